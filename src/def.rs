@@ -1,0 +1,231 @@
+//! World and material definitions: plain structs with documented defaults, and the enums that
+//! choose the method (dimension, shape function, stress-update order, boundary conditions).
+//!
+//! Every field documents its unit and why its default is what it is. Units are SI throughout
+//! (m, kg, s, Pa); any consistent unit system works because the kernel has no built-in constant
+//! other than the default gravity.
+
+use crate::{Real, Vec3};
+
+/// Spatial dimension and kinematic assumption of a world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Dimension {
+    /// Two dimensions, plane strain: quantities are per unit thickness along z, and
+    /// `F_zz = 1`, so the stress keeps a `tau_zz` component.
+    Plane2D = 2,
+    /// Two dimensions, axisymmetric (r, z) with the hoop term of seeds/000 section 7.
+    /// Reserved: `World::init` answers [`crate::Error::Unsupported`] until it is implemented.
+    Axisymmetric2D = 4,
+    /// Three dimensions.
+    ThreeD = 3,
+}
+
+/// Grid shape function used for `S_ip` and `G_ip` (seeds/000 eqs 16-17, seeds/003).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ShapeFunction {
+    /// Classic MPM: linear hat functions, 2 nodes per axis. Cheapest; its gradient jumps when a
+    /// particle crosses a cell edge (the cell-crossing error GIMP removes).
+    Linear = 0,
+    /// uGIMP (Bardenhagen and Kober 2004): linear hats integrated over an undeformed particle
+    /// domain of half-width `l_p = h / (2 n)`, `n` = [`WorldDef::particles_per_cell`]. 3 nodes per axis.
+    Gimp = 1,
+    /// Quadratic B-spline, 3 nodes per axis.
+    QuadraticBspline = 2,
+    /// Cubic B-spline, 4 nodes per axis.
+    CubicBspline = 3,
+}
+
+impl ShapeFunction {
+    /// Width of the layer of cells, at each face of the grid, that particles may not enter:
+    /// the nodes of a particle's stencil must exist. 0 for linear, 1 for the others.
+    pub const fn margin_cells(self) -> u32 {
+        match self {
+            ShapeFunction::Linear => 0,
+            _ => 1,
+        }
+    }
+}
+
+/// Where the stress update sits in a step (Bardenhagen 2002; NairnMPM's task order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum UpdateOrder {
+    /// Update stress first: from the nodal velocities `p_i / m_i` before the momentum update.
+    Usf = 0,
+    /// Update stress last: from the updated nodal velocities, in the same pass as the particle
+    /// update. One particle-to-grid and one grid-to-particle pass: the cheapest.
+    Usl = 1,
+    /// Modified USL: after the particle update, map the new particle momenta back to the grid
+    /// and take the velocity gradient from them. Most robust where nodal masses are tiny.
+    Musl = 2,
+}
+
+/// Boundary condition of one face of the grid box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Boundary {
+    /// Nodes at the wall have zero velocity; particles reaching the wall stop against it.
+    Stick = 0,
+    /// Nodes at the wall have zero normal velocity; particles slide along the wall.
+    Slip = 1,
+    /// No condition on the nodes; a particle that crosses this face leaves the simulation
+    /// (status [`crate::ParticleStatus::Escaped`]) and is counted in the step report.
+    Open = 2,
+}
+
+/// Index of each face in [`WorldDef::faces`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Face {
+    /// The face at the lowest x.
+    XMin = 0,
+    /// The face at the highest x.
+    XMax = 1,
+    /// The face at the lowest y.
+    YMin = 2,
+    /// The face at the highest y.
+    YMax = 3,
+    /// The face at the lowest z (3D only).
+    ZMin = 4,
+    /// The face at the highest z (3D only).
+    ZMax = 5,
+}
+
+/// Constitutive model of a material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum MaterialModel {
+    /// Isotropic linear elasticity, small strain, in the corotated frame: with `F = R U`,
+    /// `sigma = R (lambda tr(e) I + 2 mu e) R^T` for `e = U - I`. Rotations create no stress.
+    LinearElastic = 0,
+    /// Compressible neo-Hookean: `tau = mu (B - I) + lambda ln(J) I`, `B = F F^T`.
+    NeoHookean = 1,
+}
+
+/// A material: model and isotropic elastic constants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MaterialDef {
+    /// Constitutive model. Default: neo-Hookean, because it stays well posed at large strain.
+    pub model: MaterialModel,
+    /// Young's modulus E, Pa, > 0. Default 1 MPa: a soft rubber-like solid that a game scene can
+    /// step with a stable time step near a millisecond on a 1 cm grid.
+    pub youngs_modulus: Real,
+    /// Poisson's ratio nu, in (-1, 0.5). Default 0.3, a typical solid.
+    pub poisson_ratio: Real,
+    /// Initial density rho_0, kg/m^3, > 0. Default 1000 (water-like).
+    pub density: Real,
+}
+
+impl MaterialDef {
+    /// The documented defaults (see each field).
+    pub const DEFAULT: MaterialDef = MaterialDef {
+        model: MaterialModel::NeoHookean,
+        youngs_modulus: 1.0e6,
+        poisson_ratio: 0.3,
+        density: 1000.0,
+    };
+
+    /// Lamé constants (lambda, mu) for 3D and plane strain.
+    pub fn lame(&self) -> (Real, Real) {
+        let e = self.youngs_modulus;
+        let nu = self.poisson_ratio;
+        let mu = e / (2.0 * (1.0 + nu));
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        (lambda, mu)
+    }
+
+    /// Dilatational (P) wave speed `c = sqrt((K + 4G/3) / rho)`, m/s: the speed the stable
+    /// time step must resolve.
+    pub fn wave_speed(&self) -> Real {
+        let (lambda, mu) = self.lame();
+        crate::math::sqrt((lambda + 2.0 * mu) / self.density)
+    }
+}
+
+impl Default for MaterialDef {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Everything that fixes a world's size and method. Plain data; [`WorldDef::DEFAULT`] documents
+/// each default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldDef {
+    /// Dimension. Default [`Dimension::Plane2D`]: the cheapest, and what most game scenes need.
+    pub dimension: Dimension,
+    /// Position of the grid's lowest corner, m. Default the origin. Unused components (z in 2D)
+    /// are ignored.
+    pub origin: Vec3,
+    /// Edge length h of the square (cubic) cells, m, > 0. Default 0.01 m: 1 cm resolves a
+    /// 1 m scene with 100 cells per axis.
+    pub cell_size: Real,
+    /// Number of cells along x, y and z (z ignored in 2D), each >= 2 + 2 x the shape margin.
+    /// Default 100 x 100 x 1: a 1 m square at the default cell size.
+    pub cells: [u32; 3],
+    /// Most particles the world can hold. Default 65536: a 1 m square block at 2 x 2 particles
+    /// per 1 cm cell is 40000.
+    pub particle_capacity: u32,
+    /// Most materials the world can hold. Default 8.
+    pub material_capacity: u32,
+    /// Shape function. Default [`ShapeFunction::Gimp`] (uGIMP): it removes the cell-crossing
+    /// noise of linear MPM for a small cost.
+    pub shape: ShapeFunction,
+    /// Particles per cell per axis `n`: sets the uGIMP particle half-width `l_p = h / (2 n)` and
+    /// the spacing of the fill helpers. Default 2, the usual GIMP choice.
+    pub particles_per_cell: u32,
+    /// FLIP fraction beta in [0, 1] (seeds/000 eq 44-45): 1 is pure FLIP (no numerical damping),
+    /// 0 is PIC. Default 0.99: a 1 % PIC blend removes the particle-grid velocity noise that pure
+    /// FLIP keeps, at a damping rate `(1 - beta) / dt` on that noise only.
+    pub flip_beta: Real,
+    /// Where the stress update sits. Default [`UpdateOrder::Musl`]: it takes the velocity
+    /// gradient from re-mapped momenta, which stays bounded when nodal masses are tiny.
+    pub update_order: UpdateOrder,
+    /// Gravity, m/s^2. Default (0, -9.81, 0): y is up.
+    pub gravity: Vec3,
+    /// Boundary condition of each face, indexed by [`Face`]. Default all [`Boundary::Slip`]:
+    /// frictionless walls keep everything in the box and add no friction.
+    pub faces: [Boundary; 6],
+    /// Highest power of `grad v dt` kept in `dF = exp(grad v dt)` (seeds/000 eq 26), 1..=8.
+    /// Default 2: second order, exact for the time integration's own order and cheap.
+    pub exp_terms: u32,
+    /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)`, in (0, 1].
+    /// Default 0.5: the usual margin for explicit MPM with FLIP.
+    pub cfl: Real,
+}
+
+impl WorldDef {
+    /// The documented defaults (see each field).
+    pub const DEFAULT: WorldDef = WorldDef {
+        dimension: Dimension::Plane2D,
+        origin: Vec3::ZERO,
+        cell_size: 0.01,
+        cells: [100, 100, 1],
+        particle_capacity: 65536,
+        material_capacity: 8,
+        shape: ShapeFunction::Gimp,
+        particles_per_cell: 2,
+        flip_beta: 0.99,
+        update_order: UpdateOrder::Musl,
+        gravity: Vec3::new(0.0, -9.81, 0.0),
+        faces: [Boundary::Slip; 6],
+        exp_terms: 2,
+        cfl: 0.5,
+    };
+
+    /// Number of spatial axes (2 or 3).
+    pub const fn axes(&self) -> usize {
+        match self.dimension {
+            Dimension::ThreeD => 3,
+            _ => 2,
+        }
+    }
+}
+
+impl Default for WorldDef {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

@@ -1,0 +1,150 @@
+//! Grid node columns, index math and boundary conditions.
+//!
+//! Nodes sit at `origin + h * (i, j, k)` for `i` in `0..=cells[0]` and so on; node `(i, j, k)`
+//! has flat index `i + nx * (j + ny * k)` with `nx = cells[0] + 1`, `ny = cells[1] + 1`.
+//!
+//! The admissible region for particles is the grid shrunk by the shape function's margin
+//! (`m` cells at each face, [`crate::ShapeFunction::margin_cells`]): there every node of a
+//! particle's stencil exists. The walls of stick and slip faces act at that region's faces: all
+//! nodes in the layer from the grid face to the wall plane are constrained.
+
+use crate::def::{Boundary, WorldDef};
+use crate::layout::Layout;
+use crate::particles::Carver;
+use crate::Real;
+
+/// Mutable views of every node column, each `nodes` long.
+pub(crate) struct GridCols<'a, const D: usize> {
+    /// Nodal mass m_i (eq 23).
+    pub mass: &'a mut [Real],
+    /// Momentum p_i (eq 25) after particle-to-grid; velocity v_i = p_i / m_i after the grid update.
+    pub vel: [&'a mut [Real]; D],
+    /// Force f_i (eq 22) after particle-to-grid; acceleration a_i = f_i / m_i + g after the grid update.
+    pub acc: [&'a mut [Real]; D],
+    /// MUSL: momentum of the updated particle velocities, then the velocity from it. Empty otherwise.
+    pub remap: [&'a mut [Real]; D],
+}
+
+impl<'a, const D: usize> GridCols<'a, D> {
+    /// Carves the grid region (starting at `layout.grid_offset`) into columns.
+    pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
+        let mut c = Carver::new(region);
+        let (b, n) = (layout.node_column_bytes, layout.nodes);
+        let musl = layout.grid_columns > 1 + 2 * D;
+        let mass = c.take(b, n);
+        let vel = core::array::from_fn(|_| c.take(b, n));
+        let acc = core::array::from_fn(|_| c.take(b, n));
+        let remap = core::array::from_fn(|_| if musl { c.take(b, n) } else { &mut [][..] });
+        GridCols {
+            mass,
+            vel,
+            acc,
+            remap,
+        }
+    }
+}
+
+/// Grid geometry and the admissible region, in the precision and dimension of the step.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Geom<const D: usize> {
+    pub origin: [Real; D],
+    pub h: Real,
+    pub inv_h: Real,
+    /// Nodes per axis (`cells + 1`).
+    pub nodes: [usize; D],
+    /// Flat index stride per axis.
+    pub stride: [usize; D],
+    /// Margin in cells.
+    pub margin: usize,
+    /// Admissible region, cell units: `[margin, cells - margin]` per axis.
+    pub lo: [Real; D],
+    pub hi: [Real; D],
+    /// Boundary condition of the lower and upper face of each axis.
+    pub faces: [[Boundary; 2]; D],
+}
+
+impl<const D: usize> Geom<D> {
+    pub fn new(def: &WorldDef) -> Self {
+        let margin = def.shape.margin_cells() as usize;
+        let mut g = Geom {
+            origin: [0.0; D],
+            h: def.cell_size,
+            inv_h: 1.0 / def.cell_size,
+            nodes: [0; D],
+            stride: [0; D],
+            margin,
+            lo: [0.0; D],
+            hi: [0.0; D],
+            faces: [[Boundary::Slip; 2]; D],
+        };
+        let mut stride = 1;
+        for a in 0..D {
+            g.origin[a] = def.origin[a];
+            g.nodes[a] = def.cells[a] as usize + 1;
+            g.stride[a] = stride;
+            stride *= g.nodes[a];
+            g.lo[a] = margin as Real;
+            g.hi[a] = (def.cells[a] as usize - margin) as Real;
+            g.faces[a] = [def.faces[2 * a], def.faces[2 * a + 1]];
+        }
+        g
+    }
+
+    /// Position in cell units.
+    #[inline(always)]
+    pub fn to_cells(&self, x: [Real; D]) -> [Real; D] {
+        let mut s = [0.0; D];
+        for a in 0..D {
+            s[a] = (x[a] - self.origin[a]) * self.inv_h;
+        }
+        s
+    }
+
+    /// Applies the stick and slip walls to the nodal columns `cols` (velocity- or
+    /// acceleration-like): stick zeroes every component, slip the normal one, on every node
+    /// between the grid face and the wall plane.
+    pub fn apply_walls(&self, cols: &mut [&mut [Real]; D]) {
+        for axis in 0..D {
+            for side in 0..2 {
+                let bc = self.faces[axis][side];
+                if bc == Boundary::Open {
+                    continue;
+                }
+                let n = self.nodes[axis];
+                let layers = if side == 0 {
+                    0..self.margin + 1
+                } else {
+                    n - 1 - self.margin..n
+                };
+                for layer in layers {
+                    self.for_each_node_in_plane(axis, layer, |i| match bc {
+                        Boundary::Stick => {
+                            for col in cols.iter_mut() {
+                                col[i] = 0.0;
+                            }
+                        }
+                        _ => cols[axis][i] = 0.0,
+                    });
+                }
+            }
+        }
+    }
+
+    /// Calls `f` with the flat index of every node whose index along `axis` is `layer`.
+    fn for_each_node_in_plane(&self, axis: usize, layer: usize, mut f: impl FnMut(usize)) {
+        let total: usize = self.nodes.iter().product();
+        let plane = total / self.nodes[axis];
+        for q in 0..plane {
+            // Decompose q over the other axes.
+            let mut rem = q;
+            let mut idx = layer * self.stride[axis];
+            for b in 0..D {
+                if b != axis {
+                    idx += (rem % self.nodes[b]) * self.stride[b];
+                    rem /= self.nodes[b];
+                }
+            }
+            f(idx);
+        }
+    }
+}

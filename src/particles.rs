@@ -1,0 +1,111 @@
+//! Particle columns: one contiguous column per scalar component (structure of arrays).
+//!
+//! Always present: position x[D], velocity v[D], mass, initial volume V0, deformation gradient
+//! F[D][D] (row-major, one column per entry), stress tau/rho0 (symmetric components, see
+//! [`crate::layout::stress_components`]), material id, status. With MUSL the step also reserves
+//! D scratch columns for the new positions.
+
+use crate::layout::{stress_components, Layout};
+use crate::Real;
+
+/// Life state of a particle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ParticleStatus {
+    /// Takes part in every step.
+    Active = 0,
+    /// Its state turned non-finite (or F inverted) in a step: it keeps its last finite position,
+    /// its velocity is zeroed, and it no longer contributes to the grid.
+    Frozen = 1,
+    /// It crossed an open face: it stays at the point where it crossed and no longer takes part.
+    Escaped = 2,
+}
+
+impl ParticleStatus {
+    /// The status stored as `code` in the status column.
+    pub const fn from_code(code: u32) -> Option<ParticleStatus> {
+        match code {
+            0 => Some(ParticleStatus::Active),
+            1 => Some(ParticleStatus::Frozen),
+            2 => Some(ParticleStatus::Escaped),
+            _ => None,
+        }
+    }
+}
+
+/// Status code of an active particle.
+pub(crate) const ACTIVE: u32 = ParticleStatus::Active as u32;
+/// Status code of a frozen particle.
+pub(crate) const FROZEN: u32 = ParticleStatus::Frozen as u32;
+/// Status code of an escaped particle.
+pub(crate) const ESCAPED: u32 = ParticleStatus::Escaped as u32;
+
+/// Mutable views of every particle column, each `padded_capacity` long.
+pub(crate) struct ParticleCols<'a, const D: usize> {
+    pub x: [&'a mut [Real]; D],
+    pub v: [&'a mut [Real]; D],
+    pub mass: &'a mut [Real],
+    pub f: [[&'a mut [Real]; D]; D],
+    /// First `stress_components(D)` used; the rest are empty.
+    pub tau: [&'a mut [Real]; 6],
+    /// MUSL scratch: positions after the particle update, committed after the stress update.
+    /// Empty slices otherwise.
+    pub x_next: [&'a mut [Real]; D],
+    pub material: &'a mut [u32],
+    pub status: &'a mut [u32],
+}
+
+/// Hands out consecutive column slices of a byte region.
+pub(crate) struct Carver<'a> {
+    rest: &'a mut [u8],
+}
+
+impl<'a> Carver<'a> {
+    pub fn new(region: &'a mut [u8]) -> Self {
+        Carver { rest: region }
+    }
+
+    /// The next `bytes` bytes viewed as `len` values of `T` (`bytes` >= len * size_of T).
+    pub fn take<T: bytemuck::Pod>(&mut self, bytes: usize, len: usize) -> &'a mut [T] {
+        let rest = core::mem::take(&mut self.rest);
+        let (col, rest) = rest.split_at_mut(bytes);
+        self.rest = rest;
+        // Columns start on 64-byte boundaries of a 64-byte aligned buffer (checked at init and
+        // open), so this cast never fails.
+        bytemuck::cast_slice_mut(&mut col[..len * core::mem::size_of::<T>()])
+    }
+}
+
+impl<'a, const D: usize> ParticleCols<'a, D> {
+    /// Carves the particle region (starting at `layout.particle_offset`) into columns.
+    pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
+        let mut c = Carver::new(region);
+        let (rb, ub, n) = (
+            layout.real_column_bytes,
+            layout.u32_column_bytes,
+            layout.padded_capacity,
+        );
+        let ns = stress_components(D);
+        let musl = layout.particle_real_columns > 2 * D + 2 + D * D + ns;
+        let x = core::array::from_fn(|_| c.take(rb, n));
+        let v = core::array::from_fn(|_| c.take(rb, n));
+        let mass = c.take(rb, n);
+        // V0 is not read by the step (stress is stored as tau/rho0, eq 18): skip its column.
+        let _vol0: &mut [Real] = c.take(rb, 0);
+        let f = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
+        let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
+        let x_next = core::array::from_fn(|_| if musl { c.take(rb, n) } else { &mut [][..] });
+        let material = c.take(ub, n);
+        let status = c.take(ub, n);
+        ParticleCols {
+            x,
+            v,
+            mass,
+            f,
+            tau,
+            x_next,
+            material,
+            status,
+        }
+    }
+}

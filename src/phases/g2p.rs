@@ -1,0 +1,248 @@
+//! Grid to particle (seeds/000 section 5.1).
+//!
+//! Particle update with FLIP fraction beta and no other damping (eqs 44-45, 51-52 with
+//! `alpha_g' = alpha_p' = 0`), from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i`:
+//! - `v_p(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp)`
+//! - `x_p(n+1) = x_p + v_gp dt + a_gp dt^2 / 2 - (1 - beta)(v_p - v_gp) dt / 2`
+//!
+//! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
+//! number of terms (eq 26), `F <- dF F`, `J = det F`, and `tau/rho0` from the material.
+//!
+//! A particle that reaches a stick or slip wall is put back on the wall plane with its outward
+//! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
+//! particle whose new state is not finite, or whose F inverts, is frozen: it keeps its last
+//! finite position, F and stress, its velocity is zeroed, and it leaves the grid.
+
+use super::{load_f, load_v, load_x, Ctx};
+use crate::def::Boundary;
+use crate::grid::GridCols;
+use crate::material::{kirchhoff_over_rho0, model_of, Params};
+use crate::math::{det, exp_series, mul, Mat};
+use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
+use crate::shape::{Shape1D, Stencil};
+use crate::{Real, StepReport};
+
+/// Which nodal velocity the stress update reads.
+pub(crate) mod source {
+    /// `v_i` (USF: before the momentum update).
+    pub const VELOCITY: u8 = 0;
+    /// The re-mapped velocity (MUSL).
+    pub const REMAP: u8 = 2;
+}
+
+/// Updates F and tau/rho0 of particle `i` from its velocity gradient. Returns false (and
+/// changes nothing) if the result is not finite or F inverts.
+#[inline(always)]
+fn update_stress<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    i: usize,
+    grad_v: &Mat<D>,
+) -> bool {
+    let mut l = *grad_v;
+    for row in l.iter_mut() {
+        for v in row.iter_mut() {
+            *v *= ctx.dt;
+        }
+    }
+    let df = exp_series(&l, ctx.exp_terms);
+    let f = mul(&df, &load_f(p, i));
+    let j = det(&f);
+    if !(j > 0.0 && j.is_finite()) {
+        return false;
+    }
+    // Material ids are validated when particles are added; `get` keeps a corrupted buffer from
+    // turning into a panic.
+    let id = p.material[i] as usize;
+    let Some(rec) = ctx.materials.get(id) else {
+        return false;
+    };
+    let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &f, j);
+    let finite = s.zz.is_finite() && s.m.iter().flatten().all(|v| v.is_finite());
+    if !finite {
+        return false;
+    }
+    for a in 0..D {
+        for b in 0..D {
+            p.f[a][b][i] = f[a][b];
+        }
+    }
+    for (k, &(a, b)) in super::sym_pairs(D).iter().enumerate() {
+        p.tau[k][i] = s.m[a][b];
+    }
+    if D == 2 {
+        p.tau[3][i] = s.zz;
+    }
+    true
+}
+
+/// Freezes particle `i`: zero velocity, status frozen, counted.
+#[inline(always)]
+fn freeze<const D: usize>(p: &mut ParticleCols<'_, D>, i: usize, report: &mut StepReport) {
+    for a in 0..D {
+        p.v[a][i] = 0.0;
+    }
+    p.status[i] = FROZEN;
+    report.note_frozen(i as u32);
+}
+
+/// Velocity gradient `L[a][b] = dv_a / dx_b` from nodal velocity columns `vel` (plus
+/// `dt * acc` when `acc` is given).
+#[inline(always)]
+fn accumulate_grad<const D: usize>(l: &mut Mat<D>, grad: &[Real; D], v: [Real; D]) {
+    for a in 0..D {
+        for b in 0..D {
+            l[a][b] += v[a] * grad[b];
+        }
+    }
+}
+
+/// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
+/// from `v_i + a_i dt` in the same pass (USL); `TO_NEXT` writes the new positions to the MUSL
+/// scratch columns instead of the positions.
+pub(crate) fn particles<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const FUSED_STRESS: bool,
+    const TO_NEXT: bool,
+>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &GridCols<'_, D>,
+    report: &mut StepReport,
+) {
+    let geom = &ctx.geom;
+    let dt = ctx.dt;
+    let pic = 1.0 - ctx.beta;
+    for i in 0..count {
+        let x = load_x(p, i);
+        if p.status[i] != ACTIVE {
+            if TO_NEXT {
+                for a in 0..D {
+                    p.x_next[a][i] = x[a];
+                }
+            }
+            continue;
+        }
+        let st = Stencil::<D, K>::new(shape, geom.to_cells(x), geom.nodes, geom.stride, geom.inv_h);
+        let mut v_gp = [0.0; D];
+        let mut a_gp = [0.0; D];
+        let mut l = [[0.0; D]; D];
+        st.for_each_node(geom.stride, |n, w, grad| {
+            let vi: [Real; D] = core::array::from_fn(|a| g.vel[a][n]);
+            let ai: [Real; D] = core::array::from_fn(|a| g.acc[a][n]);
+            for a in 0..D {
+                v_gp[a] += w * vi[a];
+                a_gp[a] += w * ai[a];
+            }
+            if FUSED_STRESS {
+                accumulate_grad(&mut l, &grad, core::array::from_fn(|a| vi[a] + dt * ai[a]));
+            }
+        });
+        let v = load_v(p, i);
+        let mut v_new = [0.0; D];
+        let mut x_new = [0.0; D];
+        for a in 0..D {
+            let inversion = pic * (v[a] - v_gp[a]);
+            v_new[a] = v[a] + a_gp[a] * dt - inversion;
+            x_new[a] = x[a] + (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt;
+        }
+        let finite = x_new.iter().chain(v_new.iter()).all(|c| c.is_finite());
+        if !finite || (FUSED_STRESS && !update_stress(ctx, p, i, &l)) {
+            freeze(p, i, report);
+            if TO_NEXT {
+                for a in 0..D {
+                    p.x_next[a][i] = x[a];
+                }
+            }
+            continue;
+        }
+        // Walls and open faces.
+        let s = geom.to_cells(x_new);
+        let mut status = ACTIVE;
+        let mut stopped = false;
+        for a in 0..D {
+            let (bound, side) = if s[a] < geom.lo[a] {
+                (geom.lo[a], 0)
+            } else if s[a] > geom.hi[a] {
+                (geom.hi[a], 1)
+            } else {
+                continue;
+            };
+            x_new[a] = geom.origin[a] + bound * geom.h;
+            if geom.faces[a][side] == Boundary::Open {
+                status = ESCAPED;
+            } else {
+                stopped = true;
+                let outward = if side == 0 {
+                    v_new[a] < 0.0
+                } else {
+                    v_new[a] > 0.0
+                };
+                if outward {
+                    v_new[a] = 0.0;
+                }
+            }
+        }
+        if status == ESCAPED {
+            p.status[i] = ESCAPED;
+            report.escaped += 1;
+        } else if stopped {
+            report.stopped += 1;
+        }
+        for a in 0..D {
+            p.v[a][i] = v_new[a];
+            if TO_NEXT {
+                p.x_next[a][i] = x_new[a];
+            } else {
+                p.x[a][i] = x_new[a];
+            }
+        }
+    }
+}
+
+/// Stress update in its own pass (USF before the momentum update, MUSL after the re-map).
+/// `SOURCE` says which nodal velocity to differentiate; with MUSL the new positions are
+/// committed afterwards.
+pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const SOURCE: u8>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &GridCols<'_, D>,
+    report: &mut StepReport,
+) {
+    let geom = &ctx.geom;
+    for i in 0..count {
+        if p.status[i] == ACTIVE {
+            let x = load_x(p, i);
+            let st =
+                Stencil::<D, K>::new(shape, geom.to_cells(x), geom.nodes, geom.stride, geom.inv_h);
+            let mut l = [[0.0; D]; D];
+            st.for_each_node(geom.stride, |n, _w, grad| {
+                let vi: [Real; D] = core::array::from_fn(|a| match SOURCE {
+                    source::REMAP => g.remap[a][n],
+                    _ => g.vel[a][n],
+                });
+                accumulate_grad(&mut l, &grad, vi);
+            });
+            if !update_stress(ctx, p, i, &l) {
+                freeze(p, i, report);
+                if SOURCE == source::REMAP {
+                    // Keep the position of the start of the step, as for any frozen particle.
+                    for a in 0..D {
+                        p.x_next[a][i] = x[a];
+                    }
+                }
+            }
+        }
+        if SOURCE == source::REMAP {
+            for a in 0..D {
+                p.x[a][i] = p.x_next[a][i];
+            }
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! Grid update (seeds/000 eqs 24, 28): nodal velocity `v_i = p_i / m_i`, acceleration
+//! `a_i = f_i / m_i + g`, so that `p_i(n+1) = p_i + (f_i + m_i g) dt` is `m_i (v_i + a_i dt)`;
+//! then each face's boundary condition on both.
+
+use super::Ctx;
+use crate::grid::GridCols;
+use crate::Real;
+
+/// Zeroes every nodal column the step accumulates into.
+pub(crate) fn reset<const D: usize>(g: &mut GridCols<'_, D>) {
+    g.mass.fill(0.0);
+    for a in 0..D {
+        g.vel[a].fill(0.0);
+        g.acc[a].fill(0.0);
+        g.remap[a].fill(0.0);
+    }
+}
+
+/// `cols[a][i] /= m_i` (zero on nodes at or below the mass cutoff), then the walls.
+fn divide_by_mass<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    mass: &[Real],
+    cols: &mut [&mut [Real]; D],
+    add: [Real; D],
+) {
+    for (a, col) in cols.iter_mut().enumerate() {
+        let n = col.len().min(mass.len());
+        for (c, &m) in col[..n].iter_mut().zip(&mass[..n]) {
+            *c = if m > ctx.mass_cutoff {
+                *c / m + add[a]
+            } else {
+                0.0
+            };
+        }
+    }
+    ctx.geom.apply_walls(cols);
+}
+
+/// Momentum to velocity `v_i = p_i / m_i` (eq 28), with the walls.
+pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
+}
+
+/// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), with the walls.
+pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
+}
+
+/// MUSL: re-mapped momentum to velocity, with the walls.
+pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
+}

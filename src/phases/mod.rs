@@ -1,0 +1,75 @@
+//! The phases of one explicit step (seeds/000 section 5.1), one file each. The order in which
+//! a step calls them lives in [`crate::world`] and only there.
+//!
+//! Every phase is generic over the dimension `D`, the stencil width `K` and the shape family
+//! `S`; the world dispatches once per step to the monomorphised instance, so no hot loop
+//! branches on configuration.
+
+pub(crate) mod g2p;
+pub(crate) mod grid_update;
+pub(crate) mod p2g;
+
+use crate::grid::Geom;
+use crate::layout::MaterialRecord;
+use crate::math::Mat;
+use crate::particles::ParticleCols;
+use crate::Real;
+
+/// Everything a phase needs that is constant during one substep.
+#[derive(Clone, Copy)]
+pub(crate) struct Ctx<'m, const D: usize> {
+    pub geom: Geom<D>,
+    pub dt: Real,
+    pub gravity: [Real; D],
+    pub beta: Real,
+    pub exp_terms: u32,
+    /// Nodes lighter than this are treated as empty (velocity and acceleration zero).
+    pub mass_cutoff: Real,
+    pub materials: &'m [MaterialRecord],
+}
+
+/// (row, column) of each stored symmetric stress component; in 2D the fourth stored
+/// component is the out-of-plane `zz`.
+pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
+    if d == 2 {
+        &[(0, 0), (1, 1), (0, 1)]
+    } else {
+        &[(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+    }
+}
+
+/// The in-plane (2D) or full (3D) stress of particle `i` as a matrix.
+#[inline(always)]
+pub(crate) fn load_tau<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
+    let mut m = [[0.0; D]; D];
+    for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
+        let v = p.tau[k][i];
+        m[a][b] = v;
+        m[b][a] = v;
+    }
+    m
+}
+
+/// The deformation gradient of particle `i`.
+#[inline(always)]
+pub(crate) fn load_f<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
+    let mut m = [[0.0; D]; D];
+    for a in 0..D {
+        for b in 0..D {
+            m[a][b] = p.f[a][b][i];
+        }
+    }
+    m
+}
+
+/// Position of particle `i`.
+#[inline(always)]
+pub(crate) fn load_x<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {
+    core::array::from_fn(|a| p.x[a][i])
+}
+
+/// Velocity of particle `i`.
+#[inline(always)]
+pub(crate) fn load_v<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {
+    core::array::from_fn(|a| p.v[a][i])
+}

@@ -1,0 +1,68 @@
+//! Particle to grid (seeds/000 eqs 22, 23, 25): nodal mass `m_i = sum S_ip m_p`, momentum
+//! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
+//! enters in the grid update as `m_i g` (eq 22).
+
+use super::{load_tau, load_v, load_x, Ctx};
+use crate::grid::GridCols;
+use crate::particles::{ParticleCols, ACTIVE};
+use crate::shape::{Shape1D, Stencil};
+
+/// What a particle-to-grid pass accumulates.
+pub(crate) mod mode {
+    /// Mass, momentum and internal force (USL, MUSL).
+    pub const ALL: u8 = 0;
+    /// Mass and momentum (first pass of USF).
+    pub const MASS_MOMENTUM: u8 = 1;
+    /// Internal force only (second pass of USF, after the stress update).
+    pub const FORCE: u8 = 2;
+    /// Momentum of the updated particle velocities into the remap columns (MUSL).
+    pub const REMAP: u8 = 3;
+}
+
+/// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says.
+pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+) {
+    let geom = &ctx.geom;
+    for i in 0..count {
+        if p.status[i] != ACTIVE {
+            continue;
+        }
+        let s = geom.to_cells(load_x(p, i));
+        let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
+        let m = p.mass[i];
+        let v = load_v(p, i);
+        let mv: [_; D] = core::array::from_fn(|a| m * v[a]);
+        let tau = if MODE == mode::ALL || MODE == mode::FORCE {
+            load_tau(p, i)
+        } else {
+            [[0.0; D]; D]
+        };
+        st.for_each_node(geom.stride, |n, w, grad| {
+            if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+                g.mass[n] += w * m;
+                for a in 0..D {
+                    g.vel[a][n] += w * mv[a];
+                }
+            }
+            if MODE == mode::REMAP {
+                for a in 0..D {
+                    g.remap[a][n] += w * mv[a];
+                }
+            }
+            if MODE == mode::ALL || MODE == mode::FORCE {
+                for a in 0..D {
+                    let mut t = 0.0;
+                    for b in 0..D {
+                        t += tau[a][b] * grad[b];
+                    }
+                    g.acc[a][n] -= m * t;
+                }
+            }
+        });
+    }
+}

@@ -1,0 +1,192 @@
+//! Shape functions: one file per family, one way to ask any of them for `S_ip` and `G_ip`.
+//!
+//! Every family is evaluated per axis ([`Shape1D`]) and combined by tensor product
+//! ([`Stencil::for_each_node`]): in 2D and 3D, `S_ip` is the product of the per-axis values and
+//! each component of `G_ip` replaces one factor by its derivative (seeds/000 eqs 16-17).
+//!
+//! Positions are given in cell units relative to the grid origin (`s = (x - origin) / h`), so a
+//! node `i` sits at `s = i` and the per-axis offset is `xi = s - i`.
+
+mod bspline;
+mod gimp;
+mod linear;
+
+pub use bspline::{CubicBspline, QuadraticBspline};
+pub use gimp::Gimp;
+pub use linear::Linear;
+
+use crate::Real;
+
+/// One family of 1D shape functions with `K` nodes of support.
+pub trait Shape1D<const K: usize>: Copy {
+    /// Index of the first node of the stencil of a particle at `s` (cell units), before
+    /// clamping to the grid. Positions are never negative inside the grid, so a truncating
+    /// cast is a floor there; outside (or NaN) the result is clamped by [`Stencil::new`].
+    fn first_node(s: Real) -> i32;
+
+    /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
+    /// Zero outside the support.
+    fn eval(&self, xi: Real) -> (Real, Real);
+}
+
+/// The nodes a particle touches and their per-axis weights and derivatives.
+#[derive(Clone, Copy, Debug)]
+pub struct Stencil<const D: usize, const K: usize> {
+    /// Flat index of the stencil's first node.
+    pub base: usize,
+    /// Per-axis weights `w[axis][k]`.
+    pub w: [[Real; K]; D],
+    /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h).
+    pub dw: [[Real; K]; D],
+}
+
+impl<const D: usize, const K: usize> Stencil<D, K> {
+    /// Stencil of a particle at `s` (cell units per axis) on a grid with `nodes[a]` nodes per
+    /// axis and flat strides `stride[a]`. The first node is clamped so that all `K` nodes exist:
+    /// memory safety never depends on the position being valid. For positions inside the
+    /// admissible region the clamp is exact (the dropped node's weight is zero).
+    #[inline(always)]
+    pub fn new<S: Shape1D<K>>(
+        shape: &S,
+        s: [Real; D],
+        nodes: [usize; D],
+        stride: [usize; D],
+        inv_h: Real,
+    ) -> Self {
+        let mut base = 0usize;
+        let mut w = [[0.0; K]; D];
+        let mut dw = [[0.0; K]; D];
+        for a in 0..D {
+            let hi = (nodes[a] - K) as i32;
+            let first = S::first_node(s[a]).clamp(0, hi);
+            base += first as usize * stride[a];
+            for k in 0..K {
+                let (wk, dk) = shape.eval(s[a] - (first + k as i32) as Real);
+                w[a][k] = wk;
+                dw[a][k] = dk * inv_h;
+            }
+        }
+        Stencil { base, w, dw }
+    }
+
+    /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them).
+    #[inline(always)]
+    pub fn for_each_node(&self, stride: [usize; D], mut f: impl FnMut(usize, Real, [Real; D])) {
+        let count = K.pow(D as u32);
+        for n in 0..count {
+            let mut idx = self.base;
+            let mut k = [0usize; D];
+            let mut rem = n;
+            for a in 0..D {
+                k[a] = rem % K;
+                rem /= K;
+                idx += k[a] * stride[a];
+            }
+            let mut weight = 1.0;
+            for a in 0..D {
+                weight *= self.w[a][k[a]];
+            }
+            let mut grad = [0.0; D];
+            for (a, g) in grad.iter_mut().enumerate() {
+                let mut v = self.dw[a][k[a]];
+                for b in 0..D {
+                    if b != a {
+                        v *= self.w[b][k[b]];
+                    }
+                }
+                *g = v;
+            }
+            f(idx, weight, grad);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic pseudo-random numbers in [0, 1) (no dependency needed for a test).
+    fn lcg(state: &mut u64) -> Real {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*state >> 40) as f64 / (1u64 << 24) as f64) as Real
+    }
+
+    /// Partition of unity, zero gradient sum and linear reproduction, for one family, at random
+    /// positions plus every node and cell edge of the admissible region [lo, hi] (cell units).
+    fn check_family<const K: usize, S: Shape1D<K>>(shape: S, lo: Real, hi: Real) {
+        const N: usize = 12; // nodes per axis
+        let h: Real = 0.25;
+        let nodes = [N, N];
+        let stride = [1, N];
+        let mut st = 7u64;
+        let mut check = |s: [Real; 2]| {
+            let stencil = Stencil::<2, K>::new(&shape, s, nodes, stride, 1.0 / h);
+            let (mut sum_w, mut sum_g, mut sum_x) = (0.0, [0.0; 2], [0.0; 2]);
+            let mut sum_gx = [[0.0; 2]; 2];
+            stencil.for_each_node(stride, |idx, w, g| {
+                let node = [(idx % N) as Real * h, (idx / N) as Real * h];
+                sum_w += w;
+                for a in 0..2 {
+                    sum_g[a] += g[a];
+                    sum_x[a] += w * node[a];
+                    for b in 0..2 {
+                        sum_gx[a][b] += g[b] * node[a];
+                    }
+                }
+            });
+            let tol = 16.0 * Real::EPSILON;
+            assert!((sum_w - 1.0).abs() < tol, "sum S = {sum_w} at {s:?}");
+            for a in 0..2 {
+                assert!(sum_g[a].abs() < tol / h * 4.0, "sum G = {sum_g:?} at {s:?}");
+                assert!(
+                    (sum_x[a] - s[a] * h).abs() < tol * 4.0,
+                    "sum S x = {sum_x:?} at {s:?}"
+                );
+                for b in 0..2 {
+                    let expect = if a == b { 1.0 } else { 0.0 };
+                    assert!(
+                        (sum_gx[a][b] - expect).abs() < tol * 8.0,
+                        "sum G x at {s:?}"
+                    );
+                }
+            }
+        };
+        // Every node and cell edge (in 1D they coincide) and every half cell.
+        let mut t = lo;
+        while t <= hi {
+            check([t, lo + 0.37 * (hi - lo)]);
+            check([lo + 0.61 * (hi - lo), t]);
+            t += 0.5;
+        }
+        check([hi, hi]);
+        check([lo, lo]);
+        for _ in 0..2000 {
+            let s = [lo + (hi - lo) * lcg(&mut st), lo + (hi - lo) * lcg(&mut st)];
+            check(s);
+        }
+    }
+
+    #[test]
+    fn linear_partition_of_unity_gradient_sum_and_linear_reproduction() {
+        check_family(Linear, 0.0, 11.0);
+    }
+
+    #[test]
+    fn gimp_partition_of_unity_gradient_sum_and_linear_reproduction() {
+        for ppc in 1..=4 {
+            check_family(Gimp::new(ppc), 1.0, 10.0);
+        }
+    }
+
+    #[test]
+    fn quadratic_bspline_partition_of_unity_gradient_sum_and_linear_reproduction() {
+        check_family(QuadraticBspline, 1.0, 10.0);
+    }
+
+    #[test]
+    fn cubic_bspline_partition_of_unity_gradient_sum_and_linear_reproduction() {
+        check_family(CubicBspline, 1.0, 10.0);
+    }
+}

@@ -1,0 +1,857 @@
+//! The world: a view of the caller's buffer with add, step, stable_dt and read access.
+//! The phase order of a step lives here and only here ([`World::step`]).
+
+use crate::def::{Dimension, MaterialDef, MaterialModel, ShapeFunction, UpdateOrder, WorldDef};
+use crate::grid::{Geom, GridCols};
+use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
+use crate::material::{energy_density, model_of, Params};
+use crate::math::{ceil, det, Mat};
+use crate::particles::{ParticleCols, ACTIVE};
+use crate::phases::g2p::{self, source};
+use crate::phases::p2g::{mode, scatter};
+use crate::phases::{grid_update, Ctx};
+use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
+use crate::{Error, Real, Vec3};
+use core::mem::size_of;
+use core::ops::Range;
+
+/// Largest number of substeps one `step` call takes; a larger `dt / stable_dt` is rejected.
+pub const MAX_SUBSTEPS: u32 = 1 << 20;
+
+/// Nodes lighter than this fraction of the lightest particle are treated as empty. Small enough
+/// to change no momentum budget measurably (1e-9 relative), large enough to keep `f_i / m_i`
+/// from dividing by a denormal.
+const NODAL_MASS_CUTOFF: Real = 1.0e-9;
+
+/// What one call of [`World::step`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Substeps taken (>= 1).
+    pub substeps: u32,
+    /// Length of each substep, s.
+    pub substep_dt: Real,
+    /// Particle-substeps in which a particle reached a stick or slip wall and was stopped there.
+    pub stopped: u32,
+    /// Particles that crossed an open face and left the simulation.
+    pub escaped: u32,
+    /// Particles frozen because their state turned non-finite or their F inverted.
+    pub frozen: u32,
+    /// The ids of the first frozen particles (up to 8), for diagnosis.
+    pub first_frozen: heapless::Vec<u32, 8>,
+}
+
+impl StepReport {
+    pub(crate) fn note_frozen(&mut self, id: u32) {
+        self.frozen += 1;
+        // A full list only means more than 8 froze; the count says how many.
+        let _ = self.first_frozen.push(id);
+    }
+}
+
+/// One particle for [`World::add_particle`]. In 2D the z components are ignored.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleDef {
+    /// Position, m.
+    pub position: Vec3,
+    /// Velocity, m/s.
+    pub velocity: Vec3,
+    /// Mass, kg (per unit thickness in plane strain), > 0.
+    pub mass: Real,
+    /// Initial volume V0, m^3 (m^2 per unit thickness in plane strain), > 0.
+    pub volume: Real,
+    /// Material id returned by [`World::add_material`].
+    pub material: u32,
+}
+
+/// Particles as structure-of-arrays slices, all of one length, for [`World::add_particles`].
+/// In 2D the z slices may be empty.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleBatch<'b> {
+    /// Positions x, y, z, m.
+    pub position: [&'b [Real]; 3],
+    /// Velocities x, y, z, m/s.
+    pub velocity: [&'b [Real]; 3],
+    /// Masses, kg, > 0.
+    pub mass: &'b [Real],
+    /// Initial volumes, m^3, > 0.
+    pub volume: &'b [Real],
+    /// Material ids.
+    pub material: &'b [u32],
+}
+
+/// Sums over the active particles, in f64.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Total mass of the active particles, kg.
+    pub mass: f64,
+    /// Linear momentum, kg m/s.
+    pub momentum: [f64; 3],
+    /// Centre of mass, m.
+    pub center_of_mass: [f64; 3],
+    /// Kinetic energy `sum m v^2 / 2`, J.
+    pub kinetic: f64,
+    /// Strain energy `sum V0 W(F)`, J.
+    pub strain: f64,
+    /// Gravitational potential energy `-sum m g . x`, J (zero at the origin).
+    pub potential: f64,
+}
+
+impl Diagnostics {
+    /// Kinetic + strain + gravitational potential energy, J.
+    pub fn total_energy(&self) -> f64 {
+        self.kinetic + self.strain + self.potential
+    }
+}
+
+/// Borrowed view of the particle columns, valid while the world is not mutated.
+/// Columns of axes the dimension lacks (z in 2D) are empty slices.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticlesView<'w> {
+    /// Number of particles (every column has this length).
+    pub count: usize,
+    /// The world's dimension.
+    pub dimension: Dimension,
+    /// Positions per axis, m.
+    pub position: [&'w [Real]; 3],
+    /// Velocities per axis, m/s.
+    pub velocity: [&'w [Real]; 3],
+    /// Masses, kg.
+    pub mass: &'w [Real],
+    /// Initial volumes, m^3.
+    pub volume0: &'w [Real],
+    /// Deformation gradient `F[a][b]` (row a, column b); 2D uses a, b < 2 (F_zz = 1).
+    pub deformation_gradient: [[&'w [Real]; 3]; 3],
+    /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
+    /// xz, yz. Cauchy stress is `rho0 / J` times it.
+    pub stress: [&'w [Real]; 6],
+    /// Material ids.
+    pub material: &'w [u32],
+    /// Status codes ([`crate::ParticleStatus`]).
+    pub status: &'w [u32],
+}
+
+impl ParticlesView<'_> {
+    /// `J = det F` of particle `i` (current volume over initial volume).
+    pub fn jacobian(&self, i: usize) -> Real {
+        let f = &self.deformation_gradient;
+        if self.dimension == Dimension::ThreeD {
+            let m: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| f[a][b][i]));
+            det(&m)
+        } else {
+            let m: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| f[a][b][i]));
+            det(&m)
+        }
+    }
+}
+
+/// A world living in a caller-provided buffer. Holds no pointers into it but the borrow, so a
+/// byte copy of [`World::as_bytes`] opened with [`World::open`] is an independent world.
+pub struct World<'a> {
+    buf: &'a mut [u8],
+}
+
+fn check_buffer(buf: &[u8], bytes: usize) -> Result<(), Error> {
+    if buf.len() < bytes {
+        return Err(Error::BufferTooSmall);
+    }
+    if (buf.as_ptr() as usize) % ALIGN != 0 {
+        return Err(Error::BufferMisaligned);
+    }
+    Ok(())
+}
+
+impl<'a> World<'a> {
+    /// Lays out an empty world in `buf`, which must be at least
+    /// [`crate::memory_requirements`] bytes long and aligned to its `align`.
+    pub fn init(def: &WorldDef, buf: &'a mut [u8]) -> Result<World<'a>, Error> {
+        validate(def)?;
+        let layout = Layout::of(def);
+        check_buffer(buf, layout.total)?;
+        let used = &mut buf[..layout.total];
+        used.fill(0);
+        *bytemuck::from_bytes_mut::<Header>(&mut used[..size_of::<Header>()]) =
+            Header::new(def, layout.total);
+        let mut w = World { buf };
+        // Identity deformation gradient for every slot, so views never show a zero F.
+        let d = layout.d;
+        for a in 0..d {
+            let cap = layout.padded_capacity;
+            w.real_col_mut(&layout, col::f(d, a, a), cap).fill(1.0);
+        }
+        Ok(w)
+    }
+
+    /// Opens a world that `buf` already holds (for example a byte copy of another world's
+    /// [`World::as_bytes`]). Checks the header, the size and the alignment.
+    pub fn open(buf: &'a mut [u8]) -> Result<World<'a>, Error> {
+        check_buffer(buf, size_of::<Header>())?;
+        let h = *bytemuck::from_bytes::<Header>(&buf[..size_of::<Header>()]);
+        let def = h.def()?;
+        validate(&def).map_err(|_| Error::NotAWorld)?;
+        let layout = Layout::of(&def);
+        if h.total_bytes != layout.total as u64
+            || h.particle_count > def.particle_capacity as u64
+            || h.material_count > def.material_capacity as u64
+        {
+            return Err(Error::NotAWorld);
+        }
+        check_buffer(buf, layout.total)?;
+        Ok(World { buf })
+    }
+
+    fn header(&self) -> &Header {
+        bytemuck::from_bytes(&self.buf[..size_of::<Header>()])
+    }
+
+    fn header_mut(&mut self) -> &mut Header {
+        bytemuck::from_bytes_mut(&mut self.buf[..size_of::<Header>()])
+    }
+
+    /// The world's definition.
+    pub fn def(&self) -> WorldDef {
+        // The header was written by init or checked by open, so it always decodes.
+        self.header().def().unwrap_or(WorldDef::DEFAULT)
+    }
+
+    fn layout(&self) -> Layout {
+        Layout::of(&self.def())
+    }
+
+    /// Number of particles added.
+    pub fn particle_count(&self) -> usize {
+        self.header().particle_count as usize
+    }
+
+    /// Number of materials added.
+    pub fn material_count(&self) -> usize {
+        self.header().material_count as usize
+    }
+
+    /// Simulated time, s (sum of the `dt` of every step).
+    pub fn time(&self) -> f64 {
+        self.header().time
+    }
+
+    /// Number of `step` calls that succeeded.
+    pub fn step_count(&self) -> u64 {
+        self.header().step_count
+    }
+
+    /// The bytes the world occupies (a prefix of the buffer). A copy is a snapshot.
+    pub fn as_bytes(&self) -> &[u8] {
+        let total = self.header().total_bytes as usize;
+        &self.buf[..total]
+    }
+
+    fn materials(&self, layout: &Layout) -> &[MaterialRecord] {
+        let n = self.material_count();
+        let start = layout.materials_offset;
+        bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
+    }
+
+    fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &[Real] {
+        bytemuck::cast_slice(&self.buf[layout.real_col(j, count)])
+    }
+
+    fn real_col_mut(&mut self, layout: &Layout, j: usize, count: usize) -> &mut [Real] {
+        bytemuck::cast_slice_mut(&mut self.buf[layout.real_col(j, count)])
+    }
+
+    fn u32_col(&self, layout: &Layout, j: usize, count: usize) -> &[u32] {
+        bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
+    }
+
+    fn u32_col_mut(&mut self, layout: &Layout, j: usize, count: usize) -> &mut [u32] {
+        bytemuck::cast_slice_mut(&mut self.buf[layout.u32_col(j, count)])
+    }
+
+    /// Adds a material; returns its id.
+    pub fn add_material(&mut self, m: &MaterialDef) -> Result<u32, Error> {
+        let ok = m.youngs_modulus.is_finite()
+            && m.youngs_modulus > 0.0
+            && m.poisson_ratio > -1.0
+            && m.poisson_ratio < 0.5
+            && m.density.is_finite()
+            && m.density > 0.0;
+        if !ok {
+            return Err(Error::InvalidMaterial);
+        }
+        let (lambda, mu) = m.lame();
+        let c = m.wave_speed();
+        if !(lambda.is_finite() && mu.is_finite() && c.is_finite()) {
+            return Err(Error::InvalidMaterial);
+        }
+        let def = self.def();
+        let id = self.material_count();
+        if id >= def.material_capacity as usize {
+            return Err(Error::MaterialCapacityExceeded);
+        }
+        let layout = Layout::of(&def);
+        let start = layout.materials_offset + id * size_of::<MaterialRecord>();
+        let rec: &mut MaterialRecord =
+            bytemuck::from_bytes_mut(&mut self.buf[start..start + size_of::<MaterialRecord>()]);
+        *rec = MaterialRecord {
+            model: m.model as u32 as Real,
+            youngs_modulus: m.youngs_modulus,
+            poisson_ratio: m.poisson_ratio,
+            density: m.density,
+            lambda,
+            mu,
+            wave_speed: c,
+            reserved: 0.0,
+        };
+        self.header_mut().material_count += 1;
+        Ok(id as u32)
+    }
+
+    /// The definition of material `id`.
+    pub fn material(&self, id: u32) -> Option<MaterialDef> {
+        let layout = self.layout();
+        self.materials(&layout)
+            .get(id as usize)
+            .map(|r| MaterialDef {
+                model: match model_of(r) {
+                    MaterialModel::LinearElastic => MaterialModel::LinearElastic,
+                    MaterialModel::NeoHookean => MaterialModel::NeoHookean,
+                },
+                youngs_modulus: r.youngs_modulus,
+                poisson_ratio: r.poisson_ratio,
+                density: r.density,
+            })
+    }
+
+    /// Adds one particle; returns its id.
+    pub fn add_particle(&mut self, p: &ParticleDef) -> Result<u32, Error> {
+        fn one(v: &Real) -> &[Real] {
+            core::slice::from_ref(v)
+        }
+        let batch = ParticleBatch {
+            position: [one(&p.position.x), one(&p.position.y), one(&p.position.z)],
+            velocity: [one(&p.velocity.x), one(&p.velocity.y), one(&p.velocity.z)],
+            mass: one(&p.mass),
+            volume: one(&p.volume),
+            material: core::slice::from_ref(&p.material),
+        };
+        self.add_particles(&batch).map(|r| r.start)
+    }
+
+    /// Adds a batch of particles; all or nothing. Returns the range of their ids.
+    pub fn add_particles(&mut self, b: &ParticleBatch<'_>) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let d = def.axes();
+        let n = b.mass.len();
+        let lengths_ok = (0..d).all(|a| b.position[a].len() == n && b.velocity[a].len() == n)
+            && b.volume.len() == n
+            && b.material.len() == n;
+        if !lengths_ok {
+            return Err(Error::LengthMismatch);
+        }
+        self.check_room(&def, n)?;
+        let materials = self.material_count() as u32;
+        let geom = GeomAny::new(&def);
+        for i in 0..n {
+            let x: [Real; 3] = core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 });
+            let v: [Real; 3] = core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 });
+            let (m, vol) = (b.mass[i], b.volume[i]);
+            if !(x.iter().chain(v.iter()).all(|c| c.is_finite())
+                && m.is_finite()
+                && vol.is_finite())
+            {
+                return Err(Error::NonFiniteInput);
+            }
+            if m <= 0.0 || vol <= 0.0 {
+                return Err(Error::NonPositiveMassOrVolume);
+            }
+            if b.material[i] >= materials {
+                return Err(Error::UnknownMaterial);
+            }
+            if !geom.admits(x) {
+                return Err(Error::PositionOutsideDomain);
+            }
+        }
+        // Validated: write.
+        let items = (0..n).map(|i| {
+            (
+                core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 }),
+                core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 }),
+                b.mass[i],
+                b.volume[i],
+                b.material[i],
+            )
+        });
+        Ok(self.append(&def, items))
+    }
+
+    fn check_room(&self, def: &WorldDef, n: usize) -> Result<(), Error> {
+        if n > def.particle_capacity as usize - self.particle_count() {
+            return Err(Error::ParticleCapacityExceeded);
+        }
+        Ok(())
+    }
+
+    /// Appends validated particles `(x, v, mass, volume, material)`; returns their ids.
+    fn append(&mut self, def: &WorldDef, items: impl Iterator<Item = NewParticle>) -> Range<u32> {
+        let layout = Layout::of(def);
+        let d = layout.d;
+        let start = self.particle_count();
+        let cap = layout.padded_capacity;
+        let mut min_mass = self.header().min_particle_mass;
+        let mut i = start;
+        for (x, v, m, vol, mat) in items {
+            for a in 0..d {
+                self.real_col_mut(&layout, col::x(a), cap)[i] = x[a];
+                self.real_col_mut(&layout, col::v(d, a), cap)[i] = v[a];
+                for b in 0..d {
+                    self.real_col_mut(&layout, col::f(d, a, b), cap)[i] =
+                        if a == b { 1.0 } else { 0.0 };
+                }
+            }
+            self.real_col_mut(&layout, col::mass(d), cap)[i] = m;
+            self.real_col_mut(&layout, col::vol0(d), cap)[i] = vol;
+            for k in 0..crate::layout::stress_components(d) {
+                self.real_col_mut(&layout, col::tau(d, k), cap)[i] = 0.0;
+            }
+            self.u32_col_mut(&layout, col::MATERIAL, cap)[i] = mat;
+            self.u32_col_mut(&layout, col::STATUS, cap)[i] = ACTIVE;
+            min_mass = min_mass.min(m as f64);
+            i += 1;
+        }
+        let h = self.header_mut();
+        h.particle_count = i as u64;
+        h.min_particle_mass = min_mass;
+        start as u32..i as u32
+    }
+
+    /// Fills the axis-aligned box `[min, max]` with particles of `material` on the lattice of
+    /// `particles_per_cell` sites per cell per axis (sites at the centres of the sub-cells), each
+    /// with the volume of its sub-cell and the mass of that volume at the material's density.
+    /// All or nothing; the box must lie inside the admissible region.
+    pub fn fill_box(
+        &mut self,
+        min: Vec3,
+        max: Vec3,
+        material: u32,
+        velocity: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        self.fill(min, max, material, velocity, |_| true)
+    }
+
+    /// Fills the disk (2D) of `center` and `radius` like [`World::fill_box`]. In 3D the disk is
+    /// not defined: use [`World::fill_sphere`].
+    pub fn fill_disk(
+        &mut self,
+        center: Vec3,
+        radius: Real,
+        material: u32,
+        velocity: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        if self.def().axes() != 2 {
+            return Err(Error::InvalidRegion);
+        }
+        self.fill_ball(center, radius, material, velocity)
+    }
+
+    /// Fills the sphere (3D) of `center` and `radius` like [`World::fill_box`].
+    pub fn fill_sphere(
+        &mut self,
+        center: Vec3,
+        radius: Real,
+        material: u32,
+        velocity: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        if self.def().axes() != 3 {
+            return Err(Error::InvalidRegion);
+        }
+        self.fill_ball(center, radius, material, velocity)
+    }
+
+    fn fill_ball(
+        &mut self,
+        center: Vec3,
+        radius: Real,
+        material: u32,
+        velocity: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(Error::InvalidRegion);
+        }
+        let r = Vec3::splat(radius);
+        let d = self.def().axes();
+        self.fill(center - r, center + r, material, velocity, |x| {
+            let mut q = 0.0;
+            for a in 0..d {
+                q += (x[a] - center[a]) * (x[a] - center[a]);
+            }
+            q <= radius * radius
+        })
+    }
+
+    /// Lattice sites of the bounding box `[min, max]` for which `inside` holds.
+    fn fill(
+        &mut self,
+        min: Vec3,
+        max: Vec3,
+        material: u32,
+        velocity: Vec3,
+        inside: impl Fn([Real; 3]) -> bool,
+    ) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let d = def.axes();
+        let finite =
+            (0..3).all(|a| min[a].is_finite() && max[a].is_finite() && velocity[a].is_finite());
+        if !finite || (0..d).any(|a| min[a] > max[a]) {
+            return Err(if finite {
+                Error::InvalidRegion
+            } else {
+                Error::NonFiniteInput
+            });
+        }
+        let rec = self.material(material).ok_or(Error::UnknownMaterial)?;
+        let geom = GeomAny::new(&def);
+        let lo3: [Real; 3] = core::array::from_fn(|a| if a < d { min[a] } else { 0.0 });
+        let hi3: [Real; 3] = core::array::from_fn(|a| if a < d { max[a] } else { 0.0 });
+        if !geom.admits(lo3) || !geom.admits(hi3) {
+            return Err(Error::PositionOutsideDomain);
+        }
+        let spacing = def.cell_size / def.particles_per_cell as Real;
+        let mut volume = 1.0;
+        for _ in 0..d {
+            volume *= spacing;
+        }
+        let mass = volume * rec.density;
+        // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [min, max].
+        let mut k_lo = [0i64; 3];
+        let mut k_hi = [-1i64; 3];
+        for a in 0..3 {
+            if a < d {
+                k_lo[a] = ceil((min[a] - def.origin[a]) / spacing - 0.5) as i64;
+                k_hi[a] = ((max[a] - def.origin[a]) / spacing - 0.5) as i64;
+                if (max[a] - def.origin[a]) / spacing - 0.5 < 0.0 {
+                    k_hi[a] = -1;
+                }
+            } else {
+                k_lo[a] = 0;
+                k_hi[a] = 0;
+            }
+        }
+        let site = |k: [i64; 3]| -> [Real; 3] {
+            core::array::from_fn(|a| {
+                if a < d {
+                    def.origin[a] + (k[a] as Real + 0.5) * spacing
+                } else {
+                    0.0
+                }
+            })
+        };
+        let sites = || Sites::new(k_lo, k_hi).map(site).filter(|x| inside(*x));
+        // Pass 1: count and validate (nothing is written on failure). Stops at the first
+        // problem, so a region far larger than the capacity costs no more than the capacity.
+        let room = def.particle_capacity as usize - self.particle_count();
+        let mut n = 0usize;
+        for x in sites() {
+            if !geom.admits(x) {
+                return Err(Error::PositionOutsideDomain);
+            }
+            n += 1;
+            if n > room {
+                return Err(Error::ParticleCapacityExceeded);
+            }
+        }
+        // Pass 2: write the same sites in the same order.
+        let v3 = [velocity.x, velocity.y, velocity.z];
+        Ok(self.append(&def, sites().map(|x| (x, v3, mass, volume, material))))
+    }
+
+    /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
+    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle.
+    /// Infinite when nothing moves and there is no material.
+    pub fn stable_dt(&self) -> Real {
+        let layout = self.layout();
+        let def = self.def();
+        let c_max = self
+            .materials(&layout)
+            .iter()
+            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
+        let n = self.particle_count();
+        let d = layout.d;
+        let status = self.u32_col(&layout, col::STATUS, n);
+        let mut v2_max: Real = 0.0;
+        for i in 0..n {
+            let mut v2 = 0.0;
+            for a in 0..d {
+                let v = self.real_col(&layout, col::v(d, a), n)[i];
+                v2 += v * v;
+            }
+            if status[i] == ACTIVE && v2 > v2_max {
+                v2_max = v2;
+            }
+        }
+        let speed = c_max + crate::math::sqrt(v2_max);
+        if speed > 0.0 {
+            def.cfl * def.cell_size / speed
+        } else {
+            Real::INFINITY
+        }
+    }
+
+    /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
+    /// the start of the call) is taken in equal substeps that are each stable.
+    pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::InvalidTimeStep);
+        }
+        let stable = self.stable_dt();
+        let ratio = dt / stable;
+        let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
+        if !(substeps <= MAX_SUBSTEPS as Real) {
+            return Err(Error::InvalidTimeStep);
+        }
+        let substeps = substeps as u32;
+        let sub_dt = dt / substeps as Real;
+        let mut report = StepReport {
+            substeps,
+            substep_dt: sub_dt,
+            ..StepReport::default()
+        };
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let ppc = def.particles_per_cell;
+        for _ in 0..substeps {
+            match (def.axes(), def.shape) {
+                (2, ShapeFunction::Linear) => {
+                    self.substep::<2, 2, _>(Linear, sub_dt, &def, &layout, &mut report)
+                }
+                (2, ShapeFunction::Gimp) => {
+                    self.substep::<2, 3, _>(Gimp::new(ppc), sub_dt, &def, &layout, &mut report)
+                }
+                (2, ShapeFunction::QuadraticBspline) => {
+                    self.substep::<2, 3, _>(QuadraticBspline, sub_dt, &def, &layout, &mut report)
+                }
+                (2, ShapeFunction::CubicBspline) => {
+                    self.substep::<2, 4, _>(CubicBspline, sub_dt, &def, &layout, &mut report)
+                }
+                (_, ShapeFunction::Linear) => {
+                    self.substep::<3, 2, _>(Linear, sub_dt, &def, &layout, &mut report)
+                }
+                (_, ShapeFunction::Gimp) => {
+                    self.substep::<3, 3, _>(Gimp::new(ppc), sub_dt, &def, &layout, &mut report)
+                }
+                (_, ShapeFunction::QuadraticBspline) => {
+                    self.substep::<3, 3, _>(QuadraticBspline, sub_dt, &def, &layout, &mut report)
+                }
+                (_, ShapeFunction::CubicBspline) => {
+                    self.substep::<3, 4, _>(CubicBspline, sub_dt, &def, &layout, &mut report)
+                }
+            }
+        }
+        let h = self.header_mut();
+        h.time += dt as f64;
+        h.step_count += 1;
+        Ok(report)
+    }
+
+    /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order.
+    fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        shape: S,
+        dt: Real,
+        def: &WorldDef,
+        layout: &Layout,
+        report: &mut StepReport,
+    ) {
+        let count = self.particle_count();
+        let min_mass = self.header().min_particle_mass;
+        let n_materials = self.material_count();
+        let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
+        let (pbytes, gbytes) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
+        let mat_start = layout.materials_offset;
+        let materials: &[MaterialRecord] = bytemuck::cast_slice(
+            &head[mat_start..mat_start + n_materials * size_of::<MaterialRecord>()],
+        );
+        let mut p = ParticleCols::<D>::carve(pbytes, layout);
+        let mut g = GridCols::<D>::carve(gbytes, layout);
+        let ctx = Ctx {
+            geom: Geom::<D>::new(def),
+            dt,
+            gravity: core::array::from_fn(|a| def.gravity[a]),
+            beta: def.flip_beta,
+            exp_terms: def.exp_terms,
+            mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
+            materials,
+        };
+        let s = &shape;
+        grid_update::reset(&mut g);
+        match def.update_order {
+            UpdateOrder::Usf => {
+                scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, &ctx, &p, count, &mut g);
+                grid_update::velocity(&ctx, &mut g);
+                g2p::stress::<D, K, S, { source::VELOCITY }>(s, &ctx, &mut p, count, &g, report);
+                scatter::<D, K, S, { mode::FORCE }>(s, &ctx, &p, count, &mut g);
+                grid_update::acceleration(&ctx, &mut g);
+                g2p::particles::<D, K, S, false, false>(s, &ctx, &mut p, count, &g, report);
+            }
+            UpdateOrder::Usl => {
+                scatter::<D, K, S, { mode::ALL }>(s, &ctx, &p, count, &mut g);
+                grid_update::velocity(&ctx, &mut g);
+                grid_update::acceleration(&ctx, &mut g);
+                g2p::particles::<D, K, S, true, false>(s, &ctx, &mut p, count, &g, report);
+            }
+            UpdateOrder::Musl => {
+                scatter::<D, K, S, { mode::ALL }>(s, &ctx, &p, count, &mut g);
+                grid_update::velocity(&ctx, &mut g);
+                grid_update::acceleration(&ctx, &mut g);
+                g2p::particles::<D, K, S, false, true>(s, &ctx, &mut p, count, &g, report);
+                scatter::<D, K, S, { mode::REMAP }>(s, &ctx, &p, count, &mut g);
+                grid_update::remap_velocity(&ctx, &mut g);
+                g2p::stress::<D, K, S, { source::REMAP }>(s, &ctx, &mut p, count, &g, report);
+            }
+        }
+    }
+
+    /// Borrowed view of every particle column.
+    pub fn particles(&self) -> ParticlesView<'_> {
+        let layout = self.layout();
+        let d = layout.d;
+        let n = self.particle_count();
+        let empty: &[Real] = &[];
+        let r = |j: usize| self.real_col(&layout, j, n);
+        let ns = crate::layout::stress_components(d);
+        ParticlesView {
+            count: n,
+            dimension: self.def().dimension,
+            position: core::array::from_fn(|a| if a < d { r(col::x(a)) } else { empty }),
+            velocity: core::array::from_fn(|a| if a < d { r(col::v(d, a)) } else { empty }),
+            mass: r(col::mass(d)),
+            volume0: r(col::vol0(d)),
+            deformation_gradient: core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    if a < d && b < d {
+                        r(col::f(d, a, b))
+                    } else {
+                        empty
+                    }
+                })
+            }),
+            stress: core::array::from_fn(|k| if k < ns { r(col::tau(d, k)) } else { empty }),
+            material: self.u32_col(&layout, col::MATERIAL, n),
+            status: self.u32_col(&layout, col::STATUS, n),
+        }
+    }
+
+    /// Mass, momentum, centre of mass and energies of the active particles.
+    pub fn diagnostics(&self) -> Diagnostics {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let materials = self.materials(&layout);
+        let view = self.particles();
+        let d = layout.d;
+        let mut out = Diagnostics::default();
+        let mut first_moment = [0.0f64; 3];
+        for i in 0..view.count {
+            if view.status[i] != ACTIVE {
+                continue;
+            }
+            let m = view.mass[i] as f64;
+            out.mass += m;
+            for a in 0..d {
+                let v = view.velocity[a][i] as f64;
+                let x = view.position[a][i] as f64;
+                out.momentum[a] += m * v;
+                out.kinetic += 0.5 * m * v * v;
+                first_moment[a] += m * x;
+                out.potential -= m * def.gravity[a] as f64 * x;
+            }
+            if let Some(rec) = materials.get(view.material[i] as usize) {
+                let w = if d == 3 {
+                    let f: Mat<3> = core::array::from_fn(|a| {
+                        core::array::from_fn(|b| view.deformation_gradient[a][b][i])
+                    });
+                    energy_density(model_of(rec), &Params::of(rec), &f, det(&f))
+                } else {
+                    let f: Mat<2> = core::array::from_fn(|a| {
+                        core::array::from_fn(|b| view.deformation_gradient[a][b][i])
+                    });
+                    energy_density(model_of(rec), &Params::of(rec), &f, det(&f))
+                };
+                out.strain += view.volume0[i] as f64 * w as f64;
+            }
+        }
+        if out.mass > 0.0 {
+            for a in 0..3 {
+                out.center_of_mass[a] = first_moment[a] / out.mass;
+            }
+        }
+        out
+    }
+}
+
+/// The admissible-region check in 3-component form, for the (non-generic) add functions.
+struct GeomAny {
+    d: usize,
+    origin: [Real; 3],
+    inv_h: Real,
+    lo: [Real; 3],
+    hi: [Real; 3],
+}
+
+impl GeomAny {
+    fn new(def: &WorldDef) -> Self {
+        let m = def.shape.margin_cells() as Real;
+        GeomAny {
+            d: def.axes(),
+            origin: [def.origin.x, def.origin.y, def.origin.z],
+            inv_h: 1.0 / def.cell_size,
+            lo: [m; 3],
+            hi: core::array::from_fn(|a| def.cells[a] as Real - m),
+        }
+    }
+
+    fn admits(&self, x: [Real; 3]) -> bool {
+        (0..self.d).all(|a| {
+            let s = (x[a] - self.origin[a]) * self.inv_h;
+            s >= self.lo[a] && s <= self.hi[a]
+        })
+    }
+}
+
+/// A particle to append: position, velocity, mass, volume, material id.
+type NewParticle = ([Real; 3], [Real; 3], Real, Real, u32);
+
+/// Lattice indices in `[lo, hi]` (inclusive per axis, x fastest).
+struct Sites {
+    lo: [i64; 3],
+    hi: [i64; 3],
+    next: Option<[i64; 3]>,
+}
+
+impl Sites {
+    fn new(lo: [i64; 3], hi: [i64; 3]) -> Self {
+        let empty = (0..3).any(|a| lo[a] > hi[a]);
+        Sites {
+            lo,
+            hi,
+            next: if empty { None } else { Some(lo) },
+        }
+    }
+}
+
+impl Iterator for Sites {
+    type Item = [i64; 3];
+    fn next(&mut self) -> Option<[i64; 3]> {
+        let cur = self.next?;
+        let mut k = cur;
+        let mut a = 0;
+        self.next = loop {
+            if a == 3 {
+                break None;
+            }
+            if k[a] < self.hi[a] {
+                k[a] += 1;
+                break Some(k);
+            }
+            k[a] = self.lo[a];
+            a += 1;
+        };
+        Some(cur)
+    }
+}
