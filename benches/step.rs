@@ -1,1 +1,181 @@
-fn main() {}
+//! Criterion benches of a whole `World::step` (one substep), reported per particle
+//! (`Throughput::Elements`), so criterion prints particle-steps per second.
+//!
+//! - `step_shape_2d/<shape>` and `step_shape_3d/<shape>`: 32768 particles, default update order
+//!   (MUSL), for each shape function.
+//! - `step_order_gimp_2d/<order>`: 32768 particles, uGIMP, for each update order.
+//!
+//! Only `step` is timed (`iter_custom`): the `stable_dt` call that picks each step's `dt` is
+//! outside the measurement. Per-phase benches need a kernel hook; the phases are not public.
+//!
+//! `cargo bench --bench step` (add `-- <filter>` to run a subset).
+
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
+use mpm_gimp::{
+    memory_requirements, Dimension, HeapBuffer, MaterialDef, Real, ShapeFunction, UpdateOrder,
+    Vec3, World, WorldDef,
+};
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+/// Particles per cell per axis.
+const PPC: u32 = 2;
+/// Cell size, m.
+const CELL: Real = 0.01;
+
+const SHAPES: [(ShapeFunction, &str); 4] = [
+    (ShapeFunction::Linear, "linear"),
+    (ShapeFunction::Gimp, "gimp"),
+    (ShapeFunction::QuadraticBspline, "quadratic"),
+    (ShapeFunction::CubicBspline, "cubic"),
+];
+
+const ORDERS: [(UpdateOrder, &str); 3] = [
+    (UpdateOrder::Usf, "usf"),
+    (UpdateOrder::Usl, "usl"),
+    (UpdateOrder::Musl, "musl"),
+];
+
+/// A block of `block` cells (2 particles per cell per axis) at `first` in a grid of `grid`
+/// cells, moving down at 0.1 m/s under gravity, slip walls. Owns its storage.
+struct Scene {
+    storage: HeapBuffer,
+    particles: u64,
+}
+
+impl Scene {
+    fn new(
+        dim: Dimension,
+        shape: ShapeFunction,
+        order: UpdateOrder,
+        grid: [u32; 3],
+        first: [u32; 3],
+        block: [u32; 3],
+    ) -> Scene {
+        let axes = if dim == Dimension::ThreeD { 3 } else { 2 };
+        let expected: u32 = (0..axes).map(|a| block[a] * PPC).product();
+        let def = WorldDef {
+            dimension: dim,
+            cell_size: CELL,
+            cells: grid,
+            particle_capacity: expected,
+            material_capacity: 1,
+            shape,
+            particles_per_cell: PPC,
+            update_order: order,
+            ..WorldDef::DEFAULT
+        };
+        let req = memory_requirements(&def).expect("valid definition");
+        let mut storage = HeapBuffer::new(req.bytes);
+        let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
+        let material = world
+            .add_material(&MaterialDef::DEFAULT)
+            .expect("valid material");
+        // A quarter spacing inside the block's faces: exactly the block's lattice sites.
+        let spacing = CELL / PPC as Real;
+        let mut lo = Vec3::ZERO;
+        let mut hi = Vec3::ZERO;
+        for a in 0..axes {
+            lo[a] = first[a] as Real * CELL + 0.25 * spacing;
+            hi[a] = (first[a] + block[a]) as Real * CELL - 0.25 * spacing;
+        }
+        let ids = world
+            .fill_box(lo, hi, material, Vec3::new(0.0, -0.1, 0.0))
+            .expect("block fits");
+        assert_eq!(ids.len() as u32, expected, "block particle count");
+        Scene {
+            storage,
+            particles: expected as u64,
+        }
+    }
+
+    /// 2D: 32768 particles, a 128 x 64 cell block in a 132 x 68 grid.
+    fn plane(shape: ShapeFunction, order: UpdateOrder) -> Scene {
+        Scene::new(
+            Dimension::Plane2D,
+            shape,
+            order,
+            [132, 68, 1],
+            [2, 2, 0],
+            [128, 64, 1],
+        )
+    }
+
+    /// 3D: 32768 particles, a 16^3 cell block in the middle of a 32^3 grid.
+    fn solid(shape: ShapeFunction, order: UpdateOrder) -> Scene {
+        Scene::new(
+            Dimension::ThreeD,
+            shape,
+            order,
+            [32, 32, 32],
+            [8, 8, 8],
+            [16, 16, 16],
+        )
+    }
+
+    fn world(&mut self) -> World<'_> {
+        World::open(self.storage.as_mut_bytes()).expect("the scene's world")
+    }
+}
+
+/// Times `iters` steps of `dt = stable_dt()` each (one substep), counting only `step`.
+fn timed_steps(world: &mut World<'_>, iters: u64) -> Duration {
+    let mut total = Duration::ZERO;
+    for _ in 0..iters {
+        let dt = world.stable_dt();
+        let t0 = Instant::now();
+        let report = world.step(black_box(dt));
+        total += t0.elapsed();
+        let report = black_box(report).expect("valid dt");
+        assert_eq!(report.substeps, 1);
+    }
+    total
+}
+
+fn configure<'c>(c: &'c mut Criterion, name: &str) -> BenchmarkGroup<'c, WallTime> {
+    let mut group = c.benchmark_group(name);
+    group
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+        .sample_size(10);
+    group
+}
+
+fn bench_shapes(c: &mut Criterion) {
+    for (group_name, three_d) in [("step_shape_2d", false), ("step_shape_3d", true)] {
+        let mut group = configure(c, group_name);
+        for (shape, name) in SHAPES {
+            let order = WorldDef::DEFAULT.update_order;
+            let mut scene = if three_d {
+                Scene::solid(shape, order)
+            } else {
+                Scene::plane(shape, order)
+            };
+            group.throughput(Throughput::Elements(scene.particles));
+            let mut world = scene.world();
+            group.bench_function(BenchmarkId::from_parameter(name), |b| {
+                b.iter_custom(|iters| timed_steps(&mut world, iters))
+            });
+        }
+        group.finish();
+    }
+}
+
+fn bench_orders(c: &mut Criterion) {
+    let mut group = configure(c, "step_order_gimp_2d");
+    for (order, name) in ORDERS {
+        let mut scene = Scene::plane(ShapeFunction::Gimp, order);
+        group.throughput(Throughput::Elements(scene.particles));
+        let mut world = scene.world();
+        group.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter_custom(|iters| timed_steps(&mut world, iters))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_shapes, bench_orders);
+criterion_main!(benches);

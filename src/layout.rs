@@ -114,7 +114,7 @@ pub(crate) struct Layout {
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
-    /// Particle Real columns: x[D], v[D], mass, vol0, F[D*D], tau[NS], then x_next[D] (MUSL).
+    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_next[D] (MUSL).
     pub particle_real_columns: usize,
     pub grid_offset: usize,
     pub node_column_bytes: usize,
@@ -333,7 +333,8 @@ pub(crate) mod col {
     pub const fn vol0(d: usize) -> usize {
         2 * d + 1
     }
-    pub const fn f(d: usize, a: usize, b: usize) -> usize {
+    /// Displacement gradient `H = F - I`, entry (a, b).
+    pub const fn h(d: usize, a: usize, b: usize) -> usize {
         2 * d + 2 + a * d + b
     }
     pub const fn tau(d: usize, k: usize) -> usize {

@@ -32,6 +32,19 @@ pub fn ln(x: Real) -> Real {
     }
 }
 
+/// `ln(1 + x)`, accurate for small x.
+#[inline(always)]
+pub fn ln_1p(x: Real) -> Real {
+    #[cfg(not(feature = "f64"))]
+    {
+        libm::log1pf(x)
+    }
+    #[cfg(feature = "f64")]
+    {
+        libm::log1p(x)
+    }
+}
+
 /// Rounds up to the next integer.
 #[inline(always)]
 pub fn ceil(x: Real) -> Real {
@@ -95,6 +108,41 @@ pub fn det<const D: usize>(m: &Mat<D>) -> Real {
     }
 }
 
+/// `det(I + h) - 1 = tr h + rest`, returned as `(tr h, rest)` without forming `I + h`, so
+/// that small strains keep their precision (`rest` is the sum of the principal minors of
+/// order >= 2: `det h` in 2D; the 2 x 2 minors plus `det h` in 3D).
+#[inline(always)]
+pub fn det_identity_plus_parts<const D: usize>(h: &Mat<D>) -> (Real, Real) {
+    if D == 2 {
+        (h[0][0] + h[1][1], det(h))
+    } else {
+        let tr = h[0][0] + h[1][1] + h[2][2];
+        let minors = h[0][0] * h[1][1] - h[0][1] * h[1][0] + h[0][0] * h[2][2]
+            - h[0][2] * h[2][0]
+            + h[1][1] * h[2][2]
+            - h[1][2] * h[2][1];
+        (tr, minors + det(h))
+    }
+}
+
+/// `det(I + h) - 1`.
+#[inline(always)]
+pub fn det_identity_plus_minus_one<const D: usize>(h: &Mat<D>) -> Real {
+    let (tr, rest) = det_identity_plus_parts(h);
+    tr + rest
+}
+
+/// `x - ln(1 + x)`, accurate for small x (where the difference would cancel).
+#[inline(always)]
+pub fn x_minus_ln_1p(x: Real) -> Real {
+    if x.abs() < 1.0e-2 {
+        // Alternating series; the first omitted term is x^6 / 6 < 2e-13, below round-off.
+        x * x * (0.5 - x * (1.0 / 3.0 - x * (0.25 - x * 0.2)))
+    } else {
+        x - ln_1p(x)
+    }
+}
+
 /// Inverse transpose `m^-T` from cofactors (D = 2 or 3); the caller guarantees `det != 0`.
 #[inline(always)]
 fn inverse_transpose<const D: usize>(m: &Mat<D>) -> Mat<D> {
@@ -117,11 +165,12 @@ fn inverse_transpose<const D: usize>(m: &Mat<D>) -> Mat<D> {
     c
 }
 
-/// `exp(a)` by its Taylor series up to and including the power `terms`
-/// (seeds/000 eq 26: `dF = exp(grad v dt)`).
+/// `exp(a) - I` by the Taylor series of exp up to and including the power `terms`
+/// (seeds/000 eq 26: `dF = exp(grad v dt)`). The identity is left out so that a small
+/// increment keeps its full precision.
 #[inline(always)]
-pub fn exp_series<const D: usize>(a: &Mat<D>, terms: u32) -> Mat<D> {
-    let mut result = identity::<D>();
+pub fn exp_series_minus_identity<const D: usize>(a: &Mat<D>, terms: u32) -> Mat<D> {
+    let mut result = [[0.0; D]; D];
     let mut power = identity::<D>();
     let mut k = 1;
     while k <= terms {
@@ -148,61 +197,59 @@ fn factorial(k: u32) -> Real {
     f
 }
 
-/// The rotation R of the polar decomposition `F = R U` (det F > 0).
+/// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of
+/// `F = I + h` (det F > 0). Working with `R - I` keeps small rotations at full precision.
 ///
-/// 2D: closed form from the antisymmetric part. 3D: Higham's scaled Newton iteration
-/// `R <- (g R + R^-T / g) / 2`, which converges quadratically; it stops when the change is at
-/// round-off or after a fixed number of iterations, so its cost is bounded.
-pub fn polar_rotation<const D: usize>(f: &Mat<D>) -> Mat<D> {
+/// 2D: closed form from the angle. 3D: Newton's iteration `R <- (R + R^-T) / 2` written for
+/// `Q`: `Q <- (Q - (I + Q)^-T Q^T) / 2`, which converges quadratically near a rotation; it stops
+/// at round-off or after a fixed number of iterations, so its cost is bounded.
+pub fn polar_rotation_minus_identity<const D: usize>(h: &Mat<D>) -> Mat<D> {
     if D == 2 {
-        let c = f[0][0] + f[1][1];
-        let s = f[1][0] - f[0][1];
+        // R = [[c, -s], [s, c]] / n with c = 2 + tr h, s = h10 - h01.
+        let c = 2.0 + h[0][0] + h[1][1];
+        let s = h[1][0] - h[0][1];
         let n = sqrt(c * c + s * s);
-        let mut r = identity::<D>();
+        let mut q = [[0.0; D]; D];
         if n > 0.0 {
-            r[0][0] = c / n;
-            r[0][1] = -s / n;
-            r[1][0] = s / n;
-            r[1][1] = c / n;
+            // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation
+            // where it matters (small angles, c > 0); the first is exact enough elsewhere.
+            let cos_m1 = if c >= 0.0 { -s * s / (n * (c + n)) } else { c / n - 1.0 };
+            q[0][0] = cos_m1;
+            q[1][1] = cos_m1;
+            q[0][1] = -s / n;
+            q[1][0] = s / n;
         }
-        return r;
+        return q;
     }
-    let mut r = *f;
-    let tol = Real::EPSILON * 16.0;
+    let mut q = *h;
+    let tol = Real::EPSILON * 4.0;
     for _ in 0..32 {
+        let mut r = q;
+        for (a, row) in r.iter_mut().enumerate() {
+            row[a] += 1.0;
+        }
         let d = det(&r);
         if !(d.is_finite() && d > 0.0) {
             break;
         }
-        // Scaling by |det|^(-1/D) speeds up the first iterations (Higham 1986).
-        let g = 1.0 / libm_cbrt(d);
         let inv_t = inverse_transpose(&r);
+        let corr = mul(&inv_t, &transpose(&q));
         let mut change: Real = 0.0;
+        let mut size: Real = 0.0;
         for i in 0..D {
             for j in 0..D {
-                let next = 0.5 * (g * r[i][j] + inv_t[i][j] / g);
-                let diff = next - r[i][j];
+                let next = 0.5 * (q[i][j] - corr[i][j]);
+                let diff = next - q[i][j];
                 change += diff * diff;
-                r[i][j] = next;
+                size += next * next;
+                q[i][j] = next;
             }
         }
-        if change <= tol * tol * (D as Real) {
+        if change <= tol * tol * (1.0 + size) {
             break;
         }
     }
-    r
-}
-
-#[inline(always)]
-fn libm_cbrt(x: Real) -> Real {
-    #[cfg(not(feature = "f64"))]
-    {
-        libm::cbrtf(x)
-    }
-    #[cfg(feature = "f64")]
-    {
-        libm::cbrt(x)
-    }
+    q
 }
 
 #[cfg(test)]
@@ -210,13 +257,13 @@ mod tests {
     use super::*;
 
     #[test]
-    fn exp_series_of_zero_is_identity_and_of_diagonal_matches_scalar_exp() {
+    fn exp_series_of_zero_is_zero_and_of_diagonal_matches_scalar_exp() {
         let z: Mat<3> = [[0.0; 3]; 3];
-        assert_eq!(exp_series(&z, 4), identity::<3>());
+        assert_eq!(exp_series_minus_identity(&z, 4), z);
         let a: Mat<2> = [[0.1, 0.0], [0.0, -0.2]];
-        let e = exp_series(&a, 8);
-        assert!((e[0][0] - libm::exp(0.1) as Real).abs() < 1e-6);
-        assert!((e[1][1] - libm::exp(-0.2) as Real).abs() < 1e-6);
+        let e = exp_series_minus_identity(&a, 8);
+        assert!((e[0][0] - libm::expm1(0.1) as Real).abs() < 1e-6);
+        assert!((e[1][1] - libm::expm1(-0.2) as Real).abs() < 1e-6);
     }
 
     #[test]
@@ -225,15 +272,32 @@ mod tests {
         let (s, c) = (0.5 as Real, (0.75 as Real).sqrt());
         let r: Mat<3> = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
         let u: Mat<3> = [[1.5, 0.0, 0.0], [0.0, 0.7, 0.0], [0.0, 0.0, 1.1]];
-        let f = mul(&r, &u);
-        let got = polar_rotation(&f);
+        let mut h = mul(&r, &u);
+        for (a, row) in h.iter_mut().enumerate() {
+            row[a] -= 1.0;
+        }
+        let q = polar_rotation_minus_identity(&h);
         for i in 0..3 {
             for j in 0..3 {
-                assert!((got[i][j] - r[i][j]).abs() < 1e-5, "{i}{j}");
+                let expect = r[i][j] - if i == j { 1.0 } else { 0.0 };
+                assert!((q[i][j] - expect).abs() < 1e-5, "{i}{j}");
             }
         }
-        let f2: Mat<2> = [[c * 1.5, -s * 0.7], [s * 1.5, c * 0.7]];
-        let got2 = polar_rotation(&f2);
-        assert!((got2[0][0] - c).abs() < 1e-6 && (got2[1][0] - s).abs() < 1e-6);
+        let h2: Mat<2> = [[c * 1.5 - 1.0, -s * 0.7], [s * 1.5, c * 0.7 - 1.0]];
+        let q2 = polar_rotation_minus_identity(&h2);
+        assert!((q2[0][0] - (c - 1.0)).abs() < 1e-6 && (q2[1][0] - s).abs() < 1e-6);
+    }
+
+    #[test]
+    fn det_identity_plus_minus_one_matches_det() {
+        let h: Mat<3> = [[0.1, 0.02, -0.03], [0.04, -0.2, 0.01], [0.0, 0.05, 0.3]];
+        let mut f = h;
+        for (a, row) in f.iter_mut().enumerate() {
+            row[a] += 1.0;
+        }
+        assert!((det_identity_plus_minus_one(&h) - (det(&f) - 1.0)).abs() < 1e-6);
+        let h2: Mat<2> = [[0.1, 0.02], [0.04, -0.2]];
+        let f2: Mat<2> = [[1.1, 0.02], [0.04, 0.8]];
+        assert!((det_identity_plus_minus_one(&h2) - (det(&f2) - 1.0)).abs() < 1e-6);
     }
 }

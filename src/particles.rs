@@ -1,7 +1,8 @@
 //! Particle columns: one contiguous column per scalar component (structure of arrays).
 //!
-//! Always present: position x[D], velocity v[D], mass, initial volume V0, deformation gradient
-//! F[D][D] (row-major, one column per entry), stress tau/rho0 (symmetric components, see
+//! Always present: position x[D], velocity v[D], mass, initial volume V0, displacement
+//! gradient `H = F - I` [D][D] (row-major, one column per entry; storing `F - I` rather than F
+//! keeps small strains at full precision in f32), stress tau/rho0 (symmetric components, see
 //! [`crate::layout::stress_components`]), material id, status. With MUSL the step also reserves
 //! D scratch columns for the new positions.
 
@@ -45,7 +46,8 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub x: [&'a mut [Real]; D],
     pub v: [&'a mut [Real]; D],
     pub mass: &'a mut [Real],
-    pub f: [[&'a mut [Real]; D]; D],
+    /// Displacement gradient `H = F - I`.
+    pub h: [[&'a mut [Real]; D]; D],
     /// First `stress_components(D)` used; the rest are empty.
     pub tau: [&'a mut [Real]; 6],
     /// MUSL scratch: positions after the particle update, committed after the stress update.
@@ -92,7 +94,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let mass = c.take(rb, n);
         // V0 is not read by the step (stress is stored as tau/rho0, eq 18): skip its column.
         let _vol0: &mut [Real] = c.take(rb, 0);
-        let f = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
+        let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
         let x_next = core::array::from_fn(|_| if musl { c.take(rb, n) } else { &mut [][..] });
         let material = c.take(ub, n);
@@ -101,7 +103,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             x,
             v,
             mass,
-            f,
+            h,
             tau,
             x_next,
             material,

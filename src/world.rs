@@ -5,7 +5,7 @@ use crate::def::{Dimension, MaterialDef, MaterialModel, ShapeFunction, UpdateOrd
 use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
-use crate::math::{ceil, det, Mat};
+use crate::math::{ceil, det_identity_plus_minus_one, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::phases::g2p::{self, source};
 use crate::phases::p2g::{mode, scatter};
@@ -119,8 +119,10 @@ pub struct ParticlesView<'w> {
     pub mass: &'w [Real],
     /// Initial volumes, m^3.
     pub volume0: &'w [Real],
-    /// Deformation gradient `F[a][b]` (row a, column b); 2D uses a, b < 2 (F_zz = 1).
-    pub deformation_gradient: [[&'w [Real]; 3]; 3],
+    /// Displacement gradient `H = F - I`, entry `[a][b]` (row a, column b) with F the
+    /// deformation gradient; 2D uses a, b < 2 (F_zz = 1). Stored as `F - I` so that small
+    /// strains keep full precision in f32.
+    pub displacement_gradient: [[&'w [Real]; 3]; 3],
     /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
     /// xz, yz. Cauchy stress is `rho0 / J` times it.
     pub stress: [&'w [Real]; 6],
@@ -131,16 +133,21 @@ pub struct ParticlesView<'w> {
 }
 
 impl ParticlesView<'_> {
+    /// `J - 1 = det F - 1` of particle `i`, computed from H without cancellation.
+    pub fn jacobian_minus_one(&self, i: usize) -> Real {
+        let h = &self.displacement_gradient;
+        if self.dimension == Dimension::ThreeD {
+            let m: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
+            det_identity_plus_minus_one(&m)
+        } else {
+            let m: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
+            det_identity_plus_minus_one(&m)
+        }
+    }
+
     /// `J = det F` of particle `i` (current volume over initial volume).
     pub fn jacobian(&self, i: usize) -> Real {
-        let f = &self.deformation_gradient;
-        if self.dimension == Dimension::ThreeD {
-            let m: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| f[a][b][i]));
-            det(&m)
-        } else {
-            let m: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| f[a][b][i]));
-            det(&m)
-        }
+        1.0 + self.jacobian_minus_one(i)
     }
 }
 
@@ -171,14 +178,7 @@ impl<'a> World<'a> {
         used.fill(0);
         *bytemuck::from_bytes_mut::<Header>(&mut used[..size_of::<Header>()]) =
             Header::new(def, layout.total);
-        let mut w = World { buf };
-        // Identity deformation gradient for every slot, so views never show a zero F.
-        let d = layout.d;
-        for a in 0..d {
-            let cap = layout.padded_capacity;
-            w.real_col_mut(&layout, col::f(d, a, a), cap).fill(1.0);
-        }
-        Ok(w)
+        Ok(World { buf })
     }
 
     /// Opens a world that `buf` already holds (for example a byte copy of another world's
@@ -402,8 +402,7 @@ impl<'a> World<'a> {
                 self.real_col_mut(&layout, col::x(a), cap)[i] = x[a];
                 self.real_col_mut(&layout, col::v(d, a), cap)[i] = v[a];
                 for b in 0..d {
-                    self.real_col_mut(&layout, col::f(d, a, b), cap)[i] =
-                        if a == b { 1.0 } else { 0.0 };
+                    self.real_col_mut(&layout, col::h(d, a, b), cap)[i] = 0.0;
                 }
             }
             self.real_col_mut(&layout, col::mass(d), cap)[i] = m;
@@ -723,10 +722,10 @@ impl<'a> World<'a> {
             velocity: core::array::from_fn(|a| if a < d { r(col::v(d, a)) } else { empty }),
             mass: r(col::mass(d)),
             volume0: r(col::vol0(d)),
-            deformation_gradient: core::array::from_fn(|a| {
+            displacement_gradient: core::array::from_fn(|a| {
                 core::array::from_fn(|b| {
                     if a < d && b < d {
-                        r(col::f(d, a, b))
+                        r(col::h(d, a, b))
                     } else {
                         empty
                     }
@@ -762,16 +761,14 @@ impl<'a> World<'a> {
                 out.potential -= m * def.gravity[a] as f64 * x;
             }
             if let Some(rec) = materials.get(view.material[i] as usize) {
+                let (model, params, jm1) = (model_of(rec), Params::of(rec), view.jacobian_minus_one(i));
+                let hc = &view.displacement_gradient;
                 let w = if d == 3 {
-                    let f: Mat<3> = core::array::from_fn(|a| {
-                        core::array::from_fn(|b| view.deformation_gradient[a][b][i])
-                    });
-                    energy_density(model_of(rec), &Params::of(rec), &f, det(&f))
+                    let h: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| hc[a][b][i]));
+                    energy_density(model, &params, &h, jm1)
                 } else {
-                    let f: Mat<2> = core::array::from_fn(|a| {
-                        core::array::from_fn(|b| view.deformation_gradient[a][b][i])
-                    });
-                    energy_density(model_of(rec), &Params::of(rec), &f, det(&f))
+                    let h: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| hc[a][b][i]));
+                    energy_density(model, &params, &h, jm1)
                 };
                 out.strain += view.volume0[i] as f64 * w as f64;
             }

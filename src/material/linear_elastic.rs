@@ -2,16 +2,28 @@
 //! `sigma_rot = lambda tr(e) I + 2 mu e`, `tau = J R sigma_rot R^T`. For small strain and no
 //! rotation this is classic linear elasticity; a rigid rotation gives exactly zero strain.
 //! Plane strain: `e_zz = 0`, so `sigma_zz = lambda tr(e)`.
+//!
+//! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
 use super::{Params, Stress};
-use crate::math::{mul, polar_rotation, transpose, Mat};
+use crate::math::{mul, polar_rotation_minus_identity, Mat};
 use crate::Real;
 
-/// Small strain `e = R^T F - I` of the corotated frame, and R.
+/// Small strain `e` of the corotated frame, and `Q = R - I`.
 #[inline(always)]
-fn corotated_strain<const D: usize>(f: &Mat<D>) -> (Mat<D>, Mat<D>) {
-    let r = polar_rotation(f);
-    let mut e = mul(&transpose(&r), f);
+fn corotated_strain<const D: usize>(h: &Mat<D>) -> (Mat<D>, Mat<D>) {
+    let q = polar_rotation_minus_identity(h);
+    let mut e = [[0.0; D]; D];
+    for a in 0..D {
+        for b in 0..D {
+            // (R^T F - I)[a][b] = Q[b][a] + H[a][b] + sum_k Q[k][a] H[k][b]
+            let mut qh = 0.0;
+            for k in 0..D {
+                qh += q[k][a] * h[k][b];
+            }
+            e[a][b] = q[b][a] + h[a][b] + qh;
+        }
+    }
     // U is symmetric in exact arithmetic; symmetrise the round-off away.
     for a in 0..D {
         for b in a + 1..D {
@@ -19,14 +31,13 @@ fn corotated_strain<const D: usize>(f: &Mat<D>) -> (Mat<D>, Mat<D>) {
             e[a][b] = s;
             e[b][a] = s;
         }
-        e[a][a] -= 1.0;
     }
-    (e, r)
+    (e, q)
 }
 
 #[inline(always)]
-pub(super) fn kirchhoff<const D: usize>(p: &Params, f: &Mat<D>, j: Real) -> Stress<D> {
-    let (e, r) = corotated_strain(f);
+pub(super) fn kirchhoff<const D: usize>(p: &Params, h: &Mat<D>, jm1: Real) -> Stress<D> {
+    let (e, q) = corotated_strain(h);
     let mut tr = 0.0;
     for (a, row) in e.iter().enumerate() {
         tr += row[a];
@@ -38,7 +49,19 @@ pub(super) fn kirchhoff<const D: usize>(p: &Params, f: &Mat<D>, j: Real) -> Stre
         }
         s[a][a] += p.lambda * tr;
     }
-    let mut m = mul(&mul(&r, &s), &transpose(&r));
+    // R s R^T with R = I + Q.
+    let mut r = q;
+    for (a, row) in r.iter_mut().enumerate() {
+        row[a] += 1.0;
+    }
+    let mut rt = [[0.0; D]; D];
+    for a in 0..D {
+        for b in 0..D {
+            rt[a][b] = r[b][a];
+        }
+    }
+    let j = 1.0 + jm1;
+    let mut m = mul(&mul(&r, &s), &rt);
     for row in m.iter_mut() {
         for v in row.iter_mut() {
             *v *= j;
@@ -48,8 +71,8 @@ pub(super) fn kirchhoff<const D: usize>(p: &Params, f: &Mat<D>, j: Real) -> Stre
     Stress { m, zz }
 }
 
-pub(super) fn energy<const D: usize>(p: &Params, f: &Mat<D>) -> Real {
-    let (e, _) = corotated_strain(f);
+pub(super) fn energy<const D: usize>(p: &Params, h: &Mat<D>) -> Real {
+    let (e, _) = corotated_strain(h);
     let mut tr = 0.0;
     let mut ee = 0.0;
     for a in 0..D {

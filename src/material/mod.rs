@@ -1,5 +1,6 @@
-//! Constitutive models: F in, Kirchhoff stress over initial density `tau / rho0` out
-//! (seeds/000 eq 18), plus the strain energy per unit initial volume for energy checks.
+//! Constitutive models: the displacement gradient `H = F - I` and `J - 1` in, Kirchhoff stress
+//! over initial density `tau / rho0` out (seeds/000 eq 18), plus the strain energy per unit
+//! initial volume for energy checks.
 //!
 //! In 2D (plane strain) `F_zz = 1` and the out-of-plane stress is returned separately as `zz`.
 
@@ -44,17 +45,17 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
     }
 }
 
-/// `tau / rho0` from F (det F = j > 0).
+/// `tau / rho0` from `H = F - I` and `jm1 = det F - 1 > -1`.
 #[inline(always)]
 pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     model: MaterialModel,
     p: &Params,
-    f: &Mat<D>,
-    j: Real,
+    h: &Mat<D>,
+    jm1: Real,
 ) -> Stress<D> {
     let mut s = match model {
-        MaterialModel::NeoHookean => neo_hookean::kirchhoff(p, f, j),
-        MaterialModel::LinearElastic => linear_elastic::kirchhoff(p, f, j),
+        MaterialModel::NeoHookean => neo_hookean::kirchhoff(p, h, jm1),
+        MaterialModel::LinearElastic => linear_elastic::kirchhoff(p, h, jm1),
     };
     for row in s.m.iter_mut() {
         for v in row.iter_mut() {
@@ -65,15 +66,88 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     s
 }
 
-/// Strain energy per unit initial volume, J/m^3.
+/// Strain energy per unit initial volume, J/m^3, from `H = F - I` and `jm1 = det F - 1`.
 pub(crate) fn energy_density<const D: usize>(
     model: MaterialModel,
     p: &Params,
-    f: &Mat<D>,
-    j: Real,
+    h: &Mat<D>,
+    jm1: Real,
 ) -> Real {
     match model {
-        MaterialModel::NeoHookean => neo_hookean::energy(p, f, j),
-        MaterialModel::LinearElastic => linear_elastic::energy(p, f),
+        MaterialModel::NeoHookean => neo_hookean::energy(p, h, jm1),
+        MaterialModel::LinearElastic => linear_elastic::energy(p, h),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::det_identity_plus_minus_one;
+
+    fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
+        let (s, c) = (libm::sin(angle as f64) as Real, libm::cos(angle as f64) as Real);
+        let (i, j) = [(1, 2), (2, 0), (0, 1)][axis];
+        let mut q = [[0.0; 3]; 3];
+        q[i][i] = c - 1.0;
+        q[j][j] = c - 1.0;
+        q[i][j] = -s;
+        q[j][i] = s;
+        q
+    }
+
+    /// Objectivity: a rigid rotation (F = R, so H = R - I) gives zero stress and zero energy
+    /// in both models, to round-off, for many angles about every axis, in 3D and 2D.
+    #[test]
+    fn rigid_rotation_gives_zero_stress_and_energy() {
+        let p = Params {
+            lambda: 5.0e5,
+            mu: 4.0e5,
+            inv_rho0: 1.0e-3,
+        };
+        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+            for k in 0..64 {
+                let angle = -3.0 + 6.0 * k as Real / 63.0;
+                for axis in 0..3 {
+                    let h = rotation_minus_identity(angle, axis);
+                    let jm1 = det_identity_plus_minus_one(&h);
+                    let s = kirchhoff_over_rho0(model, &p, &h, jm1);
+                    // tau/rho0 scale of a unit strain is (lambda + 2 mu)/rho0 = 1300; round-off
+                    // of order 1e-6 of it is what f32 leaves.
+                    let bound = 1.0e-5 * 1300.0;
+                    assert!(s.m.iter().flatten().all(|v| v.abs() < bound), "{model:?} {angle} {axis}: {:?}", s.m);
+                    assert!(energy_density(model, &p, &h, jm1).abs() < 1.0e-5 * 1.3e6);
+                }
+                let (s2, c2) = (libm::sin(angle as f64) as Real, libm::cos(angle as f64) as Real);
+                let h2: Mat<2> = [[c2 - 1.0, -s2], [s2, c2 - 1.0]];
+                let jm1 = det_identity_plus_minus_one(&h2);
+                let s = kirchhoff_over_rho0(model, &p, &h2, jm1);
+                assert!(s.m.iter().flatten().all(|v| v.abs() < 1.0e-5 * 1300.0));
+                assert!(s.zz.abs() < 1.0e-5 * 1300.0);
+            }
+        }
+    }
+
+    /// Uniaxial small strain (H = diag(eps, 0, 0)): both models give the linear-elastic stress
+    /// `tau_xx = (lambda + 2 mu) eps`, `tau_yy = lambda eps` to first order (relative 2 eps).
+    #[test]
+    fn small_uniaxial_strain_matches_linear_elasticity() {
+        let p = Params {
+            lambda: 5.0e5,
+            mu: 4.0e5,
+            inv_rho0: 1.0,
+        };
+        let eps = 1.0e-4;
+        let h: Mat<3> = [[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+            let s = kirchhoff_over_rho0(model, &p, &h, det_identity_plus_minus_one(&h));
+            let xx = (p.lambda + 2.0 * p.mu) * eps;
+            let yy = p.lambda * eps;
+            assert!((s.m[0][0] - xx).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
+            assert!((s.m[1][1] - yy).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
+            // Energy (lambda + 2 mu) eps^2 / 2.
+            let w = energy_density(model, &p, &h, det_identity_plus_minus_one(&h));
+            let expect = 0.5 * (p.lambda + 2.0 * p.mu) * eps * eps;
+            assert!((w - expect).abs() < 1e-3 * expect, "{model:?} {w} {expect}");
+        }
     }
 }

@@ -6,18 +6,19 @@
 //! - `x_p(n+1) = x_p + v_gp dt + a_gp dt^2 / 2 - (1 - beta)(v_p - v_gp) dt / 2`
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
-//! number of terms (eq 26), `F <- dF F`, `J = det F`, and `tau/rho0` from the material.
+//! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
+//! from the material.
 //!
 //! A particle that reaches a stick or slip wall is put back on the wall plane with its outward
 //! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
 //! particle whose new state is not finite, or whose F inverts, is frozen: it keeps its last
 //! finite position, F and stress, its velocity is zeroed, and it leaves the grid.
 
-use super::{load_f, load_v, load_x, Ctx};
+use super::{load_h, load_v, load_x, Ctx};
 use crate::def::Boundary;
 use crate::grid::GridCols;
 use crate::material::{kirchhoff_over_rho0, model_of, Params};
-use crate::math::{det, exp_series, mul, Mat};
+use crate::math::{det_identity_plus_minus_one, exp_series_minus_identity, mul, Mat};
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil};
 use crate::{Real, StepReport};
@@ -45,10 +46,18 @@ fn update_stress<const D: usize>(
             *v *= ctx.dt;
         }
     }
-    let df = exp_series(&l, ctx.exp_terms);
-    let f = mul(&df, &load_f(p, i));
-    let j = det(&f);
-    if !(j > 0.0 && j.is_finite()) {
+    // F <- dF F in terms of H = F - I and A = dF - I: H <- H + A + A H.
+    let a = exp_series_minus_identity(&l, ctx.exp_terms);
+    let h_old = load_h(p, i);
+    let ah = mul(&a, &h_old);
+    let mut h = h_old;
+    for r in 0..D {
+        for c in 0..D {
+            h[r][c] += a[r][c] + ah[r][c];
+        }
+    }
+    let jm1 = det_identity_plus_minus_one(&h);
+    if !(jm1 > -1.0 && jm1.is_finite()) {
         return false;
     }
     // Material ids are validated when particles are added; `get` keeps a corrupted buffer from
@@ -57,14 +66,14 @@ fn update_stress<const D: usize>(
     let Some(rec) = ctx.materials.get(id) else {
         return false;
     };
-    let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &f, j);
+    let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &h, jm1);
     let finite = s.zz.is_finite() && s.m.iter().flatten().all(|v| v.is_finite());
     if !finite {
         return false;
     }
-    for a in 0..D {
-        for b in 0..D {
-            p.f[a][b][i] = f[a][b];
+    for r in 0..D {
+        for c in 0..D {
+            p.h[r][c][i] = h[r][c];
         }
     }
     for (k, &(a, b)) in super::sym_pairs(D).iter().enumerate() {

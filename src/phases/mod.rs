@@ -50,16 +50,10 @@ pub(crate) fn load_tau<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat
     m
 }
 
-/// The deformation gradient of particle `i`.
+/// The displacement gradient `H = F - I` of particle `i`.
 #[inline(always)]
-pub(crate) fn load_f<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
-    let mut m = [[0.0; D]; D];
-    for a in 0..D {
-        for b in 0..D {
-            m[a][b] = p.f[a][b][i];
-        }
-    }
-    m
+pub(crate) fn load_h<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
+    core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]))
 }
 
 /// Position of particle `i`.

@@ -17,11 +17,16 @@ impl Shape1D<2> for Linear {
     fn eval(&self, xi: Real) -> (Real, Real) {
         let a = xi.abs();
         if a < 1.0 {
-            // The derivative at a node (xi = 0) is taken from the cell the particle is in, so
-            // that the two nodes of the stencil have opposite slopes and G sums to zero.
             (1.0 - a, if xi >= 0.0 { -1.0 } else { 1.0 })
         } else {
             (0.0, 0.0)
         }
+    }
+
+    /// The two nodes of the particle's cell: the slope is that cell's, also when the particle
+    /// sits exactly on a node (where the hat's derivative jumps), so G sums to zero there too.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 2], [Real; 2]) {
+        ([1.0 - f, f], [-1.0, 1.0])
     }
 }

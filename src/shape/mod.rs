@@ -27,6 +27,19 @@ pub trait Shape1D<const K: usize>: Copy {
     /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
     /// Zero outside the support.
     fn eval(&self, xi: Real) -> (Real, Real);
+
+    /// Weights and derivatives of the `K` stencil nodes for a particle at offset `f = s - first`
+    /// from the first node. By default [`Shape1D::eval`] at each node; a family whose
+    /// derivative is defined by the cell rather than the offset (linear) overrides it.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; K], [Real; K]) {
+        let mut w = [0.0; K];
+        let mut dw = [0.0; K];
+        for k in 0..K {
+            (w[k], dw[k]) = self.eval(f - k as Real);
+        }
+        (w, dw)
+    }
 }
 
 /// The nodes a particle touches and their per-axis weights and derivatives.
@@ -60,10 +73,10 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
             let hi = (nodes[a] - K) as i32;
             let first = S::first_node(s[a]).clamp(0, hi);
             base += first as usize * stride[a];
+            let (wa, dwa) = shape.stencil(s[a] - first as Real);
+            w[a] = wa;
             for k in 0..K {
-                let (wk, dk) = shape.eval(s[a] - (first + k as i32) as Real);
-                w[a][k] = wk;
-                dw[a][k] = dk * inv_h;
+                dw[a][k] = dwa[k] * inv_h;
             }
         }
         Stencil { base, w, dw }

@@ -1,0 +1,334 @@
+//! Cost of one `World::step`, in nanoseconds per particle per step, on a fixed large scene.
+//!
+//! `cargo run --release --example step_cost -- --dim 2` (or `--dim 3`) prints exactly one JSON
+//! line on stdout and a human-readable line with the same numbers on stderr.
+//!
+//! Scene: a block of elastic material fully filled at 2 particles per cell per axis, at rest but
+//! for a uniform downward velocity of 0.1 m/s, under gravity, with slip walls on every face.
+//! - 2D: 131072 particles, a block of 256 x 128 cells inside a 260 x 132 grid (one margin cell
+//!   per side plus one cell of room).
+//! - 3D: 262144 particles, a block of 32^3 cells in the middle of a 64^3 grid.
+//!
+//! Timing: 3 warm-up steps, then `--runs` runs (default 7, at least 5) of `--steps` steps each
+//! (default 10). Every step uses `dt = world.stable_dt()`, so it is exactly one substep; only the
+//! `step` call is timed (the `stable_dt` evaluation that picks `dt` is not). Reported:
+//! `elapsed_ns / (steps * particles)` for each run and their median.
+//!
+//! Options: `--dim 2|3`, `--shape linear|gimp|quadratic|cubic`,
+//! `--material neo_hookean|linear_elastic`, `--order usf|usl|musl`, `--runs N`, `--steps S`.
+//! Unknown options or values: a message on stderr and exit code 2.
+
+use mpm_gimp::{
+    memory_requirements, Dimension, HeapBuffer, MaterialDef, MaterialModel, Real, ShapeFunction,
+    UpdateOrder, Vec3, World, WorldDef,
+};
+use std::process::exit;
+use std::time::{Duration, Instant};
+
+const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
+[--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)]";
+
+/// Particles per cell per axis of the filled block.
+const PPC: u32 = 2;
+/// Cell size, m.
+const CELL: Real = 0.01;
+/// Warm-up steps before the timed runs.
+const WARMUP_STEPS: u32 = 3;
+
+struct Options {
+    dim: u32,
+    shape: ShapeFunction,
+    material: MaterialModel,
+    order: UpdateOrder,
+    runs: u32,
+    steps: u32,
+}
+
+fn usage_error(msg: &str) -> ! {
+    eprintln!("step_cost: {msg}");
+    eprintln!("{USAGE}");
+    exit(2);
+}
+
+fn parse_options() -> Options {
+    let mut o = Options {
+        dim: 2,
+        shape: ShapeFunction::Gimp,
+        material: MaterialModel::NeoHookean,
+        order: UpdateOrder::Musl,
+        runs: 7,
+        steps: 10,
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(arg) = args.next() {
+        if arg == "-h" || arg == "--help" {
+            eprintln!("{USAGE}");
+            exit(0);
+        }
+        // Accept both `--key value` and `--key=value`.
+        let (key, inline) = match arg.split_once('=') {
+            Some((k, v)) if k.starts_with("--") => (k.to_string(), Some(v.to_string())),
+            _ => (arg.clone(), None),
+        };
+        let known = [
+            "--dim",
+            "--shape",
+            "--material",
+            "--order",
+            "--runs",
+            "--steps",
+        ];
+        if !known.contains(&key.as_str()) {
+            usage_error(&format!("unknown option `{arg}`"));
+        }
+        let value = match inline.or_else(|| args.next()) {
+            Some(v) => v,
+            None => usage_error(&format!("option `{key}` needs a value")),
+        };
+        let bad = || -> ! { usage_error(&format!("invalid value `{value}` for `{key}`")) };
+        match key.as_str() {
+            "--dim" => {
+                o.dim = match value.as_str() {
+                    "2" => 2,
+                    "3" => 3,
+                    _ => bad(),
+                }
+            }
+            "--shape" => {
+                o.shape = match value.as_str() {
+                    "linear" => ShapeFunction::Linear,
+                    "gimp" => ShapeFunction::Gimp,
+                    "quadratic" => ShapeFunction::QuadraticBspline,
+                    "cubic" => ShapeFunction::CubicBspline,
+                    _ => bad(),
+                }
+            }
+            "--material" => {
+                o.material = match value.as_str() {
+                    "neo_hookean" => MaterialModel::NeoHookean,
+                    "linear_elastic" => MaterialModel::LinearElastic,
+                    _ => bad(),
+                }
+            }
+            "--order" => {
+                o.order = match value.as_str() {
+                    "usf" => UpdateOrder::Usf,
+                    "usl" => UpdateOrder::Usl,
+                    "musl" => UpdateOrder::Musl,
+                    _ => bad(),
+                }
+            }
+            "--runs" => {
+                o.runs = match value.parse::<u32>() {
+                    Ok(n) if n >= 5 => n,
+                    _ => bad(),
+                }
+            }
+            "--steps" => {
+                o.steps = match value.parse::<u32>() {
+                    Ok(n) if n >= 1 => n,
+                    _ => bad(),
+                }
+            }
+            _ => unreachable!("checked against the known options"),
+        }
+    }
+    o
+}
+
+fn shape_name(s: ShapeFunction) -> &'static str {
+    match s {
+        ShapeFunction::Linear => "linear",
+        ShapeFunction::Gimp => "gimp",
+        ShapeFunction::QuadraticBspline => "quadratic",
+        ShapeFunction::CubicBspline => "cubic",
+    }
+}
+
+fn material_name(m: MaterialModel) -> &'static str {
+    match m {
+        MaterialModel::NeoHookean => "neo_hookean",
+        MaterialModel::LinearElastic => "linear_elastic",
+    }
+}
+
+fn order_name(u: UpdateOrder) -> &'static str {
+    match u {
+        UpdateOrder::Usf => "usf",
+        UpdateOrder::Usl => "usl",
+        UpdateOrder::Musl => "musl",
+    }
+}
+
+fn precision_name() -> &'static str {
+    match core::mem::size_of::<Real>() {
+        4 => "f32",
+        8 => "f64",
+        _ => "unknown",
+    }
+}
+
+/// Grid cells, and the block of filled cells as (first cell, cell count) per axis.
+fn scene(dim: u32) -> ([u32; 3], [u32; 3], [u32; 3]) {
+    if dim == 2 {
+        let block = [256, 128, 1];
+        // One margin cell per side (uGIMP and B-splines) plus one cell of room per side.
+        let grid = [block[0] + 4, block[1] + 4, 1];
+        (grid, [2, 2, 0], block)
+    } else {
+        ([64, 64, 64], [16, 16, 16], [32, 32, 32])
+    }
+}
+
+fn median(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
+    }
+}
+
+fn main() {
+    let o = parse_options();
+    let axes = o.dim as usize;
+    let (grid, first, block) = scene(o.dim);
+    let expected: u32 = (0..axes).map(|a| block[a] * PPC).product();
+
+    let def = WorldDef {
+        dimension: if o.dim == 3 {
+            Dimension::ThreeD
+        } else {
+            Dimension::Plane2D
+        },
+        cell_size: CELL,
+        cells: grid,
+        particle_capacity: expected,
+        material_capacity: 1,
+        shape: o.shape,
+        particles_per_cell: PPC,
+        update_order: o.order,
+        ..WorldDef::DEFAULT
+    };
+    let req = match memory_requirements(&def) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("step_cost: invalid world definition: {e:?}");
+            exit(1);
+        }
+    };
+    let mut storage = HeapBuffer::new(req.bytes);
+    let mut world = match World::init(&def, storage.as_mut_bytes()) {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("step_cost: World::init failed: {e:?}");
+            exit(1);
+        }
+    };
+    let material = world
+        .add_material(&MaterialDef {
+            model: o.material,
+            ..MaterialDef::DEFAULT
+        })
+        .expect("the default material is valid");
+
+    // Box bounds a quarter of the particle spacing inside the block's faces: the lattice sites
+    // (sub-cell centres) of exactly the block's cells fall inside, with no rounding at the edges.
+    let spacing = CELL / PPC as Real;
+    let mut lo = Vec3::ZERO;
+    let mut hi = Vec3::ZERO;
+    for a in 0..axes {
+        lo[a] = first[a] as Real * CELL + 0.25 * spacing;
+        hi[a] = (first[a] + block[a]) as Real * CELL - 0.25 * spacing;
+    }
+    let ids = match world.fill_box(lo, hi, material, Vec3::new(0.0, -0.1, 0.0)) {
+        Ok(ids) => ids,
+        Err(e) => {
+            eprintln!("step_cost: fill_box failed: {e:?}");
+            exit(1);
+        }
+    };
+    let particles = ids.len() as u32;
+    assert_eq!(particles, expected, "block particle count");
+
+    let step = |world: &mut World<'_>| -> Duration {
+        let dt = world.stable_dt();
+        let t0 = Instant::now();
+        let report = world.step(dt);
+        let elapsed = t0.elapsed();
+        let report = report.expect("stable dt is a valid time step");
+        assert_eq!(report.substeps, 1, "dt = stable_dt() must take one substep");
+        assert_eq!(report.frozen, 0, "no particle may freeze in this scene");
+        elapsed
+    };
+
+    let wall = Instant::now();
+    for _ in 0..WARMUP_STEPS {
+        step(&mut world);
+    }
+    let mut runs: Vec<f64> = Vec::with_capacity(o.runs as usize);
+    for _ in 0..o.runs {
+        let mut elapsed = Duration::ZERO;
+        for _ in 0..o.steps {
+            elapsed += step(&mut world);
+        }
+        runs.push(elapsed.as_nanos() as f64 / (o.steps as f64 * particles as f64));
+    }
+    let wall = wall.elapsed();
+    let mut sorted = runs.clone();
+    sorted.sort_by(f64::total_cmp);
+    let med = median(&sorted);
+
+    let cells = block[..axes]
+        .iter()
+        .map(|c| c.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let runs_json = runs
+        .iter()
+        .map(|r| format!("{r:.3}"))
+        .collect::<Vec<_>>()
+        .join(",");
+    println!(
+        "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
+\"order\":\"{}\",\"precision\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}]}}",
+        o.dim,
+        particles,
+        cells,
+        shape_name(o.shape),
+        material_name(o.material),
+        order_name(o.order),
+        precision_name(),
+        med,
+        runs_json
+    );
+    eprintln!(
+        "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \
+median {:.3} ns per particle-step ({:.3} ms per step) over {} runs of {} steps; \
+runs [{}] ns; min {:.3}, max {:.3}; wall {:.2} s",
+        o.dim,
+        particles,
+        block[..axes]
+            .iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join("x"),
+        grid[..axes]
+            .iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join("x"),
+        shape_name(o.shape),
+        material_name(o.material),
+        order_name(o.order),
+        precision_name(),
+        med,
+        med * particles as f64 * 1e-6,
+        o.runs,
+        o.steps,
+        runs_json.replace(',', ", "),
+        sorted[0],
+        sorted[sorted.len() - 1],
+        wall.as_secs_f64()
+    );
+}
