@@ -56,6 +56,12 @@ pub enum UpdateOrder {
     Usf = 0,
     /// Update stress last: from the updated nodal velocities, in the same pass as the particle
     /// update. One particle-to-grid and one grid-to-particle pass: the cheapest.
+    ///
+    /// Do not combine with [`ShapeFunction::Linear`] in scenes where particles cross cells:
+    /// a node that carries only a sliver of a particle's mass gets an unbounded acceleration
+    /// `f_i / m_i` while the linear gradient stays finite, and the velocity gradient blows up
+    /// (Bardenhagen 2002). The step contains it (affected particles are frozen and reported),
+    /// but the scene is lost. USF or MUSL, or any smoother shape function, avoid it.
     Usl = 1,
     /// Modified USL: after the particle update, map the new particle momenta back to the grid
     /// and take the velocity gradient from them. Most robust where nodal masses are tiny.
@@ -157,7 +163,7 @@ pub struct WorldDef {
     /// Dimension. Default [`Dimension::Plane2D`]: the cheapest, and what most game scenes need.
     pub dimension: Dimension,
     /// Position of the grid's lowest corner, m. Default the origin. Unused components (z in 2D)
-    /// are ignored.
+    /// are ignored, even if not finite.
     pub origin: Vec3,
     /// Edge length h of the square (cubic) cells, m, > 0. Default 0.01 m: 1 cm resolves a
     /// 1 m scene with 100 cells per axis.
@@ -183,7 +189,7 @@ pub struct WorldDef {
     /// Where the stress update sits. Default [`UpdateOrder::Musl`]: it takes the velocity
     /// gradient from re-mapped momenta, which stays bounded when nodal masses are tiny.
     pub update_order: UpdateOrder,
-    /// Gravity, m/s^2. Default (0, -9.81, 0): y is up.
+    /// Gravity, m/s^2. Default (0, -9.81, 0): y is up. The z component is ignored in 2D.
     pub gravity: Vec3,
     /// Boundary condition of each face, indexed by [`Face`]. Default all [`Boundary::Slip`]:
     /// frictionless walls keep everything in the box and add no friction.

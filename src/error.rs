@@ -29,7 +29,7 @@ pub enum Error {
     InvalidExpTerms = 10,
     /// Particles per cell outside 1..=8.
     InvalidParticlesPerCell = 11,
-    /// Origin or gravity not finite.
+    /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
     /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, or not finite.
     InvalidMaterial = 13,

@@ -21,7 +21,9 @@ pub(crate) struct GridCols<'a, const D: usize> {
     pub vel: [&'a mut [Real]; D],
     /// Force f_i (eq 22) after particle-to-grid; acceleration a_i = f_i / m_i + g after the grid update.
     pub acc: [&'a mut [Real]; D],
-    /// MUSL: momentum of the updated particle velocities, then the velocity from it. Empty otherwise.
+    /// The nodal velocity the separate stress pass differentiates, with the walls applied: USF
+    /// copies the lagged velocity here; MUSL accumulates the momentum of the updated particle
+    /// velocities here and divides by the mass. Empty with USL.
     pub remap: [&'a mut [Real]; D],
 }
 
@@ -30,11 +32,11 @@ impl<'a, const D: usize> GridCols<'a, D> {
     pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
         let mut c = Carver::new(region);
         let (b, n) = (layout.node_column_bytes, layout.nodes);
-        let musl = layout.grid_columns > 1 + 2 * D;
+        let has_remap = layout.grid_columns > 1 + 2 * D;
         let mass = c.take(b, n);
         let vel = core::array::from_fn(|_| c.take(b, n));
         let acc = core::array::from_fn(|_| c.take(b, n));
-        let remap = core::array::from_fn(|_| if musl { c.take(b, n) } else { &mut [][..] });
+        let remap = core::array::from_fn(|_| if has_remap { c.take(b, n) } else { &mut [][..] });
         GridCols {
             mass,
             vel,
@@ -92,7 +94,7 @@ impl<const D: usize> Geom<D> {
 
     /// Position in cell units.
     #[inline(always)]
-    pub fn to_cells(&self, x: [Real; D]) -> [Real; D] {
+    pub fn cells_of(&self, x: [Real; D]) -> [Real; D] {
         let mut s = [0.0; D];
         for a in 0..D {
             s[a] = (x[a] - self.origin[a]) * self.inv_h;
@@ -100,16 +102,18 @@ impl<const D: usize> Geom<D> {
         s
     }
 
-    /// Applies the stick and slip walls to the nodal columns `cols` (velocity- or
-    /// acceleration-like): stick zeroes every component, slip the normal one, on every node
-    /// between the grid face and the wall plane.
-    pub fn apply_walls(&self, cols: &mut [&mut [Real]; D]) {
+    /// Calls `f(node, fixed)` for every node between a grid face and its wall plane, for each
+    /// stick or slip face, where `fixed[a]` says which velocity components the wall fixes to
+    /// zero: all of them at a stick wall, the normal one at a slip wall. A node near an edge
+    /// is visited once per face it belongs to.
+    pub fn for_each_wall_node(&self, mut f: impl FnMut(usize, [bool; D])) {
         for axis in 0..D {
             for side in 0..2 {
-                let bc = self.faces[axis][side];
-                if bc == Boundary::Open {
-                    continue;
-                }
+                let fixed: [bool; D] = match self.faces[axis][side] {
+                    Boundary::Open => continue,
+                    Boundary::Stick => [true; D],
+                    Boundary::Slip => core::array::from_fn(|a| a == axis),
+                };
                 let n = self.nodes[axis];
                 let layers = if side == 0 {
                     0..self.margin + 1
@@ -117,14 +121,7 @@ impl<const D: usize> Geom<D> {
                     n - 1 - self.margin..n
                 };
                 for layer in layers {
-                    self.for_each_node_in_plane(axis, layer, |i| match bc {
-                        Boundary::Stick => {
-                            for col in cols.iter_mut() {
-                                col[i] = 0.0;
-                            }
-                        }
-                        _ => cols[axis][i] = 0.0,
-                    });
+                    self.for_each_node_in_plane(axis, layer, |i| f(i, fixed));
                 }
             }
         }

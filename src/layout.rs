@@ -118,7 +118,8 @@ pub(crate) struct Layout {
     pub particle_real_columns: usize,
     pub grid_offset: usize,
     pub node_column_bytes: usize,
-    /// Grid columns: mass, velocity[D], acceleration[D], then remapped velocity[D] (MUSL).
+    /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
+    /// (USF and MUSL).
     pub grid_columns: usize,
     pub total: usize,
 }
@@ -139,7 +140,8 @@ impl Layout {
         let particle_real_columns =
             2 * d + 2 + d * d + stress_components(d) + if musl { d } else { 0 };
         let node_column_bytes = round_up(round_up(nodes, CHUNK) * size_of::<Real>(), ALIGN);
-        let grid_columns = 1 + 2 * d + if musl { d } else { 0 };
+        let stress_velocity = def.update_order != UpdateOrder::Usl;
+        let grid_columns = 1 + 2 * d + if stress_velocity { d } else { 0 };
         let materials_offset = round_up(size_of::<Header>(), ALIGN);
         let particle_offset = round_up(
             materials_offset + def.material_capacity as usize * size_of::<MaterialRecord>(),
@@ -176,8 +178,8 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     if !(def.cell_size.is_finite() && def.cell_size > 0.0) {
         return Err(Error::InvalidCellSize);
     }
-    let finite3 = |v: Vec3| v.x.is_finite() && v.y.is_finite() && v.z.is_finite();
-    if !finite3(def.origin) || !finite3(def.gravity) {
+    let used_finite = |v: Vec3| (0..def.axes()).all(|a| v[a].is_finite());
+    if !used_finite(def.origin) || !used_finite(def.gravity) {
         return Err(Error::NonFiniteDefinition);
     }
     let min_cells = 2 + 2 * def.shape.margin_cells();

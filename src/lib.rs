@@ -33,6 +33,9 @@
 #![no_std]
 #![deny(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
+// Small-matrix and per-axis loops index several arrays with one counter; iterator chains would
+// hide the tensor notation the equations are written in.
+#![allow(clippy::needless_range_loop)]
 
 #[cfg(feature = "std")]
 extern crate std;

@@ -117,8 +117,7 @@ pub fn det_identity_plus_parts<const D: usize>(h: &Mat<D>) -> (Real, Real) {
         (h[0][0] + h[1][1], det(h))
     } else {
         let tr = h[0][0] + h[1][1] + h[2][2];
-        let minors = h[0][0] * h[1][1] - h[0][1] * h[1][0] + h[0][0] * h[2][2]
-            - h[0][2] * h[2][0]
+        let minors = h[0][0] * h[1][1] - h[0][1] * h[1][0] + h[0][0] * h[2][2] - h[0][2] * h[2][0]
             + h[1][1] * h[2][2]
             - h[1][2] * h[2][1];
         (tr, minors + det(h))
@@ -213,7 +212,11 @@ pub fn polar_rotation_minus_identity<const D: usize>(h: &Mat<D>) -> Mat<D> {
         if n > 0.0 {
             // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation
             // where it matters (small angles, c > 0); the first is exact enough elsewhere.
-            let cos_m1 = if c >= 0.0 { -s * s / (n * (c + n)) } else { c / n - 1.0 };
+            let cos_m1 = if c >= 0.0 {
+                -s * s / (n * (c + n))
+            } else {
+                c / n - 1.0
+            };
             q[0][0] = cos_m1;
             q[1][1] = cos_m1;
             q[0][1] = -s / n;

@@ -7,7 +7,7 @@ use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, det_identity_plus_minus_one, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::phases::g2p::{self, source};
+use crate::phases::g2p;
 use crate::phases::p2g::{mode, scatter};
 use crate::phases::{grid_update, Ctx};
 use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
@@ -18,10 +18,12 @@ use core::ops::Range;
 /// Largest number of substeps one `step` call takes; a larger `dt / stable_dt` is rejected.
 pub const MAX_SUBSTEPS: u32 = 1 << 20;
 
-/// Nodes lighter than this fraction of the lightest particle are treated as empty. Small enough
-/// to change no momentum budget measurably (1e-9 relative), large enough to keep `f_i / m_i`
-/// from dividing by a denormal.
-const NODAL_MASS_CUTOFF: Real = 1.0e-9;
+/// Nodes lighter than this fraction of the lightest particle are treated as empty: epsilon^2,
+/// which only keeps the division `p_i / m_i` away from denormals. A larger cutoff does harm: a
+/// node that carries a sliver of a particle still has a well-defined velocity (its `p_i / m_i`
+/// is the particle's velocity), and zeroing it puts a spurious jump next to its neighbours
+/// (seen as stress in a rigidly translating block with linear shapes in f64).
+const NODAL_MASS_CUTOFF: Real = Real::EPSILON * Real::EPSILON;
 
 /// What one call of [`World::step`] did.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -507,31 +509,25 @@ impl<'a> World<'a> {
         }
         let rec = self.material(material).ok_or(Error::UnknownMaterial)?;
         let geom = GeomAny::new(&def);
-        let lo3: [Real; 3] = core::array::from_fn(|a| if a < d { min[a] } else { 0.0 });
-        let hi3: [Real; 3] = core::array::from_fn(|a| if a < d { max[a] } else { 0.0 });
-        if !geom.admits(lo3) || !geom.admits(hi3) {
-            return Err(Error::PositionOutsideDomain);
-        }
         let spacing = def.cell_size / def.particles_per_cell as Real;
         let mut volume = 1.0;
         for _ in 0..d {
             volume *= spacing;
         }
         let mass = volume * rec.density;
-        // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [min, max].
+        // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [min, max],
+        // clipped to the admissible region widened by one site, so that a huge region costs
+        // no more than the grid while a region reaching out of the grid still meets a site
+        // outside it (and is rejected). The sites, not the region's corners, are checked.
         let mut k_lo = [0i64; 3];
-        let mut k_hi = [-1i64; 3];
-        for a in 0..3 {
-            if a < d {
-                k_lo[a] = ceil((min[a] - def.origin[a]) / spacing - 0.5) as i64;
-                k_hi[a] = ((max[a] - def.origin[a]) / spacing - 0.5) as i64;
-                if (max[a] - def.origin[a]) / spacing - 0.5 < 0.0 {
-                    k_hi[a] = -1;
-                }
-            } else {
-                k_lo[a] = 0;
-                k_hi[a] = 0;
-            }
+        let mut k_hi = [0i64; 3];
+        let lattice = |x: Real, a: usize| (x - def.origin[a]) / spacing - 0.5;
+        let margin = def.shape.margin_cells() as Real * def.particles_per_cell as Real;
+        for a in 0..d {
+            let sites_per_axis = (def.cells[a] * def.particles_per_cell) as Real;
+            let (adm_lo, adm_hi) = (margin - 1.5, sites_per_axis - margin + 0.5);
+            k_lo[a] = ceil(lattice(min[a], a).clamp(adm_lo, adm_hi)) as i64;
+            k_hi[a] = libm_floor(lattice(max[a], a).clamp(adm_lo, adm_hi)) as i64;
         }
         let site = |k: [i64; 3]| -> [Real; 3] {
             core::array::from_fn(|a| {
@@ -602,7 +598,9 @@ impl<'a> World<'a> {
         let stable = self.stable_dt();
         let ratio = dt / stable;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
-        if !(substeps <= MAX_SUBSTEPS as Real) {
+        // NaN-safe: a NaN ratio fails `<=`.
+        let within = substeps <= MAX_SUBSTEPS as Real;
+        if !within {
             return Err(Error::InvalidTimeStep);
         }
         let substeps = substeps as u32;
@@ -684,7 +682,8 @@ impl<'a> World<'a> {
             UpdateOrder::Usf => {
                 scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, &ctx, &p, count, &mut g);
                 grid_update::velocity(&ctx, &mut g);
-                g2p::stress::<D, K, S, { source::VELOCITY }>(s, &ctx, &mut p, count, &g, report);
+                grid_update::constrained_velocity(&ctx, &mut g);
+                g2p::stress::<D, K, S, false>(s, &ctx, &mut p, count, &g, report);
                 scatter::<D, K, S, { mode::FORCE }>(s, &ctx, &p, count, &mut g);
                 grid_update::acceleration(&ctx, &mut g);
                 g2p::particles::<D, K, S, false, false>(s, &ctx, &mut p, count, &g, report);
@@ -702,7 +701,7 @@ impl<'a> World<'a> {
                 g2p::particles::<D, K, S, false, true>(s, &ctx, &mut p, count, &g, report);
                 scatter::<D, K, S, { mode::REMAP }>(s, &ctx, &p, count, &mut g);
                 grid_update::remap_velocity(&ctx, &mut g);
-                g2p::stress::<D, K, S, { source::REMAP }>(s, &ctx, &mut p, count, &g, report);
+                g2p::stress::<D, K, S, true>(s, &ctx, &mut p, count, &g, report);
             }
         }
     }
@@ -761,7 +760,8 @@ impl<'a> World<'a> {
                 out.potential -= m * def.gravity[a] as f64 * x;
             }
             if let Some(rec) = materials.get(view.material[i] as usize) {
-                let (model, params, jm1) = (model_of(rec), Params::of(rec), view.jacobian_minus_one(i));
+                let (model, params, jm1) =
+                    (model_of(rec), Params::of(rec), view.jacobian_minus_one(i));
                 let hc = &view.displacement_gradient;
                 let w = if d == 3 {
                     let h: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| hc[a][b][i]));
@@ -780,6 +780,10 @@ impl<'a> World<'a> {
         }
         out
     }
+}
+
+fn libm_floor(x: Real) -> Real {
+    -ceil(-x)
 }
 
 /// The admissible-region check in 3-component form, for the (non-generic) add functions.

@@ -38,13 +38,21 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
                             let x = [
                                 lo + (i as Real + 0.5) * s,
                                 lo + (j as Real + 0.5) * s,
-                                if d == 3 { lo + (k as Real + 0.5) * s } else { 0.0 },
+                                if d == 3 {
+                                    lo + (k as Real + 0.5) * s
+                                } else {
+                                    0.0
+                                },
                             ];
                             let r = [x[0] - 0.6, x[1] - 0.6, x[2] - 0.6];
                             let v = [
                                 1.0 - 3.0 * r[1] + 2.0 * r[0] * r[0],
                                 -0.5 + 3.0 * r[0],
-                                if d == 3 { 0.3 + r[0] * r[1] * 10.0 } else { 0.0 },
+                                if d == 3 {
+                                    0.3 + r[0] * r[1] * 10.0
+                                } else {
+                                    0.0
+                                },
                             ];
                             for a in 0..3 {
                                 c[a].push(x[a]);
@@ -81,11 +89,19 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
                 let label = format!("{dim:?} {shape:?} {order:?}");
                 assert_eq!(w.particles().mass, &m0[..], "{label}: masses changed");
                 assert!(all_finite(&w), "{label}: non-finite state");
-                assert_eq!(w.diagnostics().mass, m0.iter().map(|&m| m as f64).sum::<f64>());
+                assert_eq!(
+                    w.diagnostics().mass,
+                    m0.iter().map(|&m| m as f64).sum::<f64>()
+                );
                 let p1 = w.diagnostics().momentum;
                 for a in 0..d {
                     let rel = (p1[a] - p0[a]).abs() / scale;
-                    assert!(rel < 1e-6, "{label}: momentum[{a}] {} -> {} (rel {rel:e})", p0[a], p1[a]);
+                    assert!(
+                        rel < 1e-6,
+                        "{label}: momentum[{a}] {} -> {} (rel {rel:e})",
+                        p0[a],
+                        p1[a]
+                    );
                 }
             }
         }

@@ -4,112 +4,7 @@
 mod common;
 
 use common::*;
-use mpm_gimp::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, ParticleBatch, Real, ShapeFunction,
-    UpdateOrder, Vec3, World, WorldDef,
-};
-
-/// A fixed-free bar along x of length `l`, `cells_per_l` cells per length, in 2D plane strain
-/// with nu = 0 (so it is exactly one-dimensional: sigma_xx = E eps_xx, c = sqrt(E / rho)),
-/// four cells high between slip walls, fixed (stick) at x = wall, free at the other end.
-pub struct Bar {
-    pub def: WorldDef,
-    pub l: Real,
-    pub wall: Real,
-    pub c: Real,
-    pub v0: Real,
-    pub material: MaterialDef,
-}
-
-impl Bar {
-    pub fn new(shape: ShapeFunction, cells_per_l: u32, v0: Real) -> Bar {
-        let l: Real = 1.0;
-        let h = l / cells_per_l as Real;
-        let m = shape.margin_cells();
-        let mut def = WorldDef {
-            dimension: Dimension::Plane2D,
-            cells: [cells_per_l + 2 * m + cells_per_l / 2, 4 + 2 * m, 1],
-            cell_size: h,
-            shape,
-            gravity: Vec3::ZERO,
-            faces: [Boundary::Slip; 6],
-            flip_beta: 1.0,
-            update_order: UpdateOrder::Musl,
-            particle_capacity: 4 * cells_per_l * 4,
-            ..WorldDef::DEFAULT
-        };
-        def.faces[Face::XMin as usize] = Boundary::Stick;
-        def.faces[Face::XMax as usize] = Boundary::Open;
-        let material = MaterialDef {
-            model: MaterialModel::LinearElastic,
-            youngs_modulus: 1.0e6,
-            poisson_ratio: 0.0,
-            density: 1000.0,
-        };
-        Bar {
-            def,
-            l,
-            wall: m as Real * h,
-            c: (material.youngs_modulus / material.density).sqrt(),
-            v0,
-            material,
-        }
-    }
-
-    pub fn omega(&self) -> Real {
-        std::f64::consts::PI as Real * self.c / (2.0 * self.l)
-    }
-
-    pub fn period(&self) -> Real {
-        4.0 * self.l / self.c
-    }
-
-    /// Exact displacement of the point at reference position x0 at time t:
-    /// `u = (v0 / omega) sin(pi (x0 - wall) / 2L) sin(omega t)`.
-    pub fn exact_u(&self, x0: Real, t: f64) -> f64 {
-        let k = std::f64::consts::PI / (2.0 * self.l as f64);
-        (self.v0 / self.omega()) as f64
-            * (k * (x0 - self.wall) as f64).sin()
-            * (self.omega() as f64 * t).sin()
-    }
-
-    /// Adds the bar's material and particles (2 x 2 per cell, at the sub-cell centres) moving
-    /// in the first mode's velocity field `v = v0 sin(pi (x0 - wall) / 2L)`. Returns the
-    /// reference x of every particle.
-    pub fn populate(&self, world: &mut World) -> Vec<Real> {
-        let mat = world.add_material(&self.material).unwrap();
-        let h = self.def.cell_size;
-        let d = h / 2.0;
-        let nx = (self.l / d).round() as usize;
-        let k = std::f64::consts::PI as Real / (2.0 * self.l);
-        let (mut x, mut y, mut vx) = (vec![], vec![], vec![]);
-        for j in 0..8 {
-            for i in 0..nx {
-                let x0 = self.wall + (i as Real + 0.5) * d;
-                x.push(x0);
-                y.push(self.wall + (j as Real + 0.5) * d);
-                vx.push(self.v0 * (k * (x0 - self.wall)).sin());
-            }
-        }
-        let n = x.len();
-        let (vy, mass, vol, mats) = (
-            vec![0.0; n],
-            vec![self.material.density * d * d; n],
-            vec![d * d; n],
-            vec![mat; n],
-        );
-        world
-            .add_particles(&ParticleBatch {
-                position: [&x, &y, &[]],
-                velocity: [&vx, &vy, &[]],
-                mass: &mass,
-                volume: &vol,
-                material: &mats,
-            })
-            .unwrap();
-        x
-    }
-}
+use mpm_gimp::{Dimension, MaterialDef, MaterialModel, Real, ShapeFunction, World};
 
 /// Runs the bar for `periods` periods and returns (relative RMS displacement error sampled 16
 /// times per period, measured period, energy after / energy at start).
@@ -126,7 +21,10 @@ fn run_bar(bar: &Bar, periods: f64) -> (f64, f64, f64) {
     // Mean displacement, for the zero crossings that measure the period.
     let mean_u = |w: &World| -> f64 {
         let v = w.particles();
-        (0..v.count).map(|i| (v.position[0][i] - x0[i]) as f64).sum::<f64>() / v.count as f64
+        (0..v.count)
+            .map(|i| (v.position[0][i] - x0[i]) as f64)
+            .sum::<f64>()
+            / v.count as f64
     };
     let mut crossings = vec![];
     let mut prev = (0.0f64, mean_u(&w));
@@ -178,7 +76,10 @@ fn vibrating_bar_period_and_displacement_match_exact_first_mode() {
             ((period - exact) / exact).abs() < 0.01,
             "{shape:?}: period {period} vs exact {exact}"
         );
-        assert!(err < 0.05, "{shape:?}: RMS displacement error {err} of the amplitude");
+        assert!(
+            err < 0.05,
+            "{shape:?}: RMS displacement error {err} of the amplitude"
+        );
     }
 }
 
@@ -191,7 +92,10 @@ fn vibrating_bar_period_bsplines_within_one_percent_at_64_cells() {
         let bar = Bar::new(shape, 64, 0.05);
         let (_, period, _) = run_bar(&bar, 2.0);
         let exact = bar.period() as f64;
-        assert!(((period - exact) / exact).abs() < 0.01, "{shape:?}: {period} vs {exact}");
+        assert!(
+            ((period - exact) / exact).abs() < 0.01,
+            "{shape:?}: {period} vs {exact}"
+        );
     }
 }
 
@@ -201,7 +105,11 @@ fn vibrating_bar_period_bsplines_within_one_percent_at_64_cells() {
 fn vibrating_bar_gimp_error_falls_3x_when_cell_size_halves_twice() {
     let coarse = run_bar(&Bar::new(ShapeFunction::Gimp, 16, 0.05), 1.0).0;
     let fine = run_bar(&Bar::new(ShapeFunction::Gimp, 64, 0.05), 1.0).0;
-    assert!(coarse / fine >= 3.0, "error {coarse} -> {fine}: ratio {}", coarse / fine);
+    assert!(
+        coarse / fine >= 3.0,
+        "error {coarse} -> {fine}: ratio {}",
+        coarse / fine
+    );
 }
 
 /// Pure FLIP (beta = 1) with MUSL conserves the bar's energy: after 5 periods the kinetic plus
@@ -211,53 +119,6 @@ fn vibrating_bar_flip_energy_within_one_percent_after_five_periods() {
     let bar = Bar::new(ShapeFunction::Gimp, 32, 0.05);
     let (_, _, ratio) = run_bar(&bar, 5.0);
     assert!((ratio - 1.0).abs() < 0.01, "energy ratio {ratio}");
-}
-
-/// Builds a square (2D) or cube (3D) block of side 0.3 m centred at 0.5 m with velocity
-/// `v(x)` at 2 particles per cell per axis, in free space (no gravity, open faces).
-pub fn moving_block(
-    def: &WorldDef,
-    world: &mut World,
-    material: &MaterialDef,
-    v: impl Fn([Real; 3]) -> [Real; 3],
-) -> usize {
-    let mat = world.add_material(material).unwrap();
-    let d = def.axes();
-    let spacing = def.cell_size / 2.0;
-    let n = (0.3 / spacing).round() as usize;
-    let mut cols: [Vec<Real>; 6] = Default::default();
-    let nz = if d == 3 { n } else { 1 };
-    for k in 0..nz {
-        for j in 0..n {
-            for i in 0..n {
-                let x = [
-                    0.35 + (i as Real + 0.5) * spacing,
-                    0.35 + (j as Real + 0.5) * spacing,
-                    if d == 3 { 0.35 + (k as Real + 0.5) * spacing } else { 0.0 },
-                ];
-                let vel = v(x);
-                for a in 0..3 {
-                    cols[a].push(x[a]);
-                    cols[3 + a].push(vel[a]);
-                }
-            }
-        }
-    }
-    let count = cols[0].len();
-    let vol = spacing.powi(d as i32);
-    let mass = vec![material.density * vol; count];
-    let volume = vec![vol; count];
-    let mats = vec![mat; count];
-    world
-        .add_particles(&ParticleBatch {
-            position: [&cols[0], &cols[1], &cols[2]],
-            velocity: [&cols[3], &cols[4], &cols[5]],
-            mass: &mass,
-            volume: &volume,
-            material: &mats,
-        })
-        .unwrap();
-    count
 }
 
 /// Rigid translation: a block moving at a uniform 1 m/s for 0.1 s (4 cells) stays stress-free.
@@ -273,13 +134,18 @@ fn rigid_translation_creates_no_stress() {
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
             let mat = MaterialDef::DEFAULT;
-            moving_block(&def, &mut w, &mat, |_| [1.0, 0.5, if dim == Dimension::ThreeD { -0.5 } else { 0.0 }]);
+            moving_block(&def, &mut w, &mat, |_| {
+                [1.0, 0.5, if dim == Dimension::ThreeD { -0.5 } else { 0.0 }]
+            });
             let dt = 1.0e-3;
             for _ in 0..100 {
                 w.step(dt).unwrap();
             }
             let s = max_stress(&w, mat.density);
-            assert!(s < 1.0e-6 * mat.youngs_modulus as f64, "{dim:?} {shape:?}: stress {s}");
+            assert!(
+                s < 1.0e-6 * mat.youngs_modulus as f64,
+                "{dim:?} {shape:?}: stress {s}"
+            );
         }
     }
 }
@@ -302,7 +168,10 @@ fn rigid_rotation_creates_no_stress_beyond_the_transfer_error() {
             def.flip_beta = 1.0;
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = MaterialDef { model, ..MaterialDef::DEFAULT };
+            let mat = MaterialDef {
+                model,
+                ..MaterialDef::DEFAULT
+            };
             moving_block(&def, &mut w, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
             let e0 = w.diagnostics().total_energy();
             let quarter = std::f64::consts::FRAC_PI_2;
@@ -313,10 +182,20 @@ fn rigid_rotation_creates_no_stress_beyond_the_transfer_error() {
                 w.step(dt).unwrap();
             }
             let s = max_stress(&w, mat.density);
-            assert!(s < 0.01 * mat.youngs_modulus as f64, "{shape:?} {model:?}: stress {s}");
+            assert!(
+                s < 0.01 * mat.youngs_modulus as f64,
+                "{shape:?} {model:?}: stress {s}"
+            );
             let e1 = w.diagnostics().total_energy();
-            let bound = if shape == ShapeFunction::Linear { 0.03 } else { 0.01 };
-            assert!((e1 / e0 - 1.0).abs() < bound, "{shape:?} {model:?}: energy {e0} -> {e1}");
+            let bound = if shape == ShapeFunction::Linear {
+                0.03
+            } else {
+                0.01
+            };
+            assert!(
+                (e1 / e0 - 1.0).abs() < bound,
+                "{shape:?} {model:?}: energy {e0} -> {e1}"
+            );
         }
     }
 }

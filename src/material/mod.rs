@@ -85,7 +85,10 @@ mod tests {
     use crate::math::det_identity_plus_minus_one;
 
     fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
-        let (s, c) = (libm::sin(angle as f64) as Real, libm::cos(angle as f64) as Real);
+        let (s, c) = (
+            libm::sin(angle as f64) as Real,
+            libm::cos(angle as f64) as Real,
+        );
         let (i, j) = [(1, 2), (2, 0), (0, 1)][axis];
         let mut q = [[0.0; 3]; 3];
         q[i][i] = c - 1.0;
@@ -114,10 +117,17 @@ mod tests {
                     // tau/rho0 scale of a unit strain is (lambda + 2 mu)/rho0 = 1300; round-off
                     // of order 1e-6 of it is what f32 leaves.
                     let bound = 1.0e-5 * 1300.0;
-                    assert!(s.m.iter().flatten().all(|v| v.abs() < bound), "{model:?} {angle} {axis}: {:?}", s.m);
+                    assert!(
+                        s.m.iter().flatten().all(|v| v.abs() < bound),
+                        "{model:?} {angle} {axis}: {:?}",
+                        s.m
+                    );
                     assert!(energy_density(model, &p, &h, jm1).abs() < 1.0e-5 * 1.3e6);
                 }
-                let (s2, c2) = (libm::sin(angle as f64) as Real, libm::cos(angle as f64) as Real);
+                let (s2, c2) = (
+                    libm::sin(angle as f64) as Real,
+                    libm::cos(angle as f64) as Real,
+                );
                 let h2: Mat<2> = [[c2 - 1.0, -s2], [s2, c2 - 1.0]];
                 let jm1 = det_identity_plus_minus_one(&h2);
                 let s = kirchhoff_over_rho0(model, &p, &h2, jm1);

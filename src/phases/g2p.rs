@@ -23,14 +23,6 @@ use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil};
 use crate::{Real, StepReport};
 
-/// Which nodal velocity the stress update reads.
-pub(crate) mod source {
-    /// `v_i` (USF: before the momentum update).
-    pub const VELOCITY: u8 = 0;
-    /// The re-mapped velocity (MUSL).
-    pub const REMAP: u8 = 2;
-}
-
 /// Updates F and tau/rho0 of particle `i` from its velocity gradient. Returns false (and
 /// changes nothing) if the result is not finite or F inverts.
 #[inline(always)]
@@ -136,7 +128,7 @@ pub(crate) fn particles<
             }
             continue;
         }
-        let st = Stencil::<D, K>::new(shape, geom.to_cells(x), geom.nodes, geom.stride, geom.inv_h);
+        let st = Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
         let mut v_gp = [0.0; D];
         let mut a_gp = [0.0; D];
         let mut l = [[0.0; D]; D];
@@ -170,7 +162,7 @@ pub(crate) fn particles<
             continue;
         }
         // Walls and open faces.
-        let s = geom.to_cells(x_new);
+        let s = geom.cells_of(x_new);
         let mut status = ACTIVE;
         let mut stopped = false;
         for a in 0..D {
@@ -213,10 +205,10 @@ pub(crate) fn particles<
     }
 }
 
-/// Stress update in its own pass (USF before the momentum update, MUSL after the re-map).
-/// `SOURCE` says which nodal velocity to differentiate; with MUSL the new positions are
-/// committed afterwards.
-pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const SOURCE: u8>(
+/// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
+/// from the wall-constrained velocity in the `remap` columns. `COMMIT_NEXT` (MUSL) commits
+/// the new positions afterwards.
+pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -229,18 +221,15 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const SOURCE
         if p.status[i] == ACTIVE {
             let x = load_x(p, i);
             let st =
-                Stencil::<D, K>::new(shape, geom.to_cells(x), geom.nodes, geom.stride, geom.inv_h);
+                Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
             let mut l = [[0.0; D]; D];
             st.for_each_node(geom.stride, |n, _w, grad| {
-                let vi: [Real; D] = core::array::from_fn(|a| match SOURCE {
-                    source::REMAP => g.remap[a][n],
-                    _ => g.vel[a][n],
-                });
+                let vi: [Real; D] = core::array::from_fn(|a| g.remap[a][n]);
                 accumulate_grad(&mut l, &grad, vi);
             });
             if !update_stress(ctx, p, i, &l) {
                 freeze(p, i, report);
-                if SOURCE == source::REMAP {
+                if COMMIT_NEXT {
                     // Keep the position of the start of the step, as for any frozen particle.
                     for a in 0..D {
                         p.x_next[a][i] = x[a];
@@ -248,7 +237,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const SOURCE
                 }
             }
         }
-        if SOURCE == source::REMAP {
+        if COMMIT_NEXT {
             for a in 0..D {
                 p.x[a][i] = p.x_next[a][i];
             }

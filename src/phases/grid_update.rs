@@ -16,7 +16,7 @@ pub(crate) fn reset<const D: usize>(g: &mut GridCols<'_, D>) {
     }
 }
 
-/// `cols[a][i] /= m_i` (zero on nodes at or below the mass cutoff), then the walls.
+/// `cols[a][i] /= m_i` (zero on nodes at or below the mass cutoff), plus `add[a]`.
 fn divide_by_mass<const D: usize>(
     ctx: &Ctx<'_, D>,
     mass: &[Real],
@@ -33,20 +33,51 @@ fn divide_by_mass<const D: usize>(
             };
         }
     }
-    ctx.geom.apply_walls(cols);
 }
 
-/// Momentum to velocity `v_i = p_i / m_i` (eq 28), with the walls.
+/// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
+/// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
 }
 
-/// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), with the walls.
+/// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), then the walls on the updated
+/// velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
+/// the wall's reaction `-v_i / dt`. The particle update then sees the wall stop the material
+/// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
+    let inv_dt = 1.0 / ctx.dt;
+    ctx.geom.for_each_wall_node(|i, axes| {
+        for a in 0..D {
+            if axes[a] {
+                g.acc[a][i] = -g.vel[a][i] * inv_dt;
+            }
+        }
+    });
 }
 
-/// MUSL: re-mapped momentum to velocity, with the walls.
+/// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).
 pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
+    constrain_remap(ctx, g);
+}
+
+/// USF: the lagged velocity with the walls applied, for the stress update; the unconstrained
+/// one stays in `vel` for the particle update and the wall reaction.
+pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    for a in 0..D {
+        g.remap[a].copy_from_slice(g.vel[a]);
+    }
+    constrain_remap(ctx, g);
+}
+
+fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    ctx.geom.for_each_wall_node(|i, axes| {
+        for a in 0..D {
+            if axes[a] {
+                g.remap[a][i] = 0.0;
+            }
+        }
+    });
 }

@@ -32,7 +32,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
         if p.status[i] != ACTIVE {
             continue;
         }
-        let s = geom.to_cells(load_x(p, i));
+        let s = geom.cells_of(load_x(p, i));
         let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
         let m = p.mass[i];
         let v = load_v(p, i);

@@ -134,7 +134,7 @@ mod tests {
         let nodes = [N, N];
         let stride = [1, N];
         let mut st = 7u64;
-        let mut check = |s: [Real; 2]| {
+        let check = |s: [Real; 2]| {
             let stencil = Stencil::<2, K>::new(&shape, s, nodes, stride, 1.0 / h);
             let (mut sum_w, mut sum_g, mut sum_x) = (0.0, [0.0; 2], [0.0; 2]);
             let mut sum_gx = [[0.0; 2]; 2];

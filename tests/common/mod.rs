@@ -2,8 +2,8 @@
 #![allow(dead_code)]
 
 use mpm_gimp::{
-    memory_requirements, Boundary, Dimension, HeapBuffer, ParticleStatus, Real, ShapeFunction,
-    UpdateOrder, World, WorldDef,
+    memory_requirements, Boundary, Dimension, Face, HeapBuffer, MaterialDef, MaterialModel,
+    ParticleBatch, ParticleStatus, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
 };
 
 pub const SHAPES: [ShapeFunction; 4] = [
@@ -76,4 +76,157 @@ pub fn max_stress(world: &World, rho0: Real) -> f64 {
             s2.sqrt()
         })
         .fold(0.0, f64::max)
+}
+
+/// A fixed-free bar along x of length `l`, `cells_per_l` cells per length, in 2D plane strain
+/// with nu = 0 (so it is exactly one-dimensional: sigma_xx = E eps_xx, c = sqrt(E / rho)),
+/// four cells high between slip walls, fixed (stick) at x = wall, free at the other end.
+pub struct Bar {
+    pub def: WorldDef,
+    pub l: Real,
+    pub wall: Real,
+    pub c: Real,
+    pub v0: Real,
+    pub material: MaterialDef,
+}
+
+impl Bar {
+    pub fn new(shape: ShapeFunction, cells_per_l: u32, v0: Real) -> Bar {
+        let l: Real = 1.0;
+        let h = l / cells_per_l as Real;
+        let m = shape.margin_cells();
+        let mut def = WorldDef {
+            dimension: Dimension::Plane2D,
+            cells: [cells_per_l + 2 * m + cells_per_l / 2, 4 + 2 * m, 1],
+            cell_size: h,
+            shape,
+            gravity: Vec3::ZERO,
+            faces: [Boundary::Slip; 6],
+            flip_beta: 1.0,
+            update_order: UpdateOrder::Musl,
+            particle_capacity: 4 * cells_per_l * 4,
+            ..WorldDef::DEFAULT
+        };
+        def.faces[Face::XMin as usize] = Boundary::Stick;
+        def.faces[Face::XMax as usize] = Boundary::Open;
+        let material = MaterialDef {
+            model: MaterialModel::LinearElastic,
+            youngs_modulus: 1.0e6,
+            poisson_ratio: 0.0,
+            density: 1000.0,
+        };
+        Bar {
+            def,
+            l,
+            wall: m as Real * h,
+            c: (material.youngs_modulus / material.density).sqrt(),
+            v0,
+            material,
+        }
+    }
+
+    pub fn omega(&self) -> Real {
+        std::f64::consts::PI as Real * self.c / (2.0 * self.l)
+    }
+
+    pub fn period(&self) -> Real {
+        4.0 * self.l / self.c
+    }
+
+    /// Exact displacement of the point at reference position x0 at time t:
+    /// `u = (v0 / omega) sin(pi (x0 - wall) / 2L) sin(omega t)`.
+    pub fn exact_u(&self, x0: Real, t: f64) -> f64 {
+        let k = std::f64::consts::PI / (2.0 * self.l as f64);
+        (self.v0 / self.omega()) as f64
+            * (k * (x0 - self.wall) as f64).sin()
+            * (self.omega() as f64 * t).sin()
+    }
+
+    /// Adds the bar's material and particles (2 x 2 per cell, at the sub-cell centres) moving
+    /// in the first mode's velocity field `v = v0 sin(pi (x0 - wall) / 2L)`. Returns the
+    /// reference x of every particle.
+    pub fn populate(&self, world: &mut World) -> Vec<Real> {
+        let mat = world.add_material(&self.material).unwrap();
+        let h = self.def.cell_size;
+        let d = h / 2.0;
+        let nx = (self.l / d).round() as usize;
+        let k = std::f64::consts::PI as Real / (2.0 * self.l);
+        let (mut x, mut y, mut vx) = (vec![], vec![], vec![]);
+        for j in 0..8 {
+            for i in 0..nx {
+                let x0 = self.wall + (i as Real + 0.5) * d;
+                x.push(x0);
+                y.push(self.wall + (j as Real + 0.5) * d);
+                vx.push(self.v0 * (k * (x0 - self.wall)).sin());
+            }
+        }
+        let n = x.len();
+        let (vy, mass, vol, mats) = (
+            vec![0.0; n],
+            vec![self.material.density * d * d; n],
+            vec![d * d; n],
+            vec![mat; n],
+        );
+        world
+            .add_particles(&ParticleBatch {
+                position: [&x, &y, &[]],
+                velocity: [&vx, &vy, &[]],
+                mass: &mass,
+                volume: &vol,
+                material: &mats,
+            })
+            .unwrap();
+        x
+    }
+}
+
+/// Builds a square (2D) or cube (3D) block of side 0.3 m centred at 0.5 m with velocity
+/// `v(x)` at 2 particles per cell per axis, in free space (no gravity, open faces).
+pub fn moving_block(
+    def: &WorldDef,
+    world: &mut World,
+    material: &MaterialDef,
+    v: impl Fn([Real; 3]) -> [Real; 3],
+) -> usize {
+    let mat = world.add_material(material).unwrap();
+    let d = def.axes();
+    let spacing = def.cell_size / 2.0;
+    let n = (0.3 / spacing).round() as usize;
+    let mut cols: [Vec<Real>; 6] = Default::default();
+    let nz = if d == 3 { n } else { 1 };
+    for k in 0..nz {
+        for j in 0..n {
+            for i in 0..n {
+                let x = [
+                    0.35 + (i as Real + 0.5) * spacing,
+                    0.35 + (j as Real + 0.5) * spacing,
+                    if d == 3 {
+                        0.35 + (k as Real + 0.5) * spacing
+                    } else {
+                        0.0
+                    },
+                ];
+                let vel = v(x);
+                for a in 0..3 {
+                    cols[a].push(x[a]);
+                    cols[3 + a].push(vel[a]);
+                }
+            }
+        }
+    }
+    let count = cols[0].len();
+    let vol = spacing.powi(d as i32);
+    let mass = vec![material.density * vol; count];
+    let volume = vec![vol; count];
+    let mats = vec![mat; count];
+    world
+        .add_particles(&ParticleBatch {
+            position: [&cols[0], &cols[1], &cols[2]],
+            velocity: [&cols[3], &cols[4], &cols[5]],
+            mass: &mass,
+            volume: &volume,
+            material: &mats,
+        })
+        .unwrap();
+    count
 }

@@ -1,0 +1,328 @@
+//! Hard cases that must stay finite and bounded: no NaN, mass exact, and kinetic + strain
+//! energy never above its start plus the work of gravity by more than 1 %.
+
+mod common;
+
+use common::*;
+use mpm_gimp::{
+    Boundary, Dimension, Face, MaterialDef, MaterialModel, ParticleBatch, ParticleStatus, Real,
+    ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
+};
+
+/// Tracks the energy budget of a run: kinetic + strain must stay below its start plus the
+/// work gravity did (potential energy released) by more than 1 % of that budget.
+struct Budget {
+    start: f64,
+    potential0: f64,
+    worst: f64,
+}
+
+impl Budget {
+    fn new(w: &World) -> Self {
+        let d = w.diagnostics();
+        Budget {
+            start: d.kinetic + d.strain,
+            potential0: d.potential,
+            worst: 0.0,
+        }
+    }
+
+    /// Records one sample; returns the excess over the budget as a fraction of the budget.
+    fn sample(&mut self, w: &World) {
+        let d = w.diagnostics();
+        let work = self.potential0 - d.potential;
+        let budget = self.start + work;
+        let excess = (d.kinetic + d.strain - budget) / budget.max(1e-12);
+        self.worst = self.worst.max(excess);
+    }
+}
+
+/// Finite, mass exact, and energy within budget: 1 % for uGIMP and the B-splines. Linear MPM's
+/// cell-crossing error adds energy whenever a particle's gradient jumps at a cell edge (the
+/// error GIMP was made to remove): measured up to 4.8 % in these scenes, so linear is held to
+/// 10 %, which still catches any blow-up.
+fn check(w: &World, mass0: f64, budget: &Budget, label: &str) {
+    assert!(all_finite(w), "{label}: non-finite state");
+    assert_eq!(total_mass(w), mass0, "{label}: mass changed");
+    let bound = if w.def().shape == ShapeFunction::Linear {
+        0.10
+    } else {
+        0.01
+    };
+    assert!(
+        budget.worst <= bound,
+        "{label}: energy above budget by {:.3} %",
+        100.0 * budget.worst
+    );
+}
+
+/// The fixed-free bar at an amplitude of 3 cells (peak strain 15 %): particles cross cells
+/// every half period. Every shape, default order and beta, 2 periods, at CFL 0.4: the explicit
+/// update's measured energy oscillates about its conserved value by an O(omega dt) phase error,
+/// 2.2 % x CFL for this bar (measured with uGIMP: 1.11 % at CFL 0.5, 0.88 % at 0.4, 0.64 % at
+/// 0.3, 0.10 % at 0.1, the same at 0.5 and 3 cells of amplitude), which is not growth.
+#[test]
+fn bar_crossing_cells_stays_finite_and_bounded() {
+    for shape in SHAPES {
+        let mut bar = Bar::new(shape, 32, 0.0);
+        bar.v0 = 3.0 * bar.def.cell_size * bar.omega();
+        bar.def.flip_beta = WorldDef::DEFAULT.flip_beta;
+        bar.def.update_order = WorldDef::DEFAULT.update_order;
+        bar.def.cfl = 0.4;
+        let mut buf = buffer_for(&bar.def);
+        let mut w = World::init(&bar.def, buf.as_mut_bytes()).unwrap();
+        let x0 = bar.populate(&mut w);
+        let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+        let steps = (2.0 * bar.period() / w.stable_dt()).ceil() as usize;
+        let mut max_disp: Real = 0.0;
+        for _ in 0..steps {
+            w.step(w.stable_dt()).unwrap();
+            budget.sample(&w);
+            let v = w.particles();
+            max_disp = max_disp.max((v.position[0][v.count - 1] - x0[v.count - 1]).abs());
+        }
+        check(&w, mass0, &budget, &format!("{shape:?}"));
+        assert!(
+            max_disp > 2.0 * bar.def.cell_size,
+            "{shape:?}: the tip moved only {max_disp}"
+        );
+    }
+}
+
+/// Particles placed exactly on grid nodes and exactly on cell edges (where linear weights'
+/// gradients jump and uGIMP switches branches), in 2D and 3D, falling onto a stick floor.
+#[test]
+fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            let h: Real = 0.05;
+            let mut def = WorldDef {
+                dimension: dim,
+                shape,
+                cell_size: h,
+                cells: if dim == Dimension::ThreeD {
+                    [16; 3]
+                } else {
+                    [16, 16, 1]
+                },
+                particle_capacity: 20_000,
+                ..WorldDef::DEFAULT
+            };
+            def.faces[Face::YMin as usize] = Boundary::Stick;
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let mat = w.add_material(&MaterialDef::DEFAULT).unwrap();
+            let d = def.axes();
+            // Nodes i*h and edge midpoints (i + 1/2) h in x, nodes in y and z: spacing h/2.
+            let mut c: [Vec<Real>; 3] = Default::default();
+            let nz = if d == 3 { 9 } else { 1 };
+            for k in 0..nz {
+                for j in 0..9 {
+                    for i in 0..17 {
+                        c[0].push(4.0 * h + i as Real * 0.5 * h);
+                        c[1].push(4.0 * h + j as Real * h);
+                        c[2].push(if d == 3 { 4.0 * h + k as Real * h } else { 0.0 });
+                    }
+                }
+            }
+            let n = c[0].len();
+            let vol = 0.5 * h.powi(d as i32);
+            let zeros = vec![0.0; n];
+            w.add_particles(&ParticleBatch {
+                position: [&c[0], &c[1], &c[2]],
+                velocity: [&zeros, &zeros, &zeros],
+                mass: &vec![1000.0 * vol; n],
+                volume: &vec![vol; n],
+                material: &vec![mat; n],
+            })
+            .unwrap();
+            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+            for _ in 0..30 {
+                w.step(1.0 / 120.0).unwrap();
+                budget.sample(&w);
+            }
+            check(&w, mass0, &budget, &format!("{dim:?} {shape:?}"));
+        }
+    }
+}
+
+/// A block dropped from 0.3 m onto a stick floor, 2D and 3D, every shape and order but linear
+/// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second.
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            for order in ORDERS {
+                if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
+                    continue;
+                }
+                let mut def = WorldDef {
+                    dimension: dim,
+                    shape,
+                    update_order: order,
+                    cell_size: 0.05,
+                    cells: if dim == Dimension::ThreeD {
+                        [20; 3]
+                    } else {
+                        [20, 20, 1]
+                    },
+                    particle_capacity: 20_000,
+                    ..WorldDef::DEFAULT
+                };
+                def.faces[Face::YMin as usize] = Boundary::Stick;
+                let mut buf = buffer_for(&def);
+                let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+                let mat = w
+                    .add_material(&MaterialDef {
+                        youngs_modulus: 2.0e5,
+                        ..MaterialDef::DEFAULT
+                    })
+                    .unwrap();
+                let z = if dim == Dimension::ThreeD { 0.3 } else { 0.0 };
+                let z1 = if dim == Dimension::ThreeD { 0.7 } else { 0.0 };
+                w.fill_box(
+                    Vec3::new(0.3, 0.4, z),
+                    Vec3::new(0.7, 0.7, z1),
+                    mat,
+                    Vec3::ZERO,
+                )
+                .unwrap();
+                let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+                let y0 = w.diagnostics().center_of_mass[1];
+                let mut y_low = y0;
+                for _ in 0..60 {
+                    w.step(1.0 / 60.0).unwrap();
+                    budget.sample(&w);
+                    y_low = y_low.min(w.diagnostics().center_of_mass[1]);
+                }
+                let label = format!("{dim:?} {shape:?} {order:?}");
+                check(&w, mass0, &budget, &label);
+                // Resting on the floor, the centre of mass is at the wall plus half the block's
+                // height (0.15 m): the block must get near that and never through the floor.
+                let wall = shape.margin_cells() as f64 * def.cell_size as f64;
+                assert!(
+                    y_low < wall + 0.2,
+                    "{label}: block did not reach the floor ({y0} -> {y_low})"
+                );
+                assert!(
+                    y_low > wall + 0.05,
+                    "{label}: block went through the floor ({y_low})"
+                );
+                assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
+            }
+        }
+    }
+}
+
+/// A block thrown at 20 m/s (half the wave speed) at an open face, 2D and 3D: the particles that
+/// cross it leave the simulation and are counted; the rest stay finite and bounded.
+#[test]
+fn block_thrown_at_open_face_escapes_cleanly() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            let mut def = free_space(dim, 20, 0.05);
+            def.shape = shape;
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let mat = MaterialDef::DEFAULT;
+            let n = moving_block(&def, &mut w, &mat, |_| [20.0, 0.0, 0.0]);
+            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+            let mut escaped = 0;
+            for _ in 0..40 {
+                escaped += w.step(1.0 / 400.0).unwrap().escaped as usize;
+                budget.sample(&w);
+            }
+            let label = format!("{dim:?} {shape:?}");
+            check(&w, mass0, &budget, &label);
+            assert_eq!(
+                escaped, n,
+                "{label}: every particle should have left through +x"
+            );
+            assert_eq!(count_status(&w, ParticleStatus::Escaped), n, "{label}");
+            let v = w.particles();
+            let hi = def.origin.x + (def.cells[0] - shape.margin_cells()) as Real * def.cell_size;
+            assert!(
+                v.position[0].iter().all(|&x| x <= hi),
+                "{label}: particle outside the grid"
+            );
+        }
+    }
+}
+
+/// A block whose velocity field `v = -k (x - c)` converges on its centre, fast enough to crush
+/// it to J = 0.1 before the neo-Hookean pressure turns it back (k = 500 / s, edge speed 75 m/s,
+/// twice the wave speed). Every shape, 2D and 3D.
+#[test]
+fn block_compressed_to_j_of_one_tenth_stays_finite_and_bounded() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            let mut def = free_space(dim, 40, 0.025);
+            def.shape = shape;
+            if dim == Dimension::ThreeD {
+                def.cells = [20; 3];
+                def.cell_size = 0.05;
+            }
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let mat = MaterialDef {
+                model: MaterialModel::NeoHookean,
+                ..MaterialDef::DEFAULT
+            };
+            let k = if dim == Dimension::ThreeD {
+                400.0
+            } else {
+                500.0
+            };
+            moving_block(&def, &mut w, &mat, |x| {
+                let z = if dim == Dimension::ThreeD {
+                    -k * (x[2] - 0.5)
+                } else {
+                    0.0
+                };
+                [-k * (x[0] - 0.5), -k * (x[1] - 0.5), z]
+            });
+            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+            let mut j_min: Real = 1.0;
+            for _ in 0..300 {
+                w.step(w.stable_dt().min(2.0e-5)).unwrap();
+                budget.sample(&w);
+                let v = w.particles();
+                j_min = (0..v.count).map(|i| v.jacobian(i)).fold(j_min, Real::min);
+            }
+            let label = format!("{dim:?} {shape:?}");
+            check(&w, mass0, &budget, &label);
+            assert!(j_min <= 0.1, "{label}: only compressed to J = {j_min}");
+            assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
+        }
+    }
+}
+
+/// Classic MPM (linear shapes) with USL is unstable when particles cross into cells whose
+/// nodes carry only a sliver of mass: `f_i / m_i` is unbounded while the linear gradient is not
+/// (Bardenhagen 2002). The kernel cannot make that scheme stable, but it must contain it: the
+/// state stays finite, nothing leaves the grid's memory, mass is exact, and particles whose
+/// state blows up are frozen and reported.
+#[test]
+fn linear_usl_cell_crossing_instability_is_contained() {
+    let mut def = free_space(Dimension::Plane2D, 40, 0.025);
+    def.shape = ShapeFunction::Linear;
+    def.update_order = UpdateOrder::Usl;
+    def.flip_beta = 1.0;
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let mat = MaterialDef {
+        youngs_modulus: 1.0e7,
+        ..MaterialDef::DEFAULT
+    };
+    moving_block(&def, &mut w, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
+    let mass0 = total_mass(&w);
+    let mut frozen = 0;
+    for _ in 0..2000 {
+        let r = w.step(w.stable_dt()).unwrap();
+        frozen += r.frozen;
+        assert!(r.first_frozen.len() <= 8);
+    }
+    assert!(all_finite(&w));
+    assert_eq!(total_mass(&w), mass0);
+    assert_eq!(frozen as usize, count_status(&w, ParticleStatus::Frozen));
+}
