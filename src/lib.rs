@@ -78,3 +78,8 @@ pub type Vec3 = glam::Vec3;
 /// Three-component vector of [`Real`] used by definitions and fill helpers.
 #[cfg(feature = "f64")]
 pub type Vec3 = glam::DVec3;
+
+/// The README's Rust example, compiled and run as a doctest so it stays true.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -570,12 +570,18 @@ impl<'a> World<'a> {
         let n = self.particle_count();
         let d = layout.d;
         let status = self.u32_col(&layout, col::STATUS, n);
+        let v: [&[Real]; 3] = core::array::from_fn(|a| {
+            if a < d {
+                self.real_col(&layout, col::v(d, a), n)
+            } else {
+                &[]
+            }
+        });
         let mut v2_max: Real = 0.0;
         for i in 0..n {
             let mut v2 = 0.0;
-            for a in 0..d {
-                let v = self.real_col(&layout, col::v(d, a), n)[i];
-                v2 += v * v;
+            for va in v.iter().take(d) {
+                v2 += va[i] * va[i];
             }
             if status[i] == ACTIVE && v2 > v2_max {
                 v2_max = v2;

@@ -82,34 +82,45 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         Stencil { base, w, dw }
     }
 
-    /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them).
+    /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
+    /// Every `node` is below the product of the `nodes` the stencil was made with (the first
+    /// node was clamped so that the last one exists).
     #[inline(always)]
     pub fn for_each_node(&self, stride: [usize; D], mut f: impl FnMut(usize, Real, [Real; D])) {
-        let count = K.pow(D as u32);
-        for n in 0..count {
-            let mut idx = self.base;
-            let mut k = [0usize; D];
-            let mut rem = n;
-            for a in 0..D {
-                k[a] = rem % K;
-                rem /= K;
-                idx += k[a] * stride[a];
+        let (w, dw) = (&self.w, &self.dw);
+        if D == 2 {
+            for j in 0..K {
+                let row = self.base + j * stride[1];
+                for i in 0..K {
+                    let g: [Real; D] = core::array::from_fn(|a| {
+                        if a == 0 {
+                            dw[0][i] * w[1][j]
+                        } else {
+                            w[0][i] * dw[1][j]
+                        }
+                    });
+                    f(row + i, w[0][i] * w[1][j], g);
+                }
             }
-            let mut weight = 1.0;
-            for a in 0..D {
-                weight *= self.w[a][k[a]];
-            }
-            let mut grad = [0.0; D];
-            for (a, g) in grad.iter_mut().enumerate() {
-                let mut v = self.dw[a][k[a]];
-                for b in 0..D {
-                    if b != a {
-                        v *= self.w[b][k[b]];
+        } else {
+            for k in 0..K {
+                for j in 0..K {
+                    let row = self.base + j * stride[1] + k * stride[D - 1];
+                    let (wjk, djk_y, djk_z) = (
+                        w[1][j] * w[D - 1][k],
+                        dw[1][j] * w[D - 1][k],
+                        w[1][j] * dw[D - 1][k],
+                    );
+                    for i in 0..K {
+                        let g: [Real; D] = core::array::from_fn(|a| match a {
+                            0 => dw[0][i] * wjk,
+                            1 => w[0][i] * djk_y,
+                            _ => w[0][i] * djk_z,
+                        });
+                        f(row + i, w[0][i] * wjk, g);
                     }
                 }
-                *g = v;
             }
-            f(idx, weight, grad);
         }
     }
 }
