@@ -11,6 +11,7 @@
 use crate::def::{Boundary, WorldDef};
 use crate::layout::Layout;
 use crate::particles::Carver;
+use crate::shape::ROW;
 use crate::Real;
 
 /// Mutable views of every node column, each `nodes` long.
@@ -27,11 +28,34 @@ pub(crate) struct GridCols<'a, const D: usize> {
     pub remap: [&'a mut [Real]; D],
 }
 
+/// The [`ROW`] values of `col` from `start` (zeros past the column's end, which the padding
+/// makes unreachable for stencil rows).
+#[inline(always)]
+pub(crate) fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
+    match col.get(start..start + ROW) {
+        Some(r) => core::array::from_fn(|i| r[i]),
+        None => [0.0; ROW],
+    }
+}
+
+/// Adds `v` to the [`ROW`] values of `col` from `start` (nothing past the column's end, which
+/// the padding makes unreachable for stencil rows).
+#[inline(always)]
+pub(crate) fn add_row(col: &mut [Real], start: usize, v: &[Real; ROW]) {
+    if let Some(r) = col.get_mut(start..start + ROW) {
+        for i in 0..ROW {
+            r[i] += v[i];
+        }
+    }
+}
+
 impl<'a, const D: usize> GridCols<'a, D> {
-    /// Carves the grid region (starting at `layout.grid_offset`) into columns.
+    /// Carves the grid region (starting at `layout.grid_offset`) into columns, each `nodes`
+    /// plus [`ROW`] entries of padding long (a stencil row may reach two entries past the last
+    /// node; the padding only ever receives zero weights).
     pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
         let mut c = Carver::new(region);
-        let (b, n) = (layout.node_column_bytes, layout.nodes);
+        let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let has_remap = layout.grid_columns > 1 + 2 * D;
         let mass = c.take(b, n);
         let vel = core::array::from_fn(|_| c.take(b, n));

@@ -139,7 +139,11 @@ impl Layout {
         let u32_column_bytes = round_up(cap * 4, ALIGN);
         let particle_real_columns =
             2 * d + 2 + d * d + stress_components(d) + if musl { d } else { 0 };
-        let node_column_bytes = round_up(round_up(nodes, CHUNK) * size_of::<Real>(), ALIGN);
+        // Stencil rows may reach past the last node: see `crate::shape::ROW`.
+        let node_column_bytes = round_up(
+            round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>(),
+            ALIGN,
+        );
         let stress_velocity = def.update_order != UpdateOrder::Usl;
         let grid_columns = 1 + 2 * d + if stress_velocity { d } else { 0 };
         let materials_offset = round_up(size_of::<Header>(), ALIGN);

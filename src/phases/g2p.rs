@@ -16,11 +16,11 @@
 
 use super::{load_h, load_v, load_x, Ctx};
 use crate::def::Boundary;
-use crate::grid::GridCols;
+use crate::grid::{load_row, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, Params};
 use crate::math::{det_identity_plus_minus_one, exp_series_minus_identity, mul, Mat};
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Shape1D, Stencil};
+use crate::shape::{Shape1D, Stencil, ROW};
 use crate::{Real, StepReport};
 
 /// Updates F and tau/rho0 of particle `i` from its velocity gradient. Returns false (and
@@ -87,17 +87,6 @@ fn freeze<const D: usize>(p: &mut ParticleCols<'_, D>, i: usize, report: &mut St
     report.note_frozen(i as u32);
 }
 
-/// Velocity gradient `L[a][b] = dv_a / dx_b` from nodal velocity columns `vel` (plus
-/// `dt * acc` when `acc` is given).
-#[inline(always)]
-fn accumulate_grad<const D: usize>(l: &mut Mat<D>, grad: &[Real; D], v: [Real; D]) {
-    for a in 0..D {
-        for b in 0..D {
-            l[a][b] += v[a] * grad[b];
-        }
-    }
-}
-
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
 /// from `v_i + a_i dt` in the same pass (USL); `TO_NEXT` writes the new positions to the MUSL
 /// scratch columns instead of the positions.
@@ -129,20 +118,31 @@ pub(crate) fn particles<
             continue;
         }
         let st = Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
-        let mut v_gp = [0.0; D];
-        let mut a_gp = [0.0; D];
-        let mut l = [[0.0; D]; D];
-        st.for_each_node(geom.stride, |n, w, grad| {
-            let vi: [Real; D] = core::array::from_fn(|a| g.vel[a][n]);
-            let ai: [Real; D] = core::array::from_fn(|a| g.acc[a][n]);
+        // Row-wide partial sums, reduced once at the end.
+        let mut v_acc = [[0.0; ROW]; D];
+        let mut a_acc = [[0.0; ROW]; D];
+        let mut l_acc = [[[0.0; ROW]; D]; D];
+        st.for_each_row(geom.stride, |row, w, grad| {
             for a in 0..D {
-                v_gp[a] += w * vi[a];
-                a_gp[a] += w * ai[a];
-            }
-            if FUSED_STRESS {
-                accumulate_grad(&mut l, &grad, core::array::from_fn(|a| vi[a] + dt * ai[a]));
+                let vi = load_row(g.vel[a], row);
+                let ai = load_row(g.acc[a], row);
+                for i in 0..ROW {
+                    v_acc[a][i] += w[i] * vi[i];
+                    a_acc[a][i] += w[i] * ai[i];
+                }
+                if FUSED_STRESS {
+                    for b in 0..D {
+                        for i in 0..ROW {
+                            l_acc[a][b][i] += (vi[i] + dt * ai[i]) * grad[b][i];
+                        }
+                    }
+                }
             }
         });
+        let v_gp: [Real; D] = core::array::from_fn(|a| v_acc[a].iter().sum());
+        let a_gp: [Real; D] = core::array::from_fn(|a| a_acc[a].iter().sum());
+        let l: Mat<D> =
+            core::array::from_fn(|a| core::array::from_fn(|b| l_acc[a][b].iter().sum()));
         let v = load_v(p, i);
         let mut v_new = [0.0; D];
         let mut x_new = [0.0; D];
@@ -222,11 +222,19 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
             let x = load_x(p, i);
             let st =
                 Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
-            let mut l = [[0.0; D]; D];
-            st.for_each_node(geom.stride, |n, _w, grad| {
-                let vi: [Real; D] = core::array::from_fn(|a| g.remap[a][n]);
-                accumulate_grad(&mut l, &grad, vi);
+            let mut l_acc = [[[0.0; ROW]; D]; D];
+            st.for_each_row(geom.stride, |row, _w, grad| {
+                for a in 0..D {
+                    let vi = load_row(g.remap[a], row);
+                    for b in 0..D {
+                        for i in 0..ROW {
+                            l_acc[a][b][i] += vi[i] * grad[b][i];
+                        }
+                    }
+                }
             });
+            let l: Mat<D> =
+                core::array::from_fn(|a| core::array::from_fn(|b| l_acc[a][b].iter().sum()));
             if !update_stress(ctx, p, i, &l) {
                 freeze(p, i, report);
                 if COMMIT_NEXT {

@@ -3,9 +3,11 @@
 //! enters in the grid update as `m_i g` (eq 22).
 
 use super::{load_tau, load_v, load_x, Ctx};
-use crate::grid::GridCols;
+use crate::grid::{add_row, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
+use crate::shape::ROW;
 use crate::shape::{Shape1D, Stencil};
+use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
 pub(crate) mod mode {
@@ -42,25 +44,30 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
         } else {
             [[0.0; D]; D]
         };
-        st.for_each_node(geom.stride, |n, w, grad| {
+        // Force on a node: f_a = -m sum_b tau_ab G_b, so coefficient c[a][b] = -m tau_ab.
+        let c: [[Real; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| -m * tau[a][b]));
+        st.for_each_row(geom.stride, |row, w, grad| {
             if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                g.mass[n] += w * m;
+                add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m));
                 for a in 0..D {
-                    g.vel[a][n] += w * mv[a];
+                    add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a]));
                 }
             }
             if MODE == mode::REMAP {
                 for a in 0..D {
-                    g.remap[a][n] += w * mv[a];
+                    add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]));
                 }
             }
             if MODE == mode::ALL || MODE == mode::FORCE {
                 for a in 0..D {
-                    let mut t = 0.0;
-                    for b in 0..D {
-                        t += tau[a][b] * grad[b];
-                    }
-                    g.acc[a][n] -= m * t;
+                    let f: [Real; ROW] = core::array::from_fn(|i| {
+                        let mut t = 0.0;
+                        for b in 0..D {
+                            t += c[a][b] * grad[b][i];
+                        }
+                        t
+                    });
+                    add_row(g.acc[a], row, &f);
                 }
             }
         });

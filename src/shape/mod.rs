@@ -1,8 +1,13 @@
 //! Shape functions: one file per family, one way to ask any of them for `S_ip` and `G_ip`.
 //!
 //! Every family is evaluated per axis ([`Shape1D`]) and combined by tensor product
-//! ([`Stencil::for_each_node`]): in 2D and 3D, `S_ip` is the product of the per-axis values and
-//! each component of `G_ip` replaces one factor by its derivative (seeds/000 eqs 16-17).
+//! ([`Stencil::for_each_node`], or row by row with [`Stencil::for_each_row`]): in 2D and 3D,
+//! `S_ip` is the product of the per-axis values and each component of `G_ip` replaces one factor
+//! by its derivative (seeds/000 eqs 16-17).
+//!
+//! The hot loops work row by row: the `K` nodes of a stencil row along x are contiguous in every
+//! node column, so a row is one [`ROW`]-wide vector load, add and store, padded with zero
+//! weights. Node columns therefore carry [`ROW`] entries of padding past the last node.
 //!
 //! Positions are given in cell units relative to the grid origin (`s = (x - origin) / h`), so a
 //! node `i` sits at `s = i` and the per-axis offset is `xi = s - i`.
@@ -16,6 +21,10 @@ pub use gimp::Gimp;
 pub use linear::Linear;
 
 use crate::Real;
+
+/// Width of a stencil row in the hot loops: every family has `K <= 4` nodes per axis, padded
+/// with zero weights to 4.
+pub const ROW: usize = 4;
 
 /// One family of 1D shape functions with `K` nodes of support.
 pub trait Shape1D<const K: usize>: Copy {
@@ -47,10 +56,11 @@ pub trait Shape1D<const K: usize>: Copy {
 pub struct Stencil<const D: usize, const K: usize> {
     /// Flat index of the stencil's first node.
     pub base: usize,
-    /// Per-axis weights `w[axis][k]`.
-    pub w: [[Real; K]; D],
-    /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h).
-    pub dw: [[Real; K]; D],
+    /// Per-axis weights `w[axis][k]`, zero for `k >= K`.
+    pub w: [[Real; ROW]; D],
+    /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h), zero for
+    /// `k >= K`.
+    pub dw: [[Real; ROW]; D],
 }
 
 impl<const D: usize, const K: usize> Stencil<D, K> {
@@ -67,19 +77,57 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         inv_h: Real,
     ) -> Self {
         let mut base = 0usize;
-        let mut w = [[0.0; K]; D];
-        let mut dw = [[0.0; K]; D];
+        let mut w = [[0.0; ROW]; D];
+        let mut dw = [[0.0; ROW]; D];
         for a in 0..D {
             let hi = (nodes[a] - K) as i32;
             let first = S::first_node(s[a]).clamp(0, hi);
             base += first as usize * stride[a];
             let (wa, dwa) = shape.stencil(s[a] - first as Real);
-            w[a] = wa;
             for k in 0..K {
+                w[a][k] = wa[k];
                 dw[a][k] = dwa[k] * inv_h;
             }
         }
         Stencil { base, w, dw }
+    }
+
+    /// Calls `f(row, S, G)` for every row of the stencil along x (K^(D-1) of them): `row` is the
+    /// flat index of the row's first node, `S[i]` and `G[axis][i]` the weight and gradient of
+    /// node `row + i` for `i < ROW` (zero for `i >= K`). `row + ROW` is at most two past the
+    /// last node, which the node columns' padding covers.
+    #[inline(always)]
+    pub fn for_each_row(
+        &self,
+        stride: [usize; D],
+        mut f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
+    ) {
+        let (w, dw) = (&self.w, &self.dw);
+        let layers = if D == 3 { K } else { 1 };
+        for k in 0..layers {
+            for j in 0..K {
+                let row = self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
+                // Weight of the row in y (and z) and its derivatives.
+                let (wt, dy, dz) = if D == 3 {
+                    (
+                        w[1][j] * w[D - 1][k],
+                        dw[1][j] * w[D - 1][k],
+                        w[1][j] * dw[D - 1][k],
+                    )
+                } else {
+                    (w[1][j], dw[1][j], 0.0)
+                };
+                let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
+                let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
+                    core::array::from_fn(|i| match a {
+                        0 => dw[0][i] * wt,
+                        1 => w[0][i] * dy,
+                        _ => w[0][i] * dz,
+                    })
+                });
+                f(row, &s, &g);
+            }
+        }
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
