@@ -116,16 +116,6 @@ impl<const D: usize> Geom<D> {
         g
     }
 
-    /// Position in cell units.
-    #[inline(always)]
-    pub fn cells_of(&self, x: [Real; D]) -> [Real; D] {
-        let mut s = [0.0; D];
-        for a in 0..D {
-            s[a] = (x[a] - self.origin[a]) * self.inv_h;
-        }
-        s
-    }
-
     /// Calls `f(node, fixed)` for every node between a grid face and its wall plane, for each
     /// stick or slip face, where `fixed[a]` says which velocity components the wall fixes to
     /// zero: all of them at a stick wall, the normal one at a slip wall. A node near an edge

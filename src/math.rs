@@ -45,6 +45,58 @@ pub fn ln_1p(x: Real) -> Real {
     }
 }
 
+/// `ln(1 + x)` for `x > -1`, written without calls or branches so that a loop over particles
+/// that uses it vectorises: `ln(1 + x) = ln(u) x / (u - 1)` with `u = 1 + x` (Goldberg's trick,
+/// exact where `u` rounds to 1), and `ln(u) = e ln 2 + 2 atanh((m - 1) / (m + 1))` from the
+/// float's exponent e and mantissa m in [sqrt(1/2), sqrt(2)). Relative error a few ulps.
+#[inline(always)]
+pub fn ln_1p_fast(x: Real) -> Real {
+    let u = 1.0 + x;
+    #[cfg(not(feature = "f64"))]
+    let (e, m) = {
+        let bits = u.to_bits();
+        let mut e = ((bits >> 23) & 0xff) as i32 - 127;
+        let mut m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+        let big = m > core::f32::consts::SQRT_2;
+        m = if big { 0.5 * m } else { m };
+        e += big as i32;
+        (e as Real, m)
+    };
+    #[cfg(feature = "f64")]
+    let (e, m) = {
+        let bits = u.to_bits();
+        let mut e = ((bits >> 52) & 0x7ff) as i64 - 1023;
+        let mut m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 0x3ff0_0000_0000_0000);
+        let big = m > core::f64::consts::SQRT_2;
+        m = if big { 0.5 * m } else { m };
+        e += big as i64;
+        (e as Real, m)
+    };
+    let t = (m - 1.0) / (m + 1.0);
+    let t2 = t * t;
+    // atanh series in t^2, |t| <= 0.1716: f32 needs terms to t^9, f64 to t^21.
+    #[cfg(not(feature = "f64"))]
+    let series = 1.0 + t2 * (1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (1.0 / 7.0 + t2 * (1.0 / 9.0))));
+    #[cfg(feature = "f64")]
+    let series = {
+        let mut acc = 1.0 / 21.0;
+        let mut k = 19.0;
+        while k >= 1.0 {
+            acc = 1.0 / k + t2 * acc;
+            k -= 2.0;
+        }
+        acc
+    };
+    let ln_u = e * core::f64::consts::LN_2 as Real + 2.0 * t * series;
+    let exact = u == 1.0;
+    let denom = if exact { 1.0 } else { u - 1.0 };
+    if exact {
+        x
+    } else {
+        ln_u * x / denom
+    }
+}
+
 /// Rounds up to the next integer.
 #[inline(always)]
 pub fn ceil(x: Real) -> Real {
@@ -169,32 +221,41 @@ fn inverse_transpose<const D: usize>(m: &Mat<D>) -> Mat<D> {
 /// increment keeps its full precision.
 #[inline(always)]
 pub fn exp_series_minus_identity<const D: usize>(a: &Mat<D>, terms: u32) -> Mat<D> {
-    let mut result = [[0.0; D]; D];
-    let mut power = identity::<D>();
-    let mut k = 1;
-    while k <= terms {
-        power = mul(&power, a);
-        let inv_k_fact = 1.0 / factorial(k);
+    // Horner: Q_n = A / n, Q_k = A (I + Q_(k+1)) / k, exp(A) - I = Q_1 to `terms` terms.
+    let n = terms.max(1);
+    let mut q = [[0.0; D]; D];
+    for i in 0..D {
+        for j in 0..D {
+            q[i][j] = a[i][j] * INV[n as usize];
+        }
+    }
+    let mut k = n - 1;
+    while k >= 1 {
+        let mut next = *a;
+        let aq = mul(a, &q);
         for i in 0..D {
             for j in 0..D {
-                result[i][j] += power[i][j] * inv_k_fact;
+                next[i][j] = (next[i][j] + aq[i][j]) * INV[k as usize];
             }
         }
-        k += 1;
+        q = next;
+        k -= 1;
     }
-    result
+    q
 }
 
-#[inline(always)]
-fn factorial(k: u32) -> Real {
-    let mut f = 1.0;
-    let mut i = 2;
-    while i <= k {
-        f *= i as Real;
-        i += 1;
-    }
-    f
-}
+/// `1 / k` for the series terms (index 0 unused).
+pub(crate) const INV: [Real; 9] = [
+    0.0,
+    1.0,
+    1.0 / 2.0,
+    1.0 / 3.0,
+    1.0 / 4.0,
+    1.0 / 5.0,
+    1.0 / 6.0,
+    1.0 / 7.0,
+    1.0 / 8.0,
+];
 
 /// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of
 /// `F = I + h` (det F > 0). Working with `R - I` keeps small rotations at full precision.
@@ -289,6 +350,56 @@ mod tests {
         let h2: Mat<2> = [[c * 1.5 - 1.0, -s * 0.7], [s * 1.5, c * 0.7 - 1.0]];
         let q2 = polar_rotation_minus_identity(&h2);
         assert!((q2[0][0] - (c - 1.0)).abs() < 1e-6 && (q2[1][0] - s).abs() < 1e-6);
+    }
+
+    #[test]
+    fn ln_1p_fast_matches_libm_over_many_decades() {
+        let mut x: f64 = -0.999;
+        while x < 1.0e3 {
+            let got = ln_1p_fast(x as Real) as f64;
+            let want = libm::log1p((x as Real) as f64);
+            assert!(
+                (got - want).abs() <= 8.0 * Real::EPSILON as f64 * want.abs().max(1e-30),
+                "{x}: {got} vs {want}"
+            );
+            x = if x < 0.0 {
+                x * 0.9 + if x > -1e-12 { 1e-12 } else { 0.0 }
+            } else {
+                x * 1.1 + 1e-12
+            };
+        }
+        assert_eq!(ln_1p_fast(0.0), 0.0);
+        assert_eq!(ln_1p_fast(1.0e-30), 1.0e-30);
+    }
+
+    #[test]
+    fn exp_series_matches_power_sum_for_every_term_count() {
+        let a: Mat<3> = [
+            [0.01, -0.02, 0.005],
+            [0.03, -0.01, 0.0],
+            [0.002, 0.004, 0.02],
+        ];
+        for terms in 1..=8u32 {
+            // Reference: sum of A^k / k! for k = 1..=terms.
+            let mut want = [[0.0; 3]; 3];
+            let mut power = identity::<3>();
+            let mut fact = 1.0;
+            for k in 1..=terms {
+                power = mul(&power, &a);
+                fact *= k as Real;
+                for i in 0..3 {
+                    for j in 0..3 {
+                        want[i][j] += power[i][j] / fact;
+                    }
+                }
+            }
+            let got = exp_series_minus_identity(&a, terms);
+            for i in 0..3 {
+                for j in 0..3 {
+                    assert!((got[i][j] - want[i][j]).abs() < 1e-7, "{terms} {i}{j}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -13,78 +13,287 @@
 //! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
 //! particle whose new state is not finite, or whose F inverts, is frozen: it keeps its last
 //! finite position, F and stress, its velocity is zeroed, and it leaves the grid.
+//!
+//! Particles are processed in chunks of [`W`]: each particle gathers from its stencil rows into
+//! the chunk's arrays, then the update and the material run as loops over the chunk's lanes
+//! (no calls, no branches: the compiler vectorises them), and the results are committed with
+//! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::{load_h, load_v, load_x, Ctx};
-use crate::def::Boundary;
+use super::Ctx;
+use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, Params};
-use crate::math::{det_identity_plus_minus_one, exp_series_minus_identity, mul, Mat};
+use crate::math::{ln_1p_fast, INV};
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Shape1D, Stencil, ROW};
+use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
-/// Updates F and tau/rho0 of particle `i` from its velocity gradient. Returns false (and
-/// changes nothing) if the result is not finite or F inverts.
+/// Particles per chunk.
+pub(crate) const W: usize = 8;
+
+/// One value per lane of a chunk.
+pub(crate) type Lane = [Real; W];
+/// A D x D matrix per lane, `m[a][b][lane]`.
+type LaneMat<const D: usize> = [[Lane; D]; D];
+
+/// Which nodal velocity a gather differentiates for the velocity gradient (a const parameter,
+/// so each instance has straight-line loops).
+mod grad {
+    /// None (the stress is updated in its own pass).
+    pub const NONE: u8 = 0;
+    /// `v_i + a_i dt` (USL).
+    pub const UPDATED: u8 = 1;
+    /// The wall-constrained stress-update velocity (USF, MUSL).
+    pub const REMAP: u8 = 2;
+}
+
+/// Lanes `start..start + W` that hold active particles (`< count`).
 #[inline(always)]
+fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> [bool; W] {
+    core::array::from_fn(|l| start + l < count && p.status[start + l] == ACTIVE)
+}
+
+/// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`) of the particle
+/// with stencil `st` into lane `lane`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
+    ctx: &Ctx<'_, D>,
+    g: &GridCols<'_, D>,
+    st: &Stencil<D, K>,
+    lane: usize,
+    v_gp: &mut [Lane; D],
+    a_gp: &mut [Lane; D],
+    l: &mut LaneMat<D>,
+) {
+    let geom = &ctx.geom;
+    let dt = ctx.dt;
+    // Row-wide partial sums, reduced once at the end.
+    let mut v_acc = [[0.0; ROW]; D];
+    let mut a_acc = [[0.0; ROW]; D];
+    let mut l_acc = [[[0.0; ROW]; D]; D];
+    st.for_each_row(geom.stride, |row, w, gr| {
+        for a in 0..D {
+            let vel = if GRAD == grad::REMAP {
+                load_row(g.remap[a], row)
+            } else {
+                [0.0; ROW]
+            };
+            let (vi, ai) = if VEL || GRAD == grad::UPDATED {
+                (load_row(g.vel[a], row), load_row(g.acc[a], row))
+            } else {
+                ([0.0; ROW], [0.0; ROW])
+            };
+            if VEL {
+                for i in 0..ROW {
+                    v_acc[a][i] += w[i] * vi[i];
+                    a_acc[a][i] += w[i] * ai[i];
+                }
+            }
+            if GRAD != grad::NONE {
+                for b in 0..D {
+                    for i in 0..ROW {
+                        let v = if GRAD == grad::UPDATED {
+                            vi[i] + dt * ai[i]
+                        } else {
+                            vel[i]
+                        };
+                        l_acc[a][b][i] += v * gr[b][i];
+                    }
+                }
+            }
+        }
+    });
+    for a in 0..D {
+        v_gp[a][lane] = v_acc[a].iter().sum();
+        a_gp[a][lane] = a_acc[a].iter().sum();
+        for b in 0..D {
+            l[a][b][lane] = l_acc[a][b].iter().sum();
+        }
+    }
+}
+
+/// The stencils of the chunk's particles at `x[axis][lane]`.
+#[inline(always)]
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    x: &[Lane; D],
+) -> Stencils<D, K, W> {
+    let geom = &ctx.geom;
+    let s: [Lane; D] = core::array::from_fn(|a| {
+        core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
+    });
+    Stencils::new(shape, &s, geom.nodes, geom.stride, geom.inv_h)
+}
+
+/// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
+#[inline(always)]
+fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: &[bool; W]) {
+    if let Some(d) = dst.get_mut(start..start + W) {
+        if keep.iter().all(|&k| k) {
+            // The common case: every lane was updated.
+            d.copy_from_slice(new);
+        } else {
+            for l in 0..W {
+                if keep[l] {
+                    d[l] = new[l];
+                }
+            }
+        }
+    }
+}
+
+/// Loads lanes `start..start + W` of a column (zeros past its end).
+#[inline(always)]
+pub(crate) fn load(col: &[Real], start: usize) -> Lane {
+    match col.get(start..start + W) {
+        Some(c) => core::array::from_fn(|l| c[l]),
+        None => [0.0; W],
+    }
+}
+
+/// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
+/// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
+/// keeps its H and stress.
 fn update_stress<const D: usize>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
-    i: usize,
-    grad_v: &Mat<D>,
-) -> bool {
-    let mut l = *grad_v;
-    for row in l.iter_mut() {
-        for v in row.iter_mut() {
-            *v *= ctx.dt;
+    start: usize,
+    update: &[bool; W],
+    l: &LaneMat<D>,
+) -> [bool; W] {
+    let dt = ctx.dt;
+    // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane).
+    let a: LaneMat<D> = core::array::from_fn(|r| {
+        core::array::from_fn(|c| core::array::from_fn(|ln| l[r][c][ln] * dt))
+    });
+    let n = ctx.exp_terms.clamp(1, 8) as usize;
+    let mut q: LaneMat<D> = core::array::from_fn(|r| {
+        core::array::from_fn(|c| core::array::from_fn(|ln| a[r][c][ln] * INV[n]))
+    });
+    for k in (1..n).rev() {
+        let mut next = a;
+        for r in 0..D {
+            for c in 0..D {
+                for m in 0..D {
+                    for ln in 0..W {
+                        next[r][c][ln] += a[r][m][ln] * q[m][c][ln];
+                    }
+                }
+                for ln in 0..W {
+                    next[r][c][ln] *= INV[k];
+                }
+            }
         }
+        q = next;
     }
-    // F <- dF F in terms of H = F - I and A = dF - I: H <- H + A + A H.
-    let a = exp_series_minus_identity(&l, ctx.exp_terms);
-    let h_old = load_h(p, i);
-    let ah = mul(&a, &h_old);
+    // H <- H + Q + Q H.
+    let h_old: LaneMat<D> =
+        core::array::from_fn(|r| core::array::from_fn(|c| load(p.h[r][c], start)));
     let mut h = h_old;
     for r in 0..D {
         for c in 0..D {
-            h[r][c] += a[r][c] + ah[r][c];
+            for m in 0..D {
+                for ln in 0..W {
+                    h[r][c][ln] += q[r][m][ln] * h_old[m][c][ln];
+                }
+            }
+            for ln in 0..W {
+                h[r][c][ln] += q[r][c][ln];
+            }
         }
     }
-    let jm1 = det_identity_plus_minus_one(&h);
-    if !(jm1 > -1.0 && jm1.is_finite()) {
-        return false;
+    // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H.
+    let mut jm1 = [0.0; W];
+    for ln in 0..W {
+        let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
+        jm1[ln] = crate::math::det_identity_plus_minus_one(&m);
     }
-    // Material ids are validated when particles are added; `get` keeps a corrupted buffer from
-    // turning into a panic.
-    let id = p.material[i] as usize;
-    let Some(rec) = ctx.materials.get(id) else {
-        return false;
-    };
-    let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &h, jm1);
-    let finite = s.zz.is_finite() && s.m.iter().flatten().all(|v| v.is_finite());
-    if !finite {
-        return false;
+    // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
+    // material (the common case, vectorised); otherwise lane by lane.
+    let ids: [usize; W] = core::array::from_fn(|ln| p.material[start + ln] as usize);
+    let first = (0..W).find(|&ln| update[ln]).map(|ln| ids[ln]);
+    let uniform = first.and_then(|id| {
+        let same = (0..W).all(|ln| !update[ln] || ids[ln] == id);
+        ctx.materials
+            .get(id)
+            .filter(|r| same && model_of(r) == MaterialModel::NeoHookean)
+    });
+    let ns = crate::layout::stress_components(D);
+    let mut tau = [[0.0; W]; 6];
+    let mut ok = [false; W];
+    if let Some(rec) = uniform {
+        let pr = Params::of(rec);
+        let mut lnj = [0.0; W];
+        for ln in 0..W {
+            lnj[ln] = ln_1p_fast(jm1[ln].max(-1.0 + Real::EPSILON));
+        }
+        for (k, &(r, c)) in super::sym_pairs(D).iter().enumerate() {
+            for ln in 0..W {
+                let mut hh = 0.0;
+                for m in 0..D {
+                    hh += h[r][m][ln] * h[c][m][ln];
+                }
+                let diag = if r == c { pr.lambda * lnj[ln] } else { 0.0 };
+                tau[k][ln] = (pr.mu * (h[r][c][ln] + h[c][r][ln] + hh) + diag) * pr.inv_rho0;
+            }
+        }
+        if D == 2 {
+            for ln in 0..W {
+                tau[3][ln] = pr.lambda * lnj[ln] * pr.inv_rho0;
+            }
+        }
+        for ln in 0..W {
+            ok[ln] = update[ln] && jm1[ln] > -1.0;
+        }
+    } else {
+        for ln in 0..W {
+            // NaN-safe: a NaN jm1 is not > -1.
+            let inverted = !matches!(
+                jm1[ln].partial_cmp(&-1.0),
+                Some(core::cmp::Ordering::Greater)
+            );
+            if !update[ln] || inverted {
+                continue;
+            }
+            let Some(rec) = ctx.materials.get(ids[ln]) else {
+                continue;
+            };
+            let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
+            let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &m, jm1[ln]);
+            for (k, &(r, c)) in super::sym_pairs(D).iter().enumerate() {
+                tau[k][ln] = s.m[r][c];
+            }
+            if D == 2 {
+                tau[3][ln] = s.zz;
+            }
+            ok[ln] = true;
+        }
+    }
+    // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
+    // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
+    for ln in 0..W {
+        let mut sum = jm1[ln];
+        for k in 0..ns {
+            sum += tau[k][ln];
+        }
+        for r in 0..D {
+            for c in 0..D {
+                sum += h[r][c][ln];
+            }
+        }
+        ok[ln] = ok[ln] && sum.is_finite();
     }
     for r in 0..D {
         for c in 0..D {
-            p.h[r][c][i] = h[r][c];
+            commit(p.h[r][c], start, &h[r][c], &ok);
         }
     }
-    for (k, &(a, b)) in super::sym_pairs(D).iter().enumerate() {
-        p.tau[k][i] = s.m[a][b];
+    for k in 0..ns {
+        commit(p.tau[k], start, &tau[k], &ok);
     }
-    if D == 2 {
-        p.tau[3][i] = s.zz;
-    }
-    true
-}
-
-/// Freezes particle `i`: zero velocity, status frozen, counted.
-#[inline(always)]
-fn freeze<const D: usize>(p: &mut ParticleCols<'_, D>, i: usize, report: &mut StepReport) {
-    for a in 0..D {
-        p.v[a][i] = 0.0;
-    }
-    p.status[i] = FROZEN;
-    report.note_frozen(i as u32);
+    ok
 }
 
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
@@ -107,99 +316,99 @@ pub(crate) fn particles<
     let geom = &ctx.geom;
     let dt = ctx.dt;
     let pic = 1.0 - ctx.beta;
-    for i in 0..count {
-        let x = load_x(p, i);
-        if p.status[i] != ACTIVE {
-            if TO_NEXT {
-                for a in 0..D {
-                    p.x_next[a][i] = x[a];
-                }
-            }
-            continue;
-        }
-        let st = Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
-        // Row-wide partial sums, reduced once at the end.
-        let mut v_acc = [[0.0; ROW]; D];
-        let mut a_acc = [[0.0; ROW]; D];
-        let mut l_acc = [[[0.0; ROW]; D]; D];
-        st.for_each_row(geom.stride, |row, w, grad| {
-            for a in 0..D {
-                let vi = load_row(g.vel[a], row);
-                let ai = load_row(g.acc[a], row);
-                for i in 0..ROW {
-                    v_acc[a][i] += w[i] * vi[i];
-                    a_acc[a][i] += w[i] * ai[i];
-                }
+    for start in (0..count).step_by(W) {
+        let live = live_lanes(p, start, count);
+        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
+        let mut v_gp = [[0.0; W]; D];
+        let mut a_gp = [[0.0; W]; D];
+        let mut l = [[[0.0; W]; D]; D];
+        let st = stencils::<D, K, S>(shape, ctx, &x);
+        for ln in 0..W {
+            if live[ln] {
+                let st = st.lane(ln);
                 if FUSED_STRESS {
-                    for b in 0..D {
-                        for i in 0..ROW {
-                            l_acc[a][b][i] += (vi[i] + dt * ai[i]) * grad[b][i];
-                        }
-                    }
-                }
-            }
-        });
-        let v_gp: [Real; D] = core::array::from_fn(|a| v_acc[a].iter().sum());
-        let a_gp: [Real; D] = core::array::from_fn(|a| a_acc[a].iter().sum());
-        let l: Mat<D> =
-            core::array::from_fn(|a| core::array::from_fn(|b| l_acc[a][b].iter().sum()));
-        let v = load_v(p, i);
-        let mut v_new = [0.0; D];
-        let mut x_new = [0.0; D];
-        for a in 0..D {
-            let inversion = pic * (v[a] - v_gp[a]);
-            v_new[a] = v[a] + a_gp[a] * dt - inversion;
-            x_new[a] = x[a] + (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt;
-        }
-        let finite = x_new.iter().chain(v_new.iter()).all(|c| c.is_finite());
-        if !finite || (FUSED_STRESS && !update_stress(ctx, p, i, &l)) {
-            freeze(p, i, report);
-            if TO_NEXT {
-                for a in 0..D {
-                    p.x_next[a][i] = x[a];
-                }
-            }
-            continue;
-        }
-        // Walls and open faces.
-        let s = geom.cells_of(x_new);
-        let mut status = ACTIVE;
-        let mut stopped = false;
-        for a in 0..D {
-            let (bound, side) = if s[a] < geom.lo[a] {
-                (geom.lo[a], 0)
-            } else if s[a] > geom.hi[a] {
-                (geom.hi[a], 1)
-            } else {
-                continue;
-            };
-            x_new[a] = geom.origin[a] + bound * geom.h;
-            if geom.faces[a][side] == Boundary::Open {
-                status = ESCAPED;
-            } else {
-                stopped = true;
-                let outward = if side == 0 {
-                    v_new[a] < 0.0
+                    gather::<D, K, true, { grad::UPDATED }>(
+                        ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
+                    );
                 } else {
-                    v_new[a] > 0.0
-                };
-                if outward {
-                    v_new[a] = 0.0;
+                    gather::<D, K, true, { grad::NONE }>(
+                        ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
+                    );
                 }
             }
         }
-        if status == ESCAPED {
-            p.status[i] = ESCAPED;
-            report.escaped += 1;
-        } else if stopped {
-            report.stopped += 1;
-        }
+        // FLIP with PIC damping and the second-order position update.
+        let mut v_new = [[0.0; W]; D];
+        let mut x_new = [[0.0; W]; D];
+        let mut sum = [0.0; W];
         for a in 0..D {
-            p.v[a][i] = v_new[a];
+            for ln in 0..W {
+                let inversion = pic * (v[a][ln] - v_gp[a][ln]);
+                v_new[a][ln] = v[a][ln] + a_gp[a][ln] * dt - inversion;
+                x_new[a][ln] =
+                    x[a][ln] + (v_gp[a][ln] + 0.5 * a_gp[a][ln] * dt - 0.5 * inversion) * dt;
+                sum[ln] += v_new[a][ln] + x_new[a][ln];
+            }
+        }
+        let moved: [bool; W] = core::array::from_fn(|ln| live[ln] && sum[ln].is_finite());
+        // Walls and open faces, as selects.
+        let mut stopped = [false; W];
+        let mut escaped = [false; W];
+        for a in 0..D {
+            let [lo_bc, hi_bc] = geom.faces[a];
+            let (lo_x, hi_x) = (
+                geom.origin[a] + geom.lo[a] * geom.h,
+                geom.origin[a] + geom.hi[a] * geom.h,
+            );
+            for ln in 0..W {
+                let s = (x_new[a][ln] - geom.origin[a]) * geom.inv_h;
+                let below = s < geom.lo[a];
+                let above = s > geom.hi[a];
+                x_new[a][ln] = if below {
+                    lo_x
+                } else if above {
+                    hi_x
+                } else {
+                    x_new[a][ln]
+                };
+                let open = (below && lo_bc == Boundary::Open) || (above && hi_bc == Boundary::Open);
+                let wall = (below || above) && !open;
+                let outward = (below && v_new[a][ln] < 0.0) || (above && v_new[a][ln] > 0.0);
+                v_new[a][ln] = if wall && outward { 0.0 } else { v_new[a][ln] };
+                escaped[ln] |= open;
+                stopped[ln] |= wall;
+            }
+        }
+        let ok = if FUSED_STRESS {
+            update_stress(ctx, p, start, &moved, &l)
+        } else {
+            moved
+        };
+        // Commit: updated lanes take the new state; live lanes that failed freeze.
+        let frozen: [bool; W] = core::array::from_fn(|ln| live[ln] && !ok[ln]);
+        let zero = [0.0; W];
+        for a in 0..D {
+            commit(p.v[a], start, &v_new[a], &ok);
+            commit(p.v[a], start, &zero, &frozen);
             if TO_NEXT {
-                p.x_next[a][i] = x_new[a];
+                let keep_all = [true; W];
+                let next: Lane =
+                    core::array::from_fn(|ln| if ok[ln] { x_new[a][ln] } else { x[a][ln] });
+                commit(p.x_next[a], start, &next, &keep_all);
             } else {
-                p.x[a][i] = x_new[a];
+                commit(p.x[a], start, &x_new[a], &ok);
+            }
+        }
+        for ln in 0..W {
+            if frozen[ln] {
+                p.status[start + ln] = FROZEN;
+                report.note_frozen((start + ln) as u32);
+            } else if ok[ln] && escaped[ln] {
+                p.status[start + ln] = ESCAPED;
+                report.escaped += 1;
+            } else if ok[ln] && stopped[ln] {
+                report.stopped += 1;
             }
         }
     }
@@ -216,38 +425,44 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     g: &GridCols<'_, D>,
     report: &mut StepReport,
 ) {
-    let geom = &ctx.geom;
-    for i in 0..count {
-        if p.status[i] == ACTIVE {
-            let x = load_x(p, i);
-            let st =
-                Stencil::<D, K>::new(shape, geom.cells_of(x), geom.nodes, geom.stride, geom.inv_h);
-            let mut l_acc = [[[0.0; ROW]; D]; D];
-            st.for_each_row(geom.stride, |row, _w, grad| {
-                for a in 0..D {
-                    let vi = load_row(g.remap[a], row);
-                    for b in 0..D {
-                        for i in 0..ROW {
-                            l_acc[a][b][i] += vi[i] * grad[b][i];
-                        }
-                    }
-                }
-            });
-            let l: Mat<D> =
-                core::array::from_fn(|a| core::array::from_fn(|b| l_acc[a][b].iter().sum()));
-            if !update_stress(ctx, p, i, &l) {
-                freeze(p, i, report);
-                if COMMIT_NEXT {
-                    // Keep the position of the start of the step, as for any frozen particle.
-                    for a in 0..D {
-                        p.x_next[a][i] = x[a];
-                    }
-                }
+    for start in (0..count).step_by(W) {
+        let live = live_lanes(p, start, count);
+        let mut unused = [[0.0; W]; D];
+        let mut unused2 = [[0.0; W]; D];
+        let mut l = [[[0.0; W]; D]; D];
+        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let st = stencils::<D, K, S>(shape, ctx, &x);
+        for ln in 0..W {
+            if live[ln] {
+                gather::<D, K, false, { grad::REMAP }>(
+                    ctx,
+                    g,
+                    &st.lane(ln),
+                    ln,
+                    &mut unused,
+                    &mut unused2,
+                    &mut l,
+                );
             }
         }
-        if COMMIT_NEXT {
-            for a in 0..D {
-                p.x[a][i] = p.x_next[a][i];
+        let ok = update_stress(ctx, p, start, &live, &l);
+        for ln in 0..W.min(count - start) {
+            let i = start + ln;
+            if live[ln] && !ok[ln] {
+                for a in 0..D {
+                    p.v[a][i] = 0.0;
+                    if COMMIT_NEXT {
+                        // Keep the position of the start of the step, as for any frozen particle.
+                        p.x_next[a][i] = p.x[a][i];
+                    }
+                }
+                p.status[i] = FROZEN;
+                report.note_frozen(i as u32);
+            }
+            if COMMIT_NEXT {
+                for a in 0..D {
+                    p.x[a][i] = p.x_next[a][i];
+                }
             }
         }
     }

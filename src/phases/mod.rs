@@ -50,18 +50,6 @@ pub(crate) fn load_tau<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat
     m
 }
 
-/// The displacement gradient `H = F - I` of particle `i`.
-#[inline(always)]
-pub(crate) fn load_h<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
-    core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]))
-}
-
-/// Position of particle `i`.
-#[inline(always)]
-pub(crate) fn load_x<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {
-    core::array::from_fn(|a| p.x[a][i])
-}
-
 /// Velocity of particle `i`.
 #[inline(always)]
 pub(crate) fn load_v<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {

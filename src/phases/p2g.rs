@@ -2,7 +2,8 @@
 //! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
 //! enters in the grid update as `m_i g` (eq 22).
 
-use super::{load_tau, load_v, load_x, Ctx};
+use super::g2p::{load, stencils, Lane, W};
+use super::{load_tau, load_v, Ctx};
 use crate::grid::{add_row, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::ROW;
@@ -29,13 +30,30 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    let geom = &ctx.geom;
-    for i in 0..count {
-        if p.status[i] != ACTIVE {
-            continue;
+    for start in (0..count).step_by(W) {
+        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let stencils = stencils::<D, K, S>(shape, ctx, &x);
+        for ln in 0..W.min(count - start) {
+            let i = start + ln;
+            if p.status[i] != ACTIVE {
+                continue;
+            }
+            scatter_one::<D, K, MODE>(ctx, p, i, &stencils.lane(ln), g);
         }
-        let s = geom.cells_of(load_x(p, i));
-        let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
+    }
+}
+
+/// Scatters particle `i` with stencil `st`.
+#[inline(always)]
+fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    i: usize,
+    st: &Stencil<D, K>,
+    g: &mut GridCols<'_, D>,
+) {
+    let geom = &ctx.geom;
+    {
         let m = p.mass[i];
         let v = load_v(p, i);
         let mv: [_; D] = core::array::from_fn(|a| m * v[a]);

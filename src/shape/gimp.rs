@@ -67,4 +67,43 @@ impl Shape1D<3> for Gimp {
         };
         (s, d)
     }
+
+    /// The three nodes at once. For a particle in the admissible region the offset from the
+    /// first node is `f` in [1/2, 3/2], so the middle node is within 1/2 (inner or middle
+    /// branch) and the outer nodes are at least 1/2 away (middle or outer branch): two
+    /// candidates per node instead of three. Live particles are always in the admissible region
+    /// (the step puts them back on the wall plane), so `f` is never outside that range for a
+    /// weight that is used; memory safety never depends on weights.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        let l = self.l;
+        // Middle node, offset xi = f - 1 in [-1/2, 1/2].
+        let xi = f - 1.0;
+        let a1 = xi.abs();
+        let inner = a1 < l;
+        let s1 = if inner {
+            1.0 - (xi * xi + l * l) * self.inv_2l
+        } else {
+            1.0 - a1
+        };
+        let d1 = if inner {
+            -xi * self.inv_l
+        } else if xi >= 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        // Outer nodes at distance a = f (first node, xi > 0) and 2 - f (last node, xi < 0).
+        let outer = |a: Real| -> (Real, Real) {
+            let t = (1.0 + l - a).max(0.0);
+            if a <= 1.0 - l {
+                (1.0 - a, 1.0)
+            } else {
+                (t * t * self.inv_4l, t * self.inv_2l)
+            }
+        };
+        let (s0, m0) = outer(f);
+        let (s2, m2) = outer(2.0 - f);
+        ([s0, s1, s2], [-m0, d1, m2])
+    }
 }

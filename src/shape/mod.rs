@@ -63,6 +63,94 @@ pub struct Stencil<const D: usize, const K: usize> {
     pub dw: [[Real; ROW]; D],
 }
 
+/// The rows of a stencil with first node `base` and per-axis weights `w`, derivatives `dw`.
+#[inline(always)]
+fn rows<const D: usize, const K: usize>(
+    base: usize,
+    w: &[[Real; ROW]; D],
+    dw: &[[Real; ROW]; D],
+    stride: [usize; D],
+    mut f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
+) {
+    let layers = if D == 3 { K } else { 1 };
+    for k in 0..layers {
+        for j in 0..K {
+            let row = base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
+            // Weight of the row in y (and z) and its derivatives.
+            let (wt, dy, dz) = if D == 3 {
+                (
+                    w[1][j] * w[D - 1][k],
+                    dw[1][j] * w[D - 1][k],
+                    w[1][j] * dw[D - 1][k],
+                )
+            } else {
+                (w[1][j], dw[1][j], 0.0)
+            };
+            let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
+            let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
+                core::array::from_fn(|i| match a {
+                    0 => dw[0][i] * wt,
+                    1 => w[0][i] * dy,
+                    _ => w[0][i] * dz,
+                })
+            });
+            f(row, &s, &g);
+        }
+    }
+}
+
+/// The stencils of `W` particles at once, laid out lane-fastest so that computing them is a set
+/// of loops over lanes the compiler vectorises.
+#[derive(Clone, Copy, Debug)]
+pub struct Stencils<const D: usize, const K: usize, const W: usize> {
+    base: [usize; W],
+    w: [[[Real; W]; ROW]; D],
+    dw: [[[Real; W]; ROW]; D],
+}
+
+impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
+    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`].
+    #[inline(always)]
+    pub fn new<S: Shape1D<K>>(
+        shape: &S,
+        s: &[[Real; W]; D],
+        nodes: [usize; D],
+        stride: [usize; D],
+        inv_h: Real,
+    ) -> Self {
+        let mut base = [0usize; W];
+        let mut w = [[[0.0; W]; ROW]; D];
+        let mut dw = [[[0.0; W]; ROW]; D];
+        for a in 0..D {
+            let hi = (nodes[a] - K) as i32;
+            let mut f = [0.0; W];
+            for ln in 0..W {
+                let first = S::first_node(s[a][ln]).clamp(0, hi);
+                base[ln] += first as usize * stride[a];
+                f[ln] = s[a][ln] - first as Real;
+            }
+            for ln in 0..W {
+                let (wa, dwa) = shape.stencil(f[ln]);
+                for k in 0..K {
+                    w[a][k][ln] = wa[k];
+                    dw[a][k][ln] = dwa[k] * inv_h;
+                }
+            }
+        }
+        Stencils { base, w, dw }
+    }
+
+    /// The stencil of lane `ln`.
+    #[inline(always)]
+    pub fn lane(&self, ln: usize) -> Stencil<D, K> {
+        Stencil {
+            base: self.base[ln],
+            w: core::array::from_fn(|a| core::array::from_fn(|k| self.w[a][k][ln])),
+            dw: core::array::from_fn(|a| core::array::from_fn(|k| self.dw[a][k][ln])),
+        }
+    }
+}
+
 impl<const D: usize, const K: usize> Stencil<D, K> {
     /// Stencil of a particle at `s` (cell units per axis) on a grid with `nodes[a]` nodes per
     /// axis and flat strides `stride[a]`. The first node is clamped so that all `K` nodes exist:
@@ -100,34 +188,9 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     pub fn for_each_row(
         &self,
         stride: [usize; D],
-        mut f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
+        f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
     ) {
-        let (w, dw) = (&self.w, &self.dw);
-        let layers = if D == 3 { K } else { 1 };
-        for k in 0..layers {
-            for j in 0..K {
-                let row = self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
-                // Weight of the row in y (and z) and its derivatives.
-                let (wt, dy, dz) = if D == 3 {
-                    (
-                        w[1][j] * w[D - 1][k],
-                        dw[1][j] * w[D - 1][k],
-                        w[1][j] * dw[D - 1][k],
-                    )
-                } else {
-                    (w[1][j], dw[1][j], 0.0)
-                };
-                let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
-                let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
-                    core::array::from_fn(|i| match a {
-                        0 => dw[0][i] * wt,
-                        1 => w[0][i] * dy,
-                        _ => w[0][i] * dz,
-                    })
-                });
-                f(row, &s, &g);
-            }
-        }
+        rows::<D, K>(self.base, &self.w, &self.dw, stride, f);
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
