@@ -28,28 +28,59 @@ pub(crate) struct GridCols<'a, const D: usize> {
     pub remap: [&'a mut [Real]; D],
 }
 
-/// The [`ROW`] values of `col` from `start` (zeros past the column's end, which the padding
-/// makes unreachable for stencil rows).
+/// Whether every row of a stencil whose first node is `base` fits in node columns of length
+/// `len`: the last row starts at `base + last_row_offset` and spans [`ROW`] entries. The step
+/// checks this once per particle (it always holds: the first node is clamped and the columns
+/// carry [`ROW`] entries of padding), and the row accessors below rely on it.
 #[inline(always)]
-pub(crate) fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
-    match col.get(start..start + ROW) {
-        Some(r) => core::array::from_fn(|i| r[i]),
-        None => [0.0; ROW],
-    }
+pub(crate) fn rows_fit(base: usize, last_row_offset: usize, len: usize) -> bool {
+    base + last_row_offset + ROW <= len
 }
 
-/// Adds `v` to the [`ROW`] values of `col` from `start` (nothing past the column's end, which
-/// the padding makes unreachable for stencil rows).
+/// The [`ROW`] values of `col` from `start`.
+///
+/// # Safety
+/// `start + ROW <= col.len()` (see [`rows_fit`]).
 #[inline(always)]
-pub(crate) fn add_row(col: &mut [Real], start: usize, v: &[Real; ROW]) {
-    if let Some(r) = col.get_mut(start..start + ROW) {
-        for i in 0..ROW {
-            r[i] += v[i];
-        }
+pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
+    debug_assert!(start + ROW <= col.len());
+    // SAFETY: the caller guarantees start + ROW <= col.len(), so the ROW reads are in bounds.
+    core::array::from_fn(|i| unsafe { *col.get_unchecked(start + i) })
+}
+
+/// Adds `v` to the [`ROW`] values of `col` from `start`.
+///
+/// # Safety
+/// `start + ROW <= col.len()` (see [`rows_fit`]).
+#[inline(always)]
+pub(crate) unsafe fn add_row(col: &mut [Real], start: usize, v: &[Real; ROW]) {
+    debug_assert!(start + ROW <= col.len());
+    for (i, vi) in v.iter().enumerate() {
+        // SAFETY: the caller guarantees start + ROW <= col.len(), and i < ROW.
+        unsafe { *col.get_unchecked_mut(start + i) += vi };
     }
 }
 
 impl<'a, const D: usize> GridCols<'a, D> {
+    /// Length shared by every node column (nodes plus padding).
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// Whether every column has the length [`GridCols::len`] (the remap columns may be empty).
+    /// True by construction; each pass checks it once so that the per-particle [`rows_fit`]
+    /// check covers every column.
+    pub fn lengths_consistent(&self) -> bool {
+        let len = self.len();
+        self.vel
+            .iter()
+            .chain(self.acc.iter())
+            .all(|c| c.len() == len)
+            && (self.remap.iter().all(|c| c.len() == len)
+                || self.remap.iter().all(|c| c.is_empty()))
+    }
+
     /// Carves the grid region (starting at `layout.grid_offset`) into columns, each `nodes`
     /// plus [`ROW`] entries of padding long (a stencil row may reach two entries past the last
     /// node; the padding only ever receives zero weights).

@@ -21,7 +21,7 @@
 
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
-use crate::grid::{load_row, GridCols};
+use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, Params};
 use crate::math::{ln_1p_fast, INV};
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
@@ -68,19 +68,27 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
 ) {
     let geom = &ctx.geom;
     let dt = ctx.dt;
+    // The pass checked that every column has this length (and that the remap columns exist
+    // when GRAD reads them).
+    let len = g.len();
+    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
+        return; // Unreachable by construction; keeps the unchecked row access below sound.
+    }
     // Row-wide partial sums, reduced once at the end.
     let mut v_acc = [[0.0; ROW]; D];
     let mut a_acc = [[0.0; ROW]; D];
     let mut l_acc = [[[0.0; ROW]; D]; D];
-    st.for_each_row(geom.stride, |row, w, gr| {
+    for (row, w, gr) in st.rows(geom.stride) {
         for a in 0..D {
+            // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
+            // column read has the length it was checked against.
             let vel = if GRAD == grad::REMAP {
-                load_row(g.remap[a], row)
+                unsafe { load_row(g.remap[a], row) }
             } else {
                 [0.0; ROW]
             };
             let (vi, ai) = if VEL || GRAD == grad::UPDATED {
-                (load_row(g.vel[a], row), load_row(g.acc[a], row))
+                unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
             } else {
                 ([0.0; ROW], [0.0; ROW])
             };
@@ -103,7 +111,7 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
                 }
             }
         }
-    });
+    }
     for a in 0..D {
         v_gp[a][lane] = v_acc[a].iter().sum();
         a_gp[a][lane] = a_acc[a].iter().sum();
@@ -316,6 +324,9 @@ pub(crate) fn particles<
     let geom = &ctx.geom;
     let dt = ctx.dt;
     let pic = 1.0 - ctx.beta;
+    if !g.lengths_consistent() {
+        return; // Unreachable by construction; the unchecked row access relies on it.
+    }
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
@@ -425,6 +436,9 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     g: &GridCols<'_, D>,
     report: &mut StepReport,
 ) {
+    if !g.lengths_consistent() || g.remap.iter().any(|c| c.len() != g.len()) {
+        return; // Unreachable by construction; the unchecked row access relies on it.
+    }
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let mut unused = [[0.0; W]; D];

@@ -4,7 +4,7 @@
 
 use super::g2p::{load, stencils, Lane, W};
 use super::{load_tau, load_v, Ctx};
-use crate::grid::{add_row, GridCols};
+use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::ROW;
 use crate::shape::{Shape1D, Stencil};
@@ -30,6 +30,9 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
+    if !g.lengths_consistent() {
+        return; // Unreachable by construction; the unchecked row access relies on it.
+    }
     for start in (0..count).step_by(W) {
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         let stencils = stencils::<D, K, S>(shape, ctx, &x);
@@ -53,6 +56,11 @@ fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     g: &mut GridCols<'_, D>,
 ) {
     let geom = &ctx.geom;
+    // The pass checked that every column has this length.
+    let len = g.len();
+    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
+        return; // Unreachable by construction; keeps the unchecked row access below sound.
+    }
     {
         let m = p.mass[i];
         let v = load_v(p, i);
@@ -64,16 +72,18 @@ fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
         };
         // Force on a node: f_a = -m sum_b tau_ab G_b, so coefficient c[a][b] = -m tau_ab.
         let c: [[Real; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| -m * tau[a][b]));
-        st.for_each_row(geom.stride, |row, w, grad| {
+        for (row, w, grad) in st.rows(geom.stride) {
             if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m));
+                // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
+                // columns share the length it was checked against.
+                unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
                 for a in 0..D {
-                    add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a]));
+                    unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
                 }
             }
             if MODE == mode::REMAP {
                 for a in 0..D {
-                    add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]));
+                    unsafe { add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
                 }
             }
             if MODE == mode::ALL || MODE == mode::FORCE {
@@ -85,9 +95,9 @@ fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
                         }
                         t
                     });
-                    add_row(g.acc[a], row, &f);
+                    unsafe { add_row(g.acc[a], row, &f) };
                 }
             }
-        });
+        }
     }
 }

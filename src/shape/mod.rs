@@ -1,7 +1,7 @@
 //! Shape functions: one file per family, one way to ask any of them for `S_ip` and `G_ip`.
 //!
 //! Every family is evaluated per axis ([`Shape1D`]) and combined by tensor product
-//! ([`Stencil::for_each_node`], or row by row with [`Stencil::for_each_row`]): in 2D and 3D,
+//! ([`Stencil::for_each_node`], or row by row with [`Stencil::rows`]): in 2D and 3D,
 //! `S_ip` is the product of the per-axis values and each component of `G_ip` replaces one factor
 //! by its derivative (seeds/000 eqs 16-17).
 //!
@@ -63,39 +63,51 @@ pub struct Stencil<const D: usize, const K: usize> {
     pub dw: [[Real; ROW]; D],
 }
 
-/// The rows of a stencil with first node `base` and per-axis weights `w`, derivatives `dw`.
-#[inline(always)]
-fn rows<const D: usize, const K: usize>(
-    base: usize,
-    w: &[[Real; ROW]; D],
-    dw: &[[Real; ROW]; D],
+/// One row of a stencil along x: the flat index of its first node, the weights `S[i]` and the
+/// gradients `G[axis][i]` of nodes `row + i` for `i < ROW` (zero for `i >= K`).
+pub type Row<const D: usize> = (usize, [Real; ROW], [[Real; ROW]; D]);
+
+/// The rows of a stencil (see [`Stencil::rows`]). An iterator rather than a callback so that the
+/// loop body stays in the caller's function and is optimised with it.
+pub struct Rows<'s, const D: usize, const K: usize> {
+    st: &'s Stencil<D, K>,
     stride: [usize; D],
-    mut f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
-) {
-    let layers = if D == 3 { K } else { 1 };
-    for k in 0..layers {
-        for j in 0..K {
-            let row = base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
-            // Weight of the row in y (and z) and its derivatives.
-            let (wt, dy, dz) = if D == 3 {
-                (
-                    w[1][j] * w[D - 1][k],
-                    dw[1][j] * w[D - 1][k],
-                    w[1][j] * dw[D - 1][k],
-                )
-            } else {
-                (w[1][j], dw[1][j], 0.0)
-            };
-            let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
-            let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
-                core::array::from_fn(|i| match a {
-                    0 => dw[0][i] * wt,
-                    1 => w[0][i] * dy,
-                    _ => w[0][i] * dz,
-                })
-            });
-            f(row, &s, &g);
+    n: usize,
+}
+
+impl<const D: usize, const K: usize> Iterator for Rows<'_, D, K> {
+    type Item = Row<D>;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<Row<D>> {
+        let layers = if D == 3 { K } else { 1 };
+        if self.n >= K * layers {
+            return None;
         }
+        let (j, k) = (self.n % K, self.n / K);
+        self.n += 1;
+        let (w, dw) = (&self.st.w, &self.st.dw);
+        let row =
+            self.st.base + j * self.stride[1] + if D == 3 { k * self.stride[D - 1] } else { 0 };
+        // Weight of the row in y (and z) and its derivatives.
+        let (wt, dy, dz) = if D == 3 {
+            (
+                w[1][j] * w[D - 1][k],
+                dw[1][j] * w[D - 1][k],
+                w[1][j] * dw[D - 1][k],
+            )
+        } else {
+            (w[1][j], dw[1][j], 0.0)
+        };
+        let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
+        let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
+            core::array::from_fn(|i| match a {
+                0 => dw[0][i] * wt,
+                1 => w[0][i] * dy,
+                _ => w[0][i] * dz,
+            })
+        });
+        Some((row, s, g))
     }
 }
 
@@ -180,17 +192,21 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         Stencil { base, w, dw }
     }
 
-    /// Calls `f(row, S, G)` for every row of the stencil along x (K^(D-1) of them): `row` is the
-    /// flat index of the row's first node, `S[i]` and `G[axis][i]` the weight and gradient of
-    /// node `row + i` for `i < ROW` (zero for `i >= K`). `row + ROW` is at most two past the
-    /// last node, which the node columns' padding covers.
+    /// Offset of the stencil's last row from its first node.
     #[inline(always)]
-    pub fn for_each_row(
-        &self,
-        stride: [usize; D],
-        f: impl FnMut(usize, &[Real; ROW], &[[Real; ROW]; D]),
-    ) {
-        rows::<D, K>(self.base, &self.w, &self.dw, stride, f);
+    pub fn last_row_offset(stride: [usize; D]) -> usize {
+        (K - 1) * (stride[1] + if D == 3 { stride[D - 1] } else { 0 })
+    }
+
+    /// The rows of the stencil along x (K^(D-1) of them), x-rows in y-then-z order. `row + ROW`
+    /// is at most two past the last node, which the node columns' padding covers.
+    #[inline(always)]
+    pub fn rows(&self, stride: [usize; D]) -> Rows<'_, D, K> {
+        Rows {
+            st: self,
+            stride,
+            n: 0,
+        }
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
