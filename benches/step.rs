@@ -4,9 +4,12 @@
 //! - `step_shape_2d/<shape>` and `step_shape_3d/<shape>`: 32768 particles, default update order
 //!   (MUSL), for each shape function.
 //! - `step_order_gimp_2d/<order>`: 32768 particles, uGIMP, for each update order.
+//! - `phase_gimp_2d/<phase>` and `phase_gimp_3d/<phase>`: each phase of a USL step alone
+//!   (reset, particle to grid, grid update, grid to particle), through the hidden
+//!   `World::run_phase` hook, so the phases' costs add up to a USL step.
 //!
-//! Only `step` is timed (`iter_custom`): the `stable_dt` call that picks each step's `dt` is
-//! outside the measurement. Per-phase benches need a kernel hook; the phases are not public.
+//! Only `step` (or the phase) is timed (`iter_custom`): the `stable_dt` call that picks each
+//! step's `dt` is outside the measurement.
 //!
 //! `cargo bench --bench step` (add `-- <filter>` to run a subset).
 
@@ -15,8 +18,8 @@ use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };
 use mpm_gimp::{
-    memory_requirements, Dimension, HeapBuffer, MaterialDef, Real, ShapeFunction, UpdateOrder,
-    Vec3, World, WorldDef,
+    memory_requirements, Dimension, HeapBuffer, MaterialDef, Phase, Real, ShapeFunction,
+    UpdateOrder, Vec3, World, WorldDef,
 };
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -177,5 +180,40 @@ fn bench_orders(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_shapes, bench_orders);
+const PHASES: [(Phase, &str); 4] = [
+    (Phase::ResetGrid, "reset_grid"),
+    (Phase::ParticleToGrid, "particle_to_grid"),
+    (Phase::GridUpdate, "grid_update"),
+    (Phase::GridToParticle, "grid_to_particle"),
+];
+
+/// Each phase of a USL step on its own. The grid is filled once (scatter and grid update) so
+/// that the grid update and grid-to-particle phases read a real grid; particles then move on
+/// that grid, which is fine for timing and keeps the state finite (slip walls hold them).
+fn bench_phases(c: &mut Criterion) {
+    for (group_name, three_d) in [("phase_gimp_2d", false), ("phase_gimp_3d", true)] {
+        let mut group = configure(c, group_name);
+        let order = UpdateOrder::Usl;
+        let mut scene = if three_d {
+            Scene::solid(ShapeFunction::Gimp, order)
+        } else {
+            Scene::plane(ShapeFunction::Gimp, order)
+        };
+        group.throughput(Throughput::Elements(scene.particles));
+        let mut world = scene.world();
+        let dt = world.stable_dt();
+        world
+            .run_phase(Phase::ParticleToGrid, dt)
+            .expect("valid dt");
+        world.run_phase(Phase::GridUpdate, dt).expect("valid dt");
+        for (phase, name) in PHASES {
+            group.bench_function(BenchmarkId::from_parameter(name), |b| {
+                b.iter(|| black_box(world.run_phase(black_box(phase), dt)))
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, bench_shapes, bench_orders, bench_phases);
 criterion_main!(benches);

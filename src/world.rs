@@ -616,36 +616,13 @@ impl<'a> World<'a> {
             substep_dt: sub_dt,
             ..StepReport::default()
         };
-        let def = self.def();
-        let layout = Layout::of(&def);
-        let ppc = def.particles_per_cell;
+        let order = self.def().update_order;
         for _ in 0..substeps {
-            match (def.axes(), def.shape) {
-                (2, ShapeFunction::Linear) => {
-                    self.substep::<2, 2, _>(Linear, sub_dt, &def, &layout, &mut report)
-                }
-                (2, ShapeFunction::Gimp) => {
-                    self.substep::<2, 3, _>(Gimp::new(ppc), sub_dt, &def, &layout, &mut report)
-                }
-                (2, ShapeFunction::QuadraticBspline) => {
-                    self.substep::<2, 3, _>(QuadraticBspline, sub_dt, &def, &layout, &mut report)
-                }
-                (2, ShapeFunction::CubicBspline) => {
-                    self.substep::<2, 4, _>(CubicBspline, sub_dt, &def, &layout, &mut report)
-                }
-                (_, ShapeFunction::Linear) => {
-                    self.substep::<3, 2, _>(Linear, sub_dt, &def, &layout, &mut report)
-                }
-                (_, ShapeFunction::Gimp) => {
-                    self.substep::<3, 3, _>(Gimp::new(ppc), sub_dt, &def, &layout, &mut report)
-                }
-                (_, ShapeFunction::QuadraticBspline) => {
-                    self.substep::<3, 3, _>(QuadraticBspline, sub_dt, &def, &layout, &mut report)
-                }
-                (_, ShapeFunction::CubicBspline) => {
-                    self.substep::<3, 4, _>(CubicBspline, sub_dt, &def, &layout, &mut report)
-                }
-            }
+            let mut substep = Substep {
+                order,
+                report: &mut report,
+            };
+            self.dispatch(sub_dt, &mut substep);
         }
         let h = self.header_mut();
         h.time += dt as f64;
@@ -653,14 +630,44 @@ impl<'a> World<'a> {
         Ok(report)
     }
 
-    /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order.
-    fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
+    /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
+    /// function) to the monomorphised instance.
+    fn dispatch(&mut self, dt: Real, kernel: &mut impl Kernel) {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let ppc = def.particles_per_cell;
+        match (def.axes(), def.shape) {
+            (2, ShapeFunction::Linear) => self.run::<2, 2, _>(Linear, dt, &def, &layout, kernel),
+            (2, ShapeFunction::Gimp) => {
+                self.run::<2, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel)
+            }
+            (2, ShapeFunction::QuadraticBspline) => {
+                self.run::<2, 3, _>(QuadraticBspline, dt, &def, &layout, kernel)
+            }
+            (2, ShapeFunction::CubicBspline) => {
+                self.run::<2, 4, _>(CubicBspline, dt, &def, &layout, kernel)
+            }
+            (_, ShapeFunction::Linear) => self.run::<3, 2, _>(Linear, dt, &def, &layout, kernel),
+            (_, ShapeFunction::Gimp) => {
+                self.run::<3, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel)
+            }
+            (_, ShapeFunction::QuadraticBspline) => {
+                self.run::<3, 3, _>(QuadraticBspline, dt, &def, &layout, kernel)
+            }
+            (_, ShapeFunction::CubicBspline) => {
+                self.run::<3, 4, _>(CubicBspline, dt, &def, &layout, kernel)
+            }
+        }
+    }
+
+    /// Carves the columns and the step context, then runs `kernel` on them.
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         shape: S,
         dt: Real,
         def: &WorldDef,
         layout: &Layout,
-        report: &mut StepReport,
+        kernel: &mut impl Kernel,
     ) {
         let count = self.particle_count();
         let min_mass = self.header().min_particle_mass;
@@ -682,34 +689,22 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
         };
-        let s = &shape;
-        grid_update::reset(&mut g);
-        match def.update_order {
-            UpdateOrder::Usf => {
-                scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, &ctx, &p, count, &mut g);
-                grid_update::velocity(&ctx, &mut g);
-                grid_update::constrained_velocity(&ctx, &mut g);
-                g2p::stress::<D, K, S, false>(s, &ctx, &mut p, count, &g, report);
-                scatter::<D, K, S, { mode::FORCE }>(s, &ctx, &p, count, &mut g);
-                grid_update::acceleration(&ctx, &mut g);
-                g2p::particles::<D, K, S, false, false>(s, &ctx, &mut p, count, &g, report);
-            }
-            UpdateOrder::Usl => {
-                scatter::<D, K, S, { mode::ALL }>(s, &ctx, &p, count, &mut g);
-                grid_update::velocity(&ctx, &mut g);
-                grid_update::acceleration(&ctx, &mut g);
-                g2p::particles::<D, K, S, true, false>(s, &ctx, &mut p, count, &g, report);
-            }
-            UpdateOrder::Musl => {
-                scatter::<D, K, S, { mode::ALL }>(s, &ctx, &p, count, &mut g);
-                grid_update::velocity(&ctx, &mut g);
-                grid_update::acceleration(&ctx, &mut g);
-                g2p::particles::<D, K, S, false, true>(s, &ctx, &mut p, count, &g, report);
-                scatter::<D, K, S, { mode::REMAP }>(s, &ctx, &p, count, &mut g);
-                grid_update::remap_velocity(&ctx, &mut g);
-                g2p::stress::<D, K, S, true>(s, &ctx, &mut p, count, &g, report);
-            }
+        kernel.run(&shape, &ctx, &mut p, count, &mut g);
+    }
+
+    /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
+    /// one at a time. Not part of the stable API.
+    #[doc(hidden)]
+    pub fn run_phase(&mut self, phase: Phase, dt: Real) -> Result<StepReport, Error> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::InvalidTimeStep);
         }
+        let mut run = PhaseRun {
+            phase,
+            report: StepReport::default(),
+        };
+        self.dispatch(dt, &mut run);
+        Ok(run.report)
     }
 
     /// Borrowed view of every particle column.
@@ -785,6 +780,111 @@ impl<'a> World<'a> {
             }
         }
         out
+    }
+}
+
+/// A computation on the world's columns with the dimension and shape function fixed at compile
+/// time; [`World::dispatch`] picks the instance once per call.
+trait Kernel {
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    );
+}
+
+/// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
+/// the only place the order of the phases is written down.
+struct Substep<'r> {
+    order: UpdateOrder,
+    report: &'r mut StepReport,
+}
+
+impl Kernel for Substep<'_> {
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        s: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    ) {
+        let report = &mut *self.report;
+        grid_update::reset(g);
+        match self.order {
+            UpdateOrder::Usf => {
+                scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
+                grid_update::velocity(ctx, g);
+                grid_update::constrained_velocity(ctx, g);
+                g2p::stress::<D, K, S, false>(s, ctx, p, count, g, report);
+                scatter::<D, K, S, { mode::FORCE }>(s, ctx, p, count, g);
+                grid_update::acceleration(ctx, g);
+                g2p::particles::<D, K, S, false, false>(s, ctx, p, count, g, report);
+            }
+            UpdateOrder::Usl => {
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, report);
+            }
+            UpdateOrder::Musl => {
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+                g2p::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
+                scatter::<D, K, S, { mode::REMAP }>(s, ctx, p, count, g);
+                grid_update::remap_velocity(ctx, g);
+                g2p::stress::<D, K, S, true>(s, ctx, p, count, g, report);
+            }
+        }
+    }
+}
+
+/// The phases of a USL step, for [`World::run_phase`] (benchmarks).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Zero the grid columns.
+    ResetGrid,
+    /// Reset, then scatter mass, momentum and force to the grid.
+    ParticleToGrid,
+    /// Nodal velocity and acceleration, with the walls.
+    GridUpdate,
+    /// Particle update with the fused stress update.
+    GridToParticle,
+}
+
+struct PhaseRun {
+    phase: Phase,
+    report: StepReport,
+}
+
+impl Kernel for PhaseRun {
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        s: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    ) {
+        match self.phase {
+            Phase::ResetGrid => grid_update::reset(g),
+            Phase::ParticleToGrid => {
+                grid_update::reset(g);
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+            }
+            Phase::GridUpdate => {
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+            }
+            Phase::GridToParticle => {
+                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, &mut self.report)
+            }
+        }
     }
 }
 
