@@ -266,8 +266,12 @@ fn main() {
     for _ in 0..WARMUP_STEPS {
         step(&mut world);
     }
+    // The machine is shared: each run is paired with a fixed reference workload timed right
+    // before it, so that figures from different runs can be compared through their ratio.
     let mut runs: Vec<f64> = Vec::with_capacity(o.runs as usize);
+    let mut refs: Vec<f64> = Vec::with_capacity(o.runs as usize);
     for _ in 0..o.runs {
+        refs.push(reference_ns_per_particle(particles as usize));
         let mut elapsed = Duration::ZERO;
         for _ in 0..o.steps {
             elapsed += step(&mut world);
@@ -278,6 +282,9 @@ fn main() {
     let mut sorted = runs.clone();
     sorted.sort_by(f64::total_cmp);
     let med = median(&sorted);
+    let mut sorted_refs = refs.clone();
+    sorted_refs.sort_by(f64::total_cmp);
+    let med_ref = median(&sorted_refs);
 
     let cells = block[..axes]
         .iter()
@@ -291,7 +298,8 @@ fn main() {
         .join(",");
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
-\"order\":\"{}\",\"precision\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}]}}",
+\"order\":\"{}\",\"precision\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3}}}",
         o.dim,
         particles,
         cells,
@@ -300,7 +308,9 @@ fn main() {
         order_name(o.order),
         precision_name(),
         med,
-        runs_json
+        runs_json,
+        med_ref,
+        med / med_ref
     );
     eprintln!(
         "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \
@@ -331,4 +341,25 @@ runs [{}] ns; min {:.3}, max {:.3}; wall {:.2} s",
         sorted[sorted.len() - 1],
         wall.as_secs_f64()
     );
+}
+
+/// The reference workload: a fixed scalar computation per particle (a 32-term polynomial by
+/// Horner's rule, a dependent chain of 32 multiply-adds, over 4 interleaved streams), in ns per
+/// particle. It does not depend on the kernel, so its time tracks only the machine's speed at
+/// that moment.
+fn reference_ns_per_particle(particles: usize) -> f64 {
+    let xs: Vec<f64> = (0..particles).map(|i| (i % 1024) as f64 * 1.0e-3).collect();
+    let t0 = Instant::now();
+    let mut acc = [0.0f64; 4];
+    for chunk in xs.chunks_exact(4) {
+        for (a, &x) in acc.iter_mut().zip(chunk) {
+            let mut p = 1.0f64;
+            for k in 0..32 {
+                p = p * x + (k as f64) * 1.0e-3;
+            }
+            *a += p;
+        }
+    }
+    std::hint::black_box(acc);
+    t0.elapsed().as_nanos() as f64 / particles as f64
 }
