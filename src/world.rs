@@ -446,10 +446,7 @@ impl<'a> World<'a> {
         material: u32,
         velocity: Vec3,
     ) -> Result<Range<u32>, Error> {
-        if self.def().axes() != 2 {
-            return Err(Error::InvalidRegion);
-        }
-        self.fill_ball(center, radius, material, velocity)
+        self.fill_ball(2, center, radius, material, velocity)
     }
 
     /// Fills the sphere (3D) of `center` and `radius` like [`World::fill_box`].
@@ -460,19 +457,21 @@ impl<'a> World<'a> {
         material: u32,
         velocity: Vec3,
     ) -> Result<Range<u32>, Error> {
-        if self.def().axes() != 3 {
-            return Err(Error::InvalidRegion);
-        }
-        self.fill_ball(center, radius, material, velocity)
+        self.fill_ball(3, center, radius, material, velocity)
     }
 
+    /// A disk (`axes` = 2) or sphere (`axes` = 3); a world of the other dimension rejects it.
     fn fill_ball(
         &mut self,
+        axes: usize,
         center: Vec3,
         radius: Real,
         material: u32,
         velocity: Vec3,
     ) -> Result<Range<u32>, Error> {
+        if self.def().axes() != axes {
+            return Err(Error::InvalidRegion);
+        }
         if !(radius.is_finite() && radius > 0.0) {
             return Err(Error::InvalidRegion);
         }

@@ -161,6 +161,20 @@ pub(crate) fn load(col: &[Real], start: usize) -> Lane {
     }
 }
 
+/// `acc += x y`, lane by lane.
+#[inline(always)]
+fn mul_add_lanes<const D: usize>(acc: &mut LaneMat<D>, x: &LaneMat<D>, y: &LaneMat<D>) {
+    for r in 0..D {
+        for c in 0..D {
+            for m in 0..D {
+                for ln in 0..W {
+                    acc[r][c][ln] += x[r][m][ln] * y[m][c][ln];
+                }
+            }
+        }
+    }
+}
+
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
 /// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
 /// keeps its H and stress.
@@ -182,17 +196,9 @@ fn update_stress<const D: usize>(
     });
     for k in (1..n).rev() {
         let mut next = a;
-        for r in 0..D {
-            for c in 0..D {
-                for m in 0..D {
-                    for ln in 0..W {
-                        next[r][c][ln] += a[r][m][ln] * q[m][c][ln];
-                    }
-                }
-                for ln in 0..W {
-                    next[r][c][ln] *= INV[k];
-                }
-            }
+        mul_add_lanes(&mut next, &a, &q);
+        for v in next.iter_mut().flatten().flatten() {
+            *v *= INV[k];
         }
         q = next;
     }
@@ -200,17 +206,14 @@ fn update_stress<const D: usize>(
     let h_old: LaneMat<D> =
         core::array::from_fn(|r| core::array::from_fn(|c| load(p.h[r][c], start)));
     let mut h = h_old;
-    for r in 0..D {
-        for c in 0..D {
-            for m in 0..D {
-                for ln in 0..W {
-                    h[r][c][ln] += q[r][m][ln] * h_old[m][c][ln];
-                }
-            }
-            for ln in 0..W {
-                h[r][c][ln] += q[r][c][ln];
-            }
-        }
+    mul_add_lanes(&mut h, &q, &h_old);
+    for (hv, qv) in h
+        .iter_mut()
+        .flatten()
+        .flatten()
+        .zip(q.iter().flatten().flatten())
+    {
+        *hv += qv;
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H.
     let mut jm1 = [0.0; W];
