@@ -197,8 +197,12 @@ fn update_stress<const D: usize>(
     for k in (1..n).rev() {
         let mut next = a;
         mul_add_lanes(&mut next, &a, &q);
-        for v in next.iter_mut().flatten().flatten() {
-            *v *= INV[k];
+        for r in 0..D {
+            for c in 0..D {
+                for ln in 0..W {
+                    next[r][c][ln] *= INV[k];
+                }
+            }
         }
         q = next;
     }
@@ -207,13 +211,12 @@ fn update_stress<const D: usize>(
         core::array::from_fn(|r| core::array::from_fn(|c| load(p.h[r][c], start)));
     let mut h = h_old;
     mul_add_lanes(&mut h, &q, &h_old);
-    for (hv, qv) in h
-        .iter_mut()
-        .flatten()
-        .flatten()
-        .zip(q.iter().flatten().flatten())
-    {
-        *hv += qv;
+    for r in 0..D {
+        for c in 0..D {
+            for ln in 0..W {
+                h[r][c][ln] += q[r][c][ln];
+            }
+        }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H.
     let mut jm1 = [0.0; W];
