@@ -78,35 +78,38 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     let mut v_acc = [[0.0; ROW]; D];
     let mut a_acc = [[0.0; ROW]; D];
     let mut l_acc = [[[0.0; ROW]; D]; D];
-    for (row, w, gr) in st.rows(geom.stride) {
-        for a in 0..D {
-            // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
-            // column read has the length it was checked against.
-            let vel = if GRAD == grad::REMAP {
-                unsafe { load_row(g.remap[a], row) }
-            } else {
-                [0.0; ROW]
-            };
-            let (vi, ai) = if VEL || GRAD == grad::UPDATED {
-                unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
-            } else {
-                ([0.0; ROW], [0.0; ROW])
-            };
-            if VEL {
-                for i in 0..ROW {
-                    v_acc[a][i] += w[i] * vi[i];
-                    a_acc[a][i] += w[i] * ai[i];
-                }
-            }
-            if GRAD != grad::NONE {
-                for b in 0..D {
+    for k in 0..Stencil::<D, K>::layers() {
+        for j in 0..K {
+            let (row, w, gr) = st.row(j, k, geom.stride);
+            for a in 0..D {
+                // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
+                // column read has the length it was checked against.
+                let vel = if GRAD == grad::REMAP {
+                    unsafe { load_row(g.remap[a], row) }
+                } else {
+                    [0.0; ROW]
+                };
+                let (vi, ai) = if VEL || GRAD == grad::UPDATED {
+                    unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
+                } else {
+                    ([0.0; ROW], [0.0; ROW])
+                };
+                if VEL {
                     for i in 0..ROW {
-                        let v = if GRAD == grad::UPDATED {
-                            vi[i] + dt * ai[i]
-                        } else {
-                            vel[i]
-                        };
-                        l_acc[a][b][i] += v * gr[b][i];
+                        v_acc[a][i] += w[i] * vi[i];
+                        a_acc[a][i] += w[i] * ai[i];
+                    }
+                }
+                if GRAD != grad::NONE {
+                    for b in 0..D {
+                        for i in 0..ROW {
+                            let v = if GRAD == grad::UPDATED {
+                                vi[i] + dt * ai[i]
+                            } else {
+                                vel[i]
+                            };
+                            l_acc[a][b][i] += v * gr[b][i];
+                        }
                     }
                 }
             }

@@ -72,30 +72,35 @@ fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
         };
         // Force on a node: f_a = -m sum_b tau_ab G_b, so coefficient c[a][b] = -m tau_ab.
         let c: [[Real; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| -m * tau[a][b]));
-        for (row, w, grad) in st.rows(geom.stride) {
-            if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
-                // columns share the length it was checked against.
-                unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
-                for a in 0..D {
-                    unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
+        for k in 0..Stencil::<D, K>::layers() {
+            for j in 0..K {
+                let (row, w, grad) = st.row(j, k, geom.stride);
+                if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+                    // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
+                    // columns share the length it was checked against.
+                    unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
+                    for a in 0..D {
+                        unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
+                    }
                 }
-            }
-            if MODE == mode::REMAP {
-                for a in 0..D {
-                    unsafe { add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
+                if MODE == mode::REMAP {
+                    for a in 0..D {
+                        unsafe {
+                            add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]))
+                        };
+                    }
                 }
-            }
-            if MODE == mode::ALL || MODE == mode::FORCE {
-                for a in 0..D {
-                    let f: [Real; ROW] = core::array::from_fn(|i| {
-                        let mut t = 0.0;
-                        for b in 0..D {
-                            t += c[a][b] * grad[b][i];
-                        }
-                        t
-                    });
-                    unsafe { add_row(g.acc[a], row, &f) };
+                if MODE == mode::ALL || MODE == mode::FORCE {
+                    for a in 0..D {
+                        let f: [Real; ROW] = core::array::from_fn(|i| {
+                            let mut t = 0.0;
+                            for b in 0..D {
+                                t += c[a][b] * grad[b][i];
+                            }
+                            t
+                        });
+                        unsafe { add_row(g.acc[a], row, &f) };
+                    }
                 }
             }
         }

@@ -1,7 +1,7 @@
 //! Shape functions: one file per family, one way to ask any of them for `S_ip` and `G_ip`.
 //!
 //! Every family is evaluated per axis ([`Shape1D`]) and combined by tensor product
-//! ([`Stencil::for_each_node`], or row by row with [`Stencil::rows`]): in 2D and 3D,
+//! ([`Stencil::for_each_node`], or row by row with [`Stencil::row`]): in 2D and 3D,
 //! `S_ip` is the product of the per-axis values and each component of `G_ip` replaces one factor
 //! by its derivative (seeds/000 eqs 16-17).
 //!
@@ -66,50 +66,6 @@ pub struct Stencil<const D: usize, const K: usize> {
 /// One row of a stencil along x: the flat index of its first node, the weights `S[i]` and the
 /// gradients `G[axis][i]` of nodes `row + i` for `i < ROW` (zero for `i >= K`).
 pub type Row<const D: usize> = (usize, [Real; ROW], [[Real; ROW]; D]);
-
-/// The rows of a stencil (see [`Stencil::rows`]). An iterator rather than a callback so that the
-/// loop body stays in the caller's function and is optimised with it.
-pub struct Rows<'s, const D: usize, const K: usize> {
-    st: &'s Stencil<D, K>,
-    stride: [usize; D],
-    n: usize,
-}
-
-impl<const D: usize, const K: usize> Iterator for Rows<'_, D, K> {
-    type Item = Row<D>;
-
-    #[inline(always)]
-    fn next(&mut self) -> Option<Row<D>> {
-        let layers = if D == 3 { K } else { 1 };
-        if self.n >= K * layers {
-            return None;
-        }
-        let (j, k) = (self.n % K, self.n / K);
-        self.n += 1;
-        let (w, dw) = (&self.st.w, &self.st.dw);
-        let row =
-            self.st.base + j * self.stride[1] + if D == 3 { k * self.stride[D - 1] } else { 0 };
-        // Weight of the row in y (and z) and its derivatives.
-        let (wt, dy, dz) = if D == 3 {
-            (
-                w[1][j] * w[D - 1][k],
-                dw[1][j] * w[D - 1][k],
-                w[1][j] * dw[D - 1][k],
-            )
-        } else {
-            (w[1][j], dw[1][j], 0.0)
-        };
-        let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
-        let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
-            core::array::from_fn(|i| match a {
-                0 => dw[0][i] * wt,
-                1 => w[0][i] * dy,
-                _ => w[0][i] * dz,
-            })
-        });
-        Some((row, s, g))
-    }
-}
 
 /// The stencils of `W` particles at once, laid out lane-fastest so that computing them is a set
 /// of loops over lanes the compiler vectorises.
@@ -198,15 +154,43 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         (K - 1) * (stride[1] + if D == 3 { stride[D - 1] } else { 0 })
     }
 
-    /// The rows of the stencil along x (K^(D-1) of them), x-rows in y-then-z order. `row + ROW`
-    /// is at most two past the last node, which the node columns' padding covers.
+    /// Number of z layers of rows: K in 3D, 1 in 2D. The rows of a stencil are `row(j, k)` for
+    /// `k < layers()` and `j < K`; callers write the two loops themselves, so that their bounds
+    /// are constants the compiler unrolls.
     #[inline(always)]
-    pub fn rows(&self, stride: [usize; D]) -> Rows<'_, D, K> {
-        Rows {
-            st: self,
-            stride,
-            n: 0,
+    pub const fn layers() -> usize {
+        if D == 3 {
+            K
+        } else {
+            1
         }
+    }
+
+    /// Row `j` along y of layer `k` along z (see [`Row`]). `row + ROW` is at most two past the
+    /// last node, which the node columns' padding covers.
+    #[inline(always)]
+    pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> Row<D> {
+        let (w, dw) = (&self.w, &self.dw);
+        let row = self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
+        // Weight of the row in y (and z) and its derivatives.
+        let (wt, dy, dz) = if D == 3 {
+            (
+                w[1][j] * w[D - 1][k],
+                dw[1][j] * w[D - 1][k],
+                w[1][j] * dw[D - 1][k],
+            )
+        } else {
+            (w[1][j], dw[1][j], 0.0)
+        };
+        let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
+        let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
+            core::array::from_fn(|i| match a {
+                0 => dw[0][i] * wt,
+                1 => w[0][i] * dy,
+                _ => w[0][i] * dz,
+            })
+        });
+        (row, s, g)
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
