@@ -576,19 +576,23 @@ impl<'a> World<'a> {
                 &[]
             }
         });
-        let mut v2_max: Real = 0.0;
+        // In f64: a speed near f32's range (1e19 m/s and up) would overflow v^2 in f32 and
+        // make the stable step 0, which no step could take, although the true step is
+        // representable.
+        let mut v2_max: f64 = 0.0;
         for i in 0..n {
-            let mut v2 = 0.0;
+            let mut v2 = 0.0f64;
             for va in v.iter().take(d) {
-                v2 += va[i] * va[i];
+                v2 += va[i] as f64 * va[i] as f64;
             }
             if status[i] == ACTIVE && v2 > v2_max {
                 v2_max = v2;
             }
         }
-        let speed = c_max + crate::math::sqrt(v2_max);
+        let speed = c_max as f64 + libm::sqrt(v2_max);
         if speed > 0.0 {
-            def.cfl * def.cell_size / speed
+            // Never 0: a step below the smallest positive Real is not a step.
+            ((def.cfl as f64 * def.cell_size as f64 / speed) as Real).max(Real::MIN_POSITIVE)
         } else {
             Real::INFINITY
         }
