@@ -182,7 +182,6 @@ fn corrupted_snapshots_never_panic() {
             .unwrap();
         w.step(0.001).unwrap();
         let mut bytes = w.as_bytes().to_vec();
-        drop(w);
         // Corrupt: mostly past the header (offset 512 is past the header and into the material
         // table or the columns), sometimes the header itself.
         let flips = 1 + rng.next_u64() % 64;
