@@ -837,8 +837,8 @@ impl Kernel for Substep<'_> {
                 scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
+                // Also scatters the new momenta to the remap columns (see g2p::particles).
                 g2p::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
-                scatter::<D, K, S, { mode::REMAP }>(s, ctx, p, count, g);
                 grid_update::remap_velocity(ctx, g);
                 g2p::stress::<D, K, S, true>(s, ctx, p, count, g, report);
             }

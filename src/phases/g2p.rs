@@ -19,6 +19,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
+use super::p2g::{mode, scatter_one};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -314,8 +315,11 @@ fn update_stress<const D: usize>(
 }
 
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
-/// from `v_i + a_i dt` in the same pass (USL); `TO_NEXT` writes the new positions to the MUSL
-/// scratch columns instead of the positions.
+/// from `v_i + a_i dt` in the same pass (USL). `TO_NEXT` (MUSL) writes the new positions to
+/// the scratch columns instead of the positions, and scatters the new momenta to the remap
+/// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
+/// remap columns are free to fill; particles contribute in index order, as a separate pass
+/// would).
 pub(crate) fn particles<
     const D: usize,
     const K: usize,
@@ -327,7 +331,7 @@ pub(crate) fn particles<
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
-    g: &GridCols<'_, D>,
+    g: &mut GridCols<'_, D>,
     report: &mut StepReport,
 ) {
     let geom = &ctx.geom;
@@ -429,6 +433,13 @@ pub(crate) fn particles<
                 report.escaped += 1;
             } else if ok[ln] && stopped[ln] {
                 report.stopped += 1;
+            }
+        }
+        if TO_NEXT {
+            for ln in 0..W.min(count - start) {
+                if p.status[start + ln] == ACTIVE {
+                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &st.lane(ln), g);
+                }
             }
         }
     }

@@ -46,9 +46,10 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
     }
 }
 
-/// Scatters particle `i` with stencil `st`.
+/// Scatters particle `i` with stencil `st` (also used by the MUSL particle update, which
+/// scatters the new momenta as it goes).
 #[inline(always)]
-fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
+pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     i: usize,
