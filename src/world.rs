@@ -1,7 +1,7 @@
 //! The world: a view of the caller's buffer with add, step, stable_dt and read access.
 //! The phase order of a step lives here and only here ([`World::step`]).
 
-use crate::def::{Dimension, MaterialDef, MaterialModel, ShapeFunction, UpdateOrder, WorldDef};
+use crate::def::{Dimension, MaterialDef, ShapeFunction, UpdateOrder, WorldDef};
 use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
@@ -312,10 +312,7 @@ impl<'a> World<'a> {
         self.materials(&layout)
             .get(id as usize)
             .map(|r| MaterialDef {
-                model: match model_of(r) {
-                    MaterialModel::LinearElastic => MaterialModel::LinearElastic,
-                    MaterialModel::NeoHookean => MaterialModel::NeoHookean,
-                },
+                model: model_of(r),
                 youngs_modulus: r.youngs_modulus,
                 poisson_ratio: r.poisson_ratio,
                 density: r.density,

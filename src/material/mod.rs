@@ -66,6 +66,18 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     s
 }
 
+/// Neo-Hookean `tau / rho0` for `W` particles sharing one material (the vectorised path of the
+/// stress update); see [`neo_hookean`].
+#[inline(always)]
+pub(crate) fn neo_hookean_lanes<const D: usize, const W: usize>(
+    p: &Params,
+    h: &[[[Real; W]; D]; D],
+    jm1: &[Real; W],
+    tau: &mut [[Real; W]; 6],
+) {
+    neo_hookean::kirchhoff_lanes(p, h, jm1, tau);
+}
+
 /// Strain energy per unit initial volume, J/m^3, from `H = F - I` and `jm1 = det F - 1`.
 pub(crate) fn energy_density<const D: usize>(
     model: MaterialModel,

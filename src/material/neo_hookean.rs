@@ -6,12 +6,19 @@
 //! precision in f32.
 
 use super::{Params, Stress};
-use crate::math::{det_identity_plus_parts, ln_1p, x_minus_ln_1p, Mat};
+use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p, Mat};
 use crate::Real;
+
+/// `ln J` from `J - 1` for the stress: the branch-free log, so that [`kirchhoff`] and
+/// [`kirchhoff_lanes`] give a particle bit-identical stress.
+#[inline(always)]
+fn ln_j(jm1: Real) -> Real {
+    ln_1p_fast(jm1.max(-1.0 + Real::EPSILON))
+}
 
 #[inline(always)]
 pub(super) fn kirchhoff<const D: usize>(p: &Params, h: &Mat<D>, jm1: Real) -> Stress<D> {
-    let lnj = ln_1p(jm1);
+    let lnj = ln_j(jm1);
     let mut m = [[0.0; D]; D];
     for a in 0..D {
         for b in 0..D {
@@ -25,6 +32,37 @@ pub(super) fn kirchhoff<const D: usize>(p: &Params, h: &Mat<D>, jm1: Real) -> St
     }
     let zz = if D == 2 { p.lambda * lnj } else { 0.0 };
     Stress { m, zz }
+}
+
+/// `tau / rho0` for `W` particles at once, `h[a][b][lane]` and `jm1[lane]`, into
+/// `tau[k][lane]` in the stored component order (`crate::phases::sym_pairs`, then `zz` in 2D).
+/// The same formula as [`kirchhoff`], written as loops over lanes that vectorise.
+#[inline(always)]
+pub(super) fn kirchhoff_lanes<const D: usize, const W: usize>(
+    p: &Params,
+    h: &[[[Real; W]; D]; D],
+    jm1: &[Real; W],
+    tau: &mut [[Real; W]; 6],
+) {
+    let mut lnj = [0.0; W];
+    for ln in 0..W {
+        lnj[ln] = ln_j(jm1[ln]);
+    }
+    for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+        for ln in 0..W {
+            let mut hh = 0.0;
+            for m in 0..D {
+                hh += h[r][m][ln] * h[c][m][ln];
+            }
+            let diag = if r == c { p.lambda * lnj[ln] } else { 0.0 };
+            tau[k][ln] = (p.mu * (h[r][c][ln] + h[c][r][ln] + hh) + diag) * p.inv_rho0;
+        }
+    }
+    if D == 2 {
+        for ln in 0..W {
+            tau[3][ln] = p.lambda * lnj[ln] * p.inv_rho0;
+        }
+    }
 }
 
 /// `W = mu (tr H - ln J) + mu/2 |H|^2 + lambda/2 (ln J)^2`, the same energy arranged so that no

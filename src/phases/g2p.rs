@@ -23,8 +23,8 @@ use super::p2g::{mode, scatter_one};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
-use crate::material::{kirchhoff_over_rho0, model_of, Params};
-use crate::math::{ln_1p_fast, INV};
+use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
+use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
@@ -242,26 +242,7 @@ fn update_stress<const D: usize>(
     let mut tau = [[0.0; W]; 6];
     let mut ok = [false; W];
     if let Some(rec) = uniform {
-        let pr = Params::of(rec);
-        let mut lnj = [0.0; W];
-        for ln in 0..W {
-            lnj[ln] = ln_1p_fast(jm1[ln].max(-1.0 + Real::EPSILON));
-        }
-        for (k, &(r, c)) in super::sym_pairs(D).iter().enumerate() {
-            for ln in 0..W {
-                let mut hh = 0.0;
-                for m in 0..D {
-                    hh += h[r][m][ln] * h[c][m][ln];
-                }
-                let diag = if r == c { pr.lambda * lnj[ln] } else { 0.0 };
-                tau[k][ln] = (pr.mu * (h[r][c][ln] + h[c][r][ln] + hh) + diag) * pr.inv_rho0;
-            }
-        }
-        if D == 2 {
-            for ln in 0..W {
-                tau[3][ln] = pr.lambda * lnj[ln] * pr.inv_rho0;
-            }
-        }
+        neo_hookean_lanes(&Params::of(rec), &h, &jm1, &mut tau);
         for ln in 0..W {
             ok[ln] = update[ln] && jm1[ln] > -1.0;
         }
