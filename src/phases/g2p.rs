@@ -20,13 +20,13 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::p2g::{mode, scatter_one};
-use super::Ctx;
+use super::{stencil_at, Ctx};
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Shape1D, Stencil, Stencils, ROW};
+use crate::shape::{Stencil, Table, ROW};
 use crate::{Real, StepReport};
 
 /// Particles per chunk.
@@ -123,20 +123,6 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
             l[a][b][lane] = l_acc[a][b].iter().sum();
         }
     }
-}
-
-/// The stencils of the chunk's particles at `x[axis][lane]`.
-#[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    x: &[Lane; D],
-) -> Stencils<D, K, W> {
-    let geom = &ctx.geom;
-    let s: [Lane; D] = core::array::from_fn(|a| {
-        core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
-    });
-    Stencils::new(shape, &s, geom.nodes, geom.stride, geom.inv_h)
 }
 
 /// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
@@ -304,11 +290,10 @@ fn update_stress<const D: usize>(
 pub(crate) fn particles<
     const D: usize,
     const K: usize,
-    S: Shape1D<K>,
     const FUSED_STRESS: bool,
     const TO_NEXT: bool,
 >(
-    shape: &S,
+    table: &Table<K>,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
@@ -328,10 +313,14 @@ pub(crate) fn particles<
         let mut v_gp = [[0.0; W]; D];
         let mut a_gp = [[0.0; W]; D];
         let mut l = [[[0.0; W]; D]; D];
-        let st = stencils::<D, K, S>(shape, ctx, &x);
+        // The stencils, kept for the remap scatter (MUSL).
+        let mut kept = [Stencil::<D, K>::ZERO; W];
         for ln in 0..W {
             if live[ln] {
-                let st = st.lane(ln);
+                let st = stencil_at(table, geom, p, start + ln);
+                if TO_NEXT {
+                    kept[ln] = st;
+                }
                 if FUSED_STRESS {
                     gather::<D, K, true, { grad::UPDATED }>(
                         ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
@@ -419,7 +408,7 @@ pub(crate) fn particles<
         if TO_NEXT {
             for ln in 0..W.min(count - start) {
                 if p.status[start + ln] == ACTIVE {
-                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &st.lane(ln), g);
+                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &kept[ln], g);
                 }
             }
         }
@@ -429,8 +418,8 @@ pub(crate) fn particles<
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
 /// from the wall-constrained velocity in the `remap` columns. `COMMIT_NEXT` (MUSL) commits
 /// the new positions afterwards.
-pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
-    shape: &S,
+pub(crate) fn stress<const D: usize, const K: usize, const COMMIT_NEXT: bool>(
+    table: &Table<K>,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
@@ -445,14 +434,12 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         let mut unused = [[0.0; W]; D];
         let mut unused2 = [[0.0; W]; D];
         let mut l = [[[0.0; W]; D]; D];
-        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        let st = stencils::<D, K, S>(shape, ctx, &x);
         for ln in 0..W {
             if live[ln] {
                 gather::<D, K, false, { grad::REMAP }>(
                     ctx,
                     g,
-                    &st.lane(ln),
+                    &stencil_at(table, &ctx.geom, p, start + ln),
                     ln,
                     &mut unused,
                     &mut unused2,

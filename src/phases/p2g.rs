@@ -2,12 +2,11 @@
 //! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
 //! enters in the grid update as `m_i g` (eq 22).
 
-use super::g2p::{load, stencils, Lane, W};
-use super::{load_tau, load_v, Ctx};
+use super::{load_tau, load_v, stencil_at, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::ROW;
-use crate::shape::{Shape1D, Stencil};
+use crate::shape::{Stencil, Table};
 use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
@@ -23,8 +22,8 @@ pub(crate) mod mode {
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says.
-pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
-    shape: &S,
+pub(crate) fn scatter<const D: usize, const K: usize, const MODE: u8>(
+    table: &Table<K>,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     count: usize,
@@ -33,16 +32,12 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
-    for start in (0..count).step_by(W) {
-        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        let stencils = stencils::<D, K, S>(shape, ctx, &x);
-        for ln in 0..W.min(count - start) {
-            let i = start + ln;
-            if p.status[i] != ACTIVE {
-                continue;
-            }
-            scatter_one::<D, K, MODE>(ctx, p, i, &stencils.lane(ln), g);
+    for i in 0..count {
+        if p.status[i] != ACTIVE {
+            continue;
         }
+        let st = stencil_at(table, &ctx.geom, p, i);
+        scatter_one::<D, K, MODE>(ctx, p, i, &st, g);
     }
 }
 
