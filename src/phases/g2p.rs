@@ -26,7 +26,7 @@ use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Stencil, Table, ROW};
+use crate::shape::{Row4, Stencil, Table};
 use crate::{Real, StepReport};
 
 /// Particles per chunk.
@@ -76,51 +76,42 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
     // Row-wide partial sums, reduced once at the end.
-    let mut v_acc = [[0.0; ROW]; D];
-    let mut a_acc = [[0.0; ROW]; D];
-    let mut l_acc = [[[0.0; ROW]; D]; D];
+    let mut v_acc = [Row4::ZERO; D];
+    let mut a_acc = [Row4::ZERO; D];
+    let mut l_acc = [[Row4::ZERO; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, w, gr) = st.row(j, k, geom.stride);
             for a in 0..D {
                 // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
                 // column read has the length it was checked against.
-                let vel = if GRAD == grad::REMAP {
-                    unsafe { load_row(g.remap[a], row) }
-                } else {
-                    [0.0; ROW]
-                };
                 let (vi, ai) = if VEL || GRAD == grad::UPDATED {
                     unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
                 } else {
-                    ([0.0; ROW], [0.0; ROW])
+                    (Row4::ZERO, Row4::ZERO)
                 };
                 if VEL {
-                    for i in 0..ROW {
-                        v_acc[a][i] += w[i] * vi[i];
-                        a_acc[a][i] += w[i] * ai[i];
-                    }
+                    v_acc[a] += w * vi;
+                    a_acc[a] += w * ai;
                 }
                 if GRAD != grad::NONE {
+                    let v = if GRAD == grad::UPDATED {
+                        vi + ai * dt
+                    } else {
+                        unsafe { load_row(g.remap[a], row) }
+                    };
                     for b in 0..D {
-                        for i in 0..ROW {
-                            let v = if GRAD == grad::UPDATED {
-                                vi[i] + dt * ai[i]
-                            } else {
-                                vel[i]
-                            };
-                            l_acc[a][b][i] += v * gr[b][i];
-                        }
+                        l_acc[a][b] += v * gr[b];
                     }
                 }
             }
         }
     }
     for a in 0..D {
-        v_gp[a][lane] = v_acc[a].iter().sum();
-        a_gp[a][lane] = a_acc[a].iter().sum();
+        v_gp[a][lane] = v_acc[a].element_sum();
+        a_gp[a][lane] = a_acc[a].element_sum();
         for b in 0..D {
-            l[a][b][lane] = l_acc[a][b].iter().sum();
+            l[a][b][lane] = l_acc[a][b].element_sum();
         }
     }
 }

@@ -5,7 +5,6 @@
 use super::{load_tau, load_v, stencil_at, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::ROW;
 use crate::shape::{Stencil, Table};
 use crate::Real;
 
@@ -74,28 +73,23 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
                 if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
                     // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
                     // columns share the length it was checked against.
-                    unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
+                    unsafe { add_row(g.mass, row, w * m) };
                     for a in 0..D {
-                        unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
+                        unsafe { add_row(g.vel[a], row, w * mv[a]) };
                     }
                 }
                 if MODE == mode::REMAP {
                     for a in 0..D {
-                        unsafe {
-                            add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]))
-                        };
+                        unsafe { add_row(g.remap[a], row, w * mv[a]) };
                     }
                 }
                 if MODE == mode::ALL || MODE == mode::FORCE {
                     for a in 0..D {
-                        let f: [Real; ROW] = core::array::from_fn(|i| {
-                            let mut t = 0.0;
-                            for b in 0..D {
-                                t += c[a][b] * grad[b][i];
-                            }
-                            t
-                        });
-                        unsafe { add_row(g.acc[a], row, &f) };
+                        let mut f = grad[0] * c[a][0];
+                        for b in 1..D {
+                            f += grad[b] * c[a][b];
+                        }
+                        unsafe { add_row(g.acc[a], row, f) };
                     }
                 }
             }

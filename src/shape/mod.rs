@@ -34,6 +34,14 @@ use crate::Real;
 /// with zero weights to 4.
 pub const ROW: usize = 4;
 
+/// A row of [`ROW`] values as one SIMD register (glam's SSE2 `Vec4` in f32), so that row
+/// arithmetic is vector arithmetic whatever the optimiser decides.
+#[cfg(not(feature = "f64"))]
+pub type Row4 = glam::Vec4;
+/// A row of [`ROW`] values (glam's `DVec4` in f64).
+#[cfg(feature = "f64")]
+pub type Row4 = glam::DVec4;
+
 /// Most polynomial pieces a family may have (in `|xi|`).
 pub const MAX_PIECES: usize = 3;
 
@@ -71,15 +79,16 @@ pub struct Table<const K: usize> {
     breaks: [Real; MAX_REGIONS - 1],
     /// First stencil node of each region relative to `c - 1` (0 ..= 4 - K).
     shift: [usize; MAX_REGIONS],
-    /// Weight coefficients `w[region][power][k]` of stencil node `k` (zero for `k >= K`).
-    w: [[[Real; ROW]; 4]; MAX_REGIONS],
-    /// Coefficients of the derivative with respect to `f`, `dw[region][power][k]`.
-    dw: [[[Real; ROW]; 3]; MAX_REGIONS],
+    /// Weight coefficients `w[region][power]`, lane `k` for stencil node `k` (zero for
+    /// `k >= K`).
+    w: [[Row4; 4]; MAX_REGIONS],
+    /// Coefficients of the derivative with respect to `f`, `dw[region][power]`.
+    dw: [[Row4; 3]; MAX_REGIONS],
     /// The largest `shift`.
     max_shift: usize,
-    /// Point `at[region][k]` about which node `k`'s polynomials are expanded: the
-    /// coefficients are of powers of `f - at`.
-    at: [[Real; ROW]; MAX_REGIONS],
+    /// Point `at[region]` (lane `k` for node `k`) about which the polynomials are expanded:
+    /// the coefficients are of powers of `f - at`.
+    at: [Row4; MAX_REGIONS],
 }
 
 impl<const K: usize> Table<K> {
@@ -112,10 +121,10 @@ impl<const K: usize> Table<K> {
         let mut t = Table {
             breaks: [Real::INFINITY; MAX_REGIONS - 1],
             shift: [0; MAX_REGIONS],
-            w: [[[0.0; ROW]; 4]; MAX_REGIONS],
-            dw: [[[0.0; ROW]; 3]; MAX_REGIONS],
+            w: [[Row4::ZERO; 4]; MAX_REGIONS],
+            dw: [[Row4::ZERO; 3]; MAX_REGIONS],
             max_shift: 0,
-            at: [[0.0; ROW]; MAX_REGIONS],
+            at: [Row4::ZERO; MAX_REGIONS],
         };
         for r in 0..=ncuts {
             let lo = if r == 0 { 0.0 } else { cuts[r - 1] };
@@ -178,7 +187,7 @@ impl<const K: usize> Table<K> {
     /// The cell and the first node are clamped, so the `K` nodes always exist, whatever `s`
     /// (NaN included); inside the admissible region the clamps never act.
     #[inline(always)]
-    pub fn axis(&self, s: Real, nodes: usize) -> (usize, [Real; ROW], [Real; ROW]) {
+    pub fn axis(&self, s: Real, nodes: usize) -> (usize, Row4, Row4) {
         // The highest cell is the last whose stencil fits in every region; a particle on the
         // upper face of the admissible region takes the cell below it, at f = 1.
         let top = (nodes + 1).saturating_sub(K + self.max_shift).min(1 << 30);
@@ -193,11 +202,9 @@ impl<const K: usize> Table<K> {
             + (f >= self.breaks[2]) as usize;
         let first = (c + self.shift[r]).saturating_sub(1).min(nodes - K);
         let (a, b) = (&self.w[r], &self.dw[r]);
-        let g: [Real; ROW] = core::array::from_fn(|k| f - self.at[r][k]);
-        let w = core::array::from_fn(|k| {
-            ((a[3][k] * g[k] + a[2][k]) * g[k] + a[1][k]) * g[k] + a[0][k]
-        });
-        let dw = core::array::from_fn(|k| (b[2][k] * g[k] + b[1][k]) * g[k] + b[0][k]);
+        let g = Row4::splat(f) - self.at[r];
+        let w = ((a[3] * g + a[2]) * g + a[1]) * g + a[0];
+        let dw = (b[2] * g + b[1]) * g + b[0];
         (first, w, dw)
     }
 }
@@ -223,22 +230,22 @@ pub struct Stencil<const D: usize, const K: usize> {
     /// Flat index of the stencil's first node.
     pub base: usize,
     /// Per-axis weights `w[axis][k]`, zero for `k >= K`.
-    pub w: [[Real; ROW]; D],
+    pub w: [Row4; D],
     /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h), zero for
     /// `k >= K`.
-    pub dw: [[Real; ROW]; D],
+    pub dw: [Row4; D],
 }
 
 /// One row of a stencil along x: the flat index of its first node, the weights `S[i]` and the
 /// gradients `G[axis][i]` of nodes `row + i` for `i < ROW` (zero for `i >= K`).
-pub type Row<const D: usize> = (usize, [Real; ROW], [[Real; ROW]; D]);
+pub type Row<const D: usize> = (usize, Row4, [Row4; D]);
 
 impl<const D: usize, const K: usize> Stencil<D, K> {
     /// A stencil with every weight zero, at node 0.
     pub const ZERO: Self = Stencil {
         base: 0,
-        w: [[0.0; ROW]; D],
-        dw: [[0.0; ROW]; D],
+        w: [Row4::ZERO; D],
+        dw: [Row4::ZERO; D],
     };
 
     /// Stencil of a particle at `s` (cell units per axis) on a grid with `nodes[a]` nodes per
@@ -253,13 +260,13 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         inv_h: Real,
     ) -> Self {
         let mut base = 0usize;
-        let mut w = [[0.0; ROW]; D];
-        let mut dw = [[0.0; ROW]; D];
+        let mut w = [Row4::ZERO; D];
+        let mut dw = [Row4::ZERO; D];
         for a in 0..D {
             let (first, wa, dwa) = table.axis(s[a], nodes[a]);
             base += first * stride[a];
             w[a] = wa;
-            dw[a] = core::array::from_fn(|k| dwa[k] * inv_h);
+            dw[a] = dwa * inv_h;
         }
         Stencil { base, w, dw }
     }
@@ -298,13 +305,11 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         } else {
             (w[1][j], dw[1][j], 0.0)
         };
-        let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
-        let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
-            core::array::from_fn(|i| match a {
-                0 => dw[0][i] * wt,
-                1 => w[0][i] * dy,
-                _ => w[0][i] * dz,
-            })
+        let s = w[0] * wt;
+        let g: [Row4; D] = core::array::from_fn(|a| match a {
+            0 => dw[0] * wt,
+            1 => w[0] * dy,
+            _ => w[0] * dz,
         });
         (row, s, g)
     }
