@@ -11,7 +11,7 @@
 use crate::def::{Boundary, WorldDef};
 use crate::layout::Layout;
 use crate::particles::Carver;
-use crate::shape::{Row4, ROW};
+use crate::shape::ROW;
 use crate::Real;
 
 /// Mutable views of every node column, each `nodes` long.
@@ -42,12 +42,10 @@ pub(crate) fn rows_fit(base: usize, last_row_offset: usize, len: usize) -> bool 
 /// # Safety
 /// `start + ROW <= col.len()` (see [`rows_fit`]).
 #[inline(always)]
-pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> Row4 {
+pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
     debug_assert!(start + ROW <= col.len());
     // SAFETY: the caller guarantees start + ROW <= col.len(), so the ROW reads are in bounds.
-    Row4::from_array(core::array::from_fn(|i| unsafe {
-        *col.get_unchecked(start + i)
-    }))
+    core::array::from_fn(|i| unsafe { *col.get_unchecked(start + i) })
 }
 
 /// Adds `v` to the [`ROW`] values of `col` from `start`.
@@ -55,12 +53,11 @@ pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> Row4 {
 /// # Safety
 /// `start + ROW <= col.len()` (see [`rows_fit`]).
 #[inline(always)]
-pub(crate) unsafe fn add_row(col: &mut [Real], start: usize, v: Row4) {
-    // SAFETY: the caller's guarantee is load_row's.
-    let sum = (unsafe { load_row(col, start) } + v).to_array();
-    for (i, x) in sum.into_iter().enumerate() {
+pub(crate) unsafe fn add_row(col: &mut [Real], start: usize, v: &[Real; ROW]) {
+    debug_assert!(start + ROW <= col.len());
+    for (i, vi) in v.iter().enumerate() {
         // SAFETY: the caller guarantees start + ROW <= col.len(), and i < ROW.
-        unsafe { *col.get_unchecked_mut(start + i) = x };
+        unsafe { *col.get_unchecked_mut(start + i) += vi };
     }
 }
 

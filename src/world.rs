@@ -10,7 +10,7 @@ use crate::particles::{ParticleCols, ACTIVE};
 use crate::phases::g2p;
 use crate::phases::p2g::{mode, scatter};
 use crate::phases::{grid_update, Ctx};
-use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D, Table};
+use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::{Error, Real, Vec3};
 use core::mem::size_of;
 use core::ops::Range;
@@ -708,7 +708,7 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
         };
-        kernel.run(&Table::new(&shape), &ctx, &mut p, count, &mut g);
+        kernel.run(&shape, &ctx, &mut p, count, &mut g);
     }
 
     /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
@@ -805,9 +805,9 @@ impl<'a> World<'a> {
 /// A computation on the world's columns with the dimension and shape function fixed at compile
 /// time; [`World::dispatch`] picks the instance once per call.
 trait Kernel {
-    fn run<const D: usize, const K: usize>(
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
-        table: &Table<K>,
+        shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
@@ -823,9 +823,9 @@ struct Substep<'r> {
 }
 
 impl Kernel for Substep<'_> {
-    fn run<const D: usize, const K: usize>(
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
-        s: &Table<K>,
+        s: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
@@ -835,28 +835,28 @@ impl Kernel for Substep<'_> {
         grid_update::reset(g);
         match self.order {
             UpdateOrder::Usf => {
-                scatter::<D, K, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
+                scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
-                g2p::stress::<D, K, false>(s, ctx, p, count, g, report);
-                scatter::<D, K, { mode::FORCE }>(s, ctx, p, count, g);
+                g2p::stress::<D, K, S, false>(s, ctx, p, count, g, report);
+                scatter::<D, K, S, { mode::FORCE }>(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
-                g2p::particles::<D, K, false, false>(s, ctx, p, count, g, report);
+                g2p::particles::<D, K, S, false, false>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                scatter::<D, K, { mode::ALL }>(s, ctx, p, count, g);
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
-                g2p::particles::<D, K, true, false>(s, ctx, p, count, g, report);
+                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                scatter::<D, K, { mode::ALL }>(s, ctx, p, count, g);
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).
-                g2p::particles::<D, K, false, true>(s, ctx, p, count, g, report);
+                g2p::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
                 grid_update::remap_velocity(ctx, g);
-                g2p::stress::<D, K, true>(s, ctx, p, count, g, report);
+                g2p::stress::<D, K, S, true>(s, ctx, p, count, g, report);
             }
         }
     }
@@ -882,9 +882,9 @@ struct PhaseRun {
 }
 
 impl Kernel for PhaseRun {
-    fn run<const D: usize, const K: usize>(
+    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
-        s: &Table<K>,
+        s: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
@@ -894,14 +894,14 @@ impl Kernel for PhaseRun {
             Phase::ResetGrid => grid_update::reset(g),
             Phase::ParticleToGrid => {
                 grid_update::reset(g);
-                scatter::<D, K, { mode::ALL }>(s, ctx, p, count, g);
+                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
             }
             Phase::GridToParticle => {
-                g2p::particles::<D, K, true, false>(s, ctx, p, count, g, &mut self.report)
+                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, &mut self.report)
             }
         }
     }

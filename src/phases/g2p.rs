@@ -20,13 +20,13 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::p2g::{mode, scatter_one};
-use super::{stencil_at, Ctx};
+use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Row4, Stencil, Table};
+use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
 /// Particles per chunk.
@@ -76,44 +76,67 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
     // Row-wide partial sums, reduced once at the end.
-    let mut v_acc = [Row4::ZERO; D];
-    let mut a_acc = [Row4::ZERO; D];
-    let mut l_acc = [[Row4::ZERO; D]; D];
+    let mut v_acc = [[0.0; ROW]; D];
+    let mut a_acc = [[0.0; ROW]; D];
+    let mut l_acc = [[[0.0; ROW]; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, w, gr) = st.row(j, k, geom.stride);
             for a in 0..D {
                 // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
                 // column read has the length it was checked against.
+                let vel = if GRAD == grad::REMAP {
+                    unsafe { load_row(g.remap[a], row) }
+                } else {
+                    [0.0; ROW]
+                };
                 let (vi, ai) = if VEL || GRAD == grad::UPDATED {
                     unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
                 } else {
-                    (Row4::ZERO, Row4::ZERO)
+                    ([0.0; ROW], [0.0; ROW])
                 };
                 if VEL {
-                    v_acc[a] += w * vi;
-                    a_acc[a] += w * ai;
+                    for i in 0..ROW {
+                        v_acc[a][i] += w[i] * vi[i];
+                        a_acc[a][i] += w[i] * ai[i];
+                    }
                 }
                 if GRAD != grad::NONE {
-                    let v = if GRAD == grad::UPDATED {
-                        vi + ai * dt
-                    } else {
-                        unsafe { load_row(g.remap[a], row) }
-                    };
                     for b in 0..D {
-                        l_acc[a][b] += v * gr[b];
+                        for i in 0..ROW {
+                            let v = if GRAD == grad::UPDATED {
+                                vi[i] + dt * ai[i]
+                            } else {
+                                vel[i]
+                            };
+                            l_acc[a][b][i] += v * gr[b][i];
+                        }
                     }
                 }
             }
         }
     }
     for a in 0..D {
-        v_gp[a][lane] = v_acc[a].element_sum();
-        a_gp[a][lane] = a_acc[a].element_sum();
+        v_gp[a][lane] = v_acc[a].iter().sum();
+        a_gp[a][lane] = a_acc[a].iter().sum();
         for b in 0..D {
-            l[a][b][lane] = l_acc[a][b].element_sum();
+            l[a][b][lane] = l_acc[a][b].iter().sum();
         }
     }
+}
+
+/// The stencils of the chunk's particles at `x[axis][lane]`.
+#[inline(always)]
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    x: &[Lane; D],
+) -> Stencils<D, K, W> {
+    let geom = &ctx.geom;
+    let s: [Lane; D] = core::array::from_fn(|a| {
+        core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
+    });
+    Stencils::new(shape, &s, geom.nodes, geom.stride, geom.inv_h)
 }
 
 /// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
@@ -281,10 +304,11 @@ fn update_stress<const D: usize>(
 pub(crate) fn particles<
     const D: usize,
     const K: usize,
+    S: Shape1D<K>,
     const FUSED_STRESS: bool,
     const TO_NEXT: bool,
 >(
-    table: &Table<K>,
+    shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
@@ -304,14 +328,10 @@ pub(crate) fn particles<
         let mut v_gp = [[0.0; W]; D];
         let mut a_gp = [[0.0; W]; D];
         let mut l = [[[0.0; W]; D]; D];
-        // The stencils, kept for the remap scatter (MUSL).
-        let mut kept = [Stencil::<D, K>::ZERO; W];
+        let st = stencils::<D, K, S>(shape, ctx, &x);
         for ln in 0..W {
             if live[ln] {
-                let st = stencil_at(table, geom, p, start + ln);
-                if TO_NEXT {
-                    kept[ln] = st;
-                }
+                let st = st.lane(ln);
                 if FUSED_STRESS {
                     gather::<D, K, true, { grad::UPDATED }>(
                         ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
@@ -399,7 +419,7 @@ pub(crate) fn particles<
         if TO_NEXT {
             for ln in 0..W.min(count - start) {
                 if p.status[start + ln] == ACTIVE {
-                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &kept[ln], g);
+                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &st.lane(ln), g);
                 }
             }
         }
@@ -409,8 +429,8 @@ pub(crate) fn particles<
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
 /// from the wall-constrained velocity in the `remap` columns. `COMMIT_NEXT` (MUSL) commits
 /// the new positions afterwards.
-pub(crate) fn stress<const D: usize, const K: usize, const COMMIT_NEXT: bool>(
-    table: &Table<K>,
+pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
+    shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
@@ -425,12 +445,14 @@ pub(crate) fn stress<const D: usize, const K: usize, const COMMIT_NEXT: bool>(
         let mut unused = [[0.0; W]; D];
         let mut unused2 = [[0.0; W]; D];
         let mut l = [[[0.0; W]; D]; D];
+        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let st = stencils::<D, K, S>(shape, ctx, &x);
         for ln in 0..W {
             if live[ln] {
                 gather::<D, K, false, { grad::REMAP }>(
                     ctx,
                     g,
-                    &stencil_at(table, &ctx.geom, p, start + ln),
+                    &st.lane(ln),
                     ln,
                     &mut unused,
                     &mut unused2,

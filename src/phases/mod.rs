@@ -13,7 +13,6 @@ use crate::grid::Geom;
 use crate::layout::MaterialRecord;
 use crate::math::Mat;
 use crate::particles::ParticleCols;
-use crate::shape::{Stencil, Table};
 use crate::Real;
 
 /// Everything a phase needs that is constant during one substep.
@@ -55,16 +54,4 @@ pub(crate) fn load_tau<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat
 #[inline(always)]
 pub(crate) fn load_v<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {
     core::array::from_fn(|a| p.v[a][i])
-}
-
-/// The stencil of particle `i` (any position, NaN included, gives nodes that exist).
-#[inline(always)]
-pub(crate) fn stencil_at<const D: usize, const K: usize>(
-    table: &Table<K>,
-    geom: &Geom<D>,
-    p: &ParticleCols<'_, D>,
-    i: usize,
-) -> Stencil<D, K> {
-    let s = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
-    Stencil::new(table, s, geom.nodes, geom.stride, geom.inv_h)
 }

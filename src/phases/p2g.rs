@@ -2,10 +2,12 @@
 //! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
 //! enters in the grid update as `m_i g` (eq 22).
 
-use super::{load_tau, load_v, stencil_at, Ctx};
+use super::g2p::{load, stencils, Lane, W};
+use super::{load_tau, load_v, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::{Stencil, Table};
+use crate::shape::ROW;
+use crate::shape::{Shape1D, Stencil};
 use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
@@ -21,8 +23,8 @@ pub(crate) mod mode {
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says.
-pub(crate) fn scatter<const D: usize, const K: usize, const MODE: u8>(
-    table: &Table<K>,
+pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
+    shape: &S,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     count: usize,
@@ -31,12 +33,16 @@ pub(crate) fn scatter<const D: usize, const K: usize, const MODE: u8>(
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
-    for i in 0..count {
-        if p.status[i] != ACTIVE {
-            continue;
+    for start in (0..count).step_by(W) {
+        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let stencils = stencils::<D, K, S>(shape, ctx, &x);
+        for ln in 0..W.min(count - start) {
+            let i = start + ln;
+            if p.status[i] != ACTIVE {
+                continue;
+            }
+            scatter_one::<D, K, MODE>(ctx, p, i, &stencils.lane(ln), g);
         }
-        let st = stencil_at(table, &ctx.geom, p, i);
-        scatter_one::<D, K, MODE>(ctx, p, i, &st, g);
     }
 }
 
@@ -73,23 +79,28 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
                 if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
                     // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
                     // columns share the length it was checked against.
-                    unsafe { add_row(g.mass, row, w * m) };
+                    unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
                     for a in 0..D {
-                        unsafe { add_row(g.vel[a], row, w * mv[a]) };
+                        unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
                     }
                 }
                 if MODE == mode::REMAP {
                     for a in 0..D {
-                        unsafe { add_row(g.remap[a], row, w * mv[a]) };
+                        unsafe {
+                            add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]))
+                        };
                     }
                 }
                 if MODE == mode::ALL || MODE == mode::FORCE {
                     for a in 0..D {
-                        let mut f = grad[0] * c[a][0];
-                        for b in 1..D {
-                            f += grad[b] * c[a][b];
-                        }
-                        unsafe { add_row(g.acc[a], row, f) };
+                        let f: [Real; ROW] = core::array::from_fn(|i| {
+                            let mut t = 0.0;
+                            for b in 0..D {
+                                t += c[a][b] * grad[b][i];
+                            }
+                            t
+                        });
+                        unsafe { add_row(g.acc[a], row, &f) };
                     }
                 }
             }

@@ -2,7 +2,7 @@
 //! - Quadratic: `3/4 - xi^2` for `|xi| <= 1/2`; `(3/2 - |xi|)^2 / 2` for `1/2 <= |xi| <= 3/2`. 3 nodes.
 //! - Cubic: `|xi|^3 / 2 - xi^2 + 2/3` for `|xi| < 1`; `(2 - |xi|)^3 / 6` for `1 <= |xi| < 2`. 4 nodes.
 
-use super::{Pieces, Shape1D};
+use super::Shape1D;
 use crate::Real;
 
 /// Quadratic B-spline.
@@ -14,15 +14,12 @@ pub struct QuadraticBspline;
 pub struct CubicBspline;
 
 impl Shape1D<3> for QuadraticBspline {
-    fn pieces(&self) -> Pieces {
-        Pieces {
-            n: 2,
-            hi: [0.5, 1.5, 0.0],
-            // 3/4 - a^2; (3/2 - a)^2 / 2 = 9/8 - 3a/2 + a^2/2.
-            p: [[0.75, 0.0, -1.0, 0.0], [1.125, -1.5, 0.5, 0.0], [0.0; 4]],
-        }
+    #[inline(always)]
+    fn first_node(s: Real) -> i32 {
+        (s + 0.5) as i32 - 1
     }
 
+    #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
         let a = xi.abs();
         let sign = if xi >= 0.0 { 1.0 } else { -1.0 };
@@ -38,19 +35,12 @@ impl Shape1D<3> for QuadraticBspline {
 }
 
 impl Shape1D<4> for CubicBspline {
-    fn pieces(&self) -> Pieces {
-        Pieces {
-            n: 2,
-            hi: [1.0, 2.0, 0.0],
-            // 2/3 - a^2 + a^3/2; (2 - a)^3 / 6 = 4/3 - 2a + a^2 - a^3/6.
-            p: [
-                [2.0 / 3.0, 0.0, -1.0, 0.5],
-                [4.0 / 3.0, -2.0, 1.0, -1.0 / 6.0],
-                [0.0; 4],
-            ],
-        }
+    #[inline(always)]
+    fn first_node(s: Real) -> i32 {
+        s as i32 - 1
     }
 
+    #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
         let a = xi.abs();
         let sign = if xi >= 0.0 { 1.0 } else { -1.0 };

@@ -5,59 +5,105 @@
 //! - `l <= |xi| <= 1 - l`: `S = 1 - |xi|`, `dS = -sign(xi)`
 //! - `1 - l < |xi| < 1 + l`: `S = (1 + l - |xi|)^2 / (4 l)`, `dS = -sign(xi) (1 + l - |xi|) / (2 l)`
 
-use super::{Pieces, Shape1D};
+use super::Shape1D;
 use crate::Real;
 
 /// uGIMP with a fixed particle half-width.
 #[derive(Clone, Copy, Debug)]
 pub struct Gimp {
     /// Particle half-width in cell units, `1 / (2 n)`.
-    l: f64,
+    l: Real,
+    /// `1 / l`, `1 / (2 l)` and `1 / (4 l)`, so the hot loop multiplies.
+    inv_l: Real,
+    inv_2l: Real,
+    inv_4l: Real,
 }
 
 impl Gimp {
     /// uGIMP for `particles_per_cell` particles per cell per axis (>= 1).
     pub fn new(particles_per_cell: u32) -> Self {
+        let l = 0.5 / particles_per_cell.max(1) as Real;
         Gimp {
-            l: 0.5 / particles_per_cell.max(1) as f64,
+            l,
+            inv_l: 1.0 / l,
+            inv_2l: 0.5 / l,
+            inv_4l: 0.25 / l,
         }
     }
 }
 
 impl Shape1D<3> for Gimp {
-    fn pieces(&self) -> Pieces {
-        let l = self.l;
-        let t = 1.0 + l;
-        Pieces {
-            n: 3,
-            hi: [l, 1.0 - l, 1.0 + l],
-            p: [
-                [1.0 - 0.5 * l, 0.0, -0.5 / l, 0.0],
-                [1.0, -1.0, 0.0, 0.0],
-                // (1 + l - a)^2 / (4 l)
-                [
-                    t * t / (4.0 * l),
-                    -2.0 * t / (4.0 * l),
-                    1.0 / (4.0 * l),
-                    0.0,
-                ],
-            ],
-        }
+    #[inline(always)]
+    fn first_node(s: Real) -> i32 {
+        (s + 0.5) as i32 - 1
     }
 
+    /// Written as selects between the three branches (all evaluated), so the compiler emits no
+    /// jumps: the region a particle is in changes from step to step and would mispredict.
+    #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
-        let l = self.l as Real;
+        let l = self.l;
         let a = xi.abs();
         let sign: Real = if xi >= 0.0 { 1.0 } else { -1.0 };
-        if a < l {
-            (1.0 - (xi * xi + l * l) / (2.0 * l), -xi / l)
-        } else if a <= 1.0 - l {
-            (1.0 - a, -sign)
-        } else if a < 1.0 + l {
-            let t = 1.0 + l - a;
-            (t * t / (4.0 * l), -sign * t / (2.0 * l))
+        let t = (1.0 + l - a).max(0.0);
+        let (s_in, d_in) = (1.0 - (xi * xi + l * l) * self.inv_2l, -xi * self.inv_l);
+        let (s_mid, d_mid) = (1.0 - a, -sign);
+        let (s_out, d_out) = (t * t * self.inv_4l, -sign * t * self.inv_2l);
+        let inner = a < l;
+        let middle = a <= 1.0 - l;
+        let s = if inner {
+            s_in
+        } else if middle {
+            s_mid
         } else {
-            (0.0, 0.0)
-        }
+            s_out
+        };
+        let d = if inner {
+            d_in
+        } else if middle {
+            d_mid
+        } else {
+            d_out
+        };
+        (s, d)
+    }
+
+    /// The three nodes at once. For a particle in the admissible region the offset from the
+    /// first node is `f` in [1/2, 3/2], so the middle node is within 1/2 (inner or middle
+    /// branch) and the outer nodes are at least 1/2 away (middle or outer branch): two
+    /// candidates per node instead of three. Live particles are always in the admissible region
+    /// (the step puts them back on the wall plane), so `f` is never outside that range for a
+    /// weight that is used; memory safety never depends on weights.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        let l = self.l;
+        // Middle node, offset xi = f - 1 in [-1/2, 1/2].
+        let xi = f - 1.0;
+        let a1 = xi.abs();
+        let inner = a1 < l;
+        let s1 = if inner {
+            1.0 - (xi * xi + l * l) * self.inv_2l
+        } else {
+            1.0 - a1
+        };
+        let d1 = if inner {
+            -xi * self.inv_l
+        } else if xi >= 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        // Outer nodes at distance a = f (first node, xi > 0) and 2 - f (last node, xi < 0).
+        let outer = |a: Real| -> (Real, Real) {
+            let t = (1.0 + l - a).max(0.0);
+            if a <= 1.0 - l {
+                (1.0 - a, 1.0)
+            } else {
+                (t * t * self.inv_4l, t * self.inv_2l)
+            }
+        };
+        let (s0, m0) = outer(f);
+        let (s2, m2) = outer(2.0 - f);
+        ([s0, s1, s2], [-m0, d1, m2])
     }
 }

@@ -1,10 +1,6 @@
 //! Classic MPM linear hat functions: `S = 1 - |xi|` for `|xi| < 1` (seeds/003). Two nodes.
-//!
-//! The stencil is the two nodes of the particle's cell, and the slope is that cell's, also when
-//! the particle sits exactly on a node (where the hat's derivative jumps), so `G` sums to zero
-//! there too.
 
-use super::{Pieces, Shape1D};
+use super::Shape1D;
 use crate::Real;
 
 /// Linear hat function.
@@ -12,14 +8,12 @@ use crate::Real;
 pub struct Linear;
 
 impl Shape1D<2> for Linear {
-    fn pieces(&self) -> Pieces {
-        Pieces {
-            n: 1,
-            hi: [1.0, 0.0, 0.0],
-            p: [[1.0, -1.0, 0.0, 0.0], [0.0; 4], [0.0; 4]],
-        }
+    #[inline(always)]
+    fn first_node(s: Real) -> i32 {
+        s as i32
     }
 
+    #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
         let a = xi.abs();
         if a < 1.0 {
@@ -27,5 +21,12 @@ impl Shape1D<2> for Linear {
         } else {
             (0.0, 0.0)
         }
+    }
+
+    /// The two nodes of the particle's cell: the slope is that cell's, also when the particle
+    /// sits exactly on a node (where the hat's derivative jumps), so G sums to zero there too.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 2], [Real; 2]) {
+        ([1.0 - f, f], [-1.0, 1.0])
     }
 }
