@@ -26,7 +26,13 @@ use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Shape1D, Stencil, Stencils, ROW};
+use crate::shape::{Shape1D, Stencil, Stencils};
+
+/// Four values in one SIMD register (glam's SSE2 `Vec4` in f32, `DVec4` in f64).
+#[cfg(not(feature = "f64"))]
+type Row4 = glam::Vec4;
+#[cfg(feature = "f64")]
+type Row4 = glam::DVec4;
 use crate::{Real, StepReport};
 
 /// Particles per chunk.
@@ -75,52 +81,51 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
-    // Row-wide partial sums, reduced once at the end.
-    let mut v_acc = [[0.0; ROW]; D];
-    let mut a_acc = [[0.0; ROW]; D];
-    let mut l_acc = [[[0.0; ROW]; D]; D];
+    // Row-wide partial sums (glam's 4-wide vectors, so that every instance is SIMD), reduced
+    // once at the end.
+    let mut v_acc = [Row4::ZERO; D];
+    let mut a_acc = [Row4::ZERO; D];
+    let mut l_acc = [[Row4::ZERO; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, w, gr) = st.row(j, k, geom.stride);
+            let w = Row4::from_array(w);
+            let gr: [Row4; D] = core::array::from_fn(|b| Row4::from_array(gr[b]));
             for a in 0..D {
                 // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
                 // column read has the length it was checked against.
-                let vel = if GRAD == grad::REMAP {
-                    unsafe { load_row(g.remap[a], row) }
-                } else {
-                    [0.0; ROW]
-                };
                 let (vi, ai) = if VEL || GRAD == grad::UPDATED {
-                    unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
+                    unsafe {
+                        (
+                            Row4::from_array(load_row(g.vel[a], row)),
+                            Row4::from_array(load_row(g.acc[a], row)),
+                        )
+                    }
                 } else {
-                    ([0.0; ROW], [0.0; ROW])
+                    (Row4::ZERO, Row4::ZERO)
                 };
                 if VEL {
-                    for i in 0..ROW {
-                        v_acc[a][i] += w[i] * vi[i];
-                        a_acc[a][i] += w[i] * ai[i];
-                    }
+                    v_acc[a] += w * vi;
+                    a_acc[a] += w * ai;
                 }
                 if GRAD != grad::NONE {
+                    let v = if GRAD == grad::UPDATED {
+                        vi + ai * dt
+                    } else {
+                        Row4::from_array(unsafe { load_row(g.remap[a], row) })
+                    };
                     for b in 0..D {
-                        for i in 0..ROW {
-                            let v = if GRAD == grad::UPDATED {
-                                vi[i] + dt * ai[i]
-                            } else {
-                                vel[i]
-                            };
-                            l_acc[a][b][i] += v * gr[b][i];
-                        }
+                        l_acc[a][b] += v * gr[b];
                     }
                 }
             }
         }
     }
     for a in 0..D {
-        v_gp[a][lane] = v_acc[a].iter().sum();
-        a_gp[a][lane] = a_acc[a].iter().sum();
+        v_gp[a][lane] = v_acc[a].element_sum();
+        a_gp[a][lane] = a_acc[a].element_sum();
         for b in 0..D {
-            l[a][b][lane] = l_acc[a][b].iter().sum();
+            l[a][b][lane] = l_acc[a][b].element_sum();
         }
     }
 }
