@@ -27,13 +27,13 @@ use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils};
+use crate::{Real, StepReport};
 
 /// Four values in one SIMD register (glam's SSE2 `Vec4` in f32, `DVec4` in f64).
 #[cfg(not(feature = "f64"))]
 type Row4 = glam::Vec4;
 #[cfg(feature = "f64")]
 type Row4 = glam::DVec4;
-use crate::{Real, StepReport};
 
 /// Particles per chunk.
 pub(crate) const W: usize = 8;
