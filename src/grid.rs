@@ -11,7 +11,7 @@
 use crate::def::{Boundary, WorldDef};
 use crate::layout::Layout;
 use crate::particles::Carver;
-use crate::shape::ROW;
+use crate::shape::{Row4, ROW};
 use crate::Real;
 
 /// Mutable views of every node column, each `nodes` long.
@@ -42,10 +42,11 @@ pub(crate) fn rows_fit(base: usize, last_row_offset: usize, len: usize) -> bool 
 /// # Safety
 /// `start + ROW <= col.len()` (see [`rows_fit`]).
 #[inline(always)]
-pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
+pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> Row4 {
     debug_assert!(start + ROW <= col.len());
-    // SAFETY: the caller guarantees start + ROW <= col.len(), so the ROW reads are in bounds.
-    core::array::from_fn(|i| unsafe { *col.get_unchecked(start + i) })
+    // SAFETY: the caller guarantees start + ROW <= col.len(), so the ROW reads are in bounds;
+    // an unaligned read of [Real; ROW] has no alignment requirement.
+    Row4::from_array(unsafe { core::ptr::read_unaligned(col.as_ptr().add(start).cast()) })
 }
 
 /// Adds `v` to the [`ROW`] values of `col` from `start`.
@@ -53,11 +54,13 @@ pub(crate) unsafe fn load_row(col: &[Real], start: usize) -> [Real; ROW] {
 /// # Safety
 /// `start + ROW <= col.len()` (see [`rows_fit`]).
 #[inline(always)]
-pub(crate) unsafe fn add_row(col: &mut [Real], start: usize, v: &[Real; ROW]) {
+pub(crate) unsafe fn add_row(col: &mut [Real], start: usize, v: Row4) {
     debug_assert!(start + ROW <= col.len());
-    for (i, vi) in v.iter().enumerate() {
-        // SAFETY: the caller guarantees start + ROW <= col.len(), and i < ROW.
-        unsafe { *col.get_unchecked_mut(start + i) += vi };
+    // SAFETY: as for load_row; the write covers the same ROW entries.
+    unsafe {
+        let p = col.as_mut_ptr().add(start).cast::<[Real; ROW]>();
+        let sum = Row4::from_array(core::ptr::read_unaligned(p)) + v;
+        core::ptr::write_unaligned(p, sum.to_array());
     }
 }
 

@@ -49,6 +49,8 @@ pub mod math;
 mod particles;
 mod phases;
 pub mod shape;
+#[doc(hidden)]
+pub mod simd;
 mod storage;
 mod world;
 

@@ -11,6 +11,7 @@ use crate::phases::g2p;
 use crate::phases::p2g::{mode, scatter};
 use crate::phases::{grid_update, Ctx};
 use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
+use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
 use core::mem::size_of;
 use core::ops::Range;
@@ -617,6 +618,13 @@ impl<'a> World<'a> {
     /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
     /// the start of the call) is taken in equal substeps that are each stable.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
+        self.step_with_simd(dt, Simd::Detect)
+    }
+
+    /// [`World::step`] with a chosen instruction set (see [`crate::simd`]). Not part of the
+    /// stable API: tests use it to show that both paths give bit-identical state.
+    #[doc(hidden)]
+    pub fn step_with_simd(&mut self, dt: Real, simd: Simd) -> Result<StepReport, Error> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::InvalidTimeStep);
         }
@@ -641,7 +649,7 @@ impl<'a> World<'a> {
                 order,
                 report: &mut report,
             };
-            self.dispatch(sub_dt, &mut substep);
+            self.dispatch(sub_dt, &mut substep, simd);
         }
         let h = self.header_mut();
         h.time += dt as f64;
@@ -650,31 +658,35 @@ impl<'a> World<'a> {
     }
 
     /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
-    /// function) to the monomorphised instance.
-    fn dispatch(&mut self, dt: Real, kernel: &mut impl Kernel) {
+    /// function) to the monomorphised instance, with the instruction set `simd` picks.
+    fn dispatch(&mut self, dt: Real, kernel: &mut impl Kernel, simd: Simd) {
         let def = self.def();
         let layout = Layout::of(&def);
         let ppc = def.particles_per_cell;
         match (def.axes(), def.shape) {
-            (2, ShapeFunction::Linear) => self.run::<2, 2, _>(Linear, dt, &def, &layout, kernel),
+            (2, ShapeFunction::Linear) => {
+                self.run::<2, 2, _>(Linear, dt, &def, &layout, kernel, simd)
+            }
             (2, ShapeFunction::Gimp) => {
-                self.run::<2, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel)
+                self.run::<2, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel, simd)
             }
             (2, ShapeFunction::QuadraticBspline) => {
-                self.run::<2, 3, _>(QuadraticBspline, dt, &def, &layout, kernel)
+                self.run::<2, 3, _>(QuadraticBspline, dt, &def, &layout, kernel, simd)
             }
             (2, ShapeFunction::CubicBspline) => {
-                self.run::<2, 4, _>(CubicBspline, dt, &def, &layout, kernel)
+                self.run::<2, 4, _>(CubicBspline, dt, &def, &layout, kernel, simd)
             }
-            (_, ShapeFunction::Linear) => self.run::<3, 2, _>(Linear, dt, &def, &layout, kernel),
+            (_, ShapeFunction::Linear) => {
+                self.run::<3, 2, _>(Linear, dt, &def, &layout, kernel, simd)
+            }
             (_, ShapeFunction::Gimp) => {
-                self.run::<3, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel)
+                self.run::<3, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::QuadraticBspline) => {
-                self.run::<3, 3, _>(QuadraticBspline, dt, &def, &layout, kernel)
+                self.run::<3, 3, _>(QuadraticBspline, dt, &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::CubicBspline) => {
-                self.run::<3, 4, _>(CubicBspline, dt, &def, &layout, kernel)
+                self.run::<3, 4, _>(CubicBspline, dt, &def, &layout, kernel, simd)
             }
         }
     }
@@ -687,6 +699,7 @@ impl<'a> World<'a> {
         def: &WorldDef,
         layout: &Layout,
         kernel: &mut impl Kernel,
+        simd: Simd,
     ) {
         let count = self.particle_count();
         let min_mass = self.header().min_particle_mass;
@@ -708,7 +721,7 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
         };
-        kernel.run(&shape, &ctx, &mut p, count, &mut g);
+        run_kernel(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }
 
     /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
@@ -722,7 +735,7 @@ impl<'a> World<'a> {
             phase,
             report: StepReport::default(),
         };
-        self.dispatch(dt, &mut run);
+        self.dispatch(dt, &mut run, Simd::Detect);
         Ok(run.report)
     }
 
@@ -803,9 +816,11 @@ impl<'a> World<'a> {
 }
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile
-/// time; [`World::dispatch`] picks the instance once per call.
+/// time; [`World::dispatch`] picks the instance once per call. Implementations are
+/// `#[inline(always)]`, down to the phases, so that each instance of [`run_kernel`] compiles the
+/// whole computation with its own instruction set.
 trait Kernel {
-    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -813,6 +828,42 @@ trait Kernel {
         count: usize,
         g: &mut GridCols<'_, D>,
     );
+}
+
+/// Runs `kernel` on the AVX2 instance when `simd` picks it (see [`crate::simd`]), otherwise on
+/// the baseline one.
+#[inline(always)]
+fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
+    kernel: &mut impl Kernel,
+    simd: Simd,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if simd.uses_avx2() {
+        // SAFETY: uses_avx2 checked that the CPU and the OS support AVX and AVX2.
+        unsafe { kernel_avx2(kernel, shape, ctx, p, count, g) };
+        return;
+    }
+    let _ = simd;
+    kernel.body(shape, ctx, p, count, g);
+}
+
+/// The AVX2 instance: the same inlined code, compiled with AVX and AVX2 enabled.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,avx2")]
+fn kernel_avx2<const D: usize, const K: usize, S: Shape1D<K>>(
+    kernel: &mut impl Kernel,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+) {
+    kernel.body(shape, ctx, p, count, g);
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
@@ -823,7 +874,8 @@ struct Substep<'r> {
 }
 
 impl Kernel for Substep<'_> {
-    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+    #[inline(always)]
+    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -882,7 +934,8 @@ struct PhaseRun {
 }
 
 impl Kernel for PhaseRun {
-    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+    #[inline(always)]
+    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,

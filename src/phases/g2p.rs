@@ -26,14 +26,8 @@ use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Shape1D, Stencil, Stencils};
+use crate::shape::{Row4, Shape1D, Stencil, Stencils};
 use crate::{Real, StepReport};
-
-/// Four values in one SIMD register (glam's SSE2 `Vec4` in f32, `DVec4` in f64).
-#[cfg(not(feature = "f64"))]
-type Row4 = glam::Vec4;
-#[cfg(feature = "f64")]
-type Row4 = glam::DVec4;
 
 /// Particles per chunk.
 pub(crate) const W: usize = 8;
@@ -81,51 +75,62 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
-    // Row-wide partial sums (glam's 4-wide vectors, so that every instance is SIMD), reduced
-    // once at the end.
-    let mut v_acc = [Row4::ZERO; D];
-    let mut a_acc = [Row4::ZERO; D];
-    let mut l_acc = [[Row4::ZERO; D]; D];
+    // Separable form ([`Stencil::row`]): per row, the nodal values are weighted by the row's
+    // scalar factors r[b] into 4-wide partial sums over the rows; the x weights are applied once
+    // at the end, in one horizontal sum per result.
+    let (wx, dwx) = (st.w[0], st.dw[0]);
+    // sum_rows r[0] v_i, sum_rows r[0] a_i (over x still separate).
+    let mut rv = [Row4::ZERO; D];
+    let mut ra = [Row4::ZERO; D];
+    // sum_rows r[0] u_i (REMAP only; USL uses rv + dt ra) and sum_rows r[b] u_i for b >= 1, u
+    // the differentiated velocity.
+    let mut ru = [Row4::ZERO; D];
+    let mut du = [[Row4::ZERO; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
-            let (row, w, gr) = st.row(j, k, geom.stride);
-            let w = Row4::from_array(w);
-            let gr: [Row4; D] = core::array::from_fn(|b| Row4::from_array(gr[b]));
+            let (row, r) = st.row(j, k, geom.stride);
             for a in 0..D {
                 // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
                 // column read has the length it was checked against.
                 let (vi, ai) = if VEL || GRAD == grad::UPDATED {
-                    unsafe {
-                        (
-                            Row4::from_array(load_row(g.vel[a], row)),
-                            Row4::from_array(load_row(g.acc[a], row)),
-                        )
-                    }
+                    unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
                 } else {
                     (Row4::ZERO, Row4::ZERO)
                 };
-                if VEL {
-                    v_acc[a] += w * vi;
-                    a_acc[a] += w * ai;
+                if VEL || GRAD == grad::UPDATED {
+                    rv[a] += vi * r[0];
+                    ra[a] += ai * r[0];
                 }
                 if GRAD != grad::NONE {
-                    let v = if GRAD == grad::UPDATED {
+                    let u = if GRAD == grad::UPDATED {
                         vi + ai * dt
                     } else {
-                        Row4::from_array(unsafe { load_row(g.remap[a], row) })
+                        let u = unsafe { load_row(g.remap[a], row) };
+                        ru[a] += u * r[0];
+                        u
                     };
-                    for b in 0..D {
-                        l_acc[a][b] += v * gr[b];
+                    for b in 1..D {
+                        du[a][b] += u * r[b];
                     }
                 }
             }
         }
     }
     for a in 0..D {
-        v_gp[a][lane] = v_acc[a].element_sum();
-        a_gp[a][lane] = a_acc[a].element_sum();
-        for b in 0..D {
-            l[a][b][lane] = l_acc[a][b].element_sum();
+        if VEL {
+            v_gp[a][lane] = (wx * rv[a]).element_sum();
+            a_gp[a][lane] = (wx * ra[a]).element_sum();
+        }
+        if GRAD != grad::NONE {
+            let ux = if GRAD == grad::UPDATED {
+                rv[a] + ra[a] * dt
+            } else {
+                ru[a]
+            };
+            l[a][0][lane] = (dwx * ux).element_sum();
+            for b in 1..D {
+                l[a][b][lane] = (wx * du[a][b]).element_sum();
+            }
         }
     }
 }
@@ -187,6 +192,7 @@ fn mul_add_lanes<const D: usize>(acc: &mut LaneMat<D>, x: &LaneMat<D>, y: &LaneM
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
 /// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
 /// keeps its H and stress.
+#[inline(always)]
 fn update_stress<const D: usize>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -306,6 +312,7 @@ fn update_stress<const D: usize>(
 /// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
 /// remap columns are free to fill; particles contribute in index order, as a separate pass
 /// would).
+#[inline(always)]
 pub(crate) fn particles<
     const D: usize,
     const K: usize,
@@ -339,11 +346,11 @@ pub(crate) fn particles<
                 let st = st.lane(ln);
                 if FUSED_STRESS {
                     gather::<D, K, true, { grad::UPDATED }>(
-                        ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
+                        ctx, g, st, ln, &mut v_gp, &mut a_gp, &mut l,
                     );
                 } else {
                     gather::<D, K, true, { grad::NONE }>(
-                        ctx, g, &st, ln, &mut v_gp, &mut a_gp, &mut l,
+                        ctx, g, st, ln, &mut v_gp, &mut a_gp, &mut l,
                     );
                 }
             }
@@ -424,7 +431,7 @@ pub(crate) fn particles<
         if TO_NEXT {
             for ln in 0..W.min(count - start) {
                 if p.status[start + ln] == ACTIVE {
-                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, &st.lane(ln), g);
+                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, st.lane(ln), g);
                 }
             }
         }
@@ -434,6 +441,7 @@ pub(crate) fn particles<
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
 /// from the wall-constrained velocity in the `remap` columns. `COMMIT_NEXT` (MUSL) commits
 /// the new positions afterwards.
+#[inline(always)]
 pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -457,7 +465,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
                 gather::<D, K, false, { grad::REMAP }>(
                     ctx,
                     g,
-                    &st.lane(ln),
+                    st.lane(ln),
                     ln,
                     &mut unused,
                     &mut unused2,

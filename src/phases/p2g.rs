@@ -6,9 +6,7 @@ use super::g2p::{load, stencils, Lane, W};
 use super::{load_tau, load_v, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::ROW;
-use crate::shape::{Shape1D, Stencil};
-use crate::Real;
+use crate::shape::{Row4, Shape1D, Stencil};
 
 /// What a particle-to-grid pass accumulates.
 pub(crate) mod mode {
@@ -23,6 +21,7 @@ pub(crate) mod mode {
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says.
+#[inline(always)]
 pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -41,7 +40,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
             if p.status[i] != ACTIVE {
                 continue;
             }
-            scatter_one::<D, K, MODE>(ctx, p, i, &stencils.lane(ln), g);
+            scatter_one::<D, K, MODE>(ctx, p, i, stencils.lane(ln), g);
         }
     }
 }
@@ -62,46 +61,48 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
-    {
-        let m = p.mass[i];
-        let v = load_v(p, i);
-        let mv: [_; D] = core::array::from_fn(|a| m * v[a]);
-        let tau = if MODE == mode::ALL || MODE == mode::FORCE {
-            load_tau(p, i)
-        } else {
-            [[0.0; D]; D]
-        };
-        // Force on a node: f_a = -m sum_b tau_ab G_b, so coefficient c[a][b] = -m tau_ab.
-        let c: [[Real; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| -m * tau[a][b]));
-        for k in 0..Stencil::<D, K>::layers() {
-            for j in 0..K {
-                let (row, w, grad) = st.row(j, k, geom.stride);
-                if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                    // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
-                    // columns share the length it was checked against.
-                    unsafe { add_row(g.mass, row, &core::array::from_fn(|i| w[i] * m)) };
-                    for a in 0..D {
-                        unsafe { add_row(g.vel[a], row, &core::array::from_fn(|i| w[i] * mv[a])) };
-                    }
+    // Separable form: every node weight is `w_x[i] r[0]` and every gradient component
+    // `dw_x[i] r[0]` or `w_x[i] r[b]` ([`Stencil::row`]), so the particle's factors times the
+    // x weights are formed once, as 4-wide vectors, and each row costs one multiply by a scalar
+    // per accumulated quantity.
+    let m = p.mass[i];
+    let v = load_v(p, i);
+    let (wx, dwx) = (st.w[0], st.dw[0]);
+    let mass_x = wx * m;
+    let mom_x: [Row4; D] = core::array::from_fn(|a| wx * (m * v[a]));
+    let tau = if MODE == mode::ALL || MODE == mode::FORCE {
+        load_tau(p, i)
+    } else {
+        [[0.0; D]; D]
+    };
+    // Force on a node: f_a = -m sum_b tau_ab G_b, so f_a = sum_b force_x[a][b] r[b] with
+    // force_x[a][b] = -m tau_ab (dw_x for b = 0, w_x otherwise).
+    let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
+        core::array::from_fn(|b| (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]))
+    });
+    for k in 0..Stencil::<D, K>::layers() {
+        for j in 0..K {
+            let (row, r) = st.row(j, k, geom.stride);
+            // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
+            // columns share the length it was checked against.
+            if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+                unsafe { add_row(g.mass, row, mass_x * r[0]) };
+                for a in 0..D {
+                    unsafe { add_row(g.vel[a], row, mom_x[a] * r[0]) };
                 }
-                if MODE == mode::REMAP {
-                    for a in 0..D {
-                        unsafe {
-                            add_row(g.remap[a], row, &core::array::from_fn(|i| w[i] * mv[a]))
-                        };
-                    }
+            }
+            if MODE == mode::REMAP {
+                for a in 0..D {
+                    unsafe { add_row(g.remap[a], row, mom_x[a] * r[0]) };
                 }
-                if MODE == mode::ALL || MODE == mode::FORCE {
-                    for a in 0..D {
-                        let f: [Real; ROW] = core::array::from_fn(|i| {
-                            let mut t = 0.0;
-                            for b in 0..D {
-                                t += c[a][b] * grad[b][i];
-                            }
-                            t
-                        });
-                        unsafe { add_row(g.acc[a], row, &f) };
+            }
+            if MODE == mode::ALL || MODE == mode::FORCE {
+                for a in 0..D {
+                    let mut f = force_x[a][0] * r[0];
+                    for b in 1..D {
+                        f += force_x[a][b] * r[b];
                     }
+                    unsafe { add_row(g.acc[a], row, f) };
                 }
             }
         }

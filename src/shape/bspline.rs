@@ -14,10 +14,8 @@ pub struct QuadraticBspline;
 pub struct CubicBspline;
 
 impl Shape1D<3> for QuadraticBspline {
-    #[inline(always)]
-    fn first_node(s: Real) -> i32 {
-        (s + 0.5) as i32 - 1
-    }
+    const SHIFT: Real = 0.5;
+    const LEAD: i32 = 1;
 
     #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
@@ -35,10 +33,8 @@ impl Shape1D<3> for QuadraticBspline {
 }
 
 impl Shape1D<4> for CubicBspline {
-    #[inline(always)]
-    fn first_node(s: Real) -> i32 {
-        s as i32 - 1
-    }
+    const SHIFT: Real = 0.0;
+    const LEAD: i32 = 1;
 
     #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {

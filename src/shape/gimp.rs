@@ -33,10 +33,8 @@ impl Gimp {
 }
 
 impl Shape1D<3> for Gimp {
-    #[inline(always)]
-    fn first_node(s: Real) -> i32 {
-        (s + 0.5) as i32 - 1
-    }
+    const SHIFT: Real = 0.5;
+    const LEAD: i32 = 1;
 
     /// Written as selects between the three branches (all evaluated), so the compiler emits no
     /// jumps: the region a particle is in changes from step to step and would mispredict.

@@ -8,10 +8,8 @@ use crate::Real;
 pub struct Linear;
 
 impl Shape1D<2> for Linear {
-    #[inline(always)]
-    fn first_node(s: Real) -> i32 {
-        s as i32
-    }
+    const SHIFT: Real = 0.0;
+    const LEAD: i32 = 0;
 
     #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {

@@ -26,12 +26,27 @@ use crate::Real;
 /// with zero weights to 4.
 pub const ROW: usize = 4;
 
+/// [`ROW`] values in one SIMD register (glam's SSE2 `Vec4` in f32, `DVec4` in f64): the per-axis
+/// weights of a stencil, and one stencil row of a node column.
+#[cfg(not(feature = "f64"))]
+pub type Row4 = glam::Vec4;
+/// [`ROW`] values in one SIMD register (glam's SSE2 `Vec4` in f32, `DVec4` in f64): the per-axis
+/// weights of a stencil, and one stencil row of a node column.
+#[cfg(feature = "f64")]
+pub type Row4 = glam::DVec4;
+
+#[cfg(not(feature = "f64"))]
+type Mat4 = glam::Mat4;
+#[cfg(feature = "f64")]
+type Mat4 = glam::DMat4;
+
 /// One family of 1D shape functions with `K` nodes of support.
 pub trait Shape1D<const K: usize>: Copy {
-    /// Index of the first node of the stencil of a particle at `s` (cell units), before
-    /// clamping to the grid. Positions are never negative inside the grid, so a truncating
-    /// cast is a floor there; outside (or NaN) the result is clamped by [`Stencil::new`].
-    fn first_node(s: Real) -> i32;
+    /// The first node of the stencil of a particle at `s` (cell units) is
+    /// `floor(s + SHIFT) - LEAD`, before clamping to the grid.
+    const SHIFT: Real;
+    /// See [`Shape1D::SHIFT`].
+    const LEAD: i32;
 
     /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
     /// Zero outside the support.
@@ -51,33 +66,46 @@ pub trait Shape1D<const K: usize>: Copy {
     }
 }
 
+/// First node of the stencil of a particle at `s` (cell units) on an axis with `nodes` nodes,
+/// clamped to `[0, nodes - K]` so that every node of the stencil exists, for any `s` (NaN and
+/// infinities included). Inside the admissible region the clamp changes nothing.
+///
+/// The clamp is done on the float, before the conversion (`floor` commutes with clamping to
+/// integers), so the conversion is a plain truncation the compiler vectorises.
+#[inline(always)]
+pub fn first_node<const K: usize, S: Shape1D<K>>(s: Real, nodes: usize) -> i32 {
+    let lo = S::LEAD as Real;
+    let top = (nodes - K) as Real + lo;
+    let y = s + S::SHIFT;
+    let y = if y > lo { y } else { lo }; // also NaN -> lo
+    let y = if y < top { y } else { top };
+    // SAFETY: y is finite and in [LEAD, nodes - K + LEAD], which fits in i32 (a grid has at most
+    // 2^30 nodes), and y >= 0, so truncation is the floor. The result is in [0, nodes - K].
+    unsafe { y.to_int_unchecked::<i32>() - S::LEAD }
+}
+
 /// The nodes a particle touches and their per-axis weights and derivatives.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencil<const D: usize, const K: usize> {
     /// Flat index of the stencil's first node.
     pub base: usize,
-    /// Per-axis weights `w[axis][k]`, zero for `k >= K`.
-    pub w: [[Real; ROW]; D],
+    /// Per-axis weights, `w[axis][k]` for node `k` along the axis, zero for `k >= K`.
+    pub w: [Row4; D],
     /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h), zero for
     /// `k >= K`.
-    pub dw: [[Real; ROW]; D],
+    pub dw: [Row4; D],
 }
 
-/// One row of a stencil along x: the flat index of its first node, the weights `S[i]` and the
-/// gradients `G[axis][i]` of nodes `row + i` for `i < ROW` (zero for `i >= K`).
-pub type Row<const D: usize> = (usize, [Real; ROW], [[Real; ROW]; D]);
-
-/// The stencils of `W` particles at once, laid out lane-fastest so that computing them is a set
-/// of loops over lanes the compiler vectorises.
+/// The stencils of `W` particles. They are computed lane-fastest (loops over lanes the compiler
+/// vectorises), then transposed four lanes at a time into one [`Stencil`] per particle.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencils<const D: usize, const K: usize, const W: usize> {
-    base: [usize; W],
-    w: [[[Real; W]; ROW]; D],
-    dw: [[[Real; W]; ROW]; D],
+    lanes: [Stencil<D, K>; W],
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
-    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`].
+    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`]. `W` is a
+    /// multiple of 4.
     #[inline(always)]
     pub fn new<S: Shape1D<K>>(
         shape: &S,
@@ -86,15 +114,16 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         stride: [usize; D],
         inv_h: Real,
     ) -> Self {
-        let mut base = [0usize; W];
+        const { assert!(W % 4 == 0 && K <= ROW) };
+        // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
+        let mut base = [0u32; W];
         let mut w = [[[0.0; W]; ROW]; D];
         let mut dw = [[[0.0; W]; ROW]; D];
         for a in 0..D {
-            let hi = (nodes[a] - K) as i32;
             let mut f = [0.0; W];
             for ln in 0..W {
-                let first = S::first_node(s[a][ln]).clamp(0, hi);
-                base[ln] += first as usize * stride[a];
+                let first = first_node::<K, S>(s[a][ln], nodes[a]);
+                base[ln] += first as u32 * stride[a] as u32;
                 f[ln] = s[a][ln] - first as Real;
             }
             for ln in 0..W {
@@ -105,25 +134,48 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             }
         }
-        Stencils { base, w, dw }
+        let mut lanes = [Stencil {
+            base: 0,
+            w: [Row4::ZERO; D],
+            dw: [Row4::ZERO; D],
+        }; W];
+        for l0 in (0..W).step_by(4) {
+            for a in 0..D {
+                let tw = transpose4(&w[a], l0);
+                let tdw = transpose4(&dw[a], l0);
+                for i in 0..4 {
+                    lanes[l0 + i].w[a] = tw[i];
+                    lanes[l0 + i].dw[a] = tdw[i];
+                }
+            }
+            for i in 0..4 {
+                lanes[l0 + i].base = base[l0 + i] as usize;
+            }
+        }
+        Stencils { lanes }
     }
 
     /// The stencil of lane `ln`.
     #[inline(always)]
-    pub fn lane(&self, ln: usize) -> Stencil<D, K> {
-        Stencil {
-            base: self.base[ln],
-            w: core::array::from_fn(|a| core::array::from_fn(|k| self.w[a][k][ln])),
-            dw: core::array::from_fn(|a| core::array::from_fn(|k| self.dw[a][k][ln])),
-        }
+    pub fn lane(&self, ln: usize) -> &Stencil<D, K> {
+        &self.lanes[ln]
     }
+}
+
+/// Lanes `l0..l0 + 4` of `rows[k][lane]` as one [`Row4`] over `k` per lane (a 4 x 4 transpose
+/// in registers).
+#[inline(always)]
+fn transpose4<const W: usize>(rows: &[[Real; W]; ROW], l0: usize) -> [Row4; 4] {
+    let col = |k: usize| Row4::from_array(core::array::from_fn(|i| rows[k][l0 + i]));
+    let t = Mat4::from_cols(col(0), col(1), col(2), col(3)).transpose();
+    [t.x_axis, t.y_axis, t.z_axis, t.w_axis]
 }
 
 impl<const D: usize, const K: usize> Stencil<D, K> {
     /// Stencil of a particle at `s` (cell units per axis) on a grid with `nodes[a]` nodes per
-    /// axis and flat strides `stride[a]`. The first node is clamped so that all `K` nodes exist:
-    /// memory safety never depends on the position being valid. For positions inside the
-    /// admissible region the clamp is exact (the dropped node's weight is zero).
+    /// axis and flat strides `stride[a]`. The first node is clamped so that all `K` nodes exist
+    /// ([`first_node`]): memory safety never depends on the position being valid. For positions
+    /// inside the admissible region the clamp is exact (the dropped node's weight is zero).
     #[inline(always)]
     pub fn new<S: Shape1D<K>>(
         shape: &S,
@@ -133,11 +185,10 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         inv_h: Real,
     ) -> Self {
         let mut base = 0usize;
-        let mut w = [[0.0; ROW]; D];
-        let mut dw = [[0.0; ROW]; D];
+        let mut w = [Row4::ZERO; D];
+        let mut dw = [Row4::ZERO; D];
         for a in 0..D {
-            let hi = (nodes[a] - K) as i32;
-            let first = S::first_node(s[a]).clamp(0, hi);
+            let first = first_node::<K, S>(s[a], nodes[a]);
             base += first as usize * stride[a];
             let (wa, dwa) = shape.stencil(s[a] - first as Real);
             for k in 0..K {
@@ -166,31 +217,26 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         }
     }
 
-    /// Row `j` along y of layer `k` along z (see [`Row`]). `row + ROW` is at most two past the
-    /// last node, which the node columns' padding covers.
+    /// Row `j` along y of layer `k` along z: the flat index of its first node, and the factors
+    /// that turn the x weights into the row's weights and gradients. With `r = row(..).1`,
+    /// node `row + i` has `S = w[0][i] r[0]`, `G_x = dw[0][i] r[0]` and `G_b = w[0][i] r[b]`
+    /// for `b >= 1` (seeds/000 eqs 16-17: `r[0]` is the y (and z) weight, `r[b]` the same
+    /// product with axis b's factor differentiated). `row + ROW` is at most two past the last
+    /// node, which the node columns' padding covers.
     #[inline(always)]
-    pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> Row<D> {
+    pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> (usize, [Real; D]) {
         let (w, dw) = (&self.w, &self.dw);
         let row = self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
-        // Weight of the row in y (and z) and its derivatives.
-        let (wt, dy, dz) = if D == 3 {
-            (
-                w[1][j] * w[D - 1][k],
-                dw[1][j] * w[D - 1][k],
-                w[1][j] * dw[D - 1][k],
-            )
-        } else {
-            (w[1][j], dw[1][j], 0.0)
-        };
-        let s: [Real; ROW] = core::array::from_fn(|i| w[0][i] * wt);
-        let g: [[Real; ROW]; D] = core::array::from_fn(|a| {
-            core::array::from_fn(|i| match a {
-                0 => dw[0][i] * wt,
-                1 => w[0][i] * dy,
-                _ => w[0][i] * dz,
+        let r: [Real; D] = if D == 3 {
+            core::array::from_fn(|b| match b {
+                0 => w[1][j] * w[D - 1][k],
+                1 => dw[1][j] * w[D - 1][k],
+                _ => w[1][j] * dw[D - 1][k],
             })
-        });
-        (row, s, g)
+        } else {
+            core::array::from_fn(|b| if b == 0 { w[1][j] } else { dw[1][j] })
+        };
+        (row, r)
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
@@ -198,38 +244,14 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     /// node was clamped so that the last one exists).
     #[inline(always)]
     pub fn for_each_node(&self, stride: [usize; D], mut f: impl FnMut(usize, Real, [Real; D])) {
-        let (w, dw) = (&self.w, &self.dw);
-        if D == 2 {
+        let (wx, dwx) = (self.w[0], self.dw[0]);
+        for k in 0..Self::layers() {
             for j in 0..K {
-                let row = self.base + j * stride[1];
+                let (row, r) = self.row(j, k, stride);
                 for i in 0..K {
-                    let g: [Real; D] = core::array::from_fn(|a| {
-                        if a == 0 {
-                            dw[0][i] * w[1][j]
-                        } else {
-                            w[0][i] * dw[1][j]
-                        }
-                    });
-                    f(row + i, w[0][i] * w[1][j], g);
-                }
-            }
-        } else {
-            for k in 0..K {
-                for j in 0..K {
-                    let row = self.base + j * stride[1] + k * stride[D - 1];
-                    let (wjk, djk_y, djk_z) = (
-                        w[1][j] * w[D - 1][k],
-                        dw[1][j] * w[D - 1][k],
-                        w[1][j] * dw[D - 1][k],
-                    );
-                    for i in 0..K {
-                        let g: [Real; D] = core::array::from_fn(|a| match a {
-                            0 => dw[0][i] * wjk,
-                            1 => w[0][i] * djk_y,
-                            _ => w[0][i] * djk_z,
-                        });
-                        f(row + i, w[0][i] * wjk, g);
-                    }
+                    let g: [Real; D] =
+                        core::array::from_fn(|b| if b == 0 { dwx[i] * r[0] } else { wx[i] * r[b] });
+                    f(row + i, wx[i] * r[0], g);
                 }
             }
         }
