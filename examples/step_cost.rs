@@ -15,9 +15,13 @@
 //! `elapsed_ns / (steps * particles)` for each run and their median.
 //!
 //! Options: `--dim 2|3`, `--shape linear|gimp|quadratic|cubic`,
-//! `--material neo_hookean|linear_elastic`, `--order usf|usl|musl`, `--runs N`, `--steps S`.
+//! `--material neo_hookean|linear_elastic`, `--order usf|usl|musl`, `--runs N`, `--steps S`,
+//! `--simd auto|baseline` (`auto`, the default, is what `World::step` does: the AVX2 instance
+//! on CPUs that have it; `baseline` forces the SSE2 instance, e.g. under valgrind, which cannot
+//! decode every AVX instruction). The JSON line says which instance ran (`"simd"`).
 //! Unknown options or values: a message on stderr and exit code 2.
 
+use mpm_gimp::simd::Simd;
 use mpm_gimp::{
     memory_requirements, Dimension, HeapBuffer, MaterialDef, MaterialModel, Real, ShapeFunction,
     UpdateOrder, Vec3, World, WorldDef,
@@ -26,7 +30,8 @@ use std::process::exit;
 use std::time::{Duration, Instant};
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
-[--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)]";
+[--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
+[--simd auto|baseline]";
 
 /// Particles per cell per axis of the filled block.
 const PPC: u32 = 2;
@@ -42,6 +47,7 @@ struct Options {
     order: UpdateOrder,
     runs: u32,
     steps: u32,
+    simd: Simd,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -58,6 +64,7 @@ fn parse_options() -> Options {
         order: UpdateOrder::Musl,
         runs: 7,
         steps: 10,
+        simd: Simd::Detect,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -77,6 +84,7 @@ fn parse_options() -> Options {
             "--order",
             "--runs",
             "--steps",
+            "--simd",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -127,6 +135,13 @@ fn parse_options() -> Options {
             "--steps" => {
                 o.steps = match value.parse::<u32>() {
                     Ok(n) if n >= 1 => n,
+                    _ => bad(),
+                }
+            }
+            "--simd" => {
+                o.simd = match value.as_str() {
+                    "auto" => Simd::Detect,
+                    "baseline" => Simd::Baseline,
                     _ => bad(),
                 }
             }
@@ -254,7 +269,7 @@ fn main() {
     let step = |world: &mut World<'_>| -> Duration {
         let dt = world.stable_dt();
         let t0 = Instant::now();
-        let report = world.step(dt);
+        let report = world.step_with_simd(dt, o.simd);
         let elapsed = t0.elapsed();
         let report = report.expect("stable dt is a valid time step");
         assert_eq!(report.substeps, 1, "dt = stable_dt() must take one substep");
@@ -298,7 +313,7 @@ fn main() {
         .join(",");
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
-\"order\":\"{}\",\"precision\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
+\"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
 \"reference_ns\":{:.3},\"relative_to_reference\":{:.3}}}",
         o.dim,
         particles,
@@ -307,6 +322,11 @@ fn main() {
         material_name(o.material),
         order_name(o.order),
         precision_name(),
+        if o.simd.uses_avx2() {
+            "avx2"
+        } else {
+            "baseline"
+        },
         med,
         runs_json,
         med_ref,

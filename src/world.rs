@@ -7,9 +7,11 @@ use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, det_identity_plus_minus_one, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::phases::g2p;
-use crate::phases::p2g::{mode, scatter};
-use crate::phases::{grid_update, Ctx};
+use crate::phases::p2g::mode;
+#[cfg(target_arch = "x86_64")]
+use crate::phases::Avx2;
+use crate::phases::Baseline;
+use crate::phases::{grid_update, Ctx, Isa};
 use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
@@ -816,11 +818,10 @@ impl<'a> World<'a> {
 }
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile
-/// time; [`World::dispatch`] picks the instance once per call. Implementations are
-/// `#[inline(always)]`, down to the phases, so that each instance of [`run_kernel`] compiles the
-/// whole computation with its own instruction set.
+/// time; [`World::dispatch`] picks the instance once per call. `I` is the instruction set each
+/// pass runs in: a body calls every pass as `I::run(|| pass(..))`.
 trait Kernel {
-    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -830,9 +831,8 @@ trait Kernel {
     );
 }
 
-/// Runs `kernel` on the AVX2 instance when `simd` picks it (see [`crate::simd`]), otherwise on
-/// the baseline one.
-#[inline(always)]
+/// Runs `kernel` with its passes in the AVX2 instance when `simd` picks it (see
+/// [`crate::simd`]), otherwise in the baseline one.
 fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
     kernel: &mut impl Kernel,
     simd: Simd,
@@ -844,26 +844,11 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
 ) {
     #[cfg(target_arch = "x86_64")]
     if simd.uses_avx2() {
-        // SAFETY: uses_avx2 checked that the CPU and the OS support AVX and AVX2.
-        unsafe { kernel_avx2(kernel, shape, ctx, p, count, g) };
+        kernel.body::<Avx2, D, K, S>(shape, ctx, p, count, g);
         return;
     }
     let _ = simd;
-    kernel.body(shape, ctx, p, count, g);
-}
-
-/// The AVX2 instance: the same inlined code, compiled with AVX and AVX2 enabled.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,avx2")]
-fn kernel_avx2<const D: usize, const K: usize, S: Shape1D<K>>(
-    kernel: &mut impl Kernel,
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &mut ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-) {
-    kernel.body(shape, ctx, p, count, g);
+    kernel.body::<Baseline, D, K, S>(shape, ctx, p, count, g);
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
@@ -874,8 +859,7 @@ struct Substep<'r> {
 }
 
 impl Kernel for Substep<'_> {
-    #[inline(always)]
-    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -887,28 +871,28 @@ impl Kernel for Substep<'_> {
         grid_update::reset(g);
         match self.order {
             UpdateOrder::Usf => {
-                scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
-                g2p::stress::<D, K, S, false>(s, ctx, p, count, g, report);
-                scatter::<D, K, S, { mode::FORCE }>(s, ctx, p, count, g);
+                I::stress::<D, K, S, false>(s, ctx, p, count, g, report);
+                I::scatter::<D, K, S, { mode::FORCE }>(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
-                g2p::particles::<D, K, S, false, false>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, false, false>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
-                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, true, false>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).
-                g2p::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
                 grid_update::remap_velocity(ctx, g);
-                g2p::stress::<D, K, S, true>(s, ctx, p, count, g, report);
+                I::stress::<D, K, S, true>(s, ctx, p, count, g, report);
             }
         }
     }
@@ -934,8 +918,7 @@ struct PhaseRun {
 }
 
 impl Kernel for PhaseRun {
-    #[inline(always)]
-    fn body<const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -947,14 +930,14 @@ impl Kernel for PhaseRun {
             Phase::ResetGrid => grid_update::reset(g),
             Phase::ParticleToGrid => {
                 grid_update::reset(g);
-                scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
             }
             Phase::GridToParticle => {
-                g2p::particles::<D, K, S, true, false>(s, ctx, p, count, g, &mut self.report)
+                I::particles::<D, K, S, true, false>(s, ctx, p, count, g, &mut self.report)
             }
         }
     }

@@ -7,7 +7,6 @@ use crate::grid::GridCols;
 use crate::Real;
 
 /// Zeroes every nodal column the step accumulates into.
-#[inline(always)]
 pub(crate) fn reset<const D: usize>(g: &mut GridCols<'_, D>) {
     g.mass.fill(0.0);
     for a in 0..D {
@@ -18,7 +17,6 @@ pub(crate) fn reset<const D: usize>(g: &mut GridCols<'_, D>) {
 }
 
 /// `cols[a][i] /= m_i` (zero on nodes at or below the mass cutoff), plus `add[a]`.
-#[inline(always)]
 fn divide_by_mass<const D: usize>(
     ctx: &Ctx<'_, D>,
     mass: &[Real],
@@ -39,7 +37,6 @@ fn divide_by_mass<const D: usize>(
 
 /// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
-#[inline(always)]
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
 }
@@ -48,7 +45,6 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>
 /// velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
 /// the wall's reaction `-v_i / dt`. The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
-#[inline(always)]
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
     let inv_dt = 1.0 / ctx.dt;
@@ -62,7 +58,6 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
 }
 
 /// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).
-#[inline(always)]
 pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
     constrain_remap(ctx, g);
@@ -70,7 +65,6 @@ pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<
 
 /// USF: the lagged velocity with the walls applied, for the stress update; the unconstrained
 /// one stays in `vel` for the particle update and the wall reaction.
-#[inline(always)]
 pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     for a in 0..D {
         g.remap[a].copy_from_slice(g.vel[a]);
@@ -78,7 +72,6 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut Gri
     constrain_remap(ctx, g);
 }
 
-#[inline(always)]
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     ctx.geom.for_each_wall_node(|i, axes| {
         for a in 0..D {

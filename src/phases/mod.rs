@@ -7,7 +7,12 @@
 
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
+mod isa;
 pub(crate) mod p2g;
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use isa::Avx2;
+pub(crate) use isa::{Baseline, Isa};
 
 use crate::grid::Geom;
 use crate::layout::MaterialRecord;
