@@ -162,13 +162,27 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     }
 }
 
-/// Lanes `l0..l0 + 4` of `rows[k][lane]` as one [`Row4`] over `k` per lane (a 4 x 4 transpose
-/// in registers).
+/// Lanes `l0..l0 + 4` of `rows[k][lane]` as one [`Row4`] over `k` per lane.
 #[inline(always)]
 fn transpose4<const W: usize>(rows: &[[Real; W]; ROW], l0: usize) -> [Row4; 4] {
-    let col = |k: usize| Row4::from_array(core::array::from_fn(|i| rows[k][l0 + i]));
-    let t = Mat4::from_cols(col(0), col(1), col(2), col(3)).transpose();
+    let row = |k: usize| Row4::from_array(core::array::from_fn(|i| rows[k][l0 + i]));
+    transpose4_rows([row(0), row(1), row(2), row(3)])
+}
+
+/// The 4 x 4 transpose of four [`Row4`]s, in registers: element `i` of result `k` is element
+/// `k` of `rows[i]`.
+#[inline(always)]
+pub(crate) fn transpose4_rows(rows: [Row4; 4]) -> [Row4; 4] {
+    let t = Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
     [t.x_axis, t.y_axis, t.z_axis, t.w_axis]
+}
+
+/// The element sums of four [`Row4`]s, as one [`Row4`] (a transpose and three adds instead of
+/// four horizontal sums). Element `i` is `(x + y) + (z + w)` over the elements of `v[i]`.
+#[inline(always)]
+pub(crate) fn element_sums(v: [Row4; 4]) -> Row4 {
+    let t = transpose4_rows(v);
+    (t[0] + t[1]) + (t[2] + t[3])
 }
 
 impl<const D: usize, const K: usize> Stencil<D, K> {
