@@ -511,7 +511,11 @@ pub(crate) fn particles<
         if TO_NEXT {
             for ln in 0..W.min(count - start) {
                 if p.status[start + ln] == ACTIVE {
-                    scatter_one::<D, K, { mode::REMAP }>(ctx, p, start + ln, st.lane(ln), g);
+                    // An active lane was committed: its velocity is v_new.
+                    let v: [Real; D] = core::array::from_fn(|a| v_new[a][ln]);
+                    let m = p.mass[start + ln];
+                    let none = [[0.0; D]; D];
+                    scatter_one::<D, K, { mode::REMAP }>(ctx, m, v, &none, st.lane(ln), g);
                 }
             }
         }

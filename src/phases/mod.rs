@@ -16,8 +16,6 @@ pub(crate) use isa::{Baseline, Isa};
 
 use crate::grid::Geom;
 use crate::layout::MaterialRecord;
-use crate::math::Mat;
-use crate::particles::ParticleCols;
 use crate::Real;
 
 /// Everything a phase needs that is constant during one substep.
@@ -41,22 +39,4 @@ pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
     } else {
         &[(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
     }
-}
-
-/// The in-plane (2D) or full (3D) stress of particle `i` as a matrix.
-#[inline(always)]
-pub(crate) fn load_tau<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Mat<D> {
-    let mut m = [[0.0; D]; D];
-    for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
-        let v = p.tau[k][i];
-        m[a][b] = v;
-        m[b][a] = v;
-    }
-    m
-}
-
-/// Velocity of particle `i`.
-#[inline(always)]
-pub(crate) fn load_v<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> [Real; D] {
-    core::array::from_fn(|a| p.v[a][i])
 }

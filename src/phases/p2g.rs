@@ -3,10 +3,12 @@
 //! enters in the grid update as `m_i g` (eq 22).
 
 use super::g2p::{load, stencils, Lane, W};
-use super::{load_tau, load_v, Ctx};
+use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
+use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::{Row4, Shape1D, Stencil};
+use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
 pub(crate) mod mode {
@@ -32,26 +34,47 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
+    let with_force = MODE == mode::ALL || MODE == mode::FORCE;
     for start in (0..count).step_by(W) {
+        // The chunk's particle values as lane vectors (one load per column, no per-particle
+        // bounds checks).
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        let mass = load(p.mass, start);
+        let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
+        let tau: [Lane; 6] = core::array::from_fn(|k| {
+            if with_force && k < sym_pairs(D).len() {
+                load(p.tau[k], start)
+            } else {
+                [0.0; W]
+            }
+        });
         let stencils = stencils::<D, K, S>(shape, ctx, &x);
         for ln in 0..W.min(count - start) {
-            let i = start + ln;
-            if p.status[i] != ACTIVE {
+            if p.status[start + ln] != ACTIVE {
                 continue;
             }
-            scatter_one::<D, K, MODE>(ctx, p, i, stencils.lane(ln), g);
+            let mut t = [[0.0; D]; D];
+            if with_force {
+                for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
+                    t[a][b] = tau[k][ln];
+                    t[b][a] = tau[k][ln];
+                }
+            }
+            let vp = core::array::from_fn(|a| v[a][ln]);
+            scatter_one::<D, K, MODE>(ctx, mass[ln], vp, &t, stencils.lane(ln), g);
         }
     }
 }
 
-/// Scatters particle `i` with stencil `st` (also used by the MUSL particle update, which
+/// Scatters one particle of mass `m`, velocity `v` and stress `tau` (tau/rho0; read only by
+/// the modes with force) with stencil `st` (also used by the MUSL particle update, which
 /// scatters the new momenta as it goes).
 #[inline(always)]
 pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    i: usize,
+    m: Real,
+    v: [Real; D],
+    tau: &Mat<D>,
     st: &Stencil<D, K>,
     g: &mut GridCols<'_, D>,
 ) {
@@ -65,16 +88,9 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     // `dw_x[i] r[0]` or `w_x[i] r[b]` ([`Stencil::row`]), so the particle's factors times the
     // x weights are formed once, as 4-wide vectors, and each row costs one multiply by a scalar
     // per accumulated quantity.
-    let m = p.mass[i];
-    let v = load_v(p, i);
     let (wx, dwx) = (st.w[0], st.dw[0]);
     let mass_x = wx * m;
     let mom_x: [Row4; D] = core::array::from_fn(|a| wx * (m * v[a]));
-    let tau = if MODE == mode::ALL || MODE == mode::FORCE {
-        load_tau(p, i)
-    } else {
-        [[0.0; D]; D]
-    };
     // Force on a node: f_a = -m sum_b tau_ab G_b, so f_a = sum_b force_x[a][b] r[b] with
     // force_x[a][b] = -m tau_ab (dw_x for b = 0, w_x otherwise).
     let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
