@@ -19,7 +19,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::p2g::{mode, scatter_one};
+use super::p2g::{mode, scatter_lane, scatter_one};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -391,8 +391,8 @@ fn update_stress<const D: usize>(
 /// from `v_i + a_i dt` in the same pass (USL). `TO_NEXT` (MUSL) writes the new positions to
 /// the scratch columns instead of the positions, and scatters the new momenta to the remap
 /// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
-/// remap columns are free to fill; particles contribute in index order, as a separate pass
-/// would).
+/// remap columns are free to fill; particles contribute chunk by chunk in the order of
+/// [`scatter_lane`], as the scatter pass does).
 #[inline(always)]
 pub(crate) fn particles<
     const D: usize,
@@ -509,8 +509,10 @@ pub(crate) fn particles<
             }
         }
         if TO_NEXT {
-            for ln in 0..W.min(count - start) {
-                if p.status[start + ln] == ACTIVE {
+            let n = W.min(count - start);
+            for t in 0..W {
+                let ln = scatter_lane(t);
+                if ln < n && p.status[start + ln] == ACTIVE {
                     // An active lane was committed: its velocity is v_new.
                     let v: [Real; D] = core::array::from_fn(|a| v_new[a][ln]);
                     let m = p.mass[start + ln];

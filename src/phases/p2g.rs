@@ -49,8 +49,10 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
             }
         });
         let stencils = stencils::<D, K, S>(shape, ctx, &x);
-        for ln in 0..W.min(count - start) {
-            if p.status[start + ln] != ACTIVE {
+        let n = W.min(count - start);
+        for t in 0..W {
+            let ln = scatter_lane(t);
+            if ln >= n || p.status[start + ln] != ACTIVE {
                 continue;
             }
             let mut t = [[0.0; D]; D];
@@ -64,6 +66,16 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
             scatter_one::<D, K, MODE>(ctx, mass[ln], vp, &t, stencils.lane(ln), g);
         }
     }
+}
+
+/// The lane scattered `t`-th in a chunk: 0, W/2, 1, W/2 + 1, ... Two particles scattered one
+/// after the other then come from two halves of the chunk, which in a lattice fill are cells
+/// apart, so the second does not load a stencil row that overlaps, at an offset, a row the
+/// first has just stored (a load that partly overlaps a pending store waits for the store to
+/// complete instead of taking its value from the store buffer).
+#[inline(always)]
+pub(crate) const fn scatter_lane(t: usize) -> usize {
+    (t % 2) * (W / 2) + t / 2
 }
 
 /// Scatters one particle of mass `m`, velocity `v` and stress `tau` (tau/rho0; read only by
