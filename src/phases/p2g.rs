@@ -96,40 +96,63 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
-    // Separable form: every node weight is `w_x[i] r[0]` and every gradient component
-    // `dw_x[i] r[0]` or `w_x[i] r[b]` ([`Stencil::row`]), so the particle's factors times the
-    // x weights are formed once, as 4-wide vectors, and each row costs one multiply by a scalar
-    // per accumulated quantity.
+    // Separable form (seeds/000 eqs 16-17): node (i, j, k) has S = wx_i wy_j wz_k and
+    // G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k). The particle's factors times the
+    // x weights (4-wide vectors) are multiplied by the y factors once per j; each row (j, k)
+    // then costs one multiply by wz_k per quantity, plus one by dwz_k for the force (3D).
     let (wx, dwx) = (st.w[0], st.dw[0]);
+    let (wy, dwy) = (st.w[1], st.dw[1]);
     let mass_x = wx * m;
     let mom_x: [Row4; D] = core::array::from_fn(|a| wx * (m * v[a]));
-    // Force on a node: f_a = -m sum_b tau_ab G_b, so f_a = sum_b force_x[a][b] r[b] with
-    // force_x[a][b] = -m tau_ab (dw_x for b = 0, w_x otherwise).
+    // Force on a node: f_a = -m sum_b tau_ab G_b; force_x[a][b] = -m tau_ab times dwx (b = 0)
+    // or wx (b >= 1).
     let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
         core::array::from_fn(|b| (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]))
     });
-    for k in 0..Stencil::<D, K>::layers() {
-        for j in 0..K {
-            let (row, r) = st.row(j, k, geom.stride);
+    for j in 0..K {
+        // Per y node j: mass and momentum times wy_j; the force's terms that carry wz_k
+        // (f_wz: the x and y gradients) and dwz_k (f_dwz: the z gradient, 3D only).
+        let mass_j = mass_x * wy[j];
+        let mom_j: [Row4; D] = core::array::from_fn(|a| mom_x[a] * wy[j]);
+        let f_wz: [Row4; D] =
+            core::array::from_fn(|a| force_x[a][0] * wy[j] + force_x[a][1] * dwy[j]);
+        let f_dwz: [Row4; D] = core::array::from_fn(|a| {
+            if D == 3 {
+                force_x[a][D - 1] * wy[j]
+            } else {
+                Row4::ZERO
+            }
+        });
+        for k in 0..Stencil::<D, K>::layers() {
+            let row =
+                st.base + j * geom.stride[1] + if D == 3 { k * geom.stride[D - 1] } else { 0 };
+            // The z factors (1 and 0 in 2D, where the products are skipped).
+            let (wz, dwz) = if D == 3 {
+                (st.w[D - 1][k], st.dw[D - 1][k])
+            } else {
+                (1.0, 0.0)
+            };
+            let z = |x: Row4| if D == 3 { x * wz } else { x };
             // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
             // columns share the length it was checked against.
             if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                unsafe { add_row(g.mass, row, mass_x * r[0]) };
+                unsafe { add_row(g.mass, row, z(mass_j)) };
                 for a in 0..D {
-                    unsafe { add_row(g.vel[a], row, mom_x[a] * r[0]) };
+                    unsafe { add_row(g.vel[a], row, z(mom_j[a])) };
                 }
             }
             if MODE == mode::REMAP {
                 for a in 0..D {
-                    unsafe { add_row(g.remap[a], row, mom_x[a] * r[0]) };
+                    unsafe { add_row(g.remap[a], row, z(mom_j[a])) };
                 }
             }
             if MODE == mode::ALL || MODE == mode::FORCE {
                 for a in 0..D {
-                    let mut f = force_x[a][0] * r[0];
-                    for b in 1..D {
-                        f += force_x[a][b] * r[b];
-                    }
+                    let f = if D == 3 {
+                        f_wz[a] * wz + f_dwz[a] * dwz
+                    } else {
+                        f_wz[a]
+                    };
                     unsafe { add_row(g.acc[a], row, f) };
                 }
             }
