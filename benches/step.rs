@@ -17,17 +17,13 @@ use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
 };
-use mpm_gimp::{
-    memory_requirements, Dimension, HeapBuffer, MaterialDef, Phase, Real, ShapeFunction,
-    UpdateOrder, Vec3, World, WorldDef,
-};
+use mpm_gimp::{Dimension, MaterialModel, Phase, ShapeFunction, UpdateOrder, World, WorldDef};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-/// Particles per cell per axis.
-const PPC: u32 = 2;
-/// Cell size, m.
-const CELL: Real = 0.01;
+#[path = "common/scene.rs"]
+mod scene;
+use scene::{Scene, SceneDef};
 
 const SHAPES: [(ShapeFunction, &str); 4] = [
     (ShapeFunction::Linear, "linear"),
@@ -42,86 +38,32 @@ const ORDERS: [(UpdateOrder, &str); 3] = [
     (UpdateOrder::Musl, "musl"),
 ];
 
-/// A block of `block` cells (2 particles per cell per axis) at `first` in a grid of `grid`
-/// cells, moving down at 0.1 m/s under gravity, slip walls. Owns its storage.
-struct Scene {
-    storage: HeapBuffer,
-    particles: u64,
+/// 2D: 32768 particles, a 128 x 64 cell block in a 132 x 68 grid.
+fn plane(shape: ShapeFunction, order: UpdateOrder) -> Scene {
+    Scene::new(&SceneDef {
+        dimension: Dimension::Plane2D,
+        shape,
+        material: MaterialModel::NeoHookean,
+        order,
+        grid: [132, 68, 1],
+        first: [2, 2, 0],
+        block: [128, 64, 1],
+    })
+    .expect("the 2D bench scene")
 }
 
-impl Scene {
-    fn new(
-        dim: Dimension,
-        shape: ShapeFunction,
-        order: UpdateOrder,
-        grid: [u32; 3],
-        first: [u32; 3],
-        block: [u32; 3],
-    ) -> Scene {
-        let axes = if dim == Dimension::ThreeD { 3 } else { 2 };
-        let expected: u32 = (0..axes).map(|a| block[a] * PPC).product();
-        let def = WorldDef {
-            dimension: dim,
-            cell_size: CELL,
-            cells: grid,
-            particle_capacity: expected,
-            material_capacity: 1,
-            shape,
-            particles_per_cell: PPC,
-            update_order: order,
-            ..WorldDef::DEFAULT
-        };
-        let req = memory_requirements(&def).expect("valid definition");
-        let mut storage = HeapBuffer::new(req.bytes);
-        let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
-        let material = world
-            .add_material(&MaterialDef::DEFAULT)
-            .expect("valid material");
-        // A quarter spacing inside the block's faces: exactly the block's lattice sites.
-        let spacing = CELL / PPC as Real;
-        let mut lo = Vec3::ZERO;
-        let mut hi = Vec3::ZERO;
-        for a in 0..axes {
-            lo[a] = first[a] as Real * CELL + 0.25 * spacing;
-            hi[a] = (first[a] + block[a]) as Real * CELL - 0.25 * spacing;
-        }
-        let ids = world
-            .fill_box(lo, hi, material, Vec3::new(0.0, -0.1, 0.0))
-            .expect("block fits");
-        assert_eq!(ids.len() as u32, expected, "block particle count");
-        Scene {
-            storage,
-            particles: expected as u64,
-        }
-    }
-
-    /// 2D: 32768 particles, a 128 x 64 cell block in a 132 x 68 grid.
-    fn plane(shape: ShapeFunction, order: UpdateOrder) -> Scene {
-        Scene::new(
-            Dimension::Plane2D,
-            shape,
-            order,
-            [132, 68, 1],
-            [2, 2, 0],
-            [128, 64, 1],
-        )
-    }
-
-    /// 3D: 32768 particles, a 16^3 cell block in the middle of a 32^3 grid.
-    fn solid(shape: ShapeFunction, order: UpdateOrder) -> Scene {
-        Scene::new(
-            Dimension::ThreeD,
-            shape,
-            order,
-            [32, 32, 32],
-            [8, 8, 8],
-            [16, 16, 16],
-        )
-    }
-
-    fn world(&mut self) -> World<'_> {
-        World::open(self.storage.as_mut_bytes()).expect("the scene's world")
-    }
+/// 3D: 32768 particles, a 16^3 cell block in the middle of a 32^3 grid.
+fn solid(shape: ShapeFunction, order: UpdateOrder) -> Scene {
+    Scene::new(&SceneDef {
+        dimension: Dimension::ThreeD,
+        shape,
+        material: MaterialModel::NeoHookean,
+        order,
+        grid: [32, 32, 32],
+        first: [8, 8, 8],
+        block: [16, 16, 16],
+    })
+    .expect("the 3D bench scene")
 }
 
 /// Times `iters` steps of `dt = stable_dt()` each (one substep), counting only `step`.
@@ -153,11 +95,11 @@ fn bench_shapes(c: &mut Criterion) {
         for (shape, name) in SHAPES {
             let order = WorldDef::DEFAULT.update_order;
             let mut scene = if three_d {
-                Scene::solid(shape, order)
+                solid(shape, order)
             } else {
-                Scene::plane(shape, order)
+                plane(shape, order)
             };
-            group.throughput(Throughput::Elements(scene.particles));
+            group.throughput(Throughput::Elements(scene.particles as u64));
             let mut world = scene.world();
             group.bench_function(BenchmarkId::from_parameter(name), |b| {
                 b.iter_custom(|iters| timed_steps(&mut world, iters))
@@ -170,8 +112,8 @@ fn bench_shapes(c: &mut Criterion) {
 fn bench_orders(c: &mut Criterion) {
     let mut group = configure(c, "step_order_gimp_2d");
     for (order, name) in ORDERS {
-        let mut scene = Scene::plane(ShapeFunction::Gimp, order);
-        group.throughput(Throughput::Elements(scene.particles));
+        let mut scene = plane(ShapeFunction::Gimp, order);
+        group.throughput(Throughput::Elements(scene.particles as u64));
         let mut world = scene.world();
         group.bench_function(BenchmarkId::from_parameter(name), |b| {
             b.iter_custom(|iters| timed_steps(&mut world, iters))
@@ -195,11 +137,11 @@ fn bench_phases(c: &mut Criterion) {
         let mut group = configure(c, group_name);
         let order = UpdateOrder::Usl;
         let mut scene = if three_d {
-            Scene::solid(ShapeFunction::Gimp, order)
+            solid(ShapeFunction::Gimp, order)
         } else {
-            Scene::plane(ShapeFunction::Gimp, order)
+            plane(ShapeFunction::Gimp, order)
         };
-        group.throughput(Throughput::Elements(scene.particles));
+        group.throughput(Throughput::Elements(scene.particles as u64));
         let mut world = scene.world();
         let dt = world.stable_dt();
         world

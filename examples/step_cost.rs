@@ -22,10 +22,7 @@
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
-use mpm_gimp::{
-    memory_requirements, Dimension, HeapBuffer, MaterialDef, MaterialModel, Real, ShapeFunction,
-    UpdateOrder, Vec3, World, WorldDef,
-};
+use mpm_gimp::{Dimension, MaterialModel, Real, ShapeFunction, UpdateOrder, World};
 use std::process::exit;
 use std::time::{Duration, Instant};
 
@@ -33,10 +30,10 @@ const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|baseline]";
 
-/// Particles per cell per axis of the filled block.
-const PPC: u32 = 2;
-/// Cell size, m.
-const CELL: Real = 0.01;
+#[path = "../benches/common/scene.rs"]
+mod scene;
+use scene::{Scene, SceneDef};
+
 /// Warm-up steps before the timed runs.
 const WARMUP_STEPS: u32 = 3;
 
@@ -208,63 +205,27 @@ fn main() {
     let o = parse_options();
     let axes = o.dim as usize;
     let (grid, first, block) = scene(o.dim);
-    let expected: u32 = (0..axes).map(|a| block[a] * PPC).product();
-
-    let def = WorldDef {
+    let mut scene = match Scene::new(&SceneDef {
         dimension: if o.dim == 3 {
             Dimension::ThreeD
         } else {
             Dimension::Plane2D
         },
-        cell_size: CELL,
-        cells: grid,
-        particle_capacity: expected,
-        material_capacity: 1,
         shape: o.shape,
-        particles_per_cell: PPC,
-        update_order: o.order,
-        ..WorldDef::DEFAULT
-    };
-    let req = match memory_requirements(&def) {
-        Ok(r) => r,
+        material: o.material,
+        order: o.order,
+        grid,
+        first,
+        block,
+    }) {
+        Ok(s) => s,
         Err(e) => {
-            eprintln!("step_cost: invalid world definition: {e:?}");
+            eprintln!("step_cost: {e}");
             exit(1);
         }
     };
-    let mut storage = HeapBuffer::new(req.bytes);
-    let mut world = match World::init(&def, storage.as_mut_bytes()) {
-        Ok(w) => w,
-        Err(e) => {
-            eprintln!("step_cost: World::init failed: {e:?}");
-            exit(1);
-        }
-    };
-    let material = world
-        .add_material(&MaterialDef {
-            model: o.material,
-            ..MaterialDef::DEFAULT
-        })
-        .expect("the default material is valid");
-
-    // Box bounds a quarter of the particle spacing inside the block's faces: the lattice sites
-    // (sub-cell centres) of exactly the block's cells fall inside, with no rounding at the edges.
-    let spacing = CELL / PPC as Real;
-    let mut lo = Vec3::ZERO;
-    let mut hi = Vec3::ZERO;
-    for a in 0..axes {
-        lo[a] = first[a] as Real * CELL + 0.25 * spacing;
-        hi[a] = (first[a] + block[a]) as Real * CELL - 0.25 * spacing;
-    }
-    let ids = match world.fill_box(lo, hi, material, Vec3::new(0.0, -0.1, 0.0)) {
-        Ok(ids) => ids,
-        Err(e) => {
-            eprintln!("step_cost: fill_box failed: {e:?}");
-            exit(1);
-        }
-    };
-    let particles = ids.len() as u32;
-    assert_eq!(particles, expected, "block particle count");
+    let particles = scene.particles;
+    let mut world = scene.world();
 
     let step = |world: &mut World<'_>| -> Duration {
         let dt = world.stable_dt();
