@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Interleaved wall-clock comparison of step_cost binaries on a shared, noisy machine: each
+# round runs every binary once, in turn, so that they see the same load; prints, per binary,
+# the minimum and the median of the per-round medians (ns per particle-step).
+#   bash benches/compare.sh ROUNDS BIN [BIN ...] -- [step_cost options for every BIN]
+# A BIN may carry its own options in one quoted word. E.g.
+#   bash benches/compare.sh 5 ./old_step_cost target/release/examples/step_cost -- --dim 2
+#   bash benches/compare.sh 5 "target/release/examples/step_cost --simd baseline" \
+#       target/release/examples/step_cost -- --dim 3 --order usl
+set -euo pipefail
+rounds=$1
+shift
+bins=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do
+    bins+=("$1")
+    shift
+done
+[ $# -gt 0 ] && shift
+out=$(mktemp)
+trap 'rm -f "$out"' EXIT
+for _ in $(seq "$rounds"); do
+    for b in "${bins[@]}"; do
+        read -ra cmd <<<"$b"
+        v=$("${cmd[@]}" "$@" --runs 5 --steps 10 2>/dev/null | grep -o '"ns_per_particle_step":[0-9.]*' | cut -d: -f2)
+        echo "$b|$v" >>"$out"
+    done
+done
+for b in "${bins[@]}"; do
+    vals=$(awk -F'|' -v b="$b" '$1 == b { print $2 }' "$out" | sort -g)
+    n=$(echo "$vals" | wc -l)
+    min=$(echo "$vals" | head -1)
+    med=$(echo "$vals" | sed -n "$(( (n + 1) / 2 ))p")
+    echo "$b: min $min median $med ns per particle-step over $n rounds ($(echo $vals | tr '\n' ' '))"
+done
