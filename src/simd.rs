@@ -27,15 +27,30 @@ impl Simd {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+mod state {
+    use core::sync::atomic::AtomicU8;
+    pub const UNKNOWN: u8 = 0;
+    pub const NO: u8 = 1;
+    pub const YES: u8 = 2;
+    /// The detection result, or NO after [`super::use_baseline_only`].
+    pub static STATE: AtomicU8 = AtomicU8::new(UNKNOWN);
+}
+
+/// Makes every later step of every world in the process run the baseline instance, whatever
+/// the CPU supports. For tools that emulate the CPU and cannot decode every AVX instruction
+/// (valgrind 3.19); results do not change, only speed.
+pub fn use_baseline_only() {
+    #[cfg(target_arch = "x86_64")]
+    state::STATE.store(state::NO, core::sync::atomic::Ordering::Relaxed);
+}
+
 /// Whether the CPU and the operating system support AVX and AVX2 (cached after the first call:
-/// `cpuid` can be slow under a hypervisor).
+/// `cpuid` can be slow under a hypervisor), and [`use_baseline_only`] was not called.
 #[cfg(target_arch = "x86_64")]
 pub fn has_avx2() -> bool {
-    use core::sync::atomic::{AtomicU8, Ordering};
-    const UNKNOWN: u8 = 0;
-    const NO: u8 = 1;
-    const YES: u8 = 2;
-    static STATE: AtomicU8 = AtomicU8::new(UNKNOWN);
+    use core::sync::atomic::Ordering;
+    use state::{NO, STATE, YES};
     match STATE.load(Ordering::Relaxed) {
         YES => true,
         NO => false,
