@@ -77,9 +77,8 @@ struct Gathered<const D: usize> {
 
 /// Gathers, for every live lane of a chunk, `v_gp` and `a_gp` (when `VEL`) and the velocity
 /// gradient (per `GRAD`). Each particle's results come back as [`Row4`]s (four results each);
-/// four lanes' rows are then transposed in registers into lane vectors. (Writing each result
-/// to its lane as a scalar made the vector loads that follow wait for the stores: a
-/// store-forwarding stall per lane vector.)
+/// four lanes' rows are then transposed in registers, so that every lane vector is written
+/// whole rather than one scalar per lane.
 #[inline(always)]
 fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     ctx: &Ctx<'_, D>,
@@ -144,7 +143,7 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     }
     // Separable form ([`Stencil::row`]): per row, the nodal values are weighted by the row's
     // scalar factors r[b] into 4-wide partial sums over the rows; the x weights are applied once
-    // at the end, in one horizontal sum per result.
+    // at the end, and the results summed across x four at a time.
     let (wx, dwx) = (st.w[0], st.dw[0]);
     // sum_rows r[0] v_i, sum_rows r[0] a_i (over x still separate).
     let mut rv = [Row4::ZERO; D];

@@ -124,8 +124,7 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
             }
         });
         for k in 0..Stencil::<D, K>::layers() {
-            let row =
-                st.base + j * geom.stride[1] + if D == 3 { k * geom.stride[D - 1] } else { 0 };
+            let row = st.row_start(j, k, geom.stride);
             // The z factors (1 and 0 in 2D, where the products are skipped).
             let (wz, dwz) = if D == 3 {
                 (st.w[D - 1][k], st.dw[D - 1][k])

@@ -67,20 +67,22 @@ pub trait Shape1D<const K: usize>: Copy {
 }
 
 /// First node of the stencil of a particle at `s` (cell units) on an axis with `nodes` nodes,
-/// clamped to `[0, nodes - K]` so that every node of the stencil exists, for any `s` (NaN and
-/// infinities included). Inside the admissible region the clamp changes nothing.
+/// clamped to `[0, nodes - K]` (to 0 if `nodes < K`; at most 2^30, the grid's limit) so that
+/// every node of the stencil exists, for any `s` (NaN and infinities included). Inside the
+/// admissible region the clamp changes nothing.
 ///
 /// The clamp is done on the float, before the conversion (`floor` commutes with clamping to
 /// integers), so the conversion is a plain truncation the compiler vectorises.
 #[inline(always)]
 pub fn first_node<const K: usize, S: Shape1D<K>>(s: Real, nodes: usize) -> i32 {
+    const { assert!(S::LEAD >= 0 && S::LEAD <= 4) };
     let lo = S::LEAD as Real;
-    let top = (nodes - K) as Real + lo;
+    let top = nodes.saturating_sub(K).min(1 << 30) as Real + lo;
     let y = s + S::SHIFT;
     let y = if y > lo { y } else { lo }; // also NaN -> lo
     let y = if y < top { y } else { top };
-    // SAFETY: y is finite and in [LEAD, nodes - K + LEAD], which fits in i32 (a grid has at most
-    // 2^30 nodes), and y >= 0, so truncation is the floor. The result is in [0, nodes - K].
+    // SAFETY: y is finite and in [LEAD, 2^30 + LEAD] with 0 <= LEAD <= 4, exactly representable
+    // bounds that fit in i32, and y >= 0, so truncation is the floor.
     unsafe { y.to_int_unchecked::<i32>() - S::LEAD }
 }
 
@@ -240,7 +242,7 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     #[inline(always)]
     pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> (usize, [Real; D]) {
         let (w, dw) = (&self.w, &self.dw);
-        let row = self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 };
+        let row = self.row_start(j, k, stride);
         let r: [Real; D] = if D == 3 {
             core::array::from_fn(|b| match b {
                 0 => w[1][j] * w[D - 1][k],
@@ -251,6 +253,12 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
             core::array::from_fn(|b| if b == 0 { w[1][j] } else { dw[1][j] })
         };
         (row, r)
+    }
+
+    /// Flat index of the first node of row `j` along y, layer `k` along z.
+    #[inline(always)]
+    pub fn row_start(&self, j: usize, k: usize, stride: [usize; D]) -> usize {
+        self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 }
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
@@ -337,6 +345,46 @@ mod tests {
             let s = [lo + (hi - lo) * lcg(&mut st), lo + (hi - lo) * lcg(&mut st)];
             check(s);
         }
+    }
+
+    /// The clamped first node stays in `[0, nodes - K]` for every input, and equals
+    /// `floor(s + SHIFT) - LEAD` inside that range.
+    #[test]
+    fn first_node_is_clamped_for_any_position() {
+        fn check<const K: usize, S: Shape1D<K>>() {
+            for nodes in [0usize, 1, K, K + 1, 12, 1 << 20, usize::MAX] {
+                let hi = nodes.saturating_sub(K).min(1 << 30) as i32;
+                for s in [
+                    Real::NAN,
+                    Real::INFINITY,
+                    Real::NEG_INFINITY,
+                    Real::MAX,
+                    -Real::MAX,
+                    -1.0,
+                    0.0,
+                    0.49,
+                    0.5,
+                    3.99,
+                    4.0,
+                    7.5,
+                    1.0e9,
+                ] {
+                    let f = first_node::<K, S>(s, nodes);
+                    assert!(
+                        (0..=hi).contains(&f),
+                        "{f} outside [0, {hi}] (s {s}, nodes {nodes})"
+                    );
+                    let exact = libm::floor((s + S::SHIFT) as f64) as i64 - S::LEAD as i64;
+                    if s.is_finite() && (0..=hi as i64).contains(&exact) {
+                        assert_eq!(f as i64, exact, "s {s}, nodes {nodes}");
+                    }
+                }
+            }
+        }
+        check::<2, Linear>();
+        check::<3, Gimp>();
+        check::<3, QuadraticBspline>();
+        check::<4, CubicBspline>();
     }
 
     #[test]
