@@ -215,18 +215,19 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     })
 }
 
-/// The stencils of the chunk's particles at `x[axis][lane]`.
+/// Replaces `st` by the stencils of the chunk's particles at `x[axis][lane]`.
 #[inline(always)]
 pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+    st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
     x: &[Lane; D],
-) -> Stencils<D, K, W> {
+) {
     let geom = &ctx.geom;
     let s: [Lane; D] = core::array::from_fn(|a| {
         core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
     });
-    Stencils::new(shape, &s, geom.nodes, geom.stride, geom.inv_h)
+    st.compute(shape, &s, geom.nodes, geom.stride, geom.inv_h);
 }
 
 /// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
@@ -413,11 +414,12 @@ pub(crate) fn particles<
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
+    let mut st = Stencils::<D, K, W>::default();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
-        let st = stencils::<D, K, S>(shape, ctx, &x);
+        stencils::<D, K, S>(&mut st, shape, ctx, &x);
         let Gathered { v_gp, a_gp, l } = if FUSED_STRESS {
             gather_chunk::<D, K, true, { grad::UPDATED }>(ctx, g, &st, &live)
         } else {
@@ -538,10 +540,11 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     if !g.lengths_consistent() || g.remap.iter().any(|c| c.len() != g.len()) {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
+    let mut st = Stencils::<D, K, W>::default();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        let st = stencils::<D, K, S>(shape, ctx, &x);
+        stencils::<D, K, S>(&mut st, shape, ctx, &x);
         let l = gather_chunk::<D, K, false, { grad::REMAP }>(ctx, g, &st, &live).l;
         let ok = update_stress(ctx, p, start, &live, &l);
         for ln in 0..W.min(count - start) {

@@ -7,7 +7,7 @@ use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::{Row4, Shape1D, Stencil};
+use crate::shape::{Row4, Shape1D, Stencil, Stencils};
 use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
@@ -35,6 +35,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let with_force = MODE == mode::ALL || MODE == mode::FORCE;
+    let mut st = Stencils::<D, K, W>::default();
     for start in (0..count).step_by(W) {
         // The chunk's particle values as lane vectors (one load per column, no per-particle
         // bounds checks).
@@ -48,7 +49,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
                 [0.0; W]
             }
         });
-        let stencils = stencils::<D, K, S>(shape, ctx, &x);
+        stencils::<D, K, S>(&mut st, shape, ctx, &x);
         let n = W.min(count - start);
         for t in 0..W {
             let ln = scatter_lane(t);
@@ -63,7 +64,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
                 }
             }
             let vp = core::array::from_fn(|a| v[a][ln]);
-            scatter_one::<D, K, MODE>(ctx, mass[ln], vp, &t, stencils.lane(ln), g);
+            scatter_one::<D, K, MODE>(ctx, mass[ln], vp, &t, st.lane(ln), g);
         }
     }
 }

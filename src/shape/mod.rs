@@ -99,16 +99,34 @@ pub struct Stencil<const D: usize, const K: usize> {
 }
 
 /// The stencils of `W` particles. They are computed lane-fastest (loops over lanes the compiler
-/// vectorises), then transposed four lanes at a time into one [`Stencil`] per particle.
+/// vectorises), then transposed four lanes at a time into one [`Stencil`] per particle. A pass
+/// makes one `Stencils` and refills it for every chunk ([`Stencils::compute`]): building a new
+/// one per chunk zeroed and copied over a kilobyte each time.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     lanes: [Stencil<D, K>; W],
+    /// Lane-fastest weights and derivatives, `w[axis][k][lane]`; rows `k >= K` stay zero.
+    w: [[[Real; W]; ROW]; D],
+    dw: [[[Real; W]; ROW]; D],
+}
+
+impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, W> {
+    fn default() -> Self {
+        const { assert!(W % 4 == 0 && K <= ROW) };
+        Stencils {
+            lanes: [Stencil {
+                base: 0,
+                w: [Row4::ZERO; D],
+                dw: [Row4::ZERO; D],
+            }; W],
+            w: [[[0.0; W]; ROW]; D],
+            dw: [[[0.0; W]; ROW]; D],
+        }
+    }
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
-    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`]. `W` is a
-    /// multiple of 4.
-    #[inline(always)]
+    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`].
     pub fn new<S: Shape1D<K>>(
         shape: &S,
         s: &[[Real; W]; D],
@@ -116,16 +134,29 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         stride: [usize; D],
         inv_h: Real,
     ) -> Self {
-        const { assert!(W % 4 == 0 && K <= ROW) };
+        let mut st = Self::default();
+        st.compute(shape, s, nodes, stride, inv_h);
+        st
+    }
+
+    /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units).
+    #[inline(always)]
+    pub fn compute<S: Shape1D<K>>(
+        &mut self,
+        shape: &S,
+        s: &[[Real; W]; D],
+        nodes: [usize; D],
+        stride: [usize; D],
+        inv_h: Real,
+    ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
         let mut base = [0u32; W];
-        let mut w = [[[0.0; W]; ROW]; D];
-        let mut dw = [[[0.0; W]; ROW]; D];
+        let (w, dw) = (&mut self.w, &mut self.dw);
         for a in 0..D {
             let mut f = [0.0; W];
             for ln in 0..W {
                 let first = first_node::<K, S>(s[a][ln], nodes[a]);
-                base[ln] += first as u32 * stride[a] as u32;
+                base[ln] = base[ln].wrapping_add((first as u32).wrapping_mul(stride[a] as u32));
                 f[ln] = s[a][ln] - first as Real;
             }
             for ln in 0..W {
@@ -136,25 +167,19 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             }
         }
-        let mut lanes = [Stencil {
-            base: 0,
-            w: [Row4::ZERO; D],
-            dw: [Row4::ZERO; D],
-        }; W];
         for l0 in (0..W).step_by(4) {
             for a in 0..D {
                 let tw = transpose4(&w[a], l0);
                 let tdw = transpose4(&dw[a], l0);
                 for i in 0..4 {
-                    lanes[l0 + i].w[a] = tw[i];
-                    lanes[l0 + i].dw[a] = tdw[i];
+                    self.lanes[l0 + i].w[a] = tw[i];
+                    self.lanes[l0 + i].dw[a] = tdw[i];
                 }
             }
             for i in 0..4 {
-                lanes[l0 + i].base = base[l0 + i] as usize;
+                self.lanes[l0 + i].base = base[l0 + i] as usize;
             }
         }
-        Stencils { lanes }
     }
 
     /// The stencil of lane `ln`.
