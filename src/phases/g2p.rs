@@ -61,7 +61,19 @@ mod grad {
 /// Lanes `start..start + W` that hold active particles (`< count`).
 #[inline(always)]
 fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> [bool; W] {
-    core::array::from_fn(|l| start + l < count && p.status[start + l] == ACTIVE)
+    let n = W.min(count.saturating_sub(start));
+    let status = load_u32(p.status, start);
+    core::array::from_fn(|l| l < n && status[l] == ACTIVE)
+}
+
+/// Loads lanes `start..start + W` of a u32 column (zeros past its end), with one bounds check
+/// for the chunk (a check per lane kept `from_fn` from being inlined).
+#[inline(always)]
+fn load_u32(col: &[u32], start: usize) -> [u32; W] {
+    col.get(start..start + W)
+        .and_then(|c| <&[u32; W]>::try_from(c).ok())
+        .copied()
+        .unwrap_or([0; W])
 }
 
 /// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient).
@@ -250,9 +262,21 @@ fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: &[bool; W]) {
 /// Loads lanes `start..start + W` of a column (zeros past its end).
 #[inline(always)]
 pub(crate) fn load(col: &[Real], start: usize) -> Lane {
-    match col.get(start..start + W) {
-        Some(c) => core::array::from_fn(|l| c[l]),
-        None => [0.0; W],
+    col.get(start..start + W)
+        .and_then(|c| <&Lane>::try_from(c).ok())
+        .copied()
+        .unwrap_or([0.0; W])
+}
+
+/// `m *= s`, lane by lane.
+#[inline(always)]
+fn scale_lanes<const D: usize>(m: &mut LaneMat<D>, s: Real) {
+    for row in m.iter_mut() {
+        for lanes in row.iter_mut() {
+            for v in lanes.iter_mut() {
+                *v *= s;
+            }
+        }
     }
 }
 
@@ -281,30 +305,27 @@ fn update_stress<const D: usize>(
     update: &[bool; W],
     l: &LaneMat<D>,
 ) -> [bool; W] {
-    let dt = ctx.dt;
+    // Plain loops over lanes here, not `core::array::from_fn`: a closure that indexes is not
+    // always inlined, and a helper that is not inlined runs baseline code in the AVX2 instance.
     // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane).
-    let a: LaneMat<D> = core::array::from_fn(|r| {
-        core::array::from_fn(|c| core::array::from_fn(|ln| l[r][c][ln] * dt))
-    });
+    let mut a = *l;
+    scale_lanes(&mut a, ctx.dt);
     let n = ctx.exp_terms.clamp(1, 8) as usize;
-    let mut q: LaneMat<D> = core::array::from_fn(|r| {
-        core::array::from_fn(|c| core::array::from_fn(|ln| a[r][c][ln] * INV[n]))
-    });
+    let mut q = a;
+    scale_lanes(&mut q, INV[n]);
     for k in (1..n).rev() {
         let mut next = a;
         mul_add_lanes(&mut next, &a, &q);
-        for r in 0..D {
-            for c in 0..D {
-                for ln in 0..W {
-                    next[r][c][ln] *= INV[k];
-                }
-            }
-        }
+        scale_lanes(&mut next, INV[k]);
         q = next;
     }
     // H <- H + Q + Q H.
-    let h_old: LaneMat<D> =
-        core::array::from_fn(|r| core::array::from_fn(|c| load(p.h[r][c], start)));
+    let mut h_old = [[[0.0; W]; D]; D];
+    for r in 0..D {
+        for c in 0..D {
+            h_old[r][c] = load(p.h[r][c], start);
+        }
+    }
     let mut h = h_old;
     mul_add_lanes(&mut h, &q, &h_old);
     for r in 0..D {
@@ -322,7 +343,7 @@ fn update_stress<const D: usize>(
     }
     // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
     // material (the common case, vectorised); otherwise lane by lane.
-    let ids: [usize; W] = core::array::from_fn(|ln| p.material[start + ln] as usize);
+    let ids = load_u32(p.material, start).map(|id| id as usize);
     let first = (0..W).find(|&ln| update[ln]).map(|ln| ids[ln]);
     let uniform = first.and_then(|id| {
         let same = (0..W).all(|ln| !update[ln] || ids[ln] == id);

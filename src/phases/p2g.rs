@@ -42,13 +42,12 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         let mass = load(p.mass, start);
         let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
-        let tau: [Lane; 6] = core::array::from_fn(|k| {
-            if with_force && k < sym_pairs(D).len() {
-                load(p.tau[k], start)
-            } else {
-                [0.0; W]
+        let mut tau = [[0.0; W]; 6];
+        if with_force {
+            for k in 0..sym_pairs(D).len() {
+                tau[k] = load(p.tau[k], start);
             }
-        });
+        }
         stencils::<D, K, S>(&mut st, shape, ctx, &x);
         let n = W.min(count - start);
         for t in 0..W {
