@@ -87,6 +87,23 @@ struct Gathered<const D: usize> {
     l: LaneMat<D>,
 }
 
+impl<const D: usize> Gathered<D> {
+    /// The lanes of flat result `r`: `v_gp` (D) and `a_gp` (D) below `grad0`, then `l` (D x D).
+    #[inline(always)]
+    fn slot(&mut self, r: usize, grad0: usize) -> &mut Lane {
+        if r < grad0 {
+            if r < D {
+                &mut self.v_gp[r]
+            } else {
+                &mut self.a_gp[r - D]
+            }
+        } else {
+            let i = r - grad0;
+            &mut self.l[i / D][i % D]
+        }
+    }
+}
+
 /// Gathers, for every live lane of a chunk, `v_gp` and `a_gp` (when `VEL`) and the velocity
 /// gradient (per `GRAD`). Each particle's results come back as [`Row4`]s (four results each);
 /// four lanes' rows are then transposed in registers, so that every lane vector is written
@@ -107,7 +124,11 @@ fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>
     // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) when GRAD.
     let grad0 = if VEL { 2 * D } else { 0 };
     let n = grad0 + if GRAD != grad::NONE { D * D } else { 0 };
-    let mut flat = [[0.0; W]; GATHERED];
+    let mut out = Gathered {
+        v_gp: [[0.0; W]; D],
+        a_gp: [[0.0; W]; D],
+        l: [[[0.0; W]; D]; D],
+    };
     for l0 in (0..W).step_by(4) {
         for q in 0..n.div_ceil(4) {
             let t = crate::shape::transpose4_rows([
@@ -117,23 +138,13 @@ fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>
                 rows[l0 + 3][q],
             ]);
             for r in 0..4 {
-                flat[4 * q + r][l0..l0 + 4].copy_from_slice(&t[r].to_array());
+                if 4 * q + r < n {
+                    out.slot(4 * q + r, grad0)[l0..l0 + 4].copy_from_slice(&t[r].to_array());
+                }
             }
         }
     }
-    Gathered {
-        v_gp: core::array::from_fn(|a| if VEL { flat[a] } else { [0.0; W] }),
-        a_gp: core::array::from_fn(|a| if VEL { flat[D + a] } else { [0.0; W] }),
-        l: core::array::from_fn(|a| {
-            core::array::from_fn(|b| {
-                if GRAD != grad::NONE {
-                    flat[grad0 + a * D + b]
-                } else {
-                    [0.0; W]
-                }
-            })
-        }),
-    }
+    out
 }
 
 /// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`) of the particle
