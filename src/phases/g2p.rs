@@ -357,7 +357,10 @@ fn update_stress<const D: usize>(
     let ids = load_u32(p.material, start).map(|id| id as usize);
     let first = (0..W).find(|&ln| update[ln]).map(|ln| ids[ln]);
     let uniform = first.and_then(|id| {
-        let same = (0..W).all(|ln| !update[ln] || ids[ln] == id);
+        let mut same = true;
+        for ln in 0..W {
+            same &= !update[ln] || ids[ln] == id;
+        }
         ctx.materials
             .get(id)
             .filter(|r| same && model_of(r) == MaterialModel::NeoHookean)
