@@ -582,7 +582,8 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         stencils::<D, K, S>(&mut st, shape, ctx, &x);
         let l = gather_chunk::<D, K, false, { grad::REMAP }>(ctx, g, &st, &live).l;
         let ok = update_stress(ctx, p, start, &live, &l);
-        for ln in 0..W.min(count - start) {
+        let n = W.min(count - start);
+        for ln in 0..n {
             let i = start + ln;
             if live[ln] && !ok[ln] {
                 for a in 0..D {
@@ -595,9 +596,15 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
                 p.status[i] = FROZEN;
                 report.note_frozen(i as u32);
             }
-            if COMMIT_NEXT {
-                for a in 0..D {
-                    p.x[a][i] = p.x_next[a][i];
+        }
+        if COMMIT_NEXT {
+            // x = x_next for the chunk's particles, as one copy per column.
+            for a in 0..D {
+                if let (Some(dst), Some(src)) = (
+                    p.x[a].get_mut(start..start + n),
+                    p.x_next[a].get(start..start + n),
+                ) {
+                    dst.copy_from_slice(src);
                 }
             }
         }
