@@ -10,185 +10,92 @@ use crate::particles::ParticleCols;
 use crate::shape::Shape1D;
 use crate::StepReport;
 
-/// One set of particle passes; [`crate::world`] calls a substep's passes through it.
-pub(crate) trait Isa {
+/// Declares the [`Isa`] trait with one method per pass, and its two implementations: the
+/// baseline one (each pass its own function) and the AVX2 one (each pass compiled in a
+/// `#[target_feature]` function). Each pass is written once, here, by its signature.
+macro_rules! passes {
+    ($(
+        $(#[$doc:meta])*
+        fn $name:ident [$($generics:tt)*] [$($garg:ident),*]
+            ($($arg:ident: $ty:ty),* $(,)?) => $($target:ident)::+;
+    )*) => {
+        /// One set of particle passes; [`crate::world`] calls a substep's passes through it.
+        pub(crate) trait Isa {
+            $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*);)*
+        }
+
+        /// The target's baseline instruction set.
+        pub(crate) struct Baseline;
+
+        impl Isa for Baseline {
+            $(
+                #[inline(never)]
+                fn $name<$($generics)*>($($arg: $ty),*) {
+                    $($target)::+::<$($garg),*>($($arg),*)
+                }
+            )*
+        }
+
+        /// AVX and AVX2 (x86-64). Chosen only when [`crate::simd::has_avx2`] is true.
+        #[cfg(target_arch = "x86_64")]
+        pub(crate) struct Avx2;
+
+        #[cfg(target_arch = "x86_64")]
+        impl Isa for Avx2 {
+            $(
+                #[inline(always)]
+                fn $name<$($generics)*>($($arg: $ty),*) {
+                    // SAFETY: `Avx2` is only chosen when the CPU and the OS support AVX2.
+                    unsafe { avx2::$name::<$($garg),*>($($arg),*) }
+                }
+            )*
+        }
+
+        /// The passes compiled with AVX and AVX2 enabled (the passes are `#[inline(always)]`,
+        /// so their whole code is compiled here).
+        #[cfg(target_arch = "x86_64")]
+        mod avx2 {
+            use super::*;
+            $(
+                #[target_feature(enable = "avx,avx2")]
+                pub(super) fn $name<$($generics)*>($($arg: $ty),*) {
+                    $($target)::+::<$($garg),*>($($arg),*)
+                }
+            )*
+        }
+    };
+}
+
+passes! {
     /// [`p2g::scatter`].
-    fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
+    fn scatter [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8] [D, K, S, MODE] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
         count: usize,
         g: &mut GridCols<'_, D>,
-    );
+    ) => p2g::scatter;
 
     /// [`g2p::particles`].
-    fn particles<
-        const D: usize,
-        const K: usize,
-        S: Shape1D<K>,
-        const FUSED_STRESS: bool,
-        const TO_NEXT: bool,
-    >(
+    fn particles
+        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const TO_NEXT: bool]
+        [D, K, S, FUSED_STRESS, TO_NEXT] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
         g: &mut GridCols<'_, D>,
         report: &mut StepReport,
-    );
+    ) => g2p::particles;
 
     /// [`g2p::stress`].
-    fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
+    fn stress [const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool]
+        [D, K, S, COMMIT_NEXT] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
         g: &GridCols<'_, D>,
         report: &mut StepReport,
-    );
-}
-
-/// The target's baseline instruction set.
-pub(crate) struct Baseline;
-
-impl Isa for Baseline {
-    #[inline(never)]
-    fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-    ) {
-        p2g::scatter::<D, K, S, MODE>(shape, ctx, p, count, g)
-    }
-
-    #[inline(never)]
-    fn particles<
-        const D: usize,
-        const K: usize,
-        S: Shape1D<K>,
-        const FUSED_STRESS: bool,
-        const TO_NEXT: bool,
-    >(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        g2p::particles::<D, K, S, FUSED_STRESS, TO_NEXT>(shape, ctx, p, count, g, report)
-    }
-
-    #[inline(never)]
-    fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        g2p::stress::<D, K, S, COMMIT_NEXT>(shape, ctx, p, count, g, report)
-    }
-}
-
-/// AVX and AVX2 (x86-64). Chosen only when [`crate::simd::has_avx2`] is true.
-#[cfg(target_arch = "x86_64")]
-pub(crate) struct Avx2;
-
-#[cfg(target_arch = "x86_64")]
-impl Isa for Avx2 {
-    #[inline(always)]
-    fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-    ) {
-        // SAFETY (all three): `Avx2` is only chosen when the CPU and the OS support AVX2.
-        unsafe { avx2::scatter::<D, K, S, MODE>(shape, ctx, p, count, g) }
-    }
-
-    #[inline(always)]
-    fn particles<
-        const D: usize,
-        const K: usize,
-        S: Shape1D<K>,
-        const FUSED_STRESS: bool,
-        const TO_NEXT: bool,
-    >(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        unsafe {
-            avx2::particles::<D, K, S, FUSED_STRESS, TO_NEXT>(shape, ctx, p, count, g, report)
-        }
-    }
-
-    #[inline(always)]
-    fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        unsafe { avx2::stress::<D, K, S, COMMIT_NEXT>(shape, ctx, p, count, g, report) }
-    }
-}
-
-/// The passes compiled with AVX and AVX2 enabled (the passes are `#[inline(always)]`, so their
-/// whole code is compiled here).
-#[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::*;
-
-    #[target_feature(enable = "avx,avx2")]
-    pub(super) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-    ) {
-        p2g::scatter::<D, K, S, MODE>(shape, ctx, p, count, g)
-    }
-
-    #[target_feature(enable = "avx,avx2")]
-    pub(super) fn particles<
-        const D: usize,
-        const K: usize,
-        S: Shape1D<K>,
-        const FUSED_STRESS: bool,
-        const TO_NEXT: bool,
-    >(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &mut GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        g2p::particles::<D, K, S, FUSED_STRESS, TO_NEXT>(shape, ctx, p, count, g, report)
-    }
-
-    #[target_feature(enable = "avx,avx2")]
-    pub(super) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
-        shape: &S,
-        ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
-        count: usize,
-        g: &GridCols<'_, D>,
-        report: &mut StepReport,
-    ) {
-        g2p::stress::<D, K, S, COMMIT_NEXT>(shape, ctx, p, count, g, report)
-    }
+    ) => g2p::stress;
 }
