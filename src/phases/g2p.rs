@@ -62,18 +62,8 @@ mod grad {
 #[inline(always)]
 fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> [bool; W] {
     let n = W.min(count.saturating_sub(start));
-    let status = load_u32(p.status, start);
+    let status = load(p.status, start);
     core::array::from_fn(|l| l < n && status[l] == ACTIVE)
-}
-
-/// Loads lanes `start..start + W` of a u32 column (zeros past its end), with one bounds check
-/// for the chunk (a check per lane kept `from_fn` from being inlined).
-#[inline(always)]
-fn load_u32(col: &[u32], start: usize) -> [u32; W] {
-    col.get(start..start + W)
-        .and_then(|c| <&[u32; W]>::try_from(c).ok())
-        .copied()
-        .unwrap_or([0; W])
 }
 
 /// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient).
@@ -270,13 +260,14 @@ fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: &[bool; W]) {
     }
 }
 
-/// Loads lanes `start..start + W` of a column (zeros past its end).
+/// Loads lanes `start..start + W` of a column (zeros past its end), with one bounds check for
+/// the chunk (a check per lane kept `from_fn` from being inlined).
 #[inline(always)]
-pub(crate) fn load(col: &[Real], start: usize) -> Lane {
+pub(crate) fn load<T: Copy + Default>(col: &[T], start: usize) -> [T; W] {
     col.get(start..start + W)
-        .and_then(|c| <&Lane>::try_from(c).ok())
+        .and_then(|c| <&[T; W]>::try_from(c).ok())
         .copied()
-        .unwrap_or([0.0; W])
+        .unwrap_or([T::default(); W])
 }
 
 /// `m *= s`, lane by lane.
@@ -354,7 +345,7 @@ fn update_stress<const D: usize>(
     }
     // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
     // material (the common case, vectorised); otherwise lane by lane.
-    let ids = load_u32(p.material, start).map(|id| id as usize);
+    let ids = load(p.material, start).map(|id| id as usize);
     let first = (0..W).find(|&ln| update[ln]).map(|ln| ids[ln]);
     let uniform = first.and_then(|id| {
         let mut same = true;

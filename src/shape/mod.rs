@@ -126,19 +126,6 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
-    /// Stencils of particles at `s[axis][lane]` (cell units); see [`Stencil::new`].
-    pub fn new<S: Shape1D<K>>(
-        shape: &S,
-        s: &[[Real; W]; D],
-        nodes: [usize; D],
-        stride: [usize; D],
-        inv_h: Real,
-    ) -> Self {
-        let mut st = Self::default();
-        st.compute(shape, s, nodes, stride, inv_h);
-        st
-    }
-
     /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units).
     #[inline(always)]
     pub fn compute<S: Shape1D<K>>(
