@@ -56,33 +56,41 @@ pub enum Error {
 impl Error {
     /// A static, human-readable description.
     pub const fn as_str(self) -> &'static str {
+        match core::str::from_utf8(self.as_cstr().to_bytes()) {
+            Ok(s) => s,
+            Err(_) => "",
+        }
+    }
+
+    /// The description as a NUL-terminated C string (what the C interface hands out).
+    pub const fn as_cstr(self) -> &'static core::ffi::CStr {
         match self {
-            Error::BufferTooSmall => "buffer smaller than the memory requirement",
-            Error::BufferMisaligned => "buffer not aligned as the memory requirement says",
-            Error::NotAWorld => "buffer does not hold a world of this build",
-            Error::Unsupported => "dimension not supported by this build",
-            Error::InvalidCellSize => "cell size must be finite and > 0",
-            Error::InvalidCellCount => "too few cells for the shape margin, or too many nodes",
-            Error::InvalidCapacity => "capacity must be > 0 and small enough to index",
-            Error::InvalidFlipBeta => "FLIP fraction beta must be in [0, 1]",
-            Error::InvalidCfl => "Courant number must be in (0, 1]",
-            Error::InvalidExpTerms => "exp(grad v dt) series terms must be in 1..=8",
-            Error::InvalidParticlesPerCell => "particles per cell must be in 1..=8",
-            Error::NonFiniteDefinition => "origin and gravity must be finite",
+            Error::BufferTooSmall => c"buffer smaller than the memory requirement",
+            Error::BufferMisaligned => c"buffer not aligned as the memory requirement says",
+            Error::NotAWorld => c"buffer does not hold a world of this build",
+            Error::Unsupported => c"dimension not supported by this build",
+            Error::InvalidCellSize => c"cell size must be finite and > 0",
+            Error::InvalidCellCount => c"too few cells for the shape margin, or too many nodes",
+            Error::InvalidCapacity => c"capacity must be > 0 and small enough to index",
+            Error::InvalidFlipBeta => c"FLIP fraction beta must be in [0, 1]",
+            Error::InvalidCfl => c"Courant number must be in (0, 1]",
+            Error::InvalidExpTerms => c"exp(grad v dt) series terms must be in 1..=8",
+            Error::InvalidParticlesPerCell => c"particles per cell must be in 1..=8",
+            Error::NonFiniteDefinition => c"origin and gravity must be finite",
             Error::InvalidMaterial => {
-                "material needs E > 0, -1 < nu < 0.5, density > 0, all finite"
+                c"material needs E > 0, -1 < nu < 0.5, density > 0, all finite"
             }
-            Error::MaterialCapacityExceeded => "material table is full",
-            Error::ParticleCapacityExceeded => "particles do not fit in the remaining capacity",
-            Error::UnknownMaterial => "material id names no material",
-            Error::NonFiniteInput => "position, velocity, mass or volume not finite",
-            Error::NonPositiveMassOrVolume => "mass and volume must be > 0",
+            Error::MaterialCapacityExceeded => c"material table is full",
+            Error::ParticleCapacityExceeded => c"particles do not fit in the remaining capacity",
+            Error::UnknownMaterial => c"material id names no material",
+            Error::NonFiniteInput => c"position, velocity, mass or volume not finite",
+            Error::NonPositiveMassOrVolume => c"mass and volume must be > 0",
             Error::PositionOutsideDomain => {
-                "position outside the grid or inside its boundary margin"
+                c"position outside the grid or inside its boundary margin"
             }
-            Error::LengthMismatch => "input arrays differ in length",
-            Error::InvalidTimeStep => "time step must be finite and > 0",
-            Error::InvalidRegion => "region is empty, inverted or not finite",
+            Error::LengthMismatch => c"input arrays differ in length",
+            Error::InvalidTimeStep => c"time step must be finite and > 0",
+            Error::InvalidRegion => c"region is empty, inverted or not finite",
         }
     }
 

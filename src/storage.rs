@@ -2,18 +2,8 @@
 //! buffer: an inline one with a const-generic size (for statics), and with `std` a heap one.
 //! C hosts bring their own memory.
 
+#[cfg(feature = "std")]
 use crate::layout::ALIGN;
-use bytemuck::{Pod, Zeroable};
-
-/// A 64-byte aligned block of bytes.
-#[derive(Clone, Copy)]
-#[repr(C, align(64))]
-struct Block([u8; ALIGN]);
-
-// SAFETY: Block is a repr(C) byte array of exactly its alignment: no padding, any bits valid.
-unsafe impl Zeroable for Block {}
-// SAFETY: as above; Copy and 'static.
-unsafe impl Pod for Block {}
 
 /// Inline, 64-byte aligned storage of `N` bytes, for a world in a `static` or on a large stack.
 #[repr(C, align(64))]
@@ -27,7 +17,7 @@ impl<const N: usize> AlignedBuffer<N> {
         AlignedBuffer { bytes: [0; N] }
     }
 
-    /// The bytes, aligned to [`ALIGN`].
+    /// The bytes, aligned to [`crate::ALIGN`].
     pub fn as_mut_bytes(&mut self) -> &mut [u8] {
         &mut self.bytes
     }
@@ -41,8 +31,20 @@ impl<const N: usize> Default for AlignedBuffer<N> {
 
 #[cfg(feature = "std")]
 mod heap {
-    use super::Block;
+    use super::ALIGN;
+    use bytemuck::{Pod, Zeroable};
     use std::vec::Vec;
+
+    /// A 64-byte aligned block of bytes.
+    #[derive(Clone, Copy)]
+    #[repr(C, align(64))]
+    struct Block([u8; ALIGN]);
+
+    // SAFETY: Block is a repr(C) byte array of exactly its alignment: no padding, any bits
+    // valid.
+    unsafe impl Zeroable for Block {}
+    // SAFETY: as above; Copy and 'static.
+    unsafe impl Pod for Block {}
 
     /// Heap storage of at least `bytes` bytes aligned to [`crate::ALIGN`], allocated once by the
     /// host (the kernel itself never allocates).
@@ -54,7 +56,7 @@ mod heap {
         /// Zeroed storage of at least `bytes` bytes.
         pub fn new(bytes: usize) -> Self {
             HeapBuffer {
-                blocks: std::vec![Block([0; super::ALIGN]); bytes.div_ceil(super::ALIGN)],
+                blocks: std::vec![Block([0; ALIGN]); bytes.div_ceil(ALIGN)],
             }
         }
 

@@ -189,6 +189,16 @@ impl<'a> World<'a> {
     /// Opens a world that `buf` already holds (for example a byte copy of another world's
     /// [`World::as_bytes`]). Checks the header, the size and the alignment.
     pub fn open(buf: &'a mut [u8]) -> Result<World<'a>, Error> {
+        let total = World::stored_bytes(buf)?;
+        check_buffer(buf, total)?;
+        Ok(World { buf })
+    }
+
+    /// Bytes of the world whose header starts `buf` (at least [`World::HEADER_BYTES`] long and
+    /// aligned to [`crate::ALIGN`]): what a byte copy must hold, and what [`World::open`] needs.
+    /// Checks the header as [`World::open`] does. For hosts that hold a world by its address
+    /// alone (the C interface) and must learn its extent before they can open it.
+    pub fn stored_bytes(buf: &[u8]) -> Result<usize, Error> {
         check_buffer(buf, size_of::<Header>())?;
         let h = *bytemuck::from_bytes::<Header>(&buf[..size_of::<Header>()]);
         let def = h.def()?;
@@ -200,9 +210,11 @@ impl<'a> World<'a> {
         {
             return Err(Error::NotAWorld);
         }
-        check_buffer(buf, layout.total)?;
-        Ok(World { buf })
+        Ok(layout.total)
     }
+
+    /// Size of the header at the start of every world buffer, bytes.
+    pub const HEADER_BYTES: usize = size_of::<Header>();
 
     fn header(&self) -> &Header {
         bytemuck::from_bytes(&self.buf[..size_of::<Header>()])
