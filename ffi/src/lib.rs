@@ -1,9 +1,107 @@
-//! C ABI for the `mpm-gimp` kernel.
+//! C ABI for the `mpm-gimp` kernel: the library `libmpm_gimp.a` / `libmpm_gimp.so` and the
+//! header `ffi/include/mpm_gimp.h` (generated from this crate by cbindgen).
 //!
-//! Placeholder: the C interface (cbindgen header, static and shared libraries, C and C++ hosts)
-//! is built on top of the kernel's Rust API in a later step. This crate exists now so that the
-//! workspace layout is final and the kernel is already checked to build for it.
-#![no_std]
+//! Where to find an entry point:
+//! - [`status`]: `MpmStatus` and `mpm_status_string`.
+//! - [`defs`]: `MpmWorldDef`, `MpmMaterialDef`, their `*_default()` functions and the enums.
+//! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
+//!   dt, step.
+//! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
+//!
+//! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer
+//! followed by its length, every pointer checked for NULL, nothing written and nothing changed
+//! on failure. No panic crosses the boundary: the libraries are built with `panic = "abort"`,
+//! and every entry point also catches unwinding (where the build unwinds) and answers
+//! `MPM_STATUS_INTERNAL`.
+//!
+//! A world lives in memory the host owns: `mpm_world_init` lays it out there and hands back
+//! the same address as an `MpmWorld *`. The library keeps no state of its own and never
+//! allocates. Freeing the world is freeing that memory; a byte copy of `mpm_world_bytes` bytes
+//! is a snapshot that `mpm_world_open` opens.
+#![deny(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
+// C names on purpose: `mpm_real` is the header's scalar type.
+#![allow(non_camel_case_types)]
 
-/// ABI version of the C interface; bumped on every incompatible change.
-pub const MPM_ABI_VERSION: u32 = 0;
+// Declared in the order the header presents them.
+pub mod defs;
+pub mod read;
+pub mod status;
+pub mod world;
+
+pub use defs::*;
+pub use read::*;
+pub use status::*;
+pub use world::*;
+
+/// The scalar type of every real value: `float` (or `double` for the `f64` build, where the
+/// header must be used with `MPM_GIMP_F64` defined).
+#[cfg(not(feature = "f64"))]
+pub type mpm_real = f32;
+/// The scalar type of every real value: `float` (or `double` for the `f64` build, where the
+/// header must be used with `MPM_GIMP_F64` defined).
+#[cfg(feature = "f64")]
+pub type mpm_real = f64;
+
+const _: () = assert!(
+    core::mem::size_of::<mpm_real>() == core::mem::size_of::<kernel::Real>(),
+    "the kernel's precision differs from the C interface's: enable mpm-gimp-ffi/f64 (not \
+     mpm-gimp/f64 alone) for the double-precision library"
+);
+
+/// Three components x, y, z (z ignored in 2D).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct MpmVec3 {
+    /// x component.
+    pub x: mpm_real,
+    /// y component.
+    pub y: mpm_real,
+    /// z component.
+    pub z: mpm_real,
+}
+
+/// Parses a decimal version component at compile time.
+const fn parse_u32(s: &str) -> u32 {
+    let b = s.as_bytes();
+    let mut v = 0u32;
+    let mut i = 0;
+    while i < b.len() {
+        v = v * 10 + (b[i] - b'0') as u32;
+        i += 1;
+    }
+    v
+}
+
+/// ABI version of this library, from the crate version in Cargo.toml:
+/// `major * 10000 + minor * 100 + patch`. The header's `MPM_GIMP_ABI_VERSION` is generated from
+/// the same numbers.
+pub const ABI_VERSION: u32 = parse_u32(env!("CARGO_PKG_VERSION_MAJOR")) * 10000
+    + parse_u32(env!("CARGO_PKG_VERSION_MINOR")) * 100
+    + parse_u32(env!("CARGO_PKG_VERSION_PATCH"));
+
+/// The library's ABI version; a host compares it with `MPM_GIMP_ABI_VERSION` from the header
+/// it was compiled against.
+#[no_mangle]
+pub extern "C" fn mpm_abi_version() -> u32 {
+    ABI_VERSION
+}
+
+/// Runs `f`, turning an error into its status and a panic (in builds that unwind) into
+/// `MPM_STATUS_INTERNAL`: nothing unwinds into C.
+pub(crate) fn guard(f: impl FnOnce() -> Result<(), MpmStatus>) -> MpmStatus {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)) {
+        Ok(Ok(())) => MpmStatus::Ok,
+        Ok(Err(s)) => s,
+        Err(_) => MpmStatus::Internal,
+    }
+}
+
+/// `Err(NullPointer)` if `p` is NULL.
+pub(crate) fn non_null<T>(p: *const T) -> Result<(), MpmStatus> {
+    if p.is_null() {
+        Err(MpmStatus::NullPointer)
+    } else {
+        Ok(())
+    }
+}

@@ -1,0 +1,296 @@
+//! Reading state from C: a borrowed view of the particle columns, copy-out functions into
+//! caller buffers, and the world's sums (mass, momentum, energies).
+
+use crate::status::MpmStatus;
+use crate::world::{put, world_at, MpmWorld};
+use crate::{guard, mpm_real, non_null};
+use kernel::{ParticlesView, World};
+
+/// Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
+/// call that changes the world (add, seed, step) or frees its memory. Pointers of axes the
+/// dimension lacks (z in 2D) are NULL; every other column holds `count` values.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct MpmParticlesView {
+    /// Number of particles.
+    pub count: usize,
+    /// The world's dimension.
+    pub dimension: crate::MpmDimensionValue,
+    /// Positions per axis, m.
+    pub position: [*const mpm_real; 3],
+    /// Velocities per axis, m/s.
+    pub velocity: [*const mpm_real; 3],
+    /// Masses, kg.
+    pub mass: *const mpm_real,
+    /// Initial volumes, m^3.
+    pub volume0: *const mpm_real,
+    /// Displacement gradient H = F - I, entry (a, b) at index `3 a + b`; 2D uses a, b < 2.
+    pub displacement_gradient: [*const mpm_real; 9],
+    /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
+    /// xz, yz (the last two NULL in 2D).
+    pub stress: [*const mpm_real; 6],
+    /// Material ids.
+    pub material: *const u32,
+    /// Statuses (`MpmParticleStatus`).
+    pub status: *const u32,
+}
+
+/// Sums over the active particles, in double precision.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct MpmDiagnostics {
+    /// Number of particles added (any status).
+    pub particle_count: usize,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Successful steps.
+    pub step_count: u64,
+    /// Mass of the active particles, kg.
+    pub mass: f64,
+    /// Linear momentum, kg m/s.
+    pub momentum: [f64; 3],
+    /// Centre of mass, m.
+    pub center_of_mass: [f64; 3],
+    /// Kinetic energy, J.
+    pub kinetic: f64,
+    /// Strain energy, J.
+    pub strain: f64,
+    /// Gravitational potential energy (zero at the origin), J.
+    pub potential: f64,
+}
+
+/// The particle columns of `world` in `view_out`.
+///
+/// # Safety
+/// `world` is NULL or a world; `view_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_particles(
+    world: *const MpmWorld,
+    view_out: *mut MpmParticlesView,
+) -> MpmStatus {
+    guard(|| {
+        non_null(view_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_at(world) }?;
+        let v = w.particles();
+        let d = if v.dimension == kernel::Dimension::ThreeD {
+            3
+        } else {
+            2
+        };
+        let axis = |s: &[mpm_real], used: bool| if used { s.as_ptr() } else { core::ptr::null() };
+        let out = MpmParticlesView {
+            count: v.count,
+            dimension: v.dimension as u32,
+            position: core::array::from_fn(|a| axis(v.position[a], a < d)),
+            velocity: core::array::from_fn(|a| axis(v.velocity[a], a < d)),
+            mass: v.mass.as_ptr(),
+            volume0: v.volume0.as_ptr(),
+            displacement_gradient: core::array::from_fn(|k| {
+                axis(
+                    v.displacement_gradient[k / 3][k % 3],
+                    k / 3 < d && k % 3 < d,
+                )
+            }),
+            stress: core::array::from_fn(|k| axis(v.stress[k], k < if d == 3 { 6 } else { 4 })),
+            material: v.material.as_ptr(),
+            status: v.status.as_ptr(),
+        };
+        // SAFETY: checked non-NULL.
+        unsafe { put(view_out, out) };
+        Ok(())
+    })
+}
+
+/// Copies `per` values of every particle, interleaved (particle-major), produced by `value(view,
+/// particle, k)`, into `out` (`out_len` values), and the number written into `written_out`.
+///
+/// # Safety
+/// `world` is NULL or a world; `out` is NULL or valid for `out_len` writes; `written_out` is
+/// NULL or valid.
+unsafe fn copy_out<T: Copy>(
+    world: *const MpmWorld,
+    out: *mut T,
+    out_len: usize,
+    written_out: *mut usize,
+    per: impl Fn(usize) -> usize,
+    value: impl Fn(&ParticlesView<'_>, usize, usize) -> T,
+) -> MpmStatus {
+    guard(|| {
+        non_null(out)?;
+        non_null(written_out)?;
+        // SAFETY: the caller promises a world.
+        let w: World<'_> = unsafe { world_at(world) }?;
+        let v = w.particles();
+        let d = if v.dimension == kernel::Dimension::ThreeD {
+            3
+        } else {
+            2
+        };
+        let k = per(d);
+        let n = v.count * k;
+        if out_len < n {
+            return Err(MpmStatus::OutputTooSmall);
+        }
+        // SAFETY: non-NULL and the caller promises `out_len >= n` writable values; the output
+        // cannot overlap the world's columns without breaking the caller's contract.
+        let dst = unsafe { core::slice::from_raw_parts_mut(out, n) };
+        for i in 0..v.count {
+            for j in 0..k {
+                dst[i * k + j] = value(&v, i, j);
+            }
+        }
+        // SAFETY: checked non-NULL.
+        unsafe { put(written_out, n) };
+        Ok(())
+    })
+}
+
+/// Positions, interleaved: x, y (, z) per particle; `count * D` values.
+///
+/// # Safety
+/// As the copy-out contract: `world` a world, `out` valid for `out_len` values, `written_out`
+/// valid (NULL pointers are refused).
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_copy_positions(
+    world: *const MpmWorld,
+    out: *mut mpm_real,
+    out_len: usize,
+    written_out: *mut usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        copy_out(
+            world,
+            out,
+            out_len,
+            written_out,
+            |d| d,
+            |v, i, a| v.position[a][i],
+        )
+    }
+}
+
+/// Velocities, interleaved like positions; `count * D` values.
+///
+/// # Safety
+/// As `mpm_world_copy_positions`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_copy_velocities(
+    world: *const MpmWorld,
+    out: *mut mpm_real,
+    out_len: usize,
+    written_out: *mut usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        copy_out(
+            world,
+            out,
+            out_len,
+            written_out,
+            |d| d,
+            |v, i, a| v.velocity[a][i],
+        )
+    }
+}
+
+/// Stress (tau/rho0), interleaved per particle: 2D xx, yy, xy, zz (4 values); 3D xx, yy, zz,
+/// xy, xz, yz (6 values).
+///
+/// # Safety
+/// As `mpm_world_copy_positions`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_copy_stress(
+    world: *const MpmWorld,
+    out: *mut mpm_real,
+    out_len: usize,
+    written_out: *mut usize,
+) -> MpmStatus {
+    let per = |d: usize| if d == 3 { 6 } else { 4 };
+    // SAFETY: forwarded contract.
+    unsafe {
+        copy_out(world, out, out_len, written_out, per, |v, i, k| {
+            v.stress[k][i]
+        })
+    }
+}
+
+/// J = det F of every particle (current over initial volume); `count` values.
+///
+/// # Safety
+/// As `mpm_world_copy_positions`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_copy_jacobians(
+    world: *const MpmWorld,
+    out: *mut mpm_real,
+    out_len: usize,
+    written_out: *mut usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        copy_out(
+            world,
+            out,
+            out_len,
+            written_out,
+            |_| 1,
+            |v, i, _| v.jacobian(i),
+        )
+    }
+}
+
+/// Statuses (`MpmParticleStatus`); `count` values.
+///
+/// # Safety
+/// As `mpm_world_copy_positions`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_copy_status(
+    world: *const MpmWorld,
+    out: *mut u32,
+    out_len: usize,
+    written_out: *mut usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        copy_out(
+            world,
+            out,
+            out_len,
+            written_out,
+            |_| 1,
+            |v, i, _| v.status[i],
+        )
+    }
+}
+
+/// Counts, time and the sums over the active particles.
+///
+/// # Safety
+/// `world` is NULL or a world; `diagnostics_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_diagnostics(
+    world: *const MpmWorld,
+    diagnostics_out: *mut MpmDiagnostics,
+) -> MpmStatus {
+    guard(|| {
+        non_null(diagnostics_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_at(world) }?;
+        let s = w.diagnostics();
+        let out = MpmDiagnostics {
+            particle_count: w.particle_count(),
+            time: w.time(),
+            step_count: w.step_count(),
+            mass: s.mass,
+            momentum: s.momentum,
+            center_of_mass: s.center_of_mass,
+            kinetic: s.kinetic,
+            strain: s.strain,
+            potential: s.potential,
+        };
+        // SAFETY: checked non-NULL.
+        unsafe { put(diagnostics_out, out) };
+        Ok(())
+    })
+}

@@ -1,0 +1,168 @@
+//! `MpmStatus`: the result of every fallible C call, and its static description.
+
+use kernel::Error;
+
+/// Result of a C call. The numbers are stable: the kernel's errors keep the numbers of
+/// `mpm_gimp::Error`, and the conditions only the C interface can meet start at 64.
+/// A call that returns anything but `MPM_STATUS_OK` has written nothing and changed nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum MpmStatus {
+    /// Success.
+    Ok = 0,
+    /// The memory is smaller than `mpm_memory_requirements` says.
+    BufferTooSmall = 1,
+    /// The memory does not start at the alignment `mpm_memory_requirements` says.
+    BufferMisaligned = 2,
+    /// The memory does not hold a world of this build (wrong magic, version, precision or size).
+    NotAWorld = 3,
+    /// The dimension is not supported by this build.
+    Unsupported = 4,
+    /// Cell size not finite or <= 0.
+    InvalidCellSize = 5,
+    /// Too few cells on an axis for the shape function's margin, or too many nodes to index.
+    InvalidCellCount = 6,
+    /// Particle or material capacity is zero or too large to index.
+    InvalidCapacity = 7,
+    /// FLIP fraction outside [0, 1].
+    InvalidFlipBeta = 8,
+    /// Courant number outside (0, 1].
+    InvalidCfl = 9,
+    /// Series terms for exp(grad v dt) outside 1..=8.
+    InvalidExpTerms = 10,
+    /// Particles per cell outside 1..=8.
+    InvalidParticlesPerCell = 11,
+    /// Origin or gravity not finite (on the axes the dimension uses).
+    NonFiniteDefinition = 12,
+    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, or not finite.
+    InvalidMaterial = 13,
+    /// The material table is full.
+    MaterialCapacityExceeded = 14,
+    /// The particles do not fit in the remaining capacity (none was added).
+    ParticleCapacityExceeded = 15,
+    /// A material id that names no material.
+    UnknownMaterial = 16,
+    /// A position, velocity, mass or volume that is NaN or infinite.
+    NonFiniteInput = 17,
+    /// A mass or volume <= 0.
+    NonPositiveMassOrVolume = 18,
+    /// A position outside the grid or inside the boundary margin the shape function needs.
+    PositionOutsideDomain = 19,
+    /// Input arrays of different lengths (or a count that does not fit the arrays).
+    LengthMismatch = 20,
+    /// A time step that is <= 0 or not finite.
+    InvalidTimeStep = 21,
+    /// A region (box, disk, sphere) that is empty, inverted or not finite, or a disk in 3D or
+    /// a sphere in 2D.
+    InvalidRegion = 22,
+    /// A pointer argument that must not be NULL was NULL.
+    NullPointer = 64,
+    /// A definition that did not come from `mpm_world_def_default` or
+    /// `mpm_material_def_default` (its cookie is missing or belongs to another precision).
+    DefNotFromDefault = 65,
+    /// An enum field or argument holds a value the enum does not have.
+    InvalidEnum = 66,
+    /// An output buffer shorter than the data to copy.
+    OutputTooSmall = 67,
+    /// The library hit an internal error (a Rust panic, caught at the boundary). The world may
+    /// be in an intermediate state; report it as a bug.
+    Internal = 68,
+}
+
+impl From<Error> for MpmStatus {
+    fn from(e: Error) -> MpmStatus {
+        match e {
+            Error::BufferTooSmall => MpmStatus::BufferTooSmall,
+            Error::BufferMisaligned => MpmStatus::BufferMisaligned,
+            Error::NotAWorld => MpmStatus::NotAWorld,
+            Error::Unsupported => MpmStatus::Unsupported,
+            Error::InvalidCellSize => MpmStatus::InvalidCellSize,
+            Error::InvalidCellCount => MpmStatus::InvalidCellCount,
+            Error::InvalidCapacity => MpmStatus::InvalidCapacity,
+            Error::InvalidFlipBeta => MpmStatus::InvalidFlipBeta,
+            Error::InvalidCfl => MpmStatus::InvalidCfl,
+            Error::InvalidExpTerms => MpmStatus::InvalidExpTerms,
+            Error::InvalidParticlesPerCell => MpmStatus::InvalidParticlesPerCell,
+            Error::NonFiniteDefinition => MpmStatus::NonFiniteDefinition,
+            Error::InvalidMaterial => MpmStatus::InvalidMaterial,
+            Error::MaterialCapacityExceeded => MpmStatus::MaterialCapacityExceeded,
+            Error::ParticleCapacityExceeded => MpmStatus::ParticleCapacityExceeded,
+            Error::UnknownMaterial => MpmStatus::UnknownMaterial,
+            Error::NonFiniteInput => MpmStatus::NonFiniteInput,
+            Error::NonPositiveMassOrVolume => MpmStatus::NonPositiveMassOrVolume,
+            Error::PositionOutsideDomain => MpmStatus::PositionOutsideDomain,
+            Error::LengthMismatch => MpmStatus::LengthMismatch,
+            Error::InvalidTimeStep => MpmStatus::InvalidTimeStep,
+            Error::InvalidRegion => MpmStatus::InvalidRegion,
+        }
+    }
+}
+
+impl MpmStatus {
+    /// Every status, in numeric order.
+    pub const ALL: [MpmStatus; 28] = [
+        MpmStatus::Ok,
+        MpmStatus::BufferTooSmall,
+        MpmStatus::BufferMisaligned,
+        MpmStatus::NotAWorld,
+        MpmStatus::Unsupported,
+        MpmStatus::InvalidCellSize,
+        MpmStatus::InvalidCellCount,
+        MpmStatus::InvalidCapacity,
+        MpmStatus::InvalidFlipBeta,
+        MpmStatus::InvalidCfl,
+        MpmStatus::InvalidExpTerms,
+        MpmStatus::InvalidParticlesPerCell,
+        MpmStatus::NonFiniteDefinition,
+        MpmStatus::InvalidMaterial,
+        MpmStatus::MaterialCapacityExceeded,
+        MpmStatus::ParticleCapacityExceeded,
+        MpmStatus::UnknownMaterial,
+        MpmStatus::NonFiniteInput,
+        MpmStatus::NonPositiveMassOrVolume,
+        MpmStatus::PositionOutsideDomain,
+        MpmStatus::LengthMismatch,
+        MpmStatus::InvalidTimeStep,
+        MpmStatus::InvalidRegion,
+        MpmStatus::NullPointer,
+        MpmStatus::DefNotFromDefault,
+        MpmStatus::InvalidEnum,
+        MpmStatus::OutputTooSmall,
+        MpmStatus::Internal,
+    ];
+
+    /// The description `mpm_status_string` returns, NUL-terminated: the kernel's own for its
+    /// errors.
+    pub fn as_cstr(self) -> &'static core::ffi::CStr {
+        match self {
+            MpmStatus::Ok => c"ok",
+            MpmStatus::NullPointer => c"a required pointer argument is NULL",
+            MpmStatus::DefNotFromDefault => {
+                c"definition not from mpm_world_def_default or mpm_material_def_default (or of another precision)"
+            }
+            MpmStatus::InvalidEnum => c"enum value out of range",
+            MpmStatus::OutputTooSmall => c"output buffer shorter than the data",
+            MpmStatus::Internal => c"internal error (caught panic): please report",
+            kernel => Error::ALL
+                .iter()
+                .find(|e| **e as u32 == kernel as u32)
+                .map_or(c"unknown status", |e| e.as_cstr()),
+        }
+    }
+}
+
+/// A status as the C side passes it: any 32-bit value (the C enum's storage type). Named
+/// `MpmStatus` in the header; taking it as a plain integer keeps an out-of-range value from C
+/// defined behaviour.
+pub type MpmStatusValue = u32;
+
+/// A static, NUL-terminated description of `status`; "unknown status" for a value that is not
+/// an `MpmStatus`. Never NULL; the string lives as long as the program.
+#[no_mangle]
+pub extern "C" fn mpm_status_string(status: MpmStatusValue) -> *const core::ffi::c_char {
+    MpmStatus::ALL
+        .iter()
+        .find(|s| **s as u32 == status)
+        .map_or(c"unknown status", |s| s.as_cstr())
+        .as_ptr()
+}

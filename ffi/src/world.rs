@@ -1,0 +1,457 @@
+//! A world's life from C: memory requirements, init (or open a copy), materials, particles,
+//! seeding, stable time step and step.
+
+use crate::defs::{material_def_from_c, vec3, world_def_from_c, world_def_to_c, MpmMaterialDef};
+use crate::status::MpmStatus;
+use crate::{guard, mpm_real, non_null, MpmVec3, MpmWorldDef};
+use core::ffi::c_void;
+use kernel::{memory_requirements, ParticleBatch, World};
+
+/// A world. Opaque: it is the memory the host passed to `mpm_world_init` (the pointer is that
+/// memory's address), and it lives as long as the host keeps that memory.
+pub struct MpmWorld {
+    _opaque: [u8; 0],
+}
+
+/// Bytes and alignment a world needs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct MpmMemoryRequirements {
+    /// Size of the memory, bytes.
+    pub bytes: usize,
+    /// Alignment of its first byte, bytes (a power of two).
+    pub align: usize,
+}
+
+/// Ids `first .. first + count` of particles just added.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct MpmIdRange {
+    /// Id of the first particle.
+    pub first: u32,
+    /// Number of particles.
+    pub count: u32,
+}
+
+/// Particles as structure-of-arrays for `mpm_world_add_particles`: each pointer holds `count`
+/// values. In 2D the z pointers are not read and may be NULL.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct MpmParticleArrays {
+    /// Positions x, y, z, m.
+    pub position: [*const mpm_real; 3],
+    /// Velocities x, y, z, m/s.
+    pub velocity: [*const mpm_real; 3],
+    /// Masses, kg (per unit thickness in 2D), > 0.
+    pub mass: *const mpm_real,
+    /// Initial volumes, m^3 (m^2 in 2D), > 0.
+    pub volume: *const mpm_real,
+    /// Material ids from `mpm_world_add_material`.
+    pub material: *const u32,
+}
+
+/// What one `mpm_world_step` did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct MpmStepReport {
+    /// Substeps taken (>= 1): a dt above the stable one is split into equal substeps.
+    pub substeps: u32,
+    /// Length of each substep, s.
+    pub substep_dt: mpm_real,
+    /// Particle-substeps in which a particle reached a stick or slip wall and was stopped.
+    pub stopped: u32,
+    /// Particles that crossed an open face and left the simulation.
+    pub escaped: u32,
+    /// Particles frozen because their state turned non-finite or their F inverted.
+    pub frozen: u32,
+    /// How many entries of `first_frozen` are set (at most 8).
+    pub first_frozen_count: u32,
+    /// Ids of the first frozen particles.
+    pub first_frozen: [u32; 8],
+}
+
+/// The world at `w`, opened over its stored extent, or why not.
+///
+/// # Safety
+/// `w` is NULL or points to memory readable and writable for the world's extent (what
+/// `mpm_world_init` or `mpm_world_open` returned, memory still owned by the host).
+pub(crate) unsafe fn world_at<'a>(w: *const MpmWorld) -> Result<World<'a>, MpmStatus> {
+    non_null(w)?;
+    if (w as usize) % kernel::ALIGN != 0 {
+        return Err(MpmStatus::BufferMisaligned);
+    }
+    // SAFETY: the caller promises a world at `w`, which is at least a header long.
+    let head = unsafe { core::slice::from_raw_parts(w as *const u8, World::HEADER_BYTES) };
+    let total = World::stored_bytes(head)?;
+    // SAFETY: the header just read says the world spans `total` bytes, all of which the caller
+    // owns; no other Rust reference to them exists during the call.
+    let buf = unsafe { core::slice::from_raw_parts_mut(w as *mut u8, total) };
+    Ok(World::open(buf)?)
+}
+
+/// Writes `v` to `out` (checked non-NULL by the caller).
+///
+/// # Safety
+/// `out` is valid for a write of `T`.
+pub(crate) unsafe fn put<T>(out: *mut T, v: T) {
+    // SAFETY: as the function's contract says.
+    unsafe { out.write(v) }
+}
+
+/// Bytes and alignment a world of `def` needs.
+///
+/// # Safety
+/// Each pointer is NULL or valid for its type.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_memory_requirements(
+    def: *const MpmWorldDef,
+    requirements_out: *mut MpmMemoryRequirements,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def)?;
+        non_null(requirements_out)?;
+        // SAFETY: checked non-NULL; the caller promises a valid definition.
+        let d = world_def_from_c(unsafe { &*def })?;
+        let r = memory_requirements(&d)?;
+        let out = MpmMemoryRequirements {
+            bytes: r.bytes,
+            align: r.align,
+        };
+        // SAFETY: checked non-NULL.
+        unsafe { put(requirements_out, out) };
+        Ok(())
+    })
+}
+
+/// Lays out an empty world of `def` in `memory` (`memory_len` bytes, at least what
+/// `mpm_memory_requirements` says, aligned as it says) and returns it in `world_out` (the same
+/// address). On failure the memory is untouched.
+///
+/// # Safety
+/// `memory` is NULL or valid for reads and writes of `memory_len` bytes; the other pointers
+/// are NULL or valid for their types.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_init(
+    def: *const MpmWorldDef,
+    memory: *mut c_void,
+    memory_len: usize,
+    world_out: *mut *mut MpmWorld,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def)?;
+        non_null(memory)?;
+        non_null(world_out)?;
+        // SAFETY: checked non-NULL; the caller promises a valid definition.
+        let d = world_def_from_c(unsafe { &*def })?;
+        // Validate everything before the memory is formed into a slice and written.
+        let r = memory_requirements(&d)?;
+        if memory_len < r.bytes {
+            return Err(MpmStatus::BufferTooSmall);
+        }
+        if (memory as usize) % r.align != 0 {
+            return Err(MpmStatus::BufferMisaligned);
+        }
+        // SAFETY: the caller promises `memory_len` bytes at `memory`.
+        let buf = unsafe { core::slice::from_raw_parts_mut(memory as *mut u8, memory_len) };
+        World::init(&d, buf)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(world_out, memory as *mut MpmWorld) };
+        Ok(())
+    })
+}
+
+/// Opens a world that `memory` already holds, such as a byte copy of another world's first
+/// `mpm_world_bytes` bytes (a snapshot), and returns it in `world_out`.
+///
+/// # Safety
+/// As `mpm_world_init`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_open(
+    memory: *mut c_void,
+    memory_len: usize,
+    world_out: *mut *mut MpmWorld,
+) -> MpmStatus {
+    guard(|| {
+        non_null(memory)?;
+        non_null(world_out)?;
+        // SAFETY: the caller promises `memory_len` bytes at `memory`.
+        let buf = unsafe { core::slice::from_raw_parts_mut(memory as *mut u8, memory_len) };
+        World::open(buf)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(world_out, memory as *mut MpmWorld) };
+        Ok(())
+    })
+}
+
+/// Bytes the world occupies from its start: what a snapshot must copy.
+///
+/// # Safety
+/// `world` is NULL or a world; `bytes_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_bytes(
+    world: *const MpmWorld,
+    bytes_out: *mut usize,
+) -> MpmStatus {
+    guard(|| {
+        non_null(bytes_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_at(world) }?;
+        let n = w.as_bytes().len();
+        // SAFETY: checked non-NULL.
+        unsafe { put(bytes_out, n) };
+        Ok(())
+    })
+}
+
+/// The world's definition (with the cookie, so it can init another world).
+///
+/// # Safety
+/// `world` is NULL or a world; `def_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_get_def(
+    world: *const MpmWorld,
+    def_out: *mut MpmWorldDef,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_at(world) }?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(def_out, world_def_to_c(&w.def())) };
+        Ok(())
+    })
+}
+
+/// Adds a material and returns its id in `id_out`.
+///
+/// # Safety
+/// `world` is NULL or a world; the other pointers are NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_material(
+    world: *mut MpmWorld,
+    def: *const MpmMaterialDef,
+    id_out: *mut u32,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def)?;
+        non_null(id_out)?;
+        // SAFETY: checked non-NULL; the caller promises a valid definition.
+        let m = material_def_from_c(unsafe { &*def })?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let id = w.add_material(&m)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(id_out, id) };
+        Ok(())
+    })
+}
+
+/// Adds `count` particles from structure-of-arrays; all or nothing. Their ids go to `ids_out`.
+/// A count above the remaining capacity is refused before any array is read.
+///
+/// # Safety
+/// `world` is NULL or a world; `arrays` is NULL or valid, and each pointer in it that the
+/// dimension uses is NULL or valid for reads of `count` values; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_particles(
+    world: *mut MpmWorld,
+    arrays: *const MpmParticleArrays,
+    count: usize,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    guard(|| {
+        non_null(arrays)?;
+        non_null(ids_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let def = w.def();
+        if count > def.particle_capacity as usize - w.particle_count() {
+            return Err(MpmStatus::ParticleCapacityExceeded);
+        }
+        // SAFETY: checked non-NULL.
+        let a = unsafe { &*arrays };
+        let d = def.axes();
+        let required = (0..d)
+            .flat_map(|i| [a.position[i], a.velocity[i]])
+            .chain([a.mass, a.volume]);
+        for p in required {
+            non_null(p)?;
+        }
+        non_null(a.material)?;
+        let empty: &[mpm_real] = &[];
+        // SAFETY (every slice): non-NULL, and the caller promises `count` values; `count` is at
+        // most the capacity, so the byte length fits in isize.
+        let col = |p: *const mpm_real, used: bool| {
+            if used {
+                unsafe { core::slice::from_raw_parts(p, count) }
+            } else {
+                empty
+            }
+        };
+        let batch = ParticleBatch {
+            position: core::array::from_fn(|i| col(a.position[i], i < d)),
+            velocity: core::array::from_fn(|i| col(a.velocity[i], i < d)),
+            mass: col(a.mass, true),
+            volume: col(a.volume, true),
+            // SAFETY: as above.
+            material: unsafe { core::slice::from_raw_parts(a.material, count) },
+        };
+        let ids = w.add_particles(&batch)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(ids_out, id_range(ids)) };
+        Ok(())
+    })
+}
+
+fn id_range(r: core::ops::Range<u32>) -> MpmIdRange {
+    MpmIdRange {
+        first: r.start,
+        count: r.end - r.start,
+    }
+}
+
+/// One seeding call: the world at `world`, then `fill` on it, its ids to `ids_out`.
+///
+/// # Safety
+/// As the seeding entry points.
+unsafe fn seed(
+    world: *mut MpmWorld,
+    ids_out: *mut MpmIdRange,
+    fill: impl FnOnce(&mut World<'_>) -> Result<core::ops::Range<u32>, kernel::Error>,
+) -> MpmStatus {
+    guard(|| {
+        non_null(ids_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let ids = fill(&mut w)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(ids_out, id_range(ids)) };
+        Ok(())
+    })
+}
+
+/// Fills the box `[min, max]` with particles of `material` moving at `velocity`, on the lattice
+/// of `particles_per_cell` sites per cell per axis, each with its sub-cell's volume and the
+/// mass of that volume. All or nothing; the box must lie inside the admissible region.
+///
+/// # Safety
+/// `world` is NULL or a world; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_fill_box(
+    world: *mut MpmWorld,
+    min: MpmVec3,
+    max: MpmVec3,
+    material: u32,
+    velocity: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        seed(world, ids_out, |w| {
+            w.fill_box(vec3(min), vec3(max), material, vec3(velocity))
+        })
+    }
+}
+
+/// Fills a disk (2D worlds only) like `mpm_world_fill_box`.
+///
+/// # Safety
+/// As `mpm_world_fill_box`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_fill_disk(
+    world: *mut MpmWorld,
+    center: MpmVec3,
+    radius: mpm_real,
+    material: u32,
+    velocity: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        seed(world, ids_out, |w| {
+            w.fill_disk(vec3(center), radius, material, vec3(velocity))
+        })
+    }
+}
+
+/// Fills a sphere (3D worlds only) like `mpm_world_fill_box`.
+///
+/// # Safety
+/// As `mpm_world_fill_box`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_fill_sphere(
+    world: *mut MpmWorld,
+    center: MpmVec3,
+    radius: mpm_real,
+    material: u32,
+    velocity: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe {
+        seed(world, ids_out, |w| {
+            w.fill_sphere(vec3(center), radius, material, vec3(velocity))
+        })
+    }
+}
+
+/// The largest stable time step, s, from the materials' wave speeds and the fastest particle.
+///
+/// # Safety
+/// `world` is NULL or a world; `dt_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_stable_dt(
+    world: *const MpmWorld,
+    dt_out: *mut mpm_real,
+) -> MpmStatus {
+    guard(|| {
+        non_null(dt_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_at(world) }?;
+        let dt = w.stable_dt();
+        // SAFETY: checked non-NULL.
+        unsafe { put(dt_out, dt) };
+        Ok(())
+    })
+}
+
+/// Advances the world by `dt` seconds (> 0, finite), in equal substeps no longer than the
+/// stable one, and reports what happened in `report_out`.
+///
+/// # Safety
+/// `world` is NULL or a world; `report_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_step(
+    world: *mut MpmWorld,
+    dt: mpm_real,
+    report_out: *mut MpmStepReport,
+) -> MpmStatus {
+    guard(|| {
+        non_null(report_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let r = w.step(dt)?;
+        let mut first_frozen = [0u32; 8];
+        first_frozen[..r.first_frozen.len()].copy_from_slice(&r.first_frozen);
+        let out = MpmStepReport {
+            substeps: r.substeps,
+            substep_dt: r.substep_dt,
+            stopped: r.stopped,
+            escaped: r.escaped,
+            frozen: r.frozen,
+            first_frozen_count: r.first_frozen.len() as u32,
+            first_frozen,
+        };
+        // SAFETY: checked non-NULL.
+        unsafe { put(report_out, out) };
+        Ok(())
+    })
+}
+
+/// Makes every later step of this process use the baseline (SSE2) instance of the particle
+/// passes instead of the AVX2 one. Both give bit-identical results; this exists for tools that
+/// cannot decode AVX2 instructions (valgrind 3.19). Irreversible for the process.
+#[no_mangle]
+pub extern "C" fn mpm_simd_use_baseline_only() {
+    kernel::simd::use_baseline_only();
+}

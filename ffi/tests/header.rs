@@ -1,0 +1,43 @@
+//! `include/mpm_gimp.h` is what cbindgen makes of this crate: the test regenerates it and fails
+//! when the committed header differs. `UPDATE_HEADER=1` rewrites it instead.
+
+use std::path::Path;
+
+/// The header as cbindgen generates it now, with the version macros from Cargo.toml.
+fn generate() -> String {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut config = cbindgen::Config::from_file(dir.join("cbindgen.toml")).expect("cbindgen.toml");
+    let precision = config.after_includes.take().unwrap_or_default();
+    config.after_includes = Some(format!(
+        "{precision}\n\n/* The version of this header, from the crate version. */\n\
+         #define MPM_GIMP_VERSION \"{v}\"\n\
+         /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */\n\
+         #define MPM_GIMP_ABI_VERSION {abi}\n",
+        v = env!("CARGO_PKG_VERSION"),
+        abi = mpm_gimp::ABI_VERSION,
+    ));
+    let mut out = Vec::new();
+    cbindgen::Builder::new()
+        .with_crate(dir)
+        .with_config(config)
+        .generate()
+        .expect("cbindgen generates the header")
+        .write(&mut out);
+    String::from_utf8(out).expect("the header is UTF-8")
+}
+
+#[test]
+fn committed_header_is_current() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("include/mpm_gimp.h");
+    let fresh = generate();
+    if std::env::var_os("UPDATE_HEADER").is_some() {
+        std::fs::write(&path, &fresh).expect("write the header");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == fresh,
+        "{} is stale: run UPDATE_HEADER=1 cargo test -p mpm-gimp-ffi --test header",
+        path.display()
+    );
+}
