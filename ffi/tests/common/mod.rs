@@ -62,7 +62,9 @@ pub fn build(name: &str, lang: Lang, sources: &[&str], flags: &[&str]) -> PathBu
     cmd.arg(static_lib());
     cmd.args(["-lpthread", "-ldl", "-lm"]);
     cmd.arg("-o").arg(&exe);
-    let out = cmd.output().unwrap_or_else(|e| panic!("{compiler} not runnable: {e}"));
+    let out = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("{compiler} not runnable: {e}"));
     assert!(
         out.status.success(),
         "{compiler} failed on {sources:?}:\n{}",
