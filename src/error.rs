@@ -1,4 +1,4 @@
-//! The error type of every fallible call. Each variant has a stable number (the future C
+//! The error type of every fallible call. Each variant has a stable number (the C interface's
 //! `MpmStatus` uses the same values) and a static message.
 
 use core::fmt;

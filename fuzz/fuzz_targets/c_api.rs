@@ -1,0 +1,328 @@
+//! Random sequences of C interface calls (init, add material, add particles, seed, step, read)
+//! with arbitrary values, through the same `extern "C"` functions a C host calls. After every
+//! call, either it returned a status and the world's bytes are unchanged, or it succeeded and
+//! every particle value is finite and every position inside the grid box. Single precision
+//! (the default build of the library).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use mpm_gimp::*;
+
+/// Reads the fuzzer's bytes as a stream of choices; zeros once exhausted.
+struct Input<'a>(&'a [u8]);
+
+impl Input<'_> {
+    fn byte(&mut self) -> u8 {
+        let (b, rest) = self.0.split_first().map_or((0, &[][..]), |(b, r)| (*b, r));
+        self.0 = rest;
+        b
+    }
+
+    fn u32_below(&mut self, n: u32) -> u32 {
+        let v = u32::from_le_bytes([self.byte(), self.byte(), self.byte(), self.byte()]);
+        v % n.max(1)
+    }
+
+    /// A real that is often special (NaN, infinities, zero, tiny, huge) and otherwise a value
+    /// of moderate size: what breaks numerical code.
+    fn real(&mut self) -> mpm_real {
+        match self.byte() % 16 {
+            0 => mpm_real::NAN,
+            1 => mpm_real::INFINITY,
+            2 => -mpm_real::INFINITY,
+            3 => 0.0,
+            4 => -0.0,
+            5 => mpm_real::MIN_POSITIVE,
+            6 => mpm_real::MAX,
+            7 => -1.0,
+            _ => (self.u32_below(1 << 20) as mpm_real / (1 << 16) as mpm_real) - 4.0,
+        }
+    }
+
+    /// A real in `[lo, hi]` most of the time, any real otherwise.
+    fn real_in(&mut self, lo: mpm_real, hi: mpm_real) -> mpm_real {
+        if self.byte() % 8 == 0 {
+            self.real()
+        } else {
+            lo + (hi - lo) * (self.u32_below(1 << 16) as mpm_real / (1 << 16) as mpm_real)
+        }
+    }
+
+    fn vec3_in(&mut self, lo: mpm_real, hi: mpm_real) -> MpmVec3 {
+        MpmVec3 {
+            x: self.real_in(lo, hi),
+            y: self.real_in(lo, hi),
+            z: self.real_in(lo, hi),
+        }
+    }
+}
+
+/// Memory for one world, aligned by hand.
+struct Memory {
+    bytes: Vec<u8>,
+}
+
+impl Memory {
+    fn aligned(&mut self, len: usize, align: usize) -> *mut u8 {
+        self.bytes = vec![0xA5; len + align];
+        let p = self.bytes.as_mut_ptr();
+        p.wrapping_add(p.align_offset(align))
+    }
+}
+
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The hash of the world's bytes (every column and the header).
+fn world_hash(w: *const MpmWorld) -> u64 {
+    let mut n = 0usize;
+    // SAFETY: `w` is a world this target initialised, in memory it still owns.
+    assert_eq!(unsafe { mpm_world_bytes(w, &mut n) }, MpmStatus::Ok);
+    // SAFETY: the world spans `n` bytes from `w`.
+    fnv1a(unsafe { core::slice::from_raw_parts(w as *const u8, n) })
+}
+
+/// Every particle value finite and every position inside the grid box.
+fn check_state(w: *const MpmWorld) {
+    let mut def = mpm_world_def_default_f32();
+    let mut view = core::mem::MaybeUninit::<MpmParticlesView>::uninit();
+    // SAFETY: `w` is a world; the outputs are valid.
+    unsafe {
+        assert_eq!(mpm_world_get_def(w, &mut def), MpmStatus::Ok);
+        assert_eq!(mpm_world_particles(w, view.as_mut_ptr()), MpmStatus::Ok);
+    }
+    // SAFETY: written by the successful call above.
+    let v = unsafe { view.assume_init() };
+    let d = if def.dimension == MpmDimension::Space3d as u32 {
+        3
+    } else {
+        2
+    };
+    let origin = [def.origin.x, def.origin.y, def.origin.z];
+    let col = |p: *const mpm_real| {
+        // SAFETY: every column the view names holds `count` values until the next mutation.
+        unsafe { core::slice::from_raw_parts(p, v.count) }
+    };
+    for a in 0..d {
+        let lo = origin[a];
+        let hi = origin[a] + def.cells[a] as mpm_real * def.cell_size;
+        for &x in col(v.position[a]) {
+            assert!(
+                x.is_finite() && x >= lo && x <= hi,
+                "position {x} outside [{lo}, {hi}]"
+            );
+        }
+        assert!(
+            col(v.velocity[a]).iter().all(|x| x.is_finite()),
+            "velocity not finite"
+        );
+    }
+    let mut columns = vec![v.mass, v.volume0];
+    columns.extend(v.displacement_gradient.iter().filter(|p| !p.is_null()));
+    columns.extend(v.stress.iter().filter(|p| !p.is_null()));
+    for p in columns {
+        assert!(
+            col(p).iter().all(|x| x.is_finite()),
+            "a particle value is not finite"
+        );
+    }
+}
+
+fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
+    let mut def = mpm_world_def_default_f32();
+    if inp.byte() % 16 == 0 {
+        def.internal_cookie ^= 1; // a definition not from the default function
+    }
+    def.dimension = [2, 3, 4, 7][inp.byte() as usize % 4];
+    def.cell_size = inp.real_in(0.01, 0.2);
+    def.origin = inp.vec3_in(-1.0, 1.0);
+    for c in def.cells.iter_mut() {
+        *c = inp.u32_below(if def.dimension == 3 { 12 } else { 24 }) + 1;
+    }
+    def.particle_capacity = inp.u32_below(300) + if inp.byte() % 32 == 0 { 0 } else { 1 };
+    def.material_capacity = inp.u32_below(4);
+    def.shape = inp.u32_below(5);
+    def.particles_per_cell = inp.u32_below(5);
+    def.flip_beta = inp.real_in(0.0, 1.0);
+    def.update_order = inp.u32_below(4);
+    def.gravity = inp.vec3_in(-20.0, 20.0);
+    for f in def.faces.iter_mut() {
+        *f = inp.u32_below(4);
+    }
+    def.exp_terms = inp.u32_below(10);
+    def.cfl = inp.real_in(0.05, 1.0);
+    def
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut inp = Input(data);
+    let mut memory = Memory { bytes: Vec::new() };
+    let mut world: *mut MpmWorld = core::ptr::null_mut();
+    for _ in 0..64 {
+        if inp.0.is_empty() {
+            break;
+        }
+        let op = inp.byte() % 8;
+        if world.is_null() || op == 0 {
+            let def = new_def(&mut inp);
+            let mut req = MpmMemoryRequirements::default();
+            // SAFETY: valid pointers.
+            if unsafe { mpm_memory_requirements(&def, &mut req) } != MpmStatus::Ok {
+                continue;
+            }
+            let short = inp.byte() % 16 == 0;
+            let len = if short { req.bytes / 2 } else { req.bytes };
+            let p = memory.aligned(req.bytes, req.align);
+            let mut w = core::ptr::null_mut();
+            // SAFETY: `p` has `req.bytes >= len` bytes.
+            let s = unsafe { mpm_world_init(&def, p.cast(), len, &mut w) };
+            if s == MpmStatus::Ok {
+                assert_eq!(w, p.cast());
+                world = w;
+                check_state(world);
+            } else {
+                // Nothing written on failure: the memory keeps its fill pattern.
+                // SAFETY: `p` has `req.bytes` bytes.
+                let bytes = unsafe { core::slice::from_raw_parts(p, req.bytes) };
+                assert!(
+                    bytes.iter().all(|&b| b == 0xA5),
+                    "init failed after writing"
+                );
+                world = core::ptr::null_mut();
+            }
+            continue;
+        }
+        let before = world_hash(world);
+        // SAFETY (every call below): `world` is a world in `memory`; every other pointer
+        // refers to a local that lives across the call, and each array holds `count` values.
+        let status = unsafe {
+            match op {
+                1 => {
+                    let mut m = mpm_material_def_default_f32();
+                    m.model = inp.u32_below(3);
+                    m.youngs_modulus = inp.real_in(1.0e3, 1.0e7);
+                    m.poisson_ratio = inp.real_in(-0.9, 0.49);
+                    m.density = inp.real_in(10.0, 5000.0);
+                    let mut id = 0;
+                    mpm_world_add_material(world, &m, &mut id)
+                }
+                2 => {
+                    let count = inp.u32_below(9) as usize;
+                    let mut cols: Vec<Vec<mpm_real>> = (0..8)
+                        .map(|k| {
+                            (0..count)
+                                .map(|_| {
+                                    if k < 6 {
+                                        inp.real_in(-0.5, 3.0)
+                                    } else {
+                                        inp.real_in(0.0, 1.0)
+                                    }
+                                })
+                                .collect()
+                        })
+                        .collect();
+                    let material: Vec<u32> = (0..count).map(|_| inp.u32_below(4)).collect();
+                    let arrays = MpmParticleArrays {
+                        position: [cols[0].as_ptr(), cols[1].as_ptr(), cols[2].as_ptr()],
+                        velocity: [cols[3].as_ptr(), cols[4].as_ptr(), cols[5].as_ptr()],
+                        mass: cols[6].as_ptr(),
+                        volume: cols[7].as_ptr(),
+                        material: material.as_ptr(),
+                    };
+                    let mut ids = MpmIdRange::default();
+                    let s = mpm_world_add_particles(world, &arrays, count, &mut ids);
+                    cols.clear();
+                    s
+                }
+                3 => {
+                    let (a, b, v) = (
+                        inp.vec3_in(-0.5, 3.0),
+                        inp.vec3_in(-0.5, 3.0),
+                        inp.vec3_in(-5.0, 5.0),
+                    );
+                    let material = inp.u32_below(4);
+                    let mut ids = MpmIdRange::default();
+                    match inp.byte() % 3 {
+                        0 => mpm_world_fill_box(world, a, b, material, v, &mut ids),
+                        1 => mpm_world_fill_disk(
+                            world,
+                            a,
+                            inp.real_in(0.0, 0.5),
+                            material,
+                            v,
+                            &mut ids,
+                        ),
+                        _ => mpm_world_fill_sphere(
+                            world,
+                            a,
+                            inp.real_in(0.0, 0.5),
+                            material,
+                            v,
+                            &mut ids,
+                        ),
+                    }
+                }
+                4 | 5 => {
+                    let mut dt = 0.0;
+                    assert_eq!(mpm_world_stable_dt(world, &mut dt), MpmStatus::Ok);
+                    assert!(dt > 0.0, "stable dt {dt}");
+                    // Mostly up to 8 stable steps (so an input stays fast), sometimes a value
+                    // that must be refused or is harmlessly tiny (a large finite dt is only
+                    // slow: it is split into up to 2^20 substeps).
+                    const ODD: [mpm_real; 7] = [
+                        mpm_real::NAN,
+                        mpm_real::INFINITY,
+                        -mpm_real::INFINITY,
+                        0.0,
+                        -1.0,
+                        mpm_real::MIN_POSITIVE,
+                        mpm_real::MAX,
+                    ];
+                    let dt = if inp.byte() % 8 == 0 {
+                        ODD[inp.byte() as usize % ODD.len()]
+                    } else {
+                        dt * inp.real_in(0.1, 8.0)
+                    };
+                    let mut report = MpmStepReport::default();
+                    mpm_world_step(world, dt, &mut report)
+                }
+                _ => {
+                    let len = inp.u32_below(4000) as usize;
+                    let mut out = vec![0.0 as mpm_real; len];
+                    let mut status_out = vec![0u32; len];
+                    let mut n = 0;
+                    let s = match inp.byte() % 5 {
+                        0 => mpm_world_copy_positions(world, out.as_mut_ptr(), len, &mut n),
+                        1 => mpm_world_copy_velocities(world, out.as_mut_ptr(), len, &mut n),
+                        2 => mpm_world_copy_stress(world, out.as_mut_ptr(), len, &mut n),
+                        3 => mpm_world_copy_jacobians(world, out.as_mut_ptr(), len, &mut n),
+                        _ => mpm_world_copy_status(world, status_out.as_mut_ptr(), len, &mut n),
+                    };
+                    if s == MpmStatus::Ok {
+                        assert!(n <= len);
+                        assert!(
+                            out[..n].iter().all(|x| x.is_finite()),
+                            "a copied value is not finite"
+                        );
+                    }
+                    // Reading never changes the world, whatever it answers.
+                    assert_eq!(world_hash(world), before, "a read changed the world");
+                    s
+                }
+            }
+        };
+        if status == MpmStatus::Ok {
+            check_state(world);
+        } else {
+            assert_ne!(status, MpmStatus::Internal, "a panic was caught");
+            assert_eq!(
+                world_hash(world),
+                before,
+                "a failed call changed the world ({status:?})"
+            );
+        }
+    }
+});
