@@ -1,0 +1,152 @@
+/*
+ * Layout of every type of mpm_gimp.h as this compiler sees it: one line per type (size and
+ * alignment) and one per struct field (offset and size). tests/c_checks.rs compares the lines
+ * with the Rust definitions and checks that they cover every struct and field of the header.
+ *
+ * The same file compiles as C99 and as C++17. Alignment comes from offsetof on a probe struct
+ * (a char, then the type), which C99 allows; C++ also checks the probe against alignof.
+ */
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "mpm_gimp.h"
+
+/* A struct whose second member sits at the alignment of T. */
+#define PROBE(T) \
+    struct probe_##T { \
+        char c; \
+        T t; \
+    };
+
+PROBE(mpm_real)
+PROBE(size_t)
+PROBE(MpmStatus)
+PROBE(MpmDimension)
+PROBE(MpmShape)
+PROBE(MpmUpdateOrder)
+PROBE(MpmBoundary)
+PROBE(MpmFace)
+PROBE(MpmMaterialModel)
+PROBE(MpmParticleStatus)
+PROBE(MpmVec3)
+PROBE(MpmWorldDef)
+PROBE(MpmMaterialDef)
+PROBE(MpmParticlesView)
+PROBE(MpmDiagnostics)
+PROBE(MpmMemoryRequirements)
+PROBE(MpmParticleArrays)
+PROBE(MpmIdRange)
+PROBE(MpmStepReport)
+
+#define ALIGN_OF(T) offsetof(struct probe_##T, t)
+
+#ifdef __cplusplus
+#define CHECK_PROBE(T) static_assert(ALIGN_OF(T) == alignof(T), "probe alignment of " #T);
+#else
+#define CHECK_PROBE(T)
+#endif
+
+#define TYPE(T) \
+    do { \
+        CHECK_PROBE(T) \
+        printf("type %s size %lu align %lu\n", #T, (unsigned long)sizeof(T), \
+               (unsigned long)ALIGN_OF(T)); \
+    } while (0)
+
+/* sizeof does not evaluate its operand: the null pointer is never dereferenced. */
+#define FIELD(T, f) \
+    printf("field %s.%s offset %lu size %lu\n", #T, #f, (unsigned long)offsetof(T, f), \
+           (unsigned long)sizeof(((T *)0)->f))
+
+int main(void) {
+    TYPE(mpm_real);
+    TYPE(size_t);
+
+    TYPE(MpmStatus);
+    TYPE(MpmDimension);
+    TYPE(MpmShape);
+    TYPE(MpmUpdateOrder);
+    TYPE(MpmBoundary);
+    TYPE(MpmFace);
+    TYPE(MpmMaterialModel);
+    TYPE(MpmParticleStatus);
+
+    TYPE(MpmVec3);
+    FIELD(MpmVec3, x);
+    FIELD(MpmVec3, y);
+    FIELD(MpmVec3, z);
+
+    TYPE(MpmWorldDef);
+    FIELD(MpmWorldDef, dimension);
+    FIELD(MpmWorldDef, origin);
+    FIELD(MpmWorldDef, cell_size);
+    FIELD(MpmWorldDef, cells);
+    FIELD(MpmWorldDef, particle_capacity);
+    FIELD(MpmWorldDef, material_capacity);
+    FIELD(MpmWorldDef, shape);
+    FIELD(MpmWorldDef, particles_per_cell);
+    FIELD(MpmWorldDef, flip_beta);
+    FIELD(MpmWorldDef, update_order);
+    FIELD(MpmWorldDef, gravity);
+    FIELD(MpmWorldDef, faces);
+    FIELD(MpmWorldDef, exp_terms);
+    FIELD(MpmWorldDef, cfl);
+    FIELD(MpmWorldDef, internal_cookie);
+
+    TYPE(MpmMaterialDef);
+    FIELD(MpmMaterialDef, model);
+    FIELD(MpmMaterialDef, youngs_modulus);
+    FIELD(MpmMaterialDef, poisson_ratio);
+    FIELD(MpmMaterialDef, density);
+    FIELD(MpmMaterialDef, internal_cookie);
+
+    TYPE(MpmParticlesView);
+    FIELD(MpmParticlesView, count);
+    FIELD(MpmParticlesView, dimension);
+    FIELD(MpmParticlesView, position);
+    FIELD(MpmParticlesView, velocity);
+    FIELD(MpmParticlesView, mass);
+    FIELD(MpmParticlesView, volume0);
+    FIELD(MpmParticlesView, displacement_gradient);
+    FIELD(MpmParticlesView, stress);
+    FIELD(MpmParticlesView, material);
+    FIELD(MpmParticlesView, status);
+
+    TYPE(MpmDiagnostics);
+    FIELD(MpmDiagnostics, particle_count);
+    FIELD(MpmDiagnostics, time);
+    FIELD(MpmDiagnostics, step_count);
+    FIELD(MpmDiagnostics, mass);
+    FIELD(MpmDiagnostics, momentum);
+    FIELD(MpmDiagnostics, center_of_mass);
+    FIELD(MpmDiagnostics, kinetic);
+    FIELD(MpmDiagnostics, strain);
+    FIELD(MpmDiagnostics, potential);
+
+    TYPE(MpmMemoryRequirements);
+    FIELD(MpmMemoryRequirements, bytes);
+    FIELD(MpmMemoryRequirements, align);
+
+    TYPE(MpmParticleArrays);
+    FIELD(MpmParticleArrays, position);
+    FIELD(MpmParticleArrays, velocity);
+    FIELD(MpmParticleArrays, mass);
+    FIELD(MpmParticleArrays, volume);
+    FIELD(MpmParticleArrays, material);
+
+    TYPE(MpmIdRange);
+    FIELD(MpmIdRange, first);
+    FIELD(MpmIdRange, count);
+
+    TYPE(MpmStepReport);
+    FIELD(MpmStepReport, substeps);
+    FIELD(MpmStepReport, substep_dt);
+    FIELD(MpmStepReport, stopped);
+    FIELD(MpmStepReport, escaped);
+    FIELD(MpmStepReport, frozen);
+    FIELD(MpmStepReport, first_frozen_count);
+    FIELD(MpmStepReport, first_frozen);
+
+    return 0;
+}

@@ -1,0 +1,1269 @@
+/*
+ * Misuse of the C interface from C. Every refused call must
+ *   - return the status the header documents for its misuse,
+ *   - leave every world unchanged: the FNV-1a 64 hash of each world's memory over its
+ *     mpm_world_bytes extent (which covers the header and every column) is compared before and
+ *     after,
+ *   - write no output: every output pointer points into a sentinel area that is checked after
+ *     the call (and the memory handed to a refused mpm_world_init or mpm_world_open is checked
+ *     too).
+ * Accepted calls between the checks show that the hash does see a change.
+ *
+ * The library is Rust and not instrumented by AddressSanitizer, so a read past a short array
+ * inside it would go unseen by ASan: the check that an over-capacity count reads no array also
+ * passes arrays that lie in a page mapped without access (where mmap exists), so that any read
+ * crashes the program.
+ *
+ * One line per check ("ok <name>: <status string>"); the first failure prints
+ * "FAIL <name>: <why>" and exits with status 1. The last line on success is
+ * "all <n> misuse checks passed". tests/c_checks.rs builds this file with strict warnings and
+ * with AddressSanitizer and UndefinedBehaviorSanitizer, and runs it.
+ */
+#if defined(__unix__) || defined(__APPLE__)
+/* mmap for the no-access page (not in strict C99). */
+#define _DEFAULT_SOURCE
+#define MISUSE_HAVE_MMAN 1
+#endif
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef MISUSE_HAVE_MMAN
+#include <sys/mman.h>
+#include <unistd.h>
+#ifndef MAP_ANONYMOUS
+#define MAP_ANONYMOUS MAP_ANON
+#endif
+#endif
+
+#include "mpm_gimp.h"
+
+/* ---- reporting ------------------------------------------------------------------------- */
+
+static unsigned long g_checks;
+
+static void fail(const char *name, const char *why) {
+    printf("FAIL %s: %s\n", name, why);
+    fflush(stdout);
+    exit(1);
+}
+
+static void pass(const char *name, MpmStatus s) {
+    g_checks++;
+    printf("ok %s: %s\n", name, mpm_status_string(s));
+}
+
+/* ---- hashing and tracked worlds ------------------------------------------------------- */
+
+static uint64_t fnv1a(const void *data, size_t n) {
+    const unsigned char *p = (const unsigned char *)data;
+    uint64_t h = 0xcbf29ce484222325u;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 0x100000001b3u;
+    }
+    return h;
+}
+
+static uint64_t world_hash(const MpmWorld *w) {
+    size_t n = 0;
+    if (mpm_world_bytes(w, &n) != MPM_STATUS_OK) {
+        fail("world_hash", "mpm_world_bytes refused a tracked world");
+    }
+    return fnv1a(w, n);
+}
+
+/* The worlds every check compares, with their hashes after the last accepted change. */
+#define MAX_TRACKED 2
+static MpmWorld *g_tracked[MAX_TRACKED];
+static uint64_t g_hash[MAX_TRACKED];
+static int g_tracked_count;
+
+static void track(MpmWorld *w) {
+    g_tracked[g_tracked_count] = w;
+    g_hash[g_tracked_count] = world_hash(w);
+    g_tracked_count++;
+}
+
+/* Whether any tracked world changed; records the new hashes. */
+static int rehash(void) {
+    int i, changed = 0;
+    for (i = 0; i < g_tracked_count; i++) {
+        uint64_t h = world_hash(g_tracked[i]);
+        changed |= h != g_hash[i];
+        g_hash[i] = h;
+    }
+    return changed;
+}
+
+/* ---- output sentinel ------------------------------------------------------------------ */
+
+#define OUT_BYTES 8192
+#define OUT_FILL 0xA5
+static union {
+    unsigned char bytes[OUT_BYTES];
+    double d;
+    uint64_t u;
+    size_t s;
+    void *p;
+} g_out;
+
+/* Pointers into the sentinel area, suitably aligned for any output type. */
+#define OUT(T) ((T *)(void *)g_out.bytes)
+#define OUT_AT(T, offset) ((T *)(void *)(g_out.bytes + (offset)))
+/* The copy-out tests put `out` at the start and `written_out` here. */
+#define WRITTEN_AT (OUT_BYTES - 64)
+
+static void out_reset(void) { memset(g_out.bytes, OUT_FILL, OUT_BYTES); }
+
+static int out_untouched(void) {
+    size_t i;
+    for (i = 0; i < OUT_BYTES; i++) {
+        if (g_out.bytes[i] != OUT_FILL) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* ---- the two kinds of check ----------------------------------------------------------- */
+
+static void refused_check(const char *name, MpmStatus want, MpmStatus got) {
+    char why[256];
+    if (got != want) {
+        snprintf(why, sizeof why, "expected status %u (%s), got %u (%s)", (unsigned)want,
+                 mpm_status_string(want), (unsigned)got, mpm_status_string(got));
+        fail(name, why);
+    }
+    if (!out_untouched()) {
+        fail(name, "the refused call wrote an output");
+    }
+    if (rehash()) {
+        fail(name, "the refused call changed a world's bytes");
+    }
+    pass(name, got);
+}
+
+/* `call` is evaluated after the sentinel is reset. */
+#define REFUSED(name, want, call) refused_check((name), (want), (out_reset(), (call)))
+
+/* An accepted call; `changes` says whether it must change a tracked world (so that the hash
+ * comparison of the refused calls is shown to see changes). */
+static void accepted_check(const char *name, int changes, MpmStatus got) {
+    char why[256];
+    if (got != MPM_STATUS_OK) {
+        snprintf(why, sizeof why, "expected MPM_STATUS_OK, got %u (%s)", (unsigned)got,
+                 mpm_status_string(got));
+        fail(name, why);
+    }
+    if (rehash() != changes) {
+        fail(name, changes ? "the accepted call did not change the world's bytes"
+                           : "the accepted call changed a world's bytes");
+    }
+    pass(name, got);
+}
+
+#define ACCEPTED(name, changes, call) accepted_check((name), (changes), (call))
+
+static void expect_true(const char *name, int ok) {
+    if (!ok) {
+        fail(name, "condition false");
+    }
+    g_checks++;
+    printf("ok %s\n", name);
+}
+
+/* ---- memory --------------------------------------------------------------------------- */
+
+/* `bytes` at `align` (a power of two) inside a block from malloc, plus `slack` bytes after. */
+typedef struct {
+    unsigned char *raw;
+    unsigned char *at;
+} Block;
+
+static Block block_new(size_t bytes, size_t align, size_t slack) {
+    Block b;
+    size_t offset;
+    b.raw = (unsigned char *)malloc(bytes + align + slack);
+    if (b.raw == NULL) {
+        fail("malloc", "out of memory");
+    }
+    offset = (align - (size_t)((uintptr_t)b.raw % align)) % align;
+    b.at = b.raw + offset;
+    return b;
+}
+
+#define PATTERN 0xC3
+
+static int pattern_intact(const unsigned char *p, size_t n) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        if (p[i] != PATTERN) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* ---- scenes --------------------------------------------------------------------------- */
+
+static mpm_real R(double x) { return (mpm_real)x; }
+
+static MpmVec3 v3(double x, double y, double z) {
+    MpmVec3 v;
+    v.x = R(x);
+    v.y = R(y);
+    v.z = R(z);
+    return v;
+}
+
+/* 2D: 20 x 20 cells of 0.05 m (GIMP: particles admitted in [0.05, 0.95]), 64 particles, 2
+ * materials. */
+static MpmWorldDef def_2d(void) {
+    MpmWorldDef d = mpm_world_def_default();
+    d.cells[0] = 20;
+    d.cells[1] = 20;
+    d.cell_size = R(0.05);
+    d.particle_capacity = 64;
+    d.material_capacity = 2;
+    return d;
+}
+
+/* 3D: 8 x 8 x 8 cells of 0.05 m (admitted in [0.05, 0.35] per axis), 32 particles. */
+static MpmWorldDef def_3d(void) {
+    MpmWorldDef d = mpm_world_def_default();
+    d.dimension = MPM_DIMENSION_SPACE3D;
+    d.cells[0] = 8;
+    d.cells[1] = 8;
+    d.cells[2] = 8;
+    d.cell_size = R(0.05);
+    d.particle_capacity = 32;
+    d.material_capacity = 1;
+    return d;
+}
+
+/* Structure-of-arrays storage for a few particles. */
+#define BATCH_MAX 64
+typedef struct {
+    mpm_real x[3][BATCH_MAX];
+    mpm_real v[3][BATCH_MAX];
+    mpm_real mass[BATCH_MAX];
+    mpm_real volume[BATCH_MAX];
+    uint32_t material[BATCH_MAX];
+} Batch;
+
+/* `n` valid particles of material 0 on a row starting at (x0, y0, z0), spacing 0.01 m. */
+static void batch_fill(Batch *b, size_t n, double x0, double y0, double z0) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        b->x[0][i] = R(x0 + 0.01 * (double)(i % 8));
+        b->x[1][i] = R(y0 + 0.01 * (double)(i / 8));
+        b->x[2][i] = R(z0);
+        b->v[0][i] = R(0.5);
+        b->v[1][i] = R(-0.25);
+        b->v[2][i] = R(0.125);
+        b->mass[i] = R(0.001);
+        b->volume[i] = R(0.000001);
+        b->material[i] = 0;
+    }
+}
+
+static MpmParticleArrays arrays_of(const Batch *b) {
+    MpmParticleArrays a;
+    int k;
+    for (k = 0; k < 3; k++) {
+        a.position[k] = b->x[k];
+        a.velocity[k] = b->v[k];
+    }
+    a.mass = b->mass;
+    a.volume = b->volume;
+    a.material = b->material;
+    return a;
+}
+
+/* ---- the checks ----------------------------------------------------------------------- */
+
+static MpmWorld *g_w2;      /* the 2D world */
+static MpmWorld *g_w3;      /* the 3D world */
+static size_t g_w2_bytes;   /* its extent */
+static MpmWorldDef g_def2;  /* its definition */
+
+/* Every pointer argument of every function NULL in turn: MPM_STATUS_NULL_POINTER. */
+static void null_pointers(void) {
+    MpmWorldDef d = g_def2;
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmMemoryRequirements req;
+    Batch b;
+    MpmParticleArrays a, a_null;
+    MpmVec3 lo = v3(0.2, 0.2, 0.0), hi = v3(0.25, 0.25, 0.0), zero = v3(0, 0, 0);
+    const mpm_real dt = R(0.001);
+    Block init_mem;
+    size_t len = 2 * BATCH_MAX;
+    int k;
+
+    if (mpm_memory_requirements(&d, &req) != MPM_STATUS_OK) {
+        fail("null: setup", "mpm_memory_requirements refused the 2D definition");
+    }
+    init_mem = block_new(req.bytes, req.align, 0);
+    memset(init_mem.at, PATTERN, req.bytes);
+
+    REFUSED("null: mpm_memory_requirements def", MPM_STATUS_NULL_POINTER,
+            mpm_memory_requirements(NULL, OUT(MpmMemoryRequirements)));
+    REFUSED("null: mpm_memory_requirements requirements_out", MPM_STATUS_NULL_POINTER,
+            mpm_memory_requirements(&d, NULL));
+
+    REFUSED("null: mpm_world_init def", MPM_STATUS_NULL_POINTER,
+            mpm_world_init(NULL, init_mem.at, req.bytes, OUT(MpmWorld *)));
+    REFUSED("null: mpm_world_init memory", MPM_STATUS_NULL_POINTER,
+            mpm_world_init(&d, NULL, req.bytes, OUT(MpmWorld *)));
+    REFUSED("null: mpm_world_init world_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_init(&d, init_mem.at, req.bytes, NULL));
+    expect_true("null: mpm_world_init left the memory untouched",
+                pattern_intact(init_mem.at, req.bytes));
+    free(init_mem.raw);
+
+    REFUSED("null: mpm_world_open memory", MPM_STATUS_NULL_POINTER,
+            mpm_world_open(NULL, g_w2_bytes, OUT(MpmWorld *)));
+    REFUSED("null: mpm_world_open world_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_open(g_w2, g_w2_bytes, NULL));
+
+    REFUSED("null: mpm_world_bytes world", MPM_STATUS_NULL_POINTER,
+            mpm_world_bytes(NULL, OUT(size_t)));
+    REFUSED("null: mpm_world_bytes bytes_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_bytes(g_w2, NULL));
+
+    REFUSED("null: mpm_world_get_def world", MPM_STATUS_NULL_POINTER,
+            mpm_world_get_def(NULL, OUT(MpmWorldDef)));
+    REFUSED("null: mpm_world_get_def def_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_get_def(g_w2, NULL));
+
+    REFUSED("null: mpm_world_add_material world", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_material(NULL, &m, OUT(uint32_t)));
+    REFUSED("null: mpm_world_add_material def", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_material(g_w2, NULL, OUT(uint32_t)));
+    REFUSED("null: mpm_world_add_material id_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_material(g_w2, &m, NULL));
+
+    batch_fill(&b, 2, 0.2, 0.2, 0.0);
+    a = arrays_of(&b);
+    REFUSED("null: mpm_world_add_particles world", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(NULL, &a, 2, OUT(MpmIdRange)));
+    REFUSED("null: mpm_world_add_particles arrays", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(g_w2, NULL, 2, OUT(MpmIdRange)));
+    REFUSED("null: mpm_world_add_particles ids_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(g_w2, &a, 2, NULL));
+    for (k = 0; k < 2; k++) {
+        char name[96];
+        a_null = a;
+        a_null.position[k] = NULL;
+        snprintf(name, sizeof name, "null: mpm_world_add_particles arrays.position[%d] (2D)", k);
+        REFUSED(name, MPM_STATUS_NULL_POINTER,
+                mpm_world_add_particles(g_w2, &a_null, 2, OUT(MpmIdRange)));
+        a_null = a;
+        a_null.velocity[k] = NULL;
+        snprintf(name, sizeof name, "null: mpm_world_add_particles arrays.velocity[%d] (2D)", k);
+        REFUSED(name, MPM_STATUS_NULL_POINTER,
+                mpm_world_add_particles(g_w2, &a_null, 2, OUT(MpmIdRange)));
+    }
+    a_null = a;
+    a_null.mass = NULL;
+    REFUSED("null: mpm_world_add_particles arrays.mass", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(g_w2, &a_null, 2, OUT(MpmIdRange)));
+    a_null = a;
+    a_null.volume = NULL;
+    REFUSED("null: mpm_world_add_particles arrays.volume", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(g_w2, &a_null, 2, OUT(MpmIdRange)));
+    a_null = a;
+    a_null.material = NULL;
+    REFUSED("null: mpm_world_add_particles arrays.material", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_particles(g_w2, &a_null, 2, OUT(MpmIdRange)));
+    a_null = a;
+    a_null.material = NULL;
+    REFUSED("null: mpm_world_add_particles arrays.material with count 0",
+            MPM_STATUS_NULL_POINTER, mpm_world_add_particles(g_w2, &a_null, 0, OUT(MpmIdRange)));
+
+    batch_fill(&b, 2, 0.2, 0.2, 0.2);
+    a = arrays_of(&b);
+    for (k = 0; k < 3; k++) {
+        char name[96];
+        a_null = a;
+        a_null.position[k] = NULL;
+        snprintf(name, sizeof name, "null: mpm_world_add_particles arrays.position[%d] (3D)", k);
+        REFUSED(name, MPM_STATUS_NULL_POINTER,
+                mpm_world_add_particles(g_w3, &a_null, 2, OUT(MpmIdRange)));
+        a_null = a;
+        a_null.velocity[k] = NULL;
+        snprintf(name, sizeof name, "null: mpm_world_add_particles arrays.velocity[%d] (3D)", k);
+        REFUSED(name, MPM_STATUS_NULL_POINTER,
+                mpm_world_add_particles(g_w3, &a_null, 2, OUT(MpmIdRange)));
+    }
+
+    REFUSED("null: mpm_world_fill_box world", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_box(NULL, lo, hi, 0, zero, OUT(MpmIdRange)));
+    REFUSED("null: mpm_world_fill_box ids_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_box(g_w2, lo, hi, 0, zero, NULL));
+    REFUSED("null: mpm_world_fill_disk world", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_disk(NULL, lo, R(0.02), 0, zero, OUT(MpmIdRange)));
+    REFUSED("null: mpm_world_fill_disk ids_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_disk(g_w2, lo, R(0.02), 0, zero, NULL));
+    REFUSED("null: mpm_world_fill_sphere world", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_sphere(NULL, v3(0.2, 0.2, 0.2), R(0.02), 0, zero, OUT(MpmIdRange)));
+    REFUSED("null: mpm_world_fill_sphere ids_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_fill_sphere(g_w3, v3(0.2, 0.2, 0.2), R(0.02), 0, zero, NULL));
+
+    REFUSED("null: mpm_world_stable_dt world", MPM_STATUS_NULL_POINTER,
+            mpm_world_stable_dt(NULL, OUT(mpm_real)));
+    REFUSED("null: mpm_world_stable_dt dt_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_stable_dt(g_w2, NULL));
+
+    REFUSED("null: mpm_world_step world", MPM_STATUS_NULL_POINTER,
+            mpm_world_step(NULL, dt, OUT(MpmStepReport)));
+    REFUSED("null: mpm_world_step report_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_step(g_w2, dt, NULL));
+
+    REFUSED("null: mpm_world_particles world", MPM_STATUS_NULL_POINTER,
+            mpm_world_particles(NULL, OUT(MpmParticlesView)));
+    REFUSED("null: mpm_world_particles view_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_particles(g_w2, NULL));
+
+    REFUSED("null: mpm_world_diagnostics world", MPM_STATUS_NULL_POINTER,
+            mpm_world_diagnostics(NULL, OUT(MpmDiagnostics)));
+    REFUSED("null: mpm_world_diagnostics diagnostics_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_diagnostics(g_w2, NULL));
+
+#define NULL_COPY(fn, T) \
+    REFUSED("null: " #fn " world", MPM_STATUS_NULL_POINTER, \
+            fn(NULL, OUT(T), len, OUT_AT(size_t, WRITTEN_AT))); \
+    REFUSED("null: " #fn " out", MPM_STATUS_NULL_POINTER, \
+            fn(g_w2, NULL, len, OUT_AT(size_t, WRITTEN_AT))); \
+    REFUSED("null: " #fn " out with out_len 0", MPM_STATUS_NULL_POINTER, \
+            fn(g_w2, NULL, 0, OUT_AT(size_t, WRITTEN_AT))); \
+    REFUSED("null: " #fn " written_out", MPM_STATUS_NULL_POINTER, fn(g_w2, OUT(T), len, NULL))
+
+    NULL_COPY(mpm_world_copy_positions, mpm_real);
+    NULL_COPY(mpm_world_copy_velocities, mpm_real);
+    NULL_COPY(mpm_world_copy_stress, mpm_real);
+    NULL_COPY(mpm_world_copy_jacobians, mpm_real);
+    NULL_COPY(mpm_world_copy_status, uint32_t);
+#undef NULL_COPY
+}
+
+/* World pointers that are not a world: misaligned, or aligned memory without a world. */
+static void not_a_world(void) {
+    Block zero = block_new(g_w2_bytes, 64, 0);
+    MpmWorld *bad[2];
+    MpmStatus want[2] = {MPM_STATUS_BUFFER_MISALIGNED, MPM_STATUS_NOT_A_WORLD};
+    const char *what[2] = {"misaligned world pointer", "zeroed memory as a world"};
+    MpmMaterialDef m = mpm_material_def_default();
+    Batch b;
+    MpmParticleArrays a;
+    int i;
+
+    memset(zero.at, 0, g_w2_bytes);
+    /* One byte into the 2D world: never read, the alignment is checked first. */
+    bad[0] = (MpmWorld *)(void *)((unsigned char *)(void *)g_w2 + 1);
+    bad[1] = (MpmWorld *)(void *)zero.at;
+    batch_fill(&b, 1, 0.2, 0.2, 0.0);
+    a = arrays_of(&b);
+
+    for (i = 0; i < 2; i++) {
+        char name[128];
+        MpmWorld *w = bad[i];
+#define BAD_WORLD(fn, call) \
+    snprintf(name, sizeof name, "%s: %s", what[i], fn); \
+    REFUSED(name, want[i], call)
+        BAD_WORLD("mpm_world_bytes", mpm_world_bytes(w, OUT(size_t)));
+        BAD_WORLD("mpm_world_get_def", mpm_world_get_def(w, OUT(MpmWorldDef)));
+        BAD_WORLD("mpm_world_add_material", mpm_world_add_material(w, &m, OUT(uint32_t)));
+        BAD_WORLD("mpm_world_add_particles",
+                  mpm_world_add_particles(w, &a, 1, OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_fill_box", mpm_world_fill_box(w, v3(0.2, 0.2, 0), v3(0.3, 0.3, 0),
+                                                           0, v3(0, 0, 0), OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_fill_disk",
+                  mpm_world_fill_disk(w, v3(0.2, 0.2, 0), R(0.02), 0, v3(0, 0, 0),
+                                      OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_fill_sphere",
+                  mpm_world_fill_sphere(w, v3(0.2, 0.2, 0.2), R(0.02), 0, v3(0, 0, 0),
+                                        OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_stable_dt", mpm_world_stable_dt(w, OUT(mpm_real)));
+        BAD_WORLD("mpm_world_step", mpm_world_step(w, R(0.001), OUT(MpmStepReport)));
+        BAD_WORLD("mpm_world_particles", mpm_world_particles(w, OUT(MpmParticlesView)));
+        BAD_WORLD("mpm_world_copy_positions",
+                  mpm_world_copy_positions(w, OUT(mpm_real), 16, OUT_AT(size_t, WRITTEN_AT)));
+        BAD_WORLD("mpm_world_copy_velocities",
+                  mpm_world_copy_velocities(w, OUT(mpm_real), 16, OUT_AT(size_t, WRITTEN_AT)));
+        BAD_WORLD("mpm_world_copy_stress",
+                  mpm_world_copy_stress(w, OUT(mpm_real), 16, OUT_AT(size_t, WRITTEN_AT)));
+        BAD_WORLD("mpm_world_copy_jacobians",
+                  mpm_world_copy_jacobians(w, OUT(mpm_real), 16, OUT_AT(size_t, WRITTEN_AT)));
+        BAD_WORLD("mpm_world_copy_status",
+                  mpm_world_copy_status(w, OUT(uint32_t), 16, OUT_AT(size_t, WRITTEN_AT)));
+        BAD_WORLD("mpm_world_diagnostics", mpm_world_diagnostics(w, OUT(MpmDiagnostics)));
+#undef BAD_WORLD
+    }
+    {
+        size_t k, nonzero = 0;
+        for (k = 0; k < g_w2_bytes; k++) {
+            nonzero += zero.at[k] != 0;
+        }
+        expect_true("not a world: the zeroed memory stayed zero", nonzero == 0);
+    }
+    free(zero.raw);
+}
+
+/* mpm_world_init on bad memory, bad definitions and out-of-range enums: refused, and the
+ * memory (filled with a pattern) untouched. mpm_memory_requirements refuses the same
+ * definitions. */
+static Block g_init_mem;
+static MpmMemoryRequirements g_init_req;
+
+static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d) {
+    char full[160];
+    snprintf(full, sizeof full, "%s: mpm_memory_requirements", name);
+    REFUSED(full, want, mpm_memory_requirements(d, OUT(MpmMemoryRequirements)));
+    memset(g_init_mem.raw, PATTERN, g_init_req.bytes + 2 * g_init_req.align);
+    snprintf(full, sizeof full, "%s: mpm_world_init", name);
+    REFUSED(full, want, mpm_world_init(d, g_init_mem.at, g_init_req.bytes, OUT(MpmWorld *)));
+    if (!pattern_intact(g_init_mem.raw, g_init_req.bytes + 2 * g_init_req.align)) {
+        fail(full, "the refused init wrote to the memory");
+    }
+}
+
+static void init_misuse(void) {
+    MpmWorldDef d;
+    size_t total;
+    unsigned k;
+    static const uint32_t bad_enum[] = {0xFFFFFFFFu, 0x80000000u, 7u};
+
+    if (mpm_memory_requirements(&g_def2, &g_init_req) != MPM_STATUS_OK) {
+        fail("init: setup", "mpm_memory_requirements refused the 2D definition");
+    }
+    total = g_init_req.bytes + 2 * g_init_req.align;
+    g_init_mem = block_new(g_init_req.bytes, g_init_req.align, g_init_req.align);
+
+    /* The buffer itself. */
+    memset(g_init_mem.raw, PATTERN, total);
+    REFUSED("init: buffer one byte too small", MPM_STATUS_BUFFER_TOO_SMALL,
+            mpm_world_init(&g_def2, g_init_mem.at, g_init_req.bytes - 1, OUT(MpmWorld *)));
+    REFUSED("init: buffer of 0 bytes", MPM_STATUS_BUFFER_TOO_SMALL,
+            mpm_world_init(&g_def2, g_init_mem.at, 0, OUT(MpmWorld *)));
+    REFUSED("init: buffer misaligned by 1 byte", MPM_STATUS_BUFFER_MISALIGNED,
+            mpm_world_init(&g_def2, g_init_mem.at + 1, g_init_req.bytes, OUT(MpmWorld *)));
+    REFUSED("init: buffer misaligned by 8 bytes", MPM_STATUS_BUFFER_MISALIGNED,
+            mpm_world_init(&g_def2, g_init_mem.at + 8, g_init_req.bytes, OUT(MpmWorld *)));
+    REFUSED("init: buffer misaligned by align / 2", MPM_STATUS_BUFFER_MISALIGNED,
+            mpm_world_init(&g_def2, g_init_mem.at + g_init_req.align / 2, g_init_req.bytes,
+                           OUT(MpmWorld *)));
+    expect_true("init: refused buffers left the memory untouched",
+                pattern_intact(g_init_mem.raw, total));
+
+    /* Definitions that did not come from the default function. */
+    memset(&d, 0, sizeof d);
+    init_refused("init: zeroed MpmWorldDef", MPM_STATUS_DEF_NOT_FROM_DEFAULT, &d);
+    d = g_def2;
+    d.internal_cookie += 1;
+    init_refused("init: cookie changed", MPM_STATUS_DEF_NOT_FROM_DEFAULT, &d);
+    d = g_def2;
+    d.internal_cookie = 0;
+    init_refused("init: cookie zeroed", MPM_STATUS_DEF_NOT_FROM_DEFAULT, &d);
+    /* The other precision's cookie differs in the bits of sizeof(mpm_real). */
+    d = g_def2;
+    d.internal_cookie ^= 4u ^ 8u;
+    init_refused("init: cookie of the other precision", MPM_STATUS_DEF_NOT_FROM_DEFAULT, &d);
+
+    /* Enum fields out of range. */
+    for (k = 0; k < sizeof bad_enum / sizeof bad_enum[0]; k++) {
+        char name[96];
+        int f;
+        d = g_def2;
+        d.dimension = bad_enum[k];
+        snprintf(name, sizeof name, "init: dimension %u", (unsigned)bad_enum[k]);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.shape = bad_enum[k];
+        snprintf(name, sizeof name, "init: shape %u", (unsigned)bad_enum[k]);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.update_order = bad_enum[k];
+        snprintf(name, sizeof name, "init: update_order %u", (unsigned)bad_enum[k]);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        for (f = 0; f < 6; f++) {
+            d = g_def2;
+            d.faces[f] = bad_enum[k];
+            snprintf(name, sizeof name, "init: faces[%d] %u", f, (unsigned)bad_enum[k]);
+            init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        }
+    }
+    d = g_def2;
+    d.dimension = 0;
+    init_refused("init: dimension 0", MPM_STATUS_INVALID_ENUM, &d);
+    d.dimension = 1;
+    init_refused("init: dimension 1", MPM_STATUS_INVALID_ENUM, &d);
+    d.dimension = 5;
+    init_refused("init: dimension 5", MPM_STATUS_INVALID_ENUM, &d);
+    d = g_def2;
+    d.shape = 4;
+    init_refused("init: shape 4", MPM_STATUS_INVALID_ENUM, &d);
+    d = g_def2;
+    d.update_order = 3;
+    init_refused("init: update_order 3", MPM_STATUS_INVALID_ENUM, &d);
+    {
+        int f;
+        for (f = 0; f < 6; f++) {
+            char name[64];
+            d = g_def2;
+            d.faces[f] = 3;
+            snprintf(name, sizeof name, "init: faces[%d] 3", f);
+            init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        }
+    }
+    /* A value of the enum that this build does not support. */
+    d = g_def2;
+    d.dimension = MPM_DIMENSION_AXISYMMETRIC2D;
+    init_refused("init: axisymmetric dimension", MPM_STATUS_UNSUPPORTED, &d);
+
+    /* Non-finite and out-of-range values. */
+#define BAD_DEF(name, field, value, want) \
+    d = g_def2; \
+    d.field = (value); \
+    init_refused((name), (want), &d)
+    BAD_DEF("init: cell_size NaN", cell_size, R(NAN), MPM_STATUS_INVALID_CELL_SIZE);
+    BAD_DEF("init: cell_size +inf", cell_size, R(INFINITY), MPM_STATUS_INVALID_CELL_SIZE);
+    BAD_DEF("init: cell_size 0", cell_size, R(0.0), MPM_STATUS_INVALID_CELL_SIZE);
+    BAD_DEF("init: cell_size -1", cell_size, R(-1.0), MPM_STATUS_INVALID_CELL_SIZE);
+    BAD_DEF("init: origin.x NaN", origin.x, R(NAN), MPM_STATUS_NON_FINITE_DEFINITION);
+    BAD_DEF("init: origin.y -inf", origin.y, R(-INFINITY), MPM_STATUS_NON_FINITE_DEFINITION);
+    BAD_DEF("init: gravity.x NaN", gravity.x, R(NAN), MPM_STATUS_NON_FINITE_DEFINITION);
+    BAD_DEF("init: gravity.y +inf", gravity.y, R(INFINITY), MPM_STATUS_NON_FINITE_DEFINITION);
+    BAD_DEF("init: cells[0] 3 (below the GIMP minimum)", cells[0], 3,
+            MPM_STATUS_INVALID_CELL_COUNT);
+    BAD_DEF("init: cells[1] 0", cells[1], 0, MPM_STATUS_INVALID_CELL_COUNT);
+    BAD_DEF("init: particle_capacity 0", particle_capacity, 0, MPM_STATUS_INVALID_CAPACITY);
+    BAD_DEF("init: material_capacity 0", material_capacity, 0, MPM_STATUS_INVALID_CAPACITY);
+    BAD_DEF("init: flip_beta NaN", flip_beta, R(NAN), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: flip_beta -0.5", flip_beta, R(-0.5), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: flip_beta 1.5", flip_beta, R(1.5), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: cfl NaN", cfl, R(NAN), MPM_STATUS_INVALID_CFL);
+    BAD_DEF("init: cfl +inf", cfl, R(INFINITY), MPM_STATUS_INVALID_CFL);
+    BAD_DEF("init: cfl 0", cfl, R(0.0), MPM_STATUS_INVALID_CFL);
+    BAD_DEF("init: cfl 2", cfl, R(2.0), MPM_STATUS_INVALID_CFL);
+    BAD_DEF("init: exp_terms 0", exp_terms, 0, MPM_STATUS_INVALID_EXP_TERMS);
+    BAD_DEF("init: exp_terms 9", exp_terms, 9, MPM_STATUS_INVALID_EXP_TERMS);
+    BAD_DEF("init: particles_per_cell 0", particles_per_cell, 0,
+            MPM_STATUS_INVALID_PARTICLES_PER_CELL);
+    BAD_DEF("init: particles_per_cell 9", particles_per_cell, 9,
+            MPM_STATUS_INVALID_PARTICLES_PER_CELL);
+#undef BAD_DEF
+
+    /* Control: the same memory takes a world of the definition read back from the 2D world
+     * (the cookie survives mpm_world_get_def). */
+    memset(g_init_mem.raw, PATTERN, total);
+    if (mpm_world_get_def(g_w2, &d) != MPM_STATUS_OK) {
+        fail("init: control", "mpm_world_get_def refused the 2D world");
+    }
+    {
+        MpmWorld *w = NULL;
+        MpmStatus s = mpm_world_init(&d, g_init_mem.at, g_init_req.bytes, &w);
+        ACCEPTED("init: control init with the definition from mpm_world_get_def", 0, s);
+        expect_true("init: control world is at the memory's address",
+                    (void *)w == (void *)g_init_mem.at);
+        expect_true("init: control init wrote the memory",
+                    !pattern_intact(g_init_mem.at, g_init_req.bytes));
+    }
+    free(g_init_mem.raw);
+}
+
+/* mpm_world_open on copies of the 2D world: refused, and the copy's bytes untouched. */
+static Block g_copy;
+
+static void open_refused(const char *name, MpmStatus want, void *memory, size_t len) {
+    const size_t span = g_w2_bytes + 8;
+    uint64_t before = fnv1a(g_copy.at, span);
+    REFUSED(name, want, mpm_world_open(memory, len, OUT(MpmWorld *)));
+    if (fnv1a(g_copy.at, span) != before) {
+        fail(name, "the refused open changed the memory");
+    }
+}
+
+static void open_misuse(void) {
+    MpmWorld *w = NULL;
+    size_t k;
+
+    g_copy = block_new(g_w2_bytes, 64, 64);
+    memset(g_copy.at, 0, g_w2_bytes + 8);
+    memcpy(g_copy.at, g_w2, g_w2_bytes);
+    open_refused("open: copy one byte short", MPM_STATUS_BUFFER_TOO_SMALL, g_copy.at,
+                 g_w2_bytes - 1);
+    open_refused("open: 8 bytes (less than a header)", MPM_STATUS_BUFFER_TOO_SMALL, g_copy.at, 8);
+    open_refused("open: 0 bytes", MPM_STATUS_BUFFER_TOO_SMALL, g_copy.at, 0);
+
+    /* The same bytes 8 bytes further on. */
+    memmove(g_copy.at + 8, g_copy.at, g_w2_bytes);
+    open_refused("open: copy misaligned by 8 bytes", MPM_STATUS_BUFFER_MISALIGNED,
+                 g_copy.at + 8, g_w2_bytes);
+    memmove(g_copy.at, g_copy.at + 8, g_w2_bytes);
+
+    /* A header whose first word (the magic number) is damaged. */
+    for (k = 0; k < 8; k++) {
+        g_copy.at[k] ^= 0xFF;
+    }
+    open_refused("open: damaged header", MPM_STATUS_NOT_A_WORLD, g_copy.at, g_w2_bytes);
+    for (k = 0; k < 8; k++) {
+        g_copy.at[k] ^= 0xFF;
+    }
+
+    memset(g_copy.at, 0, g_w2_bytes);
+    open_refused("open: zeroed memory", MPM_STATUS_NOT_A_WORLD, g_copy.at, g_w2_bytes);
+
+    /* Control: an intact copy opens, at its own address, with the original's bytes. */
+    memcpy(g_copy.at, g_w2, g_w2_bytes);
+    ACCEPTED("open: control open of an intact copy", 0,
+             mpm_world_open(g_copy.at, g_w2_bytes, &w));
+    expect_true("open: control world is at the copy's address", (void *)w == (void *)g_copy.at);
+    expect_true("open: control copy hashes like the original",
+                world_hash(w) == world_hash(g_w2));
+    free(g_copy.raw);
+}
+
+/* mpm_world_add_material: definitions, enum, parameters. */
+static void material_misuse(void) {
+    MpmMaterialDef m;
+    static const uint32_t bad_model[] = {2u, 3u, 0x80000000u, 0xFFFFFFFFu};
+    unsigned k;
+
+    memset(&m, 0, sizeof m);
+    REFUSED("material: zeroed MpmMaterialDef", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+            mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    m = mpm_material_def_default();
+    m.internal_cookie += 1;
+    REFUSED("material: cookie changed", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+            mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    m = mpm_material_def_default();
+    m.internal_cookie ^= 4u ^ 8u;
+    REFUSED("material: cookie of the other precision", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+            mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    {
+        /* A world definition's cookie is not a material's. */
+        MpmWorldDef wd = mpm_world_def_default();
+        m = mpm_material_def_default();
+        m.internal_cookie = wd.internal_cookie;
+        REFUSED("material: a world definition's cookie", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+                mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    }
+
+    for (k = 0; k < sizeof bad_model / sizeof bad_model[0]; k++) {
+        char name[64];
+        m = mpm_material_def_default();
+        m.model = bad_model[k];
+        snprintf(name, sizeof name, "material: model %u", (unsigned)bad_model[k]);
+        REFUSED(name, MPM_STATUS_INVALID_ENUM, mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    }
+
+#define BAD_MAT(name, field, value) \
+    m = mpm_material_def_default(); \
+    m.field = (value); \
+    REFUSED((name), MPM_STATUS_INVALID_MATERIAL, mpm_world_add_material(g_w2, &m, OUT(uint32_t)))
+    BAD_MAT("material: youngs_modulus NaN", youngs_modulus, R(NAN));
+    BAD_MAT("material: youngs_modulus +inf", youngs_modulus, R(INFINITY));
+    BAD_MAT("material: youngs_modulus 0", youngs_modulus, R(0.0));
+    BAD_MAT("material: youngs_modulus -1e6", youngs_modulus, R(-1e6));
+    BAD_MAT("material: poisson_ratio NaN", poisson_ratio, R(NAN));
+    BAD_MAT("material: poisson_ratio -inf", poisson_ratio, R(-INFINITY));
+    BAD_MAT("material: poisson_ratio 0.5", poisson_ratio, R(0.5));
+    BAD_MAT("material: poisson_ratio -1", poisson_ratio, R(-1.0));
+    BAD_MAT("material: density NaN", density, R(NAN));
+    BAD_MAT("material: density +inf", density, R(INFINITY));
+    BAD_MAT("material: density 0", density, R(0.0));
+    BAD_MAT("material: density -1000", density, R(-1000.0));
+#undef BAD_MAT
+}
+
+/* Current particle count of a world. */
+static size_t particle_count(const MpmWorld *w) {
+    MpmDiagnostics d;
+    if (mpm_world_diagnostics(w, &d) != MPM_STATUS_OK) {
+        fail("particle_count", "mpm_world_diagnostics refused a world");
+    }
+    return d.particle_count;
+}
+
+/* mpm_world_add_particles: count, values, materials, positions. */
+static void particles_misuse(void) {
+    Batch b;
+    MpmParticleArrays a;
+    size_t remaining = g_def2.particle_capacity - particle_count(g_w2);
+    int k;
+
+    /* A count above the remaining capacity is refused before any array is read: the arrays
+     * hold one value each (AddressSanitizer would see a read past them in instrumented
+     * code), and below they point into a page that cannot be read at all. */
+    {
+        mpm_real *one_real[8];
+        uint32_t *one_id = (uint32_t *)malloc(sizeof(uint32_t));
+        MpmParticleArrays s;
+        for (k = 0; k < 8; k++) {
+            one_real[k] = (mpm_real *)malloc(sizeof(mpm_real));
+            if (one_real[k] == NULL) {
+                fail("particles: setup", "out of memory");
+            }
+            *one_real[k] = R(0.25);
+        }
+        if (one_id == NULL) {
+            fail("particles: setup", "out of memory");
+        }
+        *one_id = 0;
+        for (k = 0; k < 3; k++) {
+            s.position[k] = one_real[k];
+            s.velocity[k] = one_real[3 + k];
+        }
+        s.mass = one_real[6];
+        s.volume = one_real[7];
+        s.material = one_id;
+        REFUSED("particles: count remaining + 1 with 1-value arrays",
+                MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+                mpm_world_add_particles(g_w2, &s, remaining + 1, OUT(MpmIdRange)));
+        REFUSED("particles: count SIZE_MAX with 1-value arrays",
+                MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+                mpm_world_add_particles(g_w2, &s, (size_t)-1, OUT(MpmIdRange)));
+        REFUSED("particles: count capacity + 1 with 1-value arrays",
+                MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+                mpm_world_add_particles(g_w2, &s, (size_t)g_def2.particle_capacity + 1,
+                                        OUT(MpmIdRange)));
+        for (k = 0; k < 8; k++) {
+            free(one_real[k]);
+        }
+        free(one_id);
+    }
+#ifdef MISUSE_HAVE_MMAN
+    {
+        long page = sysconf(_SC_PAGESIZE);
+        void *p = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        MpmParticleArrays s;
+        if (p == MAP_FAILED) {
+            fail("particles: setup", "mmap failed");
+        }
+        for (k = 0; k < 3; k++) {
+            s.position[k] = (const mpm_real *)p;
+            s.velocity[k] = (const mpm_real *)p;
+        }
+        s.mass = (const mpm_real *)p;
+        s.volume = (const mpm_real *)p;
+        s.material = (const uint32_t *)p;
+        REFUSED("particles: count remaining + 1 with arrays in a no-access page",
+                MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+                mpm_world_add_particles(g_w2, &s, remaining + 1, OUT(MpmIdRange)));
+        REFUSED("particles: count SIZE_MAX with arrays in a no-access page",
+                MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+                mpm_world_add_particles(g_w2, &s, (size_t)-1, OUT(MpmIdRange)));
+        munmap(p, (size_t)page);
+    }
+#endif
+
+    /* Bad values in the last of three particles: all or nothing. */
+#define BAD_PARTICLE(name, stmt, want) \
+    batch_fill(&b, 3, 0.2, 0.2, 0.0); \
+    stmt; \
+    a = arrays_of(&b); \
+    REFUSED((name), (want), mpm_world_add_particles(g_w2, &a, 3, OUT(MpmIdRange)))
+    {
+        const double bad[3] = {NAN, INFINITY, -INFINITY};
+        const char *label[3] = {"NaN", "+inf", "-inf"};
+        int j;
+        for (j = 0; j < 3; j++) {
+            char name[96];
+            for (k = 0; k < 2; k++) {
+                snprintf(name, sizeof name, "particles: position[%d] %s", k, label[j]);
+                BAD_PARTICLE(name, b.x[k][2] = R(bad[j]), MPM_STATUS_NON_FINITE_INPUT);
+                snprintf(name, sizeof name, "particles: velocity[%d] %s", k, label[j]);
+                BAD_PARTICLE(name, b.v[k][2] = R(bad[j]), MPM_STATUS_NON_FINITE_INPUT);
+            }
+            snprintf(name, sizeof name, "particles: mass %s", label[j]);
+            BAD_PARTICLE(name, b.mass[2] = R(bad[j]), MPM_STATUS_NON_FINITE_INPUT);
+            snprintf(name, sizeof name, "particles: volume %s", label[j]);
+            BAD_PARTICLE(name, b.volume[2] = R(bad[j]), MPM_STATUS_NON_FINITE_INPUT);
+        }
+    }
+    BAD_PARTICLE("particles: mass 0", b.mass[2] = R(0.0), MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME);
+    BAD_PARTICLE("particles: mass -0", b.mass[2] = R(-0.0),
+                 MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME);
+    BAD_PARTICLE("particles: mass -1", b.mass[2] = R(-1.0),
+                 MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME);
+    BAD_PARTICLE("particles: volume 0", b.volume[2] = R(0.0),
+                 MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME);
+    BAD_PARTICLE("particles: volume -1e-6", b.volume[2] = R(-1e-6),
+                 MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME);
+    BAD_PARTICLE("particles: material 1 (only 0 exists)", b.material[2] = 1,
+                 MPM_STATUS_UNKNOWN_MATERIAL);
+    BAD_PARTICLE("particles: material 0xFFFFFFFF", b.material[2] = 0xFFFFFFFFu,
+                 MPM_STATUS_UNKNOWN_MATERIAL);
+    BAD_PARTICLE("particles: x -1 (outside the grid)", b.x[0][2] = R(-1.0),
+                 MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+    BAD_PARTICLE("particles: x 10 (outside the grid)", b.x[0][2] = R(10.0),
+                 MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+    BAD_PARTICLE("particles: x 0.01 (in the boundary margin)", b.x[0][2] = R(0.01),
+                 MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+    BAD_PARTICLE("particles: y 0.99 (in the boundary margin)", b.x[1][2] = R(0.99),
+                 MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+    BAD_PARTICLE("particles: y 1e30", b.x[1][2] = R(1e30), MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+#undef BAD_PARTICLE
+
+    /* 3D: the z column is read and checked. */
+#define BAD_PARTICLE_3D(name, stmt, want) \
+    batch_fill(&b, 3, 0.2, 0.2, 0.2); \
+    stmt; \
+    a = arrays_of(&b); \
+    REFUSED((name), (want), mpm_world_add_particles(g_w3, &a, 3, OUT(MpmIdRange)))
+    BAD_PARTICLE_3D("particles 3D: position[2] NaN", b.x[2][2] = R(NAN),
+                    MPM_STATUS_NON_FINITE_INPUT);
+    BAD_PARTICLE_3D("particles 3D: velocity[2] +inf", b.v[2][2] = R(INFINITY),
+                    MPM_STATUS_NON_FINITE_INPUT);
+    BAD_PARTICLE_3D("particles 3D: z 0.01 (in the boundary margin)", b.x[2][2] = R(0.01),
+                    MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+    BAD_PARTICLE_3D("particles 3D: z 1 (outside the grid)", b.x[2][2] = R(1.0),
+                    MPM_STATUS_POSITION_OUTSIDE_DOMAIN);
+#undef BAD_PARTICLE_3D
+}
+
+/* Seeding regions. */
+static void fill_misuse(void) {
+    MpmVec3 z = v3(0, 0, 0);
+    MpmVec3 lo = v3(0.2, 0.6, 0), hi = v3(0.25, 0.65, 0);
+    MpmVec3 c = v3(0.3, 0.7, 0);
+    MpmVec3 c3 = v3(0.2, 0.2, 0.2);
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    const char *label[3] = {"NaN", "+inf", "-inf"};
+    int j;
+
+    for (j = 0; j < 3; j++) {
+        char name[96];
+        MpmVec3 p;
+        p = lo;
+        p.x = R(bad[j]);
+        snprintf(name, sizeof name, "fill_box: min.x %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_box(g_w2, p, hi, 0, z, OUT(MpmIdRange)));
+        p = hi;
+        p.y = R(bad[j]);
+        snprintf(name, sizeof name, "fill_box: max.y %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_box(g_w2, lo, p, 0, z, OUT(MpmIdRange)));
+        p = z;
+        p.x = R(bad[j]);
+        snprintf(name, sizeof name, "fill_box: velocity.x %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_box(g_w2, lo, hi, 0, p, OUT(MpmIdRange)));
+        p = c;
+        p.y = R(bad[j]);
+        snprintf(name, sizeof name, "fill_disk: center.y %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_disk(g_w2, p, R(0.03), 0, z, OUT(MpmIdRange)));
+        snprintf(name, sizeof name, "fill_disk: radius %s", label[j]);
+        REFUSED(name, MPM_STATUS_INVALID_REGION,
+                mpm_world_fill_disk(g_w2, c, R(bad[j]), 0, z, OUT(MpmIdRange)));
+        p = z;
+        p.y = R(bad[j]);
+        snprintf(name, sizeof name, "fill_disk: velocity.y %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_disk(g_w2, c, R(0.03), 0, p, OUT(MpmIdRange)));
+        p = c3;
+        p.z = R(bad[j]);
+        snprintf(name, sizeof name, "fill_sphere: center.z %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_sphere(g_w3, p, R(0.03), 0, z, OUT(MpmIdRange)));
+        snprintf(name, sizeof name, "fill_sphere: radius %s", label[j]);
+        REFUSED(name, MPM_STATUS_INVALID_REGION,
+                mpm_world_fill_sphere(g_w3, c3, R(bad[j]), 0, z, OUT(MpmIdRange)));
+        p = z;
+        p.z = R(bad[j]);
+        snprintf(name, sizeof name, "fill_sphere: velocity.z %s", label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_fill_sphere(g_w3, c3, R(0.03), 0, p, OUT(MpmIdRange)));
+    }
+    REFUSED("fill_box: min.x > max.x", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_box(g_w2, v3(0.3, 0.6, 0), v3(0.2, 0.65, 0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_box: min.y > max.y", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_box(g_w2, v3(0.2, 0.7, 0), v3(0.25, 0.6, 0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_box 3D: min.z > max.z", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_box(g_w3, v3(0.1, 0.1, 0.3), v3(0.2, 0.2, 0.2), 0, z,
+                               OUT(MpmIdRange)));
+    REFUSED("fill_disk: radius 0", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_disk(g_w2, c, R(0.0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_disk: radius -0.03", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_disk(g_w2, c, R(-0.03), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_sphere: radius 0", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_sphere(g_w3, c3, R(0.0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_box: unknown material 1", MPM_STATUS_UNKNOWN_MATERIAL,
+            mpm_world_fill_box(g_w2, lo, hi, 1, z, OUT(MpmIdRange)));
+    REFUSED("fill_disk: unknown material 0xFFFFFFFF", MPM_STATUS_UNKNOWN_MATERIAL,
+            mpm_world_fill_disk(g_w2, c, R(0.03), 0xFFFFFFFFu, z, OUT(MpmIdRange)));
+    REFUSED("fill_sphere: unknown material 1", MPM_STATUS_UNKNOWN_MATERIAL,
+            mpm_world_fill_sphere(g_w3, c3, R(0.03), 1, z, OUT(MpmIdRange)));
+    REFUSED("fill_box: reaching into the boundary margin", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_box(g_w2, v3(0.0, 0.6, 0), v3(0.1, 0.65, 0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_box: far larger than the grid", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_box(g_w2, v3(-1e30, -1e30, 0), v3(1e30, 1e30, 0), 0, z,
+                               OUT(MpmIdRange)));
+    REFUSED("fill_disk: partly outside the grid", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_disk(g_w2, v3(0.97, 0.5, 0), R(0.05), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_sphere: partly outside the grid", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_sphere(g_w3, v3(0.2, 0.2, 0.37), R(0.04), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_box: more sites than the remaining capacity",
+            MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_fill_box(g_w2, v3(0.1, 0.1, 0), v3(0.9, 0.9, 0), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_sphere: more sites than the remaining capacity",
+            MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_fill_sphere(g_w3, c3, R(0.14), 0, z, OUT(MpmIdRange)));
+
+    /* A disk is 2D only, a sphere 3D only. */
+    REFUSED("fill_sphere in 2D", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_sphere(g_w2, c, R(0.03), 0, z, OUT(MpmIdRange)));
+    REFUSED("fill_disk in 3D", MPM_STATUS_INVALID_REGION,
+            mpm_world_fill_disk(g_w3, c3, R(0.03), 0, z, OUT(MpmIdRange)));
+}
+
+static void step_misuse(void) {
+    const double bad[] = {0.0, -0.0, -1.0, NAN, INFINITY, -INFINITY, 1e9};
+    const char *label[] = {"0", "-0", "-1", "NaN", "+inf", "-inf",
+                           "1e9 (more than the most substeps)"};
+    unsigned k;
+    for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        char name[96];
+        snprintf(name, sizeof name, "step: dt %s (2D)", label[k]);
+        REFUSED(name, MPM_STATUS_INVALID_TIME_STEP,
+                mpm_world_step(g_w2, R(bad[k]), OUT(MpmStepReport)));
+        snprintf(name, sizeof name, "step: dt %s (3D)", label[k]);
+        REFUSED(name, MPM_STATUS_INVALID_TIME_STEP,
+                mpm_world_step(g_w3, R(bad[k]), OUT(MpmStepReport)));
+    }
+}
+
+/* Copy-out into buffers one value short, and of no values. */
+static void copy_misuse(void) {
+    size_t n2 = particle_count(g_w2), n3 = particle_count(g_w3);
+    size_t *written = OUT_AT(size_t, WRITTEN_AT);
+
+#define SHORT_COPY(fn, T, w, need, label) \
+    REFUSED(#fn ": one value short (" label ")", MPM_STATUS_OUTPUT_TOO_SMALL, \
+            fn((w), OUT(T), (need)-1, written)); \
+    REFUSED(#fn ": out_len 0 (" label ")", MPM_STATUS_OUTPUT_TOO_SMALL, fn((w), OUT(T), 0, written))
+
+    if ((6 * n3 + 6 * n2) * sizeof(mpm_real) > WRITTEN_AT) {
+        fail("copy: setup", "the sentinel area is too small for the worlds");
+    }
+    SHORT_COPY(mpm_world_copy_positions, mpm_real, g_w2, 2 * n2, "2D");
+    SHORT_COPY(mpm_world_copy_velocities, mpm_real, g_w2, 2 * n2, "2D");
+    SHORT_COPY(mpm_world_copy_stress, mpm_real, g_w2, 4 * n2, "2D");
+    SHORT_COPY(mpm_world_copy_jacobians, mpm_real, g_w2, n2, "2D");
+    SHORT_COPY(mpm_world_copy_status, uint32_t, g_w2, n2, "2D");
+    SHORT_COPY(mpm_world_copy_positions, mpm_real, g_w3, 3 * n3, "3D");
+    SHORT_COPY(mpm_world_copy_velocities, mpm_real, g_w3, 3 * n3, "3D");
+    SHORT_COPY(mpm_world_copy_stress, mpm_real, g_w3, 6 * n3, "3D");
+    SHORT_COPY(mpm_world_copy_jacobians, mpm_real, g_w3, n3, "3D");
+    SHORT_COPY(mpm_world_copy_status, uint32_t, g_w3, n3, "3D");
+#undef SHORT_COPY
+
+    /* Controls: the exact length is accepted and reported. */
+#define EXACT_COPY(fn, T, w, need, label) \
+    out_reset(); \
+    ACCEPTED(#fn ": exact length (" label ")", 0, fn((w), OUT(T), (need), written)); \
+    expect_true(#fn ": written_out is the exact length (" label ")", *written == (need))
+    EXACT_COPY(mpm_world_copy_positions, mpm_real, g_w2, 2 * n2, "2D");
+    EXACT_COPY(mpm_world_copy_stress, mpm_real, g_w2, 4 * n2, "2D");
+    EXACT_COPY(mpm_world_copy_positions, mpm_real, g_w3, 3 * n3, "3D");
+    EXACT_COPY(mpm_world_copy_stress, mpm_real, g_w3, 6 * n3, "3D");
+#undef EXACT_COPY
+}
+
+/* Filling the tables to capacity, then one more. */
+static void capacity_misuse(void) {
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmIdRange ids;
+    uint32_t id = 0;
+    Batch b;
+    MpmParticleArrays a;
+    size_t remaining;
+
+    ACCEPTED("capacity: second material (capacity 2)", 1, mpm_world_add_material(g_w2, &m, &id));
+    expect_true("capacity: second material has id 1", id == 1);
+    REFUSED("capacity: third material", MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED,
+            mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    REFUSED("capacity: second material in 3D (capacity 1)", MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED,
+            mpm_world_add_material(g_w3, &m, OUT(uint32_t)));
+
+    remaining = g_def2.particle_capacity - particle_count(g_w2);
+    if (remaining == 0 || remaining > BATCH_MAX) {
+        fail("capacity: setup", "unexpected remaining capacity");
+    }
+    batch_fill(&b, remaining + 1 <= BATCH_MAX ? remaining + 1 : BATCH_MAX, 0.15, 0.7, 0.0);
+    a = arrays_of(&b);
+    REFUSED("capacity: remaining + 1 valid particles", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_add_particles(g_w2, &a, remaining + 1, OUT(MpmIdRange)));
+    ACCEPTED("capacity: exactly the remaining particles", 1,
+             mpm_world_add_particles(g_w2, &a, remaining, &ids));
+    expect_true("capacity: ids of the last particles",
+                ids.count == remaining && ids.first + ids.count == g_def2.particle_capacity);
+    REFUSED("capacity: one particle into a full world", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_add_particles(g_w2, &a, 1, OUT(MpmIdRange)));
+    REFUSED("capacity: fill_box into a full world", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_fill_box(g_w2, v3(0.4, 0.8, 0), v3(0.45, 0.85, 0), 1, v3(0, 0, 0),
+                               OUT(MpmIdRange)));
+    REFUSED("capacity: fill_disk into a full world", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_fill_disk(g_w2, v3(0.5, 0.8, 0), R(0.03), 1, v3(0, 0, 0),
+                                OUT(MpmIdRange)));
+    ids.first = ids.count = 12345;
+    ACCEPTED("capacity: 0 particles into a full world", 0,
+             mpm_world_add_particles(g_w2, &a, 0, &ids));
+    expect_true("capacity: 0 particles give an empty id range", ids.count == 0);
+}
+
+/* mpm_status_string: a description for every status, "unknown status" for anything else. */
+static void status_strings(void) {
+    static const MpmStatus known[] = {
+        MPM_STATUS_OK,
+        MPM_STATUS_BUFFER_TOO_SMALL,
+        MPM_STATUS_BUFFER_MISALIGNED,
+        MPM_STATUS_NOT_A_WORLD,
+        MPM_STATUS_UNSUPPORTED,
+        MPM_STATUS_INVALID_CELL_SIZE,
+        MPM_STATUS_INVALID_CELL_COUNT,
+        MPM_STATUS_INVALID_CAPACITY,
+        MPM_STATUS_INVALID_FLIP_BETA,
+        MPM_STATUS_INVALID_CFL,
+        MPM_STATUS_INVALID_EXP_TERMS,
+        MPM_STATUS_INVALID_PARTICLES_PER_CELL,
+        MPM_STATUS_NON_FINITE_DEFINITION,
+        MPM_STATUS_INVALID_MATERIAL,
+        MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED,
+        MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+        MPM_STATUS_UNKNOWN_MATERIAL,
+        MPM_STATUS_NON_FINITE_INPUT,
+        MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME,
+        MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+        MPM_STATUS_LENGTH_MISMATCH,
+        MPM_STATUS_INVALID_TIME_STEP,
+        MPM_STATUS_INVALID_REGION,
+        MPM_STATUS_NULL_POINTER,
+        MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+        MPM_STATUS_INVALID_ENUM,
+        MPM_STATUS_OUTPUT_TOO_SMALL,
+        MPM_STATUS_INTERNAL,
+    };
+    const size_t n_known = sizeof known / sizeof known[0];
+    size_t i, j;
+    uint32_t v;
+    unsigned long unknown = 0;
+
+    for (i = 0; i < n_known; i++) {
+        const char *s = mpm_status_string(known[i]);
+        char name[96];
+        snprintf(name, sizeof name, "status string of %u is a description",
+                 (unsigned)known[i]);
+        expect_true(name, s != NULL && s[0] != '\0' && strcmp(s, "unknown status") != 0);
+        for (j = 0; j < i; j++) {
+            if (strcmp(s, mpm_status_string(known[j])) == 0) {
+                snprintf(name, sizeof name, "status strings of %u and %u are equal",
+                         (unsigned)known[i], (unsigned)known[j]);
+                fail(name, "two statuses share a description");
+            }
+        }
+    }
+    /* Every other value up to 1024, and the extremes. */
+    for (v = 0; v <= 1024; v++) {
+        int is_known = 0;
+        for (i = 0; i < n_known; i++) {
+            is_known |= (uint32_t)known[i] == v;
+        }
+        if (!is_known) {
+            const char *s = mpm_status_string((MpmStatus)v);
+            if (s == NULL || strcmp(s, "unknown status") != 0) {
+                char name[64];
+                snprintf(name, sizeof name, "status string of %u", (unsigned)v);
+                fail(name, "an unknown status is not described as \"unknown status\"");
+            }
+            unknown++;
+        }
+    }
+    expect_true("status strings of the 997 unknown values up to 1024 are \"unknown status\"",
+                unknown == 1025 - n_known);
+    expect_true("status string of 0x80000000 is \"unknown status\"",
+                strcmp(mpm_status_string((MpmStatus)0x80000000u), "unknown status") == 0);
+    expect_true("status string of 0xFFFFFFFF is \"unknown status\"",
+                strcmp(mpm_status_string((MpmStatus)0xFFFFFFFFu), "unknown status") == 0);
+}
+
+int main(void) {
+    MpmMemoryRequirements req2, req3;
+    Block mem2, mem3;
+    MpmWorldDef d3 = def_3d();
+    MpmMaterialDef m = mpm_material_def_default();
+    uint32_t id;
+    Batch b;
+    MpmParticleArrays a;
+    MpmIdRange ids;
+    MpmStepReport report;
+
+    out_reset();
+    expect_true("abi version matches the header", mpm_abi_version() == MPM_GIMP_ABI_VERSION);
+
+    /* The 2D world: one material, 4 particles from arrays, 16 from a box, one step. */
+    g_def2 = def_2d();
+    if (mpm_memory_requirements(&g_def2, &req2) != MPM_STATUS_OK ||
+        mpm_memory_requirements(&d3, &req3) != MPM_STATUS_OK) {
+        fail("setup", "mpm_memory_requirements refused a valid definition");
+    }
+    mem2 = block_new(req2.bytes, req2.align, 0);
+    mem3 = block_new(req3.bytes, req3.align, 0);
+    if (mpm_world_init(&g_def2, mem2.at, req2.bytes, &g_w2) != MPM_STATUS_OK ||
+        mpm_world_init(&d3, mem3.at, req3.bytes, &g_w3) != MPM_STATUS_OK) {
+        fail("setup", "mpm_world_init refused a valid definition");
+    }
+    if (mpm_world_bytes(g_w2, &g_w2_bytes) != MPM_STATUS_OK) {
+        fail("setup", "mpm_world_bytes refused the 2D world");
+    }
+    track(g_w2);
+    track(g_w3);
+
+    ACCEPTED("setup: 2D material", 1, mpm_world_add_material(g_w2, &m, &id));
+    batch_fill(&b, 4, 0.3, 0.3, 0.0);
+    a = arrays_of(&b);
+    a.position[2] = NULL; /* not read in 2D */
+    a.velocity[2] = NULL;
+    ACCEPTED("setup: 2D particles from arrays (z arrays NULL)", 1,
+             mpm_world_add_particles(g_w2, &a, 4, &ids));
+    ACCEPTED("setup: 2D box", 1,
+             mpm_world_fill_box(g_w2, v3(0.5, 0.5, 0), v3(0.6, 0.6, 0), 0, v3(0.1, 0, 0),
+                                &ids));
+    expect_true("setup: 2D box has 16 particles", ids.first == 4 && ids.count == 16);
+    ACCEPTED("setup: 2D step", 1, mpm_world_step(g_w2, R(1.0 / 256.0), &report));
+
+    ACCEPTED("setup: 3D material", 1, mpm_world_add_material(g_w3, &m, &id));
+    ACCEPTED("setup: 3D sphere", 1,
+             mpm_world_fill_sphere(g_w3, v3(0.2, 0.2, 0.2), R(0.03), 0, v3(0, 0, 0.25), &ids));
+    expect_true("setup: 3D sphere has 8 particles", ids.first == 0 && ids.count == 8);
+    ACCEPTED("setup: 3D step", 1, mpm_world_step(g_w3, R(1.0 / 256.0), &report));
+
+    null_pointers();
+    not_a_world();
+    init_misuse();
+    open_misuse();
+    material_misuse();
+    particles_misuse();
+    fill_misuse();
+    step_misuse();
+    copy_misuse();
+    capacity_misuse();
+    status_strings();
+
+    /* After all of it both worlds still step. */
+    ACCEPTED("end: 2D step", 1, mpm_world_step(g_w2, R(1.0 / 256.0), &report));
+    ACCEPTED("end: 3D step", 1, mpm_world_step(g_w3, R(1.0 / 256.0), &report));
+
+    free(mem2.raw);
+    free(mem3.raw);
+    printf("all %lu misuse checks passed\n", g_checks);
+    return 0;
+}

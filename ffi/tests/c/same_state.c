@@ -1,0 +1,341 @@
+/*
+ * Two scenes stepped through the C interface, printing after every seeding call and every step
+ * the FNV-1a 64 hash of the world's bytes (mpm_world_bytes extent), of every copied-out column
+ * and of the columns of the borrowed view, the diagnostics and the step report, exactly (bytes
+ * as hex, in memory order). tests/c_checks.rs runs the same scenes through the Rust kernel API
+ * and expects the same text, line for line: the C interface must add nothing and lose nothing.
+ *
+ * Every number is a dyadic fraction (exact in float and double), so that a literal means the
+ * same value here and in the Rust test.
+ *
+ * Scenes:
+ *   plane2d: a neo-Hookean block and a linear elastic disk dropped on a stick floor, plus six
+ *            particles from arrays; GIMP, MUSL.
+ *   space3d: a sphere falling towards a stick floor and a box that leaves through an open
+ *            face, in 3D; quadratic B-spline, USL.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mpm_gimp.h"
+
+static void die(const char *what, MpmStatus s) {
+    printf("FAIL %s: %s\n", what, mpm_status_string(s));
+    fflush(stdout);
+    exit(1);
+}
+
+#define CALL(what, call) \
+    do { \
+        MpmStatus s_ = (call); \
+        if (s_ != MPM_STATUS_OK) { \
+            die((what), s_); \
+        } \
+    } while (0)
+
+static uint64_t fnv1a(uint64_t h, const void *data, size_t n) {
+    const unsigned char *p = (const unsigned char *)data;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 0x100000001b3u;
+    }
+    return h;
+}
+
+#define FNV_START 0xcbf29ce484222325u
+
+static void print_hash(uint64_t h) {
+    printf("%016llx", (unsigned long long)h);
+}
+
+/* The bytes of a value, in memory order. */
+static void print_bytes(const void *data, size_t n) {
+    const unsigned char *p = (const unsigned char *)data;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        printf("%02x", p[i]);
+    }
+}
+
+static MpmVec3 v3(mpm_real x, mpm_real y, mpm_real z) {
+    MpmVec3 v;
+    v.x = x;
+    v.y = y;
+    v.z = z;
+    return v;
+}
+
+static mpm_real *g_reals;
+static uint32_t *g_ids;
+static size_t g_capacity;
+
+typedef MpmStatus (*CopyReal)(const MpmWorld *, mpm_real *, size_t, size_t *);
+
+static void print_copy(const char *label, const char *name, CopyReal fn, const MpmWorld *w) {
+    size_t written = 0;
+    CALL(name, fn(w, g_reals, 6 * g_capacity, &written));
+    printf("%s: %s ", label, name);
+    print_hash(fnv1a(FNV_START, g_reals, written * sizeof(mpm_real)));
+    printf(" %lu\n", (unsigned long)written);
+}
+
+/* Which pointers of the view are set: '1' set, '0' NULL. */
+static void print_present(const mpm_real *const *p, size_t n) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        putchar(p[i] != NULL ? '1' : '0');
+    }
+}
+
+static void print_state(const char *label, const MpmWorld *w) {
+    size_t bytes = 0, written = 0, i;
+    MpmParticlesView view;
+    MpmDiagnostics d;
+    uint64_t h;
+
+    CALL("mpm_world_bytes", mpm_world_bytes(w, &bytes));
+    printf("%s: world ", label);
+    print_hash(fnv1a(FNV_START, w, bytes));
+    printf(" %lu\n", (unsigned long)bytes);
+
+    print_copy(label, "positions", mpm_world_copy_positions, w);
+    print_copy(label, "velocities", mpm_world_copy_velocities, w);
+    print_copy(label, "stress", mpm_world_copy_stress, w);
+    print_copy(label, "jacobians", mpm_world_copy_jacobians, w);
+    CALL("status", mpm_world_copy_status(w, g_ids, g_capacity, &written));
+    printf("%s: status ", label);
+    print_hash(fnv1a(FNV_START, g_ids, written * sizeof(uint32_t)));
+    printf(" %lu\n", (unsigned long)written);
+
+    CALL("mpm_world_particles", mpm_world_particles(w, &view));
+    printf("%s: view count %lu dimension %u present ", label, (unsigned long)view.count,
+           (unsigned)view.dimension);
+    print_present(view.position, 3);
+    putchar(' ');
+    print_present(view.velocity, 3);
+    putchar(' ');
+    print_present(view.displacement_gradient, 9);
+    putchar(' ');
+    print_present(view.stress, 6);
+    printf(" mass ");
+    print_hash(fnv1a(FNV_START, view.mass, view.count * sizeof(mpm_real)));
+    printf(" volume0 ");
+    print_hash(fnv1a(FNV_START, view.volume0, view.count * sizeof(mpm_real)));
+    printf(" material ");
+    print_hash(fnv1a(FNV_START, view.material, view.count * sizeof(uint32_t)));
+    h = FNV_START;
+    for (i = 0; i < 9; i++) {
+        if (view.displacement_gradient[i] != NULL) {
+            h = fnv1a(h, view.displacement_gradient[i], view.count * sizeof(mpm_real));
+        }
+    }
+    printf(" displacement_gradient ");
+    print_hash(h);
+    putchar('\n');
+
+    CALL("mpm_world_diagnostics", mpm_world_diagnostics(w, &d));
+    printf("%s: diagnostics particles %lu steps %lu time ", label,
+           (unsigned long)d.particle_count, (unsigned long)d.step_count);
+    print_bytes(&d.time, sizeof d.time);
+    printf(" mass ");
+    print_bytes(&d.mass, sizeof d.mass);
+    printf(" momentum ");
+    for (i = 0; i < 3; i++) {
+        print_bytes(&d.momentum[i], sizeof d.momentum[i]);
+        putchar(i < 2 ? ' ' : '\n');
+    }
+    printf("%s: diagnostics center_of_mass ", label);
+    for (i = 0; i < 3; i++) {
+        print_bytes(&d.center_of_mass[i], sizeof d.center_of_mass[i]);
+        putchar(' ');
+    }
+    printf("kinetic ");
+    print_bytes(&d.kinetic, sizeof d.kinetic);
+    printf(" strain ");
+    print_bytes(&d.strain, sizeof d.strain);
+    printf(" potential ");
+    print_bytes(&d.potential, sizeof d.potential);
+    putchar('\n');
+}
+
+static void print_ids(const char *what, MpmIdRange ids) {
+    printf("seed %s: first %lu count %lu\n", what, (unsigned long)ids.first,
+           (unsigned long)ids.count);
+}
+
+static void step_frames(MpmWorld *w, int frames, mpm_real dt) {
+    int f;
+    uint32_t i;
+    for (f = 0; f < frames; f++) {
+        char label[32];
+        mpm_real stable = 0;
+        MpmStepReport r;
+        CALL("mpm_world_stable_dt", mpm_world_stable_dt(w, &stable));
+        CALL("mpm_world_step", mpm_world_step(w, dt, &r));
+        printf("step %d: stable_dt ", f + 1);
+        print_bytes(&stable, sizeof stable);
+        printf(" substeps %lu substep_dt ", (unsigned long)r.substeps);
+        print_bytes(&r.substep_dt, sizeof r.substep_dt);
+        printf(" stopped %lu escaped %lu frozen %lu first_frozen", (unsigned long)r.stopped,
+               (unsigned long)r.escaped, (unsigned long)r.frozen);
+        for (i = 0; i < r.first_frozen_count; i++) {
+            printf(" %lu", (unsigned long)r.first_frozen[i]);
+        }
+        putchar('\n');
+        snprintf(label, sizeof label, "after step %d", f + 1);
+        print_state(label, w);
+    }
+}
+
+/* A world of `def` in fresh memory; the block to free goes to `raw`. */
+static MpmWorld *new_world(const MpmWorldDef *def, void **raw) {
+    MpmMemoryRequirements req;
+    unsigned char *p;
+    size_t offset;
+    MpmWorld *w = NULL;
+    CALL("mpm_memory_requirements", mpm_memory_requirements(def, &req));
+    printf("requirements bytes %lu align %lu\n", (unsigned long)req.bytes,
+           (unsigned long)req.align);
+    p = (unsigned char *)malloc(req.bytes + req.align);
+    if (p == NULL) {
+        printf("FAIL malloc\n");
+        exit(1);
+    }
+    offset = (req.align - (size_t)((uintptr_t)p % req.align)) % req.align;
+    CALL("mpm_world_init", mpm_world_init(def, p + offset, req.bytes, &w));
+    *raw = p;
+    return w;
+}
+
+static void scratch(size_t capacity) {
+    free(g_reals);
+    free(g_ids);
+    g_capacity = capacity;
+    g_reals = (mpm_real *)malloc(6 * capacity * sizeof(mpm_real));
+    g_ids = (uint32_t *)malloc(capacity * sizeof(uint32_t));
+    if (g_reals == NULL || g_ids == NULL) {
+        printf("FAIL malloc\n");
+        exit(1);
+    }
+}
+
+static void plane2d(void) {
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef rubber = mpm_material_def_default();
+    MpmMaterialDef soft = mpm_material_def_default();
+    uint32_t id_rubber = 0, id_soft = 0, i;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+    mpm_real x[6], y[6], vx[6], vy[6], mass[6], volume[6];
+    uint32_t material[6];
+    MpmParticleArrays a;
+
+    printf("scene plane2d\n");
+    def.cells[0] = 32;
+    def.cells[1] = 32;
+    def.cell_size = (mpm_real)0.03125;
+    def.particle_capacity = 1024;
+    def.material_capacity = 2;
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    soft.model = MPM_MATERIAL_MODEL_LINEAR_ELASTIC;
+    soft.youngs_modulus = (mpm_real)500000.0;
+    soft.poisson_ratio = (mpm_real)0.25;
+    soft.density = (mpm_real)750.0;
+    CALL("add rubber", mpm_world_add_material(w, &rubber, &id_rubber));
+    CALL("add soft", mpm_world_add_material(w, &soft, &id_soft));
+    printf("materials %lu %lu\n", (unsigned long)id_rubber, (unsigned long)id_soft);
+
+    CALL("fill_box", mpm_world_fill_box(w, v3(0.3125f, 0.0625f, 0), v3(0.5625f, 0.1875f, 0),
+                                        id_rubber, v3(0, -1.0f, 0), &ids));
+    print_ids("box", ids);
+    print_state("after box", w);
+    CALL("fill_disk", mpm_world_fill_disk(w, v3(0.75f, 0.25f, 0), (mpm_real)0.0625, id_soft,
+                                          v3(-0.5f, 0, 0), &ids));
+    print_ids("disk", ids);
+    print_state("after disk", w);
+
+    for (i = 0; i < 6; i++) {
+        x[i] = (mpm_real)(0.125 + 0.03125 * i);
+        y[i] = (mpm_real)(0.125 + 0.0625 * (i % 2));
+        vx[i] = (mpm_real)(0.5 * i - 1.0);
+        vy[i] = (mpm_real)0.25;
+        mass[i] = (mpm_real)0.25;
+        volume[i] = (mpm_real)(1.0 / 4096.0);
+        material[i] = i % 2 ? id_soft : id_rubber;
+    }
+    a.position[0] = x;
+    a.position[1] = y;
+    a.position[2] = NULL;
+    a.velocity[0] = vx;
+    a.velocity[1] = vy;
+    a.velocity[2] = NULL;
+    a.mass = mass;
+    a.volume = volume;
+    a.material = material;
+    CALL("add_particles", mpm_world_add_particles(w, &a, 6, &ids));
+    print_ids("arrays", ids);
+    print_state("after arrays", w);
+
+    step_frames(w, 16, (mpm_real)0.0078125);
+    free(raw);
+}
+
+static void space3d(void) {
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef rubber = mpm_material_def_default();
+    uint32_t id = 0;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+
+    printf("scene space3d\n");
+    def.dimension = MPM_DIMENSION_SPACE3D;
+    def.cells[0] = 12;
+    def.cells[1] = 12;
+    def.cells[2] = 12;
+    def.cell_size = (mpm_real)0.0625;
+    def.particle_capacity = 2048;
+    def.material_capacity = 1;
+    def.shape = MPM_SHAPE_QUADRATIC_BSPLINE;
+    def.update_order = MPM_UPDATE_ORDER_USL;
+    def.flip_beta = (mpm_real)0.875;
+    def.gravity = v3(0.5f, -10.0f, 0.25f);
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    def.faces[MPM_FACE_X_MAX] = MPM_BOUNDARY_OPEN;
+    def.exp_terms = 3;
+    def.cfl = (mpm_real)0.375;
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
+    printf("materials %lu\n", (unsigned long)id);
+    CALL("fill_sphere", mpm_world_fill_sphere(w, v3(0.25f, 0.25f, 0.25f), (mpm_real)0.125,
+                                              id, v3(0.5f, -0.5f, 0.25f), &ids));
+    print_ids("sphere", ids);
+    print_state("after sphere", w);
+    CALL("fill_box", mpm_world_fill_box(w, v3(0.5f, 0.5f, 0.5f), v3(0.625f, 0.625f, 0.625f),
+                                        id, v3(2.0f, 0, 0), &ids));
+    print_ids("box", ids);
+    print_state("after box", w);
+
+    step_frames(w, 16, (mpm_real)0.0078125);
+    free(raw);
+}
+
+int main(void) {
+    plane2d();
+    space3d();
+    free(g_reals);
+    free(g_ids);
+    printf("end\n");
+    return 0;
+}

@@ -1,0 +1,749 @@
+//! The C interface checked from C, against the Rust definitions and the Rust kernel:
+//!
+//! - layout: every type of the header has, in C99 and in C++17, the size, alignment, field
+//!   offsets and field sizes of its Rust definition, and the C program covers every struct,
+//!   field and enum the header declares (`tests/c/layout.c`);
+//! - misuse: every refused call returns its documented status, changes no world's bytes and
+//!   writes no output, in a strict build and under AddressSanitizer and UBSan
+//!   (`tests/c/misuse.c`);
+//! - same state: two scenes stepped through the C interface leave the same bytes, columns,
+//!   diagnostics and step reports as the same scenes stepped through the Rust kernel API
+//!   (`tests/c/same_state.c` against [`rust_same_state`]);
+//! - and, in Rust through the rlib: the default definitions and the status strings agree with
+//!   the kernel's.
+
+mod common;
+
+use common::Lang;
+use core::mem::{align_of, offset_of, size_of};
+use kernel::{
+    memory_requirements, Boundary, Dimension, Error, Face, MaterialDef, MaterialModel,
+    ParticleBatch, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
+};
+use mpm_gimp::*;
+use std::collections::BTreeSet;
+use std::ffi::CStr;
+
+fn stdout_of(out: &std::process::Output) -> String {
+    String::from_utf8(out.stdout.clone()).expect("the program prints UTF-8")
+}
+
+/// Compares two texts line by line; panics at the first difference with its line number.
+fn assert_same_lines(what: &str, c: &str, rust: &str) {
+    let (c_lines, rust_lines): (Vec<&str>, Vec<&str>) =
+        (c.lines().collect(), rust.lines().collect());
+    for (i, (a, b)) in c_lines.iter().zip(rust_lines.iter()).enumerate() {
+        assert_eq!(
+            a,
+            b,
+            "{what}: line {} differs (left: C, right: Rust)",
+            i + 1
+        );
+    }
+    assert_eq!(
+        c_lines.len(),
+        rust_lines.len(),
+        "{what}: the C output has {} lines, the Rust one {}",
+        c_lines.len(),
+        rust_lines.len()
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Layout
+// ---------------------------------------------------------------------------------------------
+
+/// Size of the field that `f` projects to.
+fn field_size<T, U>(_f: impl Fn(&T) -> &U) -> usize {
+    size_of::<U>()
+}
+
+/// `type NAME size S align A`, as `tests/c/layout.c` prints it.
+macro_rules! type_line {
+    ($name:expr, $t:ty) => {
+        format!(
+            "type {} size {} align {}",
+            $name,
+            size_of::<$t>(),
+            align_of::<$t>()
+        )
+    };
+}
+
+/// The type line of struct `$t`, then `field T.f offset O size S` for each field.
+macro_rules! struct_lines {
+    ($t:ident { $($f:ident),* $(,)? }) => {{
+        let mut v = vec![type_line!(stringify!($t), $t)];
+        $(
+            v.push(format!(
+                "field {}.{} offset {} size {}",
+                stringify!($t),
+                stringify!($f),
+                offset_of!($t, $f),
+                field_size(|s: &$t| &s.$f),
+            ));
+        )*
+        v
+    }};
+}
+
+/// What `tests/c/layout.c` must print: the Rust sizes, alignments and offsets. The enum types
+/// are `uint32_t` in C (an enum with that underlying type in C++), and each Rust definition
+/// stores its enum fields as `u32`.
+fn rust_layout() -> String {
+    let mut lines = vec![
+        type_line!("mpm_real", mpm_real),
+        type_line!("size_t", usize),
+        type_line!("MpmStatus", MpmStatus),
+        type_line!("MpmDimension", MpmDimension),
+        type_line!("MpmShape", MpmShape),
+        type_line!("MpmUpdateOrder", MpmUpdateOrder),
+        type_line!("MpmBoundary", MpmBoundary),
+        type_line!("MpmFace", MpmFace),
+        type_line!("MpmMaterialModel", MpmMaterialModel),
+        type_line!("MpmParticleStatus", MpmParticleStatus),
+    ];
+    lines.extend(struct_lines!(MpmVec3 { x, y, z }));
+    lines.extend(struct_lines!(MpmWorldDef {
+        dimension,
+        origin,
+        cell_size,
+        cells,
+        particle_capacity,
+        material_capacity,
+        shape,
+        particles_per_cell,
+        flip_beta,
+        update_order,
+        gravity,
+        faces,
+        exp_terms,
+        cfl,
+        internal_cookie,
+    }));
+    lines.extend(struct_lines!(MpmMaterialDef {
+        model,
+        youngs_modulus,
+        poisson_ratio,
+        density,
+        internal_cookie,
+    }));
+    lines.extend(struct_lines!(MpmParticlesView {
+        count,
+        dimension,
+        position,
+        velocity,
+        mass,
+        volume0,
+        displacement_gradient,
+        stress,
+        material,
+        status,
+    }));
+    lines.extend(struct_lines!(MpmDiagnostics {
+        particle_count,
+        time,
+        step_count,
+        mass,
+        momentum,
+        center_of_mass,
+        kinetic,
+        strain,
+        potential,
+    }));
+    lines.extend(struct_lines!(MpmMemoryRequirements { bytes, align }));
+    lines.extend(struct_lines!(MpmParticleArrays {
+        position,
+        velocity,
+        mass,
+        volume,
+        material,
+    }));
+    lines.extend(struct_lines!(MpmIdRange { first, count }));
+    lines.extend(struct_lines!(MpmStepReport {
+        substeps,
+        substep_dt,
+        stopped,
+        escaped,
+        frozen,
+        first_frozen_count,
+        first_frozen,
+    }));
+    let mut text = lines.join("\n");
+    text.push('\n');
+    text
+}
+
+/// The structs of the header with their fields in order, and its enums, read from the header
+/// text: what the layout program must cover.
+fn header_declarations() -> (Vec<(String, Vec<String>)>, BTreeSet<String>) {
+    let header = std::fs::read_to_string(common::ffi_dir().join("include/mpm_gimp.h"))
+        .expect("read the header");
+    let mut structs: Vec<(String, Vec<String>)> = Vec::new();
+    let mut enums = BTreeSet::new();
+    let mut current: Option<(String, Vec<String>)> = None;
+    for line in header.lines() {
+        let t = line.trim();
+        if let Some(rest) = t.strip_prefix("typedef struct ") {
+            if let Some(name) = rest.strip_suffix(" {") {
+                current = Some((name.to_string(), Vec::new()));
+            }
+            continue;
+        }
+        if let Some(name) = t.strip_prefix("enum ") {
+            if !name.contains(['{', ';', ' ']) {
+                enums.insert(name.to_string());
+            }
+            continue;
+        }
+        if let Some((name, fields)) = current.as_mut() {
+            if t.starts_with('}') {
+                assert_eq!(
+                    t,
+                    format!("}} {name};"),
+                    "end of struct {name} in the header"
+                );
+                structs.push(current.take().expect("inside a struct"));
+            } else if !t.is_empty() && !t.starts_with("//") {
+                let decl = t
+                    .strip_suffix(';')
+                    .expect("a field declaration ends with ';'");
+                let decl = decl.split('[').next().expect("split gives one piece");
+                let field = decl.rsplit([' ', '*']).next().expect("a field name");
+                fields.push(field.to_string());
+            }
+        }
+    }
+    (structs, enums)
+}
+
+/// Checks the layout program's output against the Rust layout and the header's declarations.
+fn check_layout(lang: Lang, name: &str) -> String {
+    let exe = common::build(name, lang, &["tests/c/layout.c"], common::STRICT);
+    let c = stdout_of(&common::run(&exe, &[]));
+    assert_same_lines(&format!("layout ({lang:?})"), &c, &rust_layout());
+
+    let (structs, enums) = header_declarations();
+    assert!(
+        structs.len() >= 9,
+        "the header parse found only {structs:?}"
+    );
+    for (s, fields) in &structs {
+        let prefix = format!("type {s} size ");
+        assert!(
+            c.lines().any(|l| l.starts_with(&prefix)),
+            "the layout program does not cover struct {s}"
+        );
+        let printed: Vec<&str> = c
+            .lines()
+            .filter_map(|l| l.strip_prefix(&format!("field {s}.")))
+            .map(|rest| rest.split(' ').next().unwrap_or_default())
+            .collect();
+        assert_eq!(
+            printed, *fields,
+            "the layout program's fields of {s} differ from the header's"
+        );
+    }
+    assert!(
+        enums.len() >= 8,
+        "the header parse found only enums {enums:?}"
+    );
+    for e in &enums {
+        let prefix = format!("type {e} size ");
+        assert!(
+            c.lines().any(|l| l.starts_with(&prefix)),
+            "the layout program does not cover enum {e}"
+        );
+    }
+    c
+}
+
+/// Expectation: compiled as C99 with strict warnings, every struct of the header has the size,
+/// alignment (offsetof probe), field offsets and field sizes of the Rust struct, every enum
+/// type is 4 bytes aligned to 4 like its `#[repr(u32)]` Rust enum, and the program covers
+/// every struct, field and enum the header declares.
+#[test]
+fn layout_c99_matches_rust() {
+    check_layout(Lang::C99, "layout-c99");
+}
+
+/// Expectation: the same program compiled as C++17 (where the enums are `enum : uint32_t` and
+/// the probe is also checked against `alignof`) prints exactly what the C99 build prints, and
+/// both match the Rust layout.
+#[test]
+fn layout_cpp17_matches_rust_and_c99() {
+    let cpp = check_layout(Lang::Cpp17, "layout-cpp17");
+    let c = check_layout(Lang::C99, "layout-c99-for-cpp");
+    assert_same_lines("layout C++17 vs C99", &cpp, &c);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Misuse
+// ---------------------------------------------------------------------------------------------
+
+/// Runs the misuse program and checks its last line and that no check failed.
+fn check_misuse(name: &str, flags: &[&str]) {
+    let exe = common::build(name, Lang::C99, &["tests/c/misuse.c"], flags);
+    let out = stdout_of(&common::run(&exe, &[]));
+    assert!(
+        !out.lines().any(|l| l.starts_with("FAIL")),
+        "a misuse check failed:\n{out}"
+    );
+    let last = out.lines().last().unwrap_or_default();
+    let n: usize = last
+        .strip_prefix("all ")
+        .and_then(|r| r.strip_suffix(" misuse checks passed"))
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("unexpected last line {last:?} of:\n{out}"));
+    let ok_lines = out.lines().filter(|l| l.starts_with("ok ")).count();
+    assert_eq!(n, ok_lines, "the count differs from the printed checks");
+    // The program's checks as written: a shrinking count means checks went missing.
+    assert!(n >= 400, "only {n} misuse checks ran");
+}
+
+/// Expectation: with strict warnings (C99, -Wall -Wextra -Werror -pedantic), every misuse in
+/// `tests/c/misuse.c` (NULL in every pointer argument, buffers too small or misaligned, bad
+/// definitions and enums, non-finite and out-of-range inputs, capacity overflow, unknown
+/// materials, out-of-domain positions, short output buffers, a disk in 3D and a sphere in 2D,
+/// non-worlds, damaged snapshots) is refused with its status, leaves every world's bytes and
+/// every output untouched, and every status string is a description ("unknown status" for
+/// values outside the enum, never NULL). The program ends with "all N misuse checks passed".
+#[test]
+fn misuse_from_c_strict() {
+    check_misuse("misuse", common::STRICT);
+}
+
+/// Expectation: the same program, built with AddressSanitizer and UndefinedBehaviorSanitizer
+/// (no recovery), passes the same checks without a sanitizer report. (The library itself is not
+/// instrumented; the no-access page in the program is what proves that an over-capacity count
+/// reads no array.)
+#[test]
+fn misuse_from_c_sanitized() {
+    let flags: Vec<&str> = common::STRICT
+        .iter()
+        .chain(common::SANITIZE)
+        .copied()
+        .collect();
+    check_misuse("misuse-sanitized", &flags);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Same state through the C and the Rust API
+// ---------------------------------------------------------------------------------------------
+
+const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
+
+fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+fn hash(bytes: &[u8]) -> String {
+    format!("{:016x}", fnv1a(FNV_START, bytes))
+}
+
+fn real_bytes(values: impl IntoIterator<Item = Real>) -> Vec<u8> {
+    values.into_iter().flat_map(|x| x.to_ne_bytes()).collect()
+}
+
+fn u32_bytes(values: impl IntoIterator<Item = u32>) -> Vec<u8> {
+    values.into_iter().flat_map(|x| x.to_ne_bytes()).collect()
+}
+
+/// The bytes of a value in memory order, as hex (what the C program's `print_bytes` prints).
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The text of `tests/c/same_state.c`, built with the Rust API.
+struct Text(String);
+
+impl Text {
+    fn line(&mut self, s: impl AsRef<str>) {
+        self.0.push_str(s.as_ref());
+        self.0.push('\n');
+    }
+
+    /// As the C program's `print_state`.
+    fn state(&mut self, label: &str, w: &World<'_>) {
+        let bytes = w.as_bytes();
+        self.line(format!("{label}: world {} {}", hash(bytes), bytes.len()));
+        let v = w.particles();
+        let n = v.count;
+        let d = if v.dimension == Dimension::ThreeD {
+            3
+        } else {
+            2
+        };
+        let ns = if d == 3 { 6 } else { 4 };
+        let interleaved = |cols: &[&[Real]]| {
+            let k = cols.len();
+            let bytes = real_bytes((0..n * k).map(|j| cols[j % k][j / k]));
+            format!("{} {}", hash(&bytes), n * k)
+        };
+        self.line(format!(
+            "{label}: positions {}",
+            interleaved(&v.position[..d])
+        ));
+        self.line(format!(
+            "{label}: velocities {}",
+            interleaved(&v.velocity[..d])
+        ));
+        self.line(format!("{label}: stress {}", interleaved(&v.stress[..ns])));
+        let jacobians = real_bytes((0..n).map(|i| v.jacobian(i)));
+        self.line(format!("{label}: jacobians {} {n}", hash(&jacobians)));
+        let status = u32_bytes(v.status.iter().copied());
+        self.line(format!("{label}: status {} {n}", hash(&status)));
+
+        let present = |k: usize, used: &dyn Fn(usize) -> bool| -> String {
+            (0..k).map(|i| if used(i) { '1' } else { '0' }).collect()
+        };
+        let h_used = |k: usize| k / 3 < d && k % 3 < d;
+        let mut h = FNV_START;
+        for k in (0..9).filter(|&k| h_used(k)) {
+            h = fnv1a(
+                h,
+                &real_bytes(v.displacement_gradient[k / 3][k % 3].iter().copied()),
+            );
+        }
+        self.line(format!(
+            "{label}: view count {n} dimension {} present {} {} {} {} mass {} volume0 {} \
+             material {} displacement_gradient {h:016x}",
+            v.dimension as u32,
+            present(3, &|a| a < d),
+            present(3, &|a| a < d),
+            present(9, &h_used),
+            present(6, &|k| k < ns),
+            hash(&real_bytes(v.mass.iter().copied())),
+            hash(&real_bytes(v.volume0.iter().copied())),
+            hash(&u32_bytes(v.material.iter().copied())),
+        ));
+
+        let s = w.diagnostics();
+        let f = |x: f64| hex(&x.to_ne_bytes());
+        self.line(format!(
+            "{label}: diagnostics particles {} steps {} time {} mass {} momentum {} {} {}",
+            w.particle_count(),
+            w.step_count(),
+            f(w.time()),
+            f(s.mass),
+            f(s.momentum[0]),
+            f(s.momentum[1]),
+            f(s.momentum[2]),
+        ));
+        self.line(format!(
+            "{label}: diagnostics center_of_mass {} {} {} kinetic {} strain {} potential {}",
+            f(s.center_of_mass[0]),
+            f(s.center_of_mass[1]),
+            f(s.center_of_mass[2]),
+            f(s.kinetic),
+            f(s.strain),
+            f(s.potential),
+        ));
+    }
+
+    fn seed(&mut self, what: &str, ids: core::ops::Range<u32>) {
+        self.line(format!(
+            "seed {what}: first {} count {}",
+            ids.start,
+            ids.end - ids.start
+        ));
+    }
+
+    /// As the C program's `step_frames`.
+    fn frames(&mut self, w: &mut World<'_>, frames: usize, dt: Real) {
+        for f in 1..=frames {
+            let stable = w.stable_dt();
+            let r = w.step(dt).expect("a valid step");
+            let frozen: String = r.first_frozen.iter().map(|id| format!(" {id}")).collect();
+            self.line(format!(
+                "step {f}: stable_dt {} substeps {} substep_dt {} stopped {} escaped {} \
+                 frozen {} first_frozen{frozen}",
+                hex(&stable.to_ne_bytes()),
+                r.substeps,
+                hex(&r.substep_dt.to_ne_bytes()),
+                r.stopped,
+                r.escaped,
+                r.frozen,
+            ));
+            self.state(&format!("after step {f}"), w);
+        }
+    }
+}
+
+/// A zeroed buffer of `def`'s requirement inside `storage`, aligned as required.
+fn world_memory<'a>(def: &WorldDef, storage: &'a mut Vec<u8>, text: &mut Text) -> &'a mut [u8] {
+    let req = memory_requirements(def).expect("a valid definition");
+    text.line(format!(
+        "requirements bytes {} align {}",
+        req.bytes, req.align
+    ));
+    *storage = vec![0u8; req.bytes + req.align];
+    let offset = storage.as_ptr().align_offset(req.align);
+    &mut storage[offset..offset + req.bytes]
+}
+
+/// The scenes of `tests/c/same_state.c`, through `kernel::World`.
+fn rust_same_state() -> String {
+    let mut t = Text(String::new());
+
+    // plane2d
+    t.line("scene plane2d");
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    let def = WorldDef {
+        cells: [32, 32, 1],
+        cell_size: 0.03125,
+        particle_capacity: 1024,
+        material_capacity: 2,
+        faces,
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, &mut t)).expect("init");
+    t.state("empty", &w);
+    let soft = MaterialDef {
+        model: MaterialModel::LinearElastic,
+        youngs_modulus: 500000.0,
+        poisson_ratio: 0.25,
+        density: 750.0,
+    };
+    let rubber = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
+    let soft = w.add_material(&soft).expect("soft");
+    t.line(format!("materials {rubber} {soft}"));
+    let ids = w
+        .fill_box(
+            Vec3::new(0.3125, 0.0625, 0.0),
+            Vec3::new(0.5625, 0.1875, 0.0),
+            rubber,
+            Vec3::new(0.0, -1.0, 0.0),
+        )
+        .expect("box");
+    t.seed("box", ids);
+    t.state("after box", &w);
+    let ids = w
+        .fill_disk(
+            Vec3::new(0.75, 0.25, 0.0),
+            0.0625,
+            soft,
+            Vec3::new(-0.5, 0.0, 0.0),
+        )
+        .expect("disk");
+    t.seed("disk", ids);
+    t.state("after disk", &w);
+    let x: Vec<Real> = (0..6).map(|i| 0.125 + 0.03125 * i as Real).collect();
+    let y: Vec<Real> = (0..6).map(|i| 0.125 + 0.0625 * (i % 2) as Real).collect();
+    let vx: Vec<Real> = (0..6).map(|i| 0.5 * i as Real - 1.0).collect();
+    let vy = [0.25 as Real; 6];
+    let mass = [0.25 as Real; 6];
+    let volume: [Real; 6] = [1.0 / 4096.0; 6];
+    let material: Vec<u32> = (0..6)
+        .map(|i| if i % 2 == 1 { soft } else { rubber })
+        .collect();
+    let ids = w
+        .add_particles(&ParticleBatch {
+            position: [&x, &y, &[]],
+            velocity: [&vx, &vy, &[]],
+            mass: &mass,
+            volume: &volume,
+            material: &material,
+        })
+        .expect("arrays");
+    t.seed("arrays", ids);
+    t.state("after arrays", &w);
+    t.frames(&mut w, 16, 0.0078125);
+
+    // space3d
+    t.line("scene space3d");
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    faces[Face::XMax as usize] = Boundary::Open;
+    let def = WorldDef {
+        dimension: Dimension::ThreeD,
+        cells: [12, 12, 12],
+        cell_size: 0.0625,
+        particle_capacity: 2048,
+        material_capacity: 1,
+        shape: ShapeFunction::QuadraticBspline,
+        update_order: UpdateOrder::Usl,
+        flip_beta: 0.875,
+        gravity: Vec3::new(0.5, -10.0, 0.25),
+        faces,
+        exp_terms: 3,
+        cfl: 0.375,
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, &mut t)).expect("init");
+    t.state("empty", &w);
+    let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
+    t.line(format!("materials {id}"));
+    let ids = w
+        .fill_sphere(Vec3::splat(0.25), 0.125, id, Vec3::new(0.5, -0.5, 0.25))
+        .expect("sphere");
+    t.seed("sphere", ids);
+    t.state("after sphere", &w);
+    let ids = w
+        .fill_box(
+            Vec3::new(0.5, 0.5, 0.5),
+            Vec3::new(0.625, 0.625, 0.625),
+            id,
+            Vec3::new(2.0, 0.0, 0.0),
+        )
+        .expect("box");
+    t.seed("box", ids);
+    t.state("after box", &w);
+    t.frames(&mut w, 16, 0.0078125);
+
+    t.line("end");
+    t.0
+}
+
+/// Expectation: the two scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
+/// stick floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards
+/// an open face, quadratic B-spline and USL) leave, after every seeding call and every step,
+/// the same world bytes, copied-out columns (positions, velocities, stress, J, status), view
+/// columns (mass, V0, material, H, and which pointers are NULL), diagnostics (bit for bit) and
+/// step reports through the C interface as through the Rust kernel API.
+#[test]
+fn same_state_through_c_and_rust() {
+    let exe = common::build(
+        "same-state",
+        Lang::C99,
+        &["tests/c/same_state.c"],
+        common::STRICT,
+    );
+    let c = stdout_of(&common::run(&exe, &[]));
+    let rust = rust_same_state();
+    assert_same_lines("same state", &c, &rust);
+    // The escape path is part of what is compared: the whole 3D box (64 particles) leaves
+    // through the open face, and none of the 2D scene does (it has no open face).
+    assert_eq!(escaped_in(&c, "plane2d"), 0);
+    assert_eq!(escaped_in(&c, "space3d"), 64);
+}
+
+/// The sum of `escaped` over the step lines of `scene`.
+fn escaped_in(text: &str, scene: &str) -> u64 {
+    let mut current = "";
+    let mut total = 0;
+    for line in text.lines() {
+        if let Some(name) = line.strip_prefix("scene ") {
+            current = name;
+        } else if current == scene && line.starts_with("step ") {
+            let words: Vec<&str> = line.split(' ').collect();
+            let i = words
+                .iter()
+                .position(|w| *w == "escaped")
+                .expect("escaped in a step line");
+            total += words[i + 1].parse::<u64>().expect("a count");
+        }
+    }
+    total
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rust-only checks through the rlib
+// ---------------------------------------------------------------------------------------------
+
+/// Expectation: `mpm_world_def_default` and `mpm_material_def_default` carry the kernel's
+/// documented defaults field by field (enums as their numbers), with a non-zero cookie, and
+/// the world definition read back from a world made of it equals it.
+#[test]
+fn defaults_match_the_kernel() {
+    #[cfg(not(feature = "f64"))]
+    let (wd, md) = (mpm_world_def_default_f32(), mpm_material_def_default_f32());
+    #[cfg(feature = "f64")]
+    let (wd, md) = (mpm_world_def_default_f64(), mpm_material_def_default_f64());
+    let k = WorldDef::DEFAULT;
+    assert_eq!(wd.dimension, k.dimension as u32);
+    assert_eq!([wd.origin.x, wd.origin.y, wd.origin.z], k.origin.to_array());
+    assert_eq!(wd.cell_size, k.cell_size);
+    assert_eq!(wd.cells, k.cells);
+    assert_eq!(wd.particle_capacity, k.particle_capacity);
+    assert_eq!(wd.material_capacity, k.material_capacity);
+    assert_eq!(wd.shape, k.shape as u32);
+    assert_eq!(wd.particles_per_cell, k.particles_per_cell);
+    assert_eq!(wd.flip_beta, k.flip_beta);
+    assert_eq!(wd.update_order, k.update_order as u32);
+    assert_eq!(
+        [wd.gravity.x, wd.gravity.y, wd.gravity.z],
+        k.gravity.to_array()
+    );
+    assert_eq!(wd.faces, k.faces.map(|f| f as u32));
+    assert_eq!(wd.exp_terms, k.exp_terms);
+    assert_eq!(wd.cfl, k.cfl);
+    assert_ne!(wd.internal_cookie, 0);
+
+    let m = MaterialDef::DEFAULT;
+    assert_eq!(md.model, m.model as u32);
+    assert_eq!(md.youngs_modulus, m.youngs_modulus);
+    assert_eq!(md.poisson_ratio, m.poisson_ratio);
+    assert_eq!(md.density, m.density);
+    assert_ne!(md.internal_cookie, 0);
+    assert_ne!(md.internal_cookie, wd.internal_cookie);
+
+    // A small world of the default definition: get_def gives back the same definition.
+    let mut d = wd;
+    d.cells = [8, 8, 1];
+    d.particle_capacity = 16;
+    let mut req = MpmMemoryRequirements::default();
+    // SAFETY: valid pointers to locals.
+    assert_eq!(
+        unsafe { mpm_memory_requirements(&d, &mut req) },
+        MpmStatus::Ok
+    );
+    let mut storage = vec![0u8; req.bytes + req.align];
+    let offset = storage.as_ptr().align_offset(req.align);
+    let mem = storage[offset..].as_mut_ptr().cast();
+    let mut world = core::ptr::null_mut();
+    // SAFETY: `mem` holds `req.bytes` bytes at the required alignment.
+    assert_eq!(
+        unsafe { mpm_world_init(&d, mem, req.bytes, &mut world) },
+        MpmStatus::Ok
+    );
+    let mut back = wd;
+    back.internal_cookie = 0;
+    // SAFETY: `world` is the world just made; `back` is a local.
+    assert_eq!(
+        unsafe { mpm_world_get_def(world, &mut back) },
+        MpmStatus::Ok
+    );
+    let bits = |x: &MpmWorldDef| format!("{x:?}");
+    assert_eq!(bits(&back), bits(&d));
+}
+
+/// Expectation: the status numbers of the kernel's errors are the kernel's own, and
+/// `mpm_status_string` gives the kernel's description for each; for the statuses only the C
+/// interface has it gives its own description; for every other value up to 4096 and for the
+/// extremes, "unknown status".
+#[test]
+fn status_strings_match_the_kernel() {
+    let text = |v: u32| {
+        let p = mpm_status_string(v);
+        assert!(!p.is_null(), "mpm_status_string({v}) is NULL");
+        // SAFETY: non-NULL, and documented as a static NUL-terminated string.
+        unsafe { CStr::from_ptr(p) }
+            .to_str()
+            .expect("UTF-8")
+            .to_owned()
+    };
+    for e in Error::ALL {
+        let s = MpmStatus::from(e);
+        assert_eq!(s as u32, e as u32, "{e:?} keeps its number");
+        assert_eq!(text(e as u32), e.as_str(), "{e:?}");
+    }
+    let known: BTreeSet<u32> = MpmStatus::ALL.iter().map(|s| *s as u32).collect();
+    assert_eq!(known.len(), MpmStatus::ALL.len());
+    for s in MpmStatus::ALL {
+        assert_eq!(text(s as u32), s.as_cstr().to_str().expect("UTF-8"));
+        assert_ne!(text(s as u32), "unknown status", "{s:?}");
+    }
+    for v in (0..=4096).chain([u32::MAX / 2, u32::MAX / 2 + 1, u32::MAX]) {
+        if !known.contains(&v) {
+            assert_eq!(text(v), "unknown status", "value {v}");
+        }
+    }
+}
