@@ -49,7 +49,9 @@ pub enum Error {
     LengthMismatch = 20,
     /// A time step that is <= 0 or not finite.
     InvalidTimeStep = 21,
-    /// A region (box, disk, sphere) that is empty, inverted or not finite.
+    /// A box inverted on an axis (min > max), a radius not finite or <= 0, or a disk in 3D or
+    /// a sphere in 2D. (Non-finite corners, centres or velocities are
+    /// [`Error::NonFiniteInput`]; a region that holds no lattice site adds no particle.)
     InvalidRegion = 22,
 }
 
@@ -90,7 +92,9 @@ impl Error {
             }
             Error::LengthMismatch => c"input arrays differ in length",
             Error::InvalidTimeStep => c"time step must be finite and > 0",
-            Error::InvalidRegion => c"region is empty, inverted or not finite",
+            Error::InvalidRegion => {
+                c"region inverted, radius not finite or <= 0, or of the other dimension"
+            }
         }
     }
 

@@ -64,7 +64,8 @@ pub use storage::AlignedBuffer;
 #[cfg(feature = "std")]
 pub use storage::HeapBuffer;
 pub use world::{
-    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, MAX_SUBSTEPS,
+    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, WorldRef,
+    MAX_SUBSTEPS,
 };
 
 /// The scalar type of every column, parameter and result: f32, or f64 with the `f64` feature.

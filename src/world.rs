@@ -216,66 +216,71 @@ impl<'a> World<'a> {
     /// Size of the header at the start of every world buffer, bytes.
     pub const HEADER_BYTES: usize = size_of::<Header>();
 
+    /// The world's read-only queries ([`WorldRef`]), borrowing it shared.
+    pub fn read(&self) -> WorldRef<'_> {
+        WorldRef { buf: self.buf }
+    }
+
+    /// The world's definition.
+    pub fn def(&self) -> WorldDef {
+        self.read().def()
+    }
+
     fn header(&self) -> &Header {
-        bytemuck::from_bytes(&self.buf[..size_of::<Header>()])
+        self.read().header()
+    }
+
+    /// Number of particles added.
+    pub fn particle_count(&self) -> usize {
+        self.read().particle_count()
+    }
+
+    /// Number of materials added.
+    pub fn material_count(&self) -> usize {
+        self.read().material_count()
+    }
+
+    /// Simulated time, s (sum of the `dt` of every step).
+    pub fn time(&self) -> f64 {
+        self.read().time()
+    }
+
+    /// Number of `step` calls that succeeded.
+    pub fn step_count(&self) -> u64 {
+        self.read().step_count()
+    }
+
+    /// The bytes the world occupies (a prefix of the buffer). A copy is a snapshot.
+    pub fn as_bytes(&self) -> &[u8] {
+        self.read().as_bytes()
+    }
+
+    /// The definition of material `id`.
+    pub fn material(&self, id: u32) -> Option<MaterialDef> {
+        self.read().material(id)
+    }
+
+    /// The largest stable time step, s ([`WorldRef::stable_dt`]).
+    pub fn stable_dt(&self) -> Real {
+        self.read().stable_dt()
+    }
+
+    /// Borrowed view of every particle column.
+    pub fn particles(&self) -> ParticlesView<'_> {
+        self.read().particles()
+    }
+
+    /// Mass, momentum, centre of mass and energies of the active particles.
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.read().diagnostics()
     }
 
     fn header_mut(&mut self) -> &mut Header {
         bytemuck::from_bytes_mut(&mut self.buf[..size_of::<Header>()])
     }
 
-    /// The world's definition.
-    pub fn def(&self) -> WorldDef {
-        // The header was written by init or checked by open, so it always decodes.
-        self.header().def().unwrap_or(WorldDef::DEFAULT)
-    }
-
-    fn layout(&self) -> Layout {
-        Layout::of(&self.def())
-    }
-
-    /// Number of particles added.
-    pub fn particle_count(&self) -> usize {
-        self.header().particle_count as usize
-    }
-
-    /// Number of materials added.
-    pub fn material_count(&self) -> usize {
-        self.header().material_count as usize
-    }
-
-    /// Simulated time, s (sum of the `dt` of every step).
-    pub fn time(&self) -> f64 {
-        self.header().time
-    }
-
-    /// Number of `step` calls that succeeded.
-    pub fn step_count(&self) -> u64 {
-        self.header().step_count
-    }
-
-    /// The bytes the world occupies (a prefix of the buffer). A copy is a snapshot.
-    pub fn as_bytes(&self) -> &[u8] {
-        let total = self.header().total_bytes as usize;
-        &self.buf[..total]
-    }
-
-    fn materials(&self, layout: &Layout) -> &[MaterialRecord] {
-        let n = self.material_count();
-        let start = layout.materials_offset;
-        bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
-    }
-
-    fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &[Real] {
-        bytemuck::cast_slice(&self.buf[layout.real_col(j, count)])
-    }
-
     fn real_col_mut(&mut self, layout: &Layout, j: usize, count: usize) -> &mut [Real] {
         bytemuck::cast_slice_mut(&mut self.buf[layout.real_col(j, count)])
-    }
-
-    fn u32_col(&self, layout: &Layout, j: usize, count: usize) -> &[u32] {
-        bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
     }
 
     fn u32_col_mut(&mut self, layout: &Layout, j: usize, count: usize) -> &mut [u32] {
@@ -319,19 +324,6 @@ impl<'a> World<'a> {
         };
         self.header_mut().material_count += 1;
         Ok(id as u32)
-    }
-
-    /// The definition of material `id`.
-    pub fn material(&self, id: u32) -> Option<MaterialDef> {
-        let layout = self.layout();
-        self.materials(&layout)
-            .get(id as usize)
-            .map(|r| MaterialDef {
-                model: model_of(r),
-                youngs_modulus: r.youngs_modulus,
-                poisson_ratio: r.poisson_ratio,
-                density: r.density,
-            })
     }
 
     /// Adds one particle; returns its id.
@@ -568,67 +560,6 @@ impl<'a> World<'a> {
         Ok(self.append(&def, sites().map(|x| (x, v3, mass, volume, material))))
     }
 
-    /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
-    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle.
-    /// Infinite when nothing moves and there is no material.
-    pub fn stable_dt(&self) -> Real {
-        let layout = self.layout();
-        let def = self.def();
-        let c_max = self
-            .materials(&layout)
-            .iter()
-            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
-        let n = self.particle_count();
-        let d = layout.d;
-        let status = self.u32_col(&layout, col::STATUS, n);
-        let v: [&[Real]; 3] = core::array::from_fn(|a| {
-            if a < d {
-                self.real_col(&layout, col::v(d, a), n)
-            } else {
-                &[]
-            }
-        });
-        // In f64: a speed near f32's range (1e19 m/s and up) would overflow v^2 in f32 and
-        // make the stable step 0, which no step could take, although the true step is
-        // representable.
-        // Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then
-        // the tail: the same maximum as a particle-by-particle scan.
-        const L: usize = 8;
-        let mut lanes = [0.0f64; L];
-        let full = n - n % L;
-        for from in (0..full).step_by(L) {
-            let mut v2 = [0.0f64; L];
-            for va in v.iter().take(d) {
-                let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
-                for l in 0..L {
-                    v2[l] += va[l] as f64 * va[l] as f64;
-                }
-            }
-            let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
-            for l in 0..L {
-                lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
-                    v2[l]
-                } else {
-                    lanes[l]
-                };
-            }
-        }
-        let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
-        for i in full..n {
-            let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
-            if status[i] == ACTIVE && v2 > v2_max {
-                v2_max = v2;
-            }
-        }
-        let speed = c_max as f64 + libm::sqrt(v2_max);
-        if speed > 0.0 {
-            // Never 0: a step below the smallest positive Real is not a step.
-            ((def.cfl as f64 * def.cell_size as f64 / speed) as Real).max(Real::MIN_POSITIVE)
-        } else {
-            Real::INFINITY
-        }
-    }
-
     /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
     /// the start of the call) is taken in equal substeps that are each stable.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
@@ -752,9 +683,154 @@ impl<'a> World<'a> {
         self.dispatch(dt, &mut run, Simd::Detect);
         Ok(run.report)
     }
+}
+
+/// A world read in place: every query of [`World`] that changes nothing, on a shared borrow
+/// of its bytes (from [`World::read`], or [`WorldRef::open`] on memory only lent for reading,
+/// such as a snapshot or a world other threads read at the same time).
+#[derive(Clone, Copy)]
+pub struct WorldRef<'a> {
+    buf: &'a [u8],
+}
+
+impl<'a> WorldRef<'a> {
+    /// Reads the world that `buf` holds, with the checks of [`World::open`].
+    pub fn open(buf: &'a [u8]) -> Result<WorldRef<'a>, Error> {
+        let total = World::stored_bytes(buf)?;
+        check_buffer(buf, total)?;
+        Ok(WorldRef { buf })
+    }
+
+    fn header(&self) -> &'a Header {
+        bytemuck::from_bytes(&self.buf[..size_of::<Header>()])
+    }
+
+    /// The world's definition.
+    pub fn def(&self) -> WorldDef {
+        // The header was written by init or checked by open, so it always decodes.
+        self.header().def().unwrap_or(WorldDef::DEFAULT)
+    }
+
+    fn layout(&self) -> Layout {
+        Layout::of(&self.def())
+    }
+
+    /// Number of particles added.
+    pub fn particle_count(&self) -> usize {
+        self.header().particle_count as usize
+    }
+
+    /// Number of materials added.
+    pub fn material_count(&self) -> usize {
+        self.header().material_count as usize
+    }
+
+    /// Simulated time, s (sum of the `dt` of every step).
+    pub fn time(&self) -> f64 {
+        self.header().time
+    }
+
+    /// Number of `step` calls that succeeded.
+    pub fn step_count(&self) -> u64 {
+        self.header().step_count
+    }
+
+    /// The bytes the world occupies (a prefix of the buffer). A copy is a snapshot.
+    pub fn as_bytes(&self) -> &'a [u8] {
+        let total = self.header().total_bytes as usize;
+        &self.buf[..total]
+    }
+
+    fn materials(&self, layout: &Layout) -> &'a [MaterialRecord] {
+        let n = self.material_count();
+        let start = layout.materials_offset;
+        bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
+    }
+
+    fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [Real] {
+        bytemuck::cast_slice(&self.buf[layout.real_col(j, count)])
+    }
+
+    fn u32_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [u32] {
+        bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
+    }
+
+    /// The definition of material `id`.
+    pub fn material(&self, id: u32) -> Option<MaterialDef> {
+        let layout = self.layout();
+        self.materials(&layout)
+            .get(id as usize)
+            .map(|r| MaterialDef {
+                model: model_of(r),
+                youngs_modulus: r.youngs_modulus,
+                poisson_ratio: r.poisson_ratio,
+                density: r.density,
+            })
+    }
+
+    /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
+    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle.
+    /// Infinite when nothing moves and there is no material.
+    pub fn stable_dt(&self) -> Real {
+        let layout = self.layout();
+        let def = self.def();
+        let c_max = self
+            .materials(&layout)
+            .iter()
+            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
+        let n = self.particle_count();
+        let d = layout.d;
+        let status = self.u32_col(&layout, col::STATUS, n);
+        let v: [&[Real]; 3] = core::array::from_fn(|a| {
+            if a < d {
+                self.real_col(&layout, col::v(d, a), n)
+            } else {
+                &[]
+            }
+        });
+        // In f64: a speed near f32's range (1e19 m/s and up) would overflow v^2 in f32 and
+        // make the stable step 0, which no step could take, although the true step is
+        // representable.
+        // Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then
+        // the tail: the same maximum as a particle-by-particle scan.
+        const L: usize = 8;
+        let mut lanes = [0.0f64; L];
+        let full = n - n % L;
+        for from in (0..full).step_by(L) {
+            let mut v2 = [0.0f64; L];
+            for va in v.iter().take(d) {
+                let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
+                for l in 0..L {
+                    v2[l] += va[l] as f64 * va[l] as f64;
+                }
+            }
+            let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
+            for l in 0..L {
+                lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
+                    v2[l]
+                } else {
+                    lanes[l]
+                };
+            }
+        }
+        let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
+        for i in full..n {
+            let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
+            if status[i] == ACTIVE && v2 > v2_max {
+                v2_max = v2;
+            }
+        }
+        let speed = c_max as f64 + libm::sqrt(v2_max);
+        if speed > 0.0 {
+            // Never 0: a step below the smallest positive Real is not a step.
+            ((def.cfl as f64 * def.cell_size as f64 / speed) as Real).max(Real::MIN_POSITIVE)
+        } else {
+            Real::INFINITY
+        }
+    }
 
     /// Borrowed view of every particle column.
-    pub fn particles(&self) -> ParticlesView<'_> {
+    pub fn particles(&self) -> ParticlesView<'a> {
         let layout = self.layout();
         let d = layout.d;
         let n = self.particle_count();

@@ -6,7 +6,7 @@
 
 use mpm_gimp::{
     memory_requirements, Boundary, Dimension, Error, Face, HeapBuffer, MaterialDef, ParticleBatch,
-    ParticleDef, ParticleStatus, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
+    ParticleDef, ParticleStatus, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef, WorldRef,
 };
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -569,6 +569,44 @@ fn snapshot_reopened_from_bytes_steps_bit_identically_to_its_original() {
         assert_eq!(hash_bytes(world.as_bytes()), hash_bytes(twin.as_bytes()));
         assert_eq!(twin.step_count(), 25);
         assert_eq!(twin.time().to_bits(), world.time().to_bits());
+    }
+}
+
+/// A snapshot read through a shared borrow (`WorldRef`, what concurrent readers and the C
+/// interface's const calls use) answers every query exactly as the world it was copied from,
+/// and refuses what `World::open` refuses.
+#[test]
+fn read_only_view_of_a_snapshot_answers_like_the_world() {
+    for def in [def_2d(), def_3d()] {
+        let mut buf = buffer_for(&def);
+        let mut world = drop_scene(&def, buf.as_mut_bytes());
+        for _ in 0..5 {
+            world.step(1.0 / 240.0).expect("step");
+        }
+        let n = world.as_bytes().len();
+        let mut copy = HeapBuffer::new(n);
+        copy.as_mut_bytes()[..n].copy_from_slice(world.as_bytes());
+        let read = WorldRef::open(copy.as_bytes()).expect("read snapshot");
+        assert_eq!(read.def(), world.def());
+        assert_eq!(read.particle_count(), world.particle_count());
+        assert_eq!(read.material(0), world.material(0));
+        assert_eq!(read.stable_dt().to_bits(), world.stable_dt().to_bits());
+        assert_eq!(read.diagnostics(), world.diagnostics());
+        assert_eq!(hash_bytes(read.as_bytes()), hash_bytes(world.as_bytes()));
+        let (a, b) = (read.particles(), world.particles());
+        for axis in 0..3 {
+            assert_eq!(hash_reals(a.position[axis]), hash_reals(b.position[axis]));
+            assert_eq!(hash_reals(a.velocity[axis]), hash_reals(b.velocity[axis]));
+        }
+        let zeroed = HeapBuffer::new(n);
+        assert_eq!(
+            WorldRef::open(zeroed.as_bytes()).err(),
+            Some(Error::NotAWorld)
+        );
+        assert_eq!(
+            WorldRef::open(&copy.as_bytes()[..n - 1]).err(),
+            Some(Error::BufferTooSmall)
+        );
     }
 }
 

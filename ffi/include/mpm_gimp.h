@@ -77,12 +77,13 @@ enum MpmStatus
   MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME = 18,
   // A position outside the grid or inside the boundary margin the shape function needs.
   MPM_STATUS_POSITION_OUTSIDE_DOMAIN = 19,
-  // Input arrays of different lengths (or a count that does not fit the arrays).
+  // Input arrays of different lengths (Rust API only: C passes one count for all arrays).
   MPM_STATUS_LENGTH_MISMATCH = 20,
   // A time step that is <= 0 or not finite.
   MPM_STATUS_INVALID_TIME_STEP = 21,
-  // A region (box, disk, sphere) that is empty, inverted or not finite, or a disk in 3D or
-  // a sphere in 2D.
+  // A box inverted on an axis (min > max), a radius not finite or <= 0, or a disk in 3D or
+  // a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
+  // region that holds no lattice site is accepted and adds no particle.)
   MPM_STATUS_INVALID_REGION = 22,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,

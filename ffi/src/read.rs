@@ -2,9 +2,9 @@
 //! caller buffers, and the world's sums (mass, momentum, energies).
 
 use crate::status::MpmStatus;
-use crate::world::{put, world_at, MpmWorld};
+use crate::world::{put, world_ref, MpmWorld};
 use crate::{guard, mpm_real, non_null};
-use kernel::{ParticlesView, World};
+use kernel::{ParticlesView, WorldRef};
 
 /// Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
 /// call that changes the world (add, seed, step) or frees its memory. Pointers of axes the
@@ -71,7 +71,7 @@ pub unsafe extern "C" fn mpm_world_particles(
     guard(|| {
         non_null(view_out)?;
         // SAFETY: the caller promises a world.
-        let w = unsafe { world_at(world) }?;
+        let w = unsafe { world_ref(world) }?;
         let v = w.particles();
         let d = if v.dimension == kernel::Dimension::ThreeD {
             3
@@ -120,7 +120,7 @@ unsafe fn copy_out<T: Copy>(
         non_null(out)?;
         non_null(written_out)?;
         // SAFETY: the caller promises a world.
-        let w: World<'_> = unsafe { world_at(world) }?;
+        let w: WorldRef<'_> = unsafe { world_ref(world) }?;
         let v = w.particles();
         let d = if v.dimension == kernel::Dimension::ThreeD {
             3
@@ -276,7 +276,7 @@ pub unsafe extern "C" fn mpm_world_diagnostics(
     guard(|| {
         non_null(diagnostics_out)?;
         // SAFETY: the caller promises a world.
-        let w = unsafe { world_at(world) }?;
+        let w = unsafe { world_ref(world) }?;
         let s = w.diagnostics();
         let out = MpmDiagnostics {
             particle_count: w.particle_count(),

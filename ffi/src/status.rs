@@ -48,12 +48,13 @@ pub enum MpmStatus {
     NonPositiveMassOrVolume = 18,
     /// A position outside the grid or inside the boundary margin the shape function needs.
     PositionOutsideDomain = 19,
-    /// Input arrays of different lengths (or a count that does not fit the arrays).
+    /// Input arrays of different lengths (Rust API only: C passes one count for all arrays).
     LengthMismatch = 20,
     /// A time step that is <= 0 or not finite.
     InvalidTimeStep = 21,
-    /// A region (box, disk, sphere) that is empty, inverted or not finite, or a disk in 3D or
-    /// a sphere in 2D.
+    /// A box inverted on an axis (min > max), a radius not finite or <= 0, or a disk in 3D or
+    /// a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
+    /// region that holds no lattice site is accepted and adds no particle.)
     InvalidRegion = 22,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,

@@ -5,7 +5,7 @@ use crate::defs::{material_def_from_c, vec3, world_def_from_c, world_def_to_c, M
 use crate::status::MpmStatus;
 use crate::{guard, mpm_real, non_null, MpmVec3, MpmWorldDef};
 use core::ffi::c_void;
-use kernel::{memory_requirements, ParticleBatch, World};
+use kernel::{memory_requirements, ParticleBatch, World, WorldRef};
 
 /// A world. Opaque: it is the memory the host passed to `mpm_world_init` (the pointer is that
 /// memory's address), and it lives as long as the host keeps that memory.
@@ -70,23 +70,46 @@ pub struct MpmStepReport {
     pub first_frozen: [u32; 8],
 }
 
-/// The world at `w`, opened over its stored extent, or why not.
+/// The extent of the world at `w`, read from its header, or why there is none.
 ///
 /// # Safety
-/// `w` is NULL or points to memory readable and writable for the world's extent (what
-/// `mpm_world_init` or `mpm_world_open` returned, memory still owned by the host).
-pub(crate) unsafe fn world_at<'a>(w: *const MpmWorld) -> Result<World<'a>, MpmStatus> {
+/// `w` is NULL or points to a world (what `mpm_world_init` or `mpm_world_open` returned, in
+/// memory the host still owns).
+unsafe fn extent(w: *const MpmWorld) -> Result<usize, MpmStatus> {
     non_null(w)?;
     if (w as usize) % kernel::ALIGN != 0 {
         return Err(MpmStatus::BufferMisaligned);
     }
     // SAFETY: the caller promises a world at `w`, which is at least a header long.
     let head = unsafe { core::slice::from_raw_parts(w as *const u8, World::HEADER_BYTES) };
-    let total = World::stored_bytes(head)?;
-    // SAFETY: the header just read says the world spans `total` bytes, all of which the caller
-    // owns; no other Rust reference to them exists during the call.
+    Ok(World::stored_bytes(head)?)
+}
+
+/// The world at `w`, opened for a call that changes it.
+///
+/// # Safety
+/// As [`extent`]; no other call on this world runs at the same time.
+pub(crate) unsafe fn world_at<'a>(w: *mut MpmWorld) -> Result<World<'a>, MpmStatus> {
+    // SAFETY: forwarded contract.
+    let total = unsafe { extent(w) }?;
+    // SAFETY: the header says the world spans `total` bytes, all of which the caller owns and
+    // nothing else accesses during the call.
     let buf = unsafe { core::slice::from_raw_parts_mut(w as *mut u8, total) };
     Ok(World::open(buf)?)
+}
+
+/// The world at `w`, opened for reading only (calls that take a `const MpmWorld *`; several
+/// may run at once on one world).
+///
+/// # Safety
+/// As [`extent`]; no call that changes this world runs at the same time.
+pub(crate) unsafe fn world_ref<'a>(w: *const MpmWorld) -> Result<WorldRef<'a>, MpmStatus> {
+    // SAFETY: forwarded contract.
+    let total = unsafe { extent(w) }?;
+    // SAFETY: the header says the world spans `total` bytes, which nothing writes during the
+    // call.
+    let buf = unsafe { core::slice::from_raw_parts(w as *const u8, total) };
+    Ok(WorldRef::open(buf)?)
 }
 
 /// Writes `v` to `out` (checked non-NULL by the caller).
@@ -195,7 +218,7 @@ pub unsafe extern "C" fn mpm_world_bytes(
     guard(|| {
         non_null(bytes_out)?;
         // SAFETY: the caller promises a world.
-        let w = unsafe { world_at(world) }?;
+        let w = unsafe { world_ref(world) }?;
         let n = w.as_bytes().len();
         // SAFETY: checked non-NULL.
         unsafe { put(bytes_out, n) };
@@ -215,7 +238,7 @@ pub unsafe extern "C" fn mpm_world_get_def(
     guard(|| {
         non_null(def_out)?;
         // SAFETY: the caller promises a world.
-        let w = unsafe { world_at(world) }?;
+        let w = unsafe { world_ref(world) }?;
         // SAFETY: checked non-NULL.
         unsafe { put(def_out, world_def_to_c(&w.def())) };
         Ok(())
@@ -407,7 +430,7 @@ pub unsafe extern "C" fn mpm_world_stable_dt(
     guard(|| {
         non_null(dt_out)?;
         // SAFETY: the caller promises a world.
-        let w = unsafe { world_at(world) }?;
+        let w = unsafe { world_ref(world) }?;
         let dt = w.stable_dt();
         // SAFETY: checked non-NULL.
         unsafe { put(dt_out, dt) };
