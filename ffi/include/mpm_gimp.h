@@ -332,7 +332,8 @@ typedef struct MpmParticlesView {
   const uint32_t *status;
 } MpmParticlesView;
 
-// Sums over the active particles, in double precision.
+// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
+// and energies are per metre of thickness.
 typedef struct MpmDiagnostics {
   // Number of particles added (any status).
   size_t particle_count;

@@ -35,7 +35,8 @@ pub struct MpmParticlesView {
     pub status: *const u32,
 }
 
-/// Sums over the active particles, in double precision.
+/// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
+/// and energies are per metre of thickness.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct MpmDiagnostics {
