@@ -21,6 +21,19 @@ pub enum Dimension {
     ThreeD = 3,
 }
 
+impl Dimension {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<Dimension> {
+        match code {
+            2 => Some(Dimension::Plane2D),
+            3 => Some(Dimension::ThreeD),
+            4 => Some(Dimension::Axisymmetric2D),
+            _ => None,
+        }
+    }
+}
+
 /// Grid shape function used for `S_ip` and `G_ip` (seeds/000 eqs 16-17, seeds/003).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
@@ -35,6 +48,20 @@ pub enum ShapeFunction {
     QuadraticBspline = 2,
     /// Cubic B-spline, 4 nodes per axis.
     CubicBspline = 3,
+}
+
+impl ShapeFunction {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<ShapeFunction> {
+        match code {
+            0 => Some(ShapeFunction::Linear),
+            1 => Some(ShapeFunction::Gimp),
+            2 => Some(ShapeFunction::QuadraticBspline),
+            3 => Some(ShapeFunction::CubicBspline),
+            _ => None,
+        }
+    }
 }
 
 impl ShapeFunction {
@@ -68,6 +95,19 @@ pub enum UpdateOrder {
     Musl = 2,
 }
 
+impl UpdateOrder {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<UpdateOrder> {
+        match code {
+            0 => Some(UpdateOrder::Usf),
+            1 => Some(UpdateOrder::Usl),
+            2 => Some(UpdateOrder::Musl),
+            _ => None,
+        }
+    }
+}
+
 /// Boundary condition of one face of the grid box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
@@ -79,6 +119,19 @@ pub enum Boundary {
     /// No condition on the nodes; a particle that crosses this face leaves the simulation
     /// (status [`crate::ParticleStatus::Escaped`]) and is counted in the step report.
     Open = 2,
+}
+
+impl Boundary {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<Boundary> {
+        match code {
+            0 => Some(Boundary::Stick),
+            1 => Some(Boundary::Slip),
+            2 => Some(Boundary::Open),
+            _ => None,
+        }
+    }
 }
 
 /// Index of each face in [`WorldDef::faces`].
@@ -108,6 +161,18 @@ pub enum MaterialModel {
     LinearElastic = 0,
     /// Compressible neo-Hookean: `tau = mu (B - I) + lambda ln(J) I`, `B = F F^T`.
     NeoHookean = 1,
+}
+
+impl MaterialModel {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<MaterialModel> {
+        match code {
+            0 => Some(MaterialModel::LinearElastic),
+            1 => Some(MaterialModel::NeoHookean),
+            _ => None,
+        }
+    }
 }
 
 /// A material: model and isotropic elastic constants.
@@ -233,5 +298,52 @@ impl WorldDef {
 impl Default for WorldDef {
     fn default() -> Self {
         Self::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `from_code` inverts `as u32` for every variant and answers `None` for every other code
+    /// up to 1023 and at the top of the range.
+    #[test]
+    fn from_code_inverts_the_stored_number() {
+        fn check<T: Copy + PartialEq + core::fmt::Debug>(
+            all: &[T],
+            number: fn(T) -> u32,
+            from: fn(u32) -> Option<T>,
+        ) {
+            for &v in all {
+                assert_eq!(from(number(v)), Some(v));
+            }
+            let known = |c: u32| all.iter().any(|&v| number(v) == c);
+            for c in (0..1024).chain([u32::MAX - 1, u32::MAX]) {
+                assert_eq!(from(c).is_some(), known(c), "code {c}");
+            }
+        }
+        use Dimension as Dm;
+        check(
+            &[Dm::Plane2D, Dm::ThreeD, Dm::Axisymmetric2D],
+            |v| v as u32,
+            Dm::from_code,
+        );
+        use ShapeFunction as Sf;
+        let shapes = [Sf::Linear, Sf::Gimp, Sf::QuadraticBspline, Sf::CubicBspline];
+        check(&shapes, |v| v as u32, Sf::from_code);
+        use UpdateOrder as Uo;
+        check(&[Uo::Usf, Uo::Usl, Uo::Musl], |v| v as u32, Uo::from_code);
+        use Boundary as Bd;
+        check(
+            &[Bd::Stick, Bd::Slip, Bd::Open],
+            |v| v as u32,
+            Bd::from_code,
+        );
+        use MaterialModel as Mm;
+        check(
+            &[Mm::LinearElastic, Mm::NeoHookean],
+            |v| v as u32,
+            Mm::from_code,
+        );
     }
 }

@@ -273,33 +273,20 @@ impl Header {
             return Err(Error::NotAWorld);
         }
         let small = |v: u64| u32::try_from(v).map_err(|_| Error::NotAWorld);
-        let dimension = match self.dimension {
-            2 => Dimension::Plane2D,
-            3 => Dimension::ThreeD,
-            4 => Dimension::Axisymmetric2D,
-            _ => return Err(Error::NotAWorld),
-        };
-        let shape = match self.shape {
-            0 => ShapeFunction::Linear,
-            1 => ShapeFunction::Gimp,
-            2 => ShapeFunction::QuadraticBspline,
-            3 => ShapeFunction::CubicBspline,
-            _ => return Err(Error::NotAWorld),
-        };
-        let update_order = match self.update_order {
-            0 => UpdateOrder::Usf,
-            1 => UpdateOrder::Usl,
-            2 => UpdateOrder::Musl,
-            _ => return Err(Error::NotAWorld),
-        };
+        let code = |v: u64| u32::try_from(v).ok();
+        let not_a_world = Error::NotAWorld;
+        let dimension = code(self.dimension)
+            .and_then(Dimension::from_code)
+            .ok_or(not_a_world)?;
+        let shape = code(self.shape)
+            .and_then(ShapeFunction::from_code)
+            .ok_or(not_a_world)?;
+        let update_order = code(self.update_order)
+            .and_then(UpdateOrder::from_code)
+            .ok_or(not_a_world)?;
         let mut faces = [Boundary::Slip; 6];
-        for (f, &code) in faces.iter_mut().zip(self.faces.iter()) {
-            *f = match code {
-                0 => Boundary::Stick,
-                1 => Boundary::Slip,
-                2 => Boundary::Open,
-                _ => return Err(Error::NotAWorld),
-            };
+        for (f, &c) in faces.iter_mut().zip(self.faces.iter()) {
+            *f = code(c).and_then(Boundary::from_code).ok_or(not_a_world)?;
         }
         let v = |a: [f64; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
         Ok(WorldDef {

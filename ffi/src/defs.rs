@@ -213,33 +213,13 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
     if d.internal_cookie != WORLD_COOKIE {
         return Err(MpmStatus::DefNotFromDefault);
     }
-    let dimension = match d.dimension {
-        2 => Dimension::Plane2D,
-        3 => Dimension::ThreeD,
-        4 => Dimension::Axisymmetric2D,
-        _ => return Err(MpmStatus::InvalidEnum),
-    };
-    let shape = match d.shape {
-        0 => ShapeFunction::Linear,
-        1 => ShapeFunction::Gimp,
-        2 => ShapeFunction::QuadraticBspline,
-        3 => ShapeFunction::CubicBspline,
-        _ => return Err(MpmStatus::InvalidEnum),
-    };
-    let update_order = match d.update_order {
-        0 => UpdateOrder::Usf,
-        1 => UpdateOrder::Usl,
-        2 => UpdateOrder::Musl,
-        _ => return Err(MpmStatus::InvalidEnum),
-    };
+    let enum_value = MpmStatus::InvalidEnum;
+    let dimension = Dimension::from_code(d.dimension).ok_or(enum_value)?;
+    let shape = ShapeFunction::from_code(d.shape).ok_or(enum_value)?;
+    let update_order = UpdateOrder::from_code(d.update_order).ok_or(enum_value)?;
     let mut faces = [Boundary::Slip; 6];
     for (f, &v) in faces.iter_mut().zip(d.faces.iter()) {
-        *f = match v {
-            0 => Boundary::Stick,
-            1 => Boundary::Slip,
-            2 => Boundary::Open,
-            _ => return Err(MpmStatus::InvalidEnum),
-        };
+        *f = Boundary::from_code(v).ok_or(enum_value)?;
     }
     Ok(WorldDef {
         dimension,
@@ -264,11 +244,7 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
     if d.internal_cookie != MATERIAL_COOKIE {
         return Err(MpmStatus::DefNotFromDefault);
     }
-    let model = match d.model {
-        0 => MaterialModel::LinearElastic,
-        1 => MaterialModel::NeoHookean,
-        _ => return Err(MpmStatus::InvalidEnum),
-    };
+    let model = MaterialModel::from_code(d.model).ok_or(MpmStatus::InvalidEnum)?;
     Ok(MaterialDef {
         model,
         youngs_modulus: d.youngs_modulus,

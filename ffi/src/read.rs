@@ -74,11 +74,7 @@ pub unsafe extern "C" fn mpm_world_particles(
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
         let v = w.particles();
-        let d = if v.dimension == kernel::Dimension::ThreeD {
-            3
-        } else {
-            2
-        };
+        let d = w.def().axes();
         let axis = |s: &[mpm_real], used: bool| if used { s.as_ptr() } else { core::ptr::null() };
         let out = MpmParticlesView {
             count: v.count,
@@ -123,11 +119,7 @@ unsafe fn copy_out<T: Copy>(
         // SAFETY: the caller promises a world.
         let w: WorldRef<'_> = unsafe { world_ref(world) }?;
         let v = w.particles();
-        let d = if v.dimension == kernel::Dimension::ThreeD {
-            3
-        } else {
-            2
-        };
+        let d = w.def().axes();
         let k = per(d);
         let n = v.count * k;
         if out_len < n {
