@@ -5,6 +5,7 @@
 //! (m, kg, s, Pa); any consistent unit system works because the kernel has no built-in constant
 //! other than the default gravity.
 
+use crate::effects::Effects;
 use crate::{Real, Vec3};
 
 /// Spatial dimension and kinematic assumption of a world.
@@ -103,6 +104,35 @@ impl UpdateOrder {
             0 => Some(UpdateOrder::Usf),
             1 => Some(UpdateOrder::Usl),
             2 => Some(UpdateOrder::Musl),
+            _ => None,
+        }
+    }
+}
+
+/// How velocity moves from the grid back to the particles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Transfer {
+    /// FLIP blended with PIC by [`WorldDef::flip_beta`] (seeds/000 eqs 44-45, 51-52), with the
+    /// second-order position update.
+    Flip = 0,
+    /// APIC (seeds/001): the particle takes the grid velocity (PIC) plus an affine matrix
+    /// `C_p = B_p D_p^-1`, with `B_p = sum_i S_ip v_i (x_i - x_p)^T` and
+    /// `D_p = sum_i S_ip (x_i - x_p)(x_i - x_p)^T` evaluated per particle, so the transfer
+    /// conserves angular momentum with every shape function (the shortcut
+    /// `D_p = h^2/4` or `h^2/3` holds only for the quadratic and cubic B-splines). The particle
+    /// moves with the grid velocity, `x_p += v_p(n+1) dt`, and `flip_beta` is not used.
+    /// Reserves D x D columns for `C_p`.
+    Apic = 1,
+}
+
+impl Transfer {
+    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour.
+    pub const fn from_code(code: u32) -> Option<Transfer> {
+        match code {
+            0 => Some(Transfer::Flip),
+            1 => Some(Transfer::Apic),
             _ => None,
         }
     }
@@ -251,6 +281,9 @@ pub struct WorldDef {
     /// 0 is PIC. Default 0.99: a 1 % PIC blend removes the particle-grid velocity noise that pure
     /// FLIP keeps, at a damping rate `(1 - beta) / dt` on that noise only.
     pub flip_beta: Real,
+    /// Velocity transfer. Default [`Transfer::Flip`]: no extra columns, and with
+    /// [`WorldDef::flip_beta`] near 1 it keeps the most kinetic energy.
+    pub transfer: Transfer,
     /// Where the stress update sits. Default [`UpdateOrder::Musl`]: it takes the velocity
     /// gradient from re-mapped momenta, which stays bounded when nodal masses are tiny.
     pub update_order: UpdateOrder,
@@ -265,6 +298,9 @@ pub struct WorldDef {
     /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)`, in (0, 1].
     /// Default 0.5: the usual margin for explicit MPM with FLIP.
     pub cfl: Real,
+    /// The optional effects the scene uses. Default [`Effects::NONE`]: a scene pays only for
+    /// what it declares.
+    pub effects: Effects,
 }
 
 impl WorldDef {
@@ -279,11 +315,13 @@ impl WorldDef {
         shape: ShapeFunction::Gimp,
         particles_per_cell: 2,
         flip_beta: 0.99,
+        transfer: Transfer::Flip,
         update_order: UpdateOrder::Musl,
         gravity: Vec3::new(0.0, -9.81, 0.0),
         faces: [Boundary::Slip; 6],
         exp_terms: 2,
         cfl: 0.5,
+        effects: Effects::NONE,
     };
 
     /// Number of spatial axes (2 or 3).
@@ -339,6 +377,8 @@ mod tests {
             |v| v as u32,
             Bd::from_code,
         );
+        use Transfer as Tr;
+        check(&[Tr::Flip, Tr::Apic], |v| v as u32, Tr::from_code);
         use MaterialModel as Mm;
         check(
             &[Mm::LinearElastic, Mm::NeoHookean],

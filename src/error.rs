@@ -53,6 +53,16 @@ pub enum Error {
     /// a sphere in 2D. (Non-finite corners, centres or velocities are
     /// [`Error::NonFiniteInput`]; a region that holds no lattice site adds no particle.)
     InvalidRegion = 22,
+    /// An effect parameter out of range: a schedule with more than 8 points, times that do not
+    /// increase or values not finite; a damping value < 0; a thermostat gain or bound <= 0; a
+    /// body force not finite; a traction not finite or on a face the dimension lacks.
+    InvalidEffect = 23,
+    /// The call needs an effect the world's definition does not declare.
+    EffectNotDeclared = 24,
+    /// A particle id at or past the particle count.
+    UnknownParticle = 25,
+    /// The tractions do not fit in the remaining traction capacity (none was added).
+    TractionCapacityExceeded = 26,
 }
 
 impl Error {
@@ -95,11 +105,17 @@ impl Error {
             Error::InvalidRegion => {
                 c"region inverted, radius not finite or <= 0, or of the other dimension"
             }
+            Error::InvalidEffect => c"effect parameter out of range or not finite",
+            Error::EffectNotDeclared => c"the world's definition does not declare this effect",
+            Error::UnknownParticle => c"particle id names no particle",
+            Error::TractionCapacityExceeded => {
+                c"tractions do not fit in the remaining traction capacity"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 22] = [
+    pub const ALL: [Error; 26] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -122,6 +138,10 @@ impl Error {
         Error::LengthMismatch,
         Error::InvalidTimeStep,
         Error::InvalidRegion,
+        Error::InvalidEffect,
+        Error::EffectNotDeclared,
+        Error::UnknownParticle,
+        Error::TractionCapacityExceeded,
     ];
 }
 

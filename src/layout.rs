@@ -3,14 +3,18 @@
 //! A world's buffer is, in order:
 //! 1. the [`Header`] (definition, counts, time; plain old data, 8-byte fields only);
 //! 2. the material table, `material_capacity` [`MaterialRecord`]s;
-//! 3. the particle columns, one per scalar component, each `capacity` rounded up to
+//! 3. the traction table, `traction_capacity` [`TractionRecord`]s (none unless declared);
+//! 4. the particle columns, one per scalar component, each `capacity` rounded up to
 //!    [`CHUNK`] entries and starting on a [`ALIGN`]-byte boundary;
-//! 4. the grid node columns, likewise, one entry per node.
+//!    The columns of an effect come after the always-present ones and exist only when the
+//!    definition declares the effect;
+//! 5. the grid node columns, likewise, one entry per node.
 //!
 //! Nothing in the buffer is a pointer: every column is found from the definition stored in the
 //! header, so a byte copy of the buffer is a second, independent world.
 
-use crate::def::{Boundary, Dimension, ShapeFunction, UpdateOrder, WorldDef};
+use crate::def::{Boundary, Dimension, ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::effects::{Damping, Effects, Feedback, Schedule, SCHEDULE_POINTS};
 use crate::{Error, Real, Vec3};
 use bytemuck::{Pod, Zeroable};
 use core::mem::size_of;
@@ -22,7 +26,7 @@ pub const CHUNK: usize = 16;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 1;
+const VERSION: u64 = 2;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +68,57 @@ pub(crate) struct Header {
     pub step_count: u64,
     /// Smallest particle mass added so far: scales the nodal mass cutoff.
     pub min_particle_mass: f64,
+    // The method switch added with the effects, and the effects (`Effects`).
+    pub transfer: u64,
+    pub damping_declared: u64,
+    pub damping_grid: ScheduleRecord,
+    pub damping_particle: ScheduleRecord,
+    pub feedback_declared: u64,
+    pub feedback_gain: f64,
+    pub feedback_target: ScheduleRecord,
+    pub feedback_max_alpha: f64,
+    pub per_particle_damping: u64,
+    pub particle_forces: u64,
+    pub traction_capacity: u64,
+    pub body_force: [f64; 3],
+    pub body_force_scale: ScheduleRecord,
+    // Effect state.
+    pub traction_count: u64,
+    /// The thermostat's current alpha, 1/s.
+    pub feedback_alpha: f64,
+}
+
+/// A [`Schedule`] widened to 8-byte fields.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub(crate) struct ScheduleRecord {
+    pub points: u64,
+    pub times: [f64; SCHEDULE_POINTS],
+    pub values: [f64; SCHEDULE_POINTS],
+}
+
+// SAFETY: repr(C), only u64 and f64 arrays: no padding, every bit pattern valid.
+unsafe impl Zeroable for ScheduleRecord {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for ScheduleRecord {}
+
+impl ScheduleRecord {
+    fn of(s: &Schedule) -> Self {
+        ScheduleRecord {
+            points: s.points as u64,
+            times: s.times.map(|t| t as f64),
+            values: s.values.map(|v| v as f64),
+        }
+    }
+
+    fn schedule(&self) -> Result<Schedule, Error> {
+        let points = u32::try_from(self.points).map_err(|_| Error::NotAWorld)?;
+        Ok(Schedule {
+            points,
+            times: self.times.map(|t| t as Real),
+            values: self.values.map(|v| v as Real),
+        })
+    }
 }
 
 // SAFETY: Header is repr(C), every field is a u64, f64 or an array of them (8-byte size and
@@ -72,7 +127,7 @@ unsafe impl Zeroable for Header {}
 // SAFETY: as above; Header is Copy and 'static.
 unsafe impl Pod for Header {}
 
-const _: () = assert!(size_of::<Header>() == 8 * 34);
+const _: () = assert!(size_of::<Header>() == 8 * (34 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS)));
 
 /// One material in the buffer's table: parameters and what the step derives from them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -95,6 +150,23 @@ unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.
 unsafe impl Pod for MaterialRecord {}
 
+/// One traction in the buffer's table: particle id, face ([`crate::Face`] number) and the
+/// traction vector (Pa; the fourth entry is unused padding that keeps the record free of
+/// implicit padding in both precisions).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub(crate) struct TractionRecord {
+    pub particle: u32,
+    pub face: u32,
+    pub traction: [Real; 4],
+}
+
+// SAFETY: repr(C): two u32 then four floats; 8 bytes before a 4- or 8-byte aligned float array,
+// 24 or 40 bytes in all, so there is no padding; every bit pattern is valid.
+unsafe impl Zeroable for TractionRecord {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for TractionRecord {}
+
 /// Number of stored stress components (tau/rho0): 2D xx, yy, xy, zz; 3D xx, yy, zz, xy, xz, yz.
 pub(crate) const fn stress_components(d: usize) -> usize {
     if d == 2 {
@@ -111,17 +183,59 @@ pub(crate) struct Layout {
     pub padded_capacity: usize,
     pub nodes: usize,
     pub materials_offset: usize,
+    pub tractions_offset: usize,
+    pub traction_capacity: usize,
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
-    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_next[D] (MUSL).
+    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_next[D] (MUSL),
+    /// then the effect columns (see [`EffectColumns`]).
     pub particle_real_columns: usize,
+    /// First column and count of each optional group of particle Real columns.
+    pub x_next: ColumnGroup,
+    pub force: ColumnGroup,
+    pub damping: ColumnGroup,
+    pub affine: ColumnGroup,
     pub grid_offset: usize,
     pub node_column_bytes: usize,
     /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
     /// (USF and MUSL).
     pub grid_columns: usize,
     pub total: usize,
+}
+
+/// A run of consecutive particle Real columns: the first column's index and how many there are
+/// (0 when the group is not reserved).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ColumnGroup {
+    pub first: usize,
+    pub count: usize,
+}
+
+/// The optional column groups, reserved in this order after the always-present columns.
+pub(crate) struct EffectColumns;
+
+impl EffectColumns {
+    /// Groups `(x_next, force, damping, affine)` for a definition, starting at column `first`;
+    /// returns them and the column after the last.
+    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 4], usize) {
+        let musl = def.update_order == UpdateOrder::Musl;
+        let fx = &def.effects;
+        let per_particle_damping = fx.damping.is_some_and(|dm| dm.per_particle);
+        let counts = [
+            if musl { d } else { 0 },
+            if fx.particle_forces { d } else { 0 },
+            if per_particle_damping { 2 } else { 0 },
+            if def.transfer == Transfer::Apic { d * d } else { 0 },
+        ];
+        let mut next = first;
+        let groups = counts.map(|count| {
+            let g = ColumnGroup { first: next, count };
+            next += count;
+            g
+        });
+        (groups, next)
+    }
 }
 
 const fn round_up(x: usize, to: usize) -> usize {
@@ -134,11 +248,10 @@ impl Layout {
         let d = def.axes();
         let cap = round_up(def.particle_capacity as usize, CHUNK);
         let nodes: usize = (0..d).map(|a| def.cells[a] as usize + 1).product();
-        let musl = def.update_order == UpdateOrder::Musl;
         let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
         let u32_column_bytes = round_up(cap * 4, ALIGN);
-        let particle_real_columns =
-            2 * d + 2 + d * d + stress_components(d) + if musl { d } else { 0 };
+        let ([x_next, force, damping, affine], particle_real_columns) =
+            EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes = round_up(
             round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>(),
@@ -147,8 +260,13 @@ impl Layout {
         let stress_velocity = def.update_order != UpdateOrder::Usl;
         let grid_columns = 1 + 2 * d + if stress_velocity { d } else { 0 };
         let materials_offset = round_up(size_of::<Header>(), ALIGN);
-        let particle_offset = round_up(
+        let tractions_offset = round_up(
             materials_offset + def.material_capacity as usize * size_of::<MaterialRecord>(),
+            ALIGN,
+        );
+        let traction_capacity = def.effects.traction_capacity as usize;
+        let particle_offset = round_up(
+            tractions_offset + traction_capacity * size_of::<TractionRecord>(),
             ALIGN,
         );
         let grid_offset =
@@ -159,10 +277,16 @@ impl Layout {
             padded_capacity: cap,
             nodes,
             materials_offset,
+            tractions_offset,
+            traction_capacity,
             particle_offset,
             real_column_bytes,
             u32_column_bytes,
             particle_real_columns,
+            x_next,
+            force,
+            damping,
+            affine,
             grid_offset,
             node_column_bytes,
             grid_columns,
@@ -221,7 +345,7 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     if !(1..=8).contains(&def.particles_per_cell) {
         return Err(Error::InvalidParticlesPerCell);
     }
-    Ok(())
+    def.effects.validate(def.axes())
 }
 
 /// Bytes and alignment a world of this definition needs: a pure function of the definition.
@@ -236,6 +360,13 @@ pub fn memory_requirements(def: &WorldDef) -> Result<MemoryRequirements, Error> 
 impl Header {
     pub fn new(def: &WorldDef, total_bytes: usize) -> Header {
         let w = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        let fx = &def.effects;
+        let damping = fx.damping.unwrap_or(Damping::NONE);
+        let feedback = damping.feedback.unwrap_or(Feedback {
+            gain: 0.0,
+            target: Schedule::ZERO,
+            max_alpha: 0.0,
+        });
         Header {
             magic: MAGIC,
             version: VERSION,
@@ -260,6 +391,21 @@ impl Header {
             time: 0.0,
             step_count: 0,
             min_particle_mass: f64::INFINITY,
+            transfer: def.transfer as u64,
+            damping_declared: fx.damping.is_some() as u64,
+            damping_grid: ScheduleRecord::of(&damping.grid),
+            damping_particle: ScheduleRecord::of(&damping.particle),
+            feedback_declared: damping.feedback.is_some() as u64,
+            feedback_gain: feedback.gain as f64,
+            feedback_target: ScheduleRecord::of(&feedback.target),
+            feedback_max_alpha: feedback.max_alpha as f64,
+            per_particle_damping: damping.per_particle as u64,
+            particle_forces: fx.particle_forces as u64,
+            traction_capacity: fx.traction_capacity as u64,
+            body_force: w(fx.body_force),
+            body_force_scale: ScheduleRecord::of(&fx.body_force_scale),
+            traction_count: 0,
+            feedback_alpha: 0.0,
         }
     }
 
@@ -288,7 +434,41 @@ impl Header {
         for (f, &c) in faces.iter_mut().zip(self.faces.iter()) {
             *f = code(c).and_then(Boundary::from_code).ok_or(not_a_world)?;
         }
+        let transfer = code(self.transfer)
+            .and_then(Transfer::from_code)
+            .ok_or(not_a_world)?;
+        let flag = |v: u64| match v {
+            0 => Ok(false),
+            1 => Ok(true),
+            _ => Err(Error::NotAWorld),
+        };
         let v = |a: [f64; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+        let feedback = if flag(self.feedback_declared)? {
+            Some(Feedback {
+                gain: self.feedback_gain as Real,
+                target: self.feedback_target.schedule()?,
+                max_alpha: self.feedback_max_alpha as Real,
+            })
+        } else {
+            None
+        };
+        let damping = if flag(self.damping_declared)? {
+            Some(Damping {
+                grid: self.damping_grid.schedule()?,
+                particle: self.damping_particle.schedule()?,
+                feedback,
+                per_particle: flag(self.per_particle_damping)?,
+            })
+        } else {
+            None
+        };
+        let effects = Effects {
+            damping,
+            particle_forces: flag(self.particle_forces)?,
+            traction_capacity: small(self.traction_capacity)?,
+            body_force: v(self.body_force),
+            body_force_scale: self.body_force_scale.schedule()?,
+        };
         Ok(WorldDef {
             dimension,
             origin: v(self.origin),
@@ -303,11 +483,13 @@ impl Header {
             shape,
             particles_per_cell: small(self.particles_per_cell)?,
             flip_beta: self.flip_beta as Real,
+            transfer,
             update_order,
             gravity: v(self.gravity),
             faces,
             exp_terms: small(self.exp_terms)?,
             cfl: self.cfl as Real,
+            effects,
         })
     }
 }

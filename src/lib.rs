@@ -41,6 +41,7 @@
 extern crate std;
 
 mod def;
+mod effects;
 mod error;
 mod grid;
 mod layout;
@@ -55,8 +56,10 @@ mod storage;
 mod world;
 
 pub use def::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, ShapeFunction, UpdateOrder, WorldDef,
+    Boundary, Dimension, Face, MaterialDef, MaterialModel, ShapeFunction, Transfer, UpdateOrder,
+    WorldDef,
 };
+pub use effects::{Damping, Effects, Feedback, Schedule, SCHEDULE_POINTS};
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
 pub use particles::ParticleStatus;

@@ -5,6 +5,12 @@
 //! keeps small strains at full precision in f32), stress tau/rho0 (symmetric components, see
 //! [`crate::layout::stress_components`]), material id, status. With MUSL the step also reserves
 //! D scratch columns for the new positions.
+//!
+//! Per effect, only when declared: external force `F_p` [D] (particle forces), local damping
+//! `alpha_g`, `alpha_p` (per-particle damping), moment matrix `B_p` [D][D] (APIC, see
+//! [`crate::ParticlesView::affine`]). An
+//! undeclared group is a set of empty slices, which the passes that would read it never
+//! instantiate.
 
 use crate::layout::{stress_components, Layout};
 use crate::Real;
@@ -53,6 +59,12 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     /// MUSL scratch: positions after the particle update, committed after the stress update.
     /// Empty slices otherwise.
     pub x_next: [&'a mut [Real]; D],
+    /// External force `F_p`, N (particle forces).
+    pub force: [&'a mut [Real]; D],
+    /// Local grid and particle damping, 1/s (per-particle damping).
+    pub damping: [&'a mut [Real]; 2],
+    /// APIC moment matrix `B_p`, entry (a, b), m^2/s (`C_p = B_p D_p^-1`).
+    pub affine: [[&'a mut [Real]; D]; D],
     pub material: &'a mut [u32],
     pub status: &'a mut [u32],
 }
@@ -88,7 +100,14 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             layout.padded_capacity,
         );
         let ns = stress_components(D);
-        let musl = layout.particle_real_columns > 2 * D + 2 + D * D + ns;
+        // An optional group's columns, or empty slices when it is not reserved.
+        let group = |c: &mut Carver<'a>, reserved: bool| -> &'a mut [Real] {
+            if reserved {
+                c.take(rb, n)
+            } else {
+                &mut [][..]
+            }
+        };
         let x = core::array::from_fn(|_| c.take(rb, n));
         let v = core::array::from_fn(|_| c.take(rb, n));
         let mass = c.take(rb, n);
@@ -96,7 +115,12 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let _vol0: &mut [Real] = c.take(rb, 0);
         let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
-        let x_next = core::array::from_fn(|_| if musl { c.take(rb, n) } else { &mut [][..] });
+        let x_next = core::array::from_fn(|_| group(&mut c, layout.x_next.count > 0));
+        let force = core::array::from_fn(|_| group(&mut c, layout.force.count > 0));
+        let damping = core::array::from_fn(|_| group(&mut c, layout.damping.count > 0));
+        let affine = core::array::from_fn(|_| {
+            core::array::from_fn(|_| group(&mut c, layout.affine.count > 0))
+        });
         let material = c.take(ub, n);
         let status = c.take(ub, n);
         ParticleCols {
@@ -106,6 +130,9 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             h,
             tau,
             x_next,
+            force,
+            damping,
+            affine,
             material,
             status,
         }

@@ -1,9 +1,10 @@
 //! The world: a view of the caller's buffer with add, step, stable_dt and read access.
 //! The phase order of a step lives here and only here ([`World::step`]).
 
-use crate::def::{Dimension, MaterialDef, ShapeFunction, UpdateOrder, WorldDef};
+use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::effects::Feedback;
 use crate::grid::{Geom, GridCols};
-use crate::layout::{col, validate, Header, Layout, MaterialRecord, ALIGN};
+use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, det_identity_plus_minus_one, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
@@ -11,7 +12,7 @@ use crate::phases::p2g::mode;
 #[cfg(target_arch = "x86_64")]
 use crate::phases::Avx2;
 use crate::phases::Baseline;
-use crate::phases::{grid_update, Ctx, Isa};
+use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
@@ -91,6 +92,11 @@ pub struct Diagnostics {
     pub mass: f64,
     /// Linear momentum, kg m/s.
     pub momentum: [f64; 3],
+    /// Angular momentum about the coordinate origin, kg m^2/s (2D: the z component only).
+    /// With APIC it includes each particle's affine part `m_p eps : B_p^T` (see
+    /// [`ParticlesView::affine`]), which the transfer conserves together with `x_p x m_p v_p`
+    /// (seeds/001).
+    pub angular_momentum: [f64; 3],
     /// Centre of mass, m.
     pub center_of_mass: [f64; 3],
     /// Kinetic energy `sum m v^2 / 2`, J.
@@ -135,6 +141,16 @@ pub struct ParticlesView<'w> {
     pub material: &'w [u32],
     /// Status codes ([`crate::ParticleStatus`]).
     pub status: &'w [u32],
+    /// External forces per axis, N (empty unless particle forces are declared).
+    pub force: [&'w [Real]; 3],
+    /// Local grid and particle damping, 1/s (empty unless per-particle damping is declared).
+    pub damping: [&'w [Real]; 2],
+    /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
+    /// unless the transfer is APIC). The affine velocity field is `C_p = B_p D_p^-1`, with
+    /// `D_p` the particle's second moment of the weights, evaluated where the particle is when
+    /// it next scatters (storing `B_p` rather than `C_p` is what makes the transfer conserve
+    /// angular momentum when `D_p` depends on position, as with uGIMP).
+    pub affine: [[&'w [Real]; 3]; 3],
 }
 
 impl ParticlesView<'_> {
@@ -275,6 +291,16 @@ impl<'a> World<'a> {
         self.read().diagnostics()
     }
 
+    /// The thermostat's current alpha, 1/s ([`WorldRef::feedback_alpha`]).
+    pub fn feedback_alpha(&self) -> f64 {
+        self.read().feedback_alpha()
+    }
+
+    /// Number of tractions added ([`WorldRef::traction_count`]).
+    pub fn traction_count(&self) -> usize {
+        self.read().traction_count()
+    }
+
     fn header_mut(&mut self) -> &mut Header {
         bytemuck::from_bytes_mut(&mut self.buf[..size_of::<Header>()])
     }
@@ -386,6 +412,131 @@ impl<'a> World<'a> {
             )
         });
         Ok(self.append(&def, items))
+    }
+
+    /// Sets the external force `F_p` (N; per unit thickness in plane strain) of particles
+    /// `first..first + n`, `n` the length of the slices (z may be empty in 2D). Needs
+    /// [`crate::Effects::particle_forces`]. The force stays until set again.
+    pub fn set_particle_forces(&mut self, first: u32, force: [&[Real]; 3]) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        if layout.force.count == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let d = layout.d;
+        let n = force[0].len();
+        if (0..d).any(|a| force[a].len() != n) {
+            return Err(Error::LengthMismatch);
+        }
+        let range = self.particle_range(first, n)?;
+        if (0..d).any(|a| force[a].iter().any(|f| !f.is_finite())) {
+            return Err(Error::NonFiniteInput);
+        }
+        for a in 0..d {
+            let col = self.real_col_mut(&layout, layout.force.first + a, range.end);
+            col[range.clone()].copy_from_slice(force[a]);
+        }
+        Ok(())
+    }
+
+    /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
+    /// particles `first..first + n`, added to the global damping for those particles (eq 107).
+    /// Needs [`crate::Damping::per_particle`].
+    pub fn set_particle_damping(
+        &mut self,
+        first: u32,
+        alpha_g: &[Real],
+        alpha_p: &[Real],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        if layout.damping.count == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        if alpha_g.len() != alpha_p.len() {
+            return Err(Error::LengthMismatch);
+        }
+        let range = self.particle_range(first, alpha_g.len())?;
+        let valid = |a: &[Real]| a.iter().all(|v| v.is_finite() && *v >= 0.0);
+        if !valid(alpha_g) || !valid(alpha_p) {
+            return Err(Error::InvalidEffect);
+        }
+        for (k, values) in [alpha_g, alpha_p].into_iter().enumerate() {
+            let col = self.real_col_mut(&layout, layout.damping.first + k, range.end);
+            col[range.clone()].copy_from_slice(values);
+        }
+        Ok(())
+    }
+
+    /// Adds one traction per particle of `particles`, each loading the `face` of that
+    /// particle's domain with the traction `traction` (Pa: force per area of the face, whose
+    /// area is per unit thickness in plane strain); returns the range of their traction ids.
+    /// All or nothing. Needs [`crate::Effects::traction_capacity`]. The tractions are
+    /// integrated each substep into `f_iT` (eq 21) while their particle is active.
+    pub fn add_tractions(
+        &mut self,
+        particles: Range<u32>,
+        face: crate::Face,
+        traction: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        if layout.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let d = layout.d;
+        if face as usize / 2 >= d || (0..d).any(|a| !traction[a].is_finite()) {
+            return Err(Error::InvalidEffect);
+        }
+        if particles.start > particles.end {
+            return Err(Error::UnknownParticle);
+        }
+        let n = (particles.end - particles.start) as usize;
+        self.particle_range(particles.start, n)?;
+        let used = self.header().traction_count as usize;
+        if n > layout.traction_capacity - used {
+            return Err(Error::TractionCapacityExceeded);
+        }
+        let start = layout.tractions_offset + used * size_of::<TractionRecord>();
+        let table: &mut [TractionRecord] = bytemuck::cast_slice_mut(
+            &mut self.buf[start..start + n * size_of::<TractionRecord>()],
+        );
+        for (rec, id) in table.iter_mut().zip(particles) {
+            *rec = TractionRecord {
+                particle: id,
+                face: face as u32,
+                traction: core::array::from_fn(|a| if a < d { traction[a] } else { 0.0 }),
+            };
+        }
+        self.header_mut().traction_count += n as u64;
+        Ok(used as u32..(used + n) as u32)
+    }
+
+    /// Removes every traction (the capacity stays).
+    pub fn clear_tractions(&mut self) {
+        self.header_mut().traction_count = 0;
+    }
+
+    /// `first..first + n` if those particles exist.
+    fn particle_range(&self, first: u32, n: usize) -> Result<Range<usize>, Error> {
+        let first = first as usize;
+        match first.checked_add(n) {
+            Some(end) if end <= self.particle_count() => Ok(first..end),
+            _ => Err(Error::UnknownParticle),
+        }
+    }
+
+    /// The thermostat (NairnMPM's feedback damping): `alpha += 2 gain (KE - target) dt / M`,
+    /// clamped to `[0, max_alpha]`, from the active particles' kinetic energy and mass.
+    fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real) {
+        let (kinetic, mass) = self.read().kinetic_energy_and_mass();
+        let h = self.header_mut();
+        if mass > 0.0 {
+            let target = f.target.at(time) as f64;
+            let rate = 2.0 * f.gain as f64 * (kinetic - target) / mass;
+            let alpha = h.feedback_alpha + rate * dt as f64;
+            h.feedback_alpha = alpha.clamp(0.0, f.max_alpha as f64);
+        }
     }
 
     fn check_room(&self, def: &WorldDef, n: usize) -> Result<(), Error> {
@@ -588,13 +739,40 @@ impl<'a> World<'a> {
             substep_dt: sub_dt,
             ..StepReport::default()
         };
-        let order = self.def().update_order;
-        for _ in 0..substeps {
-            let mut substep = Substep {
-                order,
-                report: &mut report,
-            };
-            self.dispatch(sub_dt, &mut substep, simd);
+        let def = self.def();
+        let order = def.update_order;
+        let fx = def.effects;
+        let (force, apic, damp) = (
+            fx.particle_forces,
+            def.transfer == Transfer::Apic,
+            fx.damping.is_some(),
+        );
+        let time0 = self.time();
+        for k in 0..substeps {
+            let time = time0 + k as f64 * sub_dt as f64;
+            if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
+                self.update_feedback(&feedback, time, sub_dt);
+            }
+            // One monomorphised substep per combination of the declared effects.
+            macro_rules! substep {
+                ($force:literal, $apic:literal, $damp:literal) => {{
+                    let mut substep = Substep::<$force, $apic, $damp> {
+                        order,
+                        report: &mut report,
+                    };
+                    self.dispatch(sub_dt, time, &mut substep, simd)
+                }};
+            }
+            match (force, apic, damp) {
+                (false, false, false) => substep!(false, false, false),
+                (false, false, true) => substep!(false, false, true),
+                (false, true, false) => substep!(false, true, false),
+                (false, true, true) => substep!(false, true, true),
+                (true, false, false) => substep!(true, false, false),
+                (true, false, true) => substep!(true, false, true),
+                (true, true, false) => substep!(true, true, false),
+                (true, true, true) => substep!(true, true, true),
+            }
         }
         let h = self.header_mut();
         h.time += dt as f64;
@@ -604,43 +782,44 @@ impl<'a> World<'a> {
 
     /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
     /// function) to the monomorphised instance, with the instruction set `simd` picks.
-    fn dispatch(&mut self, dt: Real, kernel: &mut impl Kernel, simd: Simd) {
+    fn dispatch(&mut self, dt: Real, time: f64, kernel: &mut impl Kernel, simd: Simd) {
         let def = self.def();
         let layout = Layout::of(&def);
         let ppc = def.particles_per_cell;
         match (def.axes(), def.shape) {
             (2, ShapeFunction::Linear) => {
-                self.run::<2, 2, _>(Linear, dt, &def, &layout, kernel, simd)
+                self.run::<2, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
             }
             (2, ShapeFunction::Gimp) => {
-                self.run::<2, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel, simd)
+                self.run::<2, 3, _>(Gimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
             }
             (2, ShapeFunction::QuadraticBspline) => {
-                self.run::<2, 3, _>(QuadraticBspline, dt, &def, &layout, kernel, simd)
+                self.run::<2, 3, _>(QuadraticBspline, (dt, time), &def, &layout, kernel, simd)
             }
             (2, ShapeFunction::CubicBspline) => {
-                self.run::<2, 4, _>(CubicBspline, dt, &def, &layout, kernel, simd)
+                self.run::<2, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::Linear) => {
-                self.run::<3, 2, _>(Linear, dt, &def, &layout, kernel, simd)
+                self.run::<3, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::Gimp) => {
-                self.run::<3, 3, _>(Gimp::new(ppc), dt, &def, &layout, kernel, simd)
+                self.run::<3, 3, _>(Gimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::QuadraticBspline) => {
-                self.run::<3, 3, _>(QuadraticBspline, dt, &def, &layout, kernel, simd)
+                self.run::<3, 3, _>(QuadraticBspline, (dt, time), &def, &layout, kernel, simd)
             }
             (_, ShapeFunction::CubicBspline) => {
-                self.run::<3, 4, _>(CubicBspline, dt, &def, &layout, kernel, simd)
+                self.run::<3, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
             }
         }
     }
 
-    /// Carves the columns and the step context, then runs `kernel` on them.
+    /// Carves the columns and the step context of a substep of length `dt` starting at `time`,
+    /// then runs `kernel` on them.
     fn run<const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         shape: S,
-        dt: Real,
+        (dt, time): (Real, f64),
         def: &WorldDef,
         layout: &Layout,
         kernel: &mut impl Kernel,
@@ -649,22 +828,38 @@ impl<'a> World<'a> {
         let count = self.particle_count();
         let min_mass = self.header().min_particle_mass;
         let n_materials = self.material_count();
+        let n_tractions = self.header().traction_count as usize;
+        let feedback_alpha = self.header().feedback_alpha as Real;
         let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
         let (pbytes, gbytes) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
         let mat_start = layout.materials_offset;
         let materials: &[MaterialRecord] = bytemuck::cast_slice(
             &head[mat_start..mat_start + n_materials * size_of::<MaterialRecord>()],
         );
+        let trac_start = layout.tractions_offset;
+        let tractions: &[TractionRecord] = bytemuck::cast_slice(
+            &head[trac_start..trac_start + n_tractions * size_of::<TractionRecord>()],
+        );
         let mut p = ParticleCols::<D>::carve(pbytes, layout);
         let mut g = GridCols::<D>::carve(gbytes, layout);
+        let fx = &def.effects;
+        let body = fx.body_force * fx.body_force_scale.at(time);
+        let (alpha_g, alpha_p) = match fx.damping {
+            Some(d) => (d.grid.at(time) + feedback_alpha, d.particle.at(time)),
+            None => (0.0, 0.0),
+        };
         let ctx = Ctx {
             geom: Geom::<D>::new(def),
             dt,
-            gravity: core::array::from_fn(|a| def.gravity[a]),
+            gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
             beta: def.flip_beta,
+            alpha_g,
+            alpha_p,
+            half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
             exp_terms: def.exp_terms,
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
+            tractions,
         };
         run_kernel(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }
@@ -680,7 +875,8 @@ impl<'a> World<'a> {
             phase,
             report: StepReport::default(),
         };
-        self.dispatch(dt, &mut run, Simd::Detect);
+        let time = self.time();
+        self.dispatch(dt, time, &mut run, Simd::Detect);
         Ok(run.report)
     }
 }
@@ -821,9 +1017,23 @@ impl<'a> WorldRef<'a> {
             }
         }
         let speed = c_max as f64 + libm::sqrt(v2_max);
-        if speed > 0.0 {
-            // Never 0: a step below the smallest positive Real is not a step.
-            ((def.cfl as f64 * def.cell_size as f64 / speed) as Real).max(Real::MIN_POSITIVE)
+        // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
+        // most the Courant number, with alpha the largest total damping any particle can see
+        // (the schedules' maxima, the thermostat's current alpha, the largest local values).
+        let alpha = def.effects.damping.map_or(0.0, |dm| {
+            let local = |k: usize| {
+                view_max(&self.particles().damping[k], &status)
+            };
+            dm.grid.max_value() as f64
+                + dm.particle.max_value() as f64
+                + self.feedback_alpha()
+                + local(0)
+                + local(1)
+        });
+        // Never 0: a step below the smallest positive Real is not a step.
+        let dt = def.cfl as f64 * (def.cell_size as f64 / speed).min(1.0 / alpha);
+        if dt.is_finite() {
+            (dt as Real).max(Real::MIN_POSITIVE)
         } else {
             Real::INFINITY
         }
@@ -837,6 +1047,14 @@ impl<'a> WorldRef<'a> {
         let empty: &[Real] = &[];
         let r = |j: usize| self.real_col(&layout, j, n);
         let ns = crate::layout::stress_components(d);
+        // Column k of an optional group, or empty when the group is not reserved.
+        let group = |g: crate::layout::ColumnGroup, k: usize| {
+            if k < g.count {
+                r(g.first + k)
+            } else {
+                empty
+            }
+        };
         ParticlesView {
             count: n,
             dimension: self.def().dimension,
@@ -856,7 +1074,40 @@ impl<'a> WorldRef<'a> {
             stress: core::array::from_fn(|k| if k < ns { r(col::tau(d, k)) } else { empty }),
             material: self.u32_col(&layout, col::MATERIAL, n),
             status: self.u32_col(&layout, col::STATUS, n),
+            force: core::array::from_fn(|a| group(layout.force, a)),
+            damping: core::array::from_fn(|k| group(layout.damping, k)),
+            affine: core::array::from_fn(|a| {
+                core::array::from_fn(|b| if a < d && b < d { group(layout.affine, a * d + b) } else { empty })
+            }),
         }
+    }
+
+    /// Kinetic energy (J) and mass (kg) of the active particles, in f64.
+    fn kinetic_energy_and_mass(&self) -> (f64, f64) {
+        let view = self.particles();
+        let d = self.layout().d;
+        let (mut kinetic, mut mass) = (0.0f64, 0.0f64);
+        for i in 0..view.count {
+            if view.status[i] == ACTIVE {
+                let m = view.mass[i] as f64;
+                let v2: f64 = (0..d)
+                    .map(|a| view.velocity[a][i] as f64 * view.velocity[a][i] as f64)
+                    .sum();
+                kinetic += 0.5 * m * v2;
+                mass += m;
+            }
+        }
+        (kinetic, mass)
+    }
+
+    /// The thermostat's current alpha, 1/s (0 without one).
+    pub fn feedback_alpha(&self) -> f64 {
+        self.header().feedback_alpha
+    }
+
+    /// Number of tractions added.
+    pub fn traction_count(&self) -> usize {
+        self.header().traction_count as usize
     }
 
     /// Mass, momentum, centre of mass and energies of the active particles.
@@ -874,13 +1125,37 @@ impl<'a> WorldRef<'a> {
             }
             let m = view.mass[i] as f64;
             out.mass += m;
+            let mut x = [0.0f64; 3];
+            let mut v = [0.0f64; 3];
             for a in 0..d {
-                let v = view.velocity[a][i] as f64;
-                let x = view.position[a][i] as f64;
-                out.momentum[a] += m * v;
-                out.kinetic += 0.5 * m * v * v;
-                first_moment[a] += m * x;
-                out.potential -= m * def.gravity[a] as f64 * x;
+                v[a] = view.velocity[a][i] as f64;
+                x[a] = view.position[a][i] as f64;
+                out.momentum[a] += m * v[a];
+                out.kinetic += 0.5 * m * v[a] * v[a];
+                first_moment[a] += m * x[a];
+                out.potential -= m * def.gravity[a] as f64 * x[a];
+            }
+            // L = x x m v, plus m eps_abc B_cb with APIC.
+            let mut l = [
+                m * (x[1] * v[2] - x[2] * v[1]),
+                m * (x[2] * v[0] - x[0] * v[2]),
+                m * (x[0] * v[1] - x[1] * v[0]),
+            ];
+            if def.transfer == Transfer::Apic {
+                let b = |a: usize, c: usize| {
+                    if a < d && c < d {
+                        view.affine[a][c][i] as f64
+                    } else {
+                        0.0
+                    }
+                };
+                l[0] += m * (b(2, 1) - b(1, 2));
+                l[1] += m * (b(0, 2) - b(2, 0));
+                l[2] += m * (b(1, 0) - b(0, 1));
+            }
+            let axes = if d == 3 { 0..3 } else { 2..3 };
+            for a in axes {
+                out.angular_momentum[a] += l[a];
             }
             if let Some(rec) = materials.get(view.material[i] as usize) {
                 let (model, params, jm1) =
@@ -903,6 +1178,14 @@ impl<'a> WorldRef<'a> {
         }
         out
     }
+}
+
+/// Largest value of `col` over active particles (0 for an empty column).
+fn view_max(col: &[Real], status: &[u32]) -> f64 {
+    col.iter()
+        .zip(status)
+        .filter(|(_, &s)| s == ACTIVE)
+        .fold(0.0f64, |m, (&v, _)| m.max(v as f64))
 }
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile
@@ -940,13 +1223,17 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
-/// the only place the order of the phases is written down.
-struct Substep<'r> {
+/// the only place the order of the phases is written down. The declared effects are const
+/// parameters, so an undeclared effect's code is not in the instance that runs: `FORCE`
+/// (particle forces), `APIC` (the APIC transfer), `DAMP` (damping).
+struct Substep<'r, const FORCE: bool, const APIC: bool, const DAMP: bool> {
     order: UpdateOrder,
     report: &'r mut StepReport,
 }
 
-impl Kernel for Substep<'_> {
+impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
+    for Substep<'_, FORCE, APIC, DAMP>
+{
     fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
         &mut self,
         s: &S,
@@ -959,26 +1246,29 @@ impl Kernel for Substep<'_> {
         grid_update::reset(g);
         match self.order {
             UpdateOrder::Usf => {
-                I::scatter::<D, K, S, { mode::MASS_MOMENTUM }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::MASS_MOMENTUM }, false, APIC>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
                 I::stress::<D, K, S, false>(s, ctx, p, count, g, report);
-                I::scatter::<D, K, S, { mode::FORCE }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::FORCE }, FORCE, false>(s, ctx, p, count, g);
+                p2g::tractions(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, false, false>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, false, false, DAMP, APIC>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, true, false>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, true, false, DAMP, APIC>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).
-                I::particles::<D, K, S, false, true>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, false, true, DAMP, APIC>(s, ctx, p, count, g, report);
                 grid_update::remap_velocity(ctx, g);
                 I::stress::<D, K, S, true>(s, ctx, p, count, g, report);
             }
@@ -1018,14 +1308,15 @@ impl Kernel for PhaseRun {
             Phase::ResetGrid => grid_update::reset(g),
             Phase::ParticleToGrid => {
                 grid_update::reset(g);
-                I::scatter::<D, K, S, { mode::ALL }>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, { mode::ALL }, false, false>(s, ctx, p, count, g);
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
             }
             Phase::GridToParticle => {
-                I::particles::<D, K, S, true, false>(s, ctx, p, count, g, &mut self.report)
+                let report = &mut self.report;
+                I::particles::<D, K, S, true, false, false, false>(s, ctx, p, count, g, report)
             }
         }
     }

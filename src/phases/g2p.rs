@@ -1,9 +1,15 @@
 //! Grid to particle (seeds/000 section 5.1).
 //!
-//! Particle update with FLIP fraction beta and no other damping (eqs 44-45, 51-52 with
-//! `alpha_g' = alpha_p' = 0`), from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i`:
-//! - `v_p(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp)`
-//! - `x_p(n+1) = x_p + v_gp dt + a_gp dt^2 / 2 - (1 - beta)(v_p - v_gp) dt / 2`
+//! Particle update with FLIP fraction beta (eqs 44-45, 51-52), from `v_gp = sum S_ip v_i` and
+//! `a_gp = sum S_ip a_i`, with the damping acceleration `d = alpha_g v_gp + alpha_p v_p`
+//! (eqs 46-49; zero unless damping is declared, and then `alpha_g`, `alpha_p` are the
+//! global values of this substep plus the particle's own, eq 107):
+//! - `v_p(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
+//! - `x_p(n+1) = x_p + v_gp dt + a_gp dt^2 / 2 - (1 - beta)(v_p - v_gp) dt / 2 - d dt^2 / 2`
+//!
+//! With APIC (seeds/001) instead: `v_p(n+1) = v_gp + a_gp dt - d dt` (the grid velocity),
+//! `x_p(n+1) = x_p + v_p(n+1) dt`, and the moment matrix `B_p` from the updated nodal
+//! velocities ([`gather_affine`]; the next scatter turns it into `C_p = B_p D_p^-1`).
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
 //! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
@@ -19,7 +25,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::p2g::{mode, scatter_lane, scatter_one};
+use super::p2g::{mode, scatter_lane, scatter_one, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -228,9 +234,56 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
     })
 }
 
-/// Replaces `st` by the stencils of the chunk's particles at `x[axis][lane]`.
+/// `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` of the particle with stencil `st` (APIC,
+/// seeds/001): the gradient gather of the updated velocity with the first moments `e` in place
+/// of the weight derivatives (see [`Stencil::e`]).
 #[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+fn gather_affine<const D: usize, const K: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &GridCols<'_, D>,
+    st: &Stencil<D, K>,
+) -> [[Real; D]; D] {
+    let geom = &ctx.geom;
+    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), g.len()) {
+        return [[0.0; D]; D]; // Unreachable by construction, as in `gather`.
+    }
+    // Per row: the y (and z) factor with no moment (r0) and with the moment on axis b (re[b]).
+    let mut u0 = [Row4::ZERO; D];
+    let mut ue = [[Row4::ZERO; D]; D];
+    for k in 0..Stencil::<D, K>::layers() {
+        for j in 0..K {
+            let (row, r) = st.row(j, k, geom.stride);
+            let re: [Real; D] = core::array::from_fn(|b| match (b, D) {
+                (1, 3) => st.e[1][j] * st.w[2][k],
+                (2, _) => st.w[1][j] * st.e[2][k],
+                (1, _) => st.e[1][j],
+                _ => 0.0,
+            });
+            for a in 0..D {
+                // SAFETY: rows_fit checked above; every column read has that length.
+                let u = unsafe { load_row(g.vel[a], row) + load_row(g.acc[a], row) * ctx.dt };
+                u0[a] += u * r[0];
+                for b in 1..D {
+                    ue[a][b] += u * re[b];
+                }
+            }
+        }
+    }
+    core::array::from_fn(|a| {
+        core::array::from_fn(|b| {
+            if b == 0 {
+                (st.e[0] * u0[a]).element_sum()
+            } else {
+                (st.w[0] * ue[a][b]).element_sum()
+            }
+        })
+    })
+}
+
+/// Replaces `st` by the stencils of the chunk's particles at `x[axis][lane]` (with their
+/// first moments when `AFFINE`).
+#[inline(always)]
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFINE: bool>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -240,7 +293,7 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>>(
     let s: [Lane; D] = core::array::from_fn(|a| {
         core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
     });
-    st.compute(shape, &s, geom.nodes, geom.stride, geom.inv_h);
+    st.compute::<S, AFFINE>(shape, &s, geom.nodes, geom.stride, geom.inv_h);
 }
 
 /// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
@@ -418,7 +471,8 @@ fn update_stress<const D: usize>(
 /// the scratch columns instead of the positions, and scatters the new momenta to the remap
 /// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
 /// remap columns are free to fill; particles contribute chunk by chunk in the order of
-/// [`scatter_lane`], as the scatter pass does).
+/// [`scatter_lane`], as the scatter pass does). `DAMP` adds the damping of the module docs;
+/// `APIC` replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
     const D: usize,
@@ -426,6 +480,8 @@ pub(crate) fn particles<
     S: Shape1D<K>,
     const FUSED_STRESS: bool,
     const TO_NEXT: bool,
+    const DAMP: bool,
+    const APIC: bool,
 >(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -445,7 +501,31 @@ pub(crate) fn particles<
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
-        stencils::<D, K, S>(&mut st, shape, ctx, &x);
+        stencils::<D, K, S, APIC>(&mut st, shape, ctx, &x);
+        // Damping rates of each lane: the substep's global values plus the particle's own
+        // (empty columns, when per-particle damping is not declared, load as zeros).
+        let (mut alpha_g, mut alpha_p) = ([ctx.alpha_g; W], [ctx.alpha_p; W]);
+        if DAMP {
+            let (lg, lp) = (load(p.damping[0], start), load(p.damping[1], start));
+            for ln in 0..W {
+                alpha_g[ln] += lg[ln];
+                alpha_p[ln] += lp[ln];
+            }
+        }
+        // APIC: the new moment matrix B_p of each live lane.
+        let mut affine = [[[0.0; W]; D]; D];
+        if APIC {
+            for ln in 0..W {
+                if live[ln] {
+                    let b = gather_affine(ctx, g, st.lane(ln));
+                    for r in 0..D {
+                        for c in 0..D {
+                            affine[r][c][ln] = b[r][c];
+                        }
+                    }
+                }
+            }
+        }
         let Gathered { v_gp, a_gp, l } = if FUSED_STRESS {
             gather_chunk::<D, K, true, { grad::UPDATED }>(ctx, g, &st, &live)
         } else {
@@ -465,11 +545,36 @@ pub(crate) fn particles<
             let mut vn: [Row4; D] = [Row4::ZERO; D];
             let mut xn: [Row4; D] = [Row4::ZERO; D];
             for a in 0..D {
-                let (vg, ag) = (row(&v_gp[a]), row(&a_gp[a]));
-                let inversion = (row(&v[a]) - vg) * pic;
-                vn[a] = row(&v[a]) + ag * dt - inversion;
-                xn[a] = row(&x[a]) + (vg + ag * 0.5 * dt - inversion * 0.5) * dt;
+                let (vg, ag, vp) = (row(&v_gp[a]), row(&a_gp[a]), row(&v[a]));
+                // Damping acceleration (eqs 47, 107); zero and skipped unless declared.
+                let damp = if DAMP {
+                    vg * row(&alpha_g) + vp * row(&alpha_p)
+                } else {
+                    Row4::ZERO
+                };
+                if APIC {
+                    vn[a] = vg + ag * dt;
+                    if DAMP {
+                        vn[a] -= damp * dt;
+                    }
+                    xn[a] = row(&x[a]) + vn[a] * dt;
+                } else {
+                    let inversion = (vp - vg) * pic;
+                    vn[a] = vp + ag * dt - inversion;
+                    xn[a] = row(&x[a]) + (vg + ag * 0.5 * dt - inversion * 0.5) * dt;
+                    if DAMP {
+                        vn[a] -= damp * dt;
+                        xn[a] -= damp * (0.5 * dt * dt);
+                    }
+                }
                 sum += vn[a] + xn[a];
+            }
+            if APIC {
+                for r in 0..D {
+                    for c in 0..D {
+                        sum += row(&affine[r][c]);
+                    }
+                }
             }
             let finite = sum.is_finite_mask().bitmask();
             let (mut open_any, mut wall_any) = (Mask4::splat(false), Mask4::splat(false));
@@ -524,6 +629,13 @@ pub(crate) fn particles<
                 commit(p.x[a], start, &x_new[a], &ok);
             }
         }
+        if APIC {
+            for r in 0..D {
+                for c in 0..D {
+                    commit(p.affine[r][c], start, &affine[r][c], &ok);
+                }
+            }
+        }
         for ln in 0..W {
             if frozen[ln] {
                 p.status[start + ln] = FROZEN;
@@ -541,10 +653,16 @@ pub(crate) fn particles<
                 let ln = scatter_lane(t);
                 if ln < n && p.status[start + ln] == ACTIVE {
                     // An active lane was committed: its velocity is v_new.
-                    let v: [Real; D] = core::array::from_fn(|a| v_new[a][ln]);
-                    let m = p.mass[start + ln];
-                    let none = [[0.0; D]; D];
-                    scatter_one::<D, K, { mode::REMAP }>(ctx, m, v, &none, st.lane(ln), g);
+                    let pt = Scattered {
+                        m: p.mass[start + ln],
+                        v: core::array::from_fn(|a| v_new[a][ln]),
+                        tau: [[0.0; D]; D],
+                        force: [0.0; D],
+                        affine: core::array::from_fn(|r| {
+                            core::array::from_fn(|c| affine[r][c][ln])
+                        }),
+                    };
+                    scatter_one::<D, K, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
                 }
             }
         }
@@ -570,7 +688,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        stencils::<D, K, S>(&mut st, shape, ctx, &x);
+        stencils::<D, K, S, false>(&mut st, shape, ctx, &x);
         let l = gather_chunk::<D, K, false, { grad::REMAP }>(ctx, g, &st, &live).l;
         let ok = update_stress(ctx, p, start, &live, &l);
         let n = W.min(count - start);

@@ -68,7 +68,10 @@ macro_rules! passes {
 
 passes! {
     /// [`p2g::scatter`].
-    fn scatter [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8] [D, K, S, MODE] (
+    fn scatter
+        [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8, const FORCE: bool,
+            const APIC: bool]
+        [D, K, S, MODE, FORCE, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
@@ -78,8 +81,9 @@ passes! {
 
     /// [`g2p::particles`].
     fn particles
-        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const TO_NEXT: bool]
-        [D, K, S, FUSED_STRESS, TO_NEXT] (
+        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const TO_NEXT: bool,
+            const DAMP: bool, const APIC: bool]
+        [D, K, S, FUSED_STRESS, TO_NEXT, DAMP, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,

@@ -15,7 +15,7 @@ pub(crate) use isa::Avx2;
 pub(crate) use isa::{Baseline, Isa};
 
 use crate::grid::Geom;
-use crate::layout::MaterialRecord;
+use crate::layout::{MaterialRecord, TractionRecord};
 use crate::Real;
 
 /// Everything a phase needs that is constant during one substep.
@@ -25,10 +25,18 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub dt: Real,
     pub gravity: [Real; D],
     pub beta: Real,
+    /// Grid and particle damping this substep, `alpha_g(t)` (thermostat included) and
+    /// `alpha_p(t)`, 1/s (0 unless damping is declared).
+    pub alpha_g: Real,
+    pub alpha_p: Real,
+    /// Half-width of an undeformed particle domain, `h / (2 n)`, m (tractions).
+    pub half_width: Real,
     pub exp_terms: u32,
     /// Nodes lighter than this are treated as empty (velocity and acceleration zero).
     pub mass_cutoff: Real,
     pub materials: &'m [MaterialRecord],
+    /// The traction table's used entries.
+    pub tractions: &'m [TractionRecord],
 }
 
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored

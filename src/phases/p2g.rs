@@ -1,6 +1,10 @@
 //! Particle to grid (seeds/000 eqs 22, 23, 25): nodal mass `m_i = sum S_ip m_p`, momentum
 //! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
-//! enters in the grid update as `m_i g` (eq 22).
+//! and the body force enter in the grid update as `m_i b` (eq 22).
+//!
+//! Declared effects add, in the same pass: the particle force `S_ip F_p` (eq 20) and the APIC
+//! affine momentum `S_ip m_p C_p (x_i - x_p)` (seeds/001). Tractions (eq 21) are a pass of
+//! their own over the traction table ([`tractions`]).
 
 use super::g2p::{load, stencils, Lane, W};
 use super::{sym_pairs, Ctx};
@@ -22,9 +26,18 @@ pub(crate) mod mode {
     pub const REMAP: u8 = 3;
 }
 
-/// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says.
+/// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says, plus
+/// the particle forces (`FORCE`, with the force) and the affine momentum (`APIC`, with the
+/// momentum).
 #[inline(always)]
-pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8>(
+pub(crate) fn scatter<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const MODE: u8,
+    const FORCE: bool,
+    const APIC: bool,
+>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
@@ -35,6 +48,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let with_force = MODE == mode::ALL || MODE == mode::FORCE;
+    let with_momentum = MODE != mode::FORCE;
     let mut st = Stencils::<D, K, W>::default();
     for start in (0..count).step_by(W) {
         // The chunk's particle values as lane vectors (one load per column, no per-particle
@@ -48,7 +62,23 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
                 tau[k] = load(p.tau[k], start);
             }
         }
-        stencils::<D, K, S>(&mut st, shape, ctx, &x);
+        let f_ext: [Lane; D] = core::array::from_fn(|a| {
+            if FORCE && with_force {
+                load(p.force[a], start)
+            } else {
+                [0.0; W]
+            }
+        });
+        let affine: [[Lane; D]; D] = core::array::from_fn(|a| {
+            core::array::from_fn(|b| {
+                if APIC && with_momentum {
+                    load(p.affine[a][b], start)
+                } else {
+                    [0.0; W]
+                }
+            })
+        });
+        stencils::<D, K, S, APIC>(&mut st, shape, ctx, &x);
         let n = W.min(count - start);
         for t in 0..W {
             let ln = scatter_lane(t);
@@ -62,8 +92,14 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const MODE:
                     t[b][a] = tau[k][ln];
                 }
             }
-            let vp = core::array::from_fn(|a| v[a][ln]);
-            scatter_one::<D, K, MODE>(ctx, mass[ln], vp, &t, st.lane(ln), g);
+            let pt = Scattered {
+                m: mass[ln],
+                v: core::array::from_fn(|a| v[a][ln]),
+                tau: t,
+                force: core::array::from_fn(|a| f_ext[a][ln]),
+                affine: core::array::from_fn(|a| core::array::from_fn(|b| affine[a][b][ln])),
+            };
+            scatter_one::<D, K, MODE, FORCE, APIC>(ctx, &pt, st.lane(ln), g);
         }
     }
 }
@@ -78,18 +114,36 @@ pub(crate) const fn scatter_lane(t: usize) -> usize {
     (t % 2) * (W / 2) + t / 2
 }
 
-/// Scatters one particle of mass `m`, velocity `v` and stress `tau` (tau/rho0; read only by
-/// the modes with force) with stencil `st` (also used by the MUSL particle update, which
+/// What one particle scatters.
+pub(crate) struct Scattered<const D: usize> {
+    /// Mass m_p.
+    pub m: Real,
+    /// Velocity v_p.
+    pub v: [Real; D],
+    /// tau/rho0 (read only by the modes with force).
+    pub tau: Mat<D>,
+    /// External force F_p (read only with `FORCE` and force).
+    pub force: [Real; D],
+    /// APIC moment matrix B_p (read only with `APIC` and momentum).
+    pub affine: Mat<D>,
+}
+
+/// Scatters one particle with stencil `st` (also used by the MUSL particle update, which
 /// scatters the new momenta as it goes).
 #[inline(always)]
-pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
+pub(crate) fn scatter_one<
+    const D: usize,
+    const K: usize,
+    const MODE: u8,
+    const FORCE: bool,
+    const APIC: bool,
+>(
     ctx: &Ctx<'_, D>,
-    m: Real,
-    v: [Real; D],
-    tau: &Mat<D>,
+    pt: &Scattered<D>,
     st: &Stencil<D, K>,
     g: &mut GridCols<'_, D>,
 ) {
+    let (m, v, tau) = (pt.m, &pt.v, &pt.tau);
     let geom = &ctx.geom;
     // The pass checked that every column has this length.
     let len = g.len();
@@ -103,17 +157,51 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
     let (wx, dwx) = (st.w[0], st.dw[0]);
     let (wy, dwy) = (st.w[1], st.dw[1]);
     let mass_x = wx * m;
-    let mom_x: [Row4; D] = core::array::from_fn(|a| wx * (m * v[a]));
-    // Force on a node: f_a = -m sum_b tau_ab G_b; force_x[a][b] = -m tau_ab times dwx (b = 0)
-    // or wx (b >= 1).
+    // Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC) with
+    // C_ab = B_ab / D_bb; S (x_b,i - x_b,p) has the form of G_b with the moments e in place of
+    // dw: mom_x[a][b] = m C_ab times ex (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
+    let (ex, ey) = (st.e[0], st.e[1]);
+    let mom_x: [[Row4; D]; D] = core::array::from_fn(|a| {
+        core::array::from_fn(|b| {
+            let plain = if b == 0 { wx * (m * v[a]) } else { Row4::ZERO };
+            if APIC {
+                let c = pt.affine[a][b] * st.inv_d[b];
+                plain + (if b == 0 { ex } else { wx }) * (m * c)
+            } else {
+                plain
+            }
+        })
+    });
+    // Force on a node: f_a = -m sum_b tau_ab G_b + S F_a; force_x[a][b] = -m tau_ab times dwx
+    // (b = 0) or wx (b >= 1), plus F_a wx in b = 0.
     let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
-        core::array::from_fn(|b| (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]))
+        core::array::from_fn(|b| {
+            let internal = (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]);
+            if FORCE && b == 0 {
+                internal + wx * pt.force[a]
+            } else {
+                internal
+            }
+        })
     });
     for j in 0..K {
-        // Per y node j: mass and momentum times wy_j; the force's terms that carry wz_k
-        // (f_wz: the x and y gradients) and dwz_k (f_dwz: the z gradient, 3D only).
+        // Per y node j: mass times wy_j; the momentum's and force's terms that carry wz_k
+        // (`_wz`: x and y factors) and the z factor dwz_k or ez_k (`_dz`, 3D only).
         let mass_j = mass_x * wy[j];
-        let mom_j: [Row4; D] = core::array::from_fn(|a| mom_x[a] * wy[j]);
+        let mom_wz: [Row4; D] = core::array::from_fn(|a| {
+            if APIC {
+                mom_x[a][0] * wy[j] + mom_x[a][1] * ey[j]
+            } else {
+                mom_x[a][0] * wy[j]
+            }
+        });
+        let mom_dz: [Row4; D] = core::array::from_fn(|a| {
+            if APIC && D == 3 {
+                mom_x[a][D - 1] * wy[j]
+            } else {
+                Row4::ZERO
+            }
+        });
         let f_wz: [Row4; D] =
             core::array::from_fn(|a| force_x[a][0] * wy[j] + force_x[a][1] * dwy[j]);
         let f_dwz: [Row4; D] = core::array::from_fn(|a| {
@@ -126,23 +214,30 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
         for k in 0..Stencil::<D, K>::layers() {
             let row = st.row_start(j, k, geom.stride);
             // The z factors (1 and 0 in 2D, where the products are skipped).
-            let (wz, dwz) = if D == 3 {
-                (st.w[D - 1][k], st.dw[D - 1][k])
+            let (wz, dwz, ez) = if D == 3 {
+                (st.w[D - 1][k], st.dw[D - 1][k], st.e[D - 1][k])
             } else {
-                (1.0, 0.0)
+                (1.0, 0.0, 0.0)
             };
             let z = |x: Row4| if D == 3 { x * wz } else { x };
+            let mom = |a: usize| {
+                if APIC && D == 3 {
+                    mom_wz[a] * wz + mom_dz[a] * ez
+                } else {
+                    z(mom_wz[a])
+                }
+            };
             // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
             // columns share the length it was checked against.
             if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
                 unsafe { add_row(g.mass, row, z(mass_j)) };
                 for a in 0..D {
-                    unsafe { add_row(g.vel[a], row, z(mom_j[a])) };
+                    unsafe { add_row(g.vel[a], row, mom(a)) };
                 }
             }
             if MODE == mode::REMAP {
                 for a in 0..D {
-                    unsafe { add_row(g.remap[a], row, z(mom_j[a])) };
+                    unsafe { add_row(g.remap[a], row, mom(a)) };
                 }
             }
             if MODE == mode::ALL || MODE == mode::FORCE {
@@ -153,6 +248,78 @@ pub(crate) fn scatter_one<const D: usize, const K: usize, const MODE: u8>(
                         f_wz[a]
                     };
                     unsafe { add_row(g.acc[a], row, f) };
+                }
+            }
+        }
+    }
+}
+
+/// Adds the tractions of the table to the nodal force (eq 21): each loads one face of one
+/// active particle's domain, the square (segment in 2D) of half-width `l_p = h / (2 n)` at
+/// distance `l_p` from the particle, `n` particles per cell per axis, and is integrated with
+/// the grid shape functions `N_i` by the 2-point Gauss rule along each axis of the face:
+/// `f_iT += T A / q sum_q N_i(x_q)` with `A = (2 l_p)^(D-1)` (per unit thickness in 2D) and `q`
+/// the number of points. The domain is the undeformed one uGIMP uses.
+pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+) {
+    let geom = &ctx.geom;
+    let table = ctx.tractions;
+    let half = ctx.half_width;
+    // 2-point Gauss abscissae on [-1, 1].
+    let gauss: Real = 1.0 / crate::math::sqrt(3.0);
+    let points = 1usize << (D - 1);
+    let area = (0..D - 1).fold(1.0 as Real, |a, _| a * 2.0 * half);
+    for rec in table {
+        let i = rec.particle as usize;
+        let (axis, side) = ((rec.face / 2) as usize, rec.face % 2);
+        if i >= count || axis >= D || p.status.get(i) != Some(&ACTIVE) {
+            continue;
+        }
+        let t = &rec.traction[..D];
+        let share = area / points as Real;
+        for q in 0..points {
+            // Point q: the face plane along `axis`, Gauss points along the others.
+            let mut bit = 0;
+            let s: [Real; D] = core::array::from_fn(|a| {
+                let off = if a == axis {
+                    if side == 0 {
+                        -half
+                    } else {
+                        half
+                    }
+                } else {
+                    let sign = if (q >> bit) & 1 == 0 { -1.0 } else { 1.0 };
+                    bit += 1;
+                    sign * gauss * half
+                };
+                (p.x[a][i] + off - geom.origin[a]) * geom.inv_h
+            });
+            let first: [i32; D] = core::array::from_fn(|a| {
+                crate::shape::first_node::<K, S>(s[a], geom.nodes[a])
+            });
+            let w: [[Real; K]; D] =
+                core::array::from_fn(|a| shape.point_weights(s[a] - first[a] as Real));
+            // Every node of the K^D stencil, x fastest; the first node is clamped so that the
+            // last one exists, and `get_mut` keeps any index inside the columns.
+            for n in 0..K.pow(D as u32) {
+                let mut rem = n;
+                let mut node = 0usize;
+                let mut weight = share;
+                for a in 0..D {
+                    let k = rem % K;
+                    rem /= K;
+                    node += (first[a] as usize + k) * geom.stride[a];
+                    weight *= w[a][k];
+                }
+                for a in 0..D {
+                    if let Some(f) = g.acc[a].get_mut(node) {
+                        *f += weight * t[a];
+                    }
                 }
             }
         }

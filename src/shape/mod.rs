@@ -64,6 +64,15 @@ pub trait Shape1D<const K: usize>: Copy {
         }
         (w, dw)
     }
+
+    /// Values of the grid shape functions `N_i` themselves at a point at offset `f` from the
+    /// first node, for the `K` stencil nodes: what a traction integral (eq 21) weighs with. The
+    /// B-splines and linear hats are their own `N_i`; uGIMP, whose `S_ip` integrates linear hats
+    /// over the particle domain, overrides it with the hats.
+    #[inline(always)]
+    fn point_weights(&self, f: Real) -> [Real; K] {
+        self.stencil(f).0
+    }
 }
 
 /// First node of the stencil of a particle at `s` (cell units) on an axis with `nodes` nodes,
@@ -96,6 +105,15 @@ pub struct Stencil<const D: usize, const K: usize> {
     /// Per-axis derivatives `dw[axis][k]`, per unit length (already divided by h), zero for
     /// `k >= K`.
     pub dw: [Row4; D],
+    /// APIC only (else zero): per-axis first moments `e[axis][k] = w[axis][k] (x_k - x_p)`, m.
+    /// With them, `S_ip (x_i - x_p)` has the tensor-product form of `G_ip` with `dw` replaced
+    /// by `e`, so the affine transfer reuses the gradient's row code.
+    pub e: [Row4; D],
+    /// APIC only (else zero): `1 / D_p[axis][axis]`, 1/m^2, where
+    /// `D_p = sum_i S_ip (x_i - x_p)(x_i - x_p)^T` is diagonal for tensor-product weights (its
+    /// off-diagonal entries are products of first moments, which vanish). Zero where `D_p`
+    /// vanishes (a linear-shape particle exactly on a node, where the first moments vanish too).
+    pub inv_d: [Real; D],
 }
 
 /// The stencils of `W` particles. They are computed lane-fastest (loops over lanes the compiler
@@ -108,6 +126,7 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     /// Lane-fastest weights and derivatives, `w[axis][k][lane]`; rows `k >= K` stay zero.
     w: [[[Real; W]; ROW]; D],
     dw: [[[Real; W]; ROW]; D],
+    e: [[[Real; W]; ROW]; D],
 }
 
 impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, W> {
@@ -118,17 +137,21 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
                 base: 0,
                 w: [Row4::ZERO; D],
                 dw: [Row4::ZERO; D],
+                e: [Row4::ZERO; D],
+                inv_d: [0.0; D],
             }; W],
             w: [[[0.0; W]; ROW]; D],
             dw: [[[0.0; W]; ROW]; D],
+            e: [[[0.0; W]; ROW]; D],
         }
     }
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
-    /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units).
+    /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units); with
+    /// `AFFINE`, also their first moments and `D_p^-1` (APIC).
     #[inline(always)]
-    pub fn compute<S: Shape1D<K>>(
+    pub fn compute<S: Shape1D<K>, const AFFINE: bool>(
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
@@ -138,7 +161,9 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
         let mut base = [0u32; W];
-        let (w, dw) = (&mut self.w, &mut self.dw);
+        let (w, dw, e) = (&mut self.w, &mut self.dw, &mut self.e);
+        let h = 1.0 / inv_h;
+        let mut inv_d = [[0.0; W]; D];
         for a in 0..D {
             let mut f = [0.0; W];
             for ln in 0..W {
@@ -153,6 +178,18 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                     dw[a][k][ln] = dwa[k] * inv_h;
                 }
             }
+            if AFFINE {
+                for ln in 0..W {
+                    let mut d2 = 0.0;
+                    for k in 0..K {
+                        // x_k - x_p = (k - f) h.
+                        let dx = (k as Real - f[ln]) * h;
+                        e[a][k][ln] = w[a][k][ln] * dx;
+                        d2 += e[a][k][ln] * dx;
+                    }
+                    inv_d[a][ln] = moment_inverse(d2, h);
+                }
+            }
         }
         for l0 in (0..W).step_by(4) {
             for a in 0..D {
@@ -161,6 +198,13 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 for i in 0..4 {
                     self.lanes[l0 + i].w[a] = tw[i];
                     self.lanes[l0 + i].dw[a] = tdw[i];
+                }
+                if AFFINE {
+                    let te = transpose4(&e[a], l0);
+                    for i in 0..4 {
+                        self.lanes[l0 + i].e[a] = te[i];
+                        self.lanes[l0 + i].inv_d[a] = inv_d[a][l0 + i];
+                    }
                 }
             }
             for i in 0..4 {
@@ -173,6 +217,18 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     #[inline(always)]
     pub fn lane(&self, ln: usize) -> &Stencil<D, K> {
         &self.lanes[ln]
+    }
+}
+
+/// `1 / d` for a diagonal entry `d` of the APIC moment matrix `D_p` on a grid of spacing `h`;
+/// 0 when `d` is below `h^2` times a round-off floor (then the first moments, which it
+/// divides, vanish as well: only linear weights on a node get there).
+#[inline(always)]
+pub(crate) fn moment_inverse(d: Real, h: Real) -> Real {
+    if d > h * h * Real::EPSILON {
+        1.0 / d
+    } else {
+        0.0
     }
 }
 
@@ -224,7 +280,13 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
                 dw[a][k] = dwa[k] * inv_h;
             }
         }
-        Stencil { base, w, dw }
+        Stencil {
+            base,
+            w,
+            dw,
+            e: [Row4::ZERO; D],
+            inv_d: [0.0; D],
+        }
     }
 
     /// Offset of the stencil's last row from its first node.

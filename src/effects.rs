@@ -1,0 +1,208 @@
+//! The optional effects of seeds/000 a scene declares in [`crate::WorldDef::effects`]: damping
+//! (sections 5.1.2 and 5.3), particle forces and tractions (eqs 13, 20-21), and a body force
+//! besides gravity. An effect that is not declared reserves no column and runs no loop: the
+//! step dispatches once on what is declared to a monomorphised instance of its passes.
+//!
+//! (The APIC transfer of seeds/001 is a method choice, [`crate::Transfer`], with the other
+//! method switches in [`crate::def`].)
+
+use crate::{Error, Real, Vec3};
+
+/// Most points a [`Schedule`] holds.
+pub const SCHEDULE_POINTS: usize = 8;
+
+/// A value that is a function of time: piecewise linear through up to [`SCHEDULE_POINTS`]
+/// `(time, value)` points, constant before the first point and after the last. No point is the
+/// constant 0; one point is a constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// Number of points used, 0..=[`SCHEDULE_POINTS`].
+    pub points: u32,
+    /// Times of the points, s, strictly increasing; entries past `points` are ignored.
+    pub times: [Real; SCHEDULE_POINTS],
+    /// Values at those times; entries past `points` are ignored.
+    pub values: [Real; SCHEDULE_POINTS],
+}
+
+impl Schedule {
+    /// The constant 0.
+    pub const ZERO: Schedule = Schedule {
+        points: 0,
+        times: [0.0; SCHEDULE_POINTS],
+        values: [0.0; SCHEDULE_POINTS],
+    };
+
+    /// The constant `value`.
+    pub const fn constant(value: Real) -> Schedule {
+        let mut s = Schedule::ZERO;
+        s.points = 1;
+        s.values[0] = value;
+        s
+    }
+
+    /// Piecewise linear through `points` (time, value); [`Error::InvalidEffect`] if there are
+    /// more than [`SCHEDULE_POINTS`], or they are not finite, or the times do not increase.
+    pub fn from_points(points: &[(Real, Real)]) -> Result<Schedule, Error> {
+        if points.len() > SCHEDULE_POINTS {
+            return Err(Error::InvalidEffect);
+        }
+        let mut s = Schedule::ZERO;
+        s.points = points.len() as u32;
+        for (k, &(t, v)) in points.iter().enumerate() {
+            s.times[k] = t;
+            s.values[k] = v;
+        }
+        if !s.is_valid(false) {
+            return Err(Error::InvalidEffect);
+        }
+        Ok(s)
+    }
+
+    /// Whether the used points are finite with increasing times (and, with `non_negative`,
+    /// values >= 0).
+    pub fn is_valid(&self, non_negative: bool) -> bool {
+        let n = self.points as usize;
+        n <= SCHEDULE_POINTS
+            && (0..n).all(|k| {
+                let (t, v) = (self.times[k], self.values[k]);
+                t.is_finite()
+                    && v.is_finite()
+                    && (!non_negative || v >= 0.0)
+                    && (k == 0 || t > self.times[k - 1])
+            })
+    }
+
+    /// The value at time `t`, s.
+    pub fn at(&self, t: f64) -> Real {
+        let n = (self.points as usize).min(SCHEDULE_POINTS);
+        if n == 0 {
+            return 0.0;
+        }
+        let (ts, vs) = (&self.times[..n], &self.values[..n]);
+        if t <= ts[0] as f64 {
+            return vs[0];
+        }
+        for k in 1..n {
+            if t <= ts[k] as f64 {
+                let f = (t - ts[k - 1] as f64) / (ts[k] as f64 - ts[k - 1] as f64);
+                return (vs[k - 1] as f64 + f * (vs[k] as f64 - vs[k - 1] as f64)) as Real;
+            }
+        }
+        vs[n - 1]
+    }
+
+    /// Largest value over all time (0 for no point).
+    pub fn max_value(&self) -> Real {
+        let n = (self.points as usize).min(SCHEDULE_POINTS);
+        self.values[..n].iter().fold(0.0, |m: Real, &v| m.max(v))
+    }
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Schedule::ZERO
+    }
+}
+
+/// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
+/// Nosé-Hoover-style controller): once per substep,
+/// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`, where KE and M are
+/// the kinetic energy and mass of the active particles. The evolving alpha adds to the grid
+/// damping `alpha_g` and is kept in the world (a snapshot carries it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feedback {
+    /// Gain `1/Q`, 1/m^2, > 0. Sets how fast alpha reacts: an excess kinetic energy per unit
+    /// mass `e` (m^2/s^2) raises alpha by `2 gain e` per second.
+    pub gain: Real,
+    /// Target kinetic energy, J, a function of time (>= 0). 0 drives the scene to rest.
+    pub target: Schedule,
+    /// Largest alpha, 1/s, > 0 (infinity: unbounded).
+    pub max_alpha: Real,
+}
+
+/// Damping of seeds/000 sections 5.1.2 and 5.3, on top of the PIC damping that
+/// [`crate::WorldDef::flip_beta`] sets (eqs 41-52).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Damping {
+    /// Grid damping `alpha_g'(t)`, 1/s, >= 0: damps the velocity extrapolated from the grid.
+    pub grid: Schedule,
+    /// Particle damping `alpha_p'(t)`, 1/s, >= 0: damps the particle velocity.
+    pub particle: Schedule,
+    /// A thermostat that adds to the grid damping, if any.
+    pub feedback: Option<Feedback>,
+    /// Reserve two per-particle columns, `alpha_g(x_p)` and `alpha_p(x_p)` in 1/s, added to the
+    /// global values for that particle: position-dependent damping as eq 107 writes it (the
+    /// host sets them with [`crate::World::set_particle_damping`], for example from each
+    /// particle's position).
+    pub per_particle: bool,
+}
+
+impl Damping {
+    /// No damping: a starting point for struct-update syntax.
+    pub const NONE: Damping = Damping {
+        grid: Schedule::ZERO,
+        particle: Schedule::ZERO,
+        feedback: None,
+        per_particle: false,
+    };
+}
+
+/// What a scene declares beyond the momentum equation. [`Effects::NONE`] is the default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects {
+    /// Damping, if declared.
+    pub damping: Option<Damping>,
+    /// Reserve a per-particle external force column `F_p`, N (per unit thickness in plane
+    /// strain), added to the nodal force as `S_ip F_p` (eq 20). Set with
+    /// [`crate::World::set_particle_forces`].
+    pub particle_forces: bool,
+    /// Most tractions the world holds (0: none). A traction loads one face of one particle's
+    /// domain and is integrated with the grid shape functions into `f_iT` (eq 21); see
+    /// [`crate::World::add_tractions`].
+    pub traction_capacity: u32,
+    /// A uniform body force per unit mass besides gravity, m/s^2, scaled by
+    /// `body_force_scale(t)`: added to every node as `m_i b(t)` (eq 22). Unlike gravity it is
+    /// not counted in the potential energy of [`crate::Diagnostics`].
+    pub body_force: Vec3,
+    /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
+    pub body_force_scale: Schedule,
+}
+
+impl Effects {
+    /// Nothing declared.
+    pub const NONE: Effects = Effects {
+        damping: None,
+        particle_forces: false,
+        traction_capacity: 0,
+        body_force: Vec3::ZERO,
+        body_force_scale: Schedule::ZERO,
+    };
+
+    /// Checks every parameter ([`Error::InvalidEffect`] names them all).
+    pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
+        let ok_damping = self.damping.map_or(true, |d| {
+            d.grid.is_valid(true)
+                && d.particle.is_valid(true)
+                && d.feedback.map_or(true, |f| {
+                    f.gain.is_finite()
+                        && f.gain > 0.0
+                        && f.target.is_valid(true)
+                        && f.max_alpha > 0.0
+                        && !f.max_alpha.is_nan()
+                })
+        });
+        let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
+            && self.body_force_scale.is_valid(false);
+        if ok_damping && ok_body && self.traction_capacity <= 1 << 24 {
+            Ok(())
+        } else {
+            Err(Error::InvalidEffect)
+        }
+    }
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Effects::NONE
+    }
+}
