@@ -226,7 +226,11 @@ impl EffectColumns {
             if musl { d } else { 0 },
             if fx.particle_forces { d } else { 0 },
             if per_particle_damping { 2 } else { 0 },
-            if def.transfer == Transfer::Apic { d * d } else { 0 },
+            if def.transfer == Transfer::Apic {
+                d * d
+            } else {
+                0
+            },
         ];
         let mut next = first;
         let groups = counts.map(|count| {

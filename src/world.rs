@@ -146,7 +146,8 @@ pub struct ParticlesView<'w> {
     /// Local grid and particle damping, 1/s (empty unless per-particle damping is declared).
     pub damping: [&'w [Real]; 2],
     /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
-    /// unless the transfer is APIC). The affine velocity field is `C_p = B_p D_p^-1`, with
+    /// unless the transfer is APIC); with linear shape functions, the affine velocity matrix
+    /// `C_p` itself, 1/s, in its gradient form (see [`crate::shape::Shape1D::GRADIENT_AFFINE`]). The affine velocity field is `C_p = B_p D_p^-1`, with
     /// `D_p` the particle's second moment of the weights, evaluated where the particle is when
     /// it next scatters (storing `B_p` rather than `C_p` is what makes the transfer conserve
     /// angular momentum when `D_p` depends on position, as with uGIMP).
@@ -498,9 +499,8 @@ impl<'a> World<'a> {
             return Err(Error::TractionCapacityExceeded);
         }
         let start = layout.tractions_offset + used * size_of::<TractionRecord>();
-        let table: &mut [TractionRecord] = bytemuck::cast_slice_mut(
-            &mut self.buf[start..start + n * size_of::<TractionRecord>()],
-        );
+        let table: &mut [TractionRecord] =
+            bytemuck::cast_slice_mut(&mut self.buf[start..start + n * size_of::<TractionRecord>()]);
         for (rec, id) in table.iter_mut().zip(particles) {
             *rec = TractionRecord {
                 particle: id,
@@ -1021,9 +1021,7 @@ impl<'a> WorldRef<'a> {
         // most the Courant number, with alpha the largest total damping any particle can see
         // (the schedules' maxima, the thermostat's current alpha, the largest local values).
         let alpha = def.effects.damping.map_or(0.0, |dm| {
-            let local = |k: usize| {
-                view_max(&self.particles().damping[k], &status)
-            };
+            let local = |k: usize| view_max(&self.particles().damping[k], &status);
             dm.grid.max_value() as f64
                 + dm.particle.max_value() as f64
                 + self.feedback_alpha()
@@ -1077,7 +1075,13 @@ impl<'a> WorldRef<'a> {
             force: core::array::from_fn(|a| group(layout.force, a)),
             damping: core::array::from_fn(|k| group(layout.damping, k)),
             affine: core::array::from_fn(|a| {
-                core::array::from_fn(|b| if a < d && b < d { group(layout.affine, a * d + b) } else { empty })
+                core::array::from_fn(|b| {
+                    if a < d && b < d {
+                        group(layout.affine, a * d + b)
+                    } else {
+                        empty
+                    }
+                })
             }),
         }
     }
@@ -1142,9 +1146,22 @@ impl<'a> WorldRef<'a> {
                 m * (x[0] * v[1] - x[1] * v[0]),
             ];
             if def.transfer == Transfer::Apic {
+                // B_p itself, or C_p D_p for linear weights, whose column holds C_p (the
+                // gradient form; D_p = f (1 - f) h^2 per axis, f the offset in the cell).
+                let linear = def.shape == ShapeFunction::Linear;
+                let dm: [f64; 3] = core::array::from_fn(|a| {
+                    if linear && a < d {
+                        let h = def.cell_size as f64;
+                        let s = (x[a] - def.origin[a] as f64) / h;
+                        let f = s - libm::floor(s);
+                        f * (1.0 - f) * h * h
+                    } else {
+                        1.0
+                    }
+                });
                 let b = |a: usize, c: usize| {
                     if a < d && c < d {
-                        view.affine[a][c][i] as f64
+                        view.affine[a][c][i] as f64 * dm[c]
                     } else {
                         0.0
                     }

@@ -1,13 +1,113 @@
 //! Hard cases that must stay finite and bounded: no NaN, mass exact, and kinetic + strain
-//! energy never above its start plus the work of gravity by more than 1 %.
+//! energy never above its start plus the work of gravity by more than 1 %. Each runs with no
+//! effect and again with each effect switched on ([`EFFECTS`]).
 
 mod common;
 
 use common::*;
 use mpm_gimp::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, ParticleBatch, ParticleStatus, Real,
-    ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
+    Boundary, Damping, Dimension, Face, Feedback, MaterialDef, MaterialModel, ParticleBatch,
+    ParticleStatus, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
 };
+
+/// An effect switched on in a hard case: how it changes the definition, and what it sets once
+/// the particles are in.
+struct Fx {
+    name: &'static str,
+    def: fn(&mut WorldDef),
+    setup: fn(&mut World),
+    /// The effect does work on the particles (loads): the energy budget, which counts only
+    /// gravity's work, does not apply, and the scene's motion checks neither.
+    loads: bool,
+    /// The effect removes energy (damping): the scene's motion checks do not apply.
+    damps: bool,
+}
+
+fn no_def(_: &mut WorldDef) {}
+fn no_setup(_: &mut World) {}
+
+/// Every particle's own value: a force of 2 m/s^2 times its mass along x and 1 along y.
+fn set_forces(w: &mut World) {
+    let m = w.particles().mass.to_vec();
+    let fx: Vec<Real> = m.iter().map(|m| 2.0 * m).collect();
+    let fy: Vec<Real> = m.iter().map(|m| 1.0 * m).collect();
+    let fz = vec![0.0; m.len()];
+    w.set_particle_forces(0, [&fx, &fy, &fz]).unwrap();
+}
+
+/// Local damping of 5/s (grid) on every other particle.
+fn set_local_damping(w: &mut World) {
+    let n = w.particle_count();
+    let g: Vec<Real> = (0..n).map(|i| if i % 2 == 0 { 5.0 } else { 0.0 }).collect();
+    w.set_particle_damping(0, &g, &vec![0.0; n]).unwrap();
+}
+
+/// A 1 kPa traction on the +x face of the first 32 particles.
+fn set_tractions(w: &mut World) {
+    let n = w.particle_count().min(32) as u32;
+    w.add_tractions(0..n, Face::XMax, Vec3::new(1.0e3, -5.0e2, 0.0))
+        .unwrap();
+}
+
+const EFFECTS: [Fx; 6] = [
+    Fx {
+        name: "none",
+        def: no_def,
+        setup: no_setup,
+        loads: false,
+        damps: false,
+    },
+    Fx {
+        name: "damping",
+        def: |def| {
+            def.effects.damping = Some(Damping {
+                grid: Schedule::constant(1.0),
+                particle: Schedule::constant(0.5),
+                feedback: Some(Feedback {
+                    gain: 1.0,
+                    target: Schedule::ZERO,
+                    max_alpha: 20.0,
+                }),
+                per_particle: true,
+            })
+        },
+        setup: set_local_damping,
+        loads: false,
+        damps: true,
+    },
+    Fx {
+        name: "particle forces",
+        def: |def| def.effects.particle_forces = true,
+        setup: set_forces,
+        loads: true,
+        damps: false,
+    },
+    Fx {
+        name: "tractions",
+        def: |def| def.effects.traction_capacity = 64,
+        setup: set_tractions,
+        loads: true,
+        damps: false,
+    },
+    Fx {
+        name: "body force",
+        def: |def| {
+            def.effects.body_force = Vec3::new(3.0, 1.0, -1.0);
+            def.effects.body_force_scale =
+                Schedule::from_points(&[(0.0, 0.0), (0.05, 1.0)]).unwrap();
+        },
+        setup: no_setup,
+        loads: true,
+        damps: false,
+    },
+    Fx {
+        name: "APIC",
+        def: |def| def.transfer = Transfer::Apic,
+        setup: no_setup,
+        loads: false,
+        damps: false,
+    },
+];
 
 /// Tracks the energy budget of a run: kinetic + strain must stay below its start plus the
 /// work gravity did (potential energy released) by more than 1 % of that budget.
@@ -41,9 +141,12 @@ impl Budget {
 /// cell-crossing error adds energy whenever a particle's gradient jumps at a cell edge (the
 /// error GIMP was made to remove): measured up to 4.8 % in these scenes, so linear is held to
 /// 10 %, which still catches any blow-up.
-fn check(w: &World, mass0: f64, budget: &Budget, label: &str) {
+fn check(w: &World, mass0: f64, budget: &Budget, label: &str, fx: &Fx) {
     assert!(all_finite(w), "{label}: non-finite state");
     assert_eq!(total_mass(w), mass0, "{label}: mass changed");
+    if fx.loads {
+        return;
+    }
     let bound = if w.def().shape == ShapeFunction::Linear {
         0.10
     } else {
@@ -63,29 +166,33 @@ fn check(w: &World, mass0: f64, budget: &Budget, label: &str) {
 /// 0.3, 0.10 % at 0.1, the same at 0.5 and 3 cells of amplitude), which is not growth.
 #[test]
 fn bar_crossing_cells_stays_finite_and_bounded() {
-    for shape in SHAPES {
-        let mut bar = Bar::new(shape, 32, 0.0);
-        bar.v0 = 3.0 * bar.def.cell_size * bar.omega();
-        bar.def.flip_beta = WorldDef::DEFAULT.flip_beta;
-        bar.def.update_order = WorldDef::DEFAULT.update_order;
-        bar.def.cfl = 0.4;
-        let mut buf = buffer_for(&bar.def);
-        let mut w = World::init(&bar.def, buf.as_mut_bytes()).unwrap();
-        let x0 = bar.populate(&mut w);
-        let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
-        let steps = (2.0 * bar.period() / w.stable_dt()).ceil() as usize;
-        let mut max_disp: Real = 0.0;
-        for _ in 0..steps {
-            w.step(w.stable_dt()).unwrap();
-            budget.sample(&w);
-            let v = w.particles();
-            max_disp = max_disp.max((v.position[0][v.count - 1] - x0[v.count - 1]).abs());
+    for fx in &EFFECTS {
+        for shape in SHAPES {
+            let mut bar = Bar::new(shape, 32, 0.0);
+            bar.v0 = 3.0 * bar.def.cell_size * bar.omega();
+            bar.def.flip_beta = WorldDef::DEFAULT.flip_beta;
+            bar.def.update_order = WorldDef::DEFAULT.update_order;
+            bar.def.cfl = 0.4;
+            (fx.def)(&mut bar.def);
+            let mut buf = buffer_for(&bar.def);
+            let mut w = World::init(&bar.def, buf.as_mut_bytes()).unwrap();
+            let x0 = bar.populate(&mut w);
+            (fx.setup)(&mut w);
+            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+            let steps = (2.0 * bar.period() / w.stable_dt()).ceil() as usize;
+            let mut max_disp: Real = 0.0;
+            for _ in 0..steps {
+                w.step(w.stable_dt()).unwrap();
+                budget.sample(&w);
+                let v = w.particles();
+                max_disp = max_disp.max((v.position[0][v.count - 1] - x0[v.count - 1]).abs());
+            }
+            check(&w, mass0, &budget, &format!("{shape:?} {}", fx.name), fx);
+            assert!(
+                fx.damps || max_disp > 2.0 * bar.def.cell_size,
+                "{shape:?}: the tip moved only {max_disp}"
+            );
         }
-        check(&w, mass0, &budget, &format!("{shape:?}"));
-        assert!(
-            max_disp > 2.0 * bar.def.cell_size,
-            "{shape:?}: the tip moved only {max_disp}"
-        );
     }
 }
 
@@ -93,55 +200,65 @@ fn bar_crossing_cells_stays_finite_and_bounded() {
 /// gradients jump and uGIMP switches branches), in 2D and 3D, falling onto a stick floor.
 #[test]
 fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
-    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in SHAPES {
-            let h: Real = 0.05;
-            let mut def = WorldDef {
-                dimension: dim,
-                shape,
-                cell_size: h,
-                cells: if dim == Dimension::ThreeD {
-                    [16; 3]
-                } else {
-                    [16, 16, 1]
-                },
-                particle_capacity: 20_000,
-                ..WorldDef::DEFAULT
-            };
-            def.faces[Face::YMin as usize] = Boundary::Stick;
-            let mut buf = buffer_for(&def);
-            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = w.add_material(&MaterialDef::DEFAULT).unwrap();
-            let d = def.axes();
-            // Nodes i*h and edge midpoints (i + 1/2) h in x, nodes in y and z: spacing h/2.
-            let mut c: [Vec<Real>; 3] = Default::default();
-            let nz = if d == 3 { 9 } else { 1 };
-            for k in 0..nz {
-                for j in 0..9 {
-                    for i in 0..17 {
-                        c[0].push(4.0 * h + i as Real * 0.5 * h);
-                        c[1].push(4.0 * h + j as Real * h);
-                        c[2].push(if d == 3 { 4.0 * h + k as Real * h } else { 0.0 });
+    for fx in &EFFECTS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            for shape in SHAPES {
+                let h: Real = 0.05;
+                let mut def = WorldDef {
+                    dimension: dim,
+                    shape,
+                    cell_size: h,
+                    cells: if dim == Dimension::ThreeD {
+                        [16; 3]
+                    } else {
+                        [16, 16, 1]
+                    },
+                    particle_capacity: 20_000,
+                    ..WorldDef::DEFAULT
+                };
+                def.faces[Face::YMin as usize] = Boundary::Stick;
+                (fx.def)(&mut def);
+                let mut buf = buffer_for(&def);
+                let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+                let mat = w.add_material(&MaterialDef::DEFAULT).unwrap();
+                let d = def.axes();
+                // Nodes i*h and edge midpoints (i + 1/2) h in x, nodes in y and z: spacing h/2.
+                let mut c: [Vec<Real>; 3] = Default::default();
+                let nz = if d == 3 { 9 } else { 1 };
+                for k in 0..nz {
+                    for j in 0..9 {
+                        for i in 0..17 {
+                            c[0].push(4.0 * h + i as Real * 0.5 * h);
+                            c[1].push(4.0 * h + j as Real * h);
+                            c[2].push(if d == 3 { 4.0 * h + k as Real * h } else { 0.0 });
+                        }
                     }
                 }
+                let n = c[0].len();
+                let vol = 0.5 * h.powi(d as i32);
+                let zeros = vec![0.0; n];
+                w.add_particles(&ParticleBatch {
+                    position: [&c[0], &c[1], &c[2]],
+                    velocity: [&zeros, &zeros, &zeros],
+                    mass: &vec![1000.0 * vol; n],
+                    volume: &vec![vol; n],
+                    material: &vec![mat; n],
+                })
+                .unwrap();
+                (fx.setup)(&mut w);
+                let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+                for _ in 0..30 {
+                    w.step(1.0 / 120.0).unwrap();
+                    budget.sample(&w);
+                }
+                check(
+                    &w,
+                    mass0,
+                    &budget,
+                    &format!("{dim:?} {shape:?} {}", fx.name),
+                    fx,
+                );
             }
-            let n = c[0].len();
-            let vol = 0.5 * h.powi(d as i32);
-            let zeros = vec![0.0; n];
-            w.add_particles(&ParticleBatch {
-                position: [&c[0], &c[1], &c[2]],
-                velocity: [&zeros, &zeros, &zeros],
-                mass: &vec![1000.0 * vol; n],
-                volume: &vec![vol; n],
-                material: &vec![mat; n],
-            })
-            .unwrap();
-            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
-            for _ in 0..30 {
-                w.step(1.0 / 120.0).unwrap();
-                budget.sample(&w);
-            }
-            check(&w, mass0, &budget, &format!("{dim:?} {shape:?}"));
         }
     }
 }
@@ -150,65 +267,72 @@ fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
 /// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second.
 #[test]
 fn block_dropped_on_stick_floor_stays_finite_and_bounded() {
-    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in SHAPES {
-            for order in ORDERS {
-                if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
-                    continue;
-                }
-                let mut def = WorldDef {
-                    dimension: dim,
-                    shape,
-                    update_order: order,
-                    cell_size: 0.05,
-                    cells: if dim == Dimension::ThreeD {
-                        [20; 3]
-                    } else {
-                        [20, 20, 1]
-                    },
-                    particle_capacity: 20_000,
-                    ..WorldDef::DEFAULT
-                };
-                def.faces[Face::YMin as usize] = Boundary::Stick;
-                let mut buf = buffer_for(&def);
-                let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-                let mat = w
-                    .add_material(&MaterialDef {
-                        youngs_modulus: 2.0e5,
-                        ..MaterialDef::DEFAULT
-                    })
+    for fx in &EFFECTS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            for shape in SHAPES {
+                for order in ORDERS {
+                    if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
+                        continue;
+                    }
+                    let mut def = WorldDef {
+                        dimension: dim,
+                        shape,
+                        update_order: order,
+                        cell_size: 0.05,
+                        cells: if dim == Dimension::ThreeD {
+                            [20; 3]
+                        } else {
+                            [20, 20, 1]
+                        },
+                        particle_capacity: 20_000,
+                        ..WorldDef::DEFAULT
+                    };
+                    def.faces[Face::YMin as usize] = Boundary::Stick;
+                    (fx.def)(&mut def);
+                    let mut buf = buffer_for(&def);
+                    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+                    let mat = w
+                        .add_material(&MaterialDef {
+                            youngs_modulus: 2.0e5,
+                            ..MaterialDef::DEFAULT
+                        })
+                        .unwrap();
+                    let z = if dim == Dimension::ThreeD { 0.3 } else { 0.0 };
+                    let z1 = if dim == Dimension::ThreeD { 0.7 } else { 0.0 };
+                    w.fill_box(
+                        Vec3::new(0.3, 0.4, z),
+                        Vec3::new(0.7, 0.7, z1),
+                        mat,
+                        Vec3::ZERO,
+                    )
                     .unwrap();
-                let z = if dim == Dimension::ThreeD { 0.3 } else { 0.0 };
-                let z1 = if dim == Dimension::ThreeD { 0.7 } else { 0.0 };
-                w.fill_box(
-                    Vec3::new(0.3, 0.4, z),
-                    Vec3::new(0.7, 0.7, z1),
-                    mat,
-                    Vec3::ZERO,
-                )
-                .unwrap();
-                let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
-                let y0 = w.diagnostics().center_of_mass[1];
-                let mut y_low = y0;
-                for _ in 0..60 {
-                    w.step(1.0 / 60.0).unwrap();
-                    budget.sample(&w);
-                    y_low = y_low.min(w.diagnostics().center_of_mass[1]);
+                    (fx.setup)(&mut w);
+                    let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+                    let y0 = w.diagnostics().center_of_mass[1];
+                    let mut y_low = y0;
+                    for _ in 0..60 {
+                        w.step(1.0 / 60.0).unwrap();
+                        budget.sample(&w);
+                        y_low = y_low.min(w.diagnostics().center_of_mass[1]);
+                    }
+                    let label = format!("{dim:?} {shape:?} {order:?} {}", fx.name);
+                    check(&w, mass0, &budget, &label, fx);
+                    assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
+                    if fx.loads || fx.damps {
+                        continue;
+                    }
+                    // Resting on the floor, the centre of mass is at the wall plus half the block's
+                    // height (0.15 m): the block must get near that and never through the floor.
+                    let wall = shape.margin_cells() as f64 * def.cell_size as f64;
+                    assert!(
+                        y_low < wall + 0.2,
+                        "{label}: block did not reach the floor ({y0} -> {y_low})"
+                    );
+                    assert!(
+                        y_low > wall + 0.05,
+                        "{label}: block went through the floor ({y_low})"
+                    );
                 }
-                let label = format!("{dim:?} {shape:?} {order:?}");
-                check(&w, mass0, &budget, &label);
-                // Resting on the floor, the centre of mass is at the wall plus half the block's
-                // height (0.15 m): the block must get near that and never through the floor.
-                let wall = shape.margin_cells() as f64 * def.cell_size as f64;
-                assert!(
-                    y_low < wall + 0.2,
-                    "{label}: block did not reach the floor ({y0} -> {y_low})"
-                );
-                assert!(
-                    y_low > wall + 0.05,
-                    "{label}: block went through the floor ({y_low})"
-                );
-                assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
             }
         }
     }
@@ -218,33 +342,41 @@ fn block_dropped_on_stick_floor_stays_finite_and_bounded() {
 /// cross it leave the simulation and are counted; the rest stay finite and bounded.
 #[test]
 fn block_thrown_at_open_face_escapes_cleanly() {
-    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in SHAPES {
-            let mut def = free_space(dim, 20, 0.05);
-            def.shape = shape;
-            let mut buf = buffer_for(&def);
-            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = MaterialDef::DEFAULT;
-            let n = moving_block(&def, &mut w, &mat, |_| [20.0, 0.0, 0.0]);
-            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
-            let mut escaped = 0;
-            for _ in 0..40 {
-                escaped += w.step(1.0 / 400.0).unwrap().escaped as usize;
-                budget.sample(&w);
+    for fx in &EFFECTS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            for shape in SHAPES {
+                let mut def = free_space(dim, 20, 0.05);
+                def.shape = shape;
+                (fx.def)(&mut def);
+                let mut buf = buffer_for(&def);
+                let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+                let mat = MaterialDef::DEFAULT;
+                let n = moving_block(&def, &mut w, &mat, |_| [20.0, 0.0, 0.0]);
+                (fx.setup)(&mut w);
+                let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+                let mut escaped = 0;
+                for _ in 0..40 {
+                    escaped += w.step(1.0 / 400.0).unwrap().escaped as usize;
+                    budget.sample(&w);
+                }
+                let label = format!("{dim:?} {shape:?} {}", fx.name);
+                check(&w, mass0, &budget, &label, fx);
+                let v = w.particles();
+                let hi =
+                    def.origin.x + (def.cells[0] - shape.margin_cells()) as Real * def.cell_size;
+                assert!(
+                    v.position[0].iter().all(|&x| x <= hi),
+                    "{label}: particle outside the grid"
+                );
+                if fx.damps {
+                    continue;
+                }
+                assert_eq!(
+                    escaped, n,
+                    "{label}: every particle should have left through +x"
+                );
+                assert_eq!(count_status(&w, ParticleStatus::Escaped), n, "{label}");
             }
-            let label = format!("{dim:?} {shape:?}");
-            check(&w, mass0, &budget, &label);
-            assert_eq!(
-                escaped, n,
-                "{label}: every particle should have left through +x"
-            );
-            assert_eq!(count_status(&w, ParticleStatus::Escaped), n, "{label}");
-            let v = w.particles();
-            let hi = def.origin.x + (def.cells[0] - shape.margin_cells()) as Real * def.cell_size;
-            assert!(
-                v.position[0].iter().all(|&x| x <= hi),
-                "{label}: particle outside the grid"
-            );
         }
     }
 }
@@ -254,45 +386,59 @@ fn block_thrown_at_open_face_escapes_cleanly() {
 /// twice the wave speed). Every shape, 2D and 3D.
 #[test]
 fn block_compressed_to_j_of_one_tenth_stays_finite_and_bounded() {
-    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in SHAPES {
-            let mut def = free_space(dim, 40, 0.025);
-            def.shape = shape;
-            if dim == Dimension::ThreeD {
-                def.cells = [20; 3];
-                def.cell_size = 0.05;
-            }
-            let mut buf = buffer_for(&def);
-            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = MaterialDef {
-                model: MaterialModel::NeoHookean,
-                ..MaterialDef::DEFAULT
-            };
-            let k = if dim == Dimension::ThreeD {
-                400.0
-            } else {
-                500.0
-            };
-            moving_block(&def, &mut w, &mat, |x| {
-                let z = if dim == Dimension::ThreeD {
-                    -k * (x[2] - 0.5)
-                } else {
-                    0.0
+    for fx in &EFFECTS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            for shape in SHAPES {
+                let mut def = free_space(dim, 40, 0.025);
+                def.shape = shape;
+                if dim == Dimension::ThreeD {
+                    def.cells = [20; 3];
+                    def.cell_size = 0.05;
+                }
+                (fx.def)(&mut def);
+                let mut buf = buffer_for(&def);
+                let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+                let mat = MaterialDef {
+                    model: MaterialModel::NeoHookean,
+                    ..MaterialDef::DEFAULT
                 };
-                [-k * (x[0] - 0.5), -k * (x[1] - 0.5), z]
-            });
-            let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
-            let mut j_min: Real = 1.0;
-            for _ in 0..300 {
-                w.step(w.stable_dt().min(2.0e-5)).unwrap();
-                budget.sample(&w);
-                let v = w.particles();
-                j_min = (0..v.count).map(|i| v.jacobian(i)).fold(j_min, Real::min);
+                let k = if dim == Dimension::ThreeD {
+                    400.0
+                } else {
+                    500.0
+                };
+                moving_block(&def, &mut w, &mat, |x| {
+                    let z = if dim == Dimension::ThreeD {
+                        -k * (x[2] - 0.5)
+                    } else {
+                        0.0
+                    };
+                    [-k * (x[0] - 0.5), -k * (x[1] - 0.5), z]
+                });
+                (fx.setup)(&mut w);
+                let (mass0, mut budget) = (total_mass(&w), Budget::new(&w));
+                let mut j_min: Real = 1.0;
+                for _ in 0..300 {
+                    w.step(w.stable_dt().min(2.0e-5)).unwrap();
+                    budget.sample(&w);
+                    let v = w.particles();
+                    j_min = (0..v.count).map(|i| v.jacobian(i)).fold(j_min, Real::min);
+                }
+                let label = format!("{dim:?} {shape:?} {}", fx.name);
+                check(&w, mass0, &budget, &label, fx);
+                // APIC transfers the part of the velocity that is not affine as PIC does,
+                // which dissipates some of the crushing energy: it reaches J = 0.10 to 0.16.
+                let j_reached = if def.transfer == Transfer::Apic {
+                    0.2
+                } else {
+                    0.1
+                };
+                assert!(
+                    fx.damps || j_min <= j_reached,
+                    "{label}: only compressed to J = {j_min}"
+                );
+                assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
             }
-            let label = format!("{dim:?} {shape:?}");
-            check(&w, mass0, &budget, &label);
-            assert!(j_min <= 0.1, "{label}: only compressed to J = {j_min}");
-            assert_eq!(count_status(&w, ParticleStatus::Frozen), 0, "{label}");
         }
     }
 }

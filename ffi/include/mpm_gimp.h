@@ -29,6 +29,9 @@
 #define MPM_GIMP_ABI_VERSION 100
 
 
+// Most points an `MpmSchedule` holds.
+#define MPM_SCHEDULE_POINTS 8
+
 // Result of a C call. The numbers are stable: the kernel's errors keep the numbers of
 // `mpm_gimp::Error`, and the conditions only the C interface can meet start at 64.
 // A call that returns anything but `MPM_STATUS_OK` has written nothing and changed nothing.
@@ -85,12 +88,24 @@ enum MpmStatus
   // a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
   // region that holds no lattice site is accepted and adds no particle.)
   MPM_STATUS_INVALID_REGION = 22,
+  // An effect parameter out of range: a schedule with more than 8 points, times that do not
+  // increase or values not finite; a damping value < 0 or not finite; a thermostat gain or
+  // bound <= 0; a body force not finite; a traction not finite or on a face the dimension
+  // lacks.
+  MPM_STATUS_INVALID_EFFECT = 23,
+  // The call needs an effect that the world's definition does not declare.
+  MPM_STATUS_EFFECT_NOT_DECLARED = 24,
+  // A particle id at or past the particle count (or a range of ids that reaches past it).
+  MPM_STATUS_UNKNOWN_PARTICLE = 25,
+  // The tractions do not fit in the remaining traction capacity (none was added).
+  MPM_STATUS_TRACTION_CAPACITY_EXCEEDED = 26,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
   // `mpm_material_def_default` (its cookie is missing or belongs to another precision).
   MPM_STATUS_DEF_NOT_FROM_DEFAULT = 65,
-  // An enum field or argument holds a value the enum does not have.
+  // An enum field or argument holds a value the enum does not have, or a flag field (such as
+  // `MpmDamping::declared`) holds a value other than 0 or 1.
   MPM_STATUS_INVALID_ENUM = 66,
   // An output buffer shorter than the data to copy.
   MPM_STATUS_OUTPUT_TOO_SMALL = 67,
@@ -155,6 +170,22 @@ enum MpmUpdateOrder
 typedef uint32_t MpmUpdateOrder;
 #endif // __cplusplus
 
+// How velocity moves from the grid back to the particles (`mpm_gimp::Transfer`).
+enum MpmTransfer
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // FLIP blended with PIC by `MpmWorldDef::flip_beta`.
+  MPM_TRANSFER_FLIP = 0,
+  // APIC: the grid velocity plus an affine field per particle, which conserves angular
+  // momentum; `flip_beta` is not used. Reserves D x D columns (`MpmParticlesView::affine`).
+  MPM_TRANSFER_APIC = 1,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmTransfer;
+#endif // __cplusplus
+
 // Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).
 enum MpmBoundary
 #ifdef __cplusplus
@@ -172,7 +203,8 @@ enum MpmBoundary
 typedef uint32_t MpmBoundary;
 #endif // __cplusplus
 
-// Index of each face in `MpmWorldDef::faces`.
+// Index of each face in `MpmWorldDef::faces`, and the face of a particle's domain that a
+// traction loads (`mpm_world_add_tractions`).
 enum MpmFace
 #ifdef __cplusplus
   : uint32_t
@@ -254,6 +286,65 @@ typedef struct MpmVec3 {
   mpm_real z;
 } MpmVec3;
 
+// A value that is a function of time (`mpm_gimp::Schedule`): piecewise linear through the
+// first `points` (time, value) pairs, constant before the first and after the last. No point
+// is the constant 0; one point is a constant.
+typedef struct MpmSchedule {
+  // Number of points used, 0..=`MPM_SCHEDULE_POINTS` (more is `MPM_STATUS_INVALID_EFFECT`).
+  uint32_t points;
+  // Times of the points, s, finite and strictly increasing; entries past `points` are
+  // ignored.
+  mpm_real times[MPM_SCHEDULE_POINTS];
+  // Values at those times, finite; entries past `points` are ignored.
+  mpm_real values[MPM_SCHEDULE_POINTS];
+} MpmSchedule;
+
+// A kinetic-energy thermostat on the grid damping (`mpm_gimp::Feedback`): once per substep
+// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`; the evolving alpha
+// (`mpm_world_feedback_alpha`) adds to the grid damping.
+typedef struct MpmFeedback {
+  // 1: the thermostat is declared; 0: none (the other fields are then ignored).
+  uint32_t declared;
+  // Gain 1/Q, 1/m^2, > 0.
+  mpm_real gain;
+  // Target kinetic energy, J, a function of time (values >= 0).
+  struct MpmSchedule target;
+  // Largest alpha, 1/s, > 0 (infinity: unbounded).
+  mpm_real max_alpha;
+} MpmFeedback;
+
+// Damping on top of the PIC damping that `flip_beta` sets (`mpm_gimp::Damping`).
+typedef struct MpmDamping {
+  // 1: damping is declared; 0: none (the other fields are then ignored).
+  uint32_t declared;
+  // Grid damping alpha_g(t), 1/s (values >= 0): damps the velocity from the grid.
+  struct MpmSchedule grid;
+  // Particle damping alpha_p(t), 1/s (values >= 0): damps the particle velocity.
+  struct MpmSchedule particle;
+  // A thermostat that adds to the grid damping, if declared.
+  struct MpmFeedback feedback;
+  // 1: reserve per-particle alpha_g and alpha_p columns, added to the global values and set
+  // with `mpm_world_set_particle_damping`; 0: none.
+  uint32_t per_particle;
+} MpmDamping;
+
+// What a scene declares beyond the momentum equation (`mpm_gimp::Effects`). An effect that is
+// not declared reserves no memory and costs nothing in a step.
+typedef struct MpmEffects {
+  // Damping; default not declared.
+  struct MpmDamping damping;
+  // 1: reserve a per-particle external force column, N (per unit thickness in 2D), set with
+  // `mpm_world_set_particle_forces`; 0 (default): none.
+  uint32_t particle_forces;
+  // Most tractions the world holds (`mpm_world_add_tractions`), at most 2^24; default 0.
+  uint32_t traction_capacity;
+  // A uniform body force per unit mass besides gravity, m/s^2, times
+  // `body_force_scale(t)`; not counted in the potential energy. Default (0, 0, 0).
+  struct MpmVec3 body_force;
+  // Time factor of `body_force`; no point (default) is a factor of 0.
+  struct MpmSchedule body_force_scale;
+} MpmEffects;
+
 // Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
 // documentation gives each field's unit, range and the reason for its default. Get one from
 // `mpm_world_def_default()` and change the fields you need.
@@ -276,6 +367,8 @@ typedef struct MpmWorldDef {
   uint32_t particles_per_cell;
   // FLIP fraction beta in [0, 1]. Default 0.99.
   mpm_real flip_beta;
+  // Default `MPM_TRANSFER_FLIP`.
+  MpmTransfer transfer;
   // Default `MPM_UPDATE_ORDER_MUSL`.
   MpmUpdateOrder update_order;
   // Gravity, m/s^2. Default (0, -9.81, 0).
@@ -286,6 +379,8 @@ typedef struct MpmWorldDef {
   uint32_t exp_terms;
   // Courant number in (0, 1]. Default 0.5.
   mpm_real cfl;
+  // The optional effects. Default: none declared.
+  struct MpmEffects effects;
   // Set by `mpm_world_def_default`; do not change.
   uint32_t internal_cookie;
 } MpmWorldDef;
@@ -305,9 +400,18 @@ typedef struct MpmMaterialDef {
   uint32_t internal_cookie;
 } MpmMaterialDef;
 
+// Ids `first .. first + count` of particles (or tractions) just added.
+typedef struct MpmIdRange {
+  // Id of the first particle (or traction).
+  uint32_t first;
+  // Number of particles (or tractions).
+  uint32_t count;
+} MpmIdRange;
+
 // Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
-// call that changes the world (add, seed, step) or frees its memory. Pointers of axes the
-// dimension lacks (z in 2D) are NULL; every other column holds `count` values.
+// call that changes the world (add, seed, set, step) or frees its memory. Pointers of axes the
+// dimension lacks (z in 2D), and of effects the definition does not declare, are NULL; every
+// other column holds `count` values.
 typedef struct MpmParticlesView {
   // Number of particles.
   size_t count;
@@ -330,6 +434,16 @@ typedef struct MpmParticlesView {
   const uint32_t *material;
   // Statuses (`MpmParticleStatus`).
   const uint32_t *status;
+  // External forces per axis, N (NULL unless `MpmEffects::particle_forces`).
+  const mpm_real *force[3];
+  // Local grid and particle damping alpha_g, alpha_p, 1/s (NULL unless
+  // `MpmDamping::per_particle`).
+  const mpm_real *damping[2];
+  // APIC moment matrix B_p, m^2/s, entry (a, b) at index `3 a + b`; 2D uses a, b < 2 (NULL
+  // unless the transfer is `MPM_TRANSFER_APIC`). The affine velocity field is
+  // `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
+  // scatters.
+  const mpm_real *affine[9];
 } MpmParticlesView;
 
 // Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
@@ -345,6 +459,9 @@ typedef struct MpmDiagnostics {
   double mass;
   // Linear momentum, kg m/s.
   double momentum[3];
+  // Angular momentum about the origin, kg m^2/s (2D: the z component only); with APIC it
+  // includes each particle's affine part.
+  double angular_momentum[3];
   // Centre of mass, m.
   double center_of_mass[3];
   // Kinetic energy, J.
@@ -377,14 +494,6 @@ typedef struct MpmParticleArrays {
   // Material ids from `mpm_world_add_material`.
   const uint32_t *material;
 } MpmParticleArrays;
-
-// Ids `first .. first + count` of particles just added.
-typedef struct MpmIdRange {
-  // Id of the first particle.
-  uint32_t first;
-  // Number of particles.
-  uint32_t count;
-} MpmIdRange;
 
 // What one `mpm_world_step` did.
 typedef struct MpmStepReport {
@@ -437,6 +546,71 @@ struct MpmMaterialDef mpm_material_def_default_f32(void);
 // `mpm_world_add_material` checks. Precision-specific symbol, as `mpm_world_def_default`.
 struct MpmMaterialDef mpm_material_def_default_f64(void);
 #endif
+
+// Sets the external force (N; per unit thickness in 2D) of particles `first .. first + count`
+// from one array per axis, each of `count` values; the force stays until set again. `fz` is
+// not read in 2D and may be NULL there. Needs `MpmEffects::particle_forces`. Refused with
+// `MPM_STATUS_NON_FINITE_INPUT` if any value is not finite (none is set).
+//
+// # Safety
+// `world` is NULL or a world; each array the dimension uses is NULL or valid for reads of
+// `count` values.
+MpmStatus mpm_world_set_particle_forces(struct MpmWorld *world,
+                                        uint32_t first,
+                                        const mpm_real *fx,
+                                        const mpm_real *fy,
+                                        const mpm_real *fz,
+                                        size_t count);
+
+// Sets the local grid and particle damping `alpha_g`, `alpha_p` (1/s, finite, >= 0) of
+// particles `first .. first + count`, added to the global damping for those particles; each
+// array holds `count` values. Needs `MpmDamping::per_particle`. Refused with
+// `MPM_STATUS_INVALID_EFFECT` if any value is negative or not finite (none is set).
+//
+// # Safety
+// `world` is NULL or a world; `alpha_g` and `alpha_p` are NULL or valid for reads of `count`
+// values.
+MpmStatus mpm_world_set_particle_damping(struct MpmWorld *world,
+                                         uint32_t first,
+                                         const mpm_real *alpha_g,
+                                         const mpm_real *alpha_p,
+                                         size_t count);
+
+// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
+// loading the `face` of that particle's domain with `traction` (Pa, force per area of that
+// face; z ignored in 2D), and returns the traction ids in `ids_out`. All or nothing. Needs
+// `MpmEffects::traction_capacity`; a face out of range is `MPM_STATUS_INVALID_ENUM`, a z face
+// in 2D or a traction not finite `MPM_STATUS_INVALID_EFFECT`, more tractions than the
+// remaining capacity `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`. A traction acts while its
+// particle is active.
+//
+// # Safety
+// `world` is NULL or a world; `ids_out` is NULL or valid.
+MpmStatus mpm_world_add_tractions(struct MpmWorld *world,
+                                  uint32_t first_particle,
+                                  uint32_t particle_count,
+                                  MpmFace face,
+                                  struct MpmVec3 traction,
+                                  struct MpmIdRange *ids_out);
+
+// Removes every traction (the capacity stays). Needs `MpmEffects::traction_capacity`.
+//
+// # Safety
+// `world` is NULL or a world.
+MpmStatus mpm_world_clear_tractions(struct MpmWorld *world);
+
+// Number of tractions the world holds (0 if it declares none).
+//
+// # Safety
+// `world` is NULL or a world; `count_out` is NULL or valid.
+MpmStatus mpm_world_traction_count(const struct MpmWorld *world, size_t *count_out);
+
+// The thermostat's current alpha, 1/s (`MpmFeedback`; 0 if the world declares none). It is
+// part of the world's memory, so a snapshot carries it.
+//
+// # Safety
+// `world` is NULL or a world; `alpha_out` is NULL or valid.
+MpmStatus mpm_world_feedback_alpha(const struct MpmWorld *world, double *alpha_out);
 
 // The particle columns of `world` in `view_out`.
 //

@@ -4,12 +4,17 @@
 //!
 //! Enum-valued fields are plain `uint32_t` on the Rust side (named by their enum type in the
 //! header): a value out of range from C is then an `MPM_STATUS_INVALID_ENUM`, never undefined
-//! behaviour.
+//! behaviour. Flags (`declared`, `per_particle`, `particle_forces`) are `uint32_t` too and must
+//! be 0 or 1; any other value is also `MPM_STATUS_INVALID_ENUM`.
+//!
+//! The optional effects (`MpmEffects`, the C form of `mpm_gimp::Effects`) sit inside
+//! `MpmWorldDef`; `mpm_world_def_default` declares none of them.
 
 use crate::status::MpmStatus;
 use crate::{mpm_real, MpmVec3};
 use kernel::{
-    Boundary, Dimension, MaterialDef, MaterialModel, ShapeFunction, UpdateOrder, WorldDef,
+    Boundary, Damping, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel, Schedule,
+    ShapeFunction, Transfer, UpdateOrder, WorldDef,
 };
 
 /// Spatial dimension and kinematic assumption (`mpm_gimp::Dimension`).
@@ -50,6 +55,17 @@ pub enum MpmUpdateOrder {
     Musl = 2,
 }
 
+/// How velocity moves from the grid back to the particles (`mpm_gimp::Transfer`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmTransfer {
+    /// FLIP blended with PIC by `MpmWorldDef::flip_beta`.
+    Flip = 0,
+    /// APIC: the grid velocity plus an affine field per particle, which conserves angular
+    /// momentum; `flip_beta` is not used. Reserves D x D columns (`MpmParticlesView::affine`).
+    Apic = 1,
+}
+
 /// Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -62,7 +78,8 @@ pub enum MpmBoundary {
     Open = 2,
 }
 
-/// Index of each face in `MpmWorldDef::faces`.
+/// Index of each face in `MpmWorldDef::faces`, and the face of a particle's domain that a
+/// traction loads (`mpm_world_add_tractions`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
 pub enum MpmFace {
@@ -109,10 +126,86 @@ pub type MpmDimensionValue = u32;
 pub type MpmShapeValue = u32;
 /// An `MpmUpdateOrder` value as stored in a definition.
 pub type MpmUpdateOrderValue = u32;
+/// An `MpmTransfer` value as stored in a definition.
+pub type MpmTransferValue = u32;
+/// An `MpmFace` value as passed to a function.
+pub type MpmFaceValue = u32;
 /// An `MpmBoundary` value as stored in a definition.
 pub type MpmBoundaryValue = u32;
 /// An `MpmMaterialModel` value as stored in a definition.
 pub type MpmMaterialModelValue = u32;
+
+/// Most points an `MpmSchedule` holds.
+pub const MPM_SCHEDULE_POINTS: usize = 8;
+
+const _: () = assert!(MPM_SCHEDULE_POINTS == kernel::SCHEDULE_POINTS);
+
+/// A value that is a function of time (`mpm_gimp::Schedule`): piecewise linear through the
+/// first `points` (time, value) pairs, constant before the first and after the last. No point
+/// is the constant 0; one point is a constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmSchedule {
+    /// Number of points used, 0..=`MPM_SCHEDULE_POINTS` (more is `MPM_STATUS_INVALID_EFFECT`).
+    pub points: u32,
+    /// Times of the points, s, finite and strictly increasing; entries past `points` are
+    /// ignored.
+    pub times: [mpm_real; MPM_SCHEDULE_POINTS],
+    /// Values at those times, finite; entries past `points` are ignored.
+    pub values: [mpm_real; MPM_SCHEDULE_POINTS],
+}
+
+/// A kinetic-energy thermostat on the grid damping (`mpm_gimp::Feedback`): once per substep
+/// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`; the evolving alpha
+/// (`mpm_world_feedback_alpha`) adds to the grid damping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmFeedback {
+    /// 1: the thermostat is declared; 0: none (the other fields are then ignored).
+    pub declared: u32,
+    /// Gain 1/Q, 1/m^2, > 0.
+    pub gain: mpm_real,
+    /// Target kinetic energy, J, a function of time (values >= 0).
+    pub target: MpmSchedule,
+    /// Largest alpha, 1/s, > 0 (infinity: unbounded).
+    pub max_alpha: mpm_real,
+}
+
+/// Damping on top of the PIC damping that `flip_beta` sets (`mpm_gimp::Damping`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmDamping {
+    /// 1: damping is declared; 0: none (the other fields are then ignored).
+    pub declared: u32,
+    /// Grid damping alpha_g(t), 1/s (values >= 0): damps the velocity from the grid.
+    pub grid: MpmSchedule,
+    /// Particle damping alpha_p(t), 1/s (values >= 0): damps the particle velocity.
+    pub particle: MpmSchedule,
+    /// A thermostat that adds to the grid damping, if declared.
+    pub feedback: MpmFeedback,
+    /// 1: reserve per-particle alpha_g and alpha_p columns, added to the global values and set
+    /// with `mpm_world_set_particle_damping`; 0: none.
+    pub per_particle: u32,
+}
+
+/// What a scene declares beyond the momentum equation (`mpm_gimp::Effects`). An effect that is
+/// not declared reserves no memory and costs nothing in a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmEffects {
+    /// Damping; default not declared.
+    pub damping: MpmDamping,
+    /// 1: reserve a per-particle external force column, N (per unit thickness in 2D), set with
+    /// `mpm_world_set_particle_forces`; 0 (default): none.
+    pub particle_forces: u32,
+    /// Most tractions the world holds (`mpm_world_add_tractions`), at most 2^24; default 0.
+    pub traction_capacity: u32,
+    /// A uniform body force per unit mass besides gravity, m/s^2, times
+    /// `body_force_scale(t)`; not counted in the potential energy. Default (0, 0, 0).
+    pub body_force: MpmVec3,
+    /// Time factor of `body_force`; no point (default) is a factor of 0.
+    pub body_force_scale: MpmSchedule,
+}
 
 /// Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
 /// documentation gives each field's unit, range and the reason for its default. Get one from
@@ -138,6 +231,8 @@ pub struct MpmWorldDef {
     pub particles_per_cell: u32,
     /// FLIP fraction beta in [0, 1]. Default 0.99.
     pub flip_beta: mpm_real,
+    /// Default `MPM_TRANSFER_FLIP`.
+    pub transfer: MpmTransferValue,
     /// Default `MPM_UPDATE_ORDER_MUSL`.
     pub update_order: MpmUpdateOrderValue,
     /// Gravity, m/s^2. Default (0, -9.81, 0).
@@ -148,6 +243,8 @@ pub struct MpmWorldDef {
     pub exp_terms: u32,
     /// Courant number in (0, 1]. Default 0.5.
     pub cfl: mpm_real,
+    /// The optional effects. Default: none declared.
+    pub effects: MpmEffects,
     /// Set by `mpm_world_def_default`; do not change.
     pub internal_cookie: u32,
 }
@@ -199,13 +296,128 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         shape: d.shape as u32,
         particles_per_cell: d.particles_per_cell,
         flip_beta: d.flip_beta,
+        transfer: d.transfer as u32,
         update_order: d.update_order as u32,
         gravity: c_vec3(d.gravity),
         faces: d.faces.map(|f| f as u32),
         exp_terms: d.exp_terms,
         cfl: d.cfl,
+        effects: effects_to_c(&d.effects),
         internal_cookie: WORLD_COOKIE,
     }
+}
+
+fn schedule_to_c(s: &Schedule) -> MpmSchedule {
+    MpmSchedule {
+        points: s.points,
+        times: s.times,
+        values: s.values,
+    }
+}
+
+fn schedule_from_c(s: &MpmSchedule) -> Schedule {
+    Schedule {
+        points: s.points,
+        times: s.times,
+        values: s.values,
+    }
+}
+
+/// The C effects of Rust ones; what is not declared is zero.
+fn effects_to_c(e: &Effects) -> MpmEffects {
+    let zero = schedule_to_c(&Schedule::ZERO);
+    let feedback = |f: Option<Feedback>| match f {
+        Some(f) => MpmFeedback {
+            declared: 1,
+            gain: f.gain,
+            target: schedule_to_c(&f.target),
+            max_alpha: f.max_alpha,
+        },
+        None => MpmFeedback {
+            declared: 0,
+            gain: 0.0,
+            target: zero,
+            max_alpha: 0.0,
+        },
+    };
+    let damping = match e.damping {
+        Some(d) => MpmDamping {
+            declared: 1,
+            grid: schedule_to_c(&d.grid),
+            particle: schedule_to_c(&d.particle),
+            feedback: feedback(d.feedback),
+            per_particle: d.per_particle as u32,
+        },
+        None => MpmDamping {
+            declared: 0,
+            grid: zero,
+            particle: zero,
+            feedback: feedback(None),
+            per_particle: 0,
+        },
+    };
+    MpmEffects {
+        damping,
+        particle_forces: e.particle_forces as u32,
+        traction_capacity: e.traction_capacity,
+        body_force: c_vec3(e.body_force),
+        body_force_scale: schedule_to_c(&e.body_force_scale),
+    }
+}
+
+/// A flag field: 0 or 1, anything else `InvalidEnum`.
+fn flag(v: u32) -> Result<bool, MpmStatus> {
+    match v {
+        0 => Ok(false),
+        1 => Ok(true),
+        _ => Err(MpmStatus::InvalidEnum),
+    }
+}
+
+/// The Rust effects of C ones: every flag checked, the fields of what is not declared ignored.
+/// (The values are the kernel's to check.)
+fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
+    let d = &e.damping;
+    let damping = if flag(d.declared)? {
+        let f = &d.feedback;
+        let feedback = if flag(f.declared)? {
+            Some(Feedback {
+                gain: f.gain,
+                target: schedule_from_c(&f.target),
+                max_alpha: f.max_alpha,
+            })
+        } else {
+            None
+        };
+        Some(Damping {
+            grid: schedule_from_c(&d.grid),
+            particle: schedule_from_c(&d.particle),
+            feedback,
+            per_particle: flag(d.per_particle)?,
+        })
+    } else {
+        None
+    };
+    Ok(Effects {
+        damping,
+        particle_forces: flag(e.particle_forces)?,
+        traction_capacity: e.traction_capacity,
+        body_force: vec3(e.body_force),
+        body_force_scale: schedule_from_c(&e.body_force_scale),
+    })
+}
+
+/// The face numbered `v` (`MpmFace`), or `InvalidEnum`.
+pub(crate) fn face_from_c(v: MpmFaceValue) -> Result<Face, MpmStatus> {
+    Ok(match v {
+        0 => Face::XMin,
+        1 => Face::XMax,
+        2 => Face::YMin,
+        3 => Face::YMax,
+        4 => Face::ZMin,
+        5 => Face::ZMax,
+        _ => return Err(MpmStatus::InvalidEnum),
+    })
 }
 
 /// The Rust definition of a C one: the cookie and every enum value checked.
@@ -216,11 +428,13 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
     let enum_value = MpmStatus::InvalidEnum;
     let dimension = Dimension::from_code(d.dimension).ok_or(enum_value)?;
     let shape = ShapeFunction::from_code(d.shape).ok_or(enum_value)?;
+    let transfer = Transfer::from_code(d.transfer).ok_or(enum_value)?;
     let update_order = UpdateOrder::from_code(d.update_order).ok_or(enum_value)?;
     let mut faces = [Boundary::Slip; 6];
     for (f, &v) in faces.iter_mut().zip(d.faces.iter()) {
         *f = Boundary::from_code(v).ok_or(enum_value)?;
     }
+    let effects = effects_from_c(&d.effects)?;
     Ok(WorldDef {
         dimension,
         origin: vec3(d.origin),
@@ -231,11 +445,13 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
         shape,
         particles_per_cell: d.particles_per_cell,
         flip_beta: d.flip_beta,
+        transfer,
         update_order,
         gravity: vec3(d.gravity),
         faces,
         exp_terms: d.exp_terms,
         cfl: d.cfl,
+        effects,
     })
 }
 

@@ -6,6 +6,8 @@
 //! - [`defs`]: `MpmWorldDef`, `MpmMaterialDef`, their `*_default()` functions and the enums.
 //! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
 //!   dt, step.
+//! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
+//!   thermostat's alpha.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
 //!
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer
@@ -25,11 +27,13 @@
 
 // Declared in the order the header presents them.
 pub mod defs;
+pub mod effects;
 pub mod read;
 pub mod status;
 pub mod world;
 
 pub use defs::*;
+pub use effects::*;
 pub use read::*;
 pub use status::*;
 pub use world::*;

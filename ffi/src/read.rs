@@ -7,8 +7,9 @@ use crate::{guard, mpm_real, non_null};
 use kernel::{ParticlesView, WorldRef};
 
 /// Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
-/// call that changes the world (add, seed, step) or frees its memory. Pointers of axes the
-/// dimension lacks (z in 2D) are NULL; every other column holds `count` values.
+/// call that changes the world (add, seed, set, step) or frees its memory. Pointers of axes the
+/// dimension lacks (z in 2D), and of effects the definition does not declare, are NULL; every
+/// other column holds `count` values.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub struct MpmParticlesView {
@@ -33,6 +34,16 @@ pub struct MpmParticlesView {
     pub material: *const u32,
     /// Statuses (`MpmParticleStatus`).
     pub status: *const u32,
+    /// External forces per axis, N (NULL unless `MpmEffects::particle_forces`).
+    pub force: [*const mpm_real; 3],
+    /// Local grid and particle damping alpha_g, alpha_p, 1/s (NULL unless
+    /// `MpmDamping::per_particle`).
+    pub damping: [*const mpm_real; 2],
+    /// APIC moment matrix B_p, m^2/s, entry (a, b) at index `3 a + b`; 2D uses a, b < 2 (NULL
+    /// unless the transfer is `MPM_TRANSFER_APIC`). The affine velocity field is
+    /// `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
+    /// scatters.
+    pub affine: [*const mpm_real; 9],
 }
 
 /// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
@@ -50,6 +61,9 @@ pub struct MpmDiagnostics {
     pub mass: f64,
     /// Linear momentum, kg m/s.
     pub momentum: [f64; 3],
+    /// Angular momentum about the origin, kg m^2/s (2D: the z component only); with APIC it
+    /// includes each particle's affine part.
+    pub angular_momentum: [f64; 3],
     /// Centre of mass, m.
     pub center_of_mass: [f64; 3],
     /// Kinetic energy, J.
@@ -74,8 +88,12 @@ pub unsafe extern "C" fn mpm_world_particles(
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
         let v = w.particles();
-        let d = w.def().axes();
+        let def = w.def();
+        let d = def.axes();
         let axis = |s: &[mpm_real], used: bool| if used { s.as_ptr() } else { core::ptr::null() };
+        let forces = def.effects.particle_forces;
+        let per_particle = def.effects.damping.is_some_and(|dm| dm.per_particle);
+        let apic = def.transfer == kernel::Transfer::Apic;
         let out = MpmParticlesView {
             count: v.count,
             dimension: v.dimension as u32,
@@ -92,6 +110,11 @@ pub unsafe extern "C" fn mpm_world_particles(
             stress: core::array::from_fn(|k| axis(v.stress[k], k < if d == 3 { 6 } else { 4 })),
             material: v.material.as_ptr(),
             status: v.status.as_ptr(),
+            force: core::array::from_fn(|a| axis(v.force[a], forces && a < d)),
+            damping: core::array::from_fn(|k| axis(v.damping[k], per_particle)),
+            affine: core::array::from_fn(|k| {
+                axis(v.affine[k / 3][k % 3], apic && k / 3 < d && k % 3 < d)
+            }),
         };
         // SAFETY: checked non-NULL.
         unsafe { put(view_out, out) };
@@ -277,6 +300,7 @@ pub unsafe extern "C" fn mpm_world_diagnostics(
             step_count: w.step_count(),
             mass: s.mass,
             momentum: s.momentum,
+            angular_momentum: s.angular_momentum,
             center_of_mass: s.center_of_mass,
             kinetic: s.kinetic,
             strain: s.strain,

@@ -56,12 +56,24 @@ pub enum MpmStatus {
     /// a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
     /// region that holds no lattice site is accepted and adds no particle.)
     InvalidRegion = 22,
+    /// An effect parameter out of range: a schedule with more than 8 points, times that do not
+    /// increase or values not finite; a damping value < 0 or not finite; a thermostat gain or
+    /// bound <= 0; a body force not finite; a traction not finite or on a face the dimension
+    /// lacks.
+    InvalidEffect = 23,
+    /// The call needs an effect that the world's definition does not declare.
+    EffectNotDeclared = 24,
+    /// A particle id at or past the particle count (or a range of ids that reaches past it).
+    UnknownParticle = 25,
+    /// The tractions do not fit in the remaining traction capacity (none was added).
+    TractionCapacityExceeded = 26,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
     /// `mpm_material_def_default` (its cookie is missing or belongs to another precision).
     DefNotFromDefault = 65,
-    /// An enum field or argument holds a value the enum does not have.
+    /// An enum field or argument holds a value the enum does not have, or a flag field (such as
+    /// `MpmDamping::declared`) holds a value other than 0 or 1.
     InvalidEnum = 66,
     /// An output buffer shorter than the data to copy.
     OutputTooSmall = 67,
@@ -95,13 +107,17 @@ impl From<Error> for MpmStatus {
             Error::LengthMismatch => MpmStatus::LengthMismatch,
             Error::InvalidTimeStep => MpmStatus::InvalidTimeStep,
             Error::InvalidRegion => MpmStatus::InvalidRegion,
+            Error::InvalidEffect => MpmStatus::InvalidEffect,
+            Error::EffectNotDeclared => MpmStatus::EffectNotDeclared,
+            Error::UnknownParticle => MpmStatus::UnknownParticle,
+            Error::TractionCapacityExceeded => MpmStatus::TractionCapacityExceeded,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 28] = [
+    pub const ALL: [MpmStatus; 32] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -125,6 +141,10 @@ impl MpmStatus {
         MpmStatus::LengthMismatch,
         MpmStatus::InvalidTimeStep,
         MpmStatus::InvalidRegion,
+        MpmStatus::InvalidEffect,
+        MpmStatus::EffectNotDeclared,
+        MpmStatus::UnknownParticle,
+        MpmStatus::TractionCapacityExceeded,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

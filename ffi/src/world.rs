@@ -23,13 +23,13 @@ pub struct MpmMemoryRequirements {
     pub align: usize,
 }
 
-/// Ids `first .. first + count` of particles just added.
+/// Ids `first .. first + count` of particles (or tractions) just added.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[repr(C)]
 pub struct MpmIdRange {
-    /// Id of the first particle.
+    /// Id of the first particle (or traction).
     pub first: u32,
-    /// Number of particles.
+    /// Number of particles (or tractions).
     pub count: u32,
 }
 
@@ -326,7 +326,7 @@ pub unsafe extern "C" fn mpm_world_add_particles(
     })
 }
 
-fn id_range(r: core::ops::Range<u32>) -> MpmIdRange {
+pub(crate) fn id_range(r: core::ops::Range<u32>) -> MpmIdRange {
     MpmIdRange {
         first: r.start,
         count: r.end - r.start,

@@ -17,8 +17,9 @@ mod common;
 use common::Lang;
 use core::mem::{align_of, offset_of, size_of};
 use kernel::{
-    memory_requirements, Boundary, Dimension, Error, Face, MaterialDef, MaterialModel,
-    ParticleBatch, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
+    memory_requirements, Boundary, Damping, Dimension, Effects, Error, Face, Feedback, MaterialDef,
+    MaterialModel, ParticleBatch, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3,
+    World, WorldDef,
 };
 use mpm_gimp::*;
 use std::collections::BTreeSet;
@@ -98,12 +99,38 @@ fn rust_layout() -> String {
         type_line!("MpmDimension", MpmDimension),
         type_line!("MpmShape", MpmShape),
         type_line!("MpmUpdateOrder", MpmUpdateOrder),
+        type_line!("MpmTransfer", MpmTransfer),
         type_line!("MpmBoundary", MpmBoundary),
         type_line!("MpmFace", MpmFace),
         type_line!("MpmMaterialModel", MpmMaterialModel),
         type_line!("MpmParticleStatus", MpmParticleStatus),
     ];
     lines.extend(struct_lines!(MpmVec3 { x, y, z }));
+    lines.extend(struct_lines!(MpmSchedule {
+        points,
+        times,
+        values
+    }));
+    lines.extend(struct_lines!(MpmFeedback {
+        declared,
+        gain,
+        target,
+        max_alpha,
+    }));
+    lines.extend(struct_lines!(MpmDamping {
+        declared,
+        grid,
+        particle,
+        feedback,
+        per_particle,
+    }));
+    lines.extend(struct_lines!(MpmEffects {
+        damping,
+        particle_forces,
+        traction_capacity,
+        body_force,
+        body_force_scale,
+    }));
     lines.extend(struct_lines!(MpmWorldDef {
         dimension,
         origin,
@@ -114,11 +141,13 @@ fn rust_layout() -> String {
         shape,
         particles_per_cell,
         flip_beta,
+        transfer,
         update_order,
         gravity,
         faces,
         exp_terms,
         cfl,
+        effects,
         internal_cookie,
     }));
     lines.extend(struct_lines!(MpmMaterialDef {
@@ -139,6 +168,9 @@ fn rust_layout() -> String {
         stress,
         material,
         status,
+        force,
+        damping,
+        affine,
     }));
     lines.extend(struct_lines!(MpmDiagnostics {
         particle_count,
@@ -146,6 +178,7 @@ fn rust_layout() -> String {
         step_count,
         mass,
         momentum,
+        angular_momentum,
         center_of_mass,
         kinetic,
         strain,
@@ -225,7 +258,7 @@ fn check_layout(lang: Lang, name: &str) -> String {
 
     let (structs, enums) = header_declarations();
     assert!(
-        structs.len() >= 9,
+        structs.len() >= 13,
         "the header parse found only {structs:?}"
     );
     for (s, fields) in &structs {
@@ -245,7 +278,7 @@ fn check_layout(lang: Lang, name: &str) -> String {
         );
     }
     assert!(
-        enums.len() >= 8,
+        enums.len() >= 9,
         "the header parse found only enums {enums:?}"
     );
     for e in &enums {
@@ -298,16 +331,19 @@ fn check_misuse(name: &str, flags: &[&str]) {
     let ok_lines = out.lines().filter(|l| l.starts_with("ok ")).count();
     assert_eq!(n, ok_lines, "the count differs from the printed checks");
     // The program's checks as written: a shrinking count means checks went missing.
-    assert!(n >= 400, "only {n} misuse checks ran");
+    assert!(n >= 700, "only {n} misuse checks ran");
 }
 
 /// Expectation: with strict warnings (C99, -Wall -Wextra -Werror -pedantic), every misuse in
 /// `tests/c/misuse.c` (NULL in every pointer argument, buffers too small or misaligned, bad
 /// definitions and enums, non-finite and out-of-range inputs, capacity overflow, unknown
 /// materials, out-of-domain positions, short output buffers, a disk in 3D and a sphere in 2D,
-/// non-worlds, damaged snapshots) is refused with its status, leaves every world's bytes and
-/// every output untouched, and every status string is a description ("unknown status" for
-/// values outside the enum, never NULL). The program ends with "all N misuse checks passed".
+/// non-worlds, damaged snapshots; and for the effects: flags that are not 0 or 1, schedules and
+/// effect values out of range, effects not declared, unknown particle ids (refused before any
+/// array is read), non-finite forces and damping, faces out of range, the traction capacity) is
+/// refused with its status, leaves every world's bytes and every output untouched, and every
+/// status string is a description ("unknown status" for values outside the enum, never NULL).
+/// The program ends with "all N misuse checks passed".
 #[test]
 fn misuse_from_c_strict() {
     check_misuse("misuse", common::STRICT);
@@ -401,17 +437,21 @@ impl Text {
         let present = |k: usize, used: &dyn Fn(usize) -> bool| -> String {
             (0..k).map(|i| if used(i) { '1' } else { '0' }).collect()
         };
+        // One hash over the columns that are set, in order (the C program's `hash_columns`).
+        let columns = |cols: &[&[Real]], used: &dyn Fn(usize) -> bool| {
+            let mut h = FNV_START;
+            for (_, col) in cols.iter().enumerate().filter(|&(k, _)| used(k)) {
+                h = fnv1a(h, &real_bytes(col.iter().copied()));
+            }
+            format!("{h:016x}")
+        };
         let h_used = |k: usize| k / 3 < d && k % 3 < d;
-        let mut h = FNV_START;
-        for k in (0..9).filter(|&k| h_used(k)) {
-            h = fnv1a(
-                h,
-                &real_bytes(v.displacement_gradient[k / 3][k % 3].iter().copied()),
-            );
-        }
+        let h: Vec<&[Real]> = (0..9)
+            .map(|k| v.displacement_gradient[k / 3][k % 3])
+            .collect();
         self.line(format!(
             "{label}: view count {n} dimension {} present {} {} {} {} mass {} volume0 {} \
-             material {} displacement_gradient {h:016x}",
+             material {} displacement_gradient {}",
             v.dimension as u32,
             present(3, &|a| a < d),
             present(3, &|a| a < d),
@@ -420,6 +460,25 @@ impl Text {
             hash(&real_bytes(v.mass.iter().copied())),
             hash(&real_bytes(v.volume0.iter().copied())),
             hash(&u32_bytes(v.material.iter().copied())),
+            columns(&h, &h_used),
+        ));
+
+        let def = w.def();
+        let force_used = |a: usize| def.effects.particle_forces && a < d;
+        let damping_used = |_: usize| def.effects.damping.is_some_and(|dm| dm.per_particle);
+        let affine_used = |k: usize| def.transfer == Transfer::Apic && h_used(k);
+        let affine: Vec<&[Real]> = (0..9).map(|k| v.affine[k / 3][k % 3]).collect();
+        self.line(format!(
+            "{label}: effects present {} {} {} force {} damping {} affine {} tractions {} \
+             feedback_alpha {}",
+            present(3, &force_used),
+            present(2, &damping_used),
+            present(9, &affine_used),
+            columns(&v.force, &force_used),
+            columns(&v.damping, &damping_used),
+            columns(&affine, &affine_used),
+            w.traction_count(),
+            hex(&w.feedback_alpha().to_ne_bytes()),
         ));
 
         let s = w.diagnostics();
@@ -443,11 +502,26 @@ impl Text {
             f(s.strain),
             f(s.potential),
         ));
+        self.line(format!(
+            "{label}: diagnostics angular_momentum {} {} {}",
+            f(s.angular_momentum[0]),
+            f(s.angular_momentum[1]),
+            f(s.angular_momentum[2]),
+        ));
     }
 
     fn seed(&mut self, what: &str, ids: core::ops::Range<u32>) {
         self.line(format!(
             "seed {what}: first {} count {}",
+            ids.start,
+            ids.end - ids.start
+        ));
+    }
+
+    /// As the C program's `print_tractions`.
+    fn tractions(&mut self, what: &str, ids: core::ops::Range<u32>) {
+        self.line(format!(
+            "tractions {what}: first {} count {}",
             ids.start,
             ids.end - ids.start
         ));
@@ -598,16 +672,152 @@ fn rust_same_state() -> String {
     t.state("after box", &w);
     t.frames(&mut w, 16, 0.0078125);
 
+    effects2d(&mut t);
+    effects3d(&mut t);
+
     t.line("end");
     t.0
 }
 
-/// Expectation: the two scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
+/// A schedule through `points` (time, value).
+fn schedule(points: &[(Real, Real)]) -> Schedule {
+    Schedule::from_points(points).expect("a valid schedule")
+}
+
+/// The scene effects2d of `tests/c/same_state.c`.
+fn effects2d(t: &mut Text) {
+    t.line("scene effects2d");
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    let def = WorldDef {
+        cells: [32, 32, 1],
+        cell_size: 0.03125,
+        particle_capacity: 256,
+        material_capacity: 1,
+        faces,
+        transfer: Transfer::Apic,
+        effects: Effects {
+            damping: Some(Damping {
+                grid: schedule(&[(0.0, 0.5), (0.0625, 2.0)]),
+                particle: schedule(&[(0.0, 0.25)]),
+                feedback: Some(Feedback {
+                    gain: 0.5,
+                    target: Schedule::ZERO,
+                    max_alpha: 4.0,
+                }),
+                per_particle: true,
+            }),
+            particle_forces: true,
+            traction_capacity: 16,
+            body_force: Vec3::new(0.5, 0.25, 0.0),
+            body_force_scale: schedule(&[(0.0, 0.0), (0.03125, 1.0), (0.0625, 0.0)]),
+        },
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
+    t.state("empty", &w);
+    let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
+    t.line(format!("materials {id}"));
+    let ids = w
+        .fill_box(
+            Vec3::new(0.25, 0.125, 0.0),
+            Vec3::new(0.5, 0.25, 0.0),
+            id,
+            Vec3::new(0.5, -0.25, 0.0),
+        )
+        .expect("box");
+    let n = ids.end;
+    t.seed("box", ids);
+
+    let fx: Vec<Real> = (0..16).map(|i| 0.0625 * i as Real - 0.5).collect();
+    let fy = [0.125 as Real; 16];
+    w.set_particle_forces(0, [&fx, &fy, &[]]).expect("forces");
+    let alpha_g: Vec<Real> = (0..32).map(|i| 0.5 * (i % 4) as Real).collect();
+    let alpha_p: Vec<Real> = (0..32).map(|i| 0.25 * (i % 2) as Real).collect();
+    w.set_particle_damping(8, &alpha_g, &alpha_p)
+        .expect("damping");
+    let top = w
+        .add_tractions(n - 16..n, Face::YMax, Vec3::new(0.0, -512.0, 0.0))
+        .expect("tractions");
+    t.tractions("top", top);
+    t.state("after effects", &w);
+    t.frames(&mut w, 8, 0.0078125);
+
+    w.set_particle_forces(4, [&[-0.25; 8], &[0.5; 8], &[]])
+        .expect("forces again");
+    w.clear_tractions();
+    let left = w
+        .add_tractions(0..4, Face::XMin, Vec3::new(128.0, 0.0, 0.0))
+        .expect("tractions");
+    t.tractions("left", left);
+    t.state("after changes", &w);
+    t.frames(&mut w, 8, 0.0078125);
+}
+
+/// The scene effects3d of `tests/c/same_state.c`.
+fn effects3d(t: &mut Text) {
+    t.line("scene effects3d");
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    let def = WorldDef {
+        dimension: Dimension::ThreeD,
+        cells: [8, 8, 8],
+        cell_size: 0.0625,
+        particle_capacity: 512,
+        material_capacity: 1,
+        shape: ShapeFunction::CubicBspline,
+        update_order: UpdateOrder::Usf,
+        transfer: Transfer::Apic,
+        faces,
+        effects: Effects {
+            damping: Some(Damping {
+                grid: Schedule::constant(1.0),
+                ..Damping::NONE
+            }),
+            particle_forces: true,
+            traction_capacity: 8,
+            body_force: Vec3::new(0.0, 0.0, -2.0),
+            body_force_scale: Schedule::constant(1.0),
+        },
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
+    t.state("empty", &w);
+    let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
+    t.line(format!("materials {id}"));
+    let ids = w
+        .fill_sphere(Vec3::splat(0.25), 0.09375, id, Vec3::new(0.0, -0.5, 0.25))
+        .expect("sphere");
+    let n = ids.end as usize;
+    t.seed("sphere", ids);
+    let fx = vec![0.0 as Real; n];
+    let fy: Vec<Real> = (0..n).map(|i| 0.0625 * (i % 3) as Real).collect();
+    let fz = vec![-0.125 as Real; n];
+    w.set_particle_forces(0, [&fx, &fy, &fz]).expect("forces");
+    let top = w
+        .add_tractions(0..4, Face::ZMax, Vec3::new(0.0, 0.0, -256.0))
+        .expect("tractions");
+    t.tractions("top", top);
+    let side = w
+        .add_tractions(4..8, Face::XMin, Vec3::new(64.0, 0.0, 32.0))
+        .expect("tractions");
+    t.tractions("side", side);
+    t.state("after effects", &w);
+    t.frames(&mut w, 8, 0.0078125);
+}
+
+/// Expectation: the four scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
 /// stick floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards
-/// an open face, quadratic B-spline and USL) leave, after every seeding call and every step,
-/// the same world bytes, copied-out columns (positions, velocities, stress, J, status), view
-/// columns (mass, V0, material, H, and which pointers are NULL), diagnostics (bit for bit) and
-/// step reports through the C interface as through the Rust kernel API.
+/// an open face, quadratic B-spline and USL; a 2D block with every effect declared, whose
+/// forces and tractions change halfway; a 3D sphere with APIC, damping, particle forces,
+/// tractions and a body force, cubic B-spline and USF) leave, after every seeding call, every
+/// change of an effect and every step, the same world bytes, copied-out columns (positions,
+/// velocities, stress, J, status), view columns (mass, V0, material, H, forces, damping, APIC
+/// moments, and which pointers are NULL), traction counts, thermostat alpha, diagnostics
+/// (angular momentum included, bit for bit) and step reports through the C interface as
+/// through the Rust kernel API.
 #[test]
 fn same_state_through_c_and_rust() {
     let exe = common::build(
@@ -667,6 +877,8 @@ fn defaults_match_the_kernel() {
     assert_eq!(wd.shape, k.shape as u32);
     assert_eq!(wd.particles_per_cell, k.particles_per_cell);
     assert_eq!(wd.flip_beta, k.flip_beta);
+    assert_eq!(wd.transfer, k.transfer as u32);
+    assert_eq!(wd.transfer, MpmTransfer::Flip as u32);
     assert_eq!(wd.update_order, k.update_order as u32);
     assert_eq!(
         [wd.gravity.x, wd.gravity.y, wd.gravity.z],
@@ -675,6 +887,27 @@ fn defaults_match_the_kernel() {
     assert_eq!(wd.faces, k.faces.map(|f| f as u32));
     assert_eq!(wd.exp_terms, k.exp_terms);
     assert_eq!(wd.cfl, k.cfl);
+    // Effects::NONE: nothing declared, every value zero.
+    assert_eq!(k.effects, Effects::NONE);
+    let zero = MpmSchedule {
+        points: 0,
+        times: [0.0; MPM_SCHEDULE_POINTS],
+        values: [0.0; MPM_SCHEDULE_POINTS],
+    };
+    let e = wd.effects;
+    assert_eq!(e.damping.declared, 0);
+    assert_eq!((e.damping.grid, e.damping.particle), (zero, zero));
+    assert_eq!(e.damping.feedback.declared, 0);
+    assert_eq!(e.damping.feedback.target, zero);
+    assert_eq!(
+        (e.damping.feedback.gain, e.damping.feedback.max_alpha),
+        (0.0, 0.0)
+    );
+    assert_eq!(e.damping.per_particle, 0);
+    assert_eq!(e.particle_forces, 0);
+    assert_eq!(e.traction_capacity, 0);
+    assert_eq!(e.body_force, MpmVec3::default());
+    assert_eq!(e.body_force_scale, zero);
     assert_ne!(wd.internal_cookie, 0);
 
     let m = MaterialDef::DEFAULT;
@@ -745,5 +978,165 @@ fn status_strings_match_the_kernel() {
         if !known.contains(&v) {
             assert_eq!(text(v), "unknown status", "value {v}");
         }
+    }
+}
+
+/// A schedule in both forms from (time, value) points.
+fn schedules(points: &[(Real, Real)]) -> (MpmSchedule, Schedule) {
+    let k = Schedule::from_points(points).expect("a valid schedule");
+    let mut c = MpmSchedule {
+        points: points.len() as u32,
+        times: [0.0; MPM_SCHEDULE_POINTS],
+        values: [0.0; MPM_SCHEDULE_POINTS],
+    };
+    for (i, &(t, v)) in points.iter().enumerate() {
+        c.times[i] = t;
+        c.values[i] = v;
+    }
+    (c, k)
+}
+
+/// Expectation: a definition that declares every effect (APIC, damping with schedules, a
+/// thermostat and per-particle columns, particle forces, tractions, a scaled body force), set
+/// field by field from C, makes a world whose stored definition is exactly the Rust one, and
+/// `mpm_world_get_def` gives back the C definition. Fields of what is not declared are
+/// ignored (and read back as zero); a flag that is not 0 or 1 is `MPM_STATUS_INVALID_ENUM`.
+#[test]
+fn effects_definition_round_trip() {
+    #[cfg(not(feature = "f64"))]
+    let mut c = mpm_world_def_default_f32();
+    #[cfg(feature = "f64")]
+    let mut c = mpm_world_def_default_f64();
+    c.cells = [8, 8, 1];
+    c.particle_capacity = 16;
+    c.transfer = MpmTransfer::Apic as u32;
+    let (grid_c, grid_k) = schedules(&[(0.0, 1.0), (0.5, 0.25)]);
+    let (part_c, part_k) = schedules(&[(0.125, 0.5)]);
+    let (target_c, target_k) = schedules(&[(0.0, 2.0), (1.0, 0.0), (2.0, 0.0)]);
+    let (scale_c, scale_k) = schedules(&[(0.0, 0.0), (0.25, -1.0)]);
+    c.effects = MpmEffects {
+        damping: MpmDamping {
+            declared: 1,
+            grid: grid_c,
+            particle: part_c,
+            feedback: MpmFeedback {
+                declared: 1,
+                gain: 0.75,
+                target: target_c,
+                max_alpha: Real::INFINITY,
+            },
+            per_particle: 1,
+        },
+        particle_forces: 1,
+        traction_capacity: 5,
+        body_force: MpmVec3 {
+            x: 1.5,
+            y: -2.0,
+            z: 0.0,
+        },
+        body_force_scale: scale_c,
+    };
+    let expected = WorldDef {
+        cells: [8, 8, 1],
+        particle_capacity: 16,
+        transfer: Transfer::Apic,
+        effects: Effects {
+            damping: Some(Damping {
+                grid: grid_k,
+                particle: part_k,
+                feedback: Some(Feedback {
+                    gain: 0.75,
+                    target: target_k,
+                    max_alpha: Real::INFINITY,
+                }),
+                per_particle: true,
+            }),
+            particle_forces: true,
+            traction_capacity: 5,
+            body_force: Vec3::new(1.5, -2.0, 0.0),
+            body_force_scale: scale_k,
+        },
+        ..WorldDef::DEFAULT
+    };
+
+    let mut req = MpmMemoryRequirements::default();
+    // SAFETY: valid pointers to locals.
+    assert_eq!(
+        unsafe { mpm_memory_requirements(&c, &mut req) },
+        MpmStatus::Ok
+    );
+    assert_eq!(
+        req.bytes,
+        memory_requirements(&expected).expect("valid").bytes
+    );
+    let mut storage = vec![0u8; req.bytes + req.align];
+    let offset = storage.as_ptr().align_offset(req.align);
+    let mem = storage[offset..].as_mut_ptr();
+    let mut world = core::ptr::null_mut();
+    // SAFETY: `mem` holds `req.bytes` bytes at the required alignment.
+    assert_eq!(
+        unsafe { mpm_world_init(&c, mem.cast(), req.bytes, &mut world) },
+        MpmStatus::Ok
+    );
+    // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
+    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+    let stored = kernel::WorldRef::open(bytes).expect("a world").def();
+    assert_eq!(stored, expected);
+    let mut back = c;
+    back.internal_cookie = 0;
+    // SAFETY: `world` is the world just made; `back` is a local.
+    assert_eq!(
+        unsafe { mpm_world_get_def(world, &mut back) },
+        MpmStatus::Ok
+    );
+    let bits = |x: &MpmWorldDef| format!("{x:?}");
+    assert_eq!(bits(&back), bits(&c));
+
+    // Not declared: the other fields are not read, and read back as zero.
+    let mut undeclared = c;
+    undeclared.effects.damping.declared = 0;
+    undeclared.effects.damping.per_particle = 7;
+    undeclared.effects.damping.grid.points = 99;
+    undeclared.effects.damping.feedback.declared = 5;
+    let mut req2 = MpmMemoryRequirements::default();
+    // SAFETY: valid pointers to locals.
+    assert_eq!(
+        unsafe { mpm_memory_requirements(&undeclared, &mut req2) },
+        MpmStatus::Ok
+    );
+    let no_damping = WorldDef {
+        effects: Effects {
+            damping: None,
+            ..expected.effects
+        },
+        ..expected
+    };
+    assert_eq!(
+        req2.bytes,
+        memory_requirements(&no_damping).expect("valid").bytes
+    );
+
+    // Flags other than 0 or 1.
+    let refused = |d: &MpmWorldDef| {
+        let mut r = MpmMemoryRequirements::default();
+        // SAFETY: valid pointers to locals.
+        unsafe { mpm_memory_requirements(d, &mut r) }
+    };
+    for v in [2, 3, 0x8000_0000, u32::MAX] {
+        let mut d = c;
+        d.effects.damping.declared = v;
+        assert_eq!(refused(&d), MpmStatus::InvalidEnum, "damping.declared {v}");
+        let mut d = c;
+        d.effects.damping.feedback.declared = v;
+        assert_eq!(refused(&d), MpmStatus::InvalidEnum, "feedback.declared {v}");
+        let mut d = c;
+        d.effects.damping.per_particle = v;
+        assert_eq!(refused(&d), MpmStatus::InvalidEnum, "per_particle {v}");
+        let mut d = c;
+        d.effects.particle_forces = v;
+        assert_eq!(refused(&d), MpmStatus::InvalidEnum, "particle_forces {v}");
+        let mut d = c;
+        d.transfer = v;
+        assert_eq!(refused(&d), MpmStatus::InvalidEnum, "transfer {v}");
     }
 }

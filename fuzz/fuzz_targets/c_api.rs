@@ -1,8 +1,10 @@
-//! Random sequences of C interface calls (init, add material, add particles, seed, step, read)
-//! with arbitrary values, through the same `extern "C"` functions a C host calls. After every
-//! call, either it returned a status and the world's bytes are unchanged, or it succeeded and
-//! every particle value is finite and every position inside the grid box. Single precision
-//! (the default build of the library).
+//! Random sequences of C interface calls (init with arbitrary transfer and effects, add
+//! material, add particles, seed, set particle forces and damping, add and clear tractions,
+//! step, read) with arbitrary values, through the same `extern "C"` functions a C host calls.
+//! After every call, either it returned a status and the world's bytes are unchanged, or it
+//! succeeded and every particle value (forces, damping and APIC moments included) is finite
+//! and every position inside the grid box. Single precision (the default build of the
+//! library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -123,12 +125,70 @@ fn check_state(w: *const MpmWorld) {
     let mut columns = vec![v.mass, v.volume0];
     columns.extend(v.displacement_gradient.iter().filter(|p| !p.is_null()));
     columns.extend(v.stress.iter().filter(|p| !p.is_null()));
+    columns.extend(v.force.iter().filter(|p| !p.is_null()));
+    columns.extend(v.affine.iter().filter(|p| !p.is_null()));
+    for &p in v.damping.iter().filter(|p| !p.is_null()) {
+        assert!(
+            col(p).iter().all(|x| x.is_finite() && *x >= 0.0),
+            "a damping value is negative or not finite"
+        );
+    }
     for p in columns {
         assert!(
             col(p).iter().all(|x| x.is_finite()),
             "a particle value is not finite"
         );
     }
+}
+
+/// A schedule of up to 9 points (one more than allowed), mostly with increasing times.
+fn schedule(inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real) -> MpmSchedule {
+    let mut s = MpmSchedule {
+        points: inp.u32_below(MPM_SCHEDULE_POINTS as u32 + 2),
+        times: [0.0; MPM_SCHEDULE_POINTS],
+        values: [0.0; MPM_SCHEDULE_POINTS],
+    };
+    let mut t = 0.0;
+    for k in 0..MPM_SCHEDULE_POINTS {
+        t += inp.real_in(0.0, 0.05);
+        s.times[k] = t;
+        s.values[k] = inp.real_in(lo, hi);
+    }
+    s
+}
+
+/// A flag: 0 or 1, sometimes a value that is neither.
+fn flag(inp: &mut Input<'_>) -> u32 {
+    match inp.byte() % 16 {
+        0 => 2 + inp.u32_below(u32::MAX - 2),
+        b => (b % 2) as u32,
+    }
+}
+
+/// Effects, each declared about half the time, with values mostly in range.
+fn effects(inp: &mut Input<'_>) -> MpmEffects {
+    let mut e = mpm_world_def_default_f32().effects;
+    if inp.byte() % 2 == 0 {
+        return e;
+    }
+    let d = &mut e.damping;
+    d.declared = flag(inp);
+    d.grid = schedule(inp, 0.0, 20.0);
+    d.particle = schedule(inp, 0.0, 20.0);
+    d.feedback.declared = flag(inp);
+    d.feedback.gain = inp.real_in(0.0, 10.0);
+    d.feedback.target = schedule(inp, 0.0, 1.0);
+    d.feedback.max_alpha = inp.real_in(0.0, 50.0);
+    d.per_particle = flag(inp);
+    e.particle_forces = flag(inp);
+    e.traction_capacity = if inp.byte() % 32 == 0 {
+        inp.u32_below(u32::MAX)
+    } else {
+        inp.u32_below(24)
+    };
+    e.body_force = inp.vec3_in(-20.0, 20.0);
+    e.body_force_scale = schedule(inp, -2.0, 2.0);
+    e
 }
 
 fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
@@ -154,7 +214,25 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     }
     def.exp_terms = inp.u32_below(10);
     def.cfl = inp.real_in(0.05, 1.0);
+    def.transfer = inp.u32_below(3);
+    def.effects = effects(inp);
     def
+}
+
+/// A particle range: mostly inside the world's particles, sometimes past them or past u32.
+fn particle_range(inp: &mut Input<'_>, w: *const MpmWorld) -> (u32, u32) {
+    let mut diag = MpmDiagnostics::default();
+    // SAFETY: `w` is a world; `diag` is a local.
+    assert_eq!(
+        unsafe { mpm_world_diagnostics(w, &mut diag) },
+        MpmStatus::Ok
+    );
+    let n = diag.particle_count as u32;
+    if inp.byte() % 16 == 0 {
+        return (inp.u32_below(u32::MAX), inp.u32_below(u32::MAX));
+    }
+    let first = inp.u32_below(n + 2);
+    (first, inp.u32_below(n.saturating_sub(first) + 2))
 }
 
 fuzz_target!(|data: &[u8]| {
@@ -165,7 +243,7 @@ fuzz_target!(|data: &[u8]| {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 8;
+        let op = inp.byte() % 12;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -264,6 +342,69 @@ fuzz_target!(|data: &[u8]| {
                             &mut ids,
                         ),
                     }
+                }
+                8 => {
+                    let (first, count) = particle_range(&mut inp, world);
+                    let count = count as usize;
+                    let cols: Vec<Vec<mpm_real>> = (0..3)
+                        .map(|_| {
+                            (0..count.min(512))
+                                .map(|_| inp.real_in(-5.0, 5.0))
+                                .collect()
+                        })
+                        .collect();
+                    // A count past the particles is refused before any array is read.
+                    let (fx, fy, fz) = if count <= 512 {
+                        (cols[0].as_ptr(), cols[1].as_ptr(), cols[2].as_ptr())
+                    } else {
+                        let dangling = core::ptr::NonNull::<mpm_real>::dangling().as_ptr();
+                        (
+                            dangling.cast_const(),
+                            dangling.cast_const(),
+                            dangling.cast_const(),
+                        )
+                    };
+                    let fz = if inp.byte() % 4 == 0 {
+                        core::ptr::null()
+                    } else {
+                        fz
+                    };
+                    mpm_world_set_particle_forces(world, first, fx, fy, fz, count)
+                }
+                9 => {
+                    let (first, count) = particle_range(&mut inp, world);
+                    let count = (count as usize).min(512);
+                    let g: Vec<mpm_real> = (0..count).map(|_| inp.real_in(0.0, 20.0)).collect();
+                    let p: Vec<mpm_real> = (0..count).map(|_| inp.real_in(0.0, 20.0)).collect();
+                    mpm_world_set_particle_damping(world, first, g.as_ptr(), p.as_ptr(), count)
+                }
+                10 => {
+                    if inp.byte() % 4 == 0 {
+                        mpm_world_clear_tractions(world)
+                    } else {
+                        let (first, count) = particle_range(&mut inp, world);
+                        let face = inp.u32_below(7);
+                        let traction = inp.vec3_in(-1.0e4, 1.0e4);
+                        let mut ids = MpmIdRange::default();
+                        let s =
+                            mpm_world_add_tractions(world, first, count, face, traction, &mut ids);
+                        if s == MpmStatus::Ok {
+                            let mut n = 0;
+                            assert_eq!(mpm_world_traction_count(world, &mut n), MpmStatus::Ok);
+                            assert_eq!(ids.first as usize + ids.count as usize, n);
+                        }
+                        s
+                    }
+                }
+                11 => {
+                    let (mut n, mut alpha) = (0usize, 0.0f64);
+                    let mut diag = MpmDiagnostics::default();
+                    assert_eq!(mpm_world_traction_count(world, &mut n), MpmStatus::Ok);
+                    assert_eq!(mpm_world_feedback_alpha(world, &mut alpha), MpmStatus::Ok);
+                    assert!(alpha.is_finite() && alpha >= 0.0, "feedback alpha {alpha}");
+                    let s = mpm_world_diagnostics(world, &mut diag);
+                    assert_eq!(world_hash(world), before, "a read changed the world");
+                    s
                 }
                 4 | 5 => {
                     let mut dt = 0.0;

@@ -25,7 +25,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::p2g::{mode, scatter_lane, scatter_one, Scattered};
+use super::p2g::{affine_velocity, mode, scatter_lane, scatter_one, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -243,8 +243,13 @@ fn gather_affine<const D: usize, const K: usize>(
     g: &GridCols<'_, D>,
     st: &Stencil<D, K>,
 ) -> [[Real; D]; D] {
+    let e = &st.e;
     let geom = &ctx.geom;
-    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), g.len()) {
+    if !rows_fit(
+        st.base,
+        Stencil::<D, K>::last_row_offset(geom.stride),
+        g.len(),
+    ) {
         return [[0.0; D]; D]; // Unreachable by construction, as in `gather`.
     }
     // Per row: the y (and z) factor with no moment (r0) and with the moment on axis b (re[b]).
@@ -254,9 +259,9 @@ fn gather_affine<const D: usize, const K: usize>(
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
             let re: [Real; D] = core::array::from_fn(|b| match (b, D) {
-                (1, 3) => st.e[1][j] * st.w[2][k],
-                (2, _) => st.w[1][j] * st.e[2][k],
-                (1, _) => st.e[1][j],
+                (1, 3) => e[1][j] * st.w[2][k],
+                (2, _) => st.w[1][j] * e[2][k],
+                (1, _) => e[1][j],
                 _ => 0.0,
             });
             for a in 0..D {
@@ -272,12 +277,33 @@ fn gather_affine<const D: usize, const K: usize>(
     core::array::from_fn(|a| {
         core::array::from_fn(|b| {
             if b == 0 {
-                (st.e[0] * u0[a]).element_sum()
+                (e[0] * u0[a]).element_sum()
             } else {
                 (st.w[0] * ue[a][b]).element_sum()
             }
         })
     })
+}
+
+/// APIC for a family that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`], linear):
+/// `C_p` is the velocity gradient the stress update just used, committed for the lanes in
+/// `ok`. That gradient comes from the lagged (USF), re-mapped (MUSL) or updated (USL) nodal
+/// velocities; the updated ones are unbounded at a node that carries a sliver of a particle's
+/// mass (linear weights' cell-crossing instability, see [`crate::UpdateOrder::Usl`]), which
+/// would enter the next transfer through `C_p`, so USF and MUSL keep linear APIC stable where
+/// USL does not. Does nothing when the affine columns are not reserved.
+#[inline(always)]
+fn commit_gradient_affine<const D: usize>(
+    p: &mut ParticleCols<'_, D>,
+    start: usize,
+    l: &LaneMat<D>,
+    ok: &[bool; W],
+) {
+    for r in 0..D {
+        for c in 0..D {
+            commit(p.affine[r][c], start, &l[r][c], ok);
+        }
+    }
 }
 
 /// Replaces `st` by the stencils of the chunk's particles at `x[axis][lane]` (with their
@@ -512,9 +538,11 @@ pub(crate) fn particles<
                 alpha_p[ln] += lp[ln];
             }
         }
-        // APIC: the new moment matrix B_p of each live lane.
+        // APIC: the new moment matrix B_p of each live lane (a family that keeps the gradient
+        // form takes the stress update's velocity gradient instead: see
+        // `commit_gradient_affine`).
         let mut affine = [[[0.0; W]; D]; D];
-        if APIC {
+        if APIC && !S::GRADIENT_AFFINE {
             for ln in 0..W {
                 if live[ln] {
                     let b = gather_affine(ctx, g, st.lane(ln));
@@ -614,6 +642,9 @@ pub(crate) fn particles<
         } else {
             moved
         };
+        if APIC && FUSED_STRESS && S::GRADIENT_AFFINE {
+            commit_gradient_affine(p, start, &l, &ok);
+        }
         // Commit: updated lanes take the new state; live lanes that failed freeze.
         let frozen: [bool; W] = core::array::from_fn(|ln| live[ln] && !ok[ln]);
         let zero = [0.0; W];
@@ -629,7 +660,7 @@ pub(crate) fn particles<
                 commit(p.x[a], start, &x_new[a], &ok);
             }
         }
-        if APIC {
+        if APIC && !S::GRADIENT_AFFINE {
             for r in 0..D {
                 for c in 0..D {
                     commit(p.affine[r][c], start, &affine[r][c], &ok);
@@ -659,7 +690,11 @@ pub(crate) fn particles<
                         tau: [[0.0; D]; D],
                         force: [0.0; D],
                         affine: core::array::from_fn(|r| {
-                            core::array::from_fn(|c| affine[r][c][ln])
+                            // Zero for a family that keeps the gradient form: its C_p is
+                            // taken from this re-map (see `commit_gradient_affine`).
+                            core::array::from_fn(|c| {
+                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d[c])
+                            })
                         }),
                     };
                     scatter_one::<D, K, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
@@ -691,6 +726,9 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         stencils::<D, K, S, false>(&mut st, shape, ctx, &x);
         let l = gather_chunk::<D, K, false, { grad::REMAP }>(ctx, g, &st, &live).l;
         let ok = update_stress(ctx, p, start, &live, &l);
+        if S::GRADIENT_AFFINE {
+            commit_gradient_affine(p, start, &l, &ok);
+        }
         let n = W.min(count - start);
         for ln in 0..n {
             let i = start + ln;

@@ -92,14 +92,19 @@ pub(crate) fn scatter<
                     t[b][a] = tau[k][ln];
                 }
             }
+            let stn = st.lane(ln);
             let pt = Scattered {
                 m: mass[ln],
                 v: core::array::from_fn(|a| v[a][ln]),
                 tau: t,
                 force: core::array::from_fn(|a| f_ext[a][ln]),
-                affine: core::array::from_fn(|a| core::array::from_fn(|b| affine[a][b][ln])),
+                affine: core::array::from_fn(|a| {
+                    core::array::from_fn(|b| {
+                        affine_velocity::<K, S>(affine[a][b][ln], stn.inv_d[b])
+                    })
+                }),
             };
-            scatter_one::<D, K, MODE, FORCE, APIC>(ctx, &pt, st.lane(ln), g);
+            scatter_one::<D, K, MODE, FORCE, APIC>(ctx, &pt, stn, g);
         }
     }
 }
@@ -114,6 +119,18 @@ pub(crate) const fn scatter_lane(t: usize) -> usize {
     (t % 2) * (W / 2) + t / 2
 }
 
+/// Entry (a, b) of the affine velocity matrix `C_p` from the stored column value and
+/// `1 / D_p[b][b]`: the stored `B_p` divided by `D_p`, or the stored `C_p` itself for a family
+/// that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`]).
+#[inline(always)]
+pub(crate) fn affine_velocity<const K: usize, S: Shape1D<K>>(stored: Real, inv_d: Real) -> Real {
+    if S::GRADIENT_AFFINE {
+        stored
+    } else {
+        stored * inv_d
+    }
+}
+
 /// What one particle scatters.
 pub(crate) struct Scattered<const D: usize> {
     /// Mass m_p.
@@ -124,7 +141,7 @@ pub(crate) struct Scattered<const D: usize> {
     pub tau: Mat<D>,
     /// External force F_p (read only with `FORCE` and force).
     pub force: [Real; D],
-    /// APIC moment matrix B_p (read only with `APIC` and momentum).
+    /// APIC affine velocity matrix C_p (read only with `APIC` and momentum).
     pub affine: Mat<D>,
 }
 
@@ -157,16 +174,15 @@ pub(crate) fn scatter_one<
     let (wx, dwx) = (st.w[0], st.dw[0]);
     let (wy, dwy) = (st.w[1], st.dw[1]);
     let mass_x = wx * m;
-    // Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC) with
-    // C_ab = B_ab / D_bb; S (x_b,i - x_b,p) has the form of G_b with the moments e in place of
-    // dw: mom_x[a][b] = m C_ab times ex (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
+    // Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC); S (x_b,i - x_b,p)
+    // has the form of G_b with the moments e in place of dw: mom_x[a][b] = m C_ab times ex
+    // (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
     let (ex, ey) = (st.e[0], st.e[1]);
     let mom_x: [[Row4; D]; D] = core::array::from_fn(|a| {
         core::array::from_fn(|b| {
             let plain = if b == 0 { wx * (m * v[a]) } else { Row4::ZERO };
             if APIC {
-                let c = pt.affine[a][b] * st.inv_d[b];
-                plain + (if b == 0 { ex } else { wx }) * (m * c)
+                plain + (if b == 0 { ex } else { wx }) * (m * pt.affine[a][b])
             } else {
                 plain
             }
@@ -299,9 +315,8 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
                 };
                 (p.x[a][i] + off - geom.origin[a]) * geom.inv_h
             });
-            let first: [i32; D] = core::array::from_fn(|a| {
-                crate::shape::first_node::<K, S>(s[a], geom.nodes[a])
-            });
+            let first: [i32; D] =
+                core::array::from_fn(|a| crate::shape::first_node::<K, S>(s[a], geom.nodes[a]));
             let w: [[Real; K]; D] =
                 core::array::from_fn(|a| shape.point_weights(s[a] - first[a] as Real));
             // Every node of the K^D stencil, x fastest; the first node is clamped so that the

@@ -30,6 +30,18 @@ impl Shape1D<3> for QuadraticBspline {
             (0.0, 0.0)
         }
     }
+
+    /// The three nodes at once, without branches: with `t = f - 1` in [-1/2, 1/2) the outer
+    /// nodes are `(1/2 - t)^2 / 2` and `(1/2 + t)^2 / 2`, and the middle one is their complement
+    /// to 1, so the weights sum to 1 to the last bit (and the derivatives to 0), which keeps
+    /// the transfers' conservation at round-off in f32.
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        let t = f - 1.0;
+        let (a, b) = (0.5 - t, 0.5 + t);
+        let (w0, w2) = (0.5 * a * a, 0.5 * b * b);
+        ([w0, 1.0 - w0 - w2, w2], [-a, a - b, b])
+    }
 }
 
 impl Shape1D<4> for CubicBspline {
@@ -48,5 +60,21 @@ impl Shape1D<4> for CubicBspline {
         } else {
             (0.0, 0.0)
         }
+    }
+
+    /// The four nodes at once, without branches: with `t = f - 1` in [0, 1), the weights are
+    /// `(1 - t)^3 / 6`, `t^3 / 2 - t^2 + 2/3`, the complement to 1, and `t^3 / 6` (the
+    /// complement makes them sum to 1 to the last bit, and the derivatives to 0).
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 4], [Real; 4]) {
+        let t = f - 1.0;
+        let u = 1.0 - t;
+        let (w0, w3) = (u * u * u / 6.0, t * t * t / 6.0);
+        let w1 = (0.5 * t - 1.0) * t * t + 2.0 / 3.0;
+        let (d0, d1, d3) = (-0.5 * u * u, (1.5 * t - 2.0) * t, 0.5 * t * t);
+        (
+            [w0, w1, 1.0 - w0 - w1 - w3, w3],
+            [d0, d1, -(d0 + d1 + d3), d3],
+        )
     }
 }

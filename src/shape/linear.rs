@@ -10,6 +10,7 @@ pub struct Linear;
 impl Shape1D<2> for Linear {
     const SHIFT: Real = 0.0;
     const LEAD: i32 = 0;
+    const GRADIENT_AFFINE: bool = true;
 
     #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {

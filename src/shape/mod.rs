@@ -47,6 +47,12 @@ pub trait Shape1D<const K: usize>: Copy {
     const SHIFT: Real;
     /// See [`Shape1D::SHIFT`].
     const LEAD: i32;
+    /// APIC keeps this family's affine matrix in its gradient form `C_p = sum_i v_i G_ip^T`
+    /// rather than as the moment matrix `B_p` (which the next scatter divides by `D_p`): for
+    /// weights whose `D_p` vanishes at a node (linear), `B_p / D_p` taken at the new position
+    /// is unbounded, while the gradient form, equal to `B_p D_p^-1` at the old one, is not
+    /// (seeds/001 names both forms).
+    const GRADIENT_AFFINE: bool = false;
 
     /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
     /// Zero outside the support.

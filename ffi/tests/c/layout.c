@@ -25,11 +25,16 @@ PROBE(MpmStatus)
 PROBE(MpmDimension)
 PROBE(MpmShape)
 PROBE(MpmUpdateOrder)
+PROBE(MpmTransfer)
 PROBE(MpmBoundary)
 PROBE(MpmFace)
 PROBE(MpmMaterialModel)
 PROBE(MpmParticleStatus)
 PROBE(MpmVec3)
+PROBE(MpmSchedule)
+PROBE(MpmFeedback)
+PROBE(MpmDamping)
+PROBE(MpmEffects)
 PROBE(MpmWorldDef)
 PROBE(MpmMaterialDef)
 PROBE(MpmParticlesView)
@@ -67,6 +72,7 @@ int main(void) {
     TYPE(MpmDimension);
     TYPE(MpmShape);
     TYPE(MpmUpdateOrder);
+    TYPE(MpmTransfer);
     TYPE(MpmBoundary);
     TYPE(MpmFace);
     TYPE(MpmMaterialModel);
@@ -76,6 +82,31 @@ int main(void) {
     FIELD(MpmVec3, x);
     FIELD(MpmVec3, y);
     FIELD(MpmVec3, z);
+
+    TYPE(MpmSchedule);
+    FIELD(MpmSchedule, points);
+    FIELD(MpmSchedule, times);
+    FIELD(MpmSchedule, values);
+
+    TYPE(MpmFeedback);
+    FIELD(MpmFeedback, declared);
+    FIELD(MpmFeedback, gain);
+    FIELD(MpmFeedback, target);
+    FIELD(MpmFeedback, max_alpha);
+
+    TYPE(MpmDamping);
+    FIELD(MpmDamping, declared);
+    FIELD(MpmDamping, grid);
+    FIELD(MpmDamping, particle);
+    FIELD(MpmDamping, feedback);
+    FIELD(MpmDamping, per_particle);
+
+    TYPE(MpmEffects);
+    FIELD(MpmEffects, damping);
+    FIELD(MpmEffects, particle_forces);
+    FIELD(MpmEffects, traction_capacity);
+    FIELD(MpmEffects, body_force);
+    FIELD(MpmEffects, body_force_scale);
 
     TYPE(MpmWorldDef);
     FIELD(MpmWorldDef, dimension);
@@ -87,11 +118,13 @@ int main(void) {
     FIELD(MpmWorldDef, shape);
     FIELD(MpmWorldDef, particles_per_cell);
     FIELD(MpmWorldDef, flip_beta);
+    FIELD(MpmWorldDef, transfer);
     FIELD(MpmWorldDef, update_order);
     FIELD(MpmWorldDef, gravity);
     FIELD(MpmWorldDef, faces);
     FIELD(MpmWorldDef, exp_terms);
     FIELD(MpmWorldDef, cfl);
+    FIELD(MpmWorldDef, effects);
     FIELD(MpmWorldDef, internal_cookie);
 
     TYPE(MpmMaterialDef);
@@ -112,6 +145,9 @@ int main(void) {
     FIELD(MpmParticlesView, stress);
     FIELD(MpmParticlesView, material);
     FIELD(MpmParticlesView, status);
+    FIELD(MpmParticlesView, force);
+    FIELD(MpmParticlesView, damping);
+    FIELD(MpmParticlesView, affine);
 
     TYPE(MpmDiagnostics);
     FIELD(MpmDiagnostics, particle_count);
@@ -119,6 +155,7 @@ int main(void) {
     FIELD(MpmDiagnostics, step_count);
     FIELD(MpmDiagnostics, mass);
     FIELD(MpmDiagnostics, momentum);
+    FIELD(MpmDiagnostics, angular_momentum);
     FIELD(MpmDiagnostics, center_of_mass);
     FIELD(MpmDiagnostics, kinetic);
     FIELD(MpmDiagnostics, strain);

@@ -78,7 +78,7 @@ static uint64_t world_hash(const MpmWorld *w) {
 }
 
 /* The worlds every check compares, with their hashes after the last accepted change. */
-#define MAX_TRACKED 2
+#define MAX_TRACKED 4
 static MpmWorld *g_tracked[MAX_TRACKED];
 static uint64_t g_hash[MAX_TRACKED];
 static int g_tracked_count;
@@ -246,6 +246,39 @@ static MpmWorldDef def_3d(void) {
     return d;
 }
 
+/* The 2D definition with every effect declared: APIC, damping (a constant grid schedule, a
+ * thermostat, per-particle columns), particle forces, 8 tractions and a body force. */
+static MpmWorldDef def_2d_effects(void) {
+    MpmWorldDef d = def_2d();
+    d.material_capacity = 1;
+    d.transfer = MPM_TRANSFER_APIC;
+    d.effects.damping.declared = 1;
+    d.effects.damping.grid.points = 1;
+    d.effects.damping.grid.values[0] = R(1.0);
+    d.effects.damping.feedback.declared = 1;
+    d.effects.damping.feedback.gain = R(1.0);
+    d.effects.damping.feedback.max_alpha = R(8.0);
+    d.effects.damping.per_particle = 1;
+    d.effects.particle_forces = 1;
+    d.effects.traction_capacity = 8;
+    d.effects.body_force = v3(0.5, 0.0, 0.0);
+    d.effects.body_force_scale.points = 1;
+    d.effects.body_force_scale.values[0] = R(1.0);
+    return d;
+}
+
+/* The 3D definition with damping (grid only: no per-particle columns), particle forces and 4
+ * tractions; FLIP. */
+static MpmWorldDef def_3d_effects(void) {
+    MpmWorldDef d = def_3d();
+    d.effects.damping.declared = 1;
+    d.effects.damping.grid.points = 1;
+    d.effects.damping.grid.values[0] = R(0.5);
+    d.effects.particle_forces = 1;
+    d.effects.traction_capacity = 4;
+    return d;
+}
+
 /* Structure-of-arrays storage for a few particles. */
 #define BATCH_MAX 64
 typedef struct {
@@ -289,6 +322,8 @@ static MpmParticleArrays arrays_of(const Batch *b) {
 
 static MpmWorld *g_w2;      /* the 2D world */
 static MpmWorld *g_w3;      /* the 3D world */
+static MpmWorld *g_we2;     /* the 2D world with every effect declared */
+static MpmWorld *g_we3;     /* the 3D world with damping, forces and tractions */
 static size_t g_w2_bytes;   /* its extent */
 static MpmWorldDef g_def2;  /* its definition */
 
@@ -450,6 +485,52 @@ static void null_pointers(void) {
     NULL_COPY(mpm_world_copy_jacobians, mpm_real);
     NULL_COPY(mpm_world_copy_status, uint32_t);
 #undef NULL_COPY
+
+    /* The effects' calls, on the worlds that declare the effects. */
+    {
+        const mpm_real f[2] = {R(0.5), R(0.25)};
+        REFUSED("null: mpm_world_set_particle_forces world", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(NULL, 0, f, f, f, 1));
+        REFUSED("null: mpm_world_set_particle_forces fx (2D)", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we2, 0, NULL, f, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_forces fy (2D)", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we2, 0, f, NULL, f, 1));
+        REFUSED("null: mpm_world_set_particle_forces fx with count 0", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we2, 0, NULL, f, NULL, 0));
+        REFUSED("null: mpm_world_set_particle_forces fx (3D)", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we3, 0, NULL, f, f, 1));
+        REFUSED("null: mpm_world_set_particle_forces fy (3D)", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we3, 0, f, NULL, f, 1));
+        REFUSED("null: mpm_world_set_particle_forces fz (3D)", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_forces(g_we3, 0, f, f, NULL, 1));
+        /* Pointers are checked before the declaration. */
+        REFUSED("null: mpm_world_set_particle_forces fx on a world without forces",
+                MPM_STATUS_NULL_POINTER, mpm_world_set_particle_forces(g_w2, 0, NULL, f, f, 1));
+
+        REFUSED("null: mpm_world_set_particle_damping world", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_damping(NULL, 0, f, f, 1));
+        REFUSED("null: mpm_world_set_particle_damping alpha_g", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_damping(g_we2, 0, NULL, f, 1));
+        REFUSED("null: mpm_world_set_particle_damping alpha_p", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_damping(g_we2, 0, f, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_damping alpha_p with count 0",
+                MPM_STATUS_NULL_POINTER, mpm_world_set_particle_damping(g_we2, 0, f, NULL, 0));
+
+        REFUSED("null: mpm_world_add_tractions world", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_tractions(NULL, 0, 1, MPM_FACE_Y_MAX, zero, OUT(MpmIdRange)));
+        REFUSED("null: mpm_world_add_tractions ids_out", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Y_MAX, zero, NULL));
+        REFUSED("null: mpm_world_clear_tractions world", MPM_STATUS_NULL_POINTER,
+                mpm_world_clear_tractions(NULL));
+        REFUSED("null: mpm_world_traction_count world", MPM_STATUS_NULL_POINTER,
+                mpm_world_traction_count(NULL, OUT(size_t)));
+        REFUSED("null: mpm_world_traction_count count_out", MPM_STATUS_NULL_POINTER,
+                mpm_world_traction_count(g_we2, NULL));
+        REFUSED("null: mpm_world_feedback_alpha world", MPM_STATUS_NULL_POINTER,
+                mpm_world_feedback_alpha(NULL, OUT(double)));
+        REFUSED("null: mpm_world_feedback_alpha alpha_out", MPM_STATUS_NULL_POINTER,
+                mpm_world_feedback_alpha(g_we2, NULL));
+    }
 }
 
 /* World pointers that are not a world: misaligned, or aligned memory without a world. */
@@ -503,6 +584,15 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_copy_status",
                   mpm_world_copy_status(w, OUT(uint32_t), 16, OUT_AT(size_t, WRITTEN_AT)));
         BAD_WORLD("mpm_world_diagnostics", mpm_world_diagnostics(w, OUT(MpmDiagnostics)));
+        BAD_WORLD("mpm_world_set_particle_forces",
+                  mpm_world_set_particle_forces(w, 0, b.v[0], b.v[1], b.v[2], 1));
+        BAD_WORLD("mpm_world_set_particle_damping",
+                  mpm_world_set_particle_damping(w, 0, b.mass, b.volume, 1));
+        BAD_WORLD("mpm_world_add_tractions",
+                  mpm_world_add_tractions(w, 0, 1, MPM_FACE_Y_MAX, v3(0, -1, 0), OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
+        BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
+        BAD_WORLD("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, OUT(double)));
 #undef BAD_WORLD
     }
     {
@@ -531,6 +621,150 @@ static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d)
     if (!pattern_intact(g_init_mem.raw, g_init_req.bytes + 2 * g_init_req.align)) {
         fail(full, "the refused init wrote to the memory");
     }
+}
+
+/* The transfer and the effects of a definition: enums and flags out of range, effect values
+ * out of range or not finite. Fields of an effect that is not declared are not read. */
+static void effects_def_misuse(void) {
+    static const uint32_t bad_flag[] = {2u, 0x80000000u, 0xFFFFFFFFu};
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    const char *label[3] = {"NaN", "+inf", "-inf"};
+    MpmWorldDef d, damped = g_def2, fed;
+    MpmMemoryRequirements req;
+    unsigned k;
+    int j;
+
+    damped.effects.damping.declared = 1;
+    fed = damped;
+    fed.effects.damping.feedback.declared = 1;
+    fed.effects.damping.feedback.gain = R(1.0);
+    fed.effects.damping.feedback.max_alpha = R(1.0);
+
+    for (k = 0; k < sizeof bad_flag / sizeof bad_flag[0]; k++) {
+        char name[96];
+        const uint32_t v = bad_flag[k];
+        d = g_def2;
+        d.transfer = v;
+        snprintf(name, sizeof name, "init: transfer %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.effects.damping.declared = v;
+        snprintf(name, sizeof name, "init: damping.declared %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = damped;
+        d.effects.damping.per_particle = v;
+        snprintf(name, sizeof name, "init: damping.per_particle %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = damped;
+        d.effects.damping.feedback.declared = v;
+        snprintf(name, sizeof name, "init: damping.feedback.declared %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.effects.particle_forces = v;
+        snprintf(name, sizeof name, "init: particle_forces %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+    }
+
+#define BAD_EFFECT(name, base, stmt) \
+    d = (base); \
+    stmt; \
+    init_refused((name), MPM_STATUS_INVALID_EFFECT, &d)
+    BAD_EFFECT("init: damping.grid.points 9", damped, d.effects.damping.grid.points = 9);
+    BAD_EFFECT("init: damping.grid.points 0xFFFFFFFF", damped,
+               d.effects.damping.grid.points = 0xFFFFFFFFu);
+    BAD_EFFECT("init: damping.grid times equal", damped,
+               (d.effects.damping.grid.points = 2, d.effects.damping.grid.times[0] = R(0.5),
+                d.effects.damping.grid.times[1] = R(0.5)));
+    BAD_EFFECT("init: damping.grid times decreasing", damped,
+               (d.effects.damping.grid.points = 2, d.effects.damping.grid.times[0] = R(0.5),
+                d.effects.damping.grid.times[1] = R(0.25)));
+    BAD_EFFECT("init: damping.grid value -1", damped,
+               (d.effects.damping.grid.points = 1, d.effects.damping.grid.values[0] = R(-1.0)));
+    BAD_EFFECT("init: damping.particle value -0.5", damped,
+               (d.effects.damping.particle.points = 2,
+                d.effects.damping.particle.times[1] = R(1.0),
+                d.effects.damping.particle.values[1] = R(-0.5)));
+    BAD_EFFECT("init: damping.particle.points 9", damped, d.effects.damping.particle.points = 9);
+    BAD_EFFECT("init: feedback gain 0", fed, d.effects.damping.feedback.gain = R(0.0));
+    BAD_EFFECT("init: feedback gain -1", fed, d.effects.damping.feedback.gain = R(-1.0));
+    BAD_EFFECT("init: feedback max_alpha 0", fed, d.effects.damping.feedback.max_alpha = R(0.0));
+    BAD_EFFECT("init: feedback max_alpha -1", fed,
+               d.effects.damping.feedback.max_alpha = R(-1.0));
+    BAD_EFFECT("init: feedback target value -1", fed,
+               (d.effects.damping.feedback.target.points = 1,
+                d.effects.damping.feedback.target.values[0] = R(-1.0)));
+    BAD_EFFECT("init: feedback target.points 9", fed,
+               d.effects.damping.feedback.target.points = 9);
+    BAD_EFFECT("init: body_force_scale.points 9", g_def2, d.effects.body_force_scale.points = 9);
+    BAD_EFFECT("init: body_force_scale times decreasing", g_def2,
+               (d.effects.body_force_scale.points = 2,
+                d.effects.body_force_scale.times[0] = R(1.0)));
+    BAD_EFFECT("init: traction_capacity 2^24 + 1", g_def2,
+               d.effects.traction_capacity = (1u << 24) + 1);
+    BAD_EFFECT("init: traction_capacity 0xFFFFFFFF", g_def2,
+               d.effects.traction_capacity = 0xFFFFFFFFu);
+    for (j = 0; j < 3; j++) {
+        char name[96];
+        snprintf(name, sizeof name, "init: damping.grid value %s", label[j]);
+        BAD_EFFECT(name, damped,
+                   (d.effects.damping.grid.points = 1,
+                    d.effects.damping.grid.values[0] = R(bad[j])));
+        snprintf(name, sizeof name, "init: damping.grid time %s", label[j]);
+        BAD_EFFECT(name, damped,
+                   (d.effects.damping.grid.points = 1, d.effects.damping.grid.times[0] = R(bad[j])));
+        snprintf(name, sizeof name, "init: damping.particle value %s", label[j]);
+        BAD_EFFECT(name, damped,
+                   (d.effects.damping.particle.points = 1,
+                    d.effects.damping.particle.values[0] = R(bad[j])));
+        snprintf(name, sizeof name, "init: feedback gain %s", label[j]);
+        BAD_EFFECT(name, fed, d.effects.damping.feedback.gain = R(bad[j]));
+        snprintf(name, sizeof name, "init: feedback target time %s", label[j]);
+        BAD_EFFECT(name, fed,
+                   (d.effects.damping.feedback.target.points = 1,
+                    d.effects.damping.feedback.target.times[0] = R(bad[j])));
+        snprintf(name, sizeof name, "init: body_force.x %s", label[j]);
+        BAD_EFFECT(name, g_def2, d.effects.body_force.x = R(bad[j]));
+        snprintf(name, sizeof name, "init: body_force.y %s", label[j]);
+        BAD_EFFECT(name, g_def2, d.effects.body_force.y = R(bad[j]));
+        snprintf(name, sizeof name, "init: body_force.z %s (3D)", label[j]);
+        BAD_EFFECT(name, def_3d(), d.effects.body_force.z = R(bad[j]));
+        snprintf(name, sizeof name, "init: body_force_scale value %s", label[j]);
+        BAD_EFFECT(name, g_def2,
+                   (d.effects.body_force_scale.points = 1,
+                    d.effects.body_force_scale.values[0] = R(bad[j])));
+    }
+    BAD_EFFECT("init: feedback max_alpha NaN", fed,
+               d.effects.damping.feedback.max_alpha = R(NAN));
+    BAD_EFFECT("init: feedback max_alpha -inf", fed,
+               d.effects.damping.feedback.max_alpha = R(-INFINITY));
+#undef BAD_EFFECT
+
+    /* Controls: accepted definitions at the edges. */
+#define GOOD_EFFECT(name, base, stmt) \
+    d = (base); \
+    stmt; \
+    ACCEPTED((name), 0, mpm_memory_requirements(&d, &req))
+    GOOD_EFFECT("init: damping fields not read when damping is not declared", g_def2,
+                (d.effects.damping.grid.points = 99, d.effects.damping.per_particle = 7,
+                 d.effects.damping.feedback.declared = 5,
+                 d.effects.damping.particle.values[0] = R(NAN)));
+    GOOD_EFFECT("init: feedback fields not read when the thermostat is not declared", damped,
+                (d.effects.damping.feedback.gain = R(NAN),
+                 d.effects.damping.feedback.target.points = 99));
+    GOOD_EFFECT("init: feedback max_alpha +inf (unbounded)", fed,
+                d.effects.damping.feedback.max_alpha = R(INFINITY));
+    GOOD_EFFECT("init: body_force.z NaN in 2D (not read)", g_def2,
+                d.effects.body_force.z = R(NAN));
+    GOOD_EFFECT("init: negative body_force_scale value", g_def2,
+                (d.effects.body_force_scale.points = 1,
+                 d.effects.body_force_scale.values[0] = R(-2.0)));
+    GOOD_EFFECT("init: schedule of 8 points", damped,
+                (d.effects.damping.grid.points = 8, d.effects.damping.grid.times[1] = R(1.0),
+                 d.effects.damping.grid.times[2] = R(2.0), d.effects.damping.grid.times[3] = R(3.0),
+                 d.effects.damping.grid.times[4] = R(4.0), d.effects.damping.grid.times[5] = R(5.0),
+                 d.effects.damping.grid.times[6] = R(6.0), d.effects.damping.grid.times[7] = R(7.0)));
+    GOOD_EFFECT("init: traction_capacity 2^24", g_def2, d.effects.traction_capacity = 1u << 24);
+#undef GOOD_EFFECT
 }
 
 static void init_misuse(void) {
@@ -658,6 +892,8 @@ static void init_misuse(void) {
     BAD_DEF("init: particles_per_cell 9", particles_per_cell, 9,
             MPM_STATUS_INVALID_PARTICLES_PER_CELL);
 #undef BAD_DEF
+
+    effects_def_misuse();
 
     /* Control: the same memory takes a world of the definition read back from the 2D world
      * (the cookie survives mpm_world_get_def). */
@@ -1078,6 +1314,308 @@ static void copy_misuse(void) {
 #undef EXACT_COPY
 }
 
+/* The effects' calls: effects not declared, particles that do not exist (refused before any
+ * array is read), values not finite or out of range, faces out of range, the traction
+ * capacity; then accepted controls that show the values arrive. */
+static void effects_misuse(void) {
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    const char *label[3] = {"NaN", "+inf", "-inf"};
+    static const uint32_t bad_face[] = {6u, 7u, 0x80000000u, 0xFFFFFFFFu};
+    const size_t n2 = particle_count(g_we2), n3 = particle_count(g_we3);
+    mpm_real f[3][BATCH_MAX], g[BATCH_MAX], p[BATCH_MAX];
+    MpmVec3 down = v3(0, -64.0, 0);
+    MpmIdRange ids;
+    MpmParticlesView view;
+    size_t count = 0, i;
+    double alpha = -1;
+    unsigned k;
+    int j, a;
+
+    if (n2 < 4 || n2 > BATCH_MAX || n3 < 4 || n3 > BATCH_MAX) {
+        fail("effects: setup", "unexpected particle counts");
+    }
+    for (i = 0; i < BATCH_MAX; i++) {
+        f[0][i] = R(0.25 * (double)(i % 4));
+        f[1][i] = R(-0.5);
+        f[2][i] = R(0.125);
+        g[i] = R(0.5);
+        p[i] = R(0.25 * (double)(i % 2));
+    }
+
+    /* Effects the world does not declare: the declaration is checked before the ids. */
+    REFUSED("effects: set_particle_forces without particle forces (2D)",
+            MPM_STATUS_EFFECT_NOT_DECLARED, mpm_world_set_particle_forces(g_w2, 0, f[0], f[1], NULL, 1));
+    REFUSED("effects: set_particle_forces without particle forces (3D)",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_forces(g_w3, 0, f[0], f[1], f[2], 1));
+    REFUSED("effects: set_particle_forces without particle forces, unknown ids",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_forces(g_w2, 0xFFFFFFFFu, f[0], f[1], NULL, (size_t)-1));
+    REFUSED("effects: set_particle_damping without damping", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_damping(g_w2, 0, g, p, 1));
+    REFUSED("effects: set_particle_damping with damping but no per-particle columns",
+            MPM_STATUS_EFFECT_NOT_DECLARED, mpm_world_set_particle_damping(g_we3, 0, g, p, 1));
+    REFUSED("effects: add_tractions without tractions (2D)", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_tractions(g_w2, 0, 1, MPM_FACE_Y_MAX, down, OUT(MpmIdRange)));
+    REFUSED("effects: add_tractions without tractions (3D)", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_tractions(g_w3, 0, 1, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+    REFUSED("effects: add_tractions without tractions, unknown ids",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_tractions(g_w2, 0xFFFFFFFFu, 0xFFFFFFFFu, MPM_FACE_Y_MAX, down,
+                                    OUT(MpmIdRange)));
+    REFUSED("effects: clear_tractions without tractions (2D)", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_clear_tractions(g_w2));
+    REFUSED("effects: clear_tractions without tractions (3D)", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_clear_tractions(g_w3));
+    ACCEPTED("effects: traction_count without tractions", 0,
+             mpm_world_traction_count(g_w2, &count));
+    expect_true("effects: traction_count without tractions is 0", count == 0);
+    ACCEPTED("effects: feedback_alpha without damping", 0, mpm_world_feedback_alpha(g_w2, &alpha));
+    expect_true("effects: feedback_alpha without damping is 0", alpha == 0.0);
+    alpha = -1;
+    ACCEPTED("effects: feedback_alpha without a thermostat", 0,
+             mpm_world_feedback_alpha(g_we3, &alpha));
+    expect_true("effects: feedback_alpha without a thermostat is 0", alpha == 0.0);
+
+    /* Particles that do not exist. */
+#define UNKNOWN(label_, first, n) \
+    REFUSED("effects: set_particle_forces " label_, MPM_STATUS_UNKNOWN_PARTICLE, \
+            mpm_world_set_particle_forces(g_we2, (first), f[0], f[1], NULL, (n))); \
+    REFUSED("effects: set_particle_damping " label_, MPM_STATUS_UNKNOWN_PARTICLE, \
+            mpm_world_set_particle_damping(g_we2, (first), g, p, (n)))
+    UNKNOWN("first = count, 1 particle", (uint32_t)n2, 1);
+    UNKNOWN("first = count - 1, 2 particles", (uint32_t)n2 - 1, 2);
+    UNKNOWN("first 0, count + 1 particles", 0, n2 + 1);
+    UNKNOWN("first = count + 1, 0 particles", (uint32_t)n2 + 1, 0);
+    UNKNOWN("first 0xFFFFFFFF, 1 particle", 0xFFFFFFFFu, 1);
+    UNKNOWN("first 1, SIZE_MAX particles", 1, (size_t)-1);
+    UNKNOWN("first 0xFFFFFFFF, SIZE_MAX particles", 0xFFFFFFFFu, (size_t)-1);
+#undef UNKNOWN
+    REFUSED("effects: set_particle_forces first = count, 1 particle (3D)",
+            MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_set_particle_forces(g_we3, (uint32_t)n3, f[0], f[1], f[2], 1));
+#define UNKNOWN_TRACTION(label_, first, n) \
+    REFUSED("effects: add_tractions " label_, MPM_STATUS_UNKNOWN_PARTICLE, \
+            mpm_world_add_tractions(g_we2, (first), (n), MPM_FACE_Y_MAX, down, OUT(MpmIdRange)))
+    UNKNOWN_TRACTION("first = count, 1 particle", (uint32_t)n2, 1);
+    UNKNOWN_TRACTION("first = count - 1, 2 particles", (uint32_t)n2 - 1, 2);
+    UNKNOWN_TRACTION("first 0, count + 1 particles", 0, (uint32_t)n2 + 1);
+    UNKNOWN_TRACTION("first = count + 1, 0 particles", (uint32_t)n2 + 1, 0);
+    UNKNOWN_TRACTION("first 0xFFFFFFFF, 2 particles (past 32 bits)", 0xFFFFFFFFu, 2);
+    UNKNOWN_TRACTION("first 1, 0xFFFFFFFF particles (past 32 bits)", 1, 0xFFFFFFFFu);
+#undef UNKNOWN_TRACTION
+    REFUSED("effects: add_tractions first = count, 1 particle (3D)", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_add_tractions(g_we3, (uint32_t)n3, 1, MPM_FACE_Z_MAX, down,
+                                    OUT(MpmIdRange)));
+
+    /* A count past the particles is refused before any array is read: 1-value arrays, and
+     * below arrays in a page that cannot be read at all. */
+    {
+        mpm_real *one[3];
+        for (k = 0; k < 3; k++) {
+            one[k] = (mpm_real *)malloc(sizeof(mpm_real));
+            if (one[k] == NULL) {
+                fail("effects: setup", "out of memory");
+            }
+            *one[k] = R(0.25);
+        }
+        REFUSED("effects: set_particle_forces count + 1 with 1-value arrays",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_forces(g_we2, 0, one[0], one[1], one[2], n2 + 1));
+        REFUSED("effects: set_particle_damping count + 1 with 1-value arrays",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_damping(g_we2, 0, one[0], one[1], n2 + 1));
+        for (k = 0; k < 3; k++) {
+            free(one[k]);
+        }
+    }
+#ifdef MISUSE_HAVE_MMAN
+    {
+        long page = sysconf(_SC_PAGESIZE);
+        void *q = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        const mpm_real *none = (const mpm_real *)q;
+        if (q == MAP_FAILED) {
+            fail("effects: setup", "mmap failed");
+        }
+        REFUSED("effects: set_particle_forces count + 1 with arrays in a no-access page",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_forces(g_we2, 0, none, none, none, n2 + 1));
+        REFUSED("effects: set_particle_forces count SIZE_MAX with arrays in a no-access page",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_forces(g_we3, 0, none, none, none, (size_t)-1));
+        REFUSED("effects: set_particle_damping count + 1 with arrays in a no-access page",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_damping(g_we2, 0, none, none, n2 + 1));
+        REFUSED("effects: set_particle_damping count SIZE_MAX with arrays in a no-access page",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_damping(g_we2, 1, none, none, (size_t)-1));
+        munmap(q, (size_t)page);
+    }
+#endif
+
+    /* Values not finite or out of range, in the last of three particles: none is set. */
+    for (j = 0; j < 3; j++) {
+        char name[96];
+        for (a = 0; a < 3; a++) {
+            const mpm_real keep = f[a][2];
+            f[a][2] = R(bad[j]);
+            if (a < 2) {
+                snprintf(name, sizeof name, "effects: set_particle_forces f%c %s (2D)", 'x' + a,
+                         label[j]);
+                REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                        mpm_world_set_particle_forces(g_we2, 0, f[0], f[1], NULL, 3));
+            }
+            snprintf(name, sizeof name, "effects: set_particle_forces f%c %s (3D)", 'x' + a,
+                     label[j]);
+            REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                    mpm_world_set_particle_forces(g_we3, 0, f[0], f[1], f[2], 3));
+            f[a][2] = keep;
+        }
+        g[2] = R(bad[j]);
+        snprintf(name, sizeof name, "effects: set_particle_damping alpha_g %s", label[j]);
+        REFUSED(name, MPM_STATUS_INVALID_EFFECT, mpm_world_set_particle_damping(g_we2, 0, g, p, 3));
+        g[2] = R(0.5);
+        p[2] = R(bad[j]);
+        snprintf(name, sizeof name, "effects: set_particle_damping alpha_p %s", label[j]);
+        REFUSED(name, MPM_STATUS_INVALID_EFFECT, mpm_world_set_particle_damping(g_we2, 0, g, p, 3));
+        p[2] = R(0.0);
+        for (a = 0; a < 2; a++) {
+            MpmVec3 t = down;
+            if (a == 0) {
+                t.x = R(bad[j]);
+            } else {
+                t.y = R(bad[j]);
+            }
+            snprintf(name, sizeof name, "effects: add_tractions traction.%c %s", 'x' + a,
+                     label[j]);
+            REFUSED(name, MPM_STATUS_INVALID_EFFECT,
+                    mpm_world_add_tractions(g_we2, 0, 2, MPM_FACE_Y_MAX, t, OUT(MpmIdRange)));
+        }
+        {
+            MpmVec3 t = down;
+            t.z = R(bad[j]);
+            snprintf(name, sizeof name, "effects: add_tractions traction.z %s (3D)", label[j]);
+            REFUSED(name, MPM_STATUS_INVALID_EFFECT,
+                    mpm_world_add_tractions(g_we3, 0, 2, MPM_FACE_Z_MAX, t, OUT(MpmIdRange)));
+        }
+    }
+    g[1] = R(-1.0);
+    REFUSED("effects: set_particle_damping alpha_g -1", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_set_particle_damping(g_we2, 0, g, p, 3));
+    g[1] = R(0.5);
+    p[0] = R(-1e-30);
+    REFUSED("effects: set_particle_damping alpha_p -1e-30", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_set_particle_damping(g_we2, 0, g, p, 3));
+    p[0] = R(0.0);
+
+    /* Faces: out of the enum, or a z face in 2D. */
+    for (k = 0; k < sizeof bad_face / sizeof bad_face[0]; k++) {
+        char name[96];
+        snprintf(name, sizeof name, "effects: add_tractions face %u", (unsigned)bad_face[k]);
+        REFUSED(name, MPM_STATUS_INVALID_ENUM,
+                mpm_world_add_tractions(g_we2, 0, 1, bad_face[k], down, OUT(MpmIdRange)));
+        snprintf(name, sizeof name, "effects: add_tractions face %u (3D)", (unsigned)bad_face[k]);
+        REFUSED(name, MPM_STATUS_INVALID_ENUM,
+                mpm_world_add_tractions(g_we3, 0, 1, bad_face[k], down, OUT(MpmIdRange)));
+    }
+    REFUSED("effects: add_tractions face Z_MIN in 2D", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Z_MIN, down, OUT(MpmIdRange)));
+    REFUSED("effects: add_tractions face Z_MAX in 2D", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+
+    /* The traction capacity (8 in 2D, 4 in 3D); a z component in 2D is not read. */
+    {
+        MpmVec3 t = down;
+        t.z = R(NAN);
+        ACCEPTED("effects: add_tractions 1 with traction.z NaN in 2D", 1,
+                 mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_X_MIN, t, &ids));
+        expect_true("effects: first traction id 0", ids.first == 0 && ids.count == 1);
+    }
+    ACCEPTED("effects: add_tractions 4 more", 1,
+             mpm_world_add_tractions(g_we2, 0, 4, MPM_FACE_Y_MAX, down, &ids));
+    expect_true("effects: traction ids 1..5", ids.first == 1 && ids.count == 4);
+    REFUSED("effects: add_tractions 4 into 3 left", MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+            mpm_world_add_tractions(g_we2, 0, 4, MPM_FACE_Y_MAX, down, OUT(MpmIdRange)));
+    ACCEPTED("effects: add_tractions the 3 left", 1,
+             mpm_world_add_tractions(g_we2, 1, 3, MPM_FACE_X_MAX, down, &ids));
+    expect_true("effects: traction ids 5..8", ids.first == 5 && ids.count == 3);
+    REFUSED("effects: add_tractions 1 into a full table", MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+            mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Y_MAX, down, OUT(MpmIdRange)));
+    REFUSED("effects: add_tractions every particle into a full table",
+            MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+            mpm_world_add_tractions(g_we2, 0, (uint32_t)n2, MPM_FACE_Y_MAX, down,
+                                    OUT(MpmIdRange)));
+    ids.first = ids.count = 12345;
+    ACCEPTED("effects: add_tractions 0 into a full table", 0,
+             mpm_world_add_tractions(g_we2, 0, 0, MPM_FACE_Y_MAX, down, &ids));
+    expect_true("effects: 0 tractions give an empty range", ids.count == 0);
+    ACCEPTED("effects: traction_count", 0, mpm_world_traction_count(g_we2, &count));
+    expect_true("effects: traction_count is the capacity", count == 8);
+    REFUSED("effects: add_tractions 5 into 4 (3D)", MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+            mpm_world_add_tractions(g_we3, 0, 5, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+    ACCEPTED("effects: add_tractions 4 (3D)", 1,
+             mpm_world_add_tractions(g_we3, 0, 4, MPM_FACE_Z_MAX, down, &ids));
+    REFUSED("effects: add_tractions 1 into a full table (3D)",
+            MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+            mpm_world_add_tractions(g_we3, 0, 1, MPM_FACE_Z_MIN, down, OUT(MpmIdRange)));
+    ACCEPTED("effects: step with a full traction table (2D)", 1,
+             mpm_world_step(g_we2, R(1.0 / 256.0), OUT(MpmStepReport)));
+    ACCEPTED("effects: step with a full traction table (3D)", 1,
+             mpm_world_step(g_we3, R(1.0 / 256.0), OUT(MpmStepReport)));
+    ACCEPTED("effects: clear_tractions", 1, mpm_world_clear_tractions(g_we2));
+    ACCEPTED("effects: traction_count after clear", 0, mpm_world_traction_count(g_we2, &count));
+    expect_true("effects: traction_count after clear is 0", count == 0);
+    ACCEPTED("effects: clear_tractions of an empty table", 0, mpm_world_clear_tractions(g_we2));
+    ACCEPTED("effects: add_tractions after clear", 1,
+             mpm_world_add_tractions(g_we2, 0, 8, MPM_FACE_Y_MAX, down, &ids));
+    expect_true("effects: traction ids after clear start at 0", ids.first == 0 && ids.count == 8);
+
+    /* Controls: values set are the view's, the same values again change nothing, the view's
+     * pointers follow the declarations. */
+    ACCEPTED("effects: set_particle_forces on every particle (fz NULL in 2D)", 1,
+             mpm_world_set_particle_forces(g_we2, 0, f[0], f[1], NULL, n2));
+    ACCEPTED("effects: set_particle_forces with the same values", 0,
+             mpm_world_set_particle_forces(g_we2, 0, f[0], f[1], f[2], n2));
+    ACCEPTED("effects: set_particle_forces of 0 particles after the last", 0,
+             mpm_world_set_particle_forces(g_we2, (uint32_t)n2, f[0], f[1], NULL, 0));
+    ACCEPTED("effects: set_particle_forces on every particle (3D)", 1,
+             mpm_world_set_particle_forces(g_we3, 0, f[0], f[1], f[2], n3));
+    ACCEPTED("effects: set_particle_damping on every particle", 1,
+             mpm_world_set_particle_damping(g_we2, 0, g, p, n2));
+    ACCEPTED("effects: view (2D)", 0, mpm_world_particles(g_we2, &view));
+    {
+        int same = view.count == n2;
+        for (i = 0; same && i < n2; i++) {
+            same = view.force[0][i] == f[0][i] && view.force[1][i] == f[1][i] &&
+                   view.damping[0][i] == g[i] && view.damping[1][i] == p[i];
+        }
+        expect_true("effects: the view holds the forces and damping set", same);
+    }
+    expect_true("effects: view pointers of the 2D world with every effect",
+                view.force[0] && view.force[1] && !view.force[2] && view.damping[0] &&
+                    view.damping[1] && view.affine[0] && view.affine[1] && !view.affine[2] &&
+                    view.affine[3] && view.affine[4] && !view.affine[5] && !view.affine[6] &&
+                    !view.affine[7] && !view.affine[8]);
+    ACCEPTED("effects: view (3D)", 0, mpm_world_particles(g_we3, &view));
+    expect_true("effects: view pointers of the 3D world (forces only)",
+                view.force[0] && view.force[1] && view.force[2] && view.force[2][n3 - 1] == f[2][n3 - 1] &&
+                    !view.damping[0] && !view.damping[1] && !view.affine[0] && !view.affine[4] &&
+                    !view.affine[8]);
+    ACCEPTED("effects: view (2D, nothing declared)", 0, mpm_world_particles(g_w2, &view));
+    {
+        int none = 1;
+        for (k = 0; k < 9; k++) {
+            none &= view.affine[k] == NULL && (k >= 3 || view.force[k] == NULL) &&
+                    (k >= 2 || view.damping[k] == NULL);
+        }
+        expect_true("effects: view pointers of a world without effects are NULL", none);
+    }
+    ACCEPTED("effects: step (2D)", 1, mpm_world_step(g_we2, R(1.0 / 256.0), OUT(MpmStepReport)));
+    alpha = -1;
+    ACCEPTED("effects: feedback_alpha", 0, mpm_world_feedback_alpha(g_we2, &alpha));
+    expect_true("effects: feedback_alpha in [0, max_alpha]", alpha >= 0.0 && alpha <= 8.0);
+}
+
 /* Filling the tables to capacity, then one more. */
 static void capacity_misuse(void) {
     MpmMaterialDef m = mpm_material_def_default();
@@ -1146,6 +1684,10 @@ static void status_strings(void) {
         MPM_STATUS_LENGTH_MISMATCH,
         MPM_STATUS_INVALID_TIME_STEP,
         MPM_STATUS_INVALID_REGION,
+        MPM_STATUS_INVALID_EFFECT,
+        MPM_STATUS_EFFECT_NOT_DECLARED,
+        MPM_STATUS_UNKNOWN_PARTICLE,
+        MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
@@ -1187,8 +1729,13 @@ static void status_strings(void) {
             unknown++;
         }
     }
-    expect_true("status strings of the 997 unknown values up to 1024 are \"unknown status\"",
-                unknown == 1025 - n_known);
+    {
+        char name[96];
+        snprintf(name, sizeof name,
+                 "status strings of the %lu unknown values up to 1024 are \"unknown status\"",
+                 unknown);
+        expect_true(name, unknown == 1025 - n_known);
+    }
     expect_true("status string of 0x80000000 is \"unknown status\"",
                 strcmp(mpm_status_string((MpmStatus)0x80000000u), "unknown status") == 0);
     expect_true("status string of 0xFFFFFFFF is \"unknown status\"",
@@ -1196,9 +1743,9 @@ static void status_strings(void) {
 }
 
 int main(void) {
-    MpmMemoryRequirements req2, req3;
-    Block mem2, mem3;
-    MpmWorldDef d3 = def_3d();
+    MpmMemoryRequirements req2, req3, reqe2, reqe3;
+    Block mem2, mem3, meme2, meme3;
+    MpmWorldDef d3 = def_3d(), de2 = def_2d_effects(), de3 = def_3d_effects();
     MpmMaterialDef m = mpm_material_def_default();
     uint32_t id;
     Batch b;
@@ -1224,8 +1771,22 @@ int main(void) {
     if (mpm_world_bytes(g_w2, &g_w2_bytes) != MPM_STATUS_OK) {
         fail("setup", "mpm_world_bytes refused the 2D world");
     }
+    if (mpm_memory_requirements(&de2, &reqe2) != MPM_STATUS_OK ||
+        mpm_memory_requirements(&de3, &reqe3) != MPM_STATUS_OK) {
+        fail("setup", "mpm_memory_requirements refused a definition with effects");
+    }
+    expect_true("setup: the declared effects take memory",
+                reqe2.bytes > req2.bytes && reqe3.bytes > req3.bytes);
+    meme2 = block_new(reqe2.bytes, reqe2.align, 0);
+    meme3 = block_new(reqe3.bytes, reqe3.align, 0);
+    if (mpm_world_init(&de2, meme2.at, reqe2.bytes, &g_we2) != MPM_STATUS_OK ||
+        mpm_world_init(&de3, meme3.at, reqe3.bytes, &g_we3) != MPM_STATUS_OK) {
+        fail("setup", "mpm_world_init refused a definition with effects");
+    }
     track(g_w2);
     track(g_w3);
+    track(g_we2);
+    track(g_we3);
 
     ACCEPTED("setup: 2D material", 1, mpm_world_add_material(g_w2, &m, &id));
     batch_fill(&b, 4, 0.3, 0.3, 0.0);
@@ -1246,6 +1807,18 @@ int main(void) {
     expect_true("setup: 3D sphere has 8 particles", ids.first == 0 && ids.count == 8);
     ACCEPTED("setup: 3D step", 1, mpm_world_step(g_w3, R(1.0 / 256.0), &report));
 
+    ACCEPTED("setup: 2D effects material", 1, mpm_world_add_material(g_we2, &m, &id));
+    ACCEPTED("setup: 2D effects box", 1,
+             mpm_world_fill_box(g_we2, v3(0.5, 0.5, 0), v3(0.6, 0.6, 0), 0, v3(0.1, 0, 0),
+                                &ids));
+    expect_true("setup: 2D effects box has 16 particles", ids.first == 0 && ids.count == 16);
+    ACCEPTED("setup: 2D effects step", 1, mpm_world_step(g_we2, R(1.0 / 256.0), &report));
+    ACCEPTED("setup: 3D effects material", 1, mpm_world_add_material(g_we3, &m, &id));
+    ACCEPTED("setup: 3D effects sphere", 1,
+             mpm_world_fill_sphere(g_we3, v3(0.2, 0.2, 0.2), R(0.03), 0, v3(0, 0, 0.25), &ids));
+    expect_true("setup: 3D effects sphere has 8 particles", ids.first == 0 && ids.count == 8);
+    ACCEPTED("setup: 3D effects step", 1, mpm_world_step(g_we3, R(1.0 / 256.0), &report));
+
     null_pointers();
     not_a_world();
     init_misuse();
@@ -1254,6 +1827,7 @@ int main(void) {
     particles_misuse();
     fill_misuse();
     step_misuse();
+    effects_misuse();
     copy_misuse();
     capacity_misuse();
     status_strings();
@@ -1261,9 +1835,13 @@ int main(void) {
     /* After all of it both worlds still step. */
     ACCEPTED("end: 2D step", 1, mpm_world_step(g_w2, R(1.0 / 256.0), &report));
     ACCEPTED("end: 3D step", 1, mpm_world_step(g_w3, R(1.0 / 256.0), &report));
+    ACCEPTED("end: 2D effects step", 1, mpm_world_step(g_we2, R(1.0 / 256.0), &report));
+    ACCEPTED("end: 3D effects step", 1, mpm_world_step(g_we3, R(1.0 / 256.0), &report));
 
     free(mem2.raw);
     free(mem3.raw);
+    free(meme2.raw);
+    free(meme3.raw);
     printf("all %lu misuse checks passed\n", g_checks);
     return 0;
 }

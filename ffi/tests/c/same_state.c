@@ -9,10 +9,15 @@
  * same value here and in the Rust test.
  *
  * Scenes:
- *   plane2d: a neo-Hookean block and a linear elastic disk dropped on a stick floor, plus six
- *            particles from arrays; GIMP, MUSL.
- *   space3d: a sphere falling towards a stick floor and a box that leaves through an open
- *            face, in 3D; quadratic B-spline, USL.
+ *   plane2d:   a neo-Hookean block and a linear elastic disk dropped on a stick floor, plus six
+ *              particles from arrays; GIMP, MUSL.
+ *   space3d:   a sphere falling towards a stick floor and a box that leaves through an open
+ *              face, in 3D; quadratic B-spline, USL.
+ *   effects2d: a block with every effect declared: APIC, grid and particle damping schedules,
+ *              a thermostat, per-particle damping, particle forces, tractions and a ramped body
+ *              force; forces and tractions change halfway. GIMP, MUSL.
+ *   effects3d: a sphere with APIC, constant grid damping, particle forces, tractions on two
+ *              faces and a body force, in 3D; cubic B-spline, USF.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -90,11 +95,23 @@ static void print_present(const mpm_real *const *p, size_t n) {
     }
 }
 
+/* One hash over the `count` values of each column that is set, in order. */
+static uint64_t hash_columns(const mpm_real *const *p, size_t n, size_t count) {
+    uint64_t h = FNV_START;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        if (p[i] != NULL) {
+            h = fnv1a(h, p[i], count * sizeof(mpm_real));
+        }
+    }
+    return h;
+}
+
 static void print_state(const char *label, const MpmWorld *w) {
-    size_t bytes = 0, written = 0, i;
+    size_t bytes = 0, written = 0, tractions = 0, i;
     MpmParticlesView view;
     MpmDiagnostics d;
-    uint64_t h;
+    double alpha = 0;
 
     CALL("mpm_world_bytes", mpm_world_bytes(w, &bytes));
     printf("%s: world ", label);
@@ -126,14 +143,26 @@ static void print_state(const char *label, const MpmWorld *w) {
     print_hash(fnv1a(FNV_START, view.volume0, view.count * sizeof(mpm_real)));
     printf(" material ");
     print_hash(fnv1a(FNV_START, view.material, view.count * sizeof(uint32_t)));
-    h = FNV_START;
-    for (i = 0; i < 9; i++) {
-        if (view.displacement_gradient[i] != NULL) {
-            h = fnv1a(h, view.displacement_gradient[i], view.count * sizeof(mpm_real));
-        }
-    }
     printf(" displacement_gradient ");
-    print_hash(h);
+    print_hash(hash_columns(view.displacement_gradient, 9, view.count));
+    putchar('\n');
+
+    CALL("mpm_world_traction_count", mpm_world_traction_count(w, &tractions));
+    CALL("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, &alpha));
+    printf("%s: effects present ", label);
+    print_present(view.force, 3);
+    putchar(' ');
+    print_present(view.damping, 2);
+    putchar(' ');
+    print_present(view.affine, 9);
+    printf(" force ");
+    print_hash(hash_columns(view.force, 3, view.count));
+    printf(" damping ");
+    print_hash(hash_columns(view.damping, 2, view.count));
+    printf(" affine ");
+    print_hash(hash_columns(view.affine, 9, view.count));
+    printf(" tractions %lu feedback_alpha ", (unsigned long)tractions);
+    print_bytes(&alpha, sizeof alpha);
     putchar('\n');
 
     CALL("mpm_world_diagnostics", mpm_world_diagnostics(w, &d));
@@ -159,6 +188,11 @@ static void print_state(const char *label, const MpmWorld *w) {
     printf(" potential ");
     print_bytes(&d.potential, sizeof d.potential);
     putchar('\n');
+    printf("%s: diagnostics angular_momentum ", label);
+    for (i = 0; i < 3; i++) {
+        print_bytes(&d.angular_momentum[i], sizeof d.angular_momentum[i]);
+        putchar(i < 2 ? ' ' : '\n');
+    }
 }
 
 static void print_ids(const char *what, MpmIdRange ids) {
@@ -331,9 +365,159 @@ static void space3d(void) {
     free(raw);
 }
 
+/* A schedule through the first `n` of (t, v). */
+static MpmSchedule schedule(unsigned n, const double *t, const double *v) {
+    MpmSchedule s;
+    unsigned i;
+    memset(&s, 0, sizeof s);
+    s.points = n;
+    for (i = 0; i < n; i++) {
+        s.times[i] = (mpm_real)t[i];
+        s.values[i] = (mpm_real)v[i];
+    }
+    return s;
+}
+
+static void print_tractions(const char *what, MpmIdRange ids) {
+    printf("tractions %s: first %lu count %lu\n", what, (unsigned long)ids.first,
+           (unsigned long)ids.count);
+}
+
+static void effects2d(void) {
+    static const double grid_t[] = {0.0, 0.0625}, grid_v[] = {0.5, 2.0};
+    static const double particle_t[] = {0.0}, particle_v[] = {0.25};
+    static const double ramp_t[] = {0.0, 0.03125, 0.0625}, ramp_v[] = {0.0, 1.0, 0.0};
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef rubber = mpm_material_def_default();
+    uint32_t id = 0, i, n;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+    mpm_real fx[16], fy[16], alpha_g[32], alpha_p[32];
+
+    printf("scene effects2d\n");
+    def.cells[0] = 32;
+    def.cells[1] = 32;
+    def.cell_size = (mpm_real)0.03125;
+    def.particle_capacity = 256;
+    def.material_capacity = 1;
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    def.transfer = MPM_TRANSFER_APIC;
+    def.effects.damping.declared = 1;
+    def.effects.damping.grid = schedule(2, grid_t, grid_v);
+    def.effects.damping.particle = schedule(1, particle_t, particle_v);
+    def.effects.damping.feedback.declared = 1;
+    def.effects.damping.feedback.gain = (mpm_real)0.5;
+    def.effects.damping.feedback.max_alpha = (mpm_real)4.0;
+    def.effects.damping.per_particle = 1;
+    def.effects.particle_forces = 1;
+    def.effects.traction_capacity = 16;
+    def.effects.body_force = v3(0.5f, 0.25f, 0);
+    def.effects.body_force_scale = schedule(3, ramp_t, ramp_v);
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
+    printf("materials %lu\n", (unsigned long)id);
+    CALL("fill_box", mpm_world_fill_box(w, v3(0.25f, 0.125f, 0), v3(0.5f, 0.25f, 0), id,
+                                        v3(0.5f, -0.25f, 0), &ids));
+    print_ids("box", ids);
+    n = ids.count;
+
+    for (i = 0; i < 16; i++) {
+        fx[i] = (mpm_real)(0.0625 * i - 0.5);
+        fy[i] = (mpm_real)0.125;
+    }
+    CALL("set_particle_forces", mpm_world_set_particle_forces(w, 0, fx, fy, NULL, 16));
+    for (i = 0; i < 32; i++) {
+        alpha_g[i] = (mpm_real)(0.5 * (i % 4));
+        alpha_p[i] = (mpm_real)(0.25 * (i % 2));
+    }
+    CALL("set_particle_damping", mpm_world_set_particle_damping(w, 8, alpha_g, alpha_p, 32));
+    CALL("add_tractions top", mpm_world_add_tractions(w, n - 16, 16, MPM_FACE_Y_MAX,
+                                                      v3(0, -512.0f, 0), &ids));
+    print_tractions("top", ids);
+    print_state("after effects", w);
+    step_frames(w, 8, (mpm_real)0.0078125);
+
+    for (i = 0; i < 8; i++) {
+        fx[i] = (mpm_real)-0.25;
+        fy[i] = (mpm_real)0.5;
+    }
+    CALL("set_particle_forces again", mpm_world_set_particle_forces(w, 4, fx, fy, NULL, 8));
+    CALL("clear_tractions", mpm_world_clear_tractions(w));
+    CALL("add_tractions left", mpm_world_add_tractions(w, 0, 4, MPM_FACE_X_MIN,
+                                                       v3(128.0f, 0, 0), &ids));
+    print_tractions("left", ids);
+    print_state("after changes", w);
+    step_frames(w, 8, (mpm_real)0.0078125);
+    free(raw);
+}
+
+static void effects3d(void) {
+    static const double one_t[] = {0.0}, one_v[] = {1.0};
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef rubber = mpm_material_def_default();
+    uint32_t id = 0, i, n;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+    mpm_real *f[3];
+
+    printf("scene effects3d\n");
+    def.dimension = MPM_DIMENSION_SPACE3D;
+    def.cells[0] = 8;
+    def.cells[1] = 8;
+    def.cells[2] = 8;
+    def.cell_size = (mpm_real)0.0625;
+    def.particle_capacity = 512;
+    def.material_capacity = 1;
+    def.shape = MPM_SHAPE_CUBIC_BSPLINE;
+    def.update_order = MPM_UPDATE_ORDER_USF;
+    def.transfer = MPM_TRANSFER_APIC;
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    def.effects.damping.declared = 1;
+    def.effects.damping.grid = schedule(1, one_t, one_v);
+    def.effects.particle_forces = 1;
+    def.effects.traction_capacity = 8;
+    def.effects.body_force = v3(0, 0, -2.0f);
+    def.effects.body_force_scale = schedule(1, one_t, one_v);
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
+    printf("materials %lu\n", (unsigned long)id);
+    CALL("fill_sphere", mpm_world_fill_sphere(w, v3(0.25f, 0.25f, 0.25f), (mpm_real)0.09375,
+                                              id, v3(0, -0.5f, 0.25f), &ids));
+    print_ids("sphere", ids);
+    n = ids.count;
+    for (i = 0; i < 3; i++) {
+        f[i] = g_reals + i * n;
+    }
+    for (i = 0; i < n; i++) {
+        f[0][i] = 0;
+        f[1][i] = (mpm_real)(0.0625 * (i % 3));
+        f[2][i] = (mpm_real)-0.125;
+    }
+    CALL("set_particle_forces", mpm_world_set_particle_forces(w, 0, f[0], f[1], f[2], n));
+    CALL("add_tractions top", mpm_world_add_tractions(w, 0, 4, MPM_FACE_Z_MAX,
+                                                      v3(0, 0, -256.0f), &ids));
+    print_tractions("top", ids);
+    CALL("add_tractions side", mpm_world_add_tractions(w, 4, 4, MPM_FACE_X_MIN,
+                                                       v3(64.0f, 0, 32.0f), &ids));
+    print_tractions("side", ids);
+    print_state("after effects", w);
+    step_frames(w, 8, (mpm_real)0.0078125);
+    free(raw);
+}
+
 int main(void) {
     plane2d();
     space3d();
+    effects2d();
+    effects3d();
     free(g_reals);
     free(g_ids);
     printf("end\n");

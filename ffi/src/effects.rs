@@ -1,0 +1,201 @@
+//! The effects a world's definition declares (`MpmWorldDef::effects`), driven from C:
+//! per-particle forces and damping, tractions, and the thermostat's state.
+//!
+//! Every call that sets an effect's data needs that effect declared
+//! (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise), and names existing particles
+//! (`MPM_STATUS_UNKNOWN_PARTICLE` otherwise, checked before any array is read). The checks run in
+//! this order: the world and the pointers, the declaration, the particle range, then the values.
+
+use crate::defs::{face_from_c, vec3, MpmFaceValue};
+use crate::status::MpmStatus;
+use crate::world::{id_range, put, world_at, world_ref, MpmIdRange, MpmWorld};
+use crate::{guard, mpm_real, non_null, MpmVec3};
+use kernel::World;
+
+/// `Err(UnknownParticle)` unless particles `first .. first + count` exist: checked before any
+/// array of `count` values is formed, so a count past the particles reads nothing.
+fn existing(w: &World<'_>, first: u32, count: usize) -> Result<(), MpmStatus> {
+    match (first as usize).checked_add(count) {
+        Some(end) if end <= w.particle_count() => Ok(()),
+        _ => Err(MpmStatus::UnknownParticle),
+    }
+}
+
+/// `count` values at `p` (non-NULL, checked by the caller).
+///
+/// # Safety
+/// `p` is valid for reads of `count` values that nothing writes during the call; `count` is at
+/// most the particle capacity (so the byte length fits in isize).
+unsafe fn column<'a>(p: *const mpm_real, count: usize) -> &'a [mpm_real] {
+    // SAFETY: as the function's contract says.
+    unsafe { core::slice::from_raw_parts(p, count) }
+}
+
+/// Sets the external force (N; per unit thickness in 2D) of particles `first .. first + count`
+/// from one array per axis, each of `count` values; the force stays until set again. `fz` is
+/// not read in 2D and may be NULL there. Needs `MpmEffects::particle_forces`. Refused with
+/// `MPM_STATUS_NON_FINITE_INPUT` if any value is not finite (none is set).
+///
+/// # Safety
+/// `world` is NULL or a world; each array the dimension uses is NULL or valid for reads of
+/// `count` values.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_particle_forces(
+    world: *mut MpmWorld,
+    first: u32,
+    fx: *const mpm_real,
+    fy: *const mpm_real,
+    fz: *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let def = w.def();
+        let d = def.axes();
+        let arrays = [fx, fy, fz];
+        for &p in &arrays[..d] {
+            non_null(p)?;
+        }
+        if !def.effects.particle_forces {
+            return Err(MpmStatus::EffectNotDeclared);
+        }
+        existing(&w, first, count)?;
+        let force: [&[mpm_real]; 3] = core::array::from_fn(|a| {
+            if a < d {
+                // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most
+                // the particle count.
+                unsafe { column(arrays[a], count) }
+            } else {
+                &[]
+            }
+        });
+        w.set_particle_forces(first, force)?;
+        Ok(())
+    })
+}
+
+/// Sets the local grid and particle damping `alpha_g`, `alpha_p` (1/s, finite, >= 0) of
+/// particles `first .. first + count`, added to the global damping for those particles; each
+/// array holds `count` values. Needs `MpmDamping::per_particle`. Refused with
+/// `MPM_STATUS_INVALID_EFFECT` if any value is negative or not finite (none is set).
+///
+/// # Safety
+/// `world` is NULL or a world; `alpha_g` and `alpha_p` are NULL or valid for reads of `count`
+/// values.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_particle_damping(
+    world: *mut MpmWorld,
+    first: u32,
+    alpha_g: *const mpm_real,
+    alpha_p: *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        non_null(alpha_g)?;
+        non_null(alpha_p)?;
+        if !w.def().effects.damping.is_some_and(|d| d.per_particle) {
+            return Err(MpmStatus::EffectNotDeclared);
+        }
+        existing(&w, first, count)?;
+        // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most the
+        // particle count.
+        let (g, p) = unsafe { (column(alpha_g, count), column(alpha_p, count)) };
+        w.set_particle_damping(first, g, p)?;
+        Ok(())
+    })
+}
+
+/// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
+/// loading the `face` of that particle's domain with `traction` (Pa, force per area of that
+/// face; z ignored in 2D), and returns the traction ids in `ids_out`. All or nothing. Needs
+/// `MpmEffects::traction_capacity`; a face out of range is `MPM_STATUS_INVALID_ENUM`, a z face
+/// in 2D or a traction not finite `MPM_STATUS_INVALID_EFFECT`, more tractions than the
+/// remaining capacity `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`. A traction acts while its
+/// particle is active.
+///
+/// # Safety
+/// `world` is NULL or a world; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_tractions(
+    world: *mut MpmWorld,
+    first_particle: u32,
+    particle_count: u32,
+    face: MpmFaceValue,
+    traction: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    guard(|| {
+        non_null(ids_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let face = face_from_c(face)?;
+        // A range past u32 saturates: its end lies past any world's particles (at most 2^30),
+        // so the kernel refuses it as an unknown particle, after its other checks.
+        let end = first_particle.saturating_add(particle_count);
+        let ids = w.add_tractions(first_particle..end, face, vec3(traction))?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(ids_out, id_range(ids)) };
+        Ok(())
+    })
+}
+
+/// Removes every traction (the capacity stays). Needs `MpmEffects::traction_capacity`.
+///
+/// # Safety
+/// `world` is NULL or a world.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_clear_tractions(world: *mut MpmWorld) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        if w.def().effects.traction_capacity == 0 {
+            return Err(MpmStatus::EffectNotDeclared);
+        }
+        w.clear_tractions();
+        Ok(())
+    })
+}
+
+/// Number of tractions the world holds (0 if it declares none).
+///
+/// # Safety
+/// `world` is NULL or a world; `count_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_traction_count(
+    world: *const MpmWorld,
+    count_out: *mut usize,
+) -> MpmStatus {
+    guard(|| {
+        non_null(count_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_ref(world) }?;
+        let n = w.traction_count();
+        // SAFETY: checked non-NULL.
+        unsafe { put(count_out, n) };
+        Ok(())
+    })
+}
+
+/// The thermostat's current alpha, 1/s (`MpmFeedback`; 0 if the world declares none). It is
+/// part of the world's memory, so a snapshot carries it.
+///
+/// # Safety
+/// `world` is NULL or a world; `alpha_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_feedback_alpha(
+    world: *const MpmWorld,
+    alpha_out: *mut f64,
+) -> MpmStatus {
+    guard(|| {
+        non_null(alpha_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_ref(world) }?;
+        let alpha = w.feedback_alpha();
+        // SAFETY: checked non-NULL.
+        unsafe { put(alpha_out, alpha) };
+        Ok(())
+    })
+}
