@@ -3,8 +3,11 @@
 //!
 //! Every call that sets an effect's data needs that effect declared
 //! (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise), and names existing particles
-//! (`MPM_STATUS_UNKNOWN_PARTICLE` otherwise, checked before any array is read). The checks run in
-//! this order: the world and the pointers, the declaration, the particle range, then the values.
+//! (`MPM_STATUS_UNKNOWN_PARTICLE` otherwise, checked before any array is read). The setters of
+//! per-particle values check the world and the pointers, then the declaration, the particle
+//! range and the values; `mpm_world_add_tractions` checks the world, the output pointer and the
+//! face's number, then (as the kernel) the declaration, the face and traction, the particle
+//! range and the capacity.
 
 use crate::defs::{face_from_c, vec3, MpmFaceValue};
 use crate::status::MpmStatus;
