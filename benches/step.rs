@@ -7,6 +7,8 @@
 //! - `phase_gimp_2d/<phase>` and `phase_gimp_3d/<phase>`: each phase of a USL step alone
 //!   (reset, particle to grid, grid update, grid to particle), through the hidden
 //!   `World::run_phase` hook, so the phases' costs add up to a USL step.
+//! - `step_effect_gimp_2d/<effect>`: 32768 particles, uGIMP, MUSL, with no effect and with each
+//!   effect declared alone (`benches/common/scene.rs`), to price each one.
 //!
 //! Only `step` (or the phase) is timed (`iter_custom`): the `stable_dt` call that picks each
 //! step's `dt` is outside the measurement.
@@ -23,7 +25,7 @@ use std::time::{Duration, Instant};
 
 #[path = "common/scene.rs"]
 mod scene;
-use scene::{Scene, SceneDef};
+use scene::{Effect, Scene, SceneDef};
 
 const SHAPES: [(ShapeFunction, &str); 4] = [
     (ShapeFunction::Linear, "linear"),
@@ -40,6 +42,11 @@ const ORDERS: [(UpdateOrder, &str); 3] = [
 
 /// 2D: 32768 particles, a 128 x 64 cell block in a 132 x 68 grid.
 fn plane(shape: ShapeFunction, order: UpdateOrder) -> Scene {
+    plane_with(shape, order, Effect::None)
+}
+
+/// [`plane`] with `effect` declared.
+fn plane_with(shape: ShapeFunction, order: UpdateOrder, effect: Effect) -> Scene {
     Scene::new(&SceneDef {
         dimension: Dimension::Plane2D,
         shape,
@@ -48,6 +55,7 @@ fn plane(shape: ShapeFunction, order: UpdateOrder) -> Scene {
         grid: [132, 68, 1],
         first: [2, 2, 0],
         block: [128, 64, 1],
+        effect,
     })
     .expect("the 2D bench scene")
 }
@@ -62,6 +70,7 @@ fn solid(shape: ShapeFunction, order: UpdateOrder) -> Scene {
         grid: [32, 32, 32],
         first: [8, 8, 8],
         block: [16, 16, 16],
+        effect: Effect::None,
     })
     .expect("the 3D bench scene")
 }
@@ -122,6 +131,19 @@ fn bench_orders(c: &mut Criterion) {
     group.finish();
 }
 
+fn bench_effects(c: &mut Criterion) {
+    let mut group = configure(c, "step_effect_gimp_2d");
+    for (effect, name) in Effect::ALL {
+        let mut scene = plane_with(ShapeFunction::Gimp, UpdateOrder::Musl, effect);
+        group.throughput(Throughput::Elements(scene.particles as u64));
+        let mut world = scene.world();
+        group.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter_custom(|iters| timed_steps(&mut world, iters))
+        });
+    }
+    group.finish();
+}
+
 const PHASES: [(Phase, &str); 4] = [
     (Phase::ResetGrid, "reset_grid"),
     (Phase::ParticleToGrid, "particle_to_grid"),
@@ -157,5 +179,11 @@ fn bench_phases(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench_shapes, bench_orders, bench_phases);
+criterion_group!(
+    benches,
+    bench_shapes,
+    bench_orders,
+    bench_phases,
+    bench_effects
+);
 criterion_main!(benches);

@@ -19,6 +19,10 @@
 //! `--simd auto|baseline` (`auto`, the default, is what `World::step` does: the AVX2 instance
 //! on CPUs that have it; `baseline` forces the SSE2 instance, e.g. under valgrind, which cannot
 //! decode every AVX instruction). The JSON line says which instance ran (`"simd"`).
+//! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic`
+//! declares one effect (see `benches/common/scene.rs`; default none) to price it; the JSON line
+//! names it and gives the world's bytes per particle (`benches/effect_cost.sh` tabulates every
+//! effect's marginal cost).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -28,11 +32,12 @@ use std::time::{Duration, Instant};
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
-[--simd auto|baseline]";
+[--simd auto|baseline] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
+body_force|apic]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;
-use scene::{Scene, SceneDef};
+use scene::{Effect, Scene, SceneDef};
 
 /// Warm-up steps before the timed runs.
 const WARMUP_STEPS: u32 = 3;
@@ -45,6 +50,7 @@ struct Options {
     runs: u32,
     steps: u32,
     simd: Simd,
+    effect: Effect,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -62,6 +68,7 @@ fn parse_options() -> Options {
         runs: 7,
         steps: 10,
         simd: Simd::Detect,
+        effect: Effect::None,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -82,6 +89,7 @@ fn parse_options() -> Options {
             "--runs",
             "--steps",
             "--simd",
+            "--effect",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -140,6 +148,12 @@ fn parse_options() -> Options {
                     "auto" => Simd::Detect,
                     "baseline" => Simd::Baseline,
                     _ => bad(),
+                }
+            }
+            "--effect" => {
+                o.effect = match Effect::ALL.iter().find(|(_, n)| *n == value) {
+                    Some((e, _)) => *e,
+                    None => bad(),
                 }
             }
             _ => unreachable!("checked against the known options"),
@@ -217,6 +231,7 @@ fn main() {
         grid,
         first,
         block,
+        effect: o.effect,
     }) {
         Ok(s) => s,
         Err(e) => {
@@ -225,6 +240,7 @@ fn main() {
         }
     };
     let particles = scene.particles;
+    let bytes_per_particle = scene.bytes as f64 / particles as f64;
     let mut world = scene.world();
 
     let step = |world: &mut World<'_>| -> Duration {
@@ -275,7 +291,7 @@ fn main() {
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
 \"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
-\"reference_ns\":{:.3},\"relative_to_reference\":{:.3}}}",
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1}}}",
         o.dim,
         particles,
         cells,
@@ -291,7 +307,9 @@ fn main() {
         med,
         runs_json,
         med_ref,
-        med / med_ref
+        med / med_ref,
+        o.effect.name(),
+        bytes_per_particle
     );
     eprintln!(
         "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \

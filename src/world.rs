@@ -224,6 +224,9 @@ impl<'a> World<'a> {
         if h.total_bytes != layout.total as u64
             || h.particle_count > def.particle_capacity as u64
             || h.material_count > def.material_capacity as u64
+            || h.traction_count > def.effects.traction_capacity as u64
+            || !h.feedback_alpha.is_finite()
+            || h.feedback_alpha < 0.0
         {
             return Err(Error::NotAWorld);
         }
@@ -1021,7 +1024,7 @@ impl<'a> WorldRef<'a> {
         // most the Courant number, with alpha the largest total damping any particle can see
         // (the schedules' maxima, the thermostat's current alpha, the largest local values).
         let alpha = def.effects.damping.map_or(0.0, |dm| {
-            let local = |k: usize| view_max(&self.particles().damping[k], &status);
+            let local = |k: usize| view_max(self.particles().damping[k], status);
             dm.grid.max_value() as f64
                 + dm.particle.max_value() as f64
                 + self.feedback_alpha()

@@ -283,6 +283,9 @@ fn block_velocity(w: &World) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Local damping of a particle from its position.
+type LocalDamping<'a> = dyn Fn(&[Real]) -> Real + 'a;
+
 /// A rigidly translating block: `v_gp = v_p = v` and `a_gp = 0`, so grid damping alpha_g and
 /// particle damping alpha_p each give exactly `v (1 - alpha dt)^n` after n substeps of length
 /// dt (eqs 47, 52).
@@ -305,7 +308,7 @@ fn uniform_damping_of_a_rigid_block_is_exact_and_per_particle_damping_is_local()
         };
         let mat = MaterialDef::DEFAULT;
         let v0 = [0.3, -0.2, 0.1];
-        let run = |damping: Damping, local: Option<&dyn Fn(&[Real]) -> Real>| {
+        let run = |damping: Damping, local: Option<&LocalDamping<'_>>| {
             let (def, mut buf) = free_block(dim, |def| def.effects.damping = Some(damping));
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
             let count = moving_block(&def, &mut w, &mat, |_| v0);
@@ -638,7 +641,11 @@ fn beta_below_one_alone_decays_the_inversion_error_as_beta_to_the_n() {
         let mut checked = 0;
         for i in 0..v.count {
             if inside(v.position[0][i]) && inside(v.position[1][i]) {
-                let sign = if column(v.position[0][i]) % 2 == 0 { 1.0 } else { -1.0 };
+                let sign = if column(v.position[0][i]) % 2 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                };
                 let got = v.velocity[1][i] as f64;
                 assert!(
                     (got - sign * exact).abs() < 1e-4 * v0 as f64,
@@ -648,7 +655,10 @@ fn beta_below_one_alone_decays_the_inversion_error_as_beta_to_the_n() {
                 checked += 1;
             }
         }
-        assert!(checked >= 64, "{shape:?}: only {checked} interior particles");
+        assert!(
+            checked >= 64,
+            "{shape:?}: only {checked} interior particles"
+        );
     }
 }
 
@@ -713,10 +723,16 @@ fn feedback_thermostat_drives_kinetic_energy_to_its_target() {
         } else {
             let mean = ke_sum / samples as f64;
             println!("target {target:.3e}: mean kinetic energy {mean:.3e}");
-            assert!(mean < target, "mean kinetic energy {mean} vs target {target}");
+            assert!(
+                mean < target,
+                "mean kinetic energy {mean} vs target {target}"
+            );
             assert_eq!(alpha_late, 0.0, "alpha did not return to 0");
             let (e5, e6) = (e_sum[0] / e_n[0] as f64, e_sum[1] / e_n[1] as f64);
-            assert!((e6 / e5 - 1.0).abs() < 0.01, "mean energy {e5} then {e6} undamped");
+            assert!(
+                (e6 / e5 - 1.0).abs() < 0.01,
+                "mean energy {e5} then {e6} undamped"
+            );
         }
     }
 }

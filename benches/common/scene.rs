@@ -4,9 +4,121 @@
 //! gravity, inside a grid with slip walls.
 
 use mpm_gimp::{
-    memory_requirements, Dimension, HeapBuffer, MaterialDef, MaterialModel, Real, ShapeFunction,
-    UpdateOrder, Vec3, World, WorldDef,
+    memory_requirements, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
+    MaterialModel, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
 };
+
+/// One effect declared in the scene (or none), to price it: what the scene declares and what
+/// it sets once the block is filled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Effect {
+    /// Nothing declared.
+    None,
+    /// Constant grid and particle damping.
+    Damping,
+    /// Grid damping driven by the kinetic-energy thermostat (target 0).
+    Feedback,
+    /// Per-particle damping columns, set to 1/s on every particle.
+    LocalDamping,
+    /// A per-particle force column, set to the particle's weight along x.
+    ParticleForces,
+    /// A traction on the +x face of every particle of the block's last column.
+    Tractions,
+    /// A body force besides gravity, constant.
+    BodyForce,
+    /// The APIC transfer.
+    Apic,
+}
+
+impl Effect {
+    /// Every effect, with the name the cost example takes.
+    pub const ALL: [(Effect, &'static str); 8] = [
+        (Effect::None, "none"),
+        (Effect::Damping, "damping"),
+        (Effect::Feedback, "feedback"),
+        (Effect::LocalDamping, "local_damping"),
+        (Effect::ParticleForces, "particle_forces"),
+        (Effect::Tractions, "tractions"),
+        (Effect::BodyForce, "body_force"),
+        (Effect::Apic, "apic"),
+    ];
+
+    /// The effect's name.
+    pub fn name(self) -> &'static str {
+        Effect::ALL
+            .iter()
+            .find(|(e, _)| *e == self)
+            .map_or("?", |(_, n)| n)
+    }
+
+    fn declare(self, def: &mut WorldDef, block_particles: u32) {
+        let fx = &mut def.effects;
+        match self {
+            Effect::None => {}
+            Effect::Damping => {
+                fx.damping = Some(Damping {
+                    grid: Schedule::constant(1.0),
+                    particle: Schedule::constant(1.0),
+                    ..Damping::NONE
+                })
+            }
+            Effect::Feedback => {
+                fx.damping = Some(Damping {
+                    feedback: Some(Feedback {
+                        gain: 1.0,
+                        target: Schedule::ZERO,
+                        max_alpha: 10.0,
+                    }),
+                    ..Damping::NONE
+                })
+            }
+            Effect::LocalDamping => {
+                fx.damping = Some(Damping {
+                    per_particle: true,
+                    ..Damping::NONE
+                })
+            }
+            Effect::ParticleForces => fx.particle_forces = true,
+            Effect::Tractions => fx.traction_capacity = block_particles,
+            Effect::BodyForce => {
+                fx.body_force = Vec3::new(0.1, 0.0, 0.0);
+                fx.body_force_scale = Schedule::constant(1.0);
+            }
+            Effect::Apic => def.transfer = Transfer::Apic,
+        }
+    }
+
+    fn set_up(self, world: &mut World, block: [u32; 3], axes: usize) -> Result<(), String> {
+        let n = world.particle_count();
+        let err = |e| format!("setting up {}: {e:?}", self.name());
+        match self {
+            Effect::LocalDamping => world
+                .set_particle_damping(0, &vec![1.0; n], &vec![1.0; n])
+                .map_err(err),
+            Effect::ParticleForces => {
+                let fx: Vec<Real> = world.particles().mass.iter().map(|m| 9.81 * m).collect();
+                let zero = vec![0.0; n];
+                world
+                    .set_particle_forces(0, [&fx, &zero, &zero])
+                    .map_err(err)
+            }
+            Effect::Tractions => {
+                // The fill is x fastest: every (block[0] PPC)-th particle ends a row.
+                let row = (block[0] * PPC) as usize;
+                let rows = n / row;
+                let _ = axes;
+                for r in 0..rows {
+                    let last = (r * row + row - 1) as u32;
+                    world
+                        .add_tractions(last..last + 1, Face::XMax, Vec3::new(1.0e3, 0.0, 0.0))
+                        .map_err(err)?;
+                }
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+}
 
 /// Particles per cell per axis of the filled block.
 pub const PPC: u32 = 2;
@@ -24,12 +136,18 @@ pub struct SceneDef {
     /// The block: its first cell and its cell count per axis.
     pub first: [u32; 3],
     pub block: [u32; 3],
+    /// The effect declared, if any.
+    pub effect: Effect,
 }
 
 /// A world holding the scene, in its own storage.
 pub struct Scene {
     pub storage: HeapBuffer,
     pub particles: u32,
+    /// Bytes of the world (its memory requirement); step_cost reports it, the criterion
+    /// benches do not.
+    #[allow(dead_code)]
+    pub bytes: usize,
 }
 
 impl Scene {
@@ -41,7 +159,7 @@ impl Scene {
             2
         };
         let expected: u32 = (0..axes).map(|a| s.block[a] * PPC).product();
-        let def = WorldDef {
+        let mut def = WorldDef {
             dimension: s.dimension,
             cell_size: CELL,
             cells: s.grid,
@@ -52,6 +170,7 @@ impl Scene {
             update_order: s.order,
             ..WorldDef::DEFAULT
         };
+        s.effect.declare(&mut def, expected);
         let req = memory_requirements(&def).map_err(|e| format!("invalid definition: {e:?}"))?;
         let mut storage = HeapBuffer::new(req.bytes);
         let mut world = World::init(&def, storage.as_mut_bytes())
@@ -78,9 +197,11 @@ impl Scene {
         if ids.len() as u32 != expected {
             return Err(format!("{} particles, expected {expected}", ids.len()));
         }
+        s.effect.set_up(&mut world, s.block, axes)?;
         Ok(Scene {
             storage,
             particles: expected,
+            bytes: req.bytes,
         })
     }
 
