@@ -13,7 +13,8 @@ pub enum Error {
     BufferMisaligned = 2,
     /// The buffer does not hold a world of this build (wrong magic, version, precision or size).
     NotAWorld = 3,
-    /// The dimension is not supported by this build.
+    /// The dimension is not supported by this build, or the definition declares an effect and
+    /// the build lacks the `effects` feature.
     Unsupported = 4,
     /// Cell size not finite or <= 0.
     InvalidCellSize = 5,
@@ -80,7 +81,7 @@ impl Error {
             Error::BufferTooSmall => c"buffer smaller than the memory requirement",
             Error::BufferMisaligned => c"buffer not aligned as the memory requirement says",
             Error::NotAWorld => c"buffer does not hold a world of this build",
-            Error::Unsupported => c"dimension not supported by this build",
+            Error::Unsupported => c"dimension or effect not supported by this build",
             Error::InvalidCellSize => c"cell size must be finite and > 0",
             Error::InvalidCellCount => c"too few cells for the shape margin, or too many nodes",
             Error::InvalidCapacity => c"capacity must be > 0 and small enough to index",

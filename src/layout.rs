@@ -349,7 +349,14 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     if !(1..=8).contains(&def.particles_per_cell) {
         return Err(Error::InvalidParticlesPerCell);
     }
-    def.effects.validate(def.axes())
+    def.effects.validate(def.axes())?;
+    // A build without the effect instances cannot step a world that declares one.
+    if !cfg!(feature = "effects")
+        && (def.effects != crate::Effects::NONE || def.transfer != Transfer::Flip)
+    {
+        return Err(Error::Unsupported);
+    }
+    Ok(())
 }
 
 /// Bytes and alignment a world of this definition needs: a pure function of the definition.

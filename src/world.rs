@@ -766,6 +766,14 @@ impl<'a> World<'a> {
                     self.dispatch(sub_dt, time, &mut substep, simd)
                 }};
             }
+            // Without the `effects` feature no world declares one (validate refuses it), and
+            // only the plain instance is compiled.
+            #[cfg(not(feature = "effects"))]
+            {
+                let _ = (force, apic, damp);
+                substep!(false, false, false)
+            }
+            #[cfg(feature = "effects")]
             match (force, apic, damp) {
                 (false, false, false) => substep!(false, false, false),
                 (false, false, true) => substep!(false, false, true),
