@@ -217,6 +217,14 @@ pub struct MaterialDef {
     pub poisson_ratio: Real,
     /// Initial density rho_0, kg/m^3, > 0. Default 1000 (water-like).
     pub density: Real,
+    /// Specific heat capacity C_p, J/(kg K), > 0 (used only with heat conduction). Default 1000,
+    /// the order of most solids and of rubber.
+    pub heat_capacity: Real,
+    /// Thermal conductivity k, W/(m K), >= 0 (heat conduction only). Default 0: a material
+    /// conducts only when its scene asks for it.
+    pub conductivity: Real,
+    /// Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
+    pub diffusivity: Real,
 }
 
 impl MaterialDef {
@@ -226,6 +234,9 @@ impl MaterialDef {
         youngs_modulus: 1.0e6,
         poisson_ratio: 0.3,
         density: 1000.0,
+        heat_capacity: 1000.0,
+        conductivity: 0.0,
+        diffusivity: 0.0,
     };
 
     /// Lamé constants (lambda, mu) for 3D and plane strain.
@@ -242,6 +253,12 @@ impl MaterialDef {
     pub fn wave_speed(&self) -> Real {
         let (lambda, mu) = self.lame();
         crate::math::sqrt((lambda + 2.0 * mu) / self.density)
+    }
+
+    /// Thermal diffusivity `k / (rho C_p)`, m^2/s: with [`MaterialDef::diffusivity`], what the
+    /// explicit conduction step must resolve.
+    pub fn thermal_diffusivity(&self) -> Real {
+        self.conductivity / (self.density * self.heat_capacity)
     }
 }
 

@@ -1,6 +1,6 @@
 //! The optional effects of seeds/000 a scene declares in [`crate::WorldDef::effects`]: damping
-//! (sections 5.1.2 and 5.3), particle forces and tractions (eqs 13, 20-21), and a body force
-//! besides gravity. An effect that is not declared reserves no column and runs no loop: the
+//! (sections 5.1.2 and 5.3), particle forces and tractions (eqs 13, 20-21), a body force
+//! besides gravity, heat conduction (section 8) and diffusion (section 9). An effect that is not declared reserves no column and runs no loop: the
 //! step dispatches once on what is declared to a monomorphised instance of its passes.
 //!
 //! (The APIC transfer of seeds/001 is a method choice, [`crate::Transfer`], with the other
@@ -147,6 +147,46 @@ impl Damping {
     };
 }
 
+/// Boundary condition of a transported scalar (temperature or concentration potential) on one
+/// face of the grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScalarBoundary {
+    /// No flow across the face (the natural condition of eq 125).
+    Insulated,
+    /// The value held fixed on the face: the nodes from the grid face to the wall plane (as the
+    /// walls of [`crate::Boundary`]) take it.
+    Fixed(Real),
+    /// A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
+    /// concentration potential), applied on the wall plane's nodes (eqs 136, 149).
+    Flux(Real),
+}
+
+/// A transported scalar field (heat conduction, seeds/000 section 8, or diffusion, section 9):
+/// its boundary conditions and whether particles carry a source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transport {
+    /// Condition of each face, indexed by [`crate::Face`].
+    pub faces: [ScalarBoundary; 6],
+    /// Reserve a per-particle source column (W/m^3 for heat, 1/s for the concentration
+    /// potential), set with [`crate::World::set_particle_sources`].
+    pub sources: bool,
+}
+
+impl Transport {
+    /// Every face insulated, no sources.
+    pub const INSULATED: Transport = Transport {
+        faces: [ScalarBoundary::Insulated; 6],
+        sources: false,
+    };
+
+    fn is_valid(&self) -> bool {
+        self.faces.iter().all(|f| match f {
+            ScalarBoundary::Insulated => true,
+            ScalarBoundary::Fixed(v) | ScalarBoundary::Flux(v) => v.is_finite(),
+        })
+    }
+}
+
 /// What a scene declares beyond the momentum equation. [`Effects::NONE`] is the default.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Effects {
@@ -166,6 +206,14 @@ pub struct Effects {
     pub body_force: Vec3,
     /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
     pub body_force_scale: Schedule,
+    /// Heat conduction (seeds/000 section 8), if declared: a temperature column (K) on the
+    /// particles, conducted with each material's [`crate::MaterialDef::conductivity`] and
+    /// [`crate::MaterialDef::heat_capacity`].
+    pub heat: Option<Transport>,
+    /// Diffusion (seeds/000 section 9), if declared: a concentration-potential column
+    /// (dimensionless, c / c_sat) on the particles, diffused with each material's
+    /// [`crate::MaterialDef::diffusivity`].
+    pub diffusion: Option<Transport>,
 }
 
 impl Effects {
@@ -176,6 +224,8 @@ impl Effects {
         traction_capacity: 0,
         body_force: Vec3::ZERO,
         body_force_scale: Schedule::ZERO,
+        heat: None,
+        diffusion: None,
     };
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
@@ -193,7 +243,10 @@ impl Effects {
         });
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
             && self.body_force_scale.is_valid(false);
-        if ok_damping && ok_body && self.traction_capacity <= 1 << 24 {
+        let ok_transport = [self.heat, self.diffusion]
+            .iter()
+            .all(|t| t.map_or(true, |t| t.is_valid()));
+        if ok_damping && ok_body && ok_transport && self.traction_capacity <= 1 << 24 {
             Ok(())
         } else {
             Err(Error::InvalidEffect)

@@ -32,7 +32,8 @@ pub enum Error {
     InvalidParticlesPerCell = 11,
     /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
-    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, or not finite.
+    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
+    /// <= 0, conductivity or diffusivity < 0, or not finite.
     InvalidMaterial = 13,
     /// The material table is full.
     MaterialCapacityExceeded = 14,
@@ -91,7 +92,7 @@ impl Error {
             Error::InvalidParticlesPerCell => c"particles per cell must be in 1..=8",
             Error::NonFiniteDefinition => c"origin and gravity must be finite",
             Error::InvalidMaterial => {
-                c"material needs E > 0, -1 < nu < 0.5, density > 0, all finite"
+                c"material needs E > 0, -1 < nu < 0.5, density > 0, C_p > 0, k >= 0, D >= 0, all finite"
             }
             Error::MaterialCapacityExceeded => c"material table is full",
             Error::ParticleCapacityExceeded => c"particles do not fit in the remaining capacity",

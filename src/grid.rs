@@ -26,6 +26,10 @@ pub(crate) struct GridCols<'a, const D: usize> {
     /// copies the lagged velocity here; MUSL accumulates the momentum of the updated particle
     /// velocities here and divides by the mass. Empty with USL.
     pub remap: [&'a mut [Real]; D],
+    /// Transported scalars (heat, diffusion; empty when not declared), 4 columns each: capacity
+    /// (thermal mass `m_T`, or volume), momentum (`m_T T`), value (`T_i`, with the fixed
+    /// faces), flow then rate (`Q_i`, then `Q_i / m_T`).
+    pub scalar: [[&'a mut [Real]; 4]; 2],
 }
 
 /// Whether every row of a stencil whose first node is `base` fits in node columns of length
@@ -90,16 +94,27 @@ impl<'a, const D: usize> GridCols<'a, D> {
     pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
         let mut c = Carver::new(region);
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
-        let has_remap = layout.grid_columns > 1 + 2 * D;
+        let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
+        let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
         let mass = c.take(b, n);
         let vel = core::array::from_fn(|_| c.take(b, n));
         let acc = core::array::from_fn(|_| c.take(b, n));
         let remap = core::array::from_fn(|_| if has_remap { c.take(b, n) } else { &mut [][..] });
+        let scalar = core::array::from_fn(|f| {
+            core::array::from_fn(|_| {
+                if layout.scalar_grid[f] {
+                    c.take(b, n)
+                } else {
+                    &mut [][..]
+                }
+            })
+        });
         GridCols {
             mass,
             vel,
             acc,
             remap,
+            scalar,
         }
     }
 }
@@ -162,16 +177,23 @@ impl<const D: usize> Geom<D> {
                     Boundary::Stick => [true; D],
                     Boundary::Slip => core::array::from_fn(|a| a == axis),
                 };
-                let n = self.nodes[axis];
-                let layers = if side == 0 {
-                    0..self.margin + 1
-                } else {
-                    n - 1 - self.margin..n
-                };
-                for layer in layers {
-                    self.for_each_node_in_plane(axis, layer, |i| f(i, fixed));
-                }
+                self.for_each_face_node(axis, side, |i, _| f(i, fixed));
             }
+        }
+    }
+
+    /// Calls `f(node, on_wall_plane)` for every node between the grid face `side` (0 low, 1
+    /// high) of `axis` and its wall plane (the admissible region's face), the plane included;
+    /// `on_wall_plane` is true on that plane.
+    pub fn for_each_face_node(&self, axis: usize, side: usize, mut f: impl FnMut(usize, bool)) {
+        let n = self.nodes[axis];
+        let (layers, wall) = if side == 0 {
+            (0..self.margin + 1, self.margin)
+        } else {
+            (n - 1 - self.margin..n, n - 1 - self.margin)
+        };
+        for layer in layers {
+            self.for_each_node_in_plane(axis, layer, |i| f(i, layer == wall));
         }
     }
 

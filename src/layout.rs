@@ -14,7 +14,9 @@
 //! header, so a byte copy of the buffer is a second, independent world.
 
 use crate::def::{Boundary, Dimension, ShapeFunction, Transfer, UpdateOrder, WorldDef};
-use crate::effects::{Damping, Effects, Feedback, Schedule, SCHEDULE_POINTS};
+use crate::effects::{
+    Damping, Effects, Feedback, ScalarBoundary, Schedule, Transport, SCHEDULE_POINTS,
+};
 use crate::{Error, Real, Vec3};
 use bytemuck::{Pod, Zeroable};
 use core::mem::size_of;
@@ -26,7 +28,7 @@ pub const CHUNK: usize = 16;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 2;
+const VERSION: u64 = 3;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,10 +84,69 @@ pub(crate) struct Header {
     pub traction_capacity: u64,
     pub body_force: [f64; 3],
     pub body_force_scale: ScheduleRecord,
+    pub heat: TransportRecord,
+    pub diffusion: TransportRecord,
     // Effect state.
     pub traction_count: u64,
     /// The thermostat's current alpha, 1/s.
     pub feedback_alpha: f64,
+}
+
+/// An optional [`Transport`] widened to 8-byte fields: declared flag, each face's condition
+/// (0 insulated, 1 fixed, 2 flux) and value, sources flag.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub(crate) struct TransportRecord {
+    pub declared: u64,
+    pub kinds: [u64; 6],
+    pub values: [f64; 6],
+    pub sources: u64,
+}
+
+// SAFETY: repr(C), only u64 and f64 fields: no padding, every bit pattern valid.
+unsafe impl Zeroable for TransportRecord {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for TransportRecord {}
+
+impl TransportRecord {
+    fn of(t: &Option<Transport>) -> Self {
+        let mut r = TransportRecord::zeroed();
+        if let Some(t) = t {
+            r.declared = 1;
+            r.sources = t.sources as u64;
+            for (k, f) in t.faces.iter().enumerate() {
+                (r.kinds[k], r.values[k]) = match *f {
+                    ScalarBoundary::Insulated => (0, 0.0),
+                    ScalarBoundary::Fixed(v) => (1, v as f64),
+                    ScalarBoundary::Flux(v) => (2, v as f64),
+                };
+            }
+        }
+        r
+    }
+
+    fn transport(&self) -> Result<Option<Transport>, Error> {
+        if self.declared == 0 {
+            return Ok(None);
+        }
+        if self.declared != 1 || self.sources > 1 {
+            return Err(Error::NotAWorld);
+        }
+        let mut faces = [ScalarBoundary::Insulated; 6];
+        for k in 0..6 {
+            let v = self.values[k] as Real;
+            faces[k] = match self.kinds[k] {
+                0 => ScalarBoundary::Insulated,
+                1 => ScalarBoundary::Fixed(v),
+                2 => ScalarBoundary::Flux(v),
+                _ => return Err(Error::NotAWorld),
+            };
+        }
+        Ok(Some(Transport {
+            faces,
+            sources: self.sources == 1,
+        }))
+    }
 }
 
 /// A [`Schedule`] widened to 8-byte fields.
@@ -127,7 +188,8 @@ unsafe impl Zeroable for Header {}
 // SAFETY: as above; Header is Copy and 'static.
 unsafe impl Pod for Header {}
 
-const _: () = assert!(size_of::<Header>() == 8 * (34 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS)));
+const _: () =
+    assert!(size_of::<Header>() == 8 * (34 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14));
 
 /// One material in the buffer's table: parameters and what the step derives from them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -141,10 +203,13 @@ pub(crate) struct MaterialRecord {
     pub lambda: Real,
     pub mu: Real,
     pub wave_speed: Real,
-    pub reserved: Real,
+    pub heat_capacity: Real,
+    pub conductivity: Real,
+    pub diffusivity: Real,
+    pub reserved: [Real; 6],
 }
 
-// SAFETY: MaterialRecord is repr(C) with eight fields of one float type: no padding, and every
+// SAFETY: MaterialRecord is repr(C) with sixteen values of one float type: no padding, and every
 // bit pattern is a valid float.
 unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.
@@ -196,6 +261,10 @@ pub(crate) struct Layout {
     pub force: ColumnGroup,
     pub damping: ColumnGroup,
     pub affine: ColumnGroup,
+    /// Transported scalars: value, grid value, then source if declared; heat then diffusion.
+    pub scalar: [ColumnGroup; 2],
+    /// Whether each transported scalar (heat, diffusion) has its 4 grid columns.
+    pub scalar_grid: [bool; 2],
     pub grid_offset: usize,
     pub node_column_bytes: usize,
     /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
@@ -216,9 +285,9 @@ pub(crate) struct ColumnGroup {
 pub(crate) struct EffectColumns;
 
 impl EffectColumns {
-    /// Groups `(x_next, force, damping, affine)` for a definition, starting at column `first`;
-    /// returns them and the column after the last.
-    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 4], usize) {
+    /// Groups `(x_next, force, damping, affine, heat, diffusion)` for a definition, starting at
+    /// column `first`; returns them and the column after the last.
+    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 6], usize) {
         let musl = def.update_order == UpdateOrder::Musl;
         let fx = &def.effects;
         let per_particle_damping = fx.damping.is_some_and(|dm| dm.per_particle);
@@ -231,6 +300,8 @@ impl EffectColumns {
             } else {
                 0
             },
+            fx.heat.map_or(0, |t| 2 + t.sources as usize),
+            fx.diffusion.map_or(0, |t| 2 + t.sources as usize),
         ];
         let mut next = first;
         let groups = counts.map(|count| {
@@ -254,7 +325,7 @@ impl Layout {
         let nodes: usize = (0..d).map(|a| def.cells[a] as usize + 1).product();
         let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
         let u32_column_bytes = round_up(cap * 4, ALIGN);
-        let ([x_next, force, damping, affine], particle_real_columns) =
+        let ([x_next, force, damping, affine, heat, diffusion], particle_real_columns) =
             EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes = round_up(
@@ -262,7 +333,11 @@ impl Layout {
             ALIGN,
         );
         let stress_velocity = def.update_order != UpdateOrder::Usl;
-        let grid_columns = 1 + 2 * d + if stress_velocity { d } else { 0 };
+        let scalar_grid = [def.effects.heat.is_some(), def.effects.diffusion.is_some()];
+        let grid_columns = 1
+            + 2 * d
+            + if stress_velocity { d } else { 0 }
+            + 4 * scalar_grid.iter().filter(|&&b| b).count();
         let materials_offset = round_up(size_of::<Header>(), ALIGN);
         let tractions_offset = round_up(
             materials_offset + def.material_capacity as usize * size_of::<MaterialRecord>(),
@@ -291,6 +366,8 @@ impl Layout {
             force,
             damping,
             affine,
+            scalar: [heat, diffusion],
+            scalar_grid,
             grid_offset,
             node_column_bytes,
             grid_columns,
@@ -415,6 +492,8 @@ impl Header {
             traction_capacity: fx.traction_capacity as u64,
             body_force: w(fx.body_force),
             body_force_scale: ScheduleRecord::of(&fx.body_force_scale),
+            heat: TransportRecord::of(&fx.heat),
+            diffusion: TransportRecord::of(&fx.diffusion),
             traction_count: 0,
             feedback_alpha: 0.0,
         }
@@ -479,6 +558,8 @@ impl Header {
             traction_capacity: small(self.traction_capacity)?,
             body_force: v(self.body_force),
             body_force_scale: self.body_force_scale.schedule()?,
+            heat: self.heat.transport()?,
+            diffusion: self.diffusion.transport()?,
         };
         Ok(WorldDef {
             dimension,

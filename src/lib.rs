@@ -59,7 +59,9 @@ pub use def::{
     Boundary, Dimension, Face, MaterialDef, MaterialModel, ShapeFunction, Transfer, UpdateOrder,
     WorldDef,
 };
-pub use effects::{Damping, Effects, Feedback, Schedule, SCHEDULE_POINTS};
+pub use effects::{
+    Damping, Effects, Feedback, ScalarBoundary, Schedule, Transport, SCHEDULE_POINTS,
+};
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
 pub use particles::ParticleStatus;
@@ -67,8 +69,8 @@ pub use storage::AlignedBuffer;
 #[cfg(feature = "std")]
 pub use storage::HeapBuffer;
 pub use world::{
-    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, WorldRef,
-    MAX_SUBSTEPS,
+    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, ScalarField, StepReport, World,
+    WorldRef, MAX_SUBSTEPS,
 };
 
 /// The scalar type of every column, parameter and result: f32, or f64 with the `f64` feature.

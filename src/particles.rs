@@ -52,6 +52,8 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub x: [&'a mut [Real]; D],
     pub v: [&'a mut [Real]; D],
     pub mass: &'a mut [Real],
+    /// Initial volume V0.
+    pub vol0: &'a mut [Real],
     /// Displacement gradient `H = F - I`.
     pub h: [[&'a mut [Real]; D]; D],
     /// First `stress_components(D)` used; the rest are empty.
@@ -65,6 +67,9 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub damping: [&'a mut [Real]; 2],
     /// APIC moment matrix `B_p`, entry (a, b), m^2/s (`C_p = B_p D_p^-1`).
     pub affine: [[&'a mut [Real]; D]; D],
+    /// Transported scalars (heat: temperature, K; diffusion: concentration potential), each
+    /// value, grid value at the particle, then source (empty when not declared).
+    pub scalar: [[&'a mut [Real]; 3]; 2],
     pub material: &'a mut [u32],
     pub status: &'a mut [u32],
 }
@@ -111,8 +116,9 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let x = core::array::from_fn(|_| c.take(rb, n));
         let v = core::array::from_fn(|_| c.take(rb, n));
         let mass = c.take(rb, n);
-        // V0 is not read by the step (stress is stored as tau/rho0, eq 18): skip its column.
-        let _vol0: &mut [Real] = c.take(rb, 0);
+        // V0 is read only by the transported scalars (current volume `J V0`); the mechanics
+        // stores stress as tau/rho0 (eq 18) and does not need it.
+        let vol0 = c.take(rb, n);
         let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
         let x_next = core::array::from_fn(|_| group(&mut c, layout.x_next.count > 0));
@@ -121,18 +127,24 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let affine = core::array::from_fn(|_| {
             core::array::from_fn(|_| group(&mut c, layout.affine.count > 0))
         });
+        let scalar = core::array::from_fn(|f| {
+            let g = layout.scalar[f];
+            core::array::from_fn(|k| group(&mut c, k < g.count))
+        });
         let material = c.take(ub, n);
         let status = c.take(ub, n);
         ParticleCols {
             x,
             v,
             mass,
+            vol0,
             h,
             tau,
             x_next,
             force,
             damping,
             affine,
+            scalar,
             material,
             status,
         }

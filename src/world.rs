@@ -12,7 +12,7 @@ use crate::phases::p2g::mode;
 #[cfg(target_arch = "x86_64")]
 use crate::phases::Avx2;
 use crate::phases::Baseline;
-use crate::phases::{grid_update, p2g, Ctx, Isa};
+use crate::phases::{grid_update, p2g, transport, Ctx, Isa};
 use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
@@ -52,6 +52,16 @@ impl StepReport {
         // A full list only means more than 8 froze; the count says how many.
         let _ = self.first_frozen.push(id);
     }
+}
+
+/// A transported scalar field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ScalarField {
+    /// Temperature, K (heat conduction).
+    Temperature = 0,
+    /// Concentration potential `c / c_sat` (diffusion).
+    Concentration = 1,
 }
 
 /// One particle for [`World::add_particle`]. In 2D the z components are ignored.
@@ -145,6 +155,18 @@ pub struct ParticlesView<'w> {
     pub force: [&'w [Real]; 3],
     /// Local grid and particle damping, 1/s (empty unless per-particle damping is declared).
     pub damping: [&'w [Real]; 2],
+    /// Temperature, K (empty unless heat conduction is declared).
+    pub temperature: &'w [Real],
+    /// Concentration potential (empty unless diffusion is declared).
+    pub concentration: &'w [Real],
+    /// The grid's temperature at each particle after the last step, `T_g->p = sum S_ip T_i`,
+    /// K: what a feature that depends on temperature should read (seeds/000 section 8.2), since
+    /// the particles' own values keep any variation within a cell (the FLIP update never
+    /// smooths them). Empty unless heat conduction is declared.
+    pub grid_temperature: &'w [Real],
+    /// The grid's concentration potential at each particle after the last step, as
+    /// [`ParticlesView::grid_temperature`]. Empty unless diffusion is declared.
+    pub grid_concentration: &'w [Real],
     /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
     /// unless the transfer is APIC); with linear shape functions, the affine velocity matrix
     /// `C_p` itself, 1/s, in its gradient form (see [`crate::shape::Shape1D::GRADIENT_AFFINE`]). The affine velocity field is `C_p = B_p D_p^-1`, with
@@ -324,7 +346,13 @@ impl<'a> World<'a> {
             && m.poisson_ratio > -1.0
             && m.poisson_ratio < 0.5
             && m.density.is_finite()
-            && m.density > 0.0;
+            && m.density > 0.0
+            && m.heat_capacity.is_finite()
+            && m.heat_capacity > 0.0
+            && m.conductivity.is_finite()
+            && m.conductivity >= 0.0
+            && m.diffusivity.is_finite()
+            && m.diffusivity >= 0.0;
         if !ok {
             return Err(Error::InvalidMaterial);
         }
@@ -350,7 +378,10 @@ impl<'a> World<'a> {
             lambda,
             mu,
             wave_speed: c,
-            reserved: 0.0,
+            heat_capacity: m.heat_capacity,
+            conductivity: m.conductivity,
+            diffusivity: m.diffusivity,
+            reserved: [0.0; 6],
         };
         self.header_mut().material_count += 1;
         Ok(id as u32)
@@ -440,6 +471,51 @@ impl<'a> World<'a> {
             let col = self.real_col_mut(&layout, layout.force.first + a, range.end);
             col[range.clone()].copy_from_slice(force[a]);
         }
+        Ok(())
+    }
+
+    /// Sets the value of a transported scalar (temperature, K, or concentration potential) of
+    /// particles `first..first + n`, `n = values.len()`. Needs the field declared
+    /// ([`crate::Effects::heat`], [`crate::Effects::diffusion`]). Values start at 0.
+    pub fn set_particle_scalar(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 0, first, values)
+    }
+
+    /// Sets the source of a transported scalar (heat: W/m^3; diffusion: 1/s) of particles
+    /// `first..first + n`. Needs the field declared with [`crate::Transport::sources`].
+    pub fn set_particle_sources(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 2, first, values)
+    }
+
+    fn set_scalar_column(
+        &mut self,
+        field: ScalarField,
+        k: usize,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let group = layout.scalar[field as usize];
+        if k >= group.count {
+            return Err(Error::EffectNotDeclared);
+        }
+        let range = self.particle_range(first, values.len())?;
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(Error::NonFiniteInput);
+        }
+        let col = self.real_col_mut(&layout, group.first + k, range.end);
+        col[range].copy_from_slice(values);
         Ok(())
     }
 
@@ -871,6 +947,7 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
+            transport: [fx.heat, fx.diffusion],
         };
         run_kernel(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }
@@ -972,6 +1049,9 @@ impl<'a> WorldRef<'a> {
                 youngs_modulus: r.youngs_modulus,
                 poisson_ratio: r.poisson_ratio,
                 density: r.density,
+                heat_capacity: r.heat_capacity,
+                conductivity: r.conductivity,
+                diffusivity: r.diffusivity,
             })
     }
 
@@ -1039,8 +1119,26 @@ impl<'a> WorldRef<'a> {
                 + local(0)
                 + local(1)
         });
+        // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
+        // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.
+        let fx = &def.effects;
+        let kappa = self.materials(&layout).iter().fold(0.0f64, |m, r| {
+            let thermal = if fx.heat.is_some() {
+                r.conductivity as f64 / (r.density as f64 * r.heat_capacity as f64)
+            } else {
+                0.0
+            };
+            let solvent = if fx.diffusion.is_some() {
+                r.diffusivity as f64
+            } else {
+                0.0
+            };
+            m.max(thermal).max(solvent)
+        });
+        let h = def.cell_size as f64;
+        let conduction = h * h / (2.0 * d as f64 * kappa);
         // Never 0: a step below the smallest positive Real is not a step.
-        let dt = def.cfl as f64 * (def.cell_size as f64 / speed).min(1.0 / alpha);
+        let dt = def.cfl as f64 * (h / speed).min(1.0 / alpha).min(conduction);
         if dt.is_finite() {
             (dt as Real).max(Real::MIN_POSITIVE)
         } else {
@@ -1084,6 +1182,10 @@ impl<'a> WorldRef<'a> {
             material: self.u32_col(&layout, col::MATERIAL, n),
             status: self.u32_col(&layout, col::STATUS, n),
             force: core::array::from_fn(|a| group(layout.force, a)),
+            temperature: group(layout.scalar[0], 0),
+            concentration: group(layout.scalar[1], 0),
+            grid_temperature: group(layout.scalar[0], 1),
+            grid_concentration: group(layout.scalar[1], 1),
             damping: core::array::from_fn(|k| group(layout.damping, k)),
             affine: core::array::from_fn(|a| {
                 core::array::from_fn(|b| {
@@ -1271,6 +1373,12 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
         g: &mut GridCols<'_, D>,
     ) {
         let report = &mut *self.report;
+        // Heat and diffusion first, with the particles where the substep starts.
+        for (f, t) in ctx.transport.iter().enumerate() {
+            if let Some(t) = t {
+                transport::substep(s, ctx, p, count, g, f, t);
+            }
+        }
         grid_update::reset(g);
         match self.order {
             UpdateOrder::Usf => {

@@ -505,6 +505,7 @@ fn spinning(shape: ShapeFunction, transfer: Transfer, dim: Dimension) -> (f64, f
         youngs_modulus: 1.0e5,
         poisson_ratio: 0.3,
         density: 1000.0,
+        ..MaterialDef::DEFAULT
     };
     let c = Vec3::new(0.5, 0.5, 0.5);
     // The fill helper seeds the lattice sites at rest; copy them with the spin added.

@@ -7,7 +7,8 @@ mod common;
 use common::*;
 use mpm_gimp::{
     Boundary, Damping, Dimension, Face, Feedback, MaterialDef, MaterialModel, ParticleBatch,
-    ParticleStatus, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
+    ParticleStatus, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer,
+    Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 
 /// An effect switched on in a hard case: how it changes the definition, and what it sets once
@@ -54,7 +55,35 @@ fn set_tractions(w: &mut World) {
         .unwrap();
 }
 
-const EFFECTS: [Fx; 6] = [
+/// Temperatures and concentrations from 280 to 320 (and 0 to 1), and a heat source.
+fn set_scalars(w: &mut World) {
+    let n = w.particle_count();
+    let t: Vec<Real> = (0..n).map(|i| 280.0 + (i % 41) as Real).collect();
+    let c: Vec<Real> = (0..n).map(|i| (i % 2) as Real).collect();
+    let s: Vec<Real> = (0..n).map(|i| 1.0e4 * (i % 3) as Real).collect();
+    w.set_particle_scalar(ScalarField::Temperature, 0, &t)
+        .unwrap();
+    w.set_particle_sources(ScalarField::Temperature, 0, &s)
+        .unwrap();
+    w.set_particle_scalar(ScalarField::Concentration, 0, &c)
+        .unwrap();
+}
+
+/// Heat with a fixed-temperature face, a flux face and sources; diffusion with a fixed face.
+fn declare_scalars(def: &mut WorldDef) {
+    let mut heat = Transport {
+        sources: true,
+        ..Transport::INSULATED
+    };
+    heat.faces[Face::XMin as usize] = ScalarBoundary::Fixed(300.0);
+    heat.faces[Face::YMax as usize] = ScalarBoundary::Flux(1.0e3);
+    let mut diffusion = Transport::INSULATED;
+    diffusion.faces[Face::XMax as usize] = ScalarBoundary::Fixed(1.0);
+    def.effects.heat = Some(heat);
+    def.effects.diffusion = Some(diffusion);
+}
+
+const EFFECTS: [Fx; 7] = [
     Fx {
         name: "none",
         def: no_def,
@@ -103,6 +132,13 @@ const EFFECTS: [Fx; 6] = [
         },
         setup: no_setup,
         loads: true,
+        damps: false,
+    },
+    Fx {
+        name: "heat and diffusion",
+        def: declare_scalars,
+        setup: set_scalars,
+        loads: false,
         damps: false,
     },
     Fx {

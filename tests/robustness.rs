@@ -74,6 +74,7 @@ fn extreme_inputs_never_panic_never_leave_the_grid_and_stay_finite() {
                 youngs_modulus: rng.decades(-3.0, 30.0) as Real,
                 poisson_ratio: (-0.9 + 1.39 * rng.unit()) as Real,
                 density: rng.decades(-6.0, 6.0) as Real,
+                ..MaterialDef::DEFAULT
             };
             w.add_material(&m).unwrap();
         }

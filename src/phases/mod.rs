@@ -9,6 +9,7 @@ pub(crate) mod g2p;
 pub(crate) mod grid_update;
 mod isa;
 pub(crate) mod p2g;
+pub(crate) mod transport;
 
 #[cfg(target_arch = "x86_64")]
 pub(crate) use isa::Avx2;
@@ -37,6 +38,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub materials: &'m [MaterialRecord],
     /// The traction table's used entries.
     pub tractions: &'m [TractionRecord],
+    /// The transported scalars declared (heat, diffusion).
+    pub transport: [Option<crate::Transport>; 2],
 }
 
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored

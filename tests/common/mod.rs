@@ -114,6 +114,7 @@ impl Bar {
             youngs_modulus: 1.0e6,
             poisson_ratio: 0.0,
             density: 1000.0,
+            ..MaterialDef::DEFAULT
         };
         Bar {
             def,
