@@ -10,7 +10,7 @@ rounds=${1:-5}
 shift || true
 cargo build --release --example step_cost >/dev/null 2>&1
 bin=target/release/examples/step_cost
-effects=(none damping feedback local_damping particle_forces tractions body_force apic)
+effects=(none damping feedback local_damping particle_forces tractions body_force apic heat diffusion)
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for _ in $(seq "$rounds"); do

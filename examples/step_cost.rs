@@ -19,7 +19,7 @@
 //! `--simd auto|baseline` (`auto`, the default, is what `World::step` does: the AVX2 instance
 //! on CPUs that have it; `baseline` forces the SSE2 instance, e.g. under valgrind, which cannot
 //! decode every AVX instruction). The JSON line says which instance ran (`"simd"`).
-//! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic`
+//! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic|heat|diffusion`
 //! declares one effect (see `benches/common/scene.rs`; default none) to price it; the JSON line
 //! names it and gives the world's bytes per particle (`benches/effect_cost.sh` tabulates every
 //! effect's marginal cost).
@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|baseline] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
-body_force|apic]";
+body_force|apic|heat|diffusion]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;

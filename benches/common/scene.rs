@@ -5,7 +5,8 @@
 
 use mpm_gimp::{
     memory_requirements, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
-    MaterialModel, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
+    MaterialModel, Real, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder, Vec3, World,
+    WorldDef,
 };
 
 /// One effect declared in the scene (or none), to price it: what the scene declares and what
@@ -28,11 +29,16 @@ pub enum Effect {
     BodyForce,
     /// The APIC transfer.
     Apic,
+    /// Heat conduction, insulated faces (the material's conductivity is 0: the passes run, the
+    /// temperatures stay).
+    Heat,
+    /// Diffusion, insulated faces.
+    Diffusion,
 }
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 8] = [
+    pub const ALL: [(Effect, &'static str); 10] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -41,6 +47,8 @@ impl Effect {
         (Effect::Tractions, "tractions"),
         (Effect::BodyForce, "body_force"),
         (Effect::Apic, "apic"),
+        (Effect::Heat, "heat"),
+        (Effect::Diffusion, "diffusion"),
     ];
 
     /// The effect's name.
@@ -85,6 +93,8 @@ impl Effect {
                 fx.body_force_scale = Schedule::constant(1.0);
             }
             Effect::Apic => def.transfer = Transfer::Apic,
+            Effect::Heat => fx.heat = Some(Transport::INSULATED),
+            Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
         }
     }
 
