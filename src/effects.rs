@@ -197,8 +197,9 @@ pub struct Effects {
     /// [`crate::World::set_particle_forces`].
     pub particle_forces: bool,
     /// Most tractions the world holds (0: none). A traction loads one face of one particle's
-    /// domain and is integrated with the grid shape functions into `f_iT` (eq 21); see
-    /// [`crate::World::add_tractions`].
+    /// domain; its resultant enters `f_iT` (eq 21) spread with the particle's weights (see
+    /// [`crate::World::add_tractions`] and the traction pass for why not with `N_i` on the
+    /// face).
     pub traction_capacity: u32,
     /// A uniform body force per unit mass besides gravity, m/s^2, scaled by
     /// `body_force_scale(t)`: added to every node as `m_i b(t)` (eq 22). Unlike gravity it is

@@ -271,11 +271,19 @@ pub(crate) fn scatter_one<
 }
 
 /// Adds the tractions of the table to the nodal force (eq 21): each loads one face of one
-/// active particle's domain, the square (segment in 2D) of half-width `l_p = h / (2 n)` at
-/// distance `l_p` from the particle, `n` particles per cell per axis, and is integrated with
-/// the grid shape functions `N_i` by the 2-point Gauss rule along each axis of the face:
-/// `f_iT += T A / q sum_q N_i(x_q)` with `A = (2 l_p)^(D-1)` (per unit thickness in 2D) and `q`
-/// the number of points. The domain is the undeformed one uGIMP uses.
+/// active particle's domain, a square (segment in 2D) of side `2 l_p`, `l_p = h / (2 n)` for
+/// `n` particles per cell per axis (the undeformed domain uGIMP uses), so its resultant is
+/// `T A` with `A = (2 l_p)^(D-1)` (per unit thickness in 2D). The resultant is spread over the
+/// nodes with the particle's own weights, `f_iT = S_ip T A`.
+///
+/// Why not the face integral `sum_q N_i(x_q) T A / q` at Gauss points `x_q` on the face: it
+/// gives the nodes just past the material's surface a force out of proportion to the sliver of
+/// mass they carry (`N_i` at the face against `S_ip` at the particle), an acceleration that
+/// grows without bound as that mass vanishes; USL differentiates it into the velocity
+/// gradient, and a 3D quadratic B-spline block under USL froze (f64 hard case). With `S_ip`
+/// the acceleration a traction gives any node is at most `T A / m_p`. The cost is the point of
+/// application, moved by `l_p` from the face to the particle: the resultant is exact, its
+/// moment is off by `T A l_p` per particle.
 pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -284,59 +292,20 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
     g: &mut GridCols<'_, D>,
 ) {
     let geom = &ctx.geom;
-    let table = ctx.tractions;
-    let half = ctx.half_width;
-    // 2-point Gauss abscissae on [-1, 1].
-    let gauss: Real = 1.0 / crate::math::sqrt(3.0);
-    let points = 1usize << (D - 1);
-    let area = (0..D - 1).fold(1.0 as Real, |a, _| a * 2.0 * half);
-    for rec in table {
+    let area = (1..D).fold(1.0 as Real, |a, _| a * 2.0 * ctx.half_width);
+    for rec in ctx.tractions {
         let i = rec.particle as usize;
-        let (axis, side) = ((rec.face / 2) as usize, rec.face % 2);
-        if i >= count || axis >= D || p.status.get(i) != Some(&ACTIVE) {
+        if i >= count || (rec.face / 2) as usize >= D || p.status.get(i) != Some(&ACTIVE) {
             continue;
         }
-        let t = &rec.traction[..D];
-        let share = area / points as Real;
-        for q in 0..points {
-            // Point q: the face plane along `axis`, Gauss points along the others.
-            let mut bit = 0;
-            let s: [Real; D] = core::array::from_fn(|a| {
-                let off = if a == axis {
-                    if side == 0 {
-                        -half
-                    } else {
-                        half
-                    }
-                } else {
-                    let sign = if (q >> bit) & 1 == 0 { -1.0 } else { 1.0 };
-                    bit += 1;
-                    sign * gauss * half
-                };
-                (p.x[a][i] + off - geom.origin[a]) * geom.inv_h
-            });
-            let first: [i32; D] =
-                core::array::from_fn(|a| crate::shape::first_node::<K, S>(s[a], geom.nodes[a]));
-            let w: [[Real; K]; D] =
-                core::array::from_fn(|a| shape.point_weights(s[a] - first[a] as Real));
-            // Every node of the K^D stencil, x fastest; the first node is clamped so that the
-            // last one exists, and `get_mut` keeps any index inside the columns.
-            for n in 0..K.pow(D as u32) {
-                let mut rem = n;
-                let mut node = 0usize;
-                let mut weight = share;
-                for a in 0..D {
-                    let k = rem % K;
-                    rem /= K;
-                    node += (first[a] as usize + k) * geom.stride[a];
-                    weight *= w[a][k];
-                }
-                for a in 0..D {
-                    if let Some(f) = g.acc[a].get_mut(node) {
-                        *f += weight * t[a];
-                    }
+        let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
+        let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
+        st.for_each_node(geom.stride, |node, w, _| {
+            for a in 0..D {
+                if let Some(f) = g.acc[a].get_mut(node) {
+                    *f += w * rec.traction[a] * area;
                 }
             }
-        }
+        });
     }
 }

@@ -66,12 +66,6 @@ impl Shape1D<3> for Gimp {
         (s, d)
     }
 
-    /// The linear hats `N_i` under the particle domain.
-    #[inline(always)]
-    fn point_weights(&self, f: Real) -> [Real; 3] {
-        core::array::from_fn(|k| (1.0 - (f - k as Real).abs()).max(0.0))
-    }
-
     /// The three nodes at once. For a particle in the admissible region the offset from the
     /// first node is `f` in [1/2, 3/2], so the middle node is within 1/2 (inner or middle
     /// branch) and the outer nodes are at least 1/2 away (middle or outer branch): two

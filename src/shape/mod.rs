@@ -70,15 +70,6 @@ pub trait Shape1D<const K: usize>: Copy {
         }
         (w, dw)
     }
-
-    /// Values of the grid shape functions `N_i` themselves at a point at offset `f` from the
-    /// first node, for the `K` stencil nodes: what a traction integral (eq 21) weighs with. The
-    /// B-splines and linear hats are their own `N_i`; uGIMP, whose `S_ip` integrates linear hats
-    /// over the particle domain, overrides it with the hats.
-    #[inline(always)]
-    fn point_weights(&self, f: Real) -> [Real; K] {
-        self.stencil(f).0
-    }
 }
 
 /// First node of the stencil of a particle at `s` (cell units) on an axis with `nodes` nodes,
