@@ -66,7 +66,8 @@ enum MpmStatus
   MPM_STATUS_INVALID_PARTICLES_PER_CELL = 11,
   // Origin or gravity not finite (on the axes the dimension uses).
   MPM_STATUS_NON_FINITE_DEFINITION = 12,
-  // Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, or not finite.
+  // Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
+  // <= 0, conductivity or diffusivity < 0, or not finite.
   MPM_STATUS_INVALID_MATERIAL = 13,
   // The material table is full.
   MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED = 14,
@@ -74,7 +75,8 @@ enum MpmStatus
   MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED = 15,
   // A material id that names no material.
   MPM_STATUS_UNKNOWN_MATERIAL = 16,
-  // A position, velocity, mass or volume that is NaN or infinite.
+  // A position, velocity, mass or volume that is NaN or infinite (or a particle force,
+  // temperature, concentration or source).
   MPM_STATUS_NON_FINITE_INPUT = 17,
   // A mass or volume <= 0.
   MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME = 18,
@@ -90,8 +92,8 @@ enum MpmStatus
   MPM_STATUS_INVALID_REGION = 22,
   // An effect parameter out of range: a schedule with more than 8 points, times that do not
   // increase or values not finite; a damping value < 0 or not finite; a thermostat gain or
-  // bound <= 0; a body force not finite; a traction not finite or on a face the dimension
-  // lacks.
+  // bound <= 0; a body force not finite; a fixed or flux face value of heat or diffusion not
+  // finite; a traction not finite or on a face the dimension lacks.
   MPM_STATUS_INVALID_EFFECT = 23,
   // The call needs an effect that the world's definition does not declare.
   MPM_STATUS_EFFECT_NOT_DECLARED = 24,
@@ -260,6 +262,41 @@ enum MpmParticleStatus
 typedef uint32_t MpmParticleStatus;
 #endif // __cplusplus
 
+// Kind of condition a transported scalar (temperature or concentration potential) meets on
+// one face of the grid box (`mpm_gimp::ScalarBoundary`).
+enum MpmScalarBoundaryKind
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // No flow across the face; `MpmScalarBoundary::value` is not read.
+  MPM_SCALAR_BOUNDARY_KIND_INSULATED = 0,
+  // The value held fixed on the face (K, or the concentration potential).
+  MPM_SCALAR_BOUNDARY_KIND_FIXED = 1,
+  // A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
+  // concentration potential).
+  MPM_SCALAR_BOUNDARY_KIND_FLUX = 2,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmScalarBoundaryKind;
+#endif // __cplusplus
+
+// A transported scalar field (`mpm_gimp::ScalarField`), the field that
+// `mpm_world_set_particle_scalar` and `mpm_world_set_particle_sources` set.
+enum MpmScalarField
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // Temperature, K (`MpmEffects::heat`).
+  MPM_SCALAR_FIELD_TEMPERATURE = 0,
+  // Concentration potential c / c_sat (`MpmEffects::diffusion`).
+  MPM_SCALAR_FIELD_CONCENTRATION = 1,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmScalarField;
+#endif // __cplusplus
+
 // A world. Opaque: it is the memory the host passed to `mpm_world_init` (the pointer is that
 // memory's address), and it lives as long as the host keeps that memory.
 typedef struct MpmWorld MpmWorld;
@@ -328,6 +365,27 @@ typedef struct MpmDamping {
   uint32_t per_particle;
 } MpmDamping;
 
+// The condition of a transported scalar on one face (`mpm_gimp::ScalarBoundary`).
+typedef struct MpmScalarBoundary {
+  // `MpmScalarBoundaryKind`; default `MPM_SCALAR_BOUNDARY_KIND_INSULATED`.
+  MpmScalarBoundaryKind kind;
+  // The fixed value or the inflow per area, finite (on every face, z faces included in 2D);
+  // not read for an insulated face.
+  mpm_real value;
+} MpmScalarBoundary;
+
+// A transported scalar field, heat conduction or diffusion (`mpm_gimp::Transport`): its
+// face conditions and whether particles carry a source.
+typedef struct MpmTransport {
+  // 1: the field is declared; 0: none (the other fields are then ignored).
+  uint32_t declared;
+  // Condition of each face, indexed by `MpmFace`.
+  struct MpmScalarBoundary faces[6];
+  // 1: reserve a per-particle source column (W/m^3 for heat, 1/s for the concentration
+  // potential), set with `mpm_world_set_particle_sources`; 0: none.
+  uint32_t sources;
+} MpmTransport;
+
 // What a scene declares beyond the momentum equation (`mpm_gimp::Effects`). An effect that is
 // not declared reserves no memory and costs nothing in a step.
 typedef struct MpmEffects {
@@ -343,6 +401,13 @@ typedef struct MpmEffects {
   struct MpmVec3 body_force;
   // Time factor of `body_force`; no point (default) is a factor of 0.
   struct MpmSchedule body_force_scale;
+  // Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
+  // starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
+  // Default not declared.
+  struct MpmTransport heat;
+  // Diffusion: a concentration-potential column (c / c_sat, starting at 0) diffused with
+  // each material's `diffusivity`. Default not declared.
+  struct MpmTransport diffusion;
 } MpmEffects;
 
 // Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -396,6 +461,12 @@ typedef struct MpmMaterialDef {
   mpm_real poisson_ratio;
   // Initial density, kg/m^3, > 0. Default 1000.
   mpm_real density;
+  // Specific heat capacity C_p, J/(kg K), > 0 (read by heat conduction only). Default 1000.
+  mpm_real heat_capacity;
+  // Thermal conductivity k, W/(m K), >= 0 (heat conduction only). Default 0.
+  mpm_real conductivity;
+  // Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
+  mpm_real diffusivity;
   // Set by `mpm_material_def_default`; do not change.
   uint32_t internal_cookie;
 } MpmMaterialDef;
@@ -444,6 +515,17 @@ typedef struct MpmParticlesView {
   // `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
   // scatters.
   const mpm_real *affine[9];
+  // Temperatures, K (NULL unless `MpmEffects::heat`).
+  const mpm_real *temperature;
+  // Concentration potentials c / c_sat (NULL unless `MpmEffects::diffusion`).
+  const mpm_real *concentration;
+  // The grid's temperature at each particle after the last step, K: what a feature that
+  // depends on temperature should read, since the particles' own values keep any variation
+  // within a cell (NULL unless `MpmEffects::heat`).
+  const mpm_real *grid_temperature;
+  // The grid's concentration potential at each particle after the last step (NULL unless
+  // `MpmEffects::diffusion`).
+  const mpm_real *grid_concentration;
 } MpmParticlesView;
 
 // Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
@@ -574,6 +656,35 @@ MpmStatus mpm_world_set_particle_damping(struct MpmWorld *world,
                                          uint32_t first,
                                          const mpm_real *alpha_g,
                                          const mpm_real *alpha_p,
+                                         size_t count);
+
+// Sets the value of a transported scalar of particles `first .. first + count` from `values`
+// (`count` values): the temperature, K (`MPM_SCALAR_FIELD_TEMPERATURE`, needs
+// `MpmEffects::heat`) or the concentration potential c / c_sat
+// (`MPM_SCALAR_FIELD_CONCENTRATION`, needs `MpmEffects::diffusion`). Values start at 0. A
+// field out of range is `MPM_STATUS_INVALID_ENUM`; refused with `MPM_STATUS_NON_FINITE_INPUT`
+// if any value is not finite (none is set). The view's `temperature` and `concentration`
+// show the values, `grid_temperature` and `grid_concentration` the grid's after a step.
+//
+// # Safety
+// `world` is NULL or a world; `values` is NULL or valid for reads of `count` values.
+MpmStatus mpm_world_set_particle_scalar(struct MpmWorld *world,
+                                        MpmScalarField field,
+                                        uint32_t first,
+                                        const mpm_real *values,
+                                        size_t count);
+
+// Sets the source of a transported scalar of particles `first .. first + count` from
+// `values` (`count` values): W/m^3 for the temperature, 1/s for the concentration potential;
+// the source stays until set again. Needs the field declared with `MpmTransport::sources`
+// (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise). Refused as `mpm_world_set_particle_scalar`.
+//
+// # Safety
+// As `mpm_world_set_particle_scalar`.
+MpmStatus mpm_world_set_particle_sources(struct MpmWorld *world,
+                                         MpmScalarField field,
+                                         uint32_t first,
+                                         const mpm_real *values,
                                          size_t count);
 
 // Adds one traction per particle of `first_particle .. first_particle + particle_count`, each

@@ -4,8 +4,8 @@
 //!
 //! Enum-valued fields are plain `uint32_t` on the Rust side (named by their enum type in the
 //! header): a value out of range from C is then an `MPM_STATUS_INVALID_ENUM`, never undefined
-//! behaviour. Flags (`declared`, `per_particle`, `particle_forces`) are `uint32_t` too and must
-//! be 0 or 1; any other value is also `MPM_STATUS_INVALID_ENUM`.
+//! behaviour. Flags (`declared`, `per_particle`, `particle_forces`, `sources`) are `uint32_t`
+//! too and must be 0 or 1; any other value is also `MPM_STATUS_INVALID_ENUM`.
 //!
 //! The optional effects (`MpmEffects`, the C form of `mpm_gimp::Effects`) sit inside
 //! `MpmWorldDef`; `mpm_world_def_default` declares none of them.
@@ -13,8 +13,9 @@
 use crate::status::MpmStatus;
 use crate::{mpm_real, MpmVec3};
 use kernel::{
-    Boundary, Damping, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel, Schedule,
-    ShapeFunction, Transfer, UpdateOrder, WorldDef,
+    Boundary, Damping, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel,
+    ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder,
+    WorldDef,
 };
 
 /// Spatial dimension and kinematic assumption (`mpm_gimp::Dimension`).
@@ -97,6 +98,31 @@ pub enum MpmFace {
     ZMax = 5,
 }
 
+/// Kind of condition a transported scalar (temperature or concentration potential) meets on
+/// one face of the grid box (`mpm_gimp::ScalarBoundary`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmScalarBoundaryKind {
+    /// No flow across the face; `MpmScalarBoundary::value` is not read.
+    Insulated = 0,
+    /// The value held fixed on the face (K, or the concentration potential).
+    Fixed = 1,
+    /// A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
+    /// concentration potential).
+    Flux = 2,
+}
+
+/// A transported scalar field (`mpm_gimp::ScalarField`), the field that
+/// `mpm_world_set_particle_scalar` and `mpm_world_set_particle_sources` set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmScalarField {
+    /// Temperature, K (`MpmEffects::heat`).
+    Temperature = 0,
+    /// Concentration potential c / c_sat (`MpmEffects::diffusion`).
+    Concentration = 1,
+}
+
 /// Constitutive model (`mpm_gimp::MaterialModel`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -134,6 +160,10 @@ pub type MpmFaceValue = u32;
 pub type MpmBoundaryValue = u32;
 /// An `MpmMaterialModel` value as stored in a definition.
 pub type MpmMaterialModelValue = u32;
+/// An `MpmScalarBoundaryKind` value as stored in a definition.
+pub type MpmScalarBoundaryKindValue = u32;
+/// An `MpmScalarField` value as passed to a function.
+pub type MpmScalarFieldValue = u32;
 
 /// Most points an `MpmSchedule` holds.
 pub const MPM_SCHEDULE_POINTS: usize = 8;
@@ -188,6 +218,31 @@ pub struct MpmDamping {
     pub per_particle: u32,
 }
 
+/// The condition of a transported scalar on one face (`mpm_gimp::ScalarBoundary`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmScalarBoundary {
+    /// `MpmScalarBoundaryKind`; default `MPM_SCALAR_BOUNDARY_KIND_INSULATED`.
+    pub kind: MpmScalarBoundaryKindValue,
+    /// The fixed value or the inflow per area, finite (on every face, z faces included in 2D);
+    /// not read for an insulated face.
+    pub value: mpm_real,
+}
+
+/// A transported scalar field, heat conduction or diffusion (`mpm_gimp::Transport`): its
+/// face conditions and whether particles carry a source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmTransport {
+    /// 1: the field is declared; 0: none (the other fields are then ignored).
+    pub declared: u32,
+    /// Condition of each face, indexed by `MpmFace`.
+    pub faces: [MpmScalarBoundary; 6],
+    /// 1: reserve a per-particle source column (W/m^3 for heat, 1/s for the concentration
+    /// potential), set with `mpm_world_set_particle_sources`; 0: none.
+    pub sources: u32,
+}
+
 /// What a scene declares beyond the momentum equation (`mpm_gimp::Effects`). An effect that is
 /// not declared reserves no memory and costs nothing in a step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -205,6 +260,13 @@ pub struct MpmEffects {
     pub body_force: MpmVec3,
     /// Time factor of `body_force`; no point (default) is a factor of 0.
     pub body_force_scale: MpmSchedule,
+    /// Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
+    /// starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
+    /// Default not declared.
+    pub heat: MpmTransport,
+    /// Diffusion: a concentration-potential column (c / c_sat, starting at 0) diffused with
+    /// each material's `diffusivity`. Default not declared.
+    pub diffusion: MpmTransport,
 }
 
 /// Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -262,6 +324,12 @@ pub struct MpmMaterialDef {
     pub poisson_ratio: mpm_real,
     /// Initial density, kg/m^3, > 0. Default 1000.
     pub density: mpm_real,
+    /// Specific heat capacity C_p, J/(kg K), > 0 (read by heat conduction only). Default 1000.
+    pub heat_capacity: mpm_real,
+    /// Thermal conductivity k, W/(m K), >= 0 (heat conduction only). Default 0.
+    pub conductivity: mpm_real,
+    /// Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
+    pub diffusivity: mpm_real,
     /// Set by `mpm_material_def_default`; do not change.
     pub internal_cookie: u32,
 }
@@ -323,6 +391,37 @@ fn schedule_from_c(s: &MpmSchedule) -> Schedule {
     }
 }
 
+/// The C form of an optional transport; what is not declared is zero, and so is the value of
+/// an insulated face.
+fn transport_to_c(t: &Option<Transport>) -> MpmTransport {
+    let face = |f: &ScalarBoundary| match *f {
+        ScalarBoundary::Insulated => MpmScalarBoundary {
+            kind: MpmScalarBoundaryKind::Insulated as u32,
+            value: 0.0,
+        },
+        ScalarBoundary::Fixed(value) => MpmScalarBoundary {
+            kind: MpmScalarBoundaryKind::Fixed as u32,
+            value,
+        },
+        ScalarBoundary::Flux(value) => MpmScalarBoundary {
+            kind: MpmScalarBoundaryKind::Flux as u32,
+            value,
+        },
+    };
+    match t {
+        Some(t) => MpmTransport {
+            declared: 1,
+            faces: core::array::from_fn(|k| face(&t.faces[k])),
+            sources: t.sources as u32,
+        },
+        None => MpmTransport {
+            declared: 0,
+            faces: [face(&ScalarBoundary::Insulated); 6],
+            sources: 0,
+        },
+    }
+}
+
 /// The C effects of Rust ones; what is not declared is zero.
 fn effects_to_c(e: &Effects) -> MpmEffects {
     let zero = schedule_to_c(&Schedule::ZERO);
@@ -362,6 +461,8 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         traction_capacity: e.traction_capacity,
         body_force: c_vec3(e.body_force),
         body_force_scale: schedule_to_c(&e.body_force_scale),
+        heat: transport_to_c(&e.heat),
+        diffusion: transport_to_c(&e.diffusion),
     }
 }
 
@@ -372,6 +473,27 @@ fn flag(v: u32) -> Result<bool, MpmStatus> {
         1 => Ok(true),
         _ => Err(MpmStatus::InvalidEnum),
     }
+}
+
+/// The Rust transport of a C one: the flags and each face's kind checked when declared, nothing
+/// read when not (the values are the kernel's to check).
+fn transport_from_c(t: &MpmTransport) -> Result<Option<Transport>, MpmStatus> {
+    if !flag(t.declared)? {
+        return Ok(None);
+    }
+    let mut faces = [ScalarBoundary::Insulated; 6];
+    for (f, c) in faces.iter_mut().zip(t.faces.iter()) {
+        *f = match c.kind {
+            0 => ScalarBoundary::Insulated,
+            1 => ScalarBoundary::Fixed(c.value),
+            2 => ScalarBoundary::Flux(c.value),
+            _ => return Err(MpmStatus::InvalidEnum),
+        };
+    }
+    Ok(Some(Transport {
+        faces,
+        sources: flag(t.sources)?,
+    }))
 }
 
 /// The Rust effects of C ones: every flag checked, the fields of what is not declared ignored.
@@ -404,6 +526,17 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         traction_capacity: e.traction_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
+        heat: transport_from_c(&e.heat)?,
+        diffusion: transport_from_c(&e.diffusion)?,
+    })
+}
+
+/// The field numbered `v` (`MpmScalarField`), or `InvalidEnum`.
+pub(crate) fn scalar_field_from_c(v: MpmScalarFieldValue) -> Result<ScalarField, MpmStatus> {
+    Ok(match v {
+        0 => ScalarField::Temperature,
+        1 => ScalarField::Concentration,
+        _ => return Err(MpmStatus::InvalidEnum),
     })
 }
 
@@ -466,6 +599,9 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         youngs_modulus: d.youngs_modulus,
         poisson_ratio: d.poisson_ratio,
         density: d.density,
+        heat_capacity: d.heat_capacity,
+        conductivity: d.conductivity,
+        diffusivity: d.diffusivity,
     })
 }
 
@@ -504,12 +640,19 @@ pub extern "C" fn mpm_material_def_default_f64() -> MpmMaterialDef {
 }
 
 fn material_def_default() -> MpmMaterialDef {
-    let d = MaterialDef::DEFAULT;
+    material_def_to_c(&MaterialDef::DEFAULT)
+}
+
+/// The C material of a Rust one (with the cookie).
+fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
     MpmMaterialDef {
         model: d.model as u32,
         youngs_modulus: d.youngs_modulus,
         poisson_ratio: d.poisson_ratio,
         density: d.density,
+        heat_capacity: d.heat_capacity,
+        conductivity: d.conductivity,
+        diffusivity: d.diffusivity,
         internal_cookie: MATERIAL_COOKIE,
     }
 }

@@ -1,19 +1,20 @@
 //! The effects a world's definition declares (`MpmWorldDef::effects`), driven from C:
-//! per-particle forces and damping, tractions, and the thermostat's state.
+//! per-particle forces and damping, tractions, the thermostat's state, and the values and
+//! sources of the transported scalars (temperature, concentration potential).
 //!
 //! Every call that sets an effect's data needs that effect declared
 //! (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise), and names existing particles
 //! (`MPM_STATUS_UNKNOWN_PARTICLE` otherwise, checked before any array is read). The setters of
-//! per-particle values check the world and the pointers, then the declaration, the particle
-//! range and the values; `mpm_world_add_tractions` checks the world, the output pointer and the
-//! face's number, then (as the kernel) the declaration, the face and traction, the particle
-//! range and the capacity.
+//! per-particle values check the world and the pointers (and the field's number), then the
+//! declaration, the particle range and the values; `mpm_world_add_tractions` checks the world,
+//! the output pointer and the face's number, then (as the kernel) the declaration, the face and
+//! traction, the particle range and the capacity.
 
-use crate::defs::{face_from_c, vec3, MpmFaceValue};
+use crate::defs::{face_from_c, scalar_field_from_c, vec3, MpmFaceValue, MpmScalarFieldValue};
 use crate::status::MpmStatus;
 use crate::world::{id_range, put, world_at, world_ref, MpmIdRange, MpmWorld};
 use crate::{guard, mpm_real, non_null, MpmVec3};
-use kernel::World;
+use kernel::{ScalarField, World};
 
 /// `Err(UnknownParticle)` unless particles `first .. first + count` exist: checked before any
 /// array of `count` values is formed, so a count past the particles reads nothing.
@@ -109,6 +110,98 @@ pub unsafe extern "C" fn mpm_world_set_particle_damping(
         w.set_particle_damping(first, g, p)?;
         Ok(())
     })
+}
+
+/// Which column of a transported scalar a setter writes.
+#[derive(Clone, Copy)]
+enum ScalarColumn {
+    /// The value (temperature or concentration potential).
+    Value,
+    /// The source.
+    Source,
+}
+
+/// Sets `count` values of column `which` of `field` from `values`, starting at particle
+/// `first`: the checks and the call both scalar setters share.
+///
+/// # Safety
+/// As `mpm_world_set_particle_scalar`.
+unsafe fn set_scalar(
+    world: *mut MpmWorld,
+    field: MpmScalarFieldValue,
+    which: ScalarColumn,
+    first: u32,
+    values: *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        non_null(values)?;
+        let field = scalar_field_from_c(field)?;
+        let effects = w.def().effects;
+        let transport = match field {
+            ScalarField::Temperature => effects.heat,
+            ScalarField::Concentration => effects.diffusion,
+        };
+        let declared = match which {
+            ScalarColumn::Value => transport.is_some(),
+            ScalarColumn::Source => transport.is_some_and(|t| t.sources),
+        };
+        if !declared {
+            return Err(MpmStatus::EffectNotDeclared);
+        }
+        existing(&w, first, count)?;
+        // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most the
+        // particle count.
+        let v = unsafe { column(values, count) };
+        match which {
+            ScalarColumn::Value => w.set_particle_scalar(field, first, v)?,
+            ScalarColumn::Source => w.set_particle_sources(field, first, v)?,
+        }
+        Ok(())
+    })
+}
+
+/// Sets the value of a transported scalar of particles `first .. first + count` from `values`
+/// (`count` values): the temperature, K (`MPM_SCALAR_FIELD_TEMPERATURE`, needs
+/// `MpmEffects::heat`) or the concentration potential c / c_sat
+/// (`MPM_SCALAR_FIELD_CONCENTRATION`, needs `MpmEffects::diffusion`). Values start at 0. A
+/// field out of range is `MPM_STATUS_INVALID_ENUM`; refused with `MPM_STATUS_NON_FINITE_INPUT`
+/// if any value is not finite (none is set). The view's `temperature` and `concentration`
+/// show the values, `grid_temperature` and `grid_concentration` the grid's after a step.
+///
+/// # Safety
+/// `world` is NULL or a world; `values` is NULL or valid for reads of `count` values.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_particle_scalar(
+    world: *mut MpmWorld,
+    field: MpmScalarFieldValue,
+    first: u32,
+    values: *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe { set_scalar(world, field, ScalarColumn::Value, first, values, count) }
+}
+
+/// Sets the source of a transported scalar of particles `first .. first + count` from
+/// `values` (`count` values): W/m^3 for the temperature, 1/s for the concentration potential;
+/// the source stays until set again. Needs the field declared with `MpmTransport::sources`
+/// (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise). Refused as `mpm_world_set_particle_scalar`.
+///
+/// # Safety
+/// As `mpm_world_set_particle_scalar`.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_particle_sources(
+    world: *mut MpmWorld,
+    field: MpmScalarFieldValue,
+    first: u32,
+    values: *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe { set_scalar(world, field, ScalarColumn::Source, first, values, count) }
 }
 
 /// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each

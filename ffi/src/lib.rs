@@ -7,7 +7,7 @@
 //! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
 //!   dt, step.
 //! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
-//!   thermostat's alpha.
+//!   thermostat's alpha, temperatures, concentrations and their sources.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
 //!
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer

@@ -44,6 +44,17 @@ pub struct MpmParticlesView {
     /// `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
     /// scatters.
     pub affine: [*const mpm_real; 9],
+    /// Temperatures, K (NULL unless `MpmEffects::heat`).
+    pub temperature: *const mpm_real,
+    /// Concentration potentials c / c_sat (NULL unless `MpmEffects::diffusion`).
+    pub concentration: *const mpm_real,
+    /// The grid's temperature at each particle after the last step, K: what a feature that
+    /// depends on temperature should read, since the particles' own values keep any variation
+    /// within a cell (NULL unless `MpmEffects::heat`).
+    pub grid_temperature: *const mpm_real,
+    /// The grid's concentration potential at each particle after the last step (NULL unless
+    /// `MpmEffects::diffusion`).
+    pub grid_concentration: *const mpm_real,
 }
 
 /// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
@@ -94,6 +105,8 @@ pub unsafe extern "C" fn mpm_world_particles(
         let forces = def.effects.particle_forces;
         let per_particle = def.effects.damping.is_some_and(|dm| dm.per_particle);
         let apic = def.transfer == kernel::Transfer::Apic;
+        let heat = def.effects.heat.is_some();
+        let diffusion = def.effects.diffusion.is_some();
         let out = MpmParticlesView {
             count: v.count,
             dimension: v.dimension as u32,
@@ -115,6 +128,10 @@ pub unsafe extern "C" fn mpm_world_particles(
             affine: core::array::from_fn(|k| {
                 axis(v.affine[k / 3][k % 3], apic && k / 3 < d && k % 3 < d)
             }),
+            temperature: axis(v.temperature, heat),
+            concentration: axis(v.concentration, diffusion),
+            grid_temperature: axis(v.grid_temperature, heat),
+            grid_concentration: axis(v.grid_concentration, diffusion),
         };
         // SAFETY: checked non-NULL.
         unsafe { put(view_out, out) };

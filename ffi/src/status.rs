@@ -34,7 +34,8 @@ pub enum MpmStatus {
     InvalidParticlesPerCell = 11,
     /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
-    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, or not finite.
+    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
+    /// <= 0, conductivity or diffusivity < 0, or not finite.
     InvalidMaterial = 13,
     /// The material table is full.
     MaterialCapacityExceeded = 14,
@@ -42,7 +43,8 @@ pub enum MpmStatus {
     ParticleCapacityExceeded = 15,
     /// A material id that names no material.
     UnknownMaterial = 16,
-    /// A position, velocity, mass or volume that is NaN or infinite.
+    /// A position, velocity, mass or volume that is NaN or infinite (or a particle force,
+    /// temperature, concentration or source).
     NonFiniteInput = 17,
     /// A mass or volume <= 0.
     NonPositiveMassOrVolume = 18,
@@ -58,8 +60,8 @@ pub enum MpmStatus {
     InvalidRegion = 22,
     /// An effect parameter out of range: a schedule with more than 8 points, times that do not
     /// increase or values not finite; a damping value < 0 or not finite; a thermostat gain or
-    /// bound <= 0; a body force not finite; a traction not finite or on a face the dimension
-    /// lacks.
+    /// bound <= 0; a body force not finite; a fixed or flux face value of heat or diffusion not
+    /// finite; a traction not finite or on a face the dimension lacks.
     InvalidEffect = 23,
     /// The call needs an effect that the world's definition does not declare.
     EffectNotDeclared = 24,

@@ -18,8 +18,8 @@ use common::Lang;
 use core::mem::{align_of, offset_of, size_of};
 use kernel::{
     memory_requirements, Boundary, Damping, Dimension, Effects, Error, Face, Feedback, MaterialDef,
-    MaterialModel, ParticleBatch, Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3,
-    World, WorldDef,
+    MaterialModel, ParticleBatch, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction,
+    Transfer, Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 use mpm_gimp::*;
 use std::collections::BTreeSet;
@@ -104,6 +104,8 @@ fn rust_layout() -> String {
         type_line!("MpmFace", MpmFace),
         type_line!("MpmMaterialModel", MpmMaterialModel),
         type_line!("MpmParticleStatus", MpmParticleStatus),
+        type_line!("MpmScalarBoundaryKind", MpmScalarBoundaryKind),
+        type_line!("MpmScalarField", MpmScalarField),
     ];
     lines.extend(struct_lines!(MpmVec3 { x, y, z }));
     lines.extend(struct_lines!(MpmSchedule {
@@ -124,12 +126,20 @@ fn rust_layout() -> String {
         feedback,
         per_particle,
     }));
+    lines.extend(struct_lines!(MpmScalarBoundary { kind, value }));
+    lines.extend(struct_lines!(MpmTransport {
+        declared,
+        faces,
+        sources,
+    }));
     lines.extend(struct_lines!(MpmEffects {
         damping,
         particle_forces,
         traction_capacity,
         body_force,
         body_force_scale,
+        heat,
+        diffusion,
     }));
     lines.extend(struct_lines!(MpmWorldDef {
         dimension,
@@ -155,6 +165,9 @@ fn rust_layout() -> String {
         youngs_modulus,
         poisson_ratio,
         density,
+        heat_capacity,
+        conductivity,
+        diffusivity,
         internal_cookie,
     }));
     lines.extend(struct_lines!(MpmParticlesView {
@@ -171,6 +184,10 @@ fn rust_layout() -> String {
         force,
         damping,
         affine,
+        temperature,
+        concentration,
+        grid_temperature,
+        grid_concentration,
     }));
     lines.extend(struct_lines!(MpmDiagnostics {
         particle_count,
@@ -258,7 +275,7 @@ fn check_layout(lang: Lang, name: &str) -> String {
 
     let (structs, enums) = header_declarations();
     assert!(
-        structs.len() >= 13,
+        structs.len() >= 15,
         "the header parse found only {structs:?}"
     );
     for (s, fields) in &structs {
@@ -278,7 +295,7 @@ fn check_layout(lang: Lang, name: &str) -> String {
         );
     }
     assert!(
-        enums.len() >= 9,
+        enums.len() >= 11,
         "the header parse found only enums {enums:?}"
     );
     for e in &enums {
@@ -331,7 +348,7 @@ fn check_misuse(name: &str, flags: &[&str]) {
     let ok_lines = out.lines().filter(|l| l.starts_with("ok ")).count();
     assert_eq!(n, ok_lines, "the count differs from the printed checks");
     // The program's checks as written: a shrinking count means checks went missing.
-    assert!(n >= 700, "only {n} misuse checks ran");
+    assert!(n >= 1000, "only {n} misuse checks ran");
 }
 
 /// Expectation: with strict warnings (C99, -Wall -Wextra -Werror -pedantic), every misuse in
@@ -339,8 +356,11 @@ fn check_misuse(name: &str, flags: &[&str]) {
 /// definitions and enums, non-finite and out-of-range inputs, capacity overflow, unknown
 /// materials, out-of-domain positions, short output buffers, a disk in 3D and a sphere in 2D,
 /// non-worlds, damaged snapshots; and for the effects: flags that are not 0 or 1, schedules and
-/// effect values out of range, effects not declared, unknown particle ids (refused before any
-/// array is read), non-finite forces and damping, faces out of range, the traction capacity) is
+/// effect values out of range, face kinds and scalar fields out of range, effects not declared
+/// (heat, diffusion and their sources included), unknown particle ids (refused before any array
+/// is read), non-finite forces, damping, temperatures, concentrations and sources, faces out of
+/// range, the traction capacity; materials with a bad heat capacity, conductivity or
+/// diffusivity) is
 /// refused with its status, leaves every world's bytes and every output untouched, and every
 /// status string is a description ("unknown status" for values outside the enum, never NULL).
 /// The program ends with "all N misuse checks passed".
@@ -481,6 +501,21 @@ impl Text {
             hex(&w.feedback_alpha().to_ne_bytes()),
         ));
 
+        let heat = def.effects.heat.is_some();
+        let diffusion = def.effects.diffusion.is_some();
+        let scalars = [
+            (v.temperature, heat),
+            (v.concentration, diffusion),
+            (v.grid_temperature, heat),
+            (v.grid_concentration, diffusion),
+        ];
+        let [t, c, gt, gc] = scalars.map(|(col, used)| columns(&[col], &|_| used));
+        self.line(format!(
+            "{label}: transport present {} temperature {t} concentration {c} grid_temperature \
+             {gt} grid_concentration {gc}",
+            present(4, &|k| scalars[k].1),
+        ));
+
         let s = w.diagnostics();
         let f = |x: f64| hex(&x.to_ne_bytes());
         self.line(format!(
@@ -584,6 +619,7 @@ fn rust_same_state() -> String {
         youngs_modulus: 500000.0,
         poisson_ratio: 0.25,
         density: 750.0,
+        ..MaterialDef::DEFAULT
     };
     let rubber = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
     let soft = w.add_material(&soft).expect("soft");
@@ -689,6 +725,12 @@ fn effects2d(t: &mut Text) {
     t.line("scene effects2d");
     let mut faces = [Boundary::Slip; 6];
     faces[Face::YMin as usize] = Boundary::Stick;
+    let mut heat_faces = [ScalarBoundary::Insulated; 6];
+    heat_faces[Face::YMin as usize] = ScalarBoundary::Fixed(320.0);
+    heat_faces[Face::XMin as usize] = ScalarBoundary::Flux(-2048.0);
+    let mut diffusion_faces = [ScalarBoundary::Insulated; 6];
+    diffusion_faces[Face::XMax as usize] = ScalarBoundary::Fixed(1.0);
+    diffusion_faces[Face::YMin as usize] = ScalarBoundary::Flux(0.25);
     let def = WorldDef {
         cells: [32, 32, 1],
         cell_size: 0.03125,
@@ -711,13 +753,27 @@ fn effects2d(t: &mut Text) {
             traction_capacity: 16,
             body_force: Vec3::new(0.5, 0.25, 0.0),
             body_force_scale: schedule(&[(0.0, 0.0), (0.03125, 1.0), (0.0625, 0.0)]),
+            heat: Some(Transport {
+                faces: heat_faces,
+                sources: true,
+            }),
+            diffusion: Some(Transport {
+                faces: diffusion_faces,
+                sources: false,
+            }),
         },
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
     let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
     t.state("empty", &w);
-    let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
+    let rubber = MaterialDef {
+        heat_capacity: 512.0,
+        conductivity: 4096.0,
+        diffusivity: 0.0078125,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&rubber).expect("rubber");
     t.line(format!("materials {id}"));
     let ids = w
         .fill_box(
@@ -737,6 +793,14 @@ fn effects2d(t: &mut Text) {
     let alpha_p: Vec<Real> = (0..32).map(|i| 0.25 * (i % 2) as Real).collect();
     w.set_particle_damping(8, &alpha_g, &alpha_p)
         .expect("damping");
+    let heat: Vec<Real> = (0..n)
+        .map(|i| 256.0 + 8.0 * (i % 8) as Real + 0.5 * (i / 8) as Real)
+        .collect();
+    w.set_particle_scalar(ScalarField::Temperature, 0, &heat)
+        .expect("temperatures");
+    let source: Vec<Real> = (0..8).map(|i| 65536.0 * (i % 2) as Real).collect();
+    w.set_particle_sources(ScalarField::Temperature, n - 8, &source)
+        .expect("sources");
     let top = w
         .add_tractions(n - 16..n, Face::YMax, Vec3::new(0.0, -512.0, 0.0))
         .expect("tractions");
@@ -747,6 +811,9 @@ fn effects2d(t: &mut Text) {
     w.set_particle_forces(4, [&[-0.25; 8], &[0.5; 8], &[]])
         .expect("forces again");
     w.clear_tractions();
+    let concentration: Vec<Real> = (0..16).map(|i| 0.0625 * i as Real).collect();
+    w.set_particle_scalar(ScalarField::Concentration, 8, &concentration)
+        .expect("concentrations");
     let left = w
         .add_tractions(0..4, Face::XMin, Vec3::new(128.0, 0.0, 0.0))
         .expect("tractions");
@@ -779,6 +846,7 @@ fn effects3d(t: &mut Text) {
             traction_capacity: 8,
             body_force: Vec3::new(0.0, 0.0, -2.0),
             body_force_scale: Schedule::constant(1.0),
+            ..Effects::NONE
         },
         ..WorldDef::DEFAULT
     };
@@ -810,14 +878,17 @@ fn effects3d(t: &mut Text) {
 
 /// Expectation: the four scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
 /// stick floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards
-/// an open face, quadratic B-spline and USL; a 2D block with every effect declared, whose
-/// forces and tractions change halfway; a 3D sphere with APIC, damping, particle forces,
-/// tractions and a body force, cubic B-spline and USF) leave, after every seeding call, every
-/// change of an effect and every step, the same world bytes, copied-out columns (positions,
-/// velocities, stress, J, status), view columns (mass, V0, material, H, forces, damping, APIC
-/// moments, and which pointers are NULL), traction counts, thermostat alpha, diagnostics
-/// (angular momentum included, bit for bit) and step reports through the C interface as
-/// through the Rust kernel API.
+/// an open face, quadratic B-spline and USL; a 2D block with every effect declared, heat
+/// conduction and diffusion in a conducting material with temperatures set included, whose
+/// forces, tractions and concentrations change halfway; a 3D sphere with APIC, damping,
+/// particle forces, tractions and a body force, cubic B-spline and USF) leave, after every
+/// seeding call, every change of an effect and every step, the same world bytes, copied-out
+/// columns (positions, velocities, stress, J, status), view columns (mass, V0, material, H,
+/// forces, damping, APIC moments, temperatures and concentrations and their grid values, and
+/// which pointers are NULL), traction counts, thermostat alpha, diagnostics (angular momentum
+/// included, bit for bit) and step reports through the C interface as through the Rust kernel
+/// API. The temperatures change in every step and the concentrations in every step after they
+/// are set, so the transport is part of what is compared.
 #[test]
 fn same_state_through_c_and_rust() {
     let exe = common::build(
@@ -833,6 +904,42 @@ fn same_state_through_c_and_rust() {
     // through the open face, and none of the 2D scene does (it has no open face).
     assert_eq!(escaped_in(&c, "plane2d"), 0);
     assert_eq!(escaped_in(&c, "space3d"), 64);
+    // Conduction and diffusion run: every step changes the temperatures (and their grid
+    // values), each step after the concentrations are set changes those.
+    let changes = |column: &str, from: usize| {
+        let hashes = column_after_steps(&c, "effects2d", column);
+        assert_eq!(hashes.len(), 16, "{column}: {hashes:?}");
+        hashes[from..].windows(2).all(|w| w[0] != w[1])
+    };
+    assert!(changes("temperature", 0), "the temperatures did not change");
+    assert!(changes("grid_temperature", 0));
+    assert!(
+        changes("concentration", 8),
+        "the concentrations did not change"
+    );
+    assert!(changes("grid_concentration", 8));
+}
+
+/// The hash of `column` on the `transport` line after each step of `scene`.
+fn column_after_steps(text: &str, scene: &str, column: &str) -> Vec<String> {
+    let mut current = "";
+    let mut hashes = Vec::new();
+    for line in text.lines() {
+        if let Some(name) = line.strip_prefix("scene ") {
+            current = name;
+        } else if current == scene
+            && line.starts_with("after step ")
+            && line.contains(": transport present ")
+        {
+            let words: Vec<&str> = line.split(' ').collect();
+            let i = words
+                .iter()
+                .position(|w| *w == column)
+                .expect("the column in a transport line");
+            hashes.push(words[i + 1].to_string());
+        }
+    }
+    hashes
 }
 
 /// The sum of `escaped` over the step lines of `scene`.
@@ -908,6 +1015,16 @@ fn defaults_match_the_kernel() {
     assert_eq!(e.traction_capacity, 0);
     assert_eq!(e.body_force, MpmVec3::default());
     assert_eq!(e.body_force_scale, zero);
+    let insulated = MpmScalarBoundary {
+        kind: MpmScalarBoundaryKind::Insulated as u32,
+        value: 0.0,
+    };
+    let undeclared = MpmTransport {
+        declared: 0,
+        faces: [insulated; 6],
+        sources: 0,
+    };
+    assert_eq!((e.heat, e.diffusion), (undeclared, undeclared));
     assert_ne!(wd.internal_cookie, 0);
 
     let m = MaterialDef::DEFAULT;
@@ -915,6 +1032,9 @@ fn defaults_match_the_kernel() {
     assert_eq!(md.youngs_modulus, m.youngs_modulus);
     assert_eq!(md.poisson_ratio, m.poisson_ratio);
     assert_eq!(md.density, m.density);
+    assert_eq!(md.heat_capacity, m.heat_capacity);
+    assert_eq!(md.conductivity, m.conductivity);
+    assert_eq!(md.diffusivity, m.diffusivity);
     assert_ne!(md.internal_cookie, 0);
     assert_ne!(md.internal_cookie, wd.internal_cookie);
 
@@ -996,11 +1116,54 @@ fn schedules(points: &[(Real, Real)]) -> (MpmSchedule, Schedule) {
     (c, k)
 }
 
+/// A face condition of a transported scalar in C form.
+fn scalar_face(kind: MpmScalarBoundaryKind, value: Real) -> MpmScalarBoundary {
+    MpmScalarBoundary {
+        kind: kind as u32,
+        value,
+    }
+}
+
+/// The heat (`heat`) or diffusion transport of `d`.
+fn transport_of(d: &mut MpmWorldDef, heat: bool) -> &mut MpmTransport {
+    if heat {
+        &mut d.effects.heat
+    } else {
+        &mut d.effects.diffusion
+    }
+}
+
+/// The definition stored in a world made from `c` (which must be accepted).
+fn stored_def(c: &MpmWorldDef) -> WorldDef {
+    let mut req = MpmMemoryRequirements::default();
+    // SAFETY: valid pointers to locals.
+    assert_eq!(
+        unsafe { mpm_memory_requirements(c, &mut req) },
+        MpmStatus::Ok
+    );
+    let mut storage = vec![0u8; req.bytes + req.align];
+    let offset = storage.as_ptr().align_offset(req.align);
+    let mem = storage[offset..].as_mut_ptr();
+    let mut world = core::ptr::null_mut();
+    // SAFETY: `mem` holds `req.bytes` bytes at the required alignment.
+    assert_eq!(
+        unsafe { mpm_world_init(c, mem.cast(), req.bytes, &mut world) },
+        MpmStatus::Ok
+    );
+    // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
+    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+    kernel::WorldRef::open(bytes).expect("a world").def()
+}
+
 /// Expectation: a definition that declares every effect (APIC, damping with schedules, a
-/// thermostat and per-particle columns, particle forces, tractions, a scaled body force), set
-/// field by field from C, makes a world whose stored definition is exactly the Rust one, and
-/// `mpm_world_get_def` gives back the C definition. Fields of what is not declared are
-/// ignored (and read back as zero); a flag that is not 0 or 1 is `MPM_STATUS_INVALID_ENUM`.
+/// thermostat and per-particle columns, particle forces, tractions, a scaled body force, heat
+/// conduction with fixed, flux and insulated faces and sources, diffusion), set field by field
+/// from C, makes a world whose stored definition is exactly the Rust one, and
+/// `mpm_world_get_def` gives back the C definition. A material with heat capacity,
+/// conductivity and diffusivity added from C is the kernel's material. Fields of what is not
+/// declared are ignored (and read back as zero), and so is the value of an insulated face; a
+/// flag that is not 0 or 1 and a face kind out of range are `MPM_STATUS_INVALID_ENUM`, a fixed
+/// or flux value not finite `MPM_STATUS_INVALID_EFFECT`.
 #[test]
 fn effects_definition_round_trip() {
     #[cfg(not(feature = "f64"))]
@@ -1035,6 +1198,52 @@ fn effects_definition_round_trip() {
             z: 0.0,
         },
         body_force_scale: scale_c,
+        heat: MpmTransport {
+            declared: 1,
+            faces: [
+                scalar_face(MpmScalarBoundaryKind::Fixed, 300.5),
+                scalar_face(MpmScalarBoundaryKind::Flux, -12.25),
+                scalar_face(MpmScalarBoundaryKind::Insulated, 0.0),
+                scalar_face(MpmScalarBoundaryKind::Fixed, -4.0),
+                scalar_face(MpmScalarBoundaryKind::Flux, 8.0),
+                scalar_face(MpmScalarBoundaryKind::Insulated, 0.0),
+            ],
+            sources: 1,
+        },
+        diffusion: MpmTransport {
+            declared: 1,
+            faces: [
+                scalar_face(MpmScalarBoundaryKind::Insulated, 0.0),
+                scalar_face(MpmScalarBoundaryKind::Fixed, 1.0),
+                scalar_face(MpmScalarBoundaryKind::Flux, 0.5),
+                scalar_face(MpmScalarBoundaryKind::Insulated, 0.0),
+                scalar_face(MpmScalarBoundaryKind::Insulated, 0.0),
+                scalar_face(MpmScalarBoundaryKind::Fixed, 0.0),
+            ],
+            sources: 0,
+        },
+    };
+    let heat = Transport {
+        faces: [
+            ScalarBoundary::Fixed(300.5),
+            ScalarBoundary::Flux(-12.25),
+            ScalarBoundary::Insulated,
+            ScalarBoundary::Fixed(-4.0),
+            ScalarBoundary::Flux(8.0),
+            ScalarBoundary::Insulated,
+        ],
+        sources: true,
+    };
+    let diffusion = Transport {
+        faces: [
+            ScalarBoundary::Insulated,
+            ScalarBoundary::Fixed(1.0),
+            ScalarBoundary::Flux(0.5),
+            ScalarBoundary::Insulated,
+            ScalarBoundary::Insulated,
+            ScalarBoundary::Fixed(0.0),
+        ],
+        sources: false,
     };
     let expected = WorldDef {
         cells: [8, 8, 1],
@@ -1055,6 +1264,8 @@ fn effects_definition_round_trip() {
             traction_capacity: 5,
             body_force: Vec3::new(1.5, -2.0, 0.0),
             body_force_scale: scale_k,
+            heat: Some(heat),
+            diffusion: Some(diffusion),
         },
         ..WorldDef::DEFAULT
     };
@@ -1091,6 +1302,88 @@ fn effects_definition_round_trip() {
     );
     let bits = |x: &MpmWorldDef| format!("{x:?}");
     assert_eq!(bits(&back), bits(&c));
+
+    // A conducting, diffusing material from C is the kernel's material.
+    #[cfg(not(feature = "f64"))]
+    let mut m = mpm_material_def_default_f32();
+    #[cfg(feature = "f64")]
+    let mut m = mpm_material_def_default_f64();
+    m.heat_capacity = 2048.0;
+    m.conductivity = 0.75;
+    m.diffusivity = 1.0 / 1024.0;
+    let mut id = u32::MAX;
+    // SAFETY: `world` is the world just made; the other pointers are locals.
+    assert_eq!(
+        unsafe { mpm_world_add_material(world, &m, &mut id) },
+        MpmStatus::Ok
+    );
+    // SAFETY: as above.
+    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+    assert_eq!(
+        kernel::WorldRef::open(bytes).expect("a world").material(id),
+        Some(MaterialDef {
+            heat_capacity: 2048.0,
+            conductivity: 0.75,
+            diffusivity: 1.0 / 1024.0,
+            ..MaterialDef::DEFAULT
+        })
+    );
+
+    // The value of an insulated face is not read.
+    let mut ignored = c;
+    ignored.effects.heat.faces[2].value = Real::NAN;
+    ignored.effects.diffusion.faces[0].value = Real::INFINITY;
+    assert_eq!(stored_def(&ignored), expected);
+
+    // Transports not declared: their other fields are not read, and read back as zero.
+    let mut no_transport = c;
+    no_transport.effects.heat.declared = 0;
+    no_transport.effects.heat.sources = 7;
+    no_transport.effects.heat.faces[0] = MpmScalarBoundary {
+        kind: 99,
+        value: Real::NAN,
+    };
+    no_transport.effects.diffusion.declared = 0;
+    no_transport.effects.diffusion.sources = u32::MAX;
+    no_transport.effects.diffusion.faces[5].kind = u32::MAX;
+    let without = WorldDef {
+        effects: Effects {
+            heat: None,
+            diffusion: None,
+            ..expected.effects
+        },
+        ..expected
+    };
+    assert_eq!(stored_def(&no_transport), without);
+    {
+        let mut req3 = MpmMemoryRequirements::default();
+        // SAFETY: valid pointers to locals.
+        assert_eq!(
+            unsafe { mpm_memory_requirements(&no_transport, &mut req3) },
+            MpmStatus::Ok
+        );
+        assert!(req3.bytes < req.bytes, "declared transports take memory");
+        let mut storage = vec![0u8; req3.bytes + req3.align];
+        let offset = storage.as_ptr().align_offset(req3.align);
+        let mut w = core::ptr::null_mut();
+        let mut back = c;
+        // SAFETY: the memory holds `req3.bytes` bytes at the required alignment; `back` is a
+        // local.
+        unsafe {
+            let mem = storage[offset..].as_mut_ptr().cast();
+            assert_eq!(
+                mpm_world_init(&no_transport, mem, req3.bytes, &mut w),
+                MpmStatus::Ok
+            );
+            assert_eq!(mpm_world_get_def(w, &mut back), MpmStatus::Ok);
+        }
+        let zero = MpmTransport {
+            declared: 0,
+            faces: [scalar_face(MpmScalarBoundaryKind::Insulated, 0.0); 6],
+            sources: 0,
+        };
+        assert_eq!((back.effects.heat, back.effects.diffusion), (zero, zero));
+    }
 
     // Not declared: the other fields are not read, and read back as zero.
     let mut undeclared = c;
@@ -1138,5 +1431,51 @@ fn effects_definition_round_trip() {
         let mut d = c;
         d.transfer = v;
         assert_eq!(refused(&d), MpmStatus::InvalidEnum, "transfer {v}");
+        for (name, heat) in [("heat", true), ("diffusion", false)] {
+            let mut d = c;
+            transport_of(&mut d, heat).declared = v;
+            assert_eq!(refused(&d), MpmStatus::InvalidEnum, "{name}.declared {v}");
+            let mut d = c;
+            transport_of(&mut d, heat).sources = v;
+            assert_eq!(refused(&d), MpmStatus::InvalidEnum, "{name}.sources {v}");
+        }
+    }
+
+    // Face kinds out of range, and fixed or flux values that are not finite.
+    for k in 0..6 {
+        for v in [3, 4, 0x8000_0000, u32::MAX] {
+            let mut d = c;
+            d.effects.heat.faces[k].kind = v;
+            assert_eq!(
+                refused(&d),
+                MpmStatus::InvalidEnum,
+                "heat face {k} kind {v}"
+            );
+            let mut d = c;
+            d.effects.diffusion.faces[k].kind = v;
+            assert_eq!(
+                refused(&d),
+                MpmStatus::InvalidEnum,
+                "diffusion face {k} kind {v}"
+            );
+        }
+        for kind in [MpmScalarBoundaryKind::Fixed, MpmScalarBoundaryKind::Flux] {
+            for x in [Real::NAN, Real::INFINITY, Real::NEG_INFINITY] {
+                let mut d = c;
+                d.effects.heat.faces[k] = scalar_face(kind, x);
+                assert_eq!(
+                    refused(&d),
+                    MpmStatus::InvalidEffect,
+                    "heat face {k} {kind:?} {x}"
+                );
+                let mut d = c;
+                d.effects.diffusion.faces[k] = scalar_face(kind, x);
+                assert_eq!(
+                    refused(&d),
+                    MpmStatus::InvalidEffect,
+                    "diffusion face {k} {kind:?} {x}"
+                );
+            }
+        }
     }
 }

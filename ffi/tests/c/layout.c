@@ -30,10 +30,14 @@ PROBE(MpmBoundary)
 PROBE(MpmFace)
 PROBE(MpmMaterialModel)
 PROBE(MpmParticleStatus)
+PROBE(MpmScalarBoundaryKind)
+PROBE(MpmScalarField)
 PROBE(MpmVec3)
 PROBE(MpmSchedule)
 PROBE(MpmFeedback)
 PROBE(MpmDamping)
+PROBE(MpmScalarBoundary)
+PROBE(MpmTransport)
 PROBE(MpmEffects)
 PROBE(MpmWorldDef)
 PROBE(MpmMaterialDef)
@@ -77,6 +81,8 @@ int main(void) {
     TYPE(MpmFace);
     TYPE(MpmMaterialModel);
     TYPE(MpmParticleStatus);
+    TYPE(MpmScalarBoundaryKind);
+    TYPE(MpmScalarField);
 
     TYPE(MpmVec3);
     FIELD(MpmVec3, x);
@@ -101,12 +107,23 @@ int main(void) {
     FIELD(MpmDamping, feedback);
     FIELD(MpmDamping, per_particle);
 
+    TYPE(MpmScalarBoundary);
+    FIELD(MpmScalarBoundary, kind);
+    FIELD(MpmScalarBoundary, value);
+
+    TYPE(MpmTransport);
+    FIELD(MpmTransport, declared);
+    FIELD(MpmTransport, faces);
+    FIELD(MpmTransport, sources);
+
     TYPE(MpmEffects);
     FIELD(MpmEffects, damping);
     FIELD(MpmEffects, particle_forces);
     FIELD(MpmEffects, traction_capacity);
     FIELD(MpmEffects, body_force);
     FIELD(MpmEffects, body_force_scale);
+    FIELD(MpmEffects, heat);
+    FIELD(MpmEffects, diffusion);
 
     TYPE(MpmWorldDef);
     FIELD(MpmWorldDef, dimension);
@@ -132,6 +149,9 @@ int main(void) {
     FIELD(MpmMaterialDef, youngs_modulus);
     FIELD(MpmMaterialDef, poisson_ratio);
     FIELD(MpmMaterialDef, density);
+    FIELD(MpmMaterialDef, heat_capacity);
+    FIELD(MpmMaterialDef, conductivity);
+    FIELD(MpmMaterialDef, diffusivity);
     FIELD(MpmMaterialDef, internal_cookie);
 
     TYPE(MpmParticlesView);
@@ -148,6 +168,10 @@ int main(void) {
     FIELD(MpmParticlesView, force);
     FIELD(MpmParticlesView, damping);
     FIELD(MpmParticlesView, affine);
+    FIELD(MpmParticlesView, temperature);
+    FIELD(MpmParticlesView, concentration);
+    FIELD(MpmParticlesView, grid_temperature);
+    FIELD(MpmParticlesView, grid_concentration);
 
     TYPE(MpmDiagnostics);
     FIELD(MpmDiagnostics, particle_count);

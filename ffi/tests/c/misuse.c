@@ -247,7 +247,8 @@ static MpmWorldDef def_3d(void) {
 }
 
 /* The 2D definition with every effect declared: APIC, damping (a constant grid schedule, a
- * thermostat, per-particle columns), particle forces, 8 tractions and a body force. */
+ * thermostat, per-particle columns), particle forces, 8 tractions, a body force, and heat
+ * conduction and diffusion, both with sources. */
 static MpmWorldDef def_2d_effects(void) {
     MpmWorldDef d = def_2d();
     d.material_capacity = 1;
@@ -264,11 +265,19 @@ static MpmWorldDef def_2d_effects(void) {
     d.effects.body_force = v3(0.5, 0.0, 0.0);
     d.effects.body_force_scale.points = 1;
     d.effects.body_force_scale.values[0] = R(1.0);
+    d.effects.heat.declared = 1;
+    d.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    d.effects.heat.faces[MPM_FACE_Y_MIN].value = R(300.0);
+    d.effects.heat.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX;
+    d.effects.heat.faces[MPM_FACE_X_MAX].value = R(10.0);
+    d.effects.heat.sources = 1;
+    d.effects.diffusion.declared = 1;
+    d.effects.diffusion.sources = 1;
     return d;
 }
 
-/* The 3D definition with damping (grid only: no per-particle columns), particle forces and 4
- * tractions; FLIP. */
+/* The 3D definition with damping (grid only: no per-particle columns), particle forces, 4
+ * tractions and heat conduction without sources (every face insulated); FLIP. */
 static MpmWorldDef def_3d_effects(void) {
     MpmWorldDef d = def_3d();
     d.effects.damping.declared = 1;
@@ -276,6 +285,7 @@ static MpmWorldDef def_3d_effects(void) {
     d.effects.damping.grid.values[0] = R(0.5);
     d.effects.particle_forces = 1;
     d.effects.traction_capacity = 4;
+    d.effects.heat.declared = 1;
     return d;
 }
 
@@ -323,7 +333,7 @@ static MpmParticleArrays arrays_of(const Batch *b) {
 static MpmWorld *g_w2;      /* the 2D world */
 static MpmWorld *g_w3;      /* the 3D world */
 static MpmWorld *g_we2;     /* the 2D world with every effect declared */
-static MpmWorld *g_we3;     /* the 3D world with damping, forces and tractions */
+static MpmWorld *g_we3;     /* the 3D world with damping, forces, tractions and heat */
 static size_t g_w2_bytes;   /* its extent */
 static MpmWorldDef g_def2;  /* its definition */
 
@@ -530,6 +540,37 @@ static void null_pointers(void) {
                 mpm_world_feedback_alpha(NULL, OUT(double)));
         REFUSED("null: mpm_world_feedback_alpha alpha_out", MPM_STATUS_NULL_POINTER,
                 mpm_world_feedback_alpha(g_we2, NULL));
+
+        REFUSED("null: mpm_world_set_particle_scalar world", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(NULL, MPM_SCALAR_FIELD_TEMPERATURE, 0, f, 1));
+        REFUSED("null: mpm_world_set_particle_scalar values", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_scalar values (concentration)",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_CONCENTRATION, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_scalar values with count 0",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 0));
+        REFUSED("null: mpm_world_set_particle_sources world", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_sources(NULL, MPM_SCALAR_FIELD_TEMPERATURE, 0, f, 1));
+        REFUSED("null: mpm_world_set_particle_sources values", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_sources values (concentration)",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_CONCENTRATION, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_sources values with count 0",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 0));
+        /* Pointers are checked before the field's number and the declaration. */
+        REFUSED("null: mpm_world_set_particle_scalar values with a field out of range",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(g_we2, (MpmScalarField)7u, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_scalar values on a world without heat",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_scalar(g_w2, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 1));
+        REFUSED("null: mpm_world_set_particle_sources values on a world without sources",
+                MPM_STATUS_NULL_POINTER,
+                mpm_world_set_particle_sources(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0, NULL, 1));
     }
 }
 
@@ -593,6 +634,10 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
         BAD_WORLD("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, OUT(double)));
+        BAD_WORLD("mpm_world_set_particle_scalar",
+                  mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_TEMPERATURE, 0, b.mass, 1));
+        BAD_WORLD("mpm_world_set_particle_sources",
+                  mpm_world_set_particle_sources(w, MPM_SCALAR_FIELD_CONCENTRATION, 0, b.mass, 1));
 #undef BAD_WORLD
     }
     {
@@ -627,13 +672,16 @@ static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d)
  * out of range or not finite. Fields of an effect that is not declared are not read. */
 static void effects_def_misuse(void) {
     static const uint32_t bad_flag[] = {2u, 0x80000000u, 0xFFFFFFFFu};
+    static const uint32_t bad_kind[] = {3u, 0x80000000u, 0xFFFFFFFFu};
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     const char *label[3] = {"NaN", "+inf", "-inf"};
-    MpmWorldDef d, damped = g_def2, fed;
+    MpmWorldDef d, damped = g_def2, fed, heated = g_def2, diffused = g_def2;
     MpmMemoryRequirements req;
     unsigned k;
-    int j;
+    int j, f;
 
+    heated.effects.heat.declared = 1;
+    diffused.effects.diffusion.declared = 1;
     damped.effects.damping.declared = 1;
     fed = damped;
     fed.effects.damping.feedback.declared = 1;
@@ -663,6 +711,38 @@ static void effects_def_misuse(void) {
         d.effects.particle_forces = v;
         snprintf(name, sizeof name, "init: particle_forces %u", (unsigned)v);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.effects.heat.declared = v;
+        snprintf(name, sizeof name, "init: heat.declared %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = heated;
+        d.effects.heat.sources = v;
+        snprintf(name, sizeof name, "init: heat.sources %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.effects.diffusion.declared = v;
+        snprintf(name, sizeof name, "init: diffusion.declared %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = diffused;
+        d.effects.diffusion.sources = v;
+        snprintf(name, sizeof name, "init: diffusion.sources %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+    }
+
+    /* Face kinds of a declared transport out of the enum, on every face. */
+    for (k = 0; k < sizeof bad_kind / sizeof bad_kind[0]; k++) {
+        for (f = 0; f < 6; f++) {
+            char name[96];
+            d = heated;
+            d.effects.heat.faces[f].kind = bad_kind[k];
+            snprintf(name, sizeof name, "init: heat.faces[%d].kind %u", f, (unsigned)bad_kind[k]);
+            init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+            d = diffused;
+            d.effects.diffusion.faces[f].kind = bad_kind[k];
+            snprintf(name, sizeof name, "init: diffusion.faces[%d].kind %u", f,
+                     (unsigned)bad_kind[k]);
+            init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        }
     }
 
 #define BAD_EFFECT(name, base, stmt) \
@@ -733,6 +813,37 @@ static void effects_def_misuse(void) {
                    (d.effects.body_force_scale.points = 1,
                     d.effects.body_force_scale.values[0] = R(bad[j])));
     }
+    /* Fixed and flux values of a declared transport that are not finite, z faces in 2D
+     * included (the kernel checks every face). */
+    for (j = 0; j < 3; j++) {
+        char name[96];
+        snprintf(name, sizeof name, "init: heat fixed X_MIN %s", label[j]);
+        BAD_EFFECT(name, heated,
+                   (d.effects.heat.faces[MPM_FACE_X_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED,
+                    d.effects.heat.faces[MPM_FACE_X_MIN].value = R(bad[j])));
+        snprintf(name, sizeof name, "init: heat flux Y_MAX %s", label[j]);
+        BAD_EFFECT(name, heated,
+                   (d.effects.heat.faces[MPM_FACE_Y_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                    d.effects.heat.faces[MPM_FACE_Y_MAX].value = R(bad[j])));
+        snprintf(name, sizeof name, "init: heat fixed Z_MIN %s (2D)", label[j]);
+        BAD_EFFECT(name, heated,
+                   (d.effects.heat.faces[MPM_FACE_Z_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED,
+                    d.effects.heat.faces[MPM_FACE_Z_MIN].value = R(bad[j])));
+        snprintf(name, sizeof name, "init: diffusion fixed X_MAX %s", label[j]);
+        BAD_EFFECT(name, diffused,
+                   (d.effects.diffusion.faces[MPM_FACE_X_MAX].kind =
+                        MPM_SCALAR_BOUNDARY_KIND_FIXED,
+                    d.effects.diffusion.faces[MPM_FACE_X_MAX].value = R(bad[j])));
+        snprintf(name, sizeof name, "init: diffusion flux Y_MIN %s", label[j]);
+        BAD_EFFECT(name, diffused,
+                   (d.effects.diffusion.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                    d.effects.diffusion.faces[MPM_FACE_Y_MIN].value = R(bad[j])));
+        snprintf(name, sizeof name, "init: diffusion flux Z_MAX %s (3D)", label[j]);
+        BAD_EFFECT(name, def_3d(),
+                   (d.effects.diffusion.declared = 1,
+                    d.effects.diffusion.faces[MPM_FACE_Z_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                    d.effects.diffusion.faces[MPM_FACE_Z_MAX].value = R(bad[j])));
+    }
     BAD_EFFECT("init: feedback max_alpha NaN", fed,
                d.effects.damping.feedback.max_alpha = R(NAN));
     BAD_EFFECT("init: feedback max_alpha -inf", fed,
@@ -764,6 +875,26 @@ static void effects_def_misuse(void) {
                  d.effects.damping.grid.times[4] = R(4.0), d.effects.damping.grid.times[5] = R(5.0),
                  d.effects.damping.grid.times[6] = R(6.0), d.effects.damping.grid.times[7] = R(7.0)));
     GOOD_EFFECT("init: traction_capacity 2^24", g_def2, d.effects.traction_capacity = 1u << 24);
+    GOOD_EFFECT("init: transport fields not read when heat and diffusion are not declared",
+                g_def2,
+                (d.effects.heat.sources = 7, d.effects.heat.faces[0].kind = 99,
+                 d.effects.heat.faces[1].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED,
+                 d.effects.heat.faces[1].value = R(NAN), d.effects.diffusion.sources = 5,
+                 d.effects.diffusion.faces[3].kind = 0xFFFFFFFFu,
+                 d.effects.diffusion.faces[4].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                 d.effects.diffusion.faces[4].value = R(INFINITY)));
+    GOOD_EFFECT("init: the value of an insulated face is not read", heated,
+                (d.effects.heat.faces[MPM_FACE_X_MIN].value = R(NAN),
+                 d.effects.heat.faces[MPM_FACE_Z_MAX].value = R(-INFINITY)));
+    GOOD_EFFECT("init: heat and diffusion with every kind of face and sources", heated,
+                (d.effects.heat.faces[MPM_FACE_X_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED,
+                 d.effects.heat.faces[MPM_FACE_X_MIN].value = R(-273.0),
+                 d.effects.heat.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                 d.effects.heat.faces[MPM_FACE_X_MAX].value = R(-1e30),
+                 d.effects.heat.sources = 1, d.effects.diffusion.declared = 1,
+                 d.effects.diffusion.faces[MPM_FACE_Y_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX,
+                 d.effects.diffusion.faces[MPM_FACE_Y_MAX].value = R(0.0),
+                 d.effects.diffusion.sources = 1));
 #undef GOOD_EFFECT
 }
 
@@ -1015,6 +1146,18 @@ static void material_misuse(void) {
     BAD_MAT("material: density +inf", density, R(INFINITY));
     BAD_MAT("material: density 0", density, R(0.0));
     BAD_MAT("material: density -1000", density, R(-1000.0));
+    BAD_MAT("material: heat_capacity NaN", heat_capacity, R(NAN));
+    BAD_MAT("material: heat_capacity +inf", heat_capacity, R(INFINITY));
+    BAD_MAT("material: heat_capacity 0", heat_capacity, R(0.0));
+    BAD_MAT("material: heat_capacity -1000", heat_capacity, R(-1000.0));
+    BAD_MAT("material: conductivity NaN", conductivity, R(NAN));
+    BAD_MAT("material: conductivity +inf", conductivity, R(INFINITY));
+    BAD_MAT("material: conductivity -1", conductivity, R(-1.0));
+    BAD_MAT("material: conductivity -1e-30", conductivity, R(-1e-30));
+    BAD_MAT("material: diffusivity NaN", diffusivity, R(NAN));
+    BAD_MAT("material: diffusivity +inf", diffusivity, R(INFINITY));
+    BAD_MAT("material: diffusivity -1", diffusivity, R(-1.0));
+    BAD_MAT("material: diffusivity -inf", diffusivity, R(-INFINITY));
 #undef BAD_MAT
 }
 
@@ -1616,6 +1759,222 @@ static void effects_misuse(void) {
     expect_true("effects: feedback_alpha in [0, max_alpha]", alpha >= 0.0 && alpha <= 8.0);
 }
 
+/* The transported scalars' calls: a field out of the enum, fields and sources not declared,
+ * particles that do not exist (refused before any array is read), values not finite; then
+ * accepted controls that show the values arrive and that the view's pointers follow the
+ * declarations. g_we2 declares heat and diffusion with sources, g_we3 heat without sources. */
+typedef MpmStatus (*SetScalar)(MpmWorld *, MpmScalarField, uint32_t, const mpm_real *, size_t);
+
+static void transport_misuse(void) {
+    static const uint32_t bad_field[] = {2u, 3u, 0x80000000u, 0xFFFFFFFFu};
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    const char *label[3] = {"NaN", "+inf", "-inf"};
+    const SetScalar set[2] = {mpm_world_set_particle_scalar, mpm_world_set_particle_sources};
+    const char *set_name[2] = {"set_particle_scalar", "set_particle_sources"};
+    const MpmScalarField field[2] = {MPM_SCALAR_FIELD_TEMPERATURE,
+                                     MPM_SCALAR_FIELD_CONCENTRATION};
+    const char *field_name[2] = {"temperature", "concentration"};
+    const size_t n2 = particle_count(g_we2), n3 = particle_count(g_we3);
+    mpm_real v[BATCH_MAX], t[BATCH_MAX], c[BATCH_MAX], q[BATCH_MAX];
+    MpmParticlesView view;
+    size_t i;
+    unsigned k;
+    int fn, fd, j;
+    char name[128];
+
+    if (n2 < 4 || n2 > BATCH_MAX || n3 < 4 || n3 > BATCH_MAX) {
+        fail("transport: setup", "unexpected particle counts");
+    }
+    for (i = 0; i < BATCH_MAX; i++) {
+        v[i] = R(0.5);
+        t[i] = R(290.0 + 0.25 * (double)i);
+        c[i] = R(0.125 * (double)(i % 8));
+        q[i] = R(1e9); /* W/m^3: 1000 K/s in the default material (rho C_p = 1e6) */
+    }
+
+    /* The field's number is checked before the declaration. */
+    for (fn = 0; fn < 2; fn++) {
+        for (k = 0; k < sizeof bad_field / sizeof bad_field[0]; k++) {
+            snprintf(name, sizeof name, "transport: %s field %u", set_name[fn],
+                     (unsigned)bad_field[k]);
+            REFUSED(name, MPM_STATUS_INVALID_ENUM,
+                    set[fn](g_we2, (MpmScalarField)bad_field[k], 0, v, 1));
+            snprintf(name, sizeof name, "transport: %s field %u on a world without transport",
+                     set_name[fn], (unsigned)bad_field[k]);
+            REFUSED(name, MPM_STATUS_INVALID_ENUM,
+                    set[fn](g_w2, (MpmScalarField)bad_field[k], 0, v, 1));
+        }
+    }
+
+    /* Fields and sources not declared: the declaration is checked before the ids. */
+    for (fn = 0; fn < 2; fn++) {
+        for (fd = 0; fd < 2; fd++) {
+            snprintf(name, sizeof name, "transport: %s %s without transport (2D)", set_name[fn],
+                     field_name[fd]);
+            REFUSED(name, MPM_STATUS_EFFECT_NOT_DECLARED, set[fn](g_w2, field[fd], 0, v, 1));
+            snprintf(name, sizeof name, "transport: %s %s without transport (3D)", set_name[fn],
+                     field_name[fd]);
+            REFUSED(name, MPM_STATUS_EFFECT_NOT_DECLARED, set[fn](g_w3, field[fd], 0, v, 1));
+            snprintf(name, sizeof name, "transport: %s %s without transport, unknown ids",
+                     set_name[fn], field_name[fd]);
+            REFUSED(name, MPM_STATUS_EFFECT_NOT_DECLARED,
+                    set[fn](g_w2, field[fd], 0xFFFFFFFFu, v, (size_t)-1));
+        }
+    }
+    REFUSED("transport: set_particle_scalar concentration with heat only (3D)",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_scalar(g_we3, MPM_SCALAR_FIELD_CONCENTRATION, 0, v, 1));
+    REFUSED("transport: set_particle_sources temperature with heat but no sources (3D)",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_sources(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0, v, 1));
+    REFUSED("transport: set_particle_sources temperature without sources, unknown ids",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_sources(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0xFFFFFFFFu, v,
+                                           (size_t)-1));
+    REFUSED("transport: set_particle_sources concentration with heat only (3D)",
+            MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_sources(g_we3, MPM_SCALAR_FIELD_CONCENTRATION, 0, v, 1));
+
+    /* Particles that do not exist. */
+    for (fn = 0; fn < 2; fn++) {
+        for (fd = 0; fd < 2; fd++) {
+#define UNKNOWN(label_, first, n) \
+    snprintf(name, sizeof name, "transport: %s %s %s", set_name[fn], field_name[fd], label_); \
+    REFUSED(name, MPM_STATUS_UNKNOWN_PARTICLE, set[fn](g_we2, field[fd], (first), v, (n)))
+            UNKNOWN("first = count, 1 particle", (uint32_t)n2, 1);
+            UNKNOWN("first = count - 1, 2 particles", (uint32_t)n2 - 1, 2);
+            UNKNOWN("first 0, count + 1 particles", 0, n2 + 1);
+            UNKNOWN("first = count + 1, 0 particles", (uint32_t)n2 + 1, 0);
+            UNKNOWN("first 0xFFFFFFFF, 1 particle", 0xFFFFFFFFu, 1);
+            UNKNOWN("first 1, SIZE_MAX particles", 1, (size_t)-1);
+            UNKNOWN("first 0xFFFFFFFF, SIZE_MAX particles", 0xFFFFFFFFu, (size_t)-1);
+#undef UNKNOWN
+        }
+    }
+    REFUSED("transport: set_particle_scalar temperature first = count, 1 particle (3D)",
+            MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_set_particle_scalar(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, (uint32_t)n3, v,
+                                          1));
+
+    /* A count past the particles is refused before the array is read. */
+    {
+        mpm_real *one = (mpm_real *)malloc(sizeof(mpm_real));
+        if (one == NULL) {
+            fail("transport: setup", "out of memory");
+        }
+        *one = R(0.25);
+        for (fn = 0; fn < 2; fn++) {
+            for (fd = 0; fd < 2; fd++) {
+                snprintf(name, sizeof name, "transport: %s %s count + 1 with a 1-value array",
+                         set_name[fn], field_name[fd]);
+                REFUSED(name, MPM_STATUS_UNKNOWN_PARTICLE,
+                        set[fn](g_we2, field[fd], 0, one, n2 + 1));
+            }
+        }
+        free(one);
+    }
+#ifdef MISUSE_HAVE_MMAN
+    {
+        long page = sysconf(_SC_PAGESIZE);
+        void *q = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        const mpm_real *none = (const mpm_real *)q;
+        if (q == MAP_FAILED) {
+            fail("transport: setup", "mmap failed");
+        }
+        for (fn = 0; fn < 2; fn++) {
+            for (fd = 0; fd < 2; fd++) {
+                snprintf(name, sizeof name,
+                         "transport: %s %s count + 1 with an array in a no-access page",
+                         set_name[fn], field_name[fd]);
+                REFUSED(name, MPM_STATUS_UNKNOWN_PARTICLE,
+                        set[fn](g_we2, field[fd], 0, none, n2 + 1));
+                snprintf(name, sizeof name,
+                         "transport: %s %s count SIZE_MAX with an array in a no-access page",
+                         set_name[fn], field_name[fd]);
+                REFUSED(name, MPM_STATUS_UNKNOWN_PARTICLE,
+                        set[fn](g_we2, field[fd], 1, none, (size_t)-1));
+            }
+        }
+        REFUSED("transport: set_particle_scalar temperature count SIZE_MAX with an array in a "
+                "no-access page (3D)",
+                MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_set_particle_scalar(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0, none,
+                                              (size_t)-1));
+        munmap(q, (size_t)page);
+    }
+#endif
+
+    /* Values not finite, in the last of three particles: none is set. */
+    for (j = 0; j < 3; j++) {
+        v[2] = R(bad[j]);
+        for (fn = 0; fn < 2; fn++) {
+            for (fd = 0; fd < 2; fd++) {
+                snprintf(name, sizeof name, "transport: %s %s %s", set_name[fn], field_name[fd],
+                         label[j]);
+                REFUSED(name, MPM_STATUS_NON_FINITE_INPUT, set[fn](g_we2, field[fd], 0, v, 3));
+            }
+        }
+        snprintf(name, sizeof name, "transport: set_particle_scalar temperature %s (3D)",
+                 label[j]);
+        REFUSED(name, MPM_STATUS_NON_FINITE_INPUT,
+                mpm_world_set_particle_scalar(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0, v, 3));
+    }
+    v[2] = R(0.5);
+
+    /* Controls: values set are the view's, the same values again change nothing, the view's
+     * pointers follow the declarations. */
+    ACCEPTED("transport: set_particle_scalar temperature on every particle", 1,
+             mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, t, n2));
+    ACCEPTED("transport: set_particle_scalar temperature with the same values", 0,
+             mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, t, n2));
+    ACCEPTED("transport: set_particle_scalar of 0 particles after the last", 0,
+             mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, (uint32_t)n2, t,
+                                           0));
+    ACCEPTED("transport: set_particle_scalar concentration on every particle", 1,
+             mpm_world_set_particle_scalar(g_we2, MPM_SCALAR_FIELD_CONCENTRATION, 0, c, n2));
+    ACCEPTED("transport: set_particle_sources temperature on every particle", 1,
+             mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_TEMPERATURE, 0, q, n2));
+    ACCEPTED("transport: set_particle_sources concentration of 0 particles after the last", 0,
+             mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_CONCENTRATION, (uint32_t)n2,
+                                            v, 0));
+    ACCEPTED("transport: set_particle_sources concentration on 2 particles", 1,
+             mpm_world_set_particle_sources(g_we2, MPM_SCALAR_FIELD_CONCENTRATION, 1, v, 2));
+    ACCEPTED("transport: set_particle_scalar temperature on every particle (3D)", 1,
+             mpm_world_set_particle_scalar(g_we3, MPM_SCALAR_FIELD_TEMPERATURE, 0, t, n3));
+    ACCEPTED("transport: view (2D)", 0, mpm_world_particles(g_we2, &view));
+    expect_true("transport: view pointers of the 2D world with heat and diffusion",
+                view.temperature && view.concentration && view.grid_temperature &&
+                    view.grid_concentration);
+    {
+        int same = view.count == n2;
+        for (i = 0; same && i < n2; i++) {
+            same = view.temperature[i] == t[i] && view.concentration[i] == c[i];
+        }
+        expect_true("transport: the view holds the temperatures and concentrations set", same);
+    }
+    ACCEPTED("transport: view (3D)", 0, mpm_world_particles(g_we3, &view));
+    expect_true("transport: view pointers of the 3D world (heat only)",
+                view.temperature && view.grid_temperature && !view.concentration &&
+                    !view.grid_concentration && view.temperature[n3 - 1] == t[n3 - 1]);
+    ACCEPTED("transport: view (2D, nothing declared)", 0, mpm_world_particles(g_w2, &view));
+    expect_true("transport: view pointers of a world without transport are NULL",
+                !view.temperature && !view.concentration && !view.grid_temperature &&
+                    !view.grid_concentration);
+    ACCEPTED("transport: step (2D)", 1,
+             mpm_world_step(g_we2, R(1.0 / 256.0), OUT(MpmStepReport)));
+    ACCEPTED("transport: view after the step", 0, mpm_world_particles(g_we2, &view));
+    {
+        int finite = 1, heated = 1;
+        for (i = 0; i < n2; i++) {
+            finite &= isfinite(view.temperature[i]) && isfinite(view.grid_temperature[i]) &&
+                      isfinite(view.concentration[i]) && isfinite(view.grid_concentration[i]);
+            heated &= view.temperature[i] > t[i];
+        }
+        expect_true("transport: the values after a step are finite", finite);
+        expect_true("transport: the heat source warmed every particle", heated);
+    }
+}
+
 /* Filling the tables to capacity, then one more. */
 static void capacity_misuse(void) {
     MpmMaterialDef m = mpm_material_def_default();
@@ -1828,6 +2187,7 @@ int main(void) {
     fill_misuse();
     step_misuse();
     effects_misuse();
+    transport_misuse();
     copy_misuse();
     capacity_misuse();
     status_strings();

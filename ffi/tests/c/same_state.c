@@ -14,8 +14,11 @@
  *   space3d:   a sphere falling towards a stick floor and a box that leaves through an open
  *              face, in 3D; quadratic B-spline, USL.
  *   effects2d: a block with every effect declared: APIC, grid and particle damping schedules,
- *              a thermostat, per-particle damping, particle forces, tractions and a ramped body
- *              force; forces and tractions change halfway. GIMP, MUSL.
+ *              a thermostat, per-particle damping, particle forces, tractions, a ramped body
+ *              force, and heat conduction (a fixed floor, a flux face, sources) and diffusion
+ *              (a fixed face, a flux through the floor) in a conducting material with
+ *              temperatures set; forces, tractions and concentrations change halfway. GIMP,
+ *              MUSL.
  *   effects3d: a sphere with APIC, constant grid damping, particle forces, tractions on two
  *              faces and a body force, in 3D; cubic B-spline, USF.
  */
@@ -163,6 +166,21 @@ static void print_state(const char *label, const MpmWorld *w) {
     print_hash(hash_columns(view.affine, 9, view.count));
     printf(" tractions %lu feedback_alpha ", (unsigned long)tractions);
     print_bytes(&alpha, sizeof alpha);
+    putchar('\n');
+
+    printf("%s: transport present ", label);
+    print_present(&view.temperature, 1);
+    print_present(&view.concentration, 1);
+    print_present(&view.grid_temperature, 1);
+    print_present(&view.grid_concentration, 1);
+    printf(" temperature ");
+    print_hash(hash_columns(&view.temperature, 1, view.count));
+    printf(" concentration ");
+    print_hash(hash_columns(&view.concentration, 1, view.count));
+    printf(" grid_temperature ");
+    print_hash(hash_columns(&view.grid_temperature, 1, view.count));
+    printf(" grid_concentration ");
+    print_hash(hash_columns(&view.grid_concentration, 1, view.count));
     putchar('\n');
 
     CALL("mpm_world_diagnostics", mpm_world_diagnostics(w, &d));
@@ -393,7 +411,7 @@ static void effects2d(void) {
     MpmIdRange ids;
     void *raw;
     MpmWorld *w;
-    mpm_real fx[16], fy[16], alpha_g[32], alpha_p[32];
+    mpm_real fx[16], fy[16], alpha_g[32], alpha_p[32], heat[256], source[8];
 
     printf("scene effects2d\n");
     def.cells[0] = 32;
@@ -414,10 +432,25 @@ static void effects2d(void) {
     def.effects.traction_capacity = 16;
     def.effects.body_force = v3(0.5f, 0.25f, 0);
     def.effects.body_force_scale = schedule(3, ramp_t, ramp_v);
+    def.effects.heat.declared = 1;
+    def.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    def.effects.heat.faces[MPM_FACE_Y_MIN].value = (mpm_real)320.0;
+    def.effects.heat.faces[MPM_FACE_X_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX;
+    def.effects.heat.faces[MPM_FACE_X_MIN].value = (mpm_real)-2048.0;
+    def.effects.heat.sources = 1;
+    def.effects.diffusion.declared = 1;
+    def.effects.diffusion.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    def.effects.diffusion.faces[MPM_FACE_X_MAX].value = (mpm_real)1.0;
+    def.effects.diffusion.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX;
+    def.effects.diffusion.faces[MPM_FACE_Y_MIN].value = (mpm_real)0.25;
     scratch(def.particle_capacity);
     w = new_world(&def, &raw);
     print_state("empty", w);
 
+    /* A conducting, diffusing rubber: thermal diffusivity 4096 / (1000 * 512) = 0.008 m^2/s. */
+    rubber.heat_capacity = (mpm_real)512.0;
+    rubber.conductivity = (mpm_real)4096.0;
+    rubber.diffusivity = (mpm_real)0.0078125;
     CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
     printf("materials %lu\n", (unsigned long)id);
     CALL("fill_box", mpm_world_fill_box(w, v3(0.25f, 0.125f, 0), v3(0.5f, 0.25f, 0), id,
@@ -435,6 +468,16 @@ static void effects2d(void) {
         alpha_p[i] = (mpm_real)(0.25 * (i % 2));
     }
     CALL("set_particle_damping", mpm_world_set_particle_damping(w, 8, alpha_g, alpha_p, 32));
+    for (i = 0; i < n; i++) {
+        heat[i] = (mpm_real)(256.0 + 8.0 * (i % 8) + 0.5 * (i / 8));
+    }
+    CALL("set_particle_scalar temperature",
+         mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_TEMPERATURE, 0, heat, n));
+    for (i = 0; i < 8; i++) {
+        source[i] = (mpm_real)(65536.0 * (i % 2));
+    }
+    CALL("set_particle_sources temperature",
+         mpm_world_set_particle_sources(w, MPM_SCALAR_FIELD_TEMPERATURE, n - 8, source, 8));
     CALL("add_tractions top", mpm_world_add_tractions(w, n - 16, 16, MPM_FACE_Y_MAX,
                                                       v3(0, -512.0f, 0), &ids));
     print_tractions("top", ids);
@@ -447,6 +490,11 @@ static void effects2d(void) {
     }
     CALL("set_particle_forces again", mpm_world_set_particle_forces(w, 4, fx, fy, NULL, 8));
     CALL("clear_tractions", mpm_world_clear_tractions(w));
+    for (i = 0; i < 16; i++) {
+        heat[i] = (mpm_real)(0.0625 * i);
+    }
+    CALL("set_particle_scalar concentration",
+         mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_CONCENTRATION, 8, heat, 16));
     CALL("add_tractions left", mpm_world_add_tractions(w, 0, 4, MPM_FACE_X_MIN,
                                                        v3(128.0f, 0, 0), &ids));
     print_tractions("left", ids);

@@ -1,9 +1,7 @@
 //! Verification against exact solutions: rigid motions and the fixed-free vibrating bar.
 //! Each test states the exact solution it compares to, its tolerance and why.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mpm_gimp::{Dimension, MaterialDef, MaterialModel, Real, ShapeFunction, World};
 
 /// Runs the bar for `periods` periods and returns (relative RMS displacement error sampled 16

@@ -1,9 +1,7 @@
 //! Conservation: mass exactly, linear momentum to round-off, for every shape function and
 //! update order, in 2D and 3D (except linear shapes with USL, unstable by nature).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mpm_gimp::{Dimension, MaterialDef, ParticleBatch, Real, ShapeFunction, UpdateOrder, World};
 
 /// A block with translation, spin and shear (so stress develops), no gravity, open faces,

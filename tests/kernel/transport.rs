@@ -1,9 +1,7 @@
 //! Heat conduction and diffusion (seeds/000 sections 8 and 9) against exact solutions. Each
 //! test states the exact solution, its tolerance and why.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mpm_gimp::{
     Boundary, Dimension, Effects, Face, MaterialDef, MaterialModel, Real, ScalarBoundary,
     ScalarField, ShapeFunction, Transport, Vec3, World, WorldDef,

@@ -2,9 +2,7 @@
 //! energy never above its start plus the work of gravity by more than 1 %. Each runs with no
 //! effect and again with each effect switched on ([`EFFECTS`]).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mpm_gimp::{
     Boundary, Damping, Dimension, Face, Feedback, MaterialDef, MaterialModel, ParticleBatch,
     ParticleStatus, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer,

@@ -4,9 +4,7 @@
 //! panic, every particle value must stay finite, every particle must stay inside the grid, the
 //! status codes must be valid, and the step report must agree with the statuses.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use mpm_gimp::{
     Boundary, Dimension, MaterialDef, MaterialModel, ParticleBatch, ParticleStatus, Real,
     UpdateOrder, World, WorldDef,

@@ -2,7 +2,8 @@
 //! no heap use, determinism, snapshots, definition validation, "a call that fails changes
 //! nothing", capacity, error strings and the fill helpers.
 //!
-//! Runs in both precisions (`cargo test --test api_contract` and `--features f64`).
+//! Runs in both precisions (`cargo test --release --test kernel -- api_contract::`, and with
+//! `--features f64`).
 
 use mpm_gimp::{
     memory_requirements, Boundary, Dimension, Error, Face, HeapBuffer, MaterialDef, ParticleBatch,

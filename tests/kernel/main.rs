@@ -1,0 +1,18 @@
+//! The kernel's integration tests, through its public API, in one test binary (a binary per
+//! file linked the kernel once each, which made the test build several times slower). Each
+//! module states what it checks; `cargo test --release --test kernel -- <module>::` runs one.
+//! (`tests/simd_override.rs` stays a binary of its own: it switches the process-wide
+//! instruction-set override.)
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod api_contract;
+mod conservation;
+#[cfg(feature = "effects")]
+mod effects;
+mod hard_cases;
+mod robustness;
+#[cfg(feature = "effects")]
+mod transport;
+mod verification;
