@@ -1,10 +1,11 @@
-//! Random sequences of C interface calls (init with arbitrary transfer and effects, add
-//! material, add particles, seed, set particle forces and damping, add and clear tractions,
-//! step, read) with arbitrary values, through the same `extern "C"` functions a C host calls.
-//! After every call, either it returned a status and the world's bytes are unchanged, or it
-//! succeeded and every particle value (forces, damping and APIC moments included) is finite
-//! and every position inside the grid box. Single precision (the default build of the
-//! library).
+//! Random sequences of C interface calls (init with arbitrary transfer and effects, heat
+//! conduction and diffusion included, add material, add particles, seed, set particle forces,
+//! damping, temperatures, concentrations and sources, add and clear tractions, step, read) with
+//! arbitrary values, through the same `extern "C"` functions a C host calls. After every call,
+//! either it returned a status and the world's bytes are unchanged, or it succeeded and every
+//! particle value (forces, damping, APIC moments, temperatures and concentrations and their
+//! grid values included) is finite and every position inside the grid box. Single precision
+//! (the default build of the library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -127,6 +128,20 @@ fn check_state(w: *const MpmWorld) {
     columns.extend(v.stress.iter().filter(|p| !p.is_null()));
     columns.extend(v.force.iter().filter(|p| !p.is_null()));
     columns.extend(v.affine.iter().filter(|p| !p.is_null()));
+    let scalars = [
+        v.temperature,
+        v.concentration,
+        v.grid_temperature,
+        v.grid_concentration,
+    ];
+    columns.extend(scalars.iter().filter(|p| !p.is_null()));
+    let heat = def.effects.heat.declared == 1;
+    let diffusion = def.effects.diffusion.declared == 1;
+    assert_eq!(
+        scalars.map(|p| !p.is_null()),
+        [heat, diffusion, heat, diffusion],
+        "the view's scalar columns do not follow the declarations"
+    );
     for &p in v.damping.iter().filter(|p| !p.is_null()) {
         assert!(
             col(p).iter().all(|x| x.is_finite() && *x >= 0.0),
@@ -165,6 +180,25 @@ fn flag(inp: &mut Input<'_>) -> u32 {
     }
 }
 
+/// A transport (heat conduction or diffusion): declared about half the time, each face
+/// insulated, fixed or flux (sometimes a kind out of range), values mostly in range.
+fn transport(inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real) -> MpmTransport {
+    let mut t = mpm_world_def_default_f32().effects.heat;
+    t.declared = match inp.byte() % 4 {
+        0 | 1 => 0,
+        _ => flag(inp),
+    };
+    for f in t.faces.iter_mut() {
+        f.kind = match inp.byte() % 32 {
+            0 => inp.u32_below(u32::MAX),
+            b => (b % 3) as u32,
+        };
+        f.value = inp.real_in(lo, hi);
+    }
+    t.sources = flag(inp);
+    t
+}
+
 /// Effects, each declared about half the time, with values mostly in range.
 fn effects(inp: &mut Input<'_>) -> MpmEffects {
     let mut e = mpm_world_def_default_f32().effects;
@@ -188,6 +222,8 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     };
     e.body_force = inp.vec3_in(-20.0, 20.0);
     e.body_force_scale = schedule(inp, -2.0, 2.0);
+    e.heat = transport(inp, -500.0, 500.0);
+    e.diffusion = transport(inp, -2.0, 2.0);
     e
 }
 
@@ -243,7 +279,7 @@ fuzz_target!(|data: &[u8]| {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 12;
+        let op = inp.byte() % 13;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -284,6 +320,9 @@ fuzz_target!(|data: &[u8]| {
                     m.youngs_modulus = inp.real_in(1.0e3, 1.0e7);
                     m.poisson_ratio = inp.real_in(-0.9, 0.49);
                     m.density = inp.real_in(10.0, 5000.0);
+                    m.heat_capacity = inp.real_in(100.0, 5000.0);
+                    m.conductivity = inp.real_in(0.0, 500.0);
+                    m.diffusivity = inp.real_in(0.0, 1.0e-2);
                     let mut id = 0;
                     mpm_world_add_material(world, &m, &mut id)
                 }
@@ -370,6 +409,32 @@ fuzz_target!(|data: &[u8]| {
                         fz
                     };
                     mpm_world_set_particle_forces(world, first, fx, fy, fz, count)
+                }
+                12 => {
+                    // Temperatures, concentrations or their sources; sometimes a field out of
+                    // range, a NULL array or a count past the particles (refused before the
+                    // array is read).
+                    let (first, count) = particle_range(&mut inp, world);
+                    let count = count as usize;
+                    let field = match inp.byte() % 16 {
+                        0 => 2 + inp.u32_below(u32::MAX - 2),
+                        b => (b % 2) as u32,
+                    };
+                    let values: Vec<mpm_real> = (0..count.min(512))
+                        .map(|_| inp.real_in(-1000.0, 1000.0))
+                        .collect();
+                    let p = match inp.byte() % 16 {
+                        0 => core::ptr::null(),
+                        _ if count > 512 => core::ptr::NonNull::<mpm_real>::dangling()
+                            .as_ptr()
+                            .cast_const(),
+                        _ => values.as_ptr(),
+                    };
+                    if inp.byte() % 2 == 0 {
+                        mpm_world_set_particle_scalar(world, field, first, p, count)
+                    } else {
+                        mpm_world_set_particle_sources(world, field, first, p, count)
+                    }
                 }
                 9 => {
                     let (first, count) = particle_range(&mut inp, world);
