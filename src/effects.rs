@@ -179,8 +179,10 @@ impl Transport {
         sources: false,
     };
 
-    fn is_valid(&self) -> bool {
-        self.faces.iter().all(|f| match f {
+    /// Whether the faces of the `axes` used have finite values (the z faces of a 2D world are
+    /// not read, like every other z component there).
+    fn is_valid(&self, axes: usize) -> bool {
+        self.faces[..2 * axes].iter().all(|f| match f {
             ScalarBoundary::Insulated => true,
             ScalarBoundary::Fixed(v) | ScalarBoundary::Flux(v) => v.is_finite(),
         })
@@ -246,7 +248,7 @@ impl Effects {
             && self.body_force_scale.is_valid(false);
         let ok_transport = [self.heat, self.diffusion]
             .iter()
-            .all(|t| t.map_or(true, |t| t.is_valid()));
+            .all(|t| t.map_or(true, |t| t.is_valid(axes)));
         if ok_damping && ok_body && ok_transport && self.traction_capacity <= 1 << 24 {
             Ok(())
         } else {

@@ -41,7 +41,8 @@ pub enum Error {
     ParticleCapacityExceeded = 15,
     /// A material id that names no material.
     UnknownMaterial = 16,
-    /// A position, velocity, mass or volume that is NaN or infinite.
+    /// A position, velocity, mass, volume, or a value set on particles (force, temperature,
+    /// concentration, source) that is NaN or infinite.
     NonFiniteInput = 17,
     /// A mass or volume <= 0.
     NonPositiveMassOrVolume = 18,
@@ -57,7 +58,8 @@ pub enum Error {
     InvalidRegion = 22,
     /// An effect parameter out of range: a schedule with more than 8 points, times that do not
     /// increase or values not finite; a damping value < 0; a thermostat gain or bound <= 0; a
-    /// body force not finite; a traction not finite or on a face the dimension lacks.
+    /// body force not finite; a traction not finite or on a face the dimension lacks; a
+    /// transport's fixed or flux face value not finite.
     InvalidEffect = 23,
     /// The call needs an effect the world's definition does not declare.
     EffectNotDeclared = 24,
@@ -97,7 +99,7 @@ impl Error {
             Error::MaterialCapacityExceeded => c"material table is full",
             Error::ParticleCapacityExceeded => c"particles do not fit in the remaining capacity",
             Error::UnknownMaterial => c"material id names no material",
-            Error::NonFiniteInput => c"position, velocity, mass or volume not finite",
+            Error::NonFiniteInput => c"input value not finite (position, velocity, mass, volume, force, scalar)",
             Error::NonPositiveMassOrVolume => c"mass and volume must be > 0",
             Error::PositionOutsideDomain => {
                 c"position outside the grid or inside its boundary margin"

@@ -369,8 +369,8 @@ typedef struct MpmDamping {
 typedef struct MpmScalarBoundary {
   // `MpmScalarBoundaryKind`; default `MPM_SCALAR_BOUNDARY_KIND_INSULATED`.
   MpmScalarBoundaryKind kind;
-  // The fixed value or the inflow per area, finite (on every face, z faces included in 2D);
-  // not read for an insulated face.
+  // The fixed value or the inflow per area, finite on the faces the dimension has (the z
+  // faces of a 2D world are not read); not read for an insulated face.
   mpm_real value;
 } MpmScalarBoundary;
 

@@ -224,8 +224,8 @@ pub struct MpmDamping {
 pub struct MpmScalarBoundary {
     /// `MpmScalarBoundaryKind`; default `MPM_SCALAR_BOUNDARY_KIND_INSULATED`.
     pub kind: MpmScalarBoundaryKindValue,
-    /// The fixed value or the inflow per area, finite (on every face, z faces included in 2D);
-    /// not read for an insulated face.
+    /// The fixed value or the inflow per area, finite on the faces the dimension has (the z
+    /// faces of a 2D world are not read); not read for an insulated face.
     pub value: mpm_real,
 }
 
