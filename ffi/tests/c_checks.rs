@@ -1459,22 +1459,25 @@ fn effects_definition_round_trip() {
                 "diffusion face {k} kind {v}"
             );
         }
+        // The values of faces the dimension lacks (z in 2D) are not read.
+        let axes = if c.dimension == MpmDimension::Space3d as u32 {
+            3
+        } else {
+            2
+        };
+        let expect = if k < 2 * axes {
+            MpmStatus::InvalidEffect
+        } else {
+            MpmStatus::Ok
+        };
         for kind in [MpmScalarBoundaryKind::Fixed, MpmScalarBoundaryKind::Flux] {
             for x in [Real::NAN, Real::INFINITY, Real::NEG_INFINITY] {
                 let mut d = c;
                 d.effects.heat.faces[k] = scalar_face(kind, x);
-                assert_eq!(
-                    refused(&d),
-                    MpmStatus::InvalidEffect,
-                    "heat face {k} {kind:?} {x}"
-                );
+                assert_eq!(refused(&d), expect, "heat face {k} {kind:?} {x}");
                 let mut d = c;
                 d.effects.diffusion.faces[k] = scalar_face(kind, x);
-                assert_eq!(
-                    refused(&d),
-                    MpmStatus::InvalidEffect,
-                    "diffusion face {k} {kind:?} {x}"
-                );
+                assert_eq!(refused(&d), expect, "diffusion face {k} {kind:?} {x}");
             }
         }
     }
