@@ -453,25 +453,17 @@ impl<'a> World<'a> {
     /// `first..first + n`, `n` the length of the slices (z may be empty in 2D). Needs
     /// [`crate::Effects::particle_forces`]. The force stays until set again.
     pub fn set_particle_forces(&mut self, first: u32, force: [&[Real]; 3]) -> Result<(), Error> {
-        let def = self.def();
-        let layout = Layout::of(&def);
-        if layout.force.count == 0 {
-            return Err(Error::EffectNotDeclared);
-        }
-        let d = layout.d;
-        let n = force[0].len();
-        if (0..d).any(|a| force[a].len() != n) {
-            return Err(Error::LengthMismatch);
-        }
-        let range = self.particle_range(first, n)?;
-        if (0..d).any(|a| force[a].iter().any(|f| !f.is_finite())) {
-            return Err(Error::NonFiniteInput);
-        }
-        for a in 0..d {
-            let col = self.real_col_mut(&layout, layout.force.first + a, range.end);
-            col[range.clone()].copy_from_slice(force[a]);
-        }
-        Ok(())
+        let layout = Layout::of(&self.def());
+        let group = (layout.force.count > 0).then_some(layout.force.first);
+        let columns = &force[..layout.d];
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            columns,
+            Error::NonFiniteInput,
+            |_| true,
+        )
     }
 
     /// Sets the value of a transported scalar (temperature, K, or concentration potential) of
@@ -504,19 +496,17 @@ impl<'a> World<'a> {
         first: u32,
         values: &[Real],
     ) -> Result<(), Error> {
-        let def = self.def();
-        let layout = Layout::of(&def);
-        let group = layout.scalar[field as usize];
-        if k >= group.count {
-            return Err(Error::EffectNotDeclared);
-        }
-        let range = self.particle_range(first, values.len())?;
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFiniteInput);
-        }
-        let col = self.real_col_mut(&layout, group.first + k, range.end);
-        col[range].copy_from_slice(values);
-        Ok(())
+        let layout = Layout::of(&self.def());
+        let g = layout.scalar[field as usize];
+        let group = (k < g.count).then_some(g.first + k);
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            &[values],
+            Error::NonFiniteInput,
+            |_| true,
+        )
     }
 
     /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
@@ -528,21 +518,43 @@ impl<'a> World<'a> {
         alpha_g: &[Real],
         alpha_p: &[Real],
     ) -> Result<(), Error> {
-        let def = self.def();
-        let layout = Layout::of(&def);
-        if layout.damping.count == 0 {
-            return Err(Error::EffectNotDeclared);
-        }
-        if alpha_g.len() != alpha_p.len() {
+        let layout = Layout::of(&self.def());
+        let group = (layout.damping.count > 0).then_some(layout.damping.first);
+        let columns = &[alpha_g, alpha_p];
+        self.write_particle_columns(&layout, group, first, columns, Error::InvalidEffect, |v| {
+            v >= 0.0
+        })
+    }
+
+    /// The per-particle setters' one path: writes `columns` (one slice per column, all of one
+    /// length n) into the consecutive particle Real columns from `group` for particles
+    /// `first..first + n`, after checking, in this order, that the group is reserved
+    /// (`EffectNotDeclared`), that the lengths agree (`LengthMismatch`), that the particles
+    /// exist (`UnknownParticle`) and that every value is finite and passes `valid` (else
+    /// `invalid`). Nothing is written unless every check passes.
+    fn write_particle_columns(
+        &mut self,
+        layout: &Layout,
+        group: Option<usize>,
+        first: u32,
+        columns: &[&[Real]],
+        invalid: Error,
+        valid: fn(Real) -> bool,
+    ) -> Result<(), Error> {
+        let group = group.ok_or(Error::EffectNotDeclared)?;
+        let n = columns.first().map_or(0, |c| c.len());
+        if columns.iter().any(|c| c.len() != n) {
             return Err(Error::LengthMismatch);
         }
-        let range = self.particle_range(first, alpha_g.len())?;
-        let valid = |a: &[Real]| a.iter().all(|v| v.is_finite() && *v >= 0.0);
-        if !valid(alpha_g) || !valid(alpha_p) {
-            return Err(Error::InvalidEffect);
+        let range = self.particle_range(first, n)?;
+        if columns
+            .iter()
+            .any(|c| c.iter().any(|&v| !v.is_finite() || !valid(v)))
+        {
+            return Err(invalid);
         }
-        for (k, values) in [alpha_g, alpha_p].into_iter().enumerate() {
-            let col = self.real_col_mut(&layout, layout.damping.first + k, range.end);
+        for (k, values) in columns.iter().enumerate() {
+            let col = self.real_col_mut(layout, group + k, range.end);
             col[range.clone()].copy_from_slice(values);
         }
         Ok(())
