@@ -15,8 +15,13 @@ pub enum Dimension {
     /// Two dimensions, plane strain: quantities are per unit thickness along z, and
     /// `F_zz = 1`, so the stress keeps a `tau_zz` component.
     Plane2D = 2,
-    /// Two dimensions, axisymmetric (r, z) with the hoop term of seeds/000 section 7.
-    /// Reserved: `World::init` answers [`crate::Error::Unsupported`] until it is implemented.
+    /// Two dimensions, axisymmetric (seeds/000 section 7): x is the radius r and y the axis z.
+    /// Masses, volumes, forces and energies are per radian (a particle of cross-section `A_p`
+    /// at radius `r_p` has volume `A_p r_p`), the weights are r-weighted, and the radial force
+    /// has the hoop term. The axis `r = 0` must be the lower x face's wall plane:
+    /// `origin.x = -margin_cells * cell_size` and that face a slip (or stick) wall, or
+    /// [`crate::Error::InvalidAxis`]. The stored out-of-plane stress is `tau_thetatheta`, and
+    /// [`crate::ParticlesView::hoop`] holds `F_thetatheta - 1`. Needs the `effects` feature.
     Axisymmetric2D = 4,
     /// Three dimensions.
     ThreeD = 3,
@@ -225,6 +230,19 @@ pub struct MaterialDef {
     pub conductivity: Real,
     /// Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
     pub diffusivity: Real,
+    /// Linear thermal expansion coefficient alpha, 1/K, finite (heat conduction only): the
+    /// material is free of stress under the isotropic stretch `1 + alpha (T - T_0)` per axis,
+    /// `T` the grid temperature at the particle ([`crate::ParticlesView::grid_temperature`]).
+    /// Default 0.
+    pub thermal_expansion: Real,
+    /// Stress-free temperature `T_0` of the thermal expansion, K, finite. Default 0.
+    pub reference_temperature: Real,
+    /// Linear swelling coefficient beta, strain per unit concentration potential, finite
+    /// (diffusion only): the stress-free stretch gains `beta (c - c_0)` per axis, `c` the grid
+    /// concentration at the particle. Default 0.
+    pub swelling: Real,
+    /// Stress-free concentration potential `c_0` of the swelling, finite. Default 0.
+    pub reference_concentration: Real,
 }
 
 impl MaterialDef {
@@ -237,6 +255,10 @@ impl MaterialDef {
         heat_capacity: 1000.0,
         conductivity: 0.0,
         diffusivity: 0.0,
+        thermal_expansion: 0.0,
+        reference_temperature: 0.0,
+        swelling: 0.0,
+        reference_concentration: 0.0,
     };
 
     /// Lamé constants (lambda, mu) for 3D and plane strain.

@@ -13,8 +13,8 @@ pub enum Error {
     BufferMisaligned = 2,
     /// The buffer does not hold a world of this build (wrong magic, version, precision or size).
     NotAWorld = 3,
-    /// The dimension is not supported by this build, or the definition declares an effect and
-    /// the build lacks the `effects` feature.
+    /// The definition declares an effect (the axisymmetric form included) and the build lacks
+    /// the `effects` feature.
     Unsupported = 4,
     /// Cell size not finite or <= 0.
     InvalidCellSize = 5,
@@ -67,6 +67,9 @@ pub enum Error {
     UnknownParticle = 25,
     /// The tractions do not fit in the remaining traction capacity (none was added).
     TractionCapacityExceeded = 26,
+    /// An axisymmetric world whose lower r face is open, or whose wall plane there is not the
+    /// axis `r = 0` (set `origin.x = -margin_cells * cell_size`).
+    InvalidAxis = 27,
 }
 
 impl Error {
@@ -115,11 +118,14 @@ impl Error {
             Error::TractionCapacityExceeded => {
                 c"tractions do not fit in the remaining traction capacity"
             }
+            Error::InvalidAxis => {
+                c"axisymmetric: the lower r face must be a wall whose plane is the axis r = 0"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 26] = [
+    pub const ALL: [Error; 27] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -146,6 +152,7 @@ impl Error {
         Error::EffectNotDeclared,
         Error::UnknownParticle,
         Error::TractionCapacityExceeded,
+        Error::InvalidAxis,
     ];
 }
 

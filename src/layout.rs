@@ -28,7 +28,7 @@ pub const CHUNK: usize = 16;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 3;
+const VERSION: u64 = 4;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -206,7 +206,11 @@ pub(crate) struct MaterialRecord {
     pub heat_capacity: Real,
     pub conductivity: Real,
     pub diffusivity: Real,
-    pub reserved: [Real; 6],
+    pub thermal_expansion: Real,
+    pub reference_temperature: Real,
+    pub swelling: Real,
+    pub reference_concentration: Real,
+    pub reserved: [Real; 2],
 }
 
 // SAFETY: MaterialRecord is repr(C) with sixteen values of one float type: no padding, and every
@@ -263,6 +267,8 @@ pub(crate) struct Layout {
     pub affine: ColumnGroup,
     /// Transported scalars: value, grid value, then source if declared; heat then diffusion.
     pub scalar: [ColumnGroup; 2],
+    /// Axisymmetric: the hoop stretch `F_thetatheta - 1`.
+    pub hoop: ColumnGroup,
     /// Whether each transported scalar (heat, diffusion) has its 4 grid columns.
     pub scalar_grid: [bool; 2],
     pub grid_offset: usize,
@@ -285,9 +291,9 @@ pub(crate) struct ColumnGroup {
 pub(crate) struct EffectColumns;
 
 impl EffectColumns {
-    /// Groups `(x_next, force, damping, affine, heat, diffusion)` for a definition, starting at
-    /// column `first`; returns them and the column after the last.
-    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 6], usize) {
+    /// Groups `(x_next, force, damping, affine, heat, diffusion, hoop)` for a definition,
+    /// starting at column `first`; returns them and the column after the last.
+    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 7], usize) {
         let musl = def.update_order == UpdateOrder::Musl;
         let fx = &def.effects;
         let per_particle_damping = fx.damping.is_some_and(|dm| dm.per_particle);
@@ -302,6 +308,7 @@ impl EffectColumns {
             },
             fx.heat.map_or(0, |t| 2 + t.sources as usize),
             fx.diffusion.map_or(0, |t| 2 + t.sources as usize),
+            (def.dimension == Dimension::Axisymmetric2D) as usize,
         ];
         let mut next = first;
         let groups = counts.map(|count| {
@@ -325,7 +332,7 @@ impl Layout {
         let nodes: usize = (0..d).map(|a| def.cells[a] as usize + 1).product();
         let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
         let u32_column_bytes = round_up(cap * 4, ALIGN);
-        let ([x_next, force, damping, affine, heat, diffusion], particle_real_columns) =
+        let ([x_next, force, damping, affine, heat, diffusion, hoop], particle_real_columns) =
             EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes = round_up(
@@ -367,6 +374,7 @@ impl Layout {
             damping,
             affine,
             scalar: [heat, diffusion],
+            hoop,
             scalar_grid,
             grid_offset,
             node_column_bytes,
@@ -381,15 +389,20 @@ const MAX_ITEMS: u64 = 1 << 30;
 
 /// Checks every field of a definition; the error names the first one that is wrong.
 pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
-    if def.dimension == Dimension::Axisymmetric2D {
-        return Err(Error::Unsupported);
-    }
     if !(def.cell_size.is_finite() && def.cell_size > 0.0) {
         return Err(Error::InvalidCellSize);
     }
     let used_finite = |v: Vec3| (0..def.axes()).all(|a| v[a].is_finite());
     if !used_finite(def.origin) || !used_finite(def.gravity) {
         return Err(Error::NonFiniteDefinition);
+    }
+    if def.dimension == Dimension::Axisymmetric2D {
+        // The axis r = 0 is the lower r face's wall plane, `margin` cells in from the grid's
+        // face (to round-off of the cell size).
+        let axis = def.origin.x + def.shape.margin_cells() as Real * def.cell_size;
+        if def.faces[0] == Boundary::Open || axis.abs() > 1.0e-4 * def.cell_size {
+            return Err(Error::InvalidAxis);
+        }
     }
     let min_cells = 2 + 2 * def.shape.margin_cells();
     let mut nodes: u64 = 1;
@@ -429,7 +442,9 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     def.effects.validate(def.axes())?;
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")
-        && (def.effects != crate::Effects::NONE || def.transfer != Transfer::Flip)
+        && (def.effects != crate::Effects::NONE
+            || def.transfer != Transfer::Flip
+            || def.dimension == Dimension::Axisymmetric2D)
     {
         return Err(Error::Unsupported);
     }

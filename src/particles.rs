@@ -8,7 +8,8 @@
 //!
 //! Per effect, only when declared: external force `F_p` [D] (particle forces), local damping
 //! `alpha_g`, `alpha_p` (per-particle damping), moment matrix `B_p` [D][D] (APIC, see
-//! [`crate::ParticlesView::affine`]). An
+//! [`crate::ParticlesView::affine`]), transported scalars (heat, diffusion), hoop stretch
+//! `F_thetatheta - 1` (axisymmetric). An
 //! undeclared group is a set of empty slices, which the passes that would read it never
 //! instantiate.
 
@@ -70,6 +71,8 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     /// Transported scalars (heat: temperature, K; diffusion: concentration potential), each
     /// value, grid value at the particle, then source (empty when not declared).
     pub scalar: [[&'a mut [Real]; 3]; 2],
+    /// Axisymmetric only: the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`.
+    pub hoop: &'a mut [Real],
     pub material: &'a mut [u32],
     pub status: &'a mut [u32],
 }
@@ -131,6 +134,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             let g = layout.scalar[f];
             core::array::from_fn(|k| group(&mut c, k < g.count))
         });
+        let hoop = group(&mut c, layout.hoop.count > 0);
         let material = c.take(ub, n);
         let status = c.take(ub, n);
         ParticleCols {
@@ -145,6 +149,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             damping,
             affine,
             scalar,
+            hoop,
             material,
             status,
         }

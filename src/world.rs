@@ -2,11 +2,12 @@
 //! The phase order of a step lives here and only here ([`World::step`]).
 
 use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::material::{elastic_part, Deformation};
 use crate::effects::Feedback;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
 use crate::material::{energy_density, model_of, Params};
-use crate::math::{ceil, det_identity_plus_minus_one, Mat};
+use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::phases::p2g::mode;
 #[cfg(target_arch = "x86_64")]
@@ -167,6 +168,9 @@ pub struct ParticlesView<'w> {
     /// The grid's concentration potential at each particle after the last step, as
     /// [`ParticlesView::grid_temperature`]. Empty unless diffusion is declared.
     pub grid_concentration: &'w [Real],
+    /// Axisymmetric only (else empty): the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`, the
+    /// out-of-plane part of the deformation gradient.
+    pub hoop: &'w [Real],
     /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
     /// unless the transfer is APIC); with linear shape functions, the affine velocity matrix
     /// `C_p` itself, 1/s, in its gradient form (see [`crate::shape::Shape1D::GRADIENT_AFFINE`]). The affine velocity field is `C_p = B_p D_p^-1`, with
@@ -177,16 +181,21 @@ pub struct ParticlesView<'w> {
 }
 
 impl ParticlesView<'_> {
-    /// `J - 1 = det F - 1` of particle `i`, computed from H without cancellation.
+    /// `J - 1 = det F - 1` of particle `i` (with `F_thetatheta` when axisymmetric), computed
+    /// from H without cancellation.
     pub fn jacobian_minus_one(&self, i: usize) -> Real {
-        let h = &self.displacement_gradient;
         if self.dimension == Dimension::ThreeD {
-            let m: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
-            det_identity_plus_minus_one(&m)
+            self.deformation::<3>(i).jm1
         } else {
-            let m: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
-            det_identity_plus_minus_one(&m)
+            self.deformation::<2>(i).jm1
         }
+    }
+
+    /// The deformation of particle `i` as the materials see it (`D` the world's axes).
+    pub(crate) fn deformation<const D: usize>(&self, i: usize) -> Deformation<D> {
+        let h = &self.displacement_gradient;
+        let m: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
+        Deformation::new(m, self.hoop.get(i).copied().unwrap_or(0.0))
     }
 
     /// `J = det F` of particle `i` (current volume over initial volume).
@@ -352,7 +361,11 @@ impl<'a> World<'a> {
             && m.conductivity.is_finite()
             && m.conductivity >= 0.0
             && m.diffusivity.is_finite()
-            && m.diffusivity >= 0.0;
+            && m.diffusivity >= 0.0
+            && m.thermal_expansion.is_finite()
+            && m.reference_temperature.is_finite()
+            && m.swelling.is_finite()
+            && m.reference_concentration.is_finite();
         if !ok {
             return Err(Error::InvalidMaterial);
         }
@@ -381,7 +394,11 @@ impl<'a> World<'a> {
             heat_capacity: m.heat_capacity,
             conductivity: m.conductivity,
             diffusivity: m.diffusivity,
-            reserved: [0.0; 6],
+            thermal_expansion: m.thermal_expansion,
+            reference_temperature: m.reference_temperature,
+            swelling: m.swelling,
+            reference_concentration: m.reference_concentration,
+            reserved: [0.0; 2],
         };
         self.header_mut().material_count += 1;
         Ok(id as u32)
@@ -671,7 +688,8 @@ impl<'a> World<'a> {
 
     /// Fills the axis-aligned box `[min, max]` with particles of `material` on the lattice of
     /// `particles_per_cell` sites per cell per axis (sites at the centres of the sub-cells), each
-    /// with the volume of its sub-cell and the mass of that volume at the material's density.
+    /// with the volume of its sub-cell and the mass of that volume at the material's density
+    /// (axisymmetric: per radian, the sub-cell's area times the site's radius).
     /// All or nothing; the box must lie inside the admissible region.
     pub fn fill_box(
         &mut self,
@@ -759,7 +777,12 @@ impl<'a> World<'a> {
         for _ in 0..d {
             volume *= spacing;
         }
-        let mass = volume * rec.density;
+        // Axisymmetric: the volume per radian of a site's sub-cell, its area times its radius.
+        let axisymmetric = def.dimension == Dimension::Axisymmetric2D;
+        let per_site = move |x: [Real; 3]| {
+            let v = if axisymmetric { volume * x[0] } else { volume };
+            (v * rec.density, v)
+        };
         // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [min, max],
         // clipped to the admissible region widened by one site, so that a huge region costs
         // no more than the grid while a region reaching out of the grid still meets a site
@@ -799,7 +822,13 @@ impl<'a> World<'a> {
         }
         // Pass 2: write the same sites in the same order.
         let v3 = [velocity.x, velocity.y, velocity.z];
-        Ok(self.append(&def, sites().map(|x| (x, v3, mass, volume, material))))
+        Ok(self.append(
+            &def,
+            sites().map(|x| {
+                let (mass, volume) = per_site(x);
+                (x, v3, mass, volume, material)
+            }),
+        ))
     }
 
     /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
@@ -885,6 +914,31 @@ impl<'a> World<'a> {
         let def = self.def();
         let layout = Layout::of(&def);
         let ppc = def.particles_per_cell;
+        #[cfg(feature = "effects")]
+        if def.dimension == Dimension::Axisymmetric2D {
+            use crate::shape::Axisymmetric;
+            // The family wrapped in the axisymmetric form.
+            fn axi<S>(inner: S, def: &WorldDef) -> Axisymmetric<S> {
+                let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
+                Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
+            }
+            let run = (dt, time);
+            match def.shape {
+                ShapeFunction::Linear => {
+                    self.run::<2, 2, _>(axi(Linear, &def), run, &def, &layout, kernel, simd)
+                }
+                ShapeFunction::Gimp => {
+                    self.run::<2, 3, _>(axi(Gimp::new(ppc), &def), run, &def, &layout, kernel, simd)
+                }
+                ShapeFunction::QuadraticBspline => {
+                    self.run::<2, 3, _>(axi(QuadraticBspline, &def), run, &def, &layout, kernel, simd)
+                }
+                ShapeFunction::CubicBspline => {
+                    self.run::<2, 4, _>(axi(CubicBspline, &def), run, &def, &layout, kernel, simd)
+                }
+            }
+            return;
+        }
         match (def.axes(), def.shape) {
             (2, ShapeFunction::Linear) => {
                 self.run::<2, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
@@ -960,6 +1014,10 @@ impl<'a> World<'a> {
             materials,
             tractions,
             transport: [fx.heat, fx.diffusion],
+            eigenstrain: [
+                fx.heat.is_some() && materials.iter().any(|m| m.thermal_expansion != 0.0),
+                fx.diffusion.is_some() && materials.iter().any(|m| m.swelling != 0.0),
+            ],
         };
         run_kernel(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }
@@ -1064,6 +1122,10 @@ impl<'a> WorldRef<'a> {
                 heat_capacity: r.heat_capacity,
                 conductivity: r.conductivity,
                 diffusivity: r.diffusivity,
+                thermal_expansion: r.thermal_expansion,
+                reference_temperature: r.reference_temperature,
+                swelling: r.swelling,
+                reference_concentration: r.reference_concentration,
             })
     }
 
@@ -1198,6 +1260,7 @@ impl<'a> WorldRef<'a> {
             concentration: group(layout.scalar[1], 0),
             grid_temperature: group(layout.scalar[0], 1),
             grid_concentration: group(layout.scalar[1], 1),
+            hoop: group(layout.hoop, 0),
             damping: core::array::from_fn(|k| group(layout.damping, k)),
             affine: core::array::from_fn(|a| {
                 core::array::from_fn(|b| {
@@ -1300,17 +1363,18 @@ impl<'a> WorldRef<'a> {
                 out.angular_momentum[a] += l[a];
             }
             if let Some(rec) = materials.get(view.material[i] as usize) {
-                let (model, params, jm1) =
-                    (model_of(rec), Params::of(rec), view.jacobian_minus_one(i));
-                let hc = &view.displacement_gradient;
-                let w = if d == 3 {
-                    let h: Mat<3> = core::array::from_fn(|a| core::array::from_fn(|b| hc[a][b][i]));
-                    energy_density(model, &params, &h, jm1)
+                // The elastic part's energy, per volume of the eigenstrained (stress-free)
+                // configuration, (1 + d)^3 V0.
+                let (model, params) = (model_of(rec), Params::of(rec));
+                let eig = eigenstrain_of(rec, &view, i);
+                let (w, scale) = if d == 3 {
+                    let (f, k) = elastic_part(&view.deformation::<3>(i), eig);
+                    (energy_density(model, &params, &f), k)
                 } else {
-                    let h: Mat<2> = core::array::from_fn(|a| core::array::from_fn(|b| hc[a][b][i]));
-                    energy_density(model, &params, &h, jm1)
+                    let (f, k) = elastic_part(&view.deformation::<2>(i), eig);
+                    (energy_density(model, &params, &f), k)
                 };
-                out.strain += view.volume0[i] as f64 * w as f64;
+                out.strain += view.volume0[i] as f64 * (scale * w) as f64;
             }
         }
         if out.mass > 0.0 {
@@ -1323,6 +1387,15 @@ impl<'a> WorldRef<'a> {
 }
 
 /// Largest value of `col` over active particles (0 for an empty column).
+/// The isotropic eigenstrain `d` of particle `i` of material `rec` (thermal expansion and
+/// swelling, from the grid values at the particle; 0 for a field not declared), as the stress
+/// update takes it out.
+fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> Real {
+    let at = |col: &[Real], reference: Real| col.get(i).map_or(0.0, |&v| v - reference);
+    rec.thermal_expansion * at(view.grid_temperature, rec.reference_temperature)
+        + rec.swelling * at(view.grid_concentration, rec.reference_concentration)
+}
+
 fn view_max(col: &[Real], status: &[u32]) -> f64 {
     col.iter()
         .zip(status)

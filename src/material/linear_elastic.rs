@@ -1,11 +1,13 @@
 //! Isotropic linear elasticity (small strain) in the corotated frame: `F = R U`, `e = U - I`,
 //! `sigma_rot = lambda tr(e) I + 2 mu e`, `tau = J R sigma_rot R^T`. For small strain and no
 //! rotation this is classic linear elasticity; a rigid rotation gives exactly zero strain.
-//! Plane strain: `e_zz = 0`, so `sigma_zz = lambda tr(e)`.
+//! In 2D the out-of-plane axis is a principal direction (R turns in the plane only), so
+//! `e_zz = F_zz - 1`: 0 in plane strain (`sigma_zz = lambda tr(e)`), the hoop strain when
+//! axisymmetric.
 //!
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
-use super::{Params, Stress};
+use super::{Deformation, Params, Stress};
 use crate::math::{mul, polar_rotation_minus_identity, Mat};
 use crate::Real;
 
@@ -36,9 +38,10 @@ fn corotated_strain<const D: usize>(h: &Mat<D>) -> (Mat<D>, Mat<D>) {
 }
 
 #[inline(always)]
-pub(super) fn kirchhoff<const D: usize>(p: &Params, h: &Mat<D>, jm1: Real) -> Stress<D> {
-    let (e, q) = corotated_strain(h);
-    let mut tr = 0.0;
+pub(super) fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
+    let (e, q) = corotated_strain(&f.h);
+    let ezz = if D == 2 { f.hzz } else { 0.0 };
+    let mut tr = ezz;
     for (a, row) in e.iter().enumerate() {
         tr += row[a];
     }
@@ -60,21 +63,26 @@ pub(super) fn kirchhoff<const D: usize>(p: &Params, h: &Mat<D>, jm1: Real) -> St
             rt[a][b] = r[b][a];
         }
     }
-    let j = 1.0 + jm1;
+    let j = 1.0 + f.jm1;
     let mut m = mul(&mul(&r, &s), &rt);
     for row in m.iter_mut() {
         for v in row.iter_mut() {
             *v *= j;
         }
     }
-    let zz = if D == 2 { j * p.lambda * tr } else { 0.0 };
+    let zz = if D == 2 {
+        j * (p.lambda * tr + 2.0 * p.mu * ezz)
+    } else {
+        0.0
+    };
     Stress { m, zz }
 }
 
-pub(super) fn energy<const D: usize>(p: &Params, h: &Mat<D>) -> Real {
-    let (e, _) = corotated_strain(h);
-    let mut tr = 0.0;
-    let mut ee = 0.0;
+pub(super) fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    let (e, _) = corotated_strain(&f.h);
+    let ezz = if D == 2 { f.hzz } else { 0.0 };
+    let mut tr = ezz;
+    let mut ee = ezz * ezz;
     for a in 0..D {
         tr += e[a][a];
         for b in 0..D {

@@ -2,7 +2,12 @@
 //! over initial density `tau / rho0` out (seeds/000 eq 18), plus the strain energy per unit
 //! initial volume for energy checks.
 //!
-//! In 2D (plane strain) `F_zz = 1` and the out-of-plane stress is returned separately as `zz`.
+//! In 2D the out-of-plane stretch is given separately ([`Deformation::hzz`]: 0 in plane strain,
+//! `F_thetatheta - 1` in the axisymmetric form) and the out-of-plane stress is returned
+//! separately as `zz` (`tau_thetatheta` when axisymmetric).
+//!
+//! An isotropic eigenstrain (thermal expansion, swelling: `F_0 = (1 + d) I`) is taken out of the
+//! deformation before the model sees it ([`elastic_part`]), so the models know nothing of it.
 
 mod linear_elastic;
 mod neo_hookean;
@@ -16,6 +21,52 @@ use crate::{MaterialModel, Real};
 pub(crate) struct Stress<const D: usize> {
     pub m: Mat<D>,
     pub zz: Real,
+}
+
+/// The deformation a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
+/// `F_zz - 1` (2D only; ignored in 3D) and `J - 1 = det F - 1` of the whole 3 x 3 `F`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Deformation<const D: usize> {
+    pub h: Mat<D>,
+    pub hzz: Real,
+    pub jm1: Real,
+}
+
+impl<const D: usize> Deformation<D> {
+    /// From `H` and the out-of-plane `F_zz - 1` (0 in plane strain and in 3D).
+    #[inline(always)]
+    pub fn new(h: Mat<D>, hzz: Real) -> Self {
+        let j2 = crate::math::det_identity_plus_minus_one(&h);
+        let jm1 = if D == 2 { j2 + hzz + j2 * hzz } else { j2 };
+        Deformation { h, hzz, jm1 }
+    }
+}
+
+/// The elastic part `F_e = F / (1 + d)` of a deformation carrying the isotropic eigenstrain
+/// `F_0 = (1 + d) I` (thermal expansion `d = alpha (T - T_0)`, swelling `d = beta (c - c_0)`),
+/// and the factor `J / J_e = (1 + d)^3` that turns the Kirchhoff stress of `F_e` into that of
+/// `F` (`tau = J sigma`). Written in `H` and `d` so that small strains keep their precision:
+/// `H_e = (H - d I) / (1 + d)`. In 2D the out-of-plane axis carries the eigenstrain too (a
+/// clamped plane-strain block heated is stressed along z).
+#[inline(always)]
+pub(crate) fn elastic_part<const D: usize>(f: &Deformation<D>, d: Real) -> (Deformation<D>, Real) {
+    let inv = 1.0 / (1.0 + d);
+    let mut h = f.h;
+    for (a, row) in h.iter_mut().enumerate() {
+        row[a] -= d;
+        for v in row.iter_mut() {
+            *v *= inv;
+        }
+    }
+    // (1 + d)^3 - 1 without cancellation.
+    let cube_m1 = d * (3.0 + d * (3.0 + d));
+    let cube = 1.0 + cube_m1;
+    let e = Deformation {
+        h,
+        hzz: (f.hzz - d) * inv,
+        jm1: (f.jm1 - cube_m1) / cube,
+    };
+    (e, cube)
 }
 
 /// Parameters the models need, taken from a material record once per step.
@@ -45,17 +96,16 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
     }
 }
 
-/// `tau / rho0` from `H = F - I` and `jm1 = det F - 1 > -1`.
+/// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`.
 #[inline(always)]
 pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     model: MaterialModel,
     p: &Params,
-    h: &Mat<D>,
-    jm1: Real,
+    f: &Deformation<D>,
 ) -> Stress<D> {
     let mut s = match model {
-        MaterialModel::NeoHookean => neo_hookean::kirchhoff(p, h, jm1),
-        MaterialModel::LinearElastic => linear_elastic::kirchhoff(p, h, jm1),
+        MaterialModel::NeoHookean => neo_hookean::kirchhoff(p, f),
+        MaterialModel::LinearElastic => linear_elastic::kirchhoff(p, f),
     };
     for row in s.m.iter_mut() {
         for v in row.iter_mut() {
@@ -67,35 +117,35 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize>(
 }
 
 /// Neo-Hookean `tau / rho0` for `W` particles sharing one material (the vectorised path of the
-/// stress update); see [`neo_hookean`].
+/// stress update): `h[a][b][lane]`, out-of-plane `hzz[lane]` (2D) and `jm1[lane]`; see
+/// [`neo_hookean`].
 #[inline(always)]
 pub(crate) fn neo_hookean_lanes<const D: usize, const W: usize>(
     p: &Params,
     h: &[[[Real; W]; D]; D],
+    hzz: &[Real; W],
     jm1: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
-    neo_hookean::kirchhoff_lanes(p, h, jm1, tau);
+    neo_hookean::kirchhoff_lanes(p, h, hzz, jm1, tau);
 }
 
-/// Strain energy per unit initial volume, J/m^3, from `H = F - I` and `jm1 = det F - 1`.
+/// Strain energy per unit initial volume, J/m^3, of a deformation.
 pub(crate) fn energy_density<const D: usize>(
     model: MaterialModel,
     p: &Params,
-    h: &Mat<D>,
-    jm1: Real,
+    f: &Deformation<D>,
 ) -> Real {
     match model {
-        MaterialModel::NeoHookean => neo_hookean::energy(p, h, jm1),
-        MaterialModel::LinearElastic => linear_elastic::energy(p, h),
+        MaterialModel::NeoHookean => neo_hookean::energy(p, f),
+        MaterialModel::LinearElastic => linear_elastic::energy(p, f),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::det_identity_plus_minus_one;
-
+    
     fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
         let (s, c) = (
             libm::sin(angle as f64) as Real,
@@ -123,9 +173,8 @@ mod tests {
             for k in 0..64 {
                 let angle = -3.0 + 6.0 * k as Real / 63.0;
                 for axis in 0..3 {
-                    let h = rotation_minus_identity(angle, axis);
-                    let jm1 = det_identity_plus_minus_one(&h);
-                    let s = kirchhoff_over_rho0(model, &p, &h, jm1);
+                    let f = Deformation::new(rotation_minus_identity(angle, axis), 0.0);
+                    let s = kirchhoff_over_rho0(model, &p, &f);
                     // tau/rho0 scale of a unit strain is (lambda + 2 mu)/rho0 = 1300; round-off
                     // of order 1e-6 of it is what f32 leaves.
                     let bound = 1.0e-5 * 1300.0;
@@ -134,15 +183,14 @@ mod tests {
                         "{model:?} {angle} {axis}: {:?}",
                         s.m
                     );
-                    assert!(energy_density(model, &p, &h, jm1).abs() < 1.0e-5 * 1.3e6);
+                    assert!(energy_density(model, &p, &f).abs() < 1.0e-5 * 1.3e6);
                 }
                 let (s2, c2) = (
                     libm::sin(angle as f64) as Real,
                     libm::cos(angle as f64) as Real,
                 );
                 let h2: Mat<2> = [[c2 - 1.0, -s2], [s2, c2 - 1.0]];
-                let jm1 = det_identity_plus_minus_one(&h2);
-                let s = kirchhoff_over_rho0(model, &p, &h2, jm1);
+                let s = kirchhoff_over_rho0(model, &p, &Deformation::new(h2, 0.0));
                 assert!(s.m.iter().flatten().all(|v| v.abs() < 1.0e-5 * 1300.0));
                 assert!(s.zz.abs() < 1.0e-5 * 1300.0);
             }
@@ -159,15 +207,15 @@ mod tests {
             inv_rho0: 1.0,
         };
         let eps = 1.0e-4;
-        let h: Mat<3> = [[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+        let f = Deformation::<3>::new([[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]], 0.0);
         for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
-            let s = kirchhoff_over_rho0(model, &p, &h, det_identity_plus_minus_one(&h));
+            let s = kirchhoff_over_rho0(model, &p, &f);
             let xx = (p.lambda + 2.0 * p.mu) * eps;
             let yy = p.lambda * eps;
             assert!((s.m[0][0] - xx).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             assert!((s.m[1][1] - yy).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             // Energy (lambda + 2 mu) eps^2 / 2.
-            let w = energy_density(model, &p, &h, det_identity_plus_minus_one(&h));
+            let w = energy_density(model, &p, &f);
             let expect = 0.5 * (p.lambda + 2.0 * p.mu) * eps * eps;
             assert!((w - expect).abs() < 1e-3 * expect, "{model:?} {w} {expect}");
         }

@@ -13,7 +13,10 @@
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
 //! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
-//! from the material.
+//! from the material. Axisymmetric, the hoop rate `v_r / r = sum v_r,i T_ip` (seeds/000 eq
+//! 113) stretches `F_thetatheta` the same way. With thermal expansion or swelling declared,
+//! the material sees `F` without the particle's isotropic eigenstrain
+//! ([`crate::material::elastic_part`]).
 //!
 //! A particle that reaches a stick or slip wall is put back on the wall plane with its outward
 //! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
@@ -29,7 +32,9 @@ use super::p2g::{affine_velocity, mode, scatter_lane, scatter_one, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
-use crate::material::{kirchhoff_over_rho0, model_of, neo_hookean_lanes, Params};
+use crate::material::{
+    elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation, Params,
+};
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils};
@@ -72,19 +77,22 @@ fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usiz
     core::array::from_fn(|l| l < n && status[l] == ACTIVE)
 }
 
-/// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient).
+/// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient;
+/// axisymmetric: 9).
 const GATHERED: usize = 16;
 
-/// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]` and the velocity gradient `l[a][b]`
-/// of every lane (zero where not gathered).
+/// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]`, the velocity gradient `l[a][b]` and,
+/// axisymmetric, the hoop rate `v_r / r` of every lane (zero where not gathered).
 struct Gathered<const D: usize> {
     v_gp: [Lane; D],
     a_gp: [Lane; D],
     l: LaneMat<D>,
+    hoop: Lane,
 }
 
 impl<const D: usize> Gathered<D> {
-    /// The lanes of flat result `r`: `v_gp` (D) and `a_gp` (D) below `grad0`, then `l` (D x D).
+    /// The lanes of flat result `r`: `v_gp` (D) and `a_gp` (D) below `grad0`, then `l` (D x D),
+    /// then the hoop rate.
     #[inline(always)]
     fn slot(&mut self, r: usize, grad0: usize) -> &mut Lane {
         if r < grad0 {
@@ -93,9 +101,11 @@ impl<const D: usize> Gathered<D> {
             } else {
                 &mut self.a_gp[r - D]
             }
-        } else {
+        } else if r - grad0 < D * D {
             let i = r - grad0;
             &mut self.l[i / D][i % D]
+        } else {
+            &mut self.hoop
         }
     }
 }
@@ -105,7 +115,7 @@ impl<const D: usize> Gathered<D> {
 /// four lanes' rows are then transposed in registers, so that every lane vector is written
 /// whole rather than one scalar per lane.
 #[inline(always)]
-fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
+fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const GRAD: u8>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
@@ -114,16 +124,18 @@ fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>
     let mut rows = [[Row4::ZERO; GATHERED / 4]; W];
     for ln in 0..W {
         if live[ln] {
-            rows[ln] = gather::<D, K, VEL, GRAD>(ctx, g, st.lane(ln));
+            rows[ln] = gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln));
         }
     }
-    // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) when GRAD.
+    // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
+    // (axisymmetric) when GRAD.
     let grad0 = if VEL { 2 * D } else { 0 };
-    let n = grad0 + if GRAD != grad::NONE { D * D } else { 0 };
+    let n = grad0 + if GRAD != grad::NONE { D * D + S::AXISYMMETRIC as usize } else { 0 };
     let mut out = Gathered {
         v_gp: [[0.0; W]; D],
         a_gp: [[0.0; W]; D],
         l: [[[0.0; W]; D]; D],
+        hoop: [0.0; W],
     };
     for l0 in (0..W).step_by(4) {
         for q in 0..n.div_ceil(4) {
@@ -143,10 +155,11 @@ fn gather_chunk<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>
     out
 }
 
-/// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`) of the particle
-/// with stencil `st`, in the flat order of [`gather_chunk`], four results per [`Row4`].
+/// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`; with the hoop
+/// rate `sum u_r,i T_ip` axisymmetric) of the particle with stencil `st`, in the flat order of
+/// [`gather_chunk`], four results per [`Row4`].
 #[inline(always)]
-fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
+fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const GRAD: u8>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencil<D, K>,
@@ -221,6 +234,10 @@ fn gather<const D: usize, const K: usize, const VEL: bool, const GRAD: u8>(
             terms[n + a * D] = dwx * ux;
             for b in 1..D {
                 terms[n + a * D + b] = wx * du[a][b];
+            }
+            if S::AXISYMMETRIC && a == 0 {
+                // v_r / r = sum_i u_r,i t_i w_z: the x sum of the rows' z-weighted u_r.
+                terms[n + D * D] = st.t * ux;
             }
         }
     }
@@ -379,13 +396,14 @@ fn mul_add_lanes<const D: usize>(acc: &mut LaneMat<D>, x: &LaneMat<D>, y: &LaneM
 /// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
 /// keeps its H and stress.
 #[inline(always)]
-fn update_stress<const D: usize>(
+fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     start: usize,
     update: &[bool; W],
-    l: &LaneMat<D>,
+    gathered: &Gathered<D>,
 ) -> [bool; W] {
+    let l = &gathered.l;
     // Plain loops over lanes here, not `core::array::from_fn`: a closure that indexes is not
     // always inlined, and a helper that is not inlined runs baseline code in the AVX2 instance.
     // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane).
@@ -416,11 +434,38 @@ fn update_stress<const D: usize>(
             }
         }
     }
-    // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H.
+    // Axisymmetric: F_thetatheta <- exp(v_r / r dt) F_thetatheta, by the same series, kept
+    // as `F_thetatheta - 1` (the out-of-plane `hzz` the materials read; 0 in plane strain).
+    let mut hzz = [0.0; W];
+    if S::AXISYMMETRIC {
+        let old = load(p.hoop, start);
+        let mut a = gathered.hoop;
+        for v in a.iter_mut() {
+            *v *= ctx.dt;
+        }
+        let mut qh = [0.0; W];
+        for ln in 0..W {
+            qh[ln] = a[ln] * INV[n];
+        }
+        for k in (1..n).rev() {
+            for ln in 0..W {
+                qh[ln] = (a[ln] + a[ln] * qh[ln]) * INV[k];
+            }
+        }
+        for ln in 0..W {
+            hzz[ln] = old[ln] + qh[ln] + qh[ln] * old[ln];
+        }
+    }
+    // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
     let mut jm1 = [0.0; W];
     for ln in 0..W {
         let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
-        jm1[ln] = crate::math::det_identity_plus_minus_one(&m);
+        let j2 = crate::math::det_identity_plus_minus_one(&m);
+        jm1[ln] = if S::AXISYMMETRIC {
+            j2 + hzz[ln] + j2 * hzz[ln]
+        } else {
+            j2
+        };
     }
     // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
     // material (the common case, vectorised); otherwise lane by lane.
@@ -438,10 +483,42 @@ fn update_stress<const D: usize>(
     let ns = crate::layout::stress_components(D);
     let mut tau = [[0.0; W]; 6];
     let mut ok = [false; W];
+    // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
+    let eigen = eigenstrain(ctx, p, start, &ids);
     if let Some(rec) = uniform {
-        neo_hookean_lanes(&Params::of(rec), &h, &jm1, &mut tau);
+        let params = Params::of(rec);
+        let mut admissible = [true; W];
+        match &eigen {
+            None => neo_hookean_lanes(&params, &h, &hzz, &jm1, &mut tau),
+            Some(d) => {
+                let (mut he, mut hzze, mut jm1e, mut cube) = (h, hzz, jm1, [1.0; W]);
+                for ln in 0..W {
+                    let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
+                    let f = Deformation {
+                        h: m,
+                        hzz: hzz[ln],
+                        jm1: jm1[ln],
+                    };
+                    let (e, k) = elastic_part(&f, d[ln]);
+                    for r in 0..D {
+                        for c in 0..D {
+                            he[r][c][ln] = e.h[r][c];
+                        }
+                    }
+                    (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
+                    // The eigenstrain must not invert the material either.
+                    admissible[ln] = d[ln] > -1.0;
+                }
+                neo_hookean_lanes(&params, &he, &hzze, &jm1e, &mut tau);
+                for row in tau.iter_mut() {
+                    for ln in 0..W {
+                        row[ln] *= cube[ln];
+                    }
+                }
+            }
+        }
         for ln in 0..W {
-            ok[ln] = update[ln] && jm1[ln] > -1.0;
+            ok[ln] = admissible[ln] && update[ln] && jm1[ln] > -1.0;
         }
     } else {
         for ln in 0..W {
@@ -457,12 +534,22 @@ fn update_stress<const D: usize>(
                 continue;
             };
             let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
-            let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &m, jm1[ln]);
+            let f = Deformation {
+                h: m,
+                hzz: hzz[ln],
+                jm1: jm1[ln],
+            };
+            let (f, scale) = match &eigen {
+                None => (f, 1.0),
+                Some(d) if d[ln] > -1.0 => elastic_part(&f, d[ln]),
+                Some(_) => continue,
+            };
+            let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &f);
             for (k, &(r, c)) in super::sym_pairs(D).iter().enumerate() {
-                tau[k][ln] = s.m[r][c];
+                tau[k][ln] = s.m[r][c] * scale;
             }
             if D == 2 {
-                tau[3][ln] = s.zz;
+                tau[3][ln] = s.zz * scale;
             }
             ok[ln] = true;
         }
@@ -470,7 +557,7 @@ fn update_stress<const D: usize>(
     // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
     for ln in 0..W {
-        let mut sum = jm1[ln];
+        let mut sum = jm1[ln] + hzz[ln];
         for k in 0..ns {
             sum += tau[k][ln];
         }
@@ -489,7 +576,43 @@ fn update_stress<const D: usize>(
     for k in 0..ns {
         commit(p.tau[k], start, &tau[k], &ok);
     }
+    if S::AXISYMMETRIC {
+        commit(p.hoop, start, &hzz, &ok);
+    }
     ok
+}
+
+/// The isotropic eigenstrain `d` of each lane (`F_0 = (1 + d) I`): `alpha (T - T_0)` with heat
+/// conduction plus `beta (c - c_0)` with diffusion, from the grid values at the particles
+/// (seeds/000 section 8 advises features to read `T_g->p`) and each lane's material; `None`
+/// when no declared field has a material that expands or swells.
+#[inline(always)]
+fn eigenstrain<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    ids: &[usize; W],
+) -> Option<Lane> {
+    if !ctx.eigenstrain.iter().any(|&e| e) {
+        return None;
+    }
+    let mut d = [0.0; W];
+    for (f, &on) in ctx.eigenstrain.iter().enumerate() {
+        if !on {
+            continue;
+        }
+        let value = load(p.scalar[f][1], start);
+        for ln in 0..W {
+            if let Some(r) = ctx.materials.get(ids[ln]) {
+                d[ln] += if f == 0 {
+                    r.thermal_expansion * (value[ln] - r.reference_temperature)
+                } else {
+                    r.swelling * (value[ln] - r.reference_concentration)
+                };
+            }
+        }
+    }
+    Some(d)
 }
 
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
@@ -554,11 +677,12 @@ pub(crate) fn particles<
                 }
             }
         }
-        let Gathered { v_gp, a_gp, l } = if FUSED_STRESS {
-            gather_chunk::<D, K, true, { grad::UPDATED }>(ctx, g, &st, &live)
+        let gathered = if FUSED_STRESS {
+            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, &live)
         } else {
-            gather_chunk::<D, K, true, { grad::NONE }>(ctx, g, &st, &live)
+            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, &live)
         };
+        let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
         // faces as selects: written on 4-wide vectors (the auto-vectoriser left the selects
         // scalar, 13 instructions per lane and axis).
@@ -638,12 +762,12 @@ pub(crate) fn particles<
             }
         }
         let ok = if FUSED_STRESS {
-            update_stress(ctx, p, start, &moved, &l)
+            update_stress::<D, K, S>(ctx, p, start, &moved, &gathered)
         } else {
             moved
         };
         if APIC && FUSED_STRESS && S::GRADIENT_AFFINE {
-            commit_gradient_affine(p, start, &l, &ok);
+            commit_gradient_affine(p, start, l, &ok);
         }
         // Commit: updated lanes take the new state; live lanes that failed freeze.
         let frozen: [bool; W] = core::array::from_fn(|ln| live[ln] && !ok[ln]);
@@ -688,6 +812,7 @@ pub(crate) fn particles<
                         m: p.mass[start + ln],
                         v: core::array::from_fn(|a| v_new[a][ln]),
                         tau: [[0.0; D]; D],
+                        hoop: 0.0,
                         force: [0.0; D],
                         affine: core::array::from_fn(|r| {
                             // Zero for a family that keeps the gradient form: its C_p is
@@ -697,7 +822,7 @@ pub(crate) fn particles<
                             })
                         }),
                     };
-                    scatter_one::<D, K, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
+                    scatter_one::<D, K, S, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
                 }
             }
         }
@@ -724,10 +849,10 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         stencils::<D, K, S, false>(&mut st, shape, ctx, &x);
-        let l = gather_chunk::<D, K, false, { grad::REMAP }>(ctx, g, &st, &live).l;
-        let ok = update_stress(ctx, p, start, &live, &l);
+        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, &live);
+        let ok = update_stress::<D, K, S>(ctx, p, start, &live, &gathered);
         if S::GRADIENT_AFFINE {
-            commit_gradient_affine(p, start, &l, &ok);
+            commit_gradient_affine(p, start, &gathered.l, &ok);
         }
         let n = W.min(count - start);
         for ln in 0..n {

@@ -40,6 +40,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub tractions: &'m [TractionRecord],
     /// The transported scalars declared (heat, diffusion).
     pub transport: [Option<crate::Transport>; 2],
+    /// Per transported scalar: declared, and some material expands (heat) or swells
+    /// (diffusion) with it, so the stress update takes the eigenstrain out.
+    pub eigenstrain: [bool; 2],
 }
 
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored

@@ -58,7 +58,9 @@ pub(crate) fn scatter<
         let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
         let mut tau = [[0.0; W]; 6];
         if with_force {
-            for k in 0..sym_pairs(D).len() {
+            // Axisymmetric, the fourth 2D component (zz) is the hoop stress.
+            let n = sym_pairs(D).len() + (S::AXISYMMETRIC as usize);
+            for k in 0..n {
                 tau[k] = load(p.tau[k], start);
             }
         }
@@ -97,6 +99,7 @@ pub(crate) fn scatter<
                 m: mass[ln],
                 v: core::array::from_fn(|a| v[a][ln]),
                 tau: t,
+                hoop: tau[3][ln],
                 force: core::array::from_fn(|a| f_ext[a][ln]),
                 affine: core::array::from_fn(|a| {
                     core::array::from_fn(|b| {
@@ -104,7 +107,7 @@ pub(crate) fn scatter<
                     })
                 }),
             };
-            scatter_one::<D, K, MODE, FORCE, APIC>(ctx, &pt, stn, g);
+            scatter_one::<D, K, S, MODE, FORCE, APIC>(ctx, &pt, stn, g);
         }
     }
 }
@@ -139,6 +142,8 @@ pub(crate) struct Scattered<const D: usize> {
     pub v: [Real; D],
     /// tau/rho0 (read only by the modes with force).
     pub tau: Mat<D>,
+    /// Axisymmetric: the hoop stress tau_thetatheta/rho0 (read as `tau`).
+    pub hoop: Real,
     /// External force F_p (read only with `FORCE` and force).
     pub force: [Real; D],
     /// APIC affine velocity matrix C_p (read only with `APIC` and momentum).
@@ -151,6 +156,7 @@ pub(crate) struct Scattered<const D: usize> {
 pub(crate) fn scatter_one<
     const D: usize,
     const K: usize,
+    S: Shape1D<K>,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
@@ -189,15 +195,18 @@ pub(crate) fn scatter_one<
         })
     });
     // Force on a node: f_a = -m sum_b tau_ab G_b + S F_a; force_x[a][b] = -m tau_ab times dwx
-    // (b = 0) or wx (b >= 1), plus F_a wx in b = 0.
+    // (b = 0) or wx (b >= 1), plus F_a wx in b = 0. Axisymmetric, the radial force also has
+    // the hoop term -m tau_thetatheta T_ip (eq 120), T_ip = t_i w_z: in b = 0 with t.
     let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
         core::array::from_fn(|b| {
-            let internal = (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]);
+            let mut f = (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]);
             if FORCE && b == 0 {
-                internal + wx * pt.force[a]
-            } else {
-                internal
+                f += wx * pt.force[a];
             }
+            if S::AXISYMMETRIC && a == 0 && b == 0 {
+                f += st.t * (-m * pt.hoop);
+            }
+            f
         })
     });
     for j in 0..K {
@@ -284,6 +293,9 @@ pub(crate) fn scatter_one<
 /// the acceleration a traction gives any node is at most `T A / m_p`. The cost is the point of
 /// application, moved by `l_p` from the face to the particle: the resultant is exact, its
 /// moment is off by `T A l_p` per particle.
+///
+/// Axisymmetric, `A` is per radian: `2 l_p (r_p -+ l_p)` for the faces of constant r at
+/// `r_p -+ l_p`, `int r dr = 2 l_p r_p` for the faces of constant z.
 pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -300,6 +312,16 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
         }
         let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
         let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
+        let area = if S::AXISYMMETRIC {
+            let l = ctx.half_width;
+            area * match rec.face {
+                0 => (p.x[0][i] - l).max(0.0),
+                1 => p.x[0][i] + l,
+                _ => p.x[0][i],
+            }
+        } else {
+            area
+        };
         st.for_each_node(geom.stride, |node, w, _| {
             for a in 0..D {
                 if let Some(f) = g.acc[a].get_mut(node) {

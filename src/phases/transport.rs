@@ -29,7 +29,8 @@
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::GridCols;
-use crate::math::{det_identity_plus_minus_one, Mat};
+use crate::material::Deformation;
+use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::{Shape1D, Stencil};
 use crate::Real;
@@ -123,7 +124,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         for_each_face(ctx, t, |node, bc, axis, on_wall| {
             if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
             {
-                *q += flux * face_area(geom, axis, node);
+                *q += flux * face_area(geom, axis, node, S::AXISYMMETRIC);
             }
         });
         for (q, &c) in q_col.iter_mut().zip(c_col.iter()) {
@@ -179,31 +180,49 @@ fn capacity_and_conductance<const D: usize>(
     }
 }
 
-/// The area the node `node` on a wall plane normal to `axis` stands for: `h` per other axis
-/// (per unit thickness in 2D), halved on the admissible region's edges and zero outside it, so
-/// that the areas of a plane's nodes sum to the area of the admissible region's face.
-fn face_area<const D: usize>(geom: &crate::grid::Geom<D>, axis: usize, node: usize) -> Real {
-    let mut area = 1.0;
+/// The area the node `node` on a wall plane normal to `axis` stands for: its patch, `h` per
+/// other axis (per unit thickness in 2D) halved on the admissible region's edges, zero outside
+/// it, so that the areas of a plane's nodes sum to the area of the admissible region's face.
+/// `axisymmetric`: per radian, `int r dr` over the patch's radial extent, or the plane's
+/// radius times the patch for a plane of constant r.
+fn face_area<const D: usize>(
+    geom: &crate::grid::Geom<D>,
+    axis: usize,
+    node: usize,
+    axisymmetric: bool,
+) -> Real {
+    let coord = |b: usize| (node / geom.stride[b]) % geom.nodes[b];
+    let radius = |idx: usize| geom.origin[0] + idx as Real * geom.h;
+    let mut area = if axisymmetric && axis == 0 {
+        radius(coord(0))
+    } else {
+        1.0
+    };
     for b in (0..D).filter(|&b| b != axis) {
-        let idx = (node / geom.stride[b]) % geom.nodes[b];
+        let idx = coord(b);
         let (lo, hi) = (geom.margin, geom.nodes[b] - 1 - geom.margin);
         if idx < lo || idx > hi {
             return 0.0;
         }
-        area *= if idx == lo || idx == hi {
-            0.5 * geom.h
+        // The patch [x_i - h/2, x_i + h/2] in cell units from the node, cut at the edges.
+        let from = if idx == lo { 0.0 } else { -0.5 };
+        let to = if idx == hi { 0.0 } else { 0.5 };
+        area *= if axisymmetric && b == 0 {
+            let (r0, r1) = (radius(idx) + from * geom.h, radius(idx) + to * geom.h);
+            0.5 * (r1 * r1 - r0 * r0)
         } else {
-            geom.h
+            (to - from) * geom.h
         };
     }
     area
 }
 
-/// `J V0` of particle `i`.
+/// `J V0` of particle `i` (with `F_thetatheta` when axisymmetric).
 #[inline]
 fn current_volume<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Real {
     let h: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]));
-    (1.0 + det_identity_plus_minus_one(&h)) * p.vol0[i]
+    let hoop = p.hoop.get(i).copied().unwrap_or(0.0);
+    (1.0 + Deformation::new(h, hoop).jm1) * p.vol0[i]
 }
 
 /// Calls `f(node, condition, axis, on_wall_plane)` for every node of every face layer (see

@@ -32,9 +32,47 @@ impl Gimp {
     }
 }
 
+impl Gimp {
+    /// First moment `M = 1/(2l) int_{-l}^{l} N(xi + u) u du` of the hat over the domain (cell
+    /// units) and the mean of the hat at the domain's ends, for a particle at offset `xi` from
+    /// the node. With `a = |xi|` and `c = 1 - a`:
+    /// - `a < l`: `M = xi^3 / (6 l) - xi l / 2`
+    /// - `l <= a <= 1 - l`: `M = -sign(xi) l^2 / 3`
+    /// - `1 - l < a < 1 + l`: `M = -sign(xi) (l^3 / 3 + c l^2 / 2 - c^3 / 6) / (2 l)`
+    ///
+    /// (continuous at `a = l` and `a = 1 - l`, zero from `a = 1 + l`).
+    #[inline(always)]
+    fn moment_and_ends(&self, xi: Real) -> (Real, Real) {
+        let l = self.l;
+        let a = xi.abs();
+        let sign: Real = if xi >= 0.0 { 1.0 } else { -1.0 };
+        let c = (1.0 - a).max(-l);
+        let m = if a < l {
+            xi * (xi * xi / 3.0 - l * l) * 0.5 * self.inv_l
+        } else if a <= 1.0 - l {
+            -sign * l * l / 3.0
+        } else {
+            -sign * (l * l * l / 3.0 + c * l * l * 0.5 - c * c * c / 6.0) * self.inv_2l
+        };
+        let hat = |x: Real| (1.0 - x.abs()).max(0.0);
+        (m, 0.5 * (hat(xi - l) + hat(xi + l)))
+    }
+}
+
 impl Shape1D<3> for Gimp {
     const SHIFT: Real = 0.5;
     const LEAD: i32 = 1;
+    const FINITE_DOMAIN: bool = true;
+
+    #[inline(always)]
+    fn radial_terms(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        let mut m = [0.0; 3];
+        let mut ends = [0.0; 3];
+        for k in 0..3 {
+            (m[k], ends[k]) = self.moment_and_ends(f - k as Real);
+        }
+        (m, ends)
+    }
 
     /// Written as selects between the three branches (all evaluated), so the compiler emits no
     /// jumps: the region a particle is in changes from step to step and would mispredict.

@@ -12,10 +12,12 @@
 //! Positions are given in cell units relative to the grid origin (`s = (x - origin) / h`), so a
 //! node `i` sits at `s = i` and the per-axis offset is `xi = s - i`.
 
+mod axisymmetric;
 mod bspline;
 mod gimp;
 mod linear;
 
+pub use axisymmetric::Axisymmetric;
 pub use bspline::{CubicBspline, QuadraticBspline};
 pub use gimp::Gimp;
 pub use linear::Linear;
@@ -53,6 +55,30 @@ pub trait Shape1D<const K: usize>: Copy {
     /// is unbounded, while the gradient form, equal to `B_p D_p^-1` at the old one, is not
     /// (seeds/001 names both forms).
     const GRADIENT_AFFINE: bool = false;
+    /// Whether the first axis is the radius of the axisymmetric form (seeds/000 section 7); set
+    /// by [`Axisymmetric`] only, which then gives that axis r-weighted weights and the hoop
+    /// factors `T_ip` ([`Stencil::t`]).
+    const AXISYMMETRIC: bool = false;
+    /// Whether the weights integrate the grid functions over a particle domain (uGIMP) rather
+    /// than sample them at a point: then the r-weighted weights of the axisymmetric form differ
+    /// from the Cartesian ones, by [`Shape1D::radial_terms`].
+    const FINITE_DOMAIN: bool = false;
+
+    /// Axisymmetric only: the radius of a particle at `s` (cell units on the first axis), and
+    /// the smallest radius the weights are evaluated at (see [`Axisymmetric`]).
+    #[inline(always)]
+    fn radius(&self, _s: Real) -> Real {
+        0.0
+    }
+
+    /// A finite-domain family's terms of the r-weighted weights, per stencil node at offset
+    /// `f` from the first node: the first moment of the grid function over the domain,
+    /// `M = 1/(2l) int_{-l}^{l} N(xi + u) u du` (cell units, `xi` the particle's offset from
+    /// the node), and the mean of `N` at the domain's two ends. Zero for point families.
+    #[inline(always)]
+    fn radial_terms(&self, _f: Real) -> ([Real; K], [Real; K]) {
+        ([0.0; K], [0.0; K])
+    }
 
     /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
     /// Zero outside the support.
@@ -111,6 +137,9 @@ pub struct Stencil<const D: usize, const K: usize> {
     /// off-diagonal entries are products of first moments, which vanish). Zero where `D_p`
     /// vanishes (a linear-shape particle exactly on a node, where the first moments vanish too).
     pub inv_d: [Real; D],
+    /// Axisymmetric only (else zero): the hoop factors `T_ip` along the radius, `t[k]` for node
+    /// `k` of the first axis, 1/m (seeds/000 eq 116): `T_ip = t[i] w[1][j]`.
+    pub t: Row4,
 }
 
 /// The stencils of `W` particles. They are computed lane-fastest (loops over lanes the compiler
@@ -124,6 +153,7 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     w: [[[Real; W]; ROW]; D],
     dw: [[[Real; W]; ROW]; D],
     e: [[[Real; W]; ROW]; D],
+    t: [[Real; W]; ROW],
 }
 
 impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, W> {
@@ -136,10 +166,12 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
                 dw: [Row4::ZERO; D],
                 e: [Row4::ZERO; D],
                 inv_d: [0.0; D],
+                t: Row4::ZERO,
             }; W],
             w: [[[0.0; W]; ROW]; D],
             dw: [[[0.0; W]; ROW]; D],
             e: [[[0.0; W]; ROW]; D],
+            t: [[0.0; W]; ROW],
         }
     }
 }
@@ -158,7 +190,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
         let mut base = [0u32; W];
-        let (w, dw, e) = (&mut self.w, &mut self.dw, &mut self.e);
+        let (w, dw, e, t) = (&mut self.w, &mut self.dw, &mut self.e, &mut self.t);
         let h = 1.0 / inv_h;
         let mut inv_d = [[0.0; W]; D];
         for a in 0..D {
@@ -168,19 +200,38 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 base[ln] = base[ln].wrapping_add((first as u32).wrapping_mul(stride[a] as u32));
                 f[ln] = s[a][ln] - first as Real;
             }
-            for ln in 0..W {
-                let (wa, dwa) = shape.stencil(f[ln]);
-                for k in 0..K {
-                    w[a][k][ln] = wa[k];
-                    dw[a][k][ln] = dwa[k] * inv_h;
+            if S::AXISYMMETRIC && a == 0 {
+                for ln in 0..W {
+                    let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f[ln], s[0][ln], h);
+                    for k in 0..K {
+                        w[a][k][ln] = wa[k];
+                        dw[a][k][ln] = dwa[k];
+                        t[k][ln] = ta[k];
+                    }
+                }
+            } else {
+                for ln in 0..W {
+                    let (wa, dwa) = shape.stencil(f[ln]);
+                    for k in 0..K {
+                        w[a][k][ln] = wa[k];
+                        dw[a][k][ln] = dwa[k] * inv_h;
+                    }
                 }
             }
             if AFFINE {
                 for ln in 0..W {
+                    // The weights' centroid: the particle, f, except for the r-weighted weights
+                    // of a finite domain (then the moments are taken about the centroid, so that
+                    // they still sum to zero and the affine transfer adds no momentum).
+                    let c = if S::AXISYMMETRIC && S::FINITE_DOMAIN && a == 0 {
+                        (0..K).map(|k| w[a][k][ln] * k as Real).sum()
+                    } else {
+                        f[ln]
+                    };
                     let mut d2 = 0.0;
                     for k in 0..K {
                         // x_k - x_p = (k - f) h.
-                        let dx = (k as Real - f[ln]) * h;
+                        let dx = (k as Real - c) * h;
                         e[a][k][ln] = w[a][k][ln] * dx;
                         d2 += e[a][k][ln] * dx;
                     }
@@ -204,6 +255,12 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                     }
                 }
             }
+            if S::AXISYMMETRIC {
+                let tt = transpose4(t, l0);
+                for i in 0..4 {
+                    self.lanes[l0 + i].t = tt[i];
+                }
+            }
             for i in 0..4 {
                 self.lanes[l0 + i].base = base[l0 + i] as usize;
             }
@@ -215,6 +272,36 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     pub fn lane(&self, ln: usize) -> &Stencil<D, K> {
         &self.lanes[ln]
     }
+}
+
+/// The radial axis of the axisymmetric form for a particle at offset `f` from its first node
+/// and `s` (cell units): the r-weighted weights `S = 1/(A_p r_p) int chi_p N r dA` and their
+/// derivatives (eqs 112, 115; per unit length), and the hoop factors `T = S_cart / r_p` (eq
+/// 116, 1/m), with `r_p` no smaller than [`Shape1D::radius`] allows. For a point family the
+/// weights are the Cartesian ones; for a finite domain of half-width `l`,
+/// `S = S_cart + h M / r_p` and `G = G_cart + (N_ends - S_cart) / r_p` (the integral of
+/// `N' r` by parts), with `M` and `N_ends` from [`Shape1D::radial_terms`].
+#[inline(always)]
+pub(crate) fn radial_stencil<const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    f: Real,
+    s: Real,
+    h: Real,
+) -> ([Real; K], [Real; K], [Real; K]) {
+    let (mut w, mut dw) = shape.stencil(f);
+    let inv_h = 1.0 / h;
+    let inv_r = 1.0 / shape.radius(s);
+    let mut t = [0.0; K];
+    let (m, ends) = shape.radial_terms(f);
+    for k in 0..K {
+        t[k] = w[k] * inv_r;
+        dw[k] *= inv_h;
+        if S::FINITE_DOMAIN {
+            dw[k] += (ends[k] - w[k]) * inv_r;
+            w[k] += m[k] * h * inv_r;
+        }
+    }
+    (w, dw, t)
 }
 
 /// `1 / d` for a diagonal entry `d` of the APIC moment matrix `D_p` on a grid of spacing `h`;
@@ -268,13 +355,22 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
         let mut base = 0usize;
         let mut w = [Row4::ZERO; D];
         let mut dw = [Row4::ZERO; D];
+        let mut t = Row4::ZERO;
         for a in 0..D {
             let first = first_node::<K, S>(s[a], nodes[a]);
             base += first as usize * stride[a];
-            let (wa, dwa) = shape.stencil(s[a] - first as Real);
-            for k in 0..K {
-                w[a][k] = wa[k];
-                dw[a][k] = dwa[k] * inv_h;
+            let f = s[a] - first as Real;
+            if S::AXISYMMETRIC && a == 0 {
+                let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f, s[0], 1.0 / inv_h);
+                for k in 0..K {
+                    (w[a][k], dw[a][k], t[k]) = (wa[k], dwa[k], ta[k]);
+                }
+            } else {
+                let (wa, dwa) = shape.stencil(f);
+                for k in 0..K {
+                    w[a][k] = wa[k];
+                    dw[a][k] = dwa[k] * inv_h;
+                }
             }
         }
         Stencil {
@@ -283,6 +379,7 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
             dw,
             e: [Row4::ZERO; D],
             inv_d: [0.0; D],
+            t,
         }
     }
 
