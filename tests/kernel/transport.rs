@@ -37,6 +37,7 @@ fn conductor(kappa: Real) -> MaterialDef {
         heat_capacity: 1000.0,
         conductivity: kappa * 1000.0 * 1000.0,
         diffusivity: kappa,
+        ..MaterialDef::DEFAULT
     }
 }
 
