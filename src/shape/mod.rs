@@ -555,6 +555,124 @@ mod tests {
         check::<4, CubicBspline>();
     }
 
+    /// `1/(2 l) int_{-l}^{l} g(u) du` by Simpson's rule on each piece between the `kinks`
+    /// (where g or its slope jumps): exact for the piecewise quadratics here.
+    fn mean_over(l: f64, kinks: &[f64], g: impl Fn(f64) -> f64) -> f64 {
+        let mut cuts: std::vec::Vec<f64> = kinks.iter().copied().filter(|k| k.abs() < l).collect();
+        cuts.push(-l);
+        cuts.push(l);
+        cuts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let mut sum = 0.0;
+        for w in cuts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            // Inside a piece, away from its ends (a jump sits exactly on an end).
+            let e = (b - a) * 1e-12;
+            sum += (b - a) / 6.0 * (g(a + e) + 4.0 * g(0.5 * (a + b)) + g(b - e));
+        }
+        sum / (2.0 * l)
+    }
+
+    /// The axisymmetric form of one family at many radii, from one particle half-width off the
+    /// axis outward: the r-weighted weights sum to 1 and their gradients to 0; a linear nodal
+    /// field `v_r = k r`, `v_z = k' z` gives exactly `dv_r/dr = k`, `v_r / r = k` (the hoop
+    /// rate, `sum r_i T_ip = 1`), `dv_z/dz = k'` and no cross terms, which is the patch test of
+    /// a uniform radial expansion at any distance from the axis; and for uGIMP the weights
+    /// equal the r-weighted integrals of eqs 112, 115, 116 by quadrature.
+    fn check_axisymmetric<const K: usize, S: Shape1D<K>>(inner: S, finite: Option<f64>) {
+        const N: usize = 14;
+        let h: Real = 0.25;
+        let margin = 2.0; // cells between the grid's first node and the axis
+        let origin = -margin * h;
+        let half_width = h / 4.0; // 2 particles per cell
+        let shape = Axisymmetric::new(inner, origin, h, half_width);
+        let (nodes, stride) = ([N, N], [1, N]);
+        let mut st = 11u64;
+        let check = |r: Real, z: Real| {
+            let s = [(r - origin) / h, z / h];
+            let stencil = Stencil::<2, K>::new(&shape, s, nodes, stride, 1.0 / h);
+            let (mut sum_w, mut sum_g) = (0.0f64, [0.0f64; 2]);
+            let mut grad = [[0.0f64; 2]; 2]; // sum x_a,i G_b,i
+            let mut hoop = 0.0f64; // sum r_i T_ip
+            let (wx, dwx, t) = (stencil.w[0], stencil.dw[0], stencil.t);
+            stencil.for_each_node(stride, |idx, w, g| {
+                let node = [
+                    origin as f64 + (idx % N) as f64 * h as f64,
+                    (idx / N) as f64 * h as f64,
+                ];
+                let (i, j) = (idx % N, idx / N);
+                let tij = t[i - stencil.base % N] * stencil.w[1][j - stencil.base / N];
+                sum_w += w as f64;
+                hoop += node[0] * tij as f64;
+                for a in 0..2 {
+                    sum_g[a] += g[a] as f64;
+                    for b in 0..2 {
+                        grad[a][b] += node[a] * g[b] as f64;
+                    }
+                }
+            });
+            let tol = 64.0 * Real::EPSILON as f64;
+            let at = std::format!("r {r}, z {z}");
+            assert!((sum_w - 1.0).abs() < tol, "sum S = {sum_w} at {at}");
+            for a in 0..2 {
+                assert!(sum_g[a].abs() < tol / h as f64 * 8.0, "sum G {sum_g:?} at {at}");
+                for b in 0..2 {
+                    let expect = if a == b { 1.0 } else { 0.0 };
+                    assert!((grad[a][b] - expect).abs() < tol * 8.0, "sum x G {grad:?} at {at}");
+                }
+            }
+            assert!((hoop - 1.0).abs() < tol * 8.0, "sum r T = {hoop} at {at}");
+            // The radial factors against the integrals, node by node.
+            if let Some(l) = finite {
+                let (rp, l) = (r as f64, l * h as f64);
+                let first = (stencil.base % N) as f64;
+                for k in 0..K {
+                    let ri = origin as f64 + (first + k as f64) * h as f64;
+                    let hat = |x: f64| (1.0 - ((x - ri) / h as f64).abs()).max(0.0);
+                    let slope = |x: f64| {
+                        let xi = (x - ri) / h as f64;
+                        if xi.abs() < 1.0 {
+                            -xi.signum() / h as f64
+                        } else {
+                            0.0
+                        }
+                    };
+                    let hw = h as f64;
+                    let kinks = [ri - hw - rp, ri - rp, ri + hw - rp];
+                    let s_r = mean_over(l, &kinks, |u| hat(rp + u) * (rp + u)) / rp;
+                    let g_r = mean_over(l, &kinks, |u| slope(rp + u) * (rp + u)) / rp;
+                    let t_r = mean_over(l, &kinks, |u| hat(rp + u)) / rp;
+                    let q = 1.0e-12 + 64.0 * Real::EPSILON as f64;
+                    assert!((wx[k] as f64 - s_r).abs() < q, "S_r {} vs {s_r} at {at}", wx[k]);
+                    assert!(
+                        (dwx[k] as f64 - g_r).abs() < q / h as f64,
+                        "G_r {} vs {g_r} at {at}",
+                        dwx[k]
+                    );
+                    assert!((t[k] as f64 - t_r).abs() < q / h as f64, "T {} vs {t_r}", t[k]);
+                }
+            }
+        };
+        // From one half-width off the axis to well inside the grid, cell edges and nodes
+        // included, then at random.
+        let (lo, hi) = (half_width, (N as Real - 2.0 * margin - 1.0) * h);
+        let mut r = lo;
+        while r <= hi {
+            check(r, 5.3 * h);
+            r += 0.125 * h;
+        }
+        for _ in 0..2000 {
+            check(lo + (hi - lo) * lcg(&mut st), (3.0 + 5.0 * lcg(&mut st)) * h);
+        }
+    }
+
+    #[test]
+    fn axisymmetric_weights_reproduce_a_uniform_radial_expansion() {
+        check_axisymmetric(Linear, None);
+        check_axisymmetric(QuadraticBspline, None);
+        check_axisymmetric(CubicBspline, None);
+        check_axisymmetric(Gimp::new(2), Some(0.25));
+    }
+
     #[test]
     fn linear_partition_of_unity_gradient_sum_and_linear_reproduction() {
         check_family(Linear, 0.0, 11.0);
