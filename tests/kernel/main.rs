@@ -11,6 +11,8 @@ mod api_contract;
 mod conservation;
 #[cfg(feature = "effects")]
 mod effects;
+#[cfg(feature = "effects")]
+mod eigenstrain;
 mod hard_cases;
 mod robustness;
 #[cfg(feature = "effects")]
