@@ -136,6 +136,9 @@ pub(crate) struct Geom<const D: usize> {
     pub hi: [Real; D],
     /// Boundary condition of the lower and upper face of each axis.
     pub faces: [[Boundary; 2]; D],
+    /// Axisymmetric: the nodes between the grid's first face and the axis (the wall plane of
+    /// the lower r face) are the mirror images of those past the axis ([`Geom::for_each_mirror`]).
+    pub axis_mirror: bool,
 }
 
 impl<const D: usize> Geom<D> {
@@ -151,6 +154,7 @@ impl<const D: usize> Geom<D> {
             lo: [0.0; D],
             hi: [0.0; D],
             faces: [[Boundary::Slip; 2]; D],
+            axis_mirror: def.dimension == crate::Dimension::Axisymmetric2D,
         };
         let mut stride = 1;
         for a in 0..D {
@@ -194,6 +198,21 @@ impl<const D: usize> Geom<D> {
         };
         for layer in layers {
             self.for_each_node_in_plane(axis, layer, |i| f(i, layer == wall));
+        }
+    }
+
+    /// Axisymmetric: calls `f(ghost, image)` for every node before the axis (r < 0) and its
+    /// mirror image across the axis (r > 0); nothing otherwise. Material near the axis reaches
+    /// those nodes with the wider stencils (B-splines); what it puts there belongs to the image
+    /// node (the body is symmetric about the axis), and what the image has is read there, with
+    /// the radial component's sign flipped.
+    pub fn for_each_mirror(&self, mut f: impl FnMut(usize, usize)) {
+        if !self.axis_mirror {
+            return;
+        }
+        for layer in 0..self.margin {
+            let shift = 2 * (self.margin - layer) * self.stride[0];
+            self.for_each_node_in_plane(0, layer, |i| f(i, i + shift));
         }
     }
 

@@ -2,10 +2,10 @@
 //! The phase order of a step lives here and only here ([`World::step`]).
 
 use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, WorldDef};
-use crate::material::{elastic_part, Deformation};
 use crate::effects::Feedback;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
+use crate::material::{elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
@@ -930,9 +930,14 @@ impl<'a> World<'a> {
                 ShapeFunction::Gimp => {
                     self.run::<2, 3, _>(axi(Gimp::new(ppc), &def), run, &def, &layout, kernel, simd)
                 }
-                ShapeFunction::QuadraticBspline => {
-                    self.run::<2, 3, _>(axi(QuadraticBspline, &def), run, &def, &layout, kernel, simd)
-                }
+                ShapeFunction::QuadraticBspline => self.run::<2, 3, _>(
+                    axi(QuadraticBspline, &def),
+                    run,
+                    &def,
+                    &layout,
+                    kernel,
+                    simd,
+                ),
                 ShapeFunction::CubicBspline => {
                     self.run::<2, 4, _>(axi(CubicBspline, &def), run, &def, &layout, kernel, simd)
                 }

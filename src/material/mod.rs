@@ -145,7 +145,7 @@ pub(crate) fn energy_density<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    
+
     fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
         let (s, c) = (
             libm::sin(angle as f64) as Real,

@@ -130,7 +130,12 @@ fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, 
     // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
     // (axisymmetric) when GRAD.
     let grad0 = if VEL { 2 * D } else { 0 };
-    let n = grad0 + if GRAD != grad::NONE { D * D + S::AXISYMMETRIC as usize } else { 0 };
+    let n = grad0
+        + if GRAD != grad::NONE {
+            D * D + S::AXISYMMETRIC as usize
+        } else {
+            0
+        };
     let mut out = Gathered {
         v_gp: [[0.0; W]; D],
         a_gp: [[0.0; W]; D],
@@ -493,7 +498,8 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
             Some(d) => {
                 let (mut he, mut hzze, mut jm1e, mut cube) = (h, hzz, jm1, [1.0; W]);
                 for ln in 0..W {
-                    let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
+                    let m: [[Real; D]; D] =
+                        core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
                     let f = Deformation {
                         h: m,
                         hzz: hzz[ln],

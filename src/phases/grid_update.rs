@@ -35,10 +35,44 @@ fn divide_by_mass<const D: usize>(
     }
 }
 
+/// Axisymmetric: adds what the particles put on the nodes before the axis to their mirror
+/// images (the radial component with its sign flipped), and empties them (see
+/// [`crate::grid::Geom::for_each_mirror`]). Nothing otherwise.
+fn fold_mirror<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    mass: Option<&mut [Real]>,
+    cols: &mut [&mut [Real]; D],
+) {
+    let mut mass = mass;
+    ctx.geom.for_each_mirror(|ghost, image| {
+        if let Some(m) = mass.as_deref_mut() {
+            m[image] += m[ghost];
+        }
+        for (a, col) in cols.iter_mut().enumerate() {
+            let v = col[ghost];
+            col[image] += if a == 0 { -v } else { v };
+            col[ghost] = 0.0;
+        }
+    });
+}
+
+/// Axisymmetric: the nodes before the axis take their images' values, the radial component's
+/// sign flipped. Nothing otherwise.
+fn mirror<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D]) {
+    ctx.geom.for_each_mirror(|ghost, image| {
+        for (a, col) in cols.iter_mut().enumerate() {
+            let v = col[image];
+            col[ghost] = if a == 0 { -v } else { v };
+        }
+    });
+}
+
 /// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    fold_mirror(ctx, Some(&mut *g.mass), &mut g.vel);
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
+    mirror(ctx, &mut g.vel);
 }
 
 /// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), then the walls on the updated
@@ -46,6 +80,7 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>
 /// the wall's reaction `-v_i / dt`. The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    fold_mirror(ctx, None, &mut g.acc);
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
     let inv_dt = 1.0 / ctx.dt;
     ctx.geom.for_each_wall_node(|i, axes| {
@@ -55,10 +90,13 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
             }
         }
     });
+    // Past the axis the wall does not hold: those nodes mirror theirs images.
+    mirror(ctx, &mut g.acc);
 }
 
 /// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).
 pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    fold_mirror(ctx, None, &mut g.remap);
     divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
     constrain_remap(ctx, g);
 }
@@ -80,4 +118,5 @@ fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
             }
         }
     });
+    mirror(ctx, &mut g.remap);
 }

@@ -614,10 +614,16 @@ mod tests {
             let at = std::format!("r {r}, z {z}");
             assert!((sum_w - 1.0).abs() < tol, "sum S = {sum_w} at {at}");
             for a in 0..2 {
-                assert!(sum_g[a].abs() < tol / h as f64 * 8.0, "sum G {sum_g:?} at {at}");
+                assert!(
+                    sum_g[a].abs() < tol / h as f64 * 8.0,
+                    "sum G {sum_g:?} at {at}"
+                );
                 for b in 0..2 {
                     let expect = if a == b { 1.0 } else { 0.0 };
-                    assert!((grad[a][b] - expect).abs() < tol * 8.0, "sum x G {grad:?} at {at}");
+                    assert!(
+                        (grad[a][b] - expect).abs() < tol * 8.0,
+                        "sum x G {grad:?} at {at}"
+                    );
                 }
             }
             assert!((hoop - 1.0).abs() < tol * 8.0, "sum r T = {hoop} at {at}");
@@ -642,13 +648,21 @@ mod tests {
                     let g_r = mean_over(l, &kinks, |u| slope(rp + u) * (rp + u)) / rp;
                     let t_r = mean_over(l, &kinks, |u| hat(rp + u)) / rp;
                     let q = 1.0e-12 + 64.0 * Real::EPSILON as f64;
-                    assert!((wx[k] as f64 - s_r).abs() < q, "S_r {} vs {s_r} at {at}", wx[k]);
+                    assert!(
+                        (wx[k] as f64 - s_r).abs() < q,
+                        "S_r {} vs {s_r} at {at}",
+                        wx[k]
+                    );
                     assert!(
                         (dwx[k] as f64 - g_r).abs() < q / h as f64,
                         "G_r {} vs {g_r} at {at}",
                         dwx[k]
                     );
-                    assert!((t[k] as f64 - t_r).abs() < q / h as f64, "T {} vs {t_r}", t[k]);
+                    assert!(
+                        (t[k] as f64 - t_r).abs() < q / h as f64,
+                        "T {} vs {t_r}",
+                        t[k]
+                    );
                 }
             }
         };
@@ -661,7 +675,10 @@ mod tests {
             r += 0.125 * h;
         }
         for _ in 0..2000 {
-            check(lo + (hi - lo) * lcg(&mut st), (3.0 + 5.0 * lcg(&mut st)) * h);
+            check(
+                lo + (hi - lo) * lcg(&mut st),
+                (3.0 + 5.0 * lcg(&mut st)) * h,
+            );
         }
     }
 

@@ -673,9 +673,18 @@ fn bad_definitions() -> Vec<(&'static str, WorldDef, Error)> {
     };
     let mut v: Vec<(&'static str, WorldDef, Error)> = vec![
         (
-            "axisymmetric",
+            "axisymmetric, wall plane off the axis",
             with(&|d| d.dimension = Dimension::Axisymmetric2D),
-            Error::Unsupported,
+            Error::InvalidAxis,
+        ),
+        (
+            "axisymmetric, open axis face",
+            with(&|d| {
+                d.dimension = Dimension::Axisymmetric2D;
+                d.origin.x = -(d.shape.margin_cells() as Real) * d.cell_size;
+                d.faces[0] = Boundary::Open;
+            }),
+            Error::InvalidAxis,
         ),
         (
             "cell_size 0",
@@ -848,6 +857,13 @@ fn edge_definitions() -> Vec<(&'static str, WorldDef)> {
             with(&|d| {
                 d.origin = Vec3::new(-3.0, 2.0, 1.0);
                 d.gravity = Vec3::new(1.0, -20.0, 0.5);
+            }),
+        ),
+        (
+            "axisymmetric, axis on the wall plane",
+            with(&|d| {
+                d.dimension = Dimension::Axisymmetric2D;
+                d.origin.x = -(d.shape.margin_cells() as Real) * d.cell_size;
             }),
         ),
         (
@@ -1575,10 +1591,7 @@ fn every_error_has_a_distinct_message_and_its_one_based_position_as_number() {
     // Every variant is listed once (distinct numbers, and the last number is the count).
     let numbers: HashSet<u32> = Error::ALL.iter().map(|&e| e as u32).collect();
     assert_eq!(numbers.len(), Error::ALL.len());
-    assert_eq!(
-        Error::TractionCapacityExceeded as u32 as usize,
-        Error::ALL.len()
-    );
+    assert_eq!(Error::InvalidAxis as u32 as usize, Error::ALL.len());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -8,6 +8,8 @@
 mod common;
 
 mod api_contract;
+#[cfg(feature = "effects")]
+mod axisymmetric;
 mod conservation;
 #[cfg(feature = "effects")]
 mod effects;
