@@ -220,4 +220,80 @@ mod tests {
             assert!((w - expect).abs() < 1e-3 * expect, "{model:?} {w} {expect}");
         }
     }
+
+    /// The 2D form with an out-of-plane stretch (`hzz`: the hoop stretch of the axisymmetric
+    /// form) is the 3D form with `H = diag(H2, hzz)`: same stress components and energy, for
+    /// both models, at small and large strain.
+    #[test]
+    fn out_of_plane_stretch_matches_the_3d_model() {
+        let p = Params {
+            lambda: 5.0e5,
+            mu: 4.0e5,
+            inv_rho0: 1.0e-3,
+        };
+        for (scale, hzz) in [(1.0e-4, -3.0e-5), (0.2, 0.3), (0.3, -0.4)] {
+            let h2: Mat<2> = [[0.5 * scale, -0.3 * scale], [0.2 * scale, -0.4 * scale]];
+            let h3: Mat<3> = [
+                [h2[0][0], h2[0][1], 0.0],
+                [h2[1][0], h2[1][1], 0.0],
+                [0.0, 0.0, hzz],
+            ];
+            let (f2, f3) = (Deformation::new(h2, hzz), Deformation::new(h3, 0.0));
+            assert!((f2.jm1 - f3.jm1).abs() <= 4.0 * Real::EPSILON * (1.0 + f3.jm1.abs()));
+            for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+                let (s2, s3) = (
+                    kirchhoff_over_rho0(model, &p, &f2),
+                    kirchhoff_over_rho0(model, &p, &f3),
+                );
+                let tol = 1.0e-5 * 1300.0 * scale.max(hzz.abs()).max(1e-3);
+                for (a, b) in [(0, 0), (1, 1), (0, 1)] {
+                    assert!(
+                        (s2.m[a][b] - s3.m[a][b]).abs() < tol,
+                        "{model:?} {scale} {a}{b}"
+                    );
+                }
+                assert!((s2.zz - s3.m[2][2]).abs() < tol, "{model:?} {scale} zz");
+                let (w2, w3) = (
+                    energy_density(model, &p, &f2),
+                    energy_density(model, &p, &f3),
+                );
+                assert!(
+                    (w2 - w3).abs() <= 1.0e-4 * w3.abs() + 1.0e-6,
+                    "{model:?} {w2} {w3}"
+                );
+            }
+        }
+    }
+
+    /// A deformation that is exactly the eigenstrain, `F = (1 + d) I` (in 2D with the
+    /// out-of-plane stretch too), leaves no elastic part: zero stress and energy, both models.
+    #[test]
+    fn a_free_eigenstrain_is_stress_free() {
+        let p = Params {
+            lambda: 5.0e5,
+            mu: 4.0e5,
+            inv_rho0: 1.0e-3,
+        };
+        for d in [1.0e-4, -2.0e-3, 0.05, -0.3] {
+            let f2 = Deformation::<2>::new([[d, 0.0], [0.0, d]], d);
+            let f3 = Deformation::<3>::new([[d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d]], 0.0);
+            let (e2, k2) = elastic_part(&f2, d);
+            let (e3, k3) = elastic_part(&f3, d);
+            let cube = (1.0 + d) * (1.0 + d) * (1.0 + d);
+            assert!(
+                (k2 - cube).abs() < 8.0 * Real::EPSILON && (k3 - cube).abs() < 8.0 * Real::EPSILON
+            );
+            for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+                let bound = 16.0 * Real::EPSILON * 1300.0;
+                let s2 = kirchhoff_over_rho0(model, &p, &e2);
+                let s3 = kirchhoff_over_rho0(model, &p, &e3);
+                assert!(s2.m.iter().flatten().all(|v| v.abs() < bound) && s2.zz.abs() < bound);
+                assert!(
+                    s3.m.iter().flatten().all(|v| v.abs() < bound),
+                    "{model:?} {d}"
+                );
+                assert!(energy_density(model, &p, &e3).abs() < bound * 1.0e3);
+            }
+        }
+    }
 }
