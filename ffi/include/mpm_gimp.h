@@ -48,7 +48,8 @@ enum MpmStatus
   MPM_STATUS_BUFFER_MISALIGNED = 2,
   // The memory does not hold a world of this build (wrong magic, version, precision or size).
   MPM_STATUS_NOT_A_WORLD = 3,
-  // The dimension is not supported by this build.
+  // The definition declares an effect (the axisymmetric form included) and the build lacks
+  // the kernel's `effects` feature (this library is built with it).
   MPM_STATUS_UNSUPPORTED = 4,
   // Cell size not finite or <= 0.
   MPM_STATUS_INVALID_CELL_SIZE = 5,
@@ -67,7 +68,8 @@ enum MpmStatus
   // Origin or gravity not finite (on the axes the dimension uses).
   MPM_STATUS_NON_FINITE_DEFINITION = 12,
   // Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
-  // <= 0, conductivity or diffusivity < 0, or not finite.
+  // <= 0, conductivity or diffusivity < 0, or any of these or the thermal expansion,
+  // reference temperature, swelling or reference concentration not finite.
   MPM_STATUS_INVALID_MATERIAL = 13,
   // The material table is full.
   MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED = 14,
@@ -101,6 +103,10 @@ enum MpmStatus
   MPM_STATUS_UNKNOWN_PARTICLE = 25,
   // The tractions do not fit in the remaining traction capacity (none was added).
   MPM_STATUS_TRACTION_CAPACITY_EXCEEDED = 26,
+  // An axisymmetric world whose lower x (r) face is `MPM_BOUNDARY_OPEN`, or whose wall plane
+  // there is not the axis r = 0 (set `origin.x = -margin * cell_size`, see
+  // `MPM_DIMENSION_AXISYMMETRIC2D`).
+  MPM_STATUS_INVALID_AXIS = 27,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -129,7 +135,12 @@ enum MpmDimension
   MPM_DIMENSION_PLANE2D = 2,
   // Three dimensions.
   MPM_DIMENSION_SPACE3D = 3,
-  // Two dimensions, axisymmetric (r, z). Reserved: init answers `MPM_STATUS_UNSUPPORTED`.
+  // Two dimensions, axisymmetric: x is the radius r and y the axis z. Masses, volumes,
+  // forces and energies are per radian, and the out-of-plane stress is tau_thetatheta
+  // (`MpmParticlesView::hoop` holds F_thetatheta - 1). The axis r = 0 must be the lower x
+  // face's wall plane: `origin.x = -margin * cell_size` (margin 0 cells for
+  // `MPM_SHAPE_LINEAR`, 1 for the others) and `faces[MPM_FACE_X_MIN]` not
+  // `MPM_BOUNDARY_OPEN`, or `MPM_STATUS_INVALID_AXIS`.
   MPM_DIMENSION_AXISYMMETRIC2D = 4,
 };
 #ifndef __cplusplus
@@ -391,8 +402,9 @@ typedef struct MpmTransport {
 typedef struct MpmEffects {
   // Damping; default not declared.
   struct MpmDamping damping;
-  // 1: reserve a per-particle external force column, N (per unit thickness in 2D), set with
-  // `mpm_world_set_particle_forces`; 0 (default): none.
+  // 1: reserve a per-particle external force column, N (per unit thickness in plane strain,
+  // per radian when axisymmetric), set with `mpm_world_set_particle_forces`; 0 (default):
+  // none.
   uint32_t particle_forces;
   // Most tractions the world holds (`mpm_world_add_tractions`), at most 2^24; default 0.
   uint32_t traction_capacity;
@@ -416,7 +428,8 @@ typedef struct MpmEffects {
 typedef struct MpmWorldDef {
   // Default `MPM_DIMENSION_PLANE2D`.
   MpmDimension dimension;
-  // Lowest corner of the grid, m. Default (0, 0, 0).
+  // Lowest corner of the grid, m (axisymmetric: x = -margin * cell_size, see
+  // `MPM_DIMENSION_AXISYMMETRIC2D`). Default (0, 0, 0).
   struct MpmVec3 origin;
   // Cell edge length h, m, > 0. Default 0.01.
   mpm_real cell_size;
@@ -467,6 +480,18 @@ typedef struct MpmMaterialDef {
   mpm_real conductivity;
   // Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
   mpm_real diffusivity;
+  // Linear thermal expansion coefficient alpha, 1/K, finite (heat conduction only): the
+  // material is free of stress under the stretch 1 + alpha (T - T_0) per axis, T the grid
+  // temperature at the particle (`MpmParticlesView::grid_temperature`). Default 0.
+  mpm_real thermal_expansion;
+  // Stress-free temperature T_0 of the thermal expansion, K, finite. Default 0.
+  mpm_real reference_temperature;
+  // Linear swelling coefficient beta, strain per unit concentration potential, finite
+  // (diffusion only): the stress-free stretch gains beta (c - c_0) per axis, c the grid
+  // concentration potential at the particle. Default 0.
+  mpm_real swelling;
+  // Stress-free concentration potential c_0 of the swelling, finite. Default 0.
+  mpm_real reference_concentration;
   // Set by `mpm_material_def_default`; do not change.
   uint32_t internal_cookie;
 } MpmMaterialDef;
@@ -481,8 +506,8 @@ typedef struct MpmIdRange {
 
 // Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
 // call that changes the world (add, seed, set, step) or frees its memory. Pointers of axes the
-// dimension lacks (z in 2D), and of effects the definition does not declare, are NULL; every
-// other column holds `count` values.
+// dimension lacks (z in 2D), of effects the definition does not declare, and `hoop` unless the
+// world is axisymmetric, are NULL; every other column holds `count` values.
 typedef struct MpmParticlesView {
   // Number of particles.
   size_t count;
@@ -492,14 +517,15 @@ typedef struct MpmParticlesView {
   const mpm_real *position[3];
   // Velocities per axis, m/s.
   const mpm_real *velocity[3];
-  // Masses, kg.
+  // Masses, kg (per unit thickness in plane strain, per radian when axisymmetric).
   const mpm_real *mass;
-  // Initial volumes, m^3.
+  // Initial volumes, m^3 (m^2 per unit thickness in plane strain, m^3 per radian when
+  // axisymmetric).
   const mpm_real *volume0;
   // Displacement gradient H = F - I, entry (a, b) at index `3 a + b`; 2D uses a, b < 2.
   const mpm_real *displacement_gradient[9];
-  // Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
-  // xz, yz (the last two NULL in 2D).
+  // Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz (axisymmetric: rr, zz,
+  // rz, thetatheta); 3D xx, yy, zz, xy, xz, yz (the last two NULL in 2D).
   const mpm_real *stress[6];
   // Material ids.
   const uint32_t *material;
@@ -526,10 +552,13 @@ typedef struct MpmParticlesView {
   // The grid's concentration potential at each particle after the last step (NULL unless
   // `MpmEffects::diffusion`).
   const mpm_real *grid_concentration;
+  // The hoop stretch F_thetatheta - 1 = r / r_0 - 1, the out-of-plane part of the
+  // deformation gradient (NULL unless the dimension is `MPM_DIMENSION_AXISYMMETRIC2D`).
+  const mpm_real *hoop;
 } MpmParticlesView;
 
-// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
-// and energies are per metre of thickness.
+// Sums over the active particles, in double precision. In plane strain mass, momentum and
+// energies are per metre of thickness; axisymmetric, per radian.
 typedef struct MpmDiagnostics {
   // Number of particles added (any status).
   size_t particle_count;
@@ -569,9 +598,10 @@ typedef struct MpmParticleArrays {
   const mpm_real *position[3];
   // Velocities x, y, z, m/s.
   const mpm_real *velocity[3];
-  // Masses, kg (per unit thickness in 2D), > 0.
+  // Masses, kg (per unit thickness in plane strain, per radian when axisymmetric), > 0.
   const mpm_real *mass;
-  // Initial volumes, m^3 (m^2 in 2D), > 0.
+  // Initial volumes, m^3 (m^2 per unit thickness in plane strain, m^3 per radian when
+  // axisymmetric), > 0.
   const mpm_real *volume;
   // Material ids from `mpm_world_add_material`.
   const uint32_t *material;
@@ -629,10 +659,11 @@ struct MpmMaterialDef mpm_material_def_default_f32(void);
 struct MpmMaterialDef mpm_material_def_default_f64(void);
 #endif
 
-// Sets the external force (N; per unit thickness in 2D) of particles `first .. first + count`
-// from one array per axis, each of `count` values; the force stays until set again. `fz` is
-// not read in 2D and may be NULL there. Needs `MpmEffects::particle_forces`. Refused with
-// `MPM_STATUS_NON_FINITE_INPUT` if any value is not finite (none is set).
+// Sets the external force (N; per unit thickness in plane strain, per radian when
+// axisymmetric) of particles `first .. first + count` from one array per axis, each of
+// `count` values; the force stays until set again. `fz` is not read in 2D and may be NULL
+// there. Needs `MpmEffects::particle_forces`. Refused with `MPM_STATUS_NON_FINITE_INPUT` if
+// any value is not finite (none is set).
 //
 // # Safety
 // `world` is NULL or a world; each array the dimension uses is NULL or valid for reads of
@@ -846,7 +877,8 @@ MpmStatus mpm_world_add_particles(struct MpmWorld *world,
 
 // Fills the box `[min, max]` with particles of `material` moving at `velocity`, on the lattice
 // of `particles_per_cell` sites per cell per axis, each with its sub-cell's volume and the
-// mass of that volume. All or nothing; the box must lie inside the admissible region.
+// mass of that volume (axisymmetric: per radian, the sub-cell's area times the site's
+// radius). All or nothing; the box must lie inside the admissible region.
 //
 // # Safety
 // `world` is NULL or a world; `ids_out` is NULL or valid.

@@ -26,7 +26,12 @@ pub enum MpmDimension {
     Plane2d = 2,
     /// Three dimensions.
     Space3d = 3,
-    /// Two dimensions, axisymmetric (r, z). Reserved: init answers `MPM_STATUS_UNSUPPORTED`.
+    /// Two dimensions, axisymmetric: x is the radius r and y the axis z. Masses, volumes,
+    /// forces and energies are per radian, and the out-of-plane stress is tau_thetatheta
+    /// (`MpmParticlesView::hoop` holds F_thetatheta - 1). The axis r = 0 must be the lower x
+    /// face's wall plane: `origin.x = -margin * cell_size` (margin 0 cells for
+    /// `MPM_SHAPE_LINEAR`, 1 for the others) and `faces[MPM_FACE_X_MIN]` not
+    /// `MPM_BOUNDARY_OPEN`, or `MPM_STATUS_INVALID_AXIS`.
     Axisymmetric2d = 4,
 }
 
@@ -250,8 +255,9 @@ pub struct MpmTransport {
 pub struct MpmEffects {
     /// Damping; default not declared.
     pub damping: MpmDamping,
-    /// 1: reserve a per-particle external force column, N (per unit thickness in 2D), set with
-    /// `mpm_world_set_particle_forces`; 0 (default): none.
+    /// 1: reserve a per-particle external force column, N (per unit thickness in plane strain,
+    /// per radian when axisymmetric), set with `mpm_world_set_particle_forces`; 0 (default):
+    /// none.
     pub particle_forces: u32,
     /// Most tractions the world holds (`mpm_world_add_tractions`), at most 2^24; default 0.
     pub traction_capacity: u32,
@@ -277,7 +283,8 @@ pub struct MpmEffects {
 pub struct MpmWorldDef {
     /// Default `MPM_DIMENSION_PLANE2D`.
     pub dimension: MpmDimensionValue,
-    /// Lowest corner of the grid, m. Default (0, 0, 0).
+    /// Lowest corner of the grid, m (axisymmetric: x = -margin * cell_size, see
+    /// `MPM_DIMENSION_AXISYMMETRIC2D`). Default (0, 0, 0).
     pub origin: MpmVec3,
     /// Cell edge length h, m, > 0. Default 0.01.
     pub cell_size: mpm_real,
@@ -330,6 +337,18 @@ pub struct MpmMaterialDef {
     pub conductivity: mpm_real,
     /// Diffusivity D of the concentration potential, m^2/s, >= 0 (diffusion only). Default 0.
     pub diffusivity: mpm_real,
+    /// Linear thermal expansion coefficient alpha, 1/K, finite (heat conduction only): the
+    /// material is free of stress under the stretch 1 + alpha (T - T_0) per axis, T the grid
+    /// temperature at the particle (`MpmParticlesView::grid_temperature`). Default 0.
+    pub thermal_expansion: mpm_real,
+    /// Stress-free temperature T_0 of the thermal expansion, K, finite. Default 0.
+    pub reference_temperature: mpm_real,
+    /// Linear swelling coefficient beta, strain per unit concentration potential, finite
+    /// (diffusion only): the stress-free stretch gains beta (c - c_0) per axis, c the grid
+    /// concentration potential at the particle. Default 0.
+    pub swelling: mpm_real,
+    /// Stress-free concentration potential c_0 of the swelling, finite. Default 0.
+    pub reference_concentration: mpm_real,
     /// Set by `mpm_material_def_default`; do not change.
     pub internal_cookie: u32,
 }
@@ -602,6 +621,10 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         heat_capacity: d.heat_capacity,
         conductivity: d.conductivity,
         diffusivity: d.diffusivity,
+        thermal_expansion: d.thermal_expansion,
+        reference_temperature: d.reference_temperature,
+        swelling: d.swelling,
+        reference_concentration: d.reference_concentration,
     })
 }
 
@@ -653,6 +676,10 @@ fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
         heat_capacity: d.heat_capacity,
         conductivity: d.conductivity,
         diffusivity: d.diffusivity,
+        thermal_expansion: d.thermal_expansion,
+        reference_temperature: d.reference_temperature,
+        swelling: d.swelling,
+        reference_concentration: d.reference_concentration,
         internal_cookie: MATERIAL_COOKIE,
     }
 }

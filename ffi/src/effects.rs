@@ -35,10 +35,11 @@ unsafe fn column<'a>(p: *const mpm_real, count: usize) -> &'a [mpm_real] {
     unsafe { core::slice::from_raw_parts(p, count) }
 }
 
-/// Sets the external force (N; per unit thickness in 2D) of particles `first .. first + count`
-/// from one array per axis, each of `count` values; the force stays until set again. `fz` is
-/// not read in 2D and may be NULL there. Needs `MpmEffects::particle_forces`. Refused with
-/// `MPM_STATUS_NON_FINITE_INPUT` if any value is not finite (none is set).
+/// Sets the external force (N; per unit thickness in plane strain, per radian when
+/// axisymmetric) of particles `first .. first + count` from one array per axis, each of
+/// `count` values; the force stays until set again. `fz` is not read in 2D and may be NULL
+/// there. Needs `MpmEffects::particle_forces`. Refused with `MPM_STATUS_NON_FINITE_INPUT` if
+/// any value is not finite (none is set).
 ///
 /// # Safety
 /// `world` is NULL or a world; each array the dimension uses is NULL or valid for reads of

@@ -8,8 +8,8 @@ use kernel::{ParticlesView, WorldRef};
 
 /// Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
 /// call that changes the world (add, seed, set, step) or frees its memory. Pointers of axes the
-/// dimension lacks (z in 2D), and of effects the definition does not declare, are NULL; every
-/// other column holds `count` values.
+/// dimension lacks (z in 2D), of effects the definition does not declare, and `hoop` unless the
+/// world is axisymmetric, are NULL; every other column holds `count` values.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 pub struct MpmParticlesView {
@@ -21,14 +21,15 @@ pub struct MpmParticlesView {
     pub position: [*const mpm_real; 3],
     /// Velocities per axis, m/s.
     pub velocity: [*const mpm_real; 3],
-    /// Masses, kg.
+    /// Masses, kg (per unit thickness in plane strain, per radian when axisymmetric).
     pub mass: *const mpm_real,
-    /// Initial volumes, m^3.
+    /// Initial volumes, m^3 (m^2 per unit thickness in plane strain, m^3 per radian when
+    /// axisymmetric).
     pub volume0: *const mpm_real,
     /// Displacement gradient H = F - I, entry (a, b) at index `3 a + b`; 2D uses a, b < 2.
     pub displacement_gradient: [*const mpm_real; 9],
-    /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
-    /// xz, yz (the last two NULL in 2D).
+    /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz (axisymmetric: rr, zz,
+    /// rz, thetatheta); 3D xx, yy, zz, xy, xz, yz (the last two NULL in 2D).
     pub stress: [*const mpm_real; 6],
     /// Material ids.
     pub material: *const u32,
@@ -55,10 +56,13 @@ pub struct MpmParticlesView {
     /// The grid's concentration potential at each particle after the last step (NULL unless
     /// `MpmEffects::diffusion`).
     pub grid_concentration: *const mpm_real,
+    /// The hoop stretch F_thetatheta - 1 = r / r_0 - 1, the out-of-plane part of the
+    /// deformation gradient (NULL unless the dimension is `MPM_DIMENSION_AXISYMMETRIC2D`).
+    pub hoop: *const mpm_real,
 }
 
-/// Sums over the active particles, in double precision. In 2D (plane strain) mass, momentum
-/// and energies are per metre of thickness.
+/// Sums over the active particles, in double precision. In plane strain mass, momentum and
+/// energies are per metre of thickness; axisymmetric, per radian.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub struct MpmDiagnostics {
@@ -107,6 +111,7 @@ pub unsafe extern "C" fn mpm_world_particles(
         let apic = def.transfer == kernel::Transfer::Apic;
         let heat = def.effects.heat.is_some();
         let diffusion = def.effects.diffusion.is_some();
+        let axisymmetric = def.dimension == kernel::Dimension::Axisymmetric2D;
         let out = MpmParticlesView {
             count: v.count,
             dimension: v.dimension as u32,
@@ -132,6 +137,7 @@ pub unsafe extern "C" fn mpm_world_particles(
             concentration: axis(v.concentration, diffusion),
             grid_temperature: axis(v.grid_temperature, heat),
             grid_concentration: axis(v.grid_concentration, diffusion),
+            hoop: axis(v.hoop, axisymmetric),
         };
         // SAFETY: checked non-NULL.
         unsafe { put(view_out, out) };

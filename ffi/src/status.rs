@@ -16,7 +16,8 @@ pub enum MpmStatus {
     BufferMisaligned = 2,
     /// The memory does not hold a world of this build (wrong magic, version, precision or size).
     NotAWorld = 3,
-    /// The dimension is not supported by this build.
+    /// The definition declares an effect (the axisymmetric form included) and the build lacks
+    /// the kernel's `effects` feature (this library is built with it).
     Unsupported = 4,
     /// Cell size not finite or <= 0.
     InvalidCellSize = 5,
@@ -35,7 +36,8 @@ pub enum MpmStatus {
     /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
     /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
-    /// <= 0, conductivity or diffusivity < 0, or not finite.
+    /// <= 0, conductivity or diffusivity < 0, or any of these or the thermal expansion,
+    /// reference temperature, swelling or reference concentration not finite.
     InvalidMaterial = 13,
     /// The material table is full.
     MaterialCapacityExceeded = 14,
@@ -69,6 +71,10 @@ pub enum MpmStatus {
     UnknownParticle = 25,
     /// The tractions do not fit in the remaining traction capacity (none was added).
     TractionCapacityExceeded = 26,
+    /// An axisymmetric world whose lower x (r) face is `MPM_BOUNDARY_OPEN`, or whose wall plane
+    /// there is not the axis r = 0 (set `origin.x = -margin * cell_size`, see
+    /// `MPM_DIMENSION_AXISYMMETRIC2D`).
+    InvalidAxis = 27,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -113,13 +119,14 @@ impl From<Error> for MpmStatus {
             Error::EffectNotDeclared => MpmStatus::EffectNotDeclared,
             Error::UnknownParticle => MpmStatus::UnknownParticle,
             Error::TractionCapacityExceeded => MpmStatus::TractionCapacityExceeded,
+            Error::InvalidAxis => MpmStatus::InvalidAxis,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 32] = [
+    pub const ALL: [MpmStatus; 33] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -147,6 +154,7 @@ impl MpmStatus {
         MpmStatus::EffectNotDeclared,
         MpmStatus::UnknownParticle,
         MpmStatus::TractionCapacityExceeded,
+        MpmStatus::InvalidAxis,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

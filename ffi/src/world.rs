@@ -42,9 +42,10 @@ pub struct MpmParticleArrays {
     pub position: [*const mpm_real; 3],
     /// Velocities x, y, z, m/s.
     pub velocity: [*const mpm_real; 3],
-    /// Masses, kg (per unit thickness in 2D), > 0.
+    /// Masses, kg (per unit thickness in plane strain, per radian when axisymmetric), > 0.
     pub mass: *const mpm_real,
-    /// Initial volumes, m^3 (m^2 in 2D), > 0.
+    /// Initial volumes, m^3 (m^2 per unit thickness in plane strain, m^3 per radian when
+    /// axisymmetric), > 0.
     pub volume: *const mpm_real,
     /// Material ids from `mpm_world_add_material`.
     pub material: *const u32,
@@ -355,7 +356,8 @@ unsafe fn seed(
 
 /// Fills the box `[min, max]` with particles of `material` moving at `velocity`, on the lattice
 /// of `particles_per_cell` sites per cell per axis, each with its sub-cell's volume and the
-/// mass of that volume. All or nothing; the box must lie inside the admissible region.
+/// mass of that volume (axisymmetric: per radian, the sub-cell's area times the site's
+/// radius). All or nothing; the box must lie inside the admissible region.
 ///
 /// # Safety
 /// `world` is NULL or a world; `ids_out` is NULL or valid.

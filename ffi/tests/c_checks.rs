@@ -168,6 +168,10 @@ fn rust_layout() -> String {
         heat_capacity,
         conductivity,
         diffusivity,
+        thermal_expansion,
+        reference_temperature,
+        swelling,
+        reference_concentration,
         internal_cookie,
     }));
     lines.extend(struct_lines!(MpmParticlesView {
@@ -188,6 +192,7 @@ fn rust_layout() -> String {
         concentration,
         grid_temperature,
         grid_concentration,
+        hoop,
     }));
     lines.extend(struct_lines!(MpmDiagnostics {
         particle_count,
@@ -360,10 +365,14 @@ fn check_misuse(name: &str, flags: &[&str]) {
 /// (heat, diffusion and their sources included), unknown particle ids (refused before any array
 /// is read), non-finite forces, damping, temperatures, concentrations and sources, faces out of
 /// range, the traction capacity; materials with a bad heat capacity, conductivity or
-/// diffusivity) is
-/// refused with its status, leaves every world's bytes and every output untouched, and every
-/// status string is a description ("unknown status" for values outside the enum, never NULL).
-/// The program ends with "all N misuse checks passed".
+/// diffusivity, or a thermal expansion, swelling or reference value not finite; axisymmetric
+/// definitions whose axis is not the lower x face's wall plane or whose lower x face is open,
+/// and seeding past the axis) is refused with its status, leaves every world's bytes and every
+/// output untouched, and every status string is a description ("unknown status" for values
+/// outside the enum, never NULL). Accepted controls: an axisymmetric definition of each family
+/// with its axis in place, and a GIMP one whose world fills a box on the axis, steps, and has
+/// the hoop column in its view (finite, part of J, NULL in every other world). The program ends
+/// with "all N misuse checks passed".
 #[test]
 fn misuse_from_c_strict() {
     check_misuse("misuse", common::STRICT);
@@ -514,6 +523,13 @@ impl Text {
             "{label}: transport present {} temperature {t} concentration {c} grid_temperature \
              {gt} grid_concentration {gc}",
             present(4, &|k| scalars[k].1),
+        ));
+
+        let axisymmetric = def.dimension == Dimension::Axisymmetric2D;
+        self.line(format!(
+            "{label}: hoop present {} hoop {}",
+            present(1, &|_| axisymmetric),
+            columns(&[v.hoop], &|_| axisymmetric),
         ));
 
         let s = w.diagnostics();
@@ -710,6 +726,7 @@ fn rust_same_state() -> String {
 
     effects2d(&mut t);
     effects3d(&mut t);
+    axisym2d(&mut t);
 
     t.line("end");
     t.0
@@ -876,19 +893,88 @@ fn effects3d(t: &mut Text) {
     t.frames(&mut w, 8, 0.0078125);
 }
 
-/// Expectation: the four scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
+/// The scene axisym2d of `tests/c/same_state.c`.
+fn axisym2d(t: &mut Text) {
+    t.line("scene axisym2d");
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    let mut heat_faces = [ScalarBoundary::Insulated; 6];
+    heat_faces[Face::YMin as usize] = ScalarBoundary::Fixed(320.0);
+    let mut diffusion_faces = [ScalarBoundary::Insulated; 6];
+    diffusion_faces[Face::XMax as usize] = ScalarBoundary::Fixed(1.0);
+    let def = WorldDef {
+        dimension: Dimension::Axisymmetric2D,
+        origin: Vec3::new(-0.03125, 0.0, 0.0),
+        cells: [16, 16, 1],
+        cell_size: 0.03125,
+        particle_capacity: 512,
+        material_capacity: 1,
+        faces,
+        effects: Effects {
+            heat: Some(Transport {
+                faces: heat_faces,
+                sources: false,
+            }),
+            diffusion: Some(Transport {
+                faces: diffusion_faces,
+                sources: false,
+            }),
+            ..Effects::NONE
+        },
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
+    t.state("empty", &w);
+    let rubber = MaterialDef {
+        heat_capacity: 512.0,
+        conductivity: 4096.0,
+        diffusivity: 0.0078125,
+        thermal_expansion: 1.0 / 4096.0,
+        reference_temperature: 256.0,
+        swelling: 0.03125,
+        reference_concentration: 0.0,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&rubber).expect("rubber");
+    t.line(format!("materials {id}"));
+    let ids = w
+        .fill_box(
+            Vec3::new(0.0, 0.0625, 0.0),
+            Vec3::new(0.25, 0.25, 0.0),
+            id,
+            Vec3::new(0.25, -0.5, 0.0),
+        )
+        .expect("box");
+    let n = ids.end;
+    t.seed("box", ids);
+    t.state("after box", &w);
+    let heat: Vec<Real> = (0..n).map(|i| 256.0 + 8.0 * (i % 8) as Real).collect();
+    w.set_particle_scalar(ScalarField::Temperature, 0, &heat)
+        .expect("temperatures");
+    let concentration: Vec<Real> = (0..n).map(|i| 0.0625 * (i % 16) as Real).collect();
+    w.set_particle_scalar(ScalarField::Concentration, 0, &concentration)
+        .expect("concentrations");
+    t.state("after scalars", &w);
+    t.frames(&mut w, 12, 0.0078125);
+}
+
+/// Expectation: the five scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
 /// stick floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards
 /// an open face, quadratic B-spline and USL; a 2D block with every effect declared, heat
 /// conduction and diffusion in a conducting material with temperatures set included, whose
 /// forces, tractions and concentrations change halfway; a 3D sphere with APIC, damping,
-/// particle forces, tractions and a body force, cubic B-spline and USF) leave, after every
-/// seeding call, every change of an effect and every step, the same world bytes, copied-out
-/// columns (positions, velocities, stress, J, status), view columns (mass, V0, material, H,
-/// forces, damping, APIC moments, temperatures and concentrations and their grid values, and
-/// which pointers are NULL), traction counts, thermostat alpha, diagnostics (angular momentum
-/// included, bit for bit) and step reports through the C interface as through the Rust kernel
-/// API. The temperatures change in every step and the concentrations in every step after they
-/// are set, so the transport is part of what is compared.
+/// particle forces, tractions and a body force, cubic B-spline and USF; an axisymmetric
+/// cylinder on the axis that moves outwards, expands with temperature and swells with
+/// concentration, GIMP and MUSL) leave, after every seeding call, every change of an effect
+/// and every step, the same world bytes, copied-out columns (positions, velocities, stress, J,
+/// status), view columns (mass, V0, material, H, forces, damping, APIC moments, temperatures
+/// and concentrations and their grid values, the hoop stretch, and which pointers are NULL),
+/// traction counts, thermostat alpha, diagnostics (angular momentum included, bit for bit) and
+/// step reports through the C interface as through the Rust kernel API. The temperatures
+/// change in every step and the concentrations in every step after they are set, so the
+/// transport is part of what is compared; so does the hoop stretch of the axisymmetric scene
+/// (and it is NULL in every other scene).
 #[test]
 fn same_state_through_c_and_rust() {
     let exe = common::build(
@@ -907,7 +993,7 @@ fn same_state_through_c_and_rust() {
     // Conduction and diffusion run: every step changes the temperatures (and their grid
     // values), each step after the concentrations are set changes those.
     let changes = |column: &str, from: usize| {
-        let hashes = column_after_steps(&c, "effects2d", column);
+        let hashes = column_after_steps(&c, "effects2d", "transport", column);
         assert_eq!(hashes.len(), 16, "{column}: {hashes:?}");
         hashes[from..].windows(2).all(|w| w[0] != w[1])
     };
@@ -918,24 +1004,47 @@ fn same_state_through_c_and_rust() {
         "the concentrations did not change"
     );
     assert!(changes("grid_concentration", 8));
+    // The axisymmetric scene: every step changes the hoop stretch (and the temperatures and
+    // concentrations that expand and swell the cylinder); only that scene has the column.
+    let axisym = |kind: &str, column: &str| {
+        let hashes = column_after_steps(&c, "axisym2d", kind, column);
+        assert_eq!(hashes.len(), 12, "{column}: {hashes:?}");
+        hashes.windows(2).all(|w| w[0] != w[1])
+    };
+    assert!(axisym("hoop", "hoop"), "the hoop stretch did not change");
+    assert!(axisym("transport", "grid_temperature"));
+    assert!(axisym("transport", "grid_concentration"));
+    let (mut scene, mut hoop_lines) = ("", 0);
+    for line in c.lines() {
+        if let Some(name) = line.strip_prefix("scene ") {
+            scene = name;
+        } else if line.contains(": hoop present ") {
+            let present = if scene == "axisym2d" { "1" } else { "0" };
+            assert!(
+                line.contains(&format!(": hoop present {present} ")),
+                "{scene}: {line}"
+            );
+            hoop_lines += 1;
+        }
+    }
+    assert!(hoop_lines > 0, "no hoop lines");
 }
 
-/// The hash of `column` on the `transport` line after each step of `scene`.
-fn column_after_steps(text: &str, scene: &str, column: &str) -> Vec<String> {
+/// The hash of `column` on the `kind` line (`transport` or `hoop`) after each step of `scene`.
+fn column_after_steps(text: &str, scene: &str, kind: &str, column: &str) -> Vec<String> {
     let mut current = "";
     let mut hashes = Vec::new();
+    let marker = format!(": {kind} present ");
     for line in text.lines() {
         if let Some(name) = line.strip_prefix("scene ") {
             current = name;
-        } else if current == scene
-            && line.starts_with("after step ")
-            && line.contains(": transport present ")
-        {
+        } else if current == scene && line.starts_with("after step ") && line.contains(&marker) {
             let words: Vec<&str> = line.split(' ').collect();
+            // The value after the column's name (the last match: `hoop present 1 hoop <hash>`).
             let i = words
                 .iter()
-                .position(|w| *w == column)
-                .expect("the column in a transport line");
+                .rposition(|w| *w == column)
+                .expect("the column in its line");
             hashes.push(words[i + 1].to_string());
         }
     }
@@ -1035,6 +1144,10 @@ fn defaults_match_the_kernel() {
     assert_eq!(md.heat_capacity, m.heat_capacity);
     assert_eq!(md.conductivity, m.conductivity);
     assert_eq!(md.diffusivity, m.diffusivity);
+    assert_eq!(md.thermal_expansion, m.thermal_expansion);
+    assert_eq!(md.reference_temperature, m.reference_temperature);
+    assert_eq!(md.swelling, m.swelling);
+    assert_eq!(md.reference_concentration, m.reference_concentration);
     assert_ne!(md.internal_cookie, 0);
     assert_ne!(md.internal_cookie, wd.internal_cookie);
 
@@ -1160,8 +1273,9 @@ fn stored_def(c: &MpmWorldDef) -> WorldDef {
 /// conduction with fixed, flux and insulated faces and sources, diffusion), set field by field
 /// from C, makes a world whose stored definition is exactly the Rust one, and
 /// `mpm_world_get_def` gives back the C definition. A material with heat capacity,
-/// conductivity and diffusivity added from C is the kernel's material. Fields of what is not
-/// declared are ignored (and read back as zero), and so is the value of an insulated face; a
+/// conductivity, diffusivity, thermal expansion and swelling (and their reference values)
+/// added from C is the kernel's material. Fields of what is not declared are ignored (and read
+/// back as zero), and so is the value of an insulated face; a
 /// flag that is not 0 or 1 and a face kind out of range are `MPM_STATUS_INVALID_ENUM`, a fixed
 /// or flux value not finite `MPM_STATUS_INVALID_EFFECT`.
 #[test]
@@ -1303,7 +1417,8 @@ fn effects_definition_round_trip() {
     let bits = |x: &MpmWorldDef| format!("{x:?}");
     assert_eq!(bits(&back), bits(&c));
 
-    // A conducting, diffusing material from C is the kernel's material.
+    // A conducting, diffusing, expanding and swelling material from C is the kernel's
+    // material.
     #[cfg(not(feature = "f64"))]
     let mut m = mpm_material_def_default_f32();
     #[cfg(feature = "f64")]
@@ -1311,6 +1426,10 @@ fn effects_definition_round_trip() {
     m.heat_capacity = 2048.0;
     m.conductivity = 0.75;
     m.diffusivity = 1.0 / 1024.0;
+    m.thermal_expansion = 1.0 / 65536.0;
+    m.reference_temperature = 293.5;
+    m.swelling = -0.0625;
+    m.reference_concentration = 0.25;
     let mut id = u32::MAX;
     // SAFETY: `world` is the world just made; the other pointers are locals.
     assert_eq!(
@@ -1325,6 +1444,10 @@ fn effects_definition_round_trip() {
             heat_capacity: 2048.0,
             conductivity: 0.75,
             diffusivity: 1.0 / 1024.0,
+            thermal_expansion: 1.0 / 65536.0,
+            reference_temperature: 293.5,
+            swelling: -0.0625,
+            reference_concentration: 0.25,
             ..MaterialDef::DEFAULT
         })
     );
@@ -1479,6 +1602,158 @@ fn effects_definition_round_trip() {
                 d.effects.diffusion.faces[k] = scalar_face(kind, x);
                 assert_eq!(refused(&d), expect, "diffusion face {k} {kind:?} {x}");
             }
+        }
+    }
+}
+
+/// Expectation: an axisymmetric definition from C whose lower x face is a wall at the axis
+/// (`origin.x = -margin_cells * cell_size`: one cell for GIMP and the B-splines, none for
+/// linear hats) makes a world whose stored definition is the kernel's; the axis a cell off or
+/// an open lower x face is `MPM_STATUS_INVALID_AXIS`, for every family. The view's `hoop`
+/// pointer is the kernel's hoop column (NULL in plane strain), and `MPM_STATUS_INVALID_AXIS`
+/// keeps the kernel's number.
+#[test]
+fn axisymmetric_definition_and_hoop_column() {
+    assert_eq!(MpmStatus::from(Error::InvalidAxis) as u32, 27);
+    #[cfg(not(feature = "f64"))]
+    let mut c = mpm_world_def_default_f32();
+    #[cfg(feature = "f64")]
+    let mut c = mpm_world_def_default_f64();
+    c.dimension = MpmDimension::Axisymmetric2d as u32;
+    c.cells = [8, 8, 1];
+    c.cell_size = 0.0625;
+    c.particle_capacity = 64;
+    let requirements = |d: &MpmWorldDef| {
+        let mut r = MpmMemoryRequirements::default();
+        // SAFETY: valid pointers to locals.
+        unsafe { mpm_memory_requirements(d, &mut r) }
+    };
+    for shape in [
+        MpmShape::Linear,
+        MpmShape::Gimp,
+        MpmShape::QuadraticBspline,
+        MpmShape::CubicBspline,
+    ] {
+        let kernel_shape = ShapeFunction::from_code(shape as u32).expect("a shape");
+        let axis = -(kernel_shape.margin_cells() as Real) * c.cell_size;
+        let mut d = c;
+        d.shape = shape as u32;
+        d.origin.x = axis;
+        assert_eq!(
+            stored_def(&d),
+            WorldDef {
+                dimension: Dimension::Axisymmetric2D,
+                origin: Vec3::new(axis, 0.0, 0.0),
+                cells: [8, 8, 1],
+                cell_size: 0.0625,
+                particle_capacity: 64,
+                shape: kernel_shape,
+                ..WorldDef::DEFAULT
+            },
+            "{shape:?}"
+        );
+        for off in [-c.cell_size, c.cell_size] {
+            let mut bad = d;
+            bad.origin.x = axis + off;
+            assert_eq!(
+                requirements(&bad),
+                MpmStatus::InvalidAxis,
+                "{shape:?} {off}"
+            );
+        }
+        let mut open = d;
+        open.faces[MpmFace::XMin as usize] = MpmBoundary::Open as u32;
+        assert_eq!(
+            requirements(&open),
+            MpmStatus::InvalidAxis,
+            "{shape:?} open"
+        );
+        let mut plane = open;
+        plane.dimension = MpmDimension::Plane2d as u32;
+        assert_eq!(
+            requirements(&plane),
+            MpmStatus::Ok,
+            "{shape:?} plane strain"
+        );
+    }
+
+    // A GIMP world with a box on the axis: the view's hoop is the kernel's column.
+    c.origin.x = -c.cell_size;
+    for (dimension, axisymmetric) in [
+        (MpmDimension::Axisymmetric2d, true),
+        (MpmDimension::Plane2d, false),
+    ] {
+        let mut d = c;
+        d.dimension = dimension as u32;
+        let mut req = MpmMemoryRequirements::default();
+        // SAFETY: valid pointers to locals.
+        assert_eq!(
+            unsafe { mpm_memory_requirements(&d, &mut req) },
+            MpmStatus::Ok
+        );
+        let mut storage = vec![0u8; req.bytes + req.align];
+        let offset = storage.as_ptr().align_offset(req.align);
+        let mem = storage[offset..].as_mut_ptr();
+        let mut world = core::ptr::null_mut();
+        let mut view = core::mem::MaybeUninit::<MpmParticlesView>::uninit();
+        // SAFETY: `mem` holds `req.bytes` bytes at the required alignment; the other pointers
+        // are locals.
+        unsafe {
+            assert_eq!(
+                mpm_world_init(&d, mem.cast(), req.bytes, &mut world),
+                MpmStatus::Ok
+            );
+            #[cfg(not(feature = "f64"))]
+            let m = mpm_material_def_default_f32();
+            #[cfg(feature = "f64")]
+            let m = mpm_material_def_default_f64();
+            let mut id = u32::MAX;
+            assert_eq!(mpm_world_add_material(world, &m, &mut id), MpmStatus::Ok);
+            let mut ids = MpmIdRange::default();
+            let (lo, hi, v) = (
+                MpmVec3 {
+                    x: 0.0,
+                    y: 0.125,
+                    z: 0.0,
+                },
+                MpmVec3 {
+                    x: 0.125,
+                    y: 0.25,
+                    z: 0.0,
+                },
+                MpmVec3 {
+                    x: 0.5,
+                    y: 0.0,
+                    z: 0.0,
+                },
+            );
+            assert_eq!(
+                mpm_world_fill_box(world, lo, hi, id, v, &mut ids),
+                MpmStatus::Ok
+            );
+            let mut report = MpmStepReport::default();
+            assert_eq!(
+                mpm_world_step(world, 1.0 / 256.0, &mut report),
+                MpmStatus::Ok
+            );
+            assert_eq!(mpm_world_particles(world, view.as_mut_ptr()), MpmStatus::Ok);
+        }
+        // SAFETY: written by the successful call above.
+        let view = unsafe { view.assume_init() };
+        // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
+        let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+        let w = kernel::WorldRef::open(bytes).expect("a world");
+        let hoop = w.particles().hoop;
+        assert_eq!(view.dimension, dimension as u32);
+        if axisymmetric {
+            assert_eq!(view.hoop, hoop.as_ptr());
+            assert_eq!(hoop.len(), view.count);
+            assert!(view.count > 0);
+            assert!(hoop.iter().all(|x| x.is_finite()), "{hoop:?}");
+            assert!(hoop.iter().any(|&x| x != 0.0), "{hoop:?}");
+        } else {
+            assert!(view.hoop.is_null());
+            assert!(hoop.is_empty());
         }
     }
 }

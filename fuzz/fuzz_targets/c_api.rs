@@ -1,11 +1,13 @@
-//! Random sequences of C interface calls (init with arbitrary transfer and effects, heat
-//! conduction and diffusion included, add material, add particles, seed, set particle forces,
-//! damping, temperatures, concentrations and sources, add and clear tractions, step, read) with
-//! arbitrary values, through the same `extern "C"` functions a C host calls. After every call,
-//! either it returned a status and the world's bytes are unchanged, or it succeeded and every
-//! particle value (forces, damping, APIC moments, temperatures and concentrations and their
-//! grid values included) is finite and every position inside the grid box. Single precision
-//! (the default build of the library).
+//! Random sequences of C interface calls (init with arbitrary dimension, transfer and effects,
+//! axisymmetric worlds with their axis mostly in place, heat conduction and diffusion
+//! included; add material, thermal expansion and swelling included; add particles, seed, set
+//! particle forces, damping, temperatures, concentrations and sources, add and clear
+//! tractions, step, read) with arbitrary values, through the same `extern "C"` functions a C
+//! host calls. After every call, either it returned a status and the world's bytes are
+//! unchanged, or it succeeded and every particle value (forces, damping, APIC moments,
+//! temperatures and concentrations and their grid values, hoop stretches included) is finite
+//! and every position inside the grid box. Single precision (the default build of the
+//! library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -142,6 +144,15 @@ fn check_state(w: *const MpmWorld) {
         [heat, diffusion, heat, diffusion],
         "the view's scalar columns do not follow the declarations"
     );
+    let axisymmetric = def.dimension == MpmDimension::Axisymmetric2d as u32;
+    assert_eq!(
+        !v.hoop.is_null(),
+        axisymmetric,
+        "the view's hoop column does not follow the dimension"
+    );
+    if axisymmetric {
+        columns.push(v.hoop);
+    }
     for &p in v.damping.iter().filter(|p| !p.is_null()) {
         assert!(
             col(p).iter().all(|x| x.is_finite() && *x >= 0.0),
@@ -252,6 +263,19 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     def.cfl = inp.real_in(0.05, 1.0);
     def.transfer = inp.u32_below(3);
     def.effects = effects(inp);
+    // Axisymmetric: mostly with the lower x face a wall at the axis r = 0 (the grid's face
+    // `margin` cells below it), else the definition is refused with `InvalidAxis`.
+    if def.dimension == MpmDimension::Axisymmetric2d as u32 && inp.byte() % 4 != 0 {
+        let margin = if def.shape == MpmShape::Linear as u32 {
+            0.0
+        } else {
+            1.0
+        };
+        def.origin.x = -margin * def.cell_size;
+        if def.faces[MpmFace::XMin as usize] == MpmBoundary::Open as u32 {
+            def.faces[MpmFace::XMin as usize] = inp.u32_below(2);
+        }
+    }
     def
 }
 
@@ -323,6 +347,16 @@ fuzz_target!(|data: &[u8]| {
                     m.heat_capacity = inp.real_in(100.0, 5000.0);
                     m.conductivity = inp.real_in(0.0, 500.0);
                     m.diffusivity = inp.real_in(0.0, 1.0e-2);
+                    // Expansion and swelling about half the time each; a non-finite value or
+                    // reference is refused.
+                    if inp.byte() % 2 == 0 {
+                        m.thermal_expansion = inp.real_in(-1.0e-3, 1.0e-3);
+                        m.reference_temperature = inp.real_in(-500.0, 500.0);
+                    }
+                    if inp.byte() % 2 == 0 {
+                        m.swelling = inp.real_in(-0.1, 0.1);
+                        m.reference_concentration = inp.real_in(-2.0, 2.0);
+                    }
                     let mut id = 0;
                     mpm_world_add_material(world, &m, &mut id)
                 }

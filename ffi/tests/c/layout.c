@@ -152,6 +152,10 @@ int main(void) {
     FIELD(MpmMaterialDef, heat_capacity);
     FIELD(MpmMaterialDef, conductivity);
     FIELD(MpmMaterialDef, diffusivity);
+    FIELD(MpmMaterialDef, thermal_expansion);
+    FIELD(MpmMaterialDef, reference_temperature);
+    FIELD(MpmMaterialDef, swelling);
+    FIELD(MpmMaterialDef, reference_concentration);
     FIELD(MpmMaterialDef, internal_cookie);
 
     TYPE(MpmParticlesView);
@@ -172,6 +176,7 @@ int main(void) {
     FIELD(MpmParticlesView, concentration);
     FIELD(MpmParticlesView, grid_temperature);
     FIELD(MpmParticlesView, grid_concentration);
+    FIELD(MpmParticlesView, hoop);
 
     TYPE(MpmDiagnostics);
     FIELD(MpmDiagnostics, particle_count);

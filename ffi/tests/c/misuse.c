@@ -78,7 +78,7 @@ static uint64_t world_hash(const MpmWorld *w) {
 }
 
 /* The worlds every check compares, with their hashes after the last accepted change. */
-#define MAX_TRACKED 4
+#define MAX_TRACKED 5
 static MpmWorld *g_tracked[MAX_TRACKED];
 static uint64_t g_hash[MAX_TRACKED];
 static int g_tracked_count;
@@ -289,6 +289,19 @@ static MpmWorldDef def_3d_effects(void) {
     return d;
 }
 
+/* Axisymmetric: the 2D grid, GIMP, with the grid's lower x face one cell (GIMP's margin)
+ * below the axis, origin.x = -0.05, so that the wall plane is r = 0 and particles are admitted
+ * at r in [0, 0.9]; heat conduction and diffusion declared (so that a material expands and
+ * swells), 2 materials. */
+static MpmWorldDef def_axisym(void) {
+    MpmWorldDef d = def_2d();
+    d.dimension = MPM_DIMENSION_AXISYMMETRIC2D;
+    d.origin = v3(-0.05, 0.0, 0.0);
+    d.effects.heat.declared = 1;
+    d.effects.diffusion.declared = 1;
+    return d;
+}
+
 /* Structure-of-arrays storage for a few particles. */
 #define BATCH_MAX 64
 typedef struct {
@@ -334,6 +347,7 @@ static MpmWorld *g_w2;      /* the 2D world */
 static MpmWorld *g_w3;      /* the 3D world */
 static MpmWorld *g_we2;     /* the 2D world with every effect declared */
 static MpmWorld *g_we3;     /* the 3D world with damping, forces, tractions and heat */
+static MpmWorld *g_wa;      /* the axisymmetric world */
 static size_t g_w2_bytes;   /* its extent */
 static MpmWorldDef g_def2;  /* its definition */
 
@@ -897,6 +911,74 @@ static void effects_def_misuse(void) {
 #undef GOOD_EFFECT
 }
 
+/* Axisymmetric definitions: the lower x face must be a wall (stick or slip) whose plane is the
+ * axis r = 0, origin.x = -margin * cell_size (1 cell for GIMP and the B-splines, none for
+ * linear hats); anything else is MPM_STATUS_INVALID_AXIS. */
+static void axisymmetric_def_misuse(void) {
+    const MpmWorldDef a = def_axisym();
+    MpmWorldDef d;
+    MpmMemoryRequirements req, req_plane;
+
+#define BAD_AXIS(name, stmt) \
+    d = a; \
+    stmt; \
+    init_refused((name), MPM_STATUS_INVALID_AXIS, &d)
+    BAD_AXIS("init: axisymmetric, origin.x 0 (the axis inside GIMP's margin)",
+             d.origin.x = R(0.0));
+    BAD_AXIS("init: axisymmetric, origin.x -2 cells", d.origin.x = R(-0.1));
+    BAD_AXIS("init: axisymmetric, origin.x half a cell off", d.origin.x = R(-0.025));
+    BAD_AXIS("init: axisymmetric, origin.x +1 cell", d.origin.x = R(0.05));
+    BAD_AXIS("init: axisymmetric, origin.x 1e-3 cell off", d.origin.x = R(-0.05 + 0.00005));
+    BAD_AXIS("init: axisymmetric, origin.x -1e30", d.origin.x = R(-1e30));
+    BAD_AXIS("init: axisymmetric, lower x face open", d.faces[MPM_FACE_X_MIN] = MPM_BOUNDARY_OPEN);
+    BAD_AXIS("init: axisymmetric, lower x face open and origin.x 0",
+             (d.faces[MPM_FACE_X_MIN] = MPM_BOUNDARY_OPEN, d.origin.x = R(0.0)));
+    BAD_AXIS("init: axisymmetric linear, origin.x -1 cell (linear hats have no margin)",
+             d.shape = MPM_SHAPE_LINEAR);
+    BAD_AXIS("init: axisymmetric linear, lower x face open",
+             (d.shape = MPM_SHAPE_LINEAR, d.origin.x = R(0.0),
+              d.faces[MPM_FACE_X_MIN] = MPM_BOUNDARY_OPEN));
+    BAD_AXIS("init: axisymmetric quadratic B-spline, origin.x 0",
+             (d.shape = MPM_SHAPE_QUADRATIC_BSPLINE, d.origin.x = R(0.0)));
+    BAD_AXIS("init: axisymmetric cubic B-spline, origin.x 0",
+             (d.shape = MPM_SHAPE_CUBIC_BSPLINE, d.origin.x = R(0.0)));
+    BAD_AXIS("init: axisymmetric without effects, origin.x 0",
+             (d.effects = g_def2.effects, d.origin.x = R(0.0)));
+#undef BAD_AXIS
+    /* A non-finite origin is named as such, before the axis. */
+    d = a;
+    d.origin.x = R(NAN);
+    init_refused("init: axisymmetric, origin.x NaN", MPM_STATUS_NON_FINITE_DEFINITION, &d);
+
+    /* Controls: walls at the axis, for every family. */
+#define GOOD_AXIS(name, stmt) \
+    d = a; \
+    stmt; \
+    ACCEPTED((name), 0, mpm_memory_requirements(&d, &req))
+    GOOD_AXIS("init: axisymmetric GIMP, origin.x -1 cell, slip at the axis", (void)0);
+    GOOD_AXIS("init: axisymmetric, stick at the axis",
+              d.faces[MPM_FACE_X_MIN] = MPM_BOUNDARY_STICK);
+    GOOD_AXIS("init: axisymmetric, upper x face open", d.faces[MPM_FACE_X_MAX] = MPM_BOUNDARY_OPEN);
+    GOOD_AXIS("init: axisymmetric, origin.y anywhere", d.origin.y = R(-7.5));
+    GOOD_AXIS("init: axisymmetric, origin.x off by round-off (1e-5 cell)",
+              d.origin.x = R(-0.05 - 0.0000005));
+    GOOD_AXIS("init: axisymmetric linear, origin.x 0",
+              (d.shape = MPM_SHAPE_LINEAR, d.origin.x = R(0.0)));
+    GOOD_AXIS("init: axisymmetric quadratic B-spline, origin.x -1 cell",
+              d.shape = MPM_SHAPE_QUADRATIC_BSPLINE);
+    GOOD_AXIS("init: axisymmetric cubic B-spline, origin.x -1 cell",
+              d.shape = MPM_SHAPE_CUBIC_BSPLINE);
+    GOOD_AXIS("init: axisymmetric APIC", d.transfer = MPM_TRANSFER_APIC);
+    GOOD_AXIS("init: axisymmetric without effects", d.effects = g_def2.effects);
+#undef GOOD_AXIS
+    d = a;
+    d.dimension = MPM_DIMENSION_PLANE2D;
+    ACCEPTED("init: the axisymmetric definition as plane strain", 0,
+             mpm_memory_requirements(&d, &req_plane));
+    ACCEPTED("init: the axisymmetric definition", 0, mpm_memory_requirements(&a, &req));
+    expect_true("init: the hoop column takes memory", req.bytes > req_plane.bytes);
+}
+
 static void init_misuse(void) {
     MpmWorldDef d;
     size_t total;
@@ -985,10 +1067,7 @@ static void init_misuse(void) {
             init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         }
     }
-    /* A value of the enum that this build does not support. */
-    d = g_def2;
-    d.dimension = MPM_DIMENSION_AXISYMMETRIC2D;
-    init_refused("init: axisymmetric dimension", MPM_STATUS_UNSUPPORTED, &d);
+    axisymmetric_def_misuse();
 
     /* Non-finite and out-of-range values. */
 #define BAD_DEF(name, field, value, want) \
@@ -1157,7 +1236,40 @@ static void material_misuse(void) {
     BAD_MAT("material: diffusivity +inf", diffusivity, R(INFINITY));
     BAD_MAT("material: diffusivity -1", diffusivity, R(-1.0));
     BAD_MAT("material: diffusivity -inf", diffusivity, R(-INFINITY));
+    BAD_MAT("material: thermal_expansion NaN", thermal_expansion, R(NAN));
+    BAD_MAT("material: thermal_expansion +inf", thermal_expansion, R(INFINITY));
+    BAD_MAT("material: thermal_expansion -inf", thermal_expansion, R(-INFINITY));
+    BAD_MAT("material: reference_temperature NaN", reference_temperature, R(NAN));
+    BAD_MAT("material: reference_temperature +inf", reference_temperature, R(INFINITY));
+    BAD_MAT("material: reference_temperature -inf", reference_temperature, R(-INFINITY));
+    BAD_MAT("material: swelling NaN", swelling, R(NAN));
+    BAD_MAT("material: swelling +inf", swelling, R(INFINITY));
+    BAD_MAT("material: swelling -inf", swelling, R(-INFINITY));
+    BAD_MAT("material: reference_concentration NaN", reference_concentration, R(NAN));
+    BAD_MAT("material: reference_concentration +inf", reference_concentration, R(INFINITY));
+    BAD_MAT("material: reference_concentration -inf", reference_concentration, R(-INFINITY));
 #undef BAD_MAT
+    /* The same on the axisymmetric world, which declares heat and diffusion. */
+    m = mpm_material_def_default();
+    m.thermal_expansion = R(NAN);
+    REFUSED("material: thermal_expansion NaN (axisymmetric, heat declared)",
+            MPM_STATUS_INVALID_MATERIAL, mpm_world_add_material(g_wa, &m, OUT(uint32_t)));
+    m = mpm_material_def_default();
+    m.swelling = R(INFINITY);
+    REFUSED("material: swelling +inf (axisymmetric, diffusion declared)",
+            MPM_STATUS_INVALID_MATERIAL, mpm_world_add_material(g_wa, &m, OUT(uint32_t)));
+    /* Any finite value is a material, negative and large ones included. */
+    {
+        uint32_t id = 0xFFFFFFFFu;
+        m = mpm_material_def_default();
+        m.thermal_expansion = R(-1e-3);
+        m.reference_temperature = R(-1e6);
+        m.swelling = R(-2.0);
+        m.reference_concentration = R(1e6);
+        ACCEPTED("material: negative and large expansion, swelling and references (axisymmetric)",
+                 1, mpm_world_add_material(g_wa, &m, &id));
+        expect_true("material: the second axisymmetric material has id 1", id == 1);
+    }
 }
 
 /* Current particle count of a world. */
@@ -1974,6 +2086,95 @@ static void transport_misuse(void) {
     }
 }
 
+/* The axisymmetric world: its definition read back, seeding past the axis refused, the hoop
+ * column in the view (NULL in every other world), J with the hoop factor, a step. */
+static void axisymmetric_misuse(void) {
+    MpmParticlesView view;
+    MpmWorldDef d;
+    MpmStepReport report;
+    MpmWorld *others[4];
+    mpm_real before[BATCH_MAX], jac[BATCH_MAX];
+    size_t n = particle_count(g_wa), written = 0, i;
+    Batch b;
+    MpmParticleArrays a;
+    int k, finite, moved, same;
+
+    others[0] = g_w2;
+    others[1] = g_w3;
+    others[2] = g_we2;
+    others[3] = g_we3;
+    if (n == 0 || n > BATCH_MAX) {
+        fail("axisymmetric: setup", "unexpected particle count");
+    }
+
+    ACCEPTED("axisymmetric: get_def", 0, mpm_world_get_def(g_wa, &d));
+    expect_true("axisymmetric: the definition read back is axisymmetric with its origin",
+                d.dimension == MPM_DIMENSION_AXISYMMETRIC2D && d.origin.x == R(-0.05) &&
+                    d.faces[MPM_FACE_X_MIN] == MPM_BOUNDARY_SLIP);
+
+    REFUSED("axisymmetric: fill_box reaching past the axis", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_box(g_wa, v3(-0.1, 0.6, 0), v3(0.1, 0.7, 0), 0, v3(0, 0, 0),
+                               OUT(MpmIdRange)));
+    REFUSED("axisymmetric: fill_disk across the axis", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_disk(g_wa, v3(0.0, 0.6, 0), R(0.05), 0, v3(0, 0, 0),
+                                OUT(MpmIdRange)));
+    batch_fill(&b, 3, 0.2, 0.6, 0.0);
+    b.x[0][2] = R(-0.01);
+    a = arrays_of(&b);
+    REFUSED("axisymmetric: a particle at r = -0.01", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_add_particles(g_wa, &a, 3, OUT(MpmIdRange)));
+
+    /* The view: the hoop column set only here, finite; the out-of-plane stress present. */
+    ACCEPTED("axisymmetric: view", 0, mpm_world_particles(g_wa, &view));
+    expect_true("axisymmetric: the view's dimension", view.dimension == MPM_DIMENSION_AXISYMMETRIC2D);
+    expect_true("axisymmetric: the view's hoop pointer is set", view.hoop != NULL);
+    expect_true("axisymmetric: 2D pointers (no z, four stress components)",
+                view.position[2] == NULL && view.velocity[2] == NULL && view.stress[3] != NULL &&
+                    view.stress[4] == NULL && view.stress[5] == NULL);
+    finite = 1;
+    moved = 0;
+    for (i = 0; i < n; i++) {
+        finite &= isfinite(view.hoop[i]) && view.hoop[i] > R(-1.0);
+        moved |= view.hoop[i] != R(0.0);
+        before[i] = view.hoop[i];
+    }
+    expect_true("axisymmetric: the hoop stretches are finite and above -1", finite);
+    expect_true("axisymmetric: the box moving outwards has a hoop stretch", moved);
+    for (k = 0; k < 4; k++) {
+        char name[96];
+        snprintf(name, sizeof name, "axisymmetric: view of world %d (not axisymmetric)", k);
+        ACCEPTED(name, 0, mpm_world_particles(others[k], &view));
+        snprintf(name, sizeof name, "axisymmetric: the hoop pointer of world %d is NULL", k);
+        expect_true(name, view.hoop == NULL);
+    }
+
+    /* J = det(I + H) (1 + hoop): the copy-out includes the out-of-plane stretch. */
+    ACCEPTED("axisymmetric: copy_jacobians", 0,
+             mpm_world_copy_jacobians(g_wa, jac, BATCH_MAX, &written));
+    ACCEPTED("axisymmetric: view again", 0, mpm_world_particles(g_wa, &view));
+    same = written == n;
+    for (i = 0; same && i < n; i++) {
+        const double h00 = view.displacement_gradient[0][i], h01 = view.displacement_gradient[1][i];
+        const double h10 = view.displacement_gradient[3][i], h11 = view.displacement_gradient[4][i];
+        const double j = ((1.0 + h00) * (1.0 + h11) - h01 * h10) * (1.0 + (double)view.hoop[i]);
+        same = fabs((double)jac[i] - j) <= 1e-5 * fabs(j);
+    }
+    expect_true("axisymmetric: J is det(I + H) times 1 + hoop", same);
+
+    /* A step moves the hoop stretches, which stay finite. */
+    ACCEPTED("axisymmetric: step", 1, mpm_world_step(g_wa, R(1.0 / 256.0), &report));
+    ACCEPTED("axisymmetric: view after the step", 0, mpm_world_particles(g_wa, &view));
+    finite = view.hoop != NULL;
+    moved = 0;
+    for (i = 0; finite && i < n; i++) {
+        finite &= isfinite(view.hoop[i]) && view.hoop[i] > R(-1.0) &&
+                  isfinite(view.grid_temperature[i]) && isfinite(view.grid_concentration[i]);
+        moved |= view.hoop[i] != before[i];
+    }
+    expect_true("axisymmetric: the values after the step are finite", finite);
+    expect_true("axisymmetric: the step changed the hoop stretches", moved);
+}
+
 /* Filling the tables to capacity, then one more. */
 static void capacity_misuse(void) {
     MpmMaterialDef m = mpm_material_def_default();
@@ -2046,6 +2247,7 @@ static void status_strings(void) {
         MPM_STATUS_EFFECT_NOT_DECLARED,
         MPM_STATUS_UNKNOWN_PARTICLE,
         MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
+        MPM_STATUS_INVALID_AXIS,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
@@ -2101,10 +2303,10 @@ static void status_strings(void) {
 }
 
 int main(void) {
-    MpmMemoryRequirements req2, req3, reqe2, reqe3;
-    Block mem2, mem3, meme2, meme3;
-    MpmWorldDef d3 = def_3d(), de2 = def_2d_effects(), de3 = def_3d_effects();
-    MpmMaterialDef m = mpm_material_def_default();
+    MpmMemoryRequirements req2, req3, reqe2, reqe3, reqa;
+    Block mem2, mem3, meme2, meme3, mema;
+    MpmWorldDef d3 = def_3d(), de2 = def_2d_effects(), de3 = def_3d_effects(), da = def_axisym();
+    MpmMaterialDef m = mpm_material_def_default(), ma = mpm_material_def_default();
     uint32_t id;
     Batch b;
     MpmParticleArrays a;
@@ -2141,10 +2343,18 @@ int main(void) {
         mpm_world_init(&de3, meme3.at, reqe3.bytes, &g_we3) != MPM_STATUS_OK) {
         fail("setup", "mpm_world_init refused a definition with effects");
     }
+    if (mpm_memory_requirements(&da, &reqa) != MPM_STATUS_OK) {
+        fail("setup", "mpm_memory_requirements refused the axisymmetric definition");
+    }
+    mema = block_new(reqa.bytes, reqa.align, 0);
+    if (mpm_world_init(&da, mema.at, reqa.bytes, &g_wa) != MPM_STATUS_OK) {
+        fail("setup", "mpm_world_init refused the axisymmetric definition");
+    }
     track(g_w2);
     track(g_w3);
     track(g_we2);
     track(g_we3);
+    track(g_wa);
 
     ACCEPTED("setup: 2D material", 1, mpm_world_add_material(g_w2, &m, &id));
     batch_fill(&b, 4, 0.3, 0.3, 0.0);
@@ -2177,6 +2387,33 @@ int main(void) {
     expect_true("setup: 3D effects sphere has 8 particles", ids.first == 0 && ids.count == 8);
     ACCEPTED("setup: 3D effects step", 1, mpm_world_step(g_we3, R(1.0 / 256.0), &report));
 
+    /* The axisymmetric world: a material that expands with temperature and swells with
+     * concentration, a box on the axis moving outwards, temperatures and concentrations away
+     * from the reference values, one step. */
+    ma.thermal_expansion = R(1e-4);
+    ma.reference_temperature = R(300.0);
+    ma.swelling = R(0.01);
+    ma.reference_concentration = R(0.25);
+    ACCEPTED("setup: axisymmetric material that expands and swells", 1,
+             mpm_world_add_material(g_wa, &ma, &id));
+    ACCEPTED("setup: axisymmetric box on the axis", 1,
+             mpm_world_fill_box(g_wa, v3(0.0, 0.3, 0), v3(0.1, 0.4, 0), 0, v3(0.25, 0, 0),
+                                &ids));
+    expect_true("setup: axisymmetric box has 16 particles", ids.first == 0 && ids.count == 16);
+    {
+        mpm_real t[16], c[16];
+        size_t i;
+        for (i = 0; i < 16; i++) {
+            t[i] = R(320.0 + 4.0 * (double)i);
+            c[i] = R(0.0625 * (double)i);
+        }
+        ACCEPTED("setup: axisymmetric temperatures", 1,
+                 mpm_world_set_particle_scalar(g_wa, MPM_SCALAR_FIELD_TEMPERATURE, 0, t, 16));
+        ACCEPTED("setup: axisymmetric concentrations", 1,
+                 mpm_world_set_particle_scalar(g_wa, MPM_SCALAR_FIELD_CONCENTRATION, 0, c, 16));
+    }
+    ACCEPTED("setup: axisymmetric step", 1, mpm_world_step(g_wa, R(1.0 / 256.0), &report));
+
     null_pointers();
     not_a_world();
     init_misuse();
@@ -2187,6 +2424,7 @@ int main(void) {
     step_misuse();
     effects_misuse();
     transport_misuse();
+    axisymmetric_misuse();
     copy_misuse();
     capacity_misuse();
     status_strings();
@@ -2196,11 +2434,13 @@ int main(void) {
     ACCEPTED("end: 3D step", 1, mpm_world_step(g_w3, R(1.0 / 256.0), &report));
     ACCEPTED("end: 2D effects step", 1, mpm_world_step(g_we2, R(1.0 / 256.0), &report));
     ACCEPTED("end: 3D effects step", 1, mpm_world_step(g_we3, R(1.0 / 256.0), &report));
+    ACCEPTED("end: axisymmetric step", 1, mpm_world_step(g_wa, R(1.0 / 256.0), &report));
 
     free(mem2.raw);
     free(mem3.raw);
     free(meme2.raw);
     free(meme3.raw);
+    free(mema.raw);
     printf("all %lu misuse checks passed\n", g_checks);
     return 0;
 }

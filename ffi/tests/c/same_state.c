@@ -1,5 +1,5 @@
 /*
- * Two scenes stepped through the C interface, printing after every seeding call and every step
+ * Scenes stepped through the C interface, printing after every seeding call and every step
  * the FNV-1a 64 hash of the world's bytes (mpm_world_bytes extent), of every copied-out column
  * and of the columns of the borrowed view, the diagnostics and the step report, exactly (bytes
  * as hex, in memory order). tests/c_checks.rs runs the same scenes through the Rust kernel API
@@ -21,6 +21,9 @@
  *              MUSL.
  *   effects3d: a sphere with APIC, constant grid damping, particle forces, tractions on two
  *              faces and a body force, in 3D; cubic B-spline, USF.
+ *   axisym2d:  an axisymmetric cylinder on the axis, moving outwards, that expands with its
+ *              temperatures (set, and conducted towards a fixed floor) and swells with its
+ *              concentrations (diffusing in from a fixed outer face); GIMP, MUSL.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -181,6 +184,12 @@ static void print_state(const char *label, const MpmWorld *w) {
     print_hash(hash_columns(&view.grid_temperature, 1, view.count));
     printf(" grid_concentration ");
     print_hash(hash_columns(&view.grid_concentration, 1, view.count));
+    putchar('\n');
+
+    printf("%s: hoop present ", label);
+    print_present(&view.hoop, 1);
+    printf(" hoop ");
+    print_hash(hash_columns(&view.hoop, 1, view.count));
     putchar('\n');
 
     CALL("mpm_world_diagnostics", mpm_world_diagnostics(w, &d));
@@ -561,11 +570,73 @@ static void effects3d(void) {
     free(raw);
 }
 
+static void axisym2d(void) {
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef rubber = mpm_material_def_default();
+    uint32_t id = 0, i, n;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+    mpm_real *values;
+
+    printf("scene axisym2d\n");
+    def.dimension = MPM_DIMENSION_AXISYMMETRIC2D;
+    /* GIMP's margin is one cell: the lower x face's wall plane is the axis r = 0. */
+    def.origin = v3(-0.03125f, 0, 0);
+    def.cells[0] = 16;
+    def.cells[1] = 16;
+    def.cell_size = (mpm_real)0.03125;
+    def.particle_capacity = 512;
+    def.material_capacity = 1;
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    def.effects.heat.declared = 1;
+    def.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    def.effects.heat.faces[MPM_FACE_Y_MIN].value = (mpm_real)320.0;
+    def.effects.diffusion.declared = 1;
+    def.effects.diffusion.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    def.effects.diffusion.faces[MPM_FACE_X_MAX].value = (mpm_real)1.0;
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    /* Stress-free at 256 K and no concentration; 56 K more is a strain of 1.4 %. */
+    rubber.heat_capacity = (mpm_real)512.0;
+    rubber.conductivity = (mpm_real)4096.0;
+    rubber.diffusivity = (mpm_real)0.0078125;
+    rubber.thermal_expansion = (mpm_real)(1.0 / 4096.0);
+    rubber.reference_temperature = (mpm_real)256.0;
+    rubber.swelling = (mpm_real)0.03125;
+    rubber.reference_concentration = (mpm_real)0.0;
+    CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
+    printf("materials %lu\n", (unsigned long)id);
+    CALL("fill_box", mpm_world_fill_box(w, v3(0, 0.0625f, 0), v3(0.25f, 0.25f, 0), id,
+                                        v3(0.25f, -0.5f, 0), &ids));
+    print_ids("box", ids);
+    print_state("after box", w);
+    n = ids.count;
+
+    values = g_reals;
+    for (i = 0; i < n; i++) {
+        values[i] = (mpm_real)(256.0 + 8.0 * (i % 8));
+    }
+    CALL("set_particle_scalar temperature",
+         mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_TEMPERATURE, 0, values, n));
+    for (i = 0; i < n; i++) {
+        values[i] = (mpm_real)(0.0625 * (i % 16));
+    }
+    CALL("set_particle_scalar concentration",
+         mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_CONCENTRATION, 0, values, n));
+    print_state("after scalars", w);
+    step_frames(w, 12, (mpm_real)0.0078125);
+    free(raw);
+}
+
 int main(void) {
     plane2d();
     space3d();
     effects2d();
     effects3d();
+    axisym2d();
     free(g_reals);
     free(g_ids);
     printf("end\n");
