@@ -45,13 +45,16 @@ fn fold_mirror<const D: usize>(
 ) {
     let mut mass = mass;
     ctx.geom.for_each_mirror(|ghost, image| {
-        if let Some(m) = mass.as_deref_mut() {
+        // Both below the node count, which every column exceeds: the checks never fail.
+        if let Some(m) = mass.as_deref_mut().filter(|m| image < m.len()) {
             m[image] += m[ghost];
         }
         for (a, col) in cols.iter_mut().enumerate() {
-            let v = col[ghost];
-            col[image] += if a == 0 { -v } else { v };
-            col[ghost] = 0.0;
+            if image < col.len() {
+                let v = col[ghost];
+                col[image] += if a == 0 { -v } else { v };
+                col[ghost] = 0.0;
+            }
         }
     });
 }
@@ -61,8 +64,10 @@ fn fold_mirror<const D: usize>(
 fn mirror<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D]) {
     ctx.geom.for_each_mirror(|ghost, image| {
         for (a, col) in cols.iter_mut().enumerate() {
-            let v = col[image];
-            col[ghost] = if a == 0 { -v } else { v };
+            if image < col.len() {
+                let v = col[image];
+                col[ghost] = if a == 0 { -v } else { v };
+            }
         }
     });
 }
