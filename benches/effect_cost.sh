@@ -4,13 +4,32 @@
 # machine load). Prints a markdown table: median ns per particle-step over the rounds, the
 # marginal cost over no effect, and the world's bytes per particle with its marginal.
 #   bash benches/effect_cost.sh [ROUNDS] [step_cost options, e.g. --dim 3]
-# Builds target/release/examples/step_cost first.
+# Builds target/release/examples/step_cost first. thermal_expansion declares heat conduction
+# too, so its marginal includes heat's; axisymmetric is 2D only and is skipped with --dim 3.
 set -euo pipefail
 rounds=${1:-5}
 shift || true
 cargo build --release --example step_cost >/dev/null 2>&1
 bin=target/release/examples/step_cost
-effects=(none damping feedback local_damping particle_forces tractions body_force apic heat diffusion)
+effects=(none damping feedback local_damping particle_forces tractions body_force apic heat diffusion
+    thermal_expansion axisymmetric)
+# The scene's dimension, as step_cost reads it (the last --dim wins; 2 by default).
+dim=2
+prev=
+for a in "$@"; do
+    case "$a" in
+    --dim=*) dim=${a#--dim=} ;;
+    *) [ "$prev" = --dim ] && dim=$a ;;
+    esac
+    prev=$a
+done
+if [ "$dim" = 3 ]; then
+    kept=()
+    for e in "${effects[@]}"; do
+        [ "$e" = axisymmetric ] || kept+=("$e")
+    done
+    effects=("${kept[@]}")
+fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
 for _ in $(seq "$rounds"); do

@@ -8,7 +8,8 @@
 //!   (reset, particle to grid, grid update, grid to particle), through the hidden
 //!   `World::run_phase` hook, so the phases' costs add up to a USL step.
 //! - `step_effect_gimp_2d/<effect>`: 32768 particles, uGIMP, MUSL, with no effect and with each
-//!   effect declared alone (`benches/common/scene.rs`), to price each one.
+//!   effect declared alone (`benches/common/scene.rs`), to price each one (`thermal_expansion`
+//!   declares heat conduction too; `axisymmetric` makes the scene axisymmetric).
 //!
 //! Only `step` (or the phase) is timed (`iter_custom`): the `stable_dt` call that picks each
 //! step's `dt` is outside the measurement.

@@ -19,10 +19,13 @@
 //! `--simd auto|baseline` (`auto`, the default, is what `World::step` does: the AVX2 instance
 //! on CPUs that have it; `baseline` forces the SSE2 instance, e.g. under valgrind, which cannot
 //! decode every AVX instruction). The JSON line says which instance ran (`"simd"`).
-//! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic|heat|diffusion`
+//! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic|heat|diffusion|thermal_expansion|axisymmetric`
 //! declares one effect (see `benches/common/scene.rs`; default none) to price it; the JSON line
 //! names it and gives the world's bytes per particle (`benches/effect_cost.sh` tabulates every
-//! effect's marginal cost).
+//! effect's marginal cost). `thermal_expansion` declares heat conduction too (its cost includes
+//! heat's); `axisymmetric` makes the 2D scene axisymmetric (same grid and block, the origin
+//! moved so that the block sits at r >= 0) and is 2D only: with `--dim 3` step_cost says so on
+//! stderr and exits with code 1.
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -33,7 +36,7 @@ use std::time::{Duration, Instant};
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|baseline] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
-body_force|apic|heat|diffusion]";
+body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;

@@ -4,7 +4,7 @@
 //! gravity, inside a grid with slip walls.
 
 use mpm_gimp::{
-    memory_requirements, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
+    memory_requirements, Boundary, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
     MaterialModel, Real, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder, Vec3, World,
     WorldDef,
 };
@@ -34,11 +34,20 @@ pub enum Effect {
     Heat,
     /// Diffusion, insulated faces.
     Diffusion,
+    /// Thermal expansion: heat declared as [`Effect::Heat`] does, and the material's expansion
+    /// coefficient 1e-5 /K (reference temperature 0, the particles' temperature too: the
+    /// eigenstrain is 0, but the stress update takes it out all the same). Its marginal cost
+    /// includes heat's.
+    ThermalExpansion,
+    /// The axisymmetric dimension (2D only): x becomes the radius, the grid's origin moves by
+    /// its margin so that the axis r = 0 is the lower x face's wall plane (a slip wall), and the
+    /// block keeps its cells (so its size), at r >= 0.
+    Axisymmetric,
 }
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 10] = [
+    pub const ALL: [(Effect, &'static str); 12] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -49,6 +58,8 @@ impl Effect {
         (Effect::Apic, "apic"),
         (Effect::Heat, "heat"),
         (Effect::Diffusion, "diffusion"),
+        (Effect::ThermalExpansion, "thermal_expansion"),
+        (Effect::Axisymmetric, "axisymmetric"),
     ];
 
     /// The effect's name.
@@ -59,7 +70,7 @@ impl Effect {
             .map_or("?", |(_, n)| n)
     }
 
-    fn declare(self, def: &mut WorldDef, block_particles: u32) {
+    fn declare(self, def: &mut WorldDef, block_particles: u32) -> Result<(), String> {
         let fx = &mut def.effects;
         match self {
             Effect::None => {}
@@ -93,9 +104,34 @@ impl Effect {
                 fx.body_force_scale = Schedule::constant(1.0);
             }
             Effect::Apic => def.transfer = Transfer::Apic,
-            Effect::Heat => fx.heat = Some(Transport::INSULATED),
+            Effect::Heat | Effect::ThermalExpansion => fx.heat = Some(Transport::INSULATED),
             Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
+            Effect::Axisymmetric => {
+                if def.dimension == Dimension::ThreeD {
+                    return Err(format!(
+                        "the {} effect is 2D only; this scene is 3D",
+                        self.name()
+                    ));
+                }
+                def.dimension = Dimension::Axisymmetric2D;
+                def.origin.x = -(def.shape.margin_cells() as Real) * def.cell_size;
+                def.faces[Face::XMin as usize] = Boundary::Slip;
+            }
         }
+        Ok(())
+    }
+
+    /// The scene's material with this effect's parameters.
+    fn material(self, model: MaterialModel) -> MaterialDef {
+        let mut m = MaterialDef {
+            model,
+            ..MaterialDef::DEFAULT
+        };
+        if self == Effect::ThermalExpansion {
+            m.thermal_expansion = 1.0e-5;
+            m.reference_temperature = 0.0;
+        }
+        m
     }
 
     fn set_up(self, world: &mut World, block: [u32; 3], axes: usize) -> Result<(), String> {
@@ -180,26 +216,23 @@ impl Scene {
             update_order: s.order,
             ..WorldDef::DEFAULT
         };
-        s.effect.declare(&mut def, expected);
+        s.effect.declare(&mut def, expected)?;
         let req = memory_requirements(&def).map_err(|e| format!("invalid definition: {e:?}"))?;
         let mut storage = HeapBuffer::new(req.bytes);
         let mut world = World::init(&def, storage.as_mut_bytes())
             .map_err(|e| format!("World::init failed: {e:?}"))?;
         let material = world
-            .add_material(&MaterialDef {
-                model: s.material,
-                ..MaterialDef::DEFAULT
-            })
+            .add_material(&s.effect.material(s.material))
             .map_err(|e| format!("add_material failed: {e:?}"))?;
         // Box bounds a quarter of the particle spacing inside the block's faces: the lattice
         // sites (sub-cell centres) of exactly the block's cells fall inside, with no rounding
-        // at the edges.
+        // at the edges. Cells count from the grid's origin.
         let spacing = CELL / PPC as Real;
         let mut lo = Vec3::ZERO;
         let mut hi = Vec3::ZERO;
         for a in 0..axes {
-            lo[a] = s.first[a] as Real * CELL + 0.25 * spacing;
-            hi[a] = (s.first[a] + s.block[a]) as Real * CELL - 0.25 * spacing;
+            lo[a] = def.origin[a] + s.first[a] as Real * CELL + 0.25 * spacing;
+            hi[a] = def.origin[a] + (s.first[a] + s.block[a]) as Real * CELL - 0.25 * spacing;
         }
         let ids = world
             .fill_box(lo, hi, material, Vec3::new(0.0, -0.1, 0.0))
