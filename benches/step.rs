@@ -28,11 +28,12 @@ use std::time::{Duration, Instant};
 mod scene;
 use scene::{Effect, Scene, SceneDef};
 
-const SHAPES: [(ShapeFunction, &str); 4] = [
+const SHAPES: [(ShapeFunction, &str); 5] = [
     (ShapeFunction::Linear, "linear"),
     (ShapeFunction::Gimp, "gimp"),
     (ShapeFunction::QuadraticBspline, "quadratic"),
     (ShapeFunction::CubicBspline, "cubic"),
+    (ShapeFunction::CpGimp, "cpgimp"),
 ];
 
 const ORDERS: [(UpdateOrder, &str); 3] = [

@@ -116,6 +116,7 @@ fn parse_options() -> Options {
                     "gimp" => ShapeFunction::Gimp,
                     "quadratic" => ShapeFunction::QuadraticBspline,
                     "cubic" => ShapeFunction::CubicBspline,
+                    "cpgimp" => ShapeFunction::CpGimp,
                     _ => bad(),
                 }
             }
@@ -171,6 +172,7 @@ fn shape_name(s: ShapeFunction) -> &'static str {
         ShapeFunction::Gimp => "gimp",
         ShapeFunction::QuadraticBspline => "quadratic",
         ShapeFunction::CubicBspline => "cubic",
+        ShapeFunction::CpGimp => "cpgimp",
     }
 }
 

@@ -54,6 +54,12 @@ pub enum ShapeFunction {
     QuadraticBspline = 2,
     /// Cubic B-spline, 4 nodes per axis.
     CubicBspline = 3,
+    /// cpGIMP (Wallstedt and Guilkey 2008): uGIMP whose particle domain is convected with the
+    /// deformation. Along each axis the half-width is `l_p` times the extent of the deformed
+    /// domain there, `sum_b |F_ab|` (`F_aa` under a stretch along the axes, as cpGIMP writes
+    /// it; rotation-invariant in length), kept within `[l_p / 10, h / 2]` so that the domain
+    /// stays within the 3 nodes per axis. Costs the deformation gradient's load in every pass.
+    CpGimp = 4,
 }
 
 impl ShapeFunction {
@@ -65,6 +71,7 @@ impl ShapeFunction {
             1 => Some(ShapeFunction::Gimp),
             2 => Some(ShapeFunction::QuadraticBspline),
             3 => Some(ShapeFunction::CubicBspline),
+            4 => Some(ShapeFunction::CpGimp),
             _ => None,
         }
     }
@@ -406,7 +413,13 @@ mod tests {
             Dm::from_code,
         );
         use ShapeFunction as Sf;
-        let shapes = [Sf::Linear, Sf::Gimp, Sf::QuadraticBspline, Sf::CubicBspline];
+        let shapes = [
+            Sf::Linear,
+            Sf::Gimp,
+            Sf::QuadraticBspline,
+            Sf::CubicBspline,
+            Sf::CpGimp,
+        ];
         check(&shapes, |v| v as u32, Sf::from_code);
         use UpdateOrder as Uo;
         check(&[Uo::Usf, Uo::Usl, Uo::Musl], |v| v as u32, Uo::from_code);

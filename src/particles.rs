@@ -98,6 +98,22 @@ impl<'a> Carver<'a> {
     }
 }
 
+impl<const D: usize> ParticleCols<'_, D> {
+    /// The stretch of particle `i`'s domain per axis for a family that
+    /// [`crate::shape::Shape1D::STRETCHES`] (cpGIMP); 1 for every other family.
+    #[inline(always)]
+    pub fn domain_stretch<const K: usize, S: crate::shape::Shape1D<K>>(
+        &self,
+        i: usize,
+    ) -> [Real; D] {
+        if S::STRETCHES {
+            crate::shape::domain_stretch::<D>(|a, b| self.h[a][b].get(i).copied().unwrap_or(0.0))
+        } else {
+            [1.0; D]
+        }
+    }
+}
+
 impl<'a, const D: usize> ParticleCols<'a, D> {
     /// Carves the particle region (starting at `layout.particle_offset`) into columns.
     pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {

@@ -14,7 +14,7 @@ use crate::phases::p2g::mode;
 use crate::phases::Avx2;
 use crate::phases::Baseline;
 use crate::phases::{grid_update, p2g, transport, Ctx, Isa};
-use crate::shape::{CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
+use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
 use core::mem::size_of;
@@ -941,6 +941,14 @@ impl<'a> World<'a> {
                 ShapeFunction::CubicBspline => {
                     self.run::<2, 4, _>(axi(CubicBspline, &def), run, &def, &layout, kernel, simd)
                 }
+                ShapeFunction::CpGimp => self.run::<2, 3, _>(
+                    axi(CpGimp::new(ppc), &def),
+                    run,
+                    &def,
+                    &layout,
+                    kernel,
+                    simd,
+                ),
             }
             return;
         }
@@ -957,6 +965,9 @@ impl<'a> World<'a> {
             (2, ShapeFunction::CubicBspline) => {
                 self.run::<2, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
             }
+            (2, ShapeFunction::CpGimp) => {
+                self.run::<2, 3, _>(CpGimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
+            }
             (_, ShapeFunction::Linear) => {
                 self.run::<3, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
             }
@@ -968,6 +979,9 @@ impl<'a> World<'a> {
             }
             (_, ShapeFunction::CubicBspline) => {
                 self.run::<3, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
+            }
+            (_, ShapeFunction::CpGimp) => {
+                self.run::<3, 3, _>(CpGimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
             }
         }
     }

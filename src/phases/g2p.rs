@@ -328,20 +328,34 @@ fn commit_gradient_affine<const D: usize>(
     }
 }
 
-/// Replaces `st` by the stencils of the chunk's particles at `x[axis][lane]` (with their
-/// first moments when `AFFINE`).
+/// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
+/// `x[axis][lane]` (with their first moments when `AFFINE`). A family whose domain stretches
+/// (cpGIMP) also reads the chunk's deformation gradients.
 #[inline(always)]
 pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFINE: bool>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
     x: &[Lane; D],
 ) {
     let geom = &ctx.geom;
     let s: [Lane; D] = core::array::from_fn(|a| {
         core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
     });
-    st.compute::<S, AFFINE>(shape, &s, geom.nodes, geom.stride, geom.inv_h);
+    let mut stretch = [[1.0; W]; D];
+    if S::STRETCHES {
+        let h: LaneMat<D> =
+            core::array::from_fn(|a| core::array::from_fn(|b| load(p.h[a][b], start)));
+        for ln in 0..W {
+            let e = crate::shape::domain_stretch::<D>(|a, b| h[a][b][ln]);
+            for a in 0..D {
+                stretch[a][ln] = e[a];
+            }
+        }
+    }
+    st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
 }
 
 /// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
@@ -656,7 +670,7 @@ pub(crate) fn particles<
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
-        stencils::<D, K, S, APIC>(&mut st, shape, ctx, &x);
+        stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
         let (mut alpha_g, mut alpha_p) = ([ctx.alpha_g; W], [ctx.alpha_p; W]);
@@ -854,7 +868,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        stencils::<D, K, S, false>(&mut st, shape, ctx, &x);
+        stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
         let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, &live);
         let ok = update_stress::<D, K, S>(ctx, p, start, &live, &gathered);
         if S::GRADIENT_AFFINE {

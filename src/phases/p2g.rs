@@ -80,7 +80,7 @@ pub(crate) fn scatter<
                 }
             })
         });
-        stencils::<D, K, S, APIC>(&mut st, shape, ctx, &x);
+        stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         let n = W.min(count - start);
         for t in 0..W {
             let ln = scatter_lane(t);
@@ -314,7 +314,8 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
             continue;
         }
         let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
-        let st = Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h);
+        let stretch = p.domain_stretch::<K, S>(i);
+        let st = Stencil::<D, K>::new(shape, s, stretch, geom.nodes, geom.stride, geom.inv_h);
         let area = if S::AXISYMMETRIC {
             let (r, l) = (p.x[0][i], ctx.half_width);
             area * match rec.face {

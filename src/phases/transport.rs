@@ -56,11 +56,11 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         c.fill(0.0);
     }
     let geom = &ctx.geom;
-    let stencil = |x: [Real; D]| {
-        let s: [Real; D] = core::array::from_fn(|a| (x[a] - geom.origin[a]) * geom.inv_h);
-        Stencil::<D, K>::new(shape, s, geom.nodes, geom.stride, geom.inv_h)
+    let stencil = |p: &ParticleCols<'_, D>, i: usize| {
+        let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
+        let stretch = p.domain_stretch::<K, S>(i);
+        Stencil::<D, K>::new(shape, s, stretch, geom.nodes, geom.stride, geom.inv_h)
     };
-    let position = |p: &ParticleCols<'_, D>, i: usize| core::array::from_fn(|a| p.x[a][i]);
     // 1. Capacity and momentum.
     for i in 0..count {
         if p.status[i] != ACTIVE {
@@ -68,7 +68,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         }
         let (cap, _) = capacity_and_conductance(ctx, p, i, f);
         let phi = p.scalar[f][0][i];
-        let st = stencil(position(p, i));
+        let st = stencil(p, i);
         let [c_col, m_col, _, _] = &mut g.scalar[f];
         st.for_each_node(geom.stride, |node, w, _| {
             if let (Some(c), Some(m)) = (c_col.get_mut(node), m_col.get_mut(node)) {
@@ -100,7 +100,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
         let volume = current_volume(p, i);
         let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
-        let st = stencil(position(p, i));
+        let st = stencil(p, i);
         let [_, _, v_col, q_col] = &mut g.scalar[f];
         let mut grad = [0.0 as Real; D];
         st.for_each_node(geom.stride, |node, _, gw| {
@@ -146,7 +146,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         if p.status[i] != ACTIVE {
             continue;
         }
-        let st = stencil(position(p, i));
+        let st = stencil(p, i);
         let [_, _, value, rate] = &g.scalar[f];
         let (mut a, mut on_grid) = (0.0, 0.0);
         st.for_each_node(geom.stride, |node, w, _| {

@@ -39,6 +39,7 @@ impl<const K: usize, S: Shape1D<K>> Shape1D<K> for Axisymmetric<S> {
     const GRADIENT_AFFINE: bool = S::GRADIENT_AFFINE;
     const AXISYMMETRIC: bool = true;
     const FINITE_DOMAIN: bool = S::FINITE_DOMAIN;
+    const STRETCHES: bool = S::STRETCHES;
 
     #[inline(always)]
     fn radius(&self, s: Real) -> Real {
@@ -52,8 +53,13 @@ impl<const K: usize, S: Shape1D<K>> Shape1D<K> for Axisymmetric<S> {
     }
 
     #[inline(always)]
-    fn radial_terms(&self, f: Real) -> ([Real; K], [Real; K]) {
-        self.inner.radial_terms(f)
+    fn radial_terms(&self, f: Real, stretch: Real) -> ([Real; K], [Real; K]) {
+        self.inner.radial_terms(f, stretch)
+    }
+
+    #[inline(always)]
+    fn stencil_stretched(&self, f: Real, stretch: Real) -> ([Real; K], [Real; K]) {
+        self.inner.stencil_stretched(f, stretch)
     }
 
     #[inline(always)]

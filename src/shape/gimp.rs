@@ -4,6 +4,8 @@
 //! - `|xi| < l`: `S = 1 - (xi^2 + l^2) / (2 l)`, `dS = -xi / l`
 //! - `l <= |xi| <= 1 - l`: `S = 1 - |xi|`, `dS = -sign(xi)`
 //! - `1 - l < |xi| < 1 + l`: `S = (1 + l - |xi|)^2 / (4 l)`, `dS = -sign(xi) (1 + l - |xi|) / (2 l)`
+//!
+//! cpGIMP ([`CpGimp`]) is the same closed form with each particle's own half-width per axis.
 
 use super::Shape1D;
 use crate::Real;
@@ -22,7 +24,13 @@ pub struct Gimp {
 impl Gimp {
     /// uGIMP for `particles_per_cell` particles per cell per axis (>= 1).
     pub fn new(particles_per_cell: u32) -> Self {
-        let l = 0.5 / particles_per_cell.max(1) as Real;
+        Gimp::with_half_width(0.5 / particles_per_cell.max(1) as Real)
+    }
+
+    /// uGIMP with half-width `l` in cell units, in (0, 1/2] (the closed form's range with 3
+    /// nodes per axis).
+    #[inline(always)]
+    pub fn with_half_width(l: Real) -> Self {
         Gimp {
             l,
             inv_l: 1.0 / l,
@@ -65,7 +73,7 @@ impl Shape1D<3> for Gimp {
     const FINITE_DOMAIN: bool = true;
 
     #[inline(always)]
-    fn radial_terms(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+    fn radial_terms(&self, f: Real, _stretch: Real) -> ([Real; 3], [Real; 3]) {
         let mut m = [0.0; 3];
         let mut ends = [0.0; 3];
         for k in 0..3 {
@@ -141,5 +149,59 @@ impl Shape1D<3> for Gimp {
         let (s0, m0) = outer(f);
         let (s2, m2) = outer(2.0 - f);
         ([s0, s1, s2], [-m0, d1, m2])
+    }
+}
+
+/// cpGIMP (Wallstedt and Guilkey 2008): uGIMP whose particle domain is convected with the
+/// deformation. A particle's half-width along an axis is the undeformed `l_0 = 1 / (2 n)`
+/// times its domain's stretch there ([`crate::shape::domain_stretch`]), kept within
+/// `[l_0 / 10, 1 / 2]` cell units: the upper bound keeps the domain within the 3 nodes of the
+/// stencil (the closed form's range), the lower one keeps the weights' derivatives bounded.
+#[derive(Clone, Copy, Debug)]
+pub struct CpGimp {
+    l0: Real,
+}
+
+impl CpGimp {
+    /// cpGIMP for `particles_per_cell` particles per cell per axis (>= 1).
+    pub fn new(particles_per_cell: u32) -> Self {
+        CpGimp {
+            l0: 0.5 / particles_per_cell.max(1) as Real,
+        }
+    }
+
+    /// uGIMP at the half-width of a domain stretched by `stretch` (NaN-safe: the smallest).
+    #[inline(always)]
+    fn at(&self, stretch: Real) -> Gimp {
+        let (lo, l) = (0.1 * self.l0, self.l0 * stretch);
+        let l = if l > lo { l } else { lo };
+        Gimp::with_half_width(if l < 0.5 { l } else { 0.5 })
+    }
+}
+
+impl Shape1D<3> for CpGimp {
+    const SHIFT: Real = 0.5;
+    const LEAD: i32 = 1;
+    const FINITE_DOMAIN: bool = true;
+    const STRETCHES: bool = true;
+
+    #[inline(always)]
+    fn eval(&self, xi: Real) -> (Real, Real) {
+        self.at(1.0).eval(xi)
+    }
+
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        self.at(1.0).stencil(f)
+    }
+
+    #[inline(always)]
+    fn stencil_stretched(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
+        self.at(stretch).stencil(f)
+    }
+
+    #[inline(always)]
+    fn radial_terms(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
+        self.at(stretch).radial_terms(f, stretch)
     }
 }

@@ -19,7 +19,7 @@ mod linear;
 
 pub use axisymmetric::Axisymmetric;
 pub use bspline::{CubicBspline, QuadraticBspline};
-pub use gimp::Gimp;
+pub use gimp::{CpGimp, Gimp};
 pub use linear::Linear;
 
 use crate::Real;
@@ -63,6 +63,9 @@ pub trait Shape1D<const K: usize>: Copy {
     /// than sample them at a point: then the r-weighted weights of the axisymmetric form differ
     /// from the Cartesian ones, by [`Shape1D::radial_terms`].
     const FINITE_DOMAIN: bool = false;
+    /// Whether the particle domain stretches with the deformation (cpGIMP): then the passes
+    /// give each particle its domain's stretch per axis ([`Shape1D::stencil_stretched`]).
+    const STRETCHES: bool = false;
 
     /// Axisymmetric only: the radius of a particle at `s` (cell units on the first axis), and
     /// the smallest radius the weights are evaluated at (see [`Axisymmetric`]).
@@ -76,8 +79,15 @@ pub trait Shape1D<const K: usize>: Copy {
     /// `M = 1/(2l) int_{-l}^{l} N(xi + u) u du` (cell units, `xi` the particle's offset from
     /// the node), and the mean of `N` at the domain's two ends. Zero for point families.
     #[inline(always)]
-    fn radial_terms(&self, _f: Real) -> ([Real; K], [Real; K]) {
+    fn radial_terms(&self, _f: Real, _stretch: Real) -> ([Real; K], [Real; K]) {
         ([0.0; K], [0.0; K])
+    }
+
+    /// [`Shape1D::stencil`] for a particle whose domain is stretched by `stretch` along this
+    /// axis (1 undeformed); only a family that [`Shape1D::STRETCHES`] reads it.
+    #[inline(always)]
+    fn stencil_stretched(&self, f: Real, _stretch: Real) -> ([Real; K], [Real; K]) {
+        self.stencil(f)
     }
 
     /// Weight and its derivative with respect to `s` at offset `xi = s - x_i` (cell units).
@@ -177,13 +187,15 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
-    /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units); with
-    /// `AFFINE`, also their first moments and `D_p^-1` (APIC).
+    /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units) whose
+    /// domains are stretched by `stretch[axis][lane]` (read only by a family that
+    /// [`Shape1D::STRETCHES`]); with `AFFINE`, also their first moments and `D_p^-1` (APIC).
     #[inline(always)]
     pub fn compute<S: Shape1D<K>, const AFFINE: bool>(
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
+        stretch: &[[Real; W]; D],
         nodes: [usize; D],
         stride: [usize; D],
         inv_h: Real,
@@ -202,7 +214,8 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
             }
             if S::AXISYMMETRIC && a == 0 {
                 for ln in 0..W {
-                    let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f[ln], s[0][ln], h);
+                    let (wa, dwa, ta) =
+                        radial_stencil::<K, S>(shape, f[ln], s[0][ln], stretch[0][ln], h);
                     for k in 0..K {
                         w[a][k][ln] = wa[k];
                         dw[a][k][ln] = dwa[k];
@@ -211,7 +224,11 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             } else {
                 for ln in 0..W {
-                    let (wa, dwa) = shape.stencil(f[ln]);
+                    let (wa, dwa) = if S::STRETCHES {
+                        shape.stencil_stretched(f[ln], stretch[a][ln])
+                    } else {
+                        shape.stencil(f[ln])
+                    };
                     for k in 0..K {
                         w[a][k][ln] = wa[k];
                         dw[a][k][ln] = dwa[k] * inv_h;
@@ -286,13 +303,14 @@ pub(crate) fn radial_stencil<const K: usize, S: Shape1D<K>>(
     shape: &S,
     f: Real,
     s: Real,
+    stretch: Real,
     h: Real,
 ) -> ([Real; K], [Real; K], [Real; K]) {
-    let (mut w, mut dw) = shape.stencil(f);
+    let (mut w, mut dw) = shape.stencil_stretched(f, stretch);
     let inv_h = 1.0 / h;
     let inv_r = 1.0 / shape.radius(s);
     let mut t = [0.0; K];
-    let (m, ends) = shape.radial_terms(f);
+    let (m, ends) = shape.radial_terms(f, stretch);
     for k in 0..K {
         t[k] = w[k] * inv_r;
         dw[k] *= inv_h;
@@ -302,6 +320,19 @@ pub(crate) fn radial_stencil<const K: usize, S: Shape1D<K>>(
         }
     }
     (w, dw, t)
+}
+
+/// The stretch of a particle domain along each axis for cpGIMP: the extent of the deformed
+/// domain `F [-1, 1]^D` along the axis, `sum_b |F_ab|`, from `H = F - I` (`h(a, b)` is
+/// `H_ab`). Under a stretch along the axes it is `F_aa`, as cpGIMP has it; a rotation changes
+/// the box's extent but not the domain's size.
+#[inline(always)]
+pub(crate) fn domain_stretch<const D: usize>(h: impl Fn(usize, usize) -> Real) -> [Real; D] {
+    core::array::from_fn(|a| {
+        (0..D)
+            .map(|b| (h(a, b) + if a == b { 1.0 } else { 0.0 }).abs())
+            .sum()
+    })
 }
 
 /// `1 / d` for a diagonal entry `d` of the APIC moment matrix `D_p` on a grid of spacing `h`;
@@ -348,6 +379,7 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     pub fn new<S: Shape1D<K>>(
         shape: &S,
         s: [Real; D],
+        stretch: [Real; D],
         nodes: [usize; D],
         stride: [usize; D],
         inv_h: Real,
@@ -361,12 +393,12 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
             base += first as usize * stride[a];
             let f = s[a] - first as Real;
             if S::AXISYMMETRIC && a == 0 {
-                let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f, s[0], 1.0 / inv_h);
+                let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f, s[0], stretch[0], 1.0 / inv_h);
                 for k in 0..K {
                     (w[a][k], dw[a][k], t[k]) = (wa[k], dwa[k], ta[k]);
                 }
             } else {
-                let (wa, dwa) = shape.stencil(f);
+                let (wa, dwa) = shape.stencil_stretched(f, stretch[a]);
                 for k in 0..K {
                     w[a][k] = wa[k];
                     dw[a][k] = dwa[k] * inv_h;
@@ -468,8 +500,15 @@ mod tests {
         let nodes = [N, N];
         let stride = [1, N];
         let mut st = 7u64;
-        let check = |s: [Real; 2]| {
-            let stencil = Stencil::<2, K>::new(&shape, s, nodes, stride, 1.0 / h);
+        // A stretching family (cpGIMP) gets a different domain stretch per check, from 0.05 to
+        // 3 (both clamps of its half-width included).
+        let mut stretch_state = 3u64;
+        let mut check = |s: [Real; 2]| {
+            let stretch = [
+                0.05 + 2.95 * lcg(&mut stretch_state),
+                0.05 + 2.95 * lcg(&mut stretch_state),
+            ];
+            let stencil = Stencil::<2, K>::new(&shape, s, stretch, nodes, stride, 1.0 / h);
             let (mut sum_w, mut sum_g, mut sum_x) = (0.0, [0.0; 2], [0.0; 2]);
             let mut sum_gx = [[0.0; 2]; 2];
             stencil.for_each_node(stride, |idx, w, g| {
@@ -542,7 +581,8 @@ mod tests {
                         (0..=hi).contains(&f),
                         "{f} outside [0, {hi}] (s {s}, nodes {nodes})"
                     );
-                    let exact = libm::floor((s + S::SHIFT) as f64) as i64 - S::LEAD as i64;
+                    let exact =
+                        (libm::floor((s + S::SHIFT) as f64) as i64).saturating_sub(S::LEAD as i64);
                     if s.is_finite() && (0..=hi as i64).contains(&exact) {
                         assert_eq!(f as i64, exact, "s {s}, nodes {nodes}");
                     }
@@ -553,6 +593,7 @@ mod tests {
         check::<3, Gimp>();
         check::<3, QuadraticBspline>();
         check::<4, CubicBspline>();
+        check::<3, CpGimp>();
     }
 
     /// `1/(2 l) int_{-l}^{l} g(u) du` by Simpson's rule on each piece between the `kinks`
@@ -589,7 +630,7 @@ mod tests {
         let mut st = 11u64;
         let check = |r: Real, z: Real| {
             let s = [(r - origin) / h, z / h];
-            let stencil = Stencil::<2, K>::new(&shape, s, nodes, stride, 1.0 / h);
+            let stencil = Stencil::<2, K>::new(&shape, s, [1.0; 2], nodes, stride, 1.0 / h);
             let (mut sum_w, mut sum_g) = (0.0f64, [0.0f64; 2]);
             let mut grad = [[0.0f64; 2]; 2]; // sum x_a,i G_b,i
             let mut hoop = 0.0f64; // sum r_i T_ip
@@ -688,6 +729,14 @@ mod tests {
         check_axisymmetric(QuadraticBspline, None);
         check_axisymmetric(CubicBspline, None);
         check_axisymmetric(Gimp::new(2), Some(0.25));
+        check_axisymmetric(CpGimp::new(2), Some(0.25));
+    }
+
+    #[test]
+    fn cpgimp_partition_of_unity_gradient_sum_and_linear_reproduction_at_any_stretch() {
+        for ppc in 1..=4 {
+            check_family(CpGimp::new(ppc), 1.0, 10.0);
+        }
     }
 
     #[test]

@@ -6,11 +6,12 @@ use mpm_gimp::{
     ParticleBatch, ParticleStatus, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
 };
 
-pub const SHAPES: [ShapeFunction; 4] = [
+pub const SHAPES: [ShapeFunction; 5] = [
     ShapeFunction::Linear,
     ShapeFunction::Gimp,
     ShapeFunction::QuadraticBspline,
     ShapeFunction::CubicBspline,
+    ShapeFunction::CpGimp,
 ];
 
 pub const ORDERS: [UpdateOrder; 3] = [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl];
