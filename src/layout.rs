@@ -269,6 +269,8 @@ pub(crate) struct Layout {
     pub scalar: [ColumnGroup; 2],
     /// Axisymmetric: the hoop stretch `F_thetatheta - 1`.
     pub hoop: ColumnGroup,
+    /// cpGIMP: each particle's domain stretch per axis, frozen for a substep.
+    pub stretch: ColumnGroup,
     /// Whether each transported scalar (heat, diffusion) has its 4 grid columns.
     pub scalar_grid: [bool; 2],
     pub grid_offset: usize,
@@ -293,7 +295,7 @@ pub(crate) struct EffectColumns;
 impl EffectColumns {
     /// Groups `(x_next, force, damping, affine, heat, diffusion, hoop)` for a definition,
     /// starting at column `first`; returns them and the column after the last.
-    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 7], usize) {
+    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 8], usize) {
         let musl = def.update_order == UpdateOrder::Musl;
         let fx = &def.effects;
         let per_particle_damping = fx.damping.is_some_and(|dm| dm.per_particle);
@@ -309,6 +311,11 @@ impl EffectColumns {
             fx.heat.map_or(0, |t| 2 + t.sources as usize),
             fx.diffusion.map_or(0, |t| 2 + t.sources as usize),
             (def.dimension == Dimension::Axisymmetric2D) as usize,
+            if def.shape == ShapeFunction::CpGimp {
+                d
+            } else {
+                0
+            },
         ];
         let mut next = first;
         let groups = counts.map(|count| {
@@ -332,8 +339,10 @@ impl Layout {
         let nodes: usize = (0..d).map(|a| def.cells[a] as usize + 1).product();
         let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
         let u32_column_bytes = round_up(cap * 4, ALIGN);
-        let ([x_next, force, damping, affine, heat, diffusion, hoop], particle_real_columns) =
-            EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
+        let (
+            [x_next, force, damping, affine, heat, diffusion, hoop, stretch],
+            particle_real_columns,
+        ) = EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes = round_up(
             round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>(),
@@ -375,6 +384,7 @@ impl Layout {
             affine,
             scalar: [heat, diffusion],
             hoop,
+            stretch,
             scalar_grid,
             grid_offset,
             node_column_bytes,

@@ -73,6 +73,8 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub scalar: [[&'a mut [Real]; 3]; 2],
     /// Axisymmetric only: the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`.
     pub hoop: &'a mut [Real],
+    /// cpGIMP only: each particle's domain stretch per axis for the current substep.
+    pub stretch: [&'a mut [Real]; D],
     pub material: &'a mut [u32],
     pub status: &'a mut [u32],
 }
@@ -107,9 +109,32 @@ impl<const D: usize> ParticleCols<'_, D> {
         i: usize,
     ) -> [Real; D] {
         if S::STRETCHES {
-            crate::shape::domain_stretch::<D>(|a, b| self.h[a][b].get(i).copied().unwrap_or(0.0))
+            core::array::from_fn(|a| self.stretch[a].get(i).copied().unwrap_or(1.0))
         } else {
             [1.0; D]
+        }
+    }
+
+    /// cpGIMP: freezes each particle's domain stretch for the substep, from its deformation
+    /// at the substep's start, so that every pass of the substep weighs a particle with the
+    /// same domain (the scatter of mass and the gather of accelerations must agree, or
+    /// momentum is not conserved; USF updates F between them). Nothing for other families.
+    pub fn freeze_domain_stretch<const K: usize, S: crate::shape::Shape1D<K>>(
+        &mut self,
+        count: usize,
+    ) {
+        if !S::STRETCHES {
+            return;
+        }
+        for i in 0..count {
+            let h = &self.h;
+            let e =
+                crate::shape::domain_stretch::<D>(|a, b| h[a][b].get(i).copied().unwrap_or(0.0));
+            for a in 0..D {
+                if let Some(v) = self.stretch[a].get_mut(i) {
+                    *v = e[a];
+                }
+            }
         }
     }
 }
@@ -151,6 +176,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             core::array::from_fn(|k| group(&mut c, k < g.count))
         });
         let hoop = group(&mut c, layout.hoop.count > 0);
+        let stretch = core::array::from_fn(|_| group(&mut c, layout.stretch.count > 0));
         let material = c.take(ub, n);
         let status = c.take(ub, n);
         ParticleCols {
@@ -166,6 +192,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             affine,
             scalar,
             hoop,
+            stretch,
             material,
             status,
         }

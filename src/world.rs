@@ -1477,6 +1477,7 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
         g: &mut GridCols<'_, D>,
     ) {
         let report = &mut *self.report;
+        p.freeze_domain_stretch::<K, S>(count);
         // Heat and diffusion first, with the particles where the substep starts.
         for (f, t) in ctx.transport.iter().enumerate() {
             if let Some(t) = t {
@@ -1547,6 +1548,7 @@ impl Kernel for PhaseRun {
         match self.phase {
             Phase::ResetGrid => grid_update::reset(g),
             Phase::ParticleToGrid => {
+                p.freeze_domain_stretch::<K, S>(count);
                 grid_update::reset(g);
                 I::scatter::<D, K, S, { mode::ALL }, false, false>(s, ctx, p, count, g);
             }

@@ -344,17 +344,13 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
     let s: [Lane; D] = core::array::from_fn(|a| {
         core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
     });
-    let mut stretch = [[1.0; W]; D];
-    if S::STRETCHES {
-        let h: LaneMat<D> =
-            core::array::from_fn(|a| core::array::from_fn(|b| load(p.h[a][b], start)));
-        for ln in 0..W {
-            let e = crate::shape::domain_stretch::<D>(|a, b| h[a][b][ln]);
-            for a in 0..D {
-                stretch[a][ln] = e[a];
-            }
+    let stretch: [Lane; D] = core::array::from_fn(|a| {
+        if S::STRETCHES {
+            load(p.stretch[a], start)
+        } else {
+            [1.0; W]
         }
-    }
+    });
     st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
 }
 
