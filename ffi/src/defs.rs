@@ -47,6 +47,13 @@ pub enum MpmShape {
     QuadraticBspline = 2,
     /// Cubic B-spline, 4 nodes per axis.
     CubicBspline = 3,
+    /// cpGIMP (Wallstedt and Guilkey 2008): uGIMP whose particle domain deforms with the
+    /// material. On each axis the domain's half-width is uGIMP's,
+    /// `cell_size / (2 * particles_per_cell)`, times the deformed domain's extent along that
+    /// axis (the row sum of |F|), clamped between a tenth of uGIMP's and half a cell so that it
+    /// keeps to 3 nodes per axis. Margin 1 cell, as uGIMP; each pass also reads the
+    /// deformation gradient.
+    CpGimp = 4,
 }
 
 /// Where the stress update sits in a step (`mpm_gimp::UpdateOrder`).

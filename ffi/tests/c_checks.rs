@@ -371,8 +371,10 @@ fn check_misuse(name: &str, flags: &[&str]) {
 /// output untouched, and every status string is a description ("unknown status" for values
 /// outside the enum, never NULL). Accepted controls: an axisymmetric definition of each family
 /// with its axis in place, and a GIMP one whose world fills a box on the axis, steps, and has
-/// the hoop column in its view (finite, part of J, NULL in every other world). The program ends
-/// with "all N misuse checks passed".
+/// the hoop column in its view (finite, part of J, NULL in every other world). Shape 4 (cpGIMP)
+/// is accepted and 5 refused; cpGIMP worlds in 2D and 3D fill a box and step with finite
+/// positions, velocities, stress, J and diagnostics, the 2D one ending elsewhere than under
+/// GIMP, and keep GIMP's one-cell margin. The program ends with "all N misuse checks passed".
 #[test]
 fn misuse_from_c_strict() {
     check_misuse("misuse", common::STRICT);
@@ -727,6 +729,8 @@ fn rust_same_state() -> String {
     effects2d(&mut t);
     effects3d(&mut t);
     axisym2d(&mut t);
+    cpgimp(&mut t, Dimension::Plane2D);
+    cpgimp(&mut t, Dimension::ThreeD);
 
     t.line("end");
     t.0
@@ -959,22 +963,83 @@ fn axisym2d(t: &mut Text) {
     t.frames(&mut w, 12, 0.0078125);
 }
 
-/// Expectation: the five scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a
-/// stick floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards
-/// an open face, quadratic B-spline and USL; a 2D block with every effect declared, heat
-/// conduction and diffusion in a conducting material with temperatures set included, whose
-/// forces, tractions and concentrations change halfway; a 3D sphere with APIC, damping,
-/// particle forces, tractions and a body force, cubic B-spline and USF; an axisymmetric
-/// cylinder on the axis that moves outwards, expands with temperature and swells with
-/// concentration, GIMP and MUSL) leave, after every seeding call, every change of an effect
-/// and every step, the same world bytes, copied-out columns (positions, velocities, stress, J,
-/// status), view columns (mass, V0, material, H, forces, damping, APIC moments, temperatures
-/// and concentrations and their grid values, the hoop stretch, and which pointers are NULL),
-/// traction counts, thermostat alpha, diagnostics (angular momentum included, bit for bit) and
-/// step reports through the C interface as through the Rust kernel API. The temperatures
-/// change in every step and the concentrations in every step after they are set, so the
-/// transport is part of what is compared; so does the hoop stretch of the axisymmetric scene
-/// (and it is NULL in every other scene).
+/// The scenes cpgimp2d and cpgimp3d of `tests/c/same_state.c`.
+fn cpgimp(t: &mut Text, dimension: Dimension) {
+    let three = dimension == Dimension::ThreeD;
+    t.line(if three {
+        "scene cpgimp3d"
+    } else {
+        "scene cpgimp2d"
+    });
+    let mut faces = [Boundary::Slip; 6];
+    faces[Face::YMin as usize] = Boundary::Stick;
+    let def = WorldDef {
+        dimension,
+        cells: if three { [8, 8, 8] } else { [16, 16, 1] },
+        cell_size: 0.0625,
+        particle_capacity: 256,
+        material_capacity: 1,
+        shape: ShapeFunction::CpGimp,
+        update_order: if three {
+            UpdateOrder::Usf
+        } else {
+            UpdateOrder::Usl
+        },
+        transfer: if three {
+            Transfer::Apic
+        } else {
+            Transfer::Flip
+        },
+        faces,
+        ..WorldDef::DEFAULT
+    };
+    let mut storage = Vec::new();
+    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
+    t.state("empty", &w);
+    let soft = MaterialDef {
+        youngs_modulus: 500000.0,
+        poisson_ratio: 0.25,
+        density: 750.0,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&soft).expect("soft");
+    t.line(format!("materials {id}"));
+    let (lo, hi, v) = if three {
+        (
+            Vec3::splat(0.125),
+            Vec3::splat(0.25),
+            Vec3::new(0.5, -2.0, 0.25),
+        )
+    } else {
+        (
+            Vec3::new(0.25, 0.125, 0.0),
+            Vec3::new(0.5, 0.375, 0.0),
+            Vec3::new(0.5, -2.0, 0.0),
+        )
+    };
+    let ids = w.fill_box(lo, hi, id, v).expect("box");
+    t.seed("box", ids);
+    t.state("after box", &w);
+    t.frames(&mut w, if three { 12 } else { 16 }, 0.0078125);
+}
+
+/// Expectation: the seven scenes of `tests/c/same_state.c` (a 2D block and disk dropped on a stick
+/// floor with particles from arrays, GIMP and MUSL; a 3D sphere and a box moving towards an open
+/// face, quadratic B-spline and USL; a 2D block with every effect declared, heat conduction and
+/// diffusion in a conducting material with temperatures set included, whose forces, tractions and
+/// concentrations change halfway; a 3D sphere with APIC, damping, particle forces, tractions and a
+/// body force, cubic B-spline and USF; an axisymmetric cylinder on the axis that moves outwards,
+/// expands with temperature and swells with concentration, GIMP and MUSL; a soft block thrown onto
+/// a stick floor, where it squashes, in 2D with cpGIMP and USL and in 3D with cpGIMP, APIC and USF)
+/// leave, after every seeding call, every change of an effect and every step, the same world bytes,
+/// copied-out columns (positions, velocities, stress, J, status), view columns (mass, V0, material,
+/// H, forces, damping, APIC moments, temperatures and concentrations and their grid values, the
+/// hoop stretch, and which pointers are NULL), traction counts, thermostat alpha, diagnostics
+/// (angular momentum included, bit for bit) and step reports through the C interface as through the
+/// Rust kernel API. The temperatures change in every step and the concentrations in every step
+/// after they are set, so the transport is part of what is compared; so does the hoop stretch of
+/// the axisymmetric scene (and it is NULL in every other scene). The cpGIMP blocks deform (J moves
+/// away from 1), so the stretched particle domains are part of what is compared.
 #[test]
 fn same_state_through_c_and_rust() {
     let exe = common::build(
@@ -1028,6 +1093,20 @@ fn same_state_through_c_and_rust() {
         }
     }
     assert!(hoop_lines > 0, "no hoop lines");
+    for scene in ["cpgimp2d", "cpgimp3d"] {
+        let jacobians: Vec<&str> = c
+            .lines()
+            .skip_while(|l| *l != format!("scene {scene}"))
+            .skip(1)
+            .take_while(|l| !l.starts_with("scene ") && *l != "end")
+            .filter_map(|l| l.split_once(": jacobians ").map(|(_, h)| h))
+            .collect();
+        let after_box = jacobians.get(1).expect("J after the box");
+        assert!(
+            jacobians.len() > 3 && jacobians.last() != Some(after_box),
+            "{scene}: J did not change: {jacobians:?}"
+        );
+    }
 }
 
 /// The hash of `column` on the `kind` line (`transport` or `hoop`) after each step of `scene`.
@@ -1179,6 +1258,54 @@ fn defaults_match_the_kernel() {
     );
     let bits = |x: &MpmWorldDef| format!("{x:?}");
     assert_eq!(bits(&back), bits(&d));
+}
+
+/// Expectation: every `MpmShape` value is the kernel's shape function of the same name (cpGIMP
+/// included) and the next value is none; a world made from C with each shape stores the
+/// kernel's, and `mpm_world_get_def` gives the C value back.
+#[test]
+fn shapes_match_the_kernel() {
+    #[cfg(not(feature = "f64"))]
+    let base = mpm_world_def_default_f32();
+    #[cfg(feature = "f64")]
+    let base = mpm_world_def_default_f64();
+    let shapes = [
+        MpmShape::Linear,
+        MpmShape::Gimp,
+        MpmShape::QuadraticBspline,
+        MpmShape::CubicBspline,
+        MpmShape::CpGimp,
+    ];
+    for (code, shape) in shapes.into_iter().enumerate() {
+        assert_eq!(shape as usize, code);
+        let kernel_shape = ShapeFunction::from_code(shape as u32).expect("a kernel shape");
+        assert_eq!(format!("{shape:?}"), format!("{kernel_shape:?}"));
+        let mut d = base;
+        d.shape = shape as u32;
+        assert_eq!(stored_def(&d).shape, kernel_shape, "{shape:?}");
+        let mut req = MpmMemoryRequirements::default();
+        // SAFETY: valid pointers to locals.
+        assert_eq!(
+            unsafe { mpm_memory_requirements(&d, &mut req) },
+            MpmStatus::Ok
+        );
+        let mut storage = vec![0u8; req.bytes + req.align];
+        let offset = storage.as_ptr().align_offset(req.align);
+        let mut world = core::ptr::null_mut();
+        let mut back = base;
+        // SAFETY: the memory holds `req.bytes` bytes at the required alignment; `back` is a
+        // local.
+        unsafe {
+            let mem = storage[offset..].as_mut_ptr();
+            assert_eq!(
+                mpm_world_init(&d, mem.cast(), req.bytes, &mut world),
+                MpmStatus::Ok
+            );
+            assert_eq!(mpm_world_get_def(world, &mut back), MpmStatus::Ok);
+        }
+        assert_eq!(back.shape, shape as u32, "{shape:?}");
+    }
+    assert_eq!(ShapeFunction::from_code(shapes.len() as u32), None);
 }
 
 /// Expectation: the status numbers of the kernel's errors are the kernel's own, and
@@ -1607,8 +1734,8 @@ fn effects_definition_round_trip() {
 }
 
 /// Expectation: an axisymmetric definition from C whose lower x face is a wall at the axis
-/// (`origin.x = -margin_cells * cell_size`: one cell for GIMP and the B-splines, none for
-/// linear hats) makes a world whose stored definition is the kernel's; the axis a cell off or
+/// (`origin.x = -margin_cells * cell_size`: one cell for GIMP, cpGIMP and the B-splines, none
+/// for linear hats) makes a world whose stored definition is the kernel's; the axis a cell off or
 /// an open lower x face is `MPM_STATUS_INVALID_AXIS`, for every family. The view's `hoop`
 /// pointer is the kernel's hoop column (NULL in plane strain), and `MPM_STATUS_INVALID_AXIS`
 /// keeps the kernel's number.
@@ -1633,6 +1760,7 @@ fn axisymmetric_definition_and_hoop_column() {
         MpmShape::Gimp,
         MpmShape::QuadraticBspline,
         MpmShape::CubicBspline,
+        MpmShape::CpGimp,
     ] {
         let kernel_shape = ShapeFunction::from_code(shape as u32).expect("a shape");
         let axis = -(kernel_shape.margin_cells() as Real) * c.cell_size;

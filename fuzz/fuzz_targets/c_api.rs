@@ -1,13 +1,12 @@
-//! Random sequences of C interface calls (init with arbitrary dimension, transfer and effects,
-//! axisymmetric worlds with their axis mostly in place, heat conduction and diffusion
-//! included; add material, thermal expansion and swelling included; add particles, seed, set
-//! particle forces, damping, temperatures, concentrations and sources, add and clear
-//! tractions, step, read) with arbitrary values, through the same `extern "C"` functions a C
-//! host calls. After every call, either it returned a status and the world's bytes are
-//! unchanged, or it succeeded and every particle value (forces, damping, APIC moments,
-//! temperatures and concentrations and their grid values, hoop stretches included) is finite
-//! and every position inside the grid box. Single precision (the default build of the
-//! library).
+//! Random sequences of C interface calls (init with arbitrary dimension, shape (cpGIMP included),
+//! transfer and effects, axisymmetric worlds with their axis mostly in place, heat conduction and
+//! diffusion included; add material, thermal expansion and swelling included; add particles, seed,
+//! set particle forces, damping, temperatures, concentrations and sources, add and clear tractions,
+//! step, read) with arbitrary values, through the same `extern "C"` functions a C host calls. After
+//! every call, either it returned a status and the world's bytes are unchanged, or it succeeded and
+//! every particle value (forces, damping, APIC moments, temperatures and concentrations and their
+//! grid values, hoop stretches included) is finite and every position inside the grid box. Single
+//! precision (the default build of the library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -251,7 +250,7 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     }
     def.particle_capacity = inp.u32_below(300) + if inp.byte() % 32 == 0 { 0 } else { 1 };
     def.material_capacity = inp.u32_below(4);
-    def.shape = inp.u32_below(5);
+    def.shape = inp.u32_below(6); // 0..=4 the shapes (cpGIMP 4), 5 out of range
     def.particles_per_cell = inp.u32_below(5);
     def.flip_beta = inp.real_in(0.0, 1.0);
     def.update_order = inp.u32_below(4);

@@ -912,8 +912,8 @@ static void effects_def_misuse(void) {
 }
 
 /* Axisymmetric definitions: the lower x face must be a wall (stick or slip) whose plane is the
- * axis r = 0, origin.x = -margin * cell_size (1 cell for GIMP and the B-splines, none for
- * linear hats); anything else is MPM_STATUS_INVALID_AXIS. */
+ * axis r = 0, origin.x = -margin * cell_size (1 cell for GIMP, cpGIMP and the B-splines, none
+ * for linear hats); anything else is MPM_STATUS_INVALID_AXIS. */
 static void axisymmetric_def_misuse(void) {
     const MpmWorldDef a = def_axisym();
     MpmWorldDef d;
@@ -942,6 +942,8 @@ static void axisymmetric_def_misuse(void) {
              (d.shape = MPM_SHAPE_QUADRATIC_BSPLINE, d.origin.x = R(0.0)));
     BAD_AXIS("init: axisymmetric cubic B-spline, origin.x 0",
              (d.shape = MPM_SHAPE_CUBIC_BSPLINE, d.origin.x = R(0.0)));
+    BAD_AXIS("init: axisymmetric cpGIMP, origin.x 0",
+             (d.shape = MPM_SHAPE_CP_GIMP, d.origin.x = R(0.0)));
     BAD_AXIS("init: axisymmetric without effects, origin.x 0",
              (d.effects = g_def2.effects, d.origin.x = R(0.0)));
 #undef BAD_AXIS
@@ -968,6 +970,7 @@ static void axisymmetric_def_misuse(void) {
               d.shape = MPM_SHAPE_QUADRATIC_BSPLINE);
     GOOD_AXIS("init: axisymmetric cubic B-spline, origin.x -1 cell",
               d.shape = MPM_SHAPE_CUBIC_BSPLINE);
+    GOOD_AXIS("init: axisymmetric cpGIMP, origin.x -1 cell", d.shape = MPM_SHAPE_CP_GIMP);
     GOOD_AXIS("init: axisymmetric APIC", d.transfer = MPM_TRANSFER_APIC);
     GOOD_AXIS("init: axisymmetric without effects", d.effects = g_def2.effects);
 #undef GOOD_AXIS
@@ -981,6 +984,7 @@ static void axisymmetric_def_misuse(void) {
 
 static void init_misuse(void) {
     MpmWorldDef d;
+    MpmMemoryRequirements req;
     size_t total;
     unsigned k;
     static const uint32_t bad_enum[] = {0xFFFFFFFFu, 0x80000000u, 7u};
@@ -1052,8 +1056,13 @@ static void init_misuse(void) {
     d.dimension = 5;
     init_refused("init: dimension 5", MPM_STATUS_INVALID_ENUM, &d);
     d = g_def2;
-    d.shape = 4;
-    init_refused("init: shape 4", MPM_STATUS_INVALID_ENUM, &d);
+    d.shape = 5;
+    init_refused("init: shape 5", MPM_STATUS_INVALID_ENUM, &d);
+    d.shape = MPM_SHAPE_CP_GIMP;
+    ACCEPTED("init: shape 4 (cpGIMP)", 0, mpm_memory_requirements(&d, &req));
+    d.cells[0] = 3;
+    init_refused("init: cpGIMP, cells[0] 3 (below its minimum, as GIMP's)",
+                 MPM_STATUS_INVALID_CELL_COUNT, &d);
     d = g_def2;
     d.update_order = 3;
     init_refused("init: update_order 3", MPM_STATUS_INVALID_ENUM, &d);
@@ -2175,6 +2184,130 @@ static void axisymmetric_misuse(void) {
     expect_true("axisymmetric: the step changed the hoop stretches", moved);
 }
 
+/* A box of `def` (64 particles in 2D, 32 in 3D) of the default material, moving at `v` towards
+ * the stick floor, stepped 16 times by 1/256 s in a world of its own (not tracked): every call
+ * is accepted, the definition reads back with its shape, no particle is frozen, and the
+ * positions, velocities, stress, J (> 0) and diagnostics are finite. The positions go to
+ * `pos` (6 * BATCH_MAX values), their number to `*n_pos`. */
+static void step_box(const char *label, MpmWorldDef def, MpmVec3 lo, MpmVec3 hi, MpmVec3 v,
+                     size_t want, mpm_real *pos, size_t *n_pos) {
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmMemoryRequirements req;
+    MpmWorldDef back;
+    MpmWorld *w = NULL;
+    MpmIdRange ids;
+    MpmStepReport report;
+    MpmDiagnostics diag;
+    Block mem;
+    mpm_real vel[6 * BATCH_MAX], stress[6 * BATCH_MAX], jac[BATCH_MAX];
+    size_t n_vel = 0, n_stress = 0, n_jac = 0, i;
+    const size_t d = def.dimension == MPM_DIMENSION_SPACE3D ? 3 : 2;
+    char name[128];
+    uint32_t id = 0, frozen = 0;
+    int step, finite;
+
+    snprintf(name, sizeof name, "%s: mpm_memory_requirements", label);
+    ACCEPTED(name, 0, mpm_memory_requirements(&def, &req));
+    mem = block_new(req.bytes, req.align, 0);
+    snprintf(name, sizeof name, "%s: init", label);
+    ACCEPTED(name, 0, mpm_world_init(&def, mem.at, req.bytes, &w));
+    snprintf(name, sizeof name, "%s: get_def", label);
+    ACCEPTED(name, 0, mpm_world_get_def(w, &back));
+    snprintf(name, sizeof name, "%s: the definition reads back with its shape", label);
+    expect_true(name, back.shape == def.shape && back.dimension == def.dimension);
+    snprintf(name, sizeof name, "%s: material", label);
+    ACCEPTED(name, 0, mpm_world_add_material(w, &m, &id));
+    snprintf(name, sizeof name, "%s: fill_box", label);
+    ACCEPTED(name, 0, mpm_world_fill_box(w, lo, hi, id, v, &ids));
+    snprintf(name, sizeof name, "%s: the box has %lu particles", label, (unsigned long)want);
+    expect_true(name, ids.first == 0 && ids.count == want);
+    for (step = 0; step < 16; step++) {
+        if (mpm_world_step(w, R(1.0 / 256.0), &report) != MPM_STATUS_OK) {
+            fail(label, "a step was refused");
+        }
+        frozen += report.frozen;
+    }
+    snprintf(name, sizeof name, "%s: 16 steps froze no particle", label);
+    expect_true(name, frozen == 0);
+    snprintf(name, sizeof name, "%s: copy_positions", label);
+    ACCEPTED(name, 0, mpm_world_copy_positions(w, pos, 6 * BATCH_MAX, n_pos));
+    snprintf(name, sizeof name, "%s: copy_velocities", label);
+    ACCEPTED(name, 0, mpm_world_copy_velocities(w, vel, 6 * BATCH_MAX, &n_vel));
+    snprintf(name, sizeof name, "%s: copy_stress", label);
+    ACCEPTED(name, 0, mpm_world_copy_stress(w, stress, 6 * BATCH_MAX, &n_stress));
+    snprintf(name, sizeof name, "%s: copy_jacobians", label);
+    ACCEPTED(name, 0, mpm_world_copy_jacobians(w, jac, BATCH_MAX, &n_jac));
+    snprintf(name, sizeof name, "%s: diagnostics", label);
+    ACCEPTED(name, 0, mpm_world_diagnostics(w, &diag));
+    finite = *n_pos == d * want && n_vel == d * want && n_stress == (d == 3 ? 6 : 4) * want &&
+             n_jac == want;
+    for (i = 0; finite && i < *n_pos; i++) {
+        finite &= isfinite(pos[i]) && isfinite(vel[i]);
+    }
+    for (i = 0; finite && i < n_stress; i++) {
+        finite &= isfinite(stress[i]);
+    }
+    for (i = 0; finite && i < n_jac; i++) {
+        finite &= isfinite(jac[i]) && jac[i] > R(0.0);
+    }
+    finite &= diag.step_count == 16 && isfinite(diag.kinetic) && isfinite(diag.strain) &&
+              isfinite(diag.momentum[0]) && isfinite(diag.momentum[1]) &&
+              isfinite(diag.momentum[2]) && isfinite(diag.center_of_mass[1]);
+    snprintf(name, sizeof name, "%s: positions, velocities, stress, J and diagnostics finite",
+             label);
+    expect_true(name, finite);
+    free(mem.raw);
+}
+
+/* cpGIMP (shape 4): 2D and 3D worlds fill a box, which falls onto the floor and deforms, and
+ * step with finite results; the same 2D box under GIMP ends elsewhere (cpGIMP's domains follow
+ * the deformation, so shape 4 is not read as GIMP). Its margin is GIMP's one cell. */
+static void cpgimp_world(void) {
+    MpmWorldDef d2 = def_2d(), d3 = def_3d();
+    mpm_real cp[6 * BATCH_MAX], gimp[6 * BATCH_MAX];
+    size_t n_cp = 0, n_gimp = 0, i;
+    int same = 1;
+    Block mem;
+    MpmMemoryRequirements req;
+    MpmWorld *w = NULL;
+    uint32_t id = 0;
+    MpmMaterialDef m = mpm_material_def_default();
+
+    d2.shape = MPM_SHAPE_CP_GIMP;
+    d3.shape = MPM_SHAPE_CP_GIMP;
+    step_box("cpGIMP 3D", d3, v3(0.1, 0.1, 0.1), v3(0.2, 0.2, 0.15), v3(0.5, -1.0, 0.25), 32,
+             cp, &n_cp);
+    step_box("cpGIMP 2D", d2, v3(0.4, 0.1, 0), v3(0.6, 0.3, 0), v3(0.25, -1.0, 0), 64, cp,
+             &n_cp);
+    d2.shape = MPM_SHAPE_GIMP;
+    step_box("GIMP 2D", d2, v3(0.4, 0.1, 0), v3(0.6, 0.3, 0), v3(0.25, -1.0, 0), 64, gimp,
+             &n_gimp);
+    for (i = 0; same && i < n_cp && n_cp == n_gimp; i++) {
+        same = cp[i] == gimp[i];
+    }
+    expect_true("cpGIMP 2D: the positions differ from GIMP's", n_cp == n_gimp && !same);
+
+    /* The margin: one cell at every face, as GIMP's. */
+    d2.shape = MPM_SHAPE_CP_GIMP;
+    if (mpm_memory_requirements(&d2, &req) != MPM_STATUS_OK) {
+        fail("cpGIMP margin", "mpm_memory_requirements refused the definition");
+    }
+    mem = block_new(req.bytes, req.align, 0);
+    if (mpm_world_init(&d2, mem.at, req.bytes, &w) != MPM_STATUS_OK ||
+        mpm_world_add_material(w, &m, &id) != MPM_STATUS_OK) {
+        fail("cpGIMP margin", "the world or its material was refused");
+    }
+    REFUSED("cpGIMP 2D: fill_box reaching into the boundary margin",
+            MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_box(w, v3(0.02, 0.4, 0), v3(0.2, 0.5, 0), id, v3(0, 0, 0),
+                               OUT(MpmIdRange)));
+    REFUSED("cpGIMP 2D: fill_box reaching into the upper margin",
+            MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_fill_box(w, v3(0.4, 0.8, 0), v3(0.6, 0.98, 0), id, v3(0, 0, 0),
+                               OUT(MpmIdRange)));
+    free(mem.raw);
+}
+
 /* Filling the tables to capacity, then one more. */
 static void capacity_misuse(void) {
     MpmMaterialDef m = mpm_material_def_default();
@@ -2425,6 +2558,7 @@ int main(void) {
     effects_misuse();
     transport_misuse();
     axisymmetric_misuse();
+    cpgimp_world();
     copy_misuse();
     capacity_misuse();
     status_strings();

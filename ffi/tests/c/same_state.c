@@ -24,6 +24,9 @@
  *   axisym2d:  an axisymmetric cylinder on the axis, moving outwards, that expands with its
  *              temperatures (set, and conducted towards a fixed floor) and swells with its
  *              concentrations (diffusing in from a fixed outer face); GIMP, MUSL.
+ *   cpgimp2d:  a soft block thrown onto a stick floor, where it squashes (so that its particle
+ *              domains stretch); cpGIMP, USL.
+ *   cpgimp3d:  a soft box thrown onto a stick floor in 3D; cpGIMP, APIC, USF.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -631,12 +634,59 @@ static void axisym2d(void) {
     free(raw);
 }
 
+/* cpGIMP's domains follow F: a soft block squashed on the floor. */
+static void cpgimp(MpmDimension dimension) {
+    MpmWorldDef def = mpm_world_def_default();
+    MpmMaterialDef soft = mpm_material_def_default();
+    uint32_t id = 0;
+    MpmIdRange ids;
+    void *raw;
+    MpmWorld *w;
+    const int three = dimension == MPM_DIMENSION_SPACE3D;
+
+    printf(three ? "scene cpgimp3d\n" : "scene cpgimp2d\n");
+    def.dimension = dimension;
+    def.cells[0] = three ? 8 : 16;
+    def.cells[1] = three ? 8 : 16;
+    def.cells[2] = three ? 8 : 1;
+    def.cell_size = (mpm_real)0.0625;
+    def.particle_capacity = 256;
+    def.material_capacity = 1;
+    def.shape = MPM_SHAPE_CP_GIMP;
+    def.update_order = three ? MPM_UPDATE_ORDER_USF : MPM_UPDATE_ORDER_USL;
+    def.transfer = three ? MPM_TRANSFER_APIC : MPM_TRANSFER_FLIP;
+    def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    scratch(def.particle_capacity);
+    w = new_world(&def, &raw);
+    print_state("empty", w);
+
+    soft.youngs_modulus = (mpm_real)500000.0;
+    soft.poisson_ratio = (mpm_real)0.25;
+    soft.density = (mpm_real)750.0;
+    CALL("add soft", mpm_world_add_material(w, &soft, &id));
+    printf("materials %lu\n", (unsigned long)id);
+    if (three) {
+        CALL("fill_box", mpm_world_fill_box(w, v3(0.125f, 0.125f, 0.125f),
+                                            v3(0.25f, 0.25f, 0.25f), id,
+                                            v3(0.5f, -2.0f, 0.25f), &ids));
+    } else {
+        CALL("fill_box", mpm_world_fill_box(w, v3(0.25f, 0.125f, 0), v3(0.5f, 0.375f, 0), id,
+                                            v3(0.5f, -2.0f, 0), &ids));
+    }
+    print_ids("box", ids);
+    print_state("after box", w);
+    step_frames(w, three ? 12 : 16, (mpm_real)0.0078125);
+    free(raw);
+}
+
 int main(void) {
     plane2d();
     space3d();
     effects2d();
     effects3d();
     axisym2d();
+    cpgimp(MPM_DIMENSION_PLANE2D);
+    cpgimp(MPM_DIMENSION_SPACE3D);
     free(g_reals);
     free(g_ids);
     printf("end\n");
