@@ -154,7 +154,7 @@ impl Shape1D<3> for Gimp {
 
 /// cpGIMP (Wallstedt and Guilkey 2008): uGIMP whose particle domain is convected with the
 /// deformation. A particle's half-width along an axis is the undeformed `l_0 = 1 / (2 n)`
-/// times its domain's stretch there ([`crate::shape::domain_stretch`]), kept within
+/// times its domain's stretch there (the deformed extent `sum_b |F_ab|`), kept within
 /// `[l_0 / 10, 1 / 2]` cell units: the upper bound keeps the domain within the 3 nodes of the
 /// stencil (the closed form's range), the lower one keeps the weights' derivatives bounded.
 #[derive(Clone, Copy, Debug)]
