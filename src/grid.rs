@@ -216,6 +216,29 @@ impl<const D: usize> Geom<D> {
         }
     }
 
+    /// Axisymmetric: adds what the particles put on each node before the axis to its image,
+    /// times `sign` (-1 for a radial component, 1 otherwise), and empties it. Nothing
+    /// otherwise. Every index is below the node count, which every column exceeds: the bound
+    /// checks never fail.
+    pub fn fold_mirror(&self, col: &mut [Real], sign: Real) {
+        self.for_each_mirror(|ghost, image| {
+            if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
+                col[image] += sign * v;
+                col[ghost] = 0.0;
+            }
+        });
+    }
+
+    /// Axisymmetric: each node before the axis takes its image's value times `sign`. Nothing
+    /// otherwise.
+    pub fn mirror(&self, col: &mut [Real], sign: Real) {
+        self.for_each_mirror(|ghost, image| {
+            if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
+                col[ghost] = sign * v;
+            }
+        });
+    }
+
     /// Calls `f` with the flat index of every node whose index along `axis` is `layer`.
     fn for_each_node_in_plane(&self, axis: usize, layer: usize, mut f: impl FnMut(usize)) {
         let total: usize = self.nodes.iter().product();

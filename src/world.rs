@@ -5,7 +5,7 @@ use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, W
 use crate::effects::Feedback;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
-use crate::material::{elastic_part, Deformation};
+use crate::material::{eigenstrain_part, elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
@@ -914,75 +914,66 @@ impl<'a> World<'a> {
         let def = self.def();
         let layout = Layout::of(&def);
         let ppc = def.particles_per_cell;
+        let run = (dt, time);
+        // One arm per shape family, each family's stencil width `K` fixed with it; `$wrap`
+        // turns the family into the shape the step uses.
+        macro_rules! by_shape {
+            ($d:literal, $wrap:expr) => {
+                match def.shape {
+                    ShapeFunction::Linear => {
+                        self.run::<$d, 2, _>($wrap(Linear, &def), run, &def, &layout, kernel, simd)
+                    }
+                    ShapeFunction::Gimp => self.run::<$d, 3, _>(
+                        $wrap(Gimp::new(ppc), &def),
+                        run,
+                        &def,
+                        &layout,
+                        kernel,
+                        simd,
+                    ),
+                    ShapeFunction::QuadraticBspline => self.run::<$d, 3, _>(
+                        $wrap(QuadraticBspline, &def),
+                        run,
+                        &def,
+                        &layout,
+                        kernel,
+                        simd,
+                    ),
+                    ShapeFunction::CubicBspline => self.run::<$d, 4, _>(
+                        $wrap(CubicBspline, &def),
+                        run,
+                        &def,
+                        &layout,
+                        kernel,
+                        simd,
+                    ),
+                    ShapeFunction::CpGimp => self.run::<$d, 3, _>(
+                        $wrap(CpGimp::new(ppc), &def),
+                        run,
+                        &def,
+                        &layout,
+                        kernel,
+                        simd,
+                    ),
+                }
+            };
+        }
+        // The family as it is, or wrapped in the axisymmetric form.
+        fn plain<S>(shape: S, _: &WorldDef) -> S {
+            shape
+        }
         #[cfg(feature = "effects")]
         if def.dimension == Dimension::Axisymmetric2D {
-            use crate::shape::Axisymmetric;
-            // The family wrapped in the axisymmetric form.
-            fn axi<S>(inner: S, def: &WorldDef) -> Axisymmetric<S> {
+            fn axi<S>(inner: S, def: &WorldDef) -> crate::shape::Axisymmetric<S> {
                 let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
-                Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
+                crate::shape::Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
             }
-            let run = (dt, time);
-            match def.shape {
-                ShapeFunction::Linear => {
-                    self.run::<2, 2, _>(axi(Linear, &def), run, &def, &layout, kernel, simd)
-                }
-                ShapeFunction::Gimp => {
-                    self.run::<2, 3, _>(axi(Gimp::new(ppc), &def), run, &def, &layout, kernel, simd)
-                }
-                ShapeFunction::QuadraticBspline => self.run::<2, 3, _>(
-                    axi(QuadraticBspline, &def),
-                    run,
-                    &def,
-                    &layout,
-                    kernel,
-                    simd,
-                ),
-                ShapeFunction::CubicBspline => {
-                    self.run::<2, 4, _>(axi(CubicBspline, &def), run, &def, &layout, kernel, simd)
-                }
-                ShapeFunction::CpGimp => self.run::<2, 3, _>(
-                    axi(CpGimp::new(ppc), &def),
-                    run,
-                    &def,
-                    &layout,
-                    kernel,
-                    simd,
-                ),
-            }
-            return;
+            return by_shape!(2, axi);
         }
-        match (def.axes(), def.shape) {
-            (2, ShapeFunction::Linear) => {
-                self.run::<2, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
-            }
-            (2, ShapeFunction::Gimp) => {
-                self.run::<2, 3, _>(Gimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
-            }
-            (2, ShapeFunction::QuadraticBspline) => {
-                self.run::<2, 3, _>(QuadraticBspline, (dt, time), &def, &layout, kernel, simd)
-            }
-            (2, ShapeFunction::CubicBspline) => {
-                self.run::<2, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
-            }
-            (2, ShapeFunction::CpGimp) => {
-                self.run::<2, 3, _>(CpGimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
-            }
-            (_, ShapeFunction::Linear) => {
-                self.run::<3, 2, _>(Linear, (dt, time), &def, &layout, kernel, simd)
-            }
-            (_, ShapeFunction::Gimp) => {
-                self.run::<3, 3, _>(Gimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
-            }
-            (_, ShapeFunction::QuadraticBspline) => {
-                self.run::<3, 3, _>(QuadraticBspline, (dt, time), &def, &layout, kernel, simd)
-            }
-            (_, ShapeFunction::CubicBspline) => {
-                self.run::<3, 4, _>(CubicBspline, (dt, time), &def, &layout, kernel, simd)
-            }
-            (_, ShapeFunction::CpGimp) => {
-                self.run::<3, 3, _>(CpGimp::new(ppc), (dt, time), &def, &layout, kernel, simd)
-            }
+        if def.axes() == 2 {
+            by_shape!(2, plain)
+        } else {
+            by_shape!(3, plain)
         }
     }
 
@@ -1405,16 +1396,18 @@ impl<'a> WorldRef<'a> {
     }
 }
 
-/// Largest value of `col` over active particles (0 for an empty column).
 /// The isotropic eigenstrain `d` of particle `i` of material `rec` (thermal expansion and
 /// swelling, from the grid values at the particle; 0 for a field not declared), as the stress
 /// update takes it out.
 fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> Real {
-    let at = |col: &[Real], reference: Real| col.get(i).map_or(0.0, |&v| v - reference);
-    rec.thermal_expansion * at(view.grid_temperature, rec.reference_temperature)
-        + rec.swelling * at(view.grid_concentration, rec.reference_concentration)
+    [view.grid_temperature, view.grid_concentration]
+        .iter()
+        .enumerate()
+        .filter_map(|(f, col)| col.get(i).map(|&v| eigenstrain_part(rec, f, v)))
+        .sum()
 }
 
+/// Largest value of `col` over active particles (0 for an empty column).
 fn view_max(col: &[Real], status: &[u32]) -> f64 {
     col.iter()
         .zip(status)

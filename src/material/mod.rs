@@ -69,6 +69,18 @@ pub(crate) fn elastic_part<const D: usize>(f: &Deformation<D>, d: Real) -> (Defo
     (e, cube)
 }
 
+/// The part of the isotropic eigenstrain `d` (`F_0 = (1 + d) I`) of a particle of material
+/// `r` that transported field `field` gives at the grid value `value` there: thermal expansion
+/// `alpha (T - T_0)` for heat (0), swelling `beta (c - c_0)` for diffusion (1).
+#[inline(always)]
+pub(crate) fn eigenstrain_part(r: &MaterialRecord, field: usize, value: Real) -> Real {
+    if field == 0 {
+        r.thermal_expansion * (value - r.reference_temperature)
+    } else {
+        r.swelling * (value - r.reference_concentration)
+    }
+}
+
 /// Parameters the models need, taken from a material record once per step.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Params {

@@ -33,7 +33,8 @@ use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
 use crate::material::{
-    elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation, Params,
+    eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation,
+    Params,
 };
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
@@ -620,11 +621,7 @@ fn eigenstrain<const D: usize>(
         let value = load(p.scalar[f][1], start);
         for ln in 0..W {
             if let Some(r) = ctx.materials.get(ids[ln]) {
-                d[ln] += if f == 0 {
-                    r.thermal_expansion * (value[ln] - r.reference_temperature)
-                } else {
-                    r.swelling * (value[ln] - r.reference_concentration)
-                };
+                d[ln] += eigenstrain_part(r, f, value[ln]);
             }
         }
     }

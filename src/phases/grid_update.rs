@@ -35,49 +35,27 @@ fn divide_by_mass<const D: usize>(
     }
 }
 
-/// Axisymmetric: adds what the particles put on the nodes before the axis to their mirror
-/// images (the radial component with its sign flipped), and empties them (see
-/// [`crate::grid::Geom::for_each_mirror`]). Nothing otherwise.
-fn fold_mirror<const D: usize>(
-    ctx: &Ctx<'_, D>,
-    mass: Option<&mut [Real]>,
-    cols: &mut [&mut [Real]; D],
-) {
-    let mut mass = mass;
-    ctx.geom.for_each_mirror(|ghost, image| {
-        // Both below the node count, which every column exceeds: the checks never fail.
-        if let Some(m) = mass.as_deref_mut().filter(|m| image < m.len()) {
-            m[image] += m[ghost];
+/// Axisymmetric: folds the nodes before the axis onto their images, or reads the images back
+/// into them ([`crate::grid::Geom::fold_mirror`], [`crate::grid::Geom::mirror`]), for every
+/// component of a nodal vector, the radial one with its sign flipped.
+fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], fold: bool) {
+    for (a, col) in cols.iter_mut().enumerate() {
+        let sign = if a == 0 { -1.0 } else { 1.0 };
+        if fold {
+            ctx.geom.fold_mirror(col, sign);
+        } else {
+            ctx.geom.mirror(col, sign);
         }
-        for (a, col) in cols.iter_mut().enumerate() {
-            if image < col.len() {
-                let v = col[ghost];
-                col[image] += if a == 0 { -v } else { v };
-                col[ghost] = 0.0;
-            }
-        }
-    });
-}
-
-/// Axisymmetric: the nodes before the axis take their images' values, the radial component's
-/// sign flipped. Nothing otherwise.
-fn mirror<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D]) {
-    ctx.geom.for_each_mirror(|ghost, image| {
-        for (a, col) in cols.iter_mut().enumerate() {
-            if image < col.len() {
-                let v = col[image];
-                col[ghost] = if a == 0 { -v } else { v };
-            }
-        }
-    });
+    }
 }
 
 /// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    fold_mirror(ctx, Some(&mut *g.mass), &mut g.vel);
+    ctx.geom.fold_mirror(g.mass, 1.0);
+    mirror_vector(ctx, &mut g.vel, true);
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
-    mirror(ctx, &mut g.vel);
+    mirror_vector(ctx, &mut g.vel, false);
 }
 
 /// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), then the walls on the updated
@@ -85,7 +63,7 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>
 /// the wall's reaction `-v_i / dt`. The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    fold_mirror(ctx, None, &mut g.acc);
+    mirror_vector(ctx, &mut g.acc, true);
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
     let inv_dt = 1.0 / ctx.dt;
     ctx.geom.for_each_wall_node(|i, axes| {
@@ -96,12 +74,12 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
         }
     });
     // Past the axis the wall does not hold: those nodes mirror theirs images.
-    mirror(ctx, &mut g.acc);
+    mirror_vector(ctx, &mut g.acc, false);
 }
 
 /// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).
 pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    fold_mirror(ctx, None, &mut g.remap);
+    mirror_vector(ctx, &mut g.remap, true);
     divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
     constrain_remap(ctx, g);
 }
@@ -123,5 +101,5 @@ fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
             }
         }
     });
-    mirror(ctx, &mut g.remap);
+    mirror_vector(ctx, &mut g.remap, false);
 }

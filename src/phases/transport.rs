@@ -80,8 +80,8 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     let cutoff = ctx.mass_cutoff;
     {
         let [c_col, m_col, v_col, _] = &mut g.scalar[f];
-        fold_mirror(geom, c_col);
-        fold_mirror(geom, m_col);
+        geom.fold_mirror(c_col, 1.0);
+        geom.fold_mirror(m_col, 1.0);
         for ((v, &m), &c) in v_col.iter_mut().zip(m_col.iter()).zip(c_col.iter()) {
             *v = if c > cutoff { m / c } else { 0.0 };
         }
@@ -90,7 +90,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 *v = value;
             }
         });
-        mirror(geom, v_col);
+        geom.mirror(v_col, 1.0);
     }
     // 2. Flow.
     for i in 0..count {
@@ -124,7 +124,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
         // to its value.
         let [c_col, _, _, q_col] = &mut g.scalar[f];
-        fold_mirror(geom, q_col);
+        geom.fold_mirror(q_col, 1.0);
         for_each_face(ctx, t, |node, bc, axis, on_wall| {
             if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
             {
@@ -139,7 +139,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 *q = 0.0;
             }
         });
-        mirror(geom, q_col);
+        geom.mirror(q_col, 1.0);
     }
     // 3. FLIP update of the particles' values.
     for i in 0..count {
@@ -164,27 +164,6 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
             }
         }
     }
-}
-
-/// Axisymmetric: what the particles put on the nodes before the axis belongs to their images
-/// across it (see [`crate::grid::Geom::for_each_mirror`]; a scalar keeps its sign). Nothing
-/// otherwise.
-fn fold_mirror<const D: usize>(geom: &crate::grid::Geom<D>, col: &mut [Real]) {
-    geom.for_each_mirror(|ghost, image| {
-        if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
-            col[image] += v;
-            col[ghost] = 0.0;
-        }
-    });
-}
-
-/// Axisymmetric: the nodes before the axis read their images' values. Nothing otherwise.
-fn mirror<const D: usize>(geom: &crate::grid::Geom<D>, col: &mut [Real]) {
-    geom.for_each_mirror(|ghost, image| {
-        if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
-            col[ghost] = v;
-        }
-    });
 }
 
 /// Capacity `c_p` and conductance `kappa_p` of particle `i` for field `f` (see the module's

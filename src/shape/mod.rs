@@ -212,26 +212,14 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 base[ln] = base[ln].wrapping_add((first as u32).wrapping_mul(stride[a] as u32));
                 f[ln] = s[a][ln] - first as Real;
             }
-            if S::AXISYMMETRIC && a == 0 {
-                for ln in 0..W {
-                    let (wa, dwa, ta) =
-                        radial_stencil::<K, S>(shape, f[ln], s[0][ln], stretch[0][ln], h);
-                    for k in 0..K {
-                        w[a][k][ln] = wa[k];
-                        dw[a][k][ln] = dwa[k];
+            for ln in 0..W {
+                let (wa, dwa, ta) =
+                    axis_weights::<K, S>(shape, a, f[ln], s[a][ln], stretch[a][ln], (h, inv_h));
+                for k in 0..K {
+                    w[a][k][ln] = wa[k];
+                    dw[a][k][ln] = dwa[k];
+                    if S::AXISYMMETRIC && a == 0 {
                         t[k][ln] = ta[k];
-                    }
-                }
-            } else {
-                for ln in 0..W {
-                    let (wa, dwa) = if S::STRETCHES {
-                        shape.stencil_stretched(f[ln], stretch[a][ln])
-                    } else {
-                        shape.stencil(f[ln])
-                    };
-                    for k in 0..K {
-                        w[a][k][ln] = wa[k];
-                        dw[a][k][ln] = dwa[k] * inv_h;
                     }
                 }
             }
@@ -289,6 +277,29 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     pub fn lane(&self, ln: usize) -> &Stencil<D, K> {
         &self.lanes[ln]
     }
+}
+
+/// Weights, derivatives (per unit length) and hoop factors along axis `a` of a particle at
+/// offset `f` from its first node and `s` (cell units), its domain stretched by `stretch`
+/// (read only by a family that [`Shape1D::STRETCHES`]): the radial axis of the axisymmetric
+/// form through [`radial_stencil`], every other axis with no hoop factors (zeros).
+#[inline(always)]
+fn axis_weights<const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    a: usize,
+    f: Real,
+    s: Real,
+    stretch: Real,
+    (h, inv_h): (Real, Real),
+) -> ([Real; K], [Real; K], [Real; K]) {
+    if S::AXISYMMETRIC && a == 0 {
+        return radial_stencil::<K, S>(shape, f, s, stretch, h);
+    }
+    let (w, mut dw) = shape.stencil_stretched(f, stretch);
+    for d in dw.iter_mut() {
+        *d *= inv_h;
+    }
+    (w, dw, [0.0; K])
 }
 
 /// The radial axis of the axisymmetric form for a particle at offset `f` from its first node
@@ -392,16 +403,12 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
             let first = first_node::<K, S>(s[a], nodes[a]);
             base += first as usize * stride[a];
             let f = s[a] - first as Real;
-            if S::AXISYMMETRIC && a == 0 {
-                let (wa, dwa, ta) = radial_stencil::<K, S>(shape, f, s[0], stretch[0], 1.0 / inv_h);
-                for k in 0..K {
-                    (w[a][k], dw[a][k], t[k]) = (wa[k], dwa[k], ta[k]);
-                }
-            } else {
-                let (wa, dwa) = shape.stencil_stretched(f, stretch[a]);
-                for k in 0..K {
-                    w[a][k] = wa[k];
-                    dw[a][k] = dwa[k] * inv_h;
+            let (wa, dwa, ta) =
+                axis_weights::<K, S>(shape, a, f, s[a], stretch[a], (1.0 / inv_h, inv_h));
+            for k in 0..K {
+                (w[a][k], dw[a][k]) = (wa[k], dwa[k]);
+                if S::AXISYMMETRIC && a == 0 {
+                    t[k] = ta[k];
                 }
             }
         }
