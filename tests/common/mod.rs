@@ -232,3 +232,18 @@ pub fn moving_block(
         .unwrap();
     count
 }
+
+/// A conducting material: thermal diffusivity `k / (rho C_p)` = `kappa`, stiff enough that the
+/// mechanics (at rest) takes no part, and diffusivity `kappa` for the concentration too.
+pub fn conductor(kappa: Real) -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::LinearElastic,
+        youngs_modulus: 1.0e4,
+        poisson_ratio: 0.0,
+        density: 1000.0,
+        heat_capacity: 1000.0,
+        conductivity: kappa * 1000.0 * 1000.0,
+        diffusivity: kappa,
+        ..MaterialDef::DEFAULT
+    }
+}

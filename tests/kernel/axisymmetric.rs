@@ -2,7 +2,7 @@
 //! uniform radial expansion, and a solid cylinder under external pressure, whose exact state
 //! (uniform stress, `sigma_rr = sigma_thetatheta`) exists only if the hoop term is right.
 
-use crate::common::{all_finite, buffer_for, SHAPES};
+use crate::common::{all_finite, buffer_for, conductor, SHAPES};
 use mpm_gimp::{
     Boundary, Damping, Dimension, Effects, Face, MaterialDef, MaterialModel, ParticleBatch, Real,
     ScalarField, Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
@@ -245,17 +245,7 @@ fn bessel_mode_error(shape: ShapeFunction, cells: u32) -> f64 {
     let mut buf = buffer_for(&def);
     let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
     let kappa: Real = 0.1;
-    let mat = w
-        .add_material(&MaterialDef {
-            model: MaterialModel::LinearElastic,
-            youngs_modulus: 1.0e4,
-            poisson_ratio: 0.0,
-            density: 1000.0,
-            heat_capacity: 1000.0,
-            conductivity: kappa * 1000.0 * 1000.0,
-            ..MaterialDef::DEFAULT
-        })
-        .unwrap();
+    let mat = w.add_material(&conductor(kappa)).unwrap();
     w.fill_box(Vec3::ZERO, Vec3::new(radius, 2.0 * h, 0.0), mat, Vec3::ZERO)
         .unwrap();
     let a = 3.831_705_970_207_512;

@@ -3,8 +3,8 @@
 
 use crate::common::*;
 use mpm_gimp::{
-    Boundary, Dimension, Effects, Face, MaterialDef, MaterialModel, Real, ScalarBoundary,
-    ScalarField, ShapeFunction, Transport, Vec3, World, WorldDef,
+    Boundary, Dimension, Effects, Face, MaterialDef, Real, ScalarBoundary, ScalarField,
+    ShapeFunction, Transport, Vec3, World, WorldDef,
 };
 
 /// A strip of material `length` long along x (from the left wall plane), 4 cells high, at 2
@@ -23,21 +23,6 @@ fn strip(shape: ShapeFunction, cells: u32, length: Real, fx: Effects) -> WorldDe
         particle_capacity: 4 * cells * 8,
         effects: fx,
         ..WorldDef::DEFAULT
-    }
-}
-
-/// A conducting material: thermal diffusivity `k / (rho C_p)` = `kappa`, stiff enough that the
-/// mechanics (at rest) takes no part, and diffusivity `kappa` for the concentration too.
-fn conductor(kappa: Real) -> MaterialDef {
-    MaterialDef {
-        model: MaterialModel::LinearElastic,
-        youngs_modulus: 1.0e4,
-        poisson_ratio: 0.0,
-        density: 1000.0,
-        heat_capacity: 1000.0,
-        conductivity: kappa * 1000.0 * 1000.0,
-        diffusivity: kappa,
-        ..MaterialDef::DEFAULT
     }
 }
 
