@@ -58,6 +58,7 @@ fn plane_with(shape: ShapeFunction, order: UpdateOrder, effect: Effect) -> Scene
         first: [2, 2, 0],
         block: [128, 64, 1],
         effect,
+        ..SceneDef::PLANE_2D
     })
     .expect("the 2D bench scene")
 }
@@ -73,6 +74,7 @@ fn solid(shape: ShapeFunction, order: UpdateOrder) -> Scene {
         first: [8, 8, 8],
         block: [16, 16, 16],
         effect: Effect::None,
+        ..SceneDef::PLANE_2D
     })
     .expect("the 3D bench scene")
 }

@@ -9,7 +9,7 @@
 //!   per side plus one cell of room).
 //! - 3D: 262144 particles, a block of 32^3 cells in the middle of a 64^3 grid.
 //!
-//! Timing: 3 warm-up steps, then `--runs` runs (default 7, at least 5) of `--steps` steps each
+//! Timing (`benches/common/timing.rs`, shared with the accuracy report): 3 warm-up steps, then `--runs` runs (default 7, at least 5) of `--steps` steps each
 //! (default 10). Every step uses `dt = world.stable_dt()`, so it is exactly one substep; only the
 //! `step` call is timed (the `stable_dt` evaluation that picks `dt` is not). Reported:
 //! `elapsed_ns / (steps * particles)` for each run and their median.
@@ -29,9 +29,8 @@
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
-use mpm_gimp::{Dimension, MaterialModel, Real, ShapeFunction, UpdateOrder, World};
+use mpm_gimp::{Dimension, MaterialModel, Real, ShapeFunction, UpdateOrder};
 use std::process::exit;
-use std::time::{Duration, Instant};
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
@@ -41,9 +40,9 @@ body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 #[path = "../benches/common/scene.rs"]
 mod scene;
 use scene::{Effect, Scene, SceneDef};
-
-/// Warm-up steps before the timed runs.
-const WARMUP_STEPS: u32 = 3;
+#[path = "../benches/common/timing.rs"]
+mod timing;
+use timing::time_steps;
 
 struct Options {
     dim: u32,
@@ -202,21 +201,11 @@ fn precision_name() -> &'static str {
 /// Grid cells, and the block of filled cells as (first cell, cell count) per axis.
 fn scene(dim: u32) -> ([u32; 3], [u32; 3], [u32; 3]) {
     if dim == 2 {
-        let block = [256, 128, 1];
         // One margin cell per side (uGIMP and B-splines) plus one cell of room per side.
-        let grid = [block[0] + 4, block[1] + 4, 1];
-        (grid, [2, 2, 0], block)
+        let s = SceneDef::PLANE_2D;
+        (s.grid, s.first, s.block)
     } else {
         ([64, 64, 64], [16, 16, 16], [32, 32, 32])
-    }
-}
-
-fn median(sorted: &[f64]) -> f64 {
-    let n = sorted.len();
-    if n % 2 == 1 {
-        sorted[n / 2]
-    } else {
-        0.5 * (sorted[n / 2 - 1] + sorted[n / 2])
     }
 }
 
@@ -237,6 +226,7 @@ fn main() {
         first,
         block,
         effect: o.effect,
+        ..SceneDef::PLANE_2D
     }) {
         Ok(s) => s,
         Err(e) => {
@@ -248,40 +238,10 @@ fn main() {
     let bytes_per_particle = scene.bytes as f64 / particles as f64;
     let mut world = scene.world();
 
-    let step = |world: &mut World<'_>| -> Duration {
-        let dt = world.stable_dt();
-        let t0 = Instant::now();
-        let report = world.step_with_simd(dt, o.simd);
-        let elapsed = t0.elapsed();
-        let report = report.expect("stable dt is a valid time step");
-        assert_eq!(report.substeps, 1, "dt = stable_dt() must take one substep");
-        assert_eq!(report.frozen, 0, "no particle may freeze in this scene");
-        elapsed
-    };
-
-    let wall = Instant::now();
-    for _ in 0..WARMUP_STEPS {
-        step(&mut world);
-    }
-    // The machine is shared: each run is paired with a fixed reference workload timed right
-    // before it, so that figures from different runs can be compared through their ratio.
-    let mut runs: Vec<f64> = Vec::with_capacity(o.runs as usize);
-    let mut refs: Vec<f64> = Vec::with_capacity(o.runs as usize);
-    for _ in 0..o.runs {
-        refs.push(reference_ns_per_particle(particles as usize));
-        let mut elapsed = Duration::ZERO;
-        for _ in 0..o.steps {
-            elapsed += step(&mut world);
-        }
-        runs.push(elapsed.as_nanos() as f64 / (o.steps as f64 * particles as f64));
-    }
-    let wall = wall.elapsed();
+    let timing = time_steps(&mut world, particles, o.runs, o.steps, o.simd);
+    let (runs, med, med_ref, wall) = (timing.runs, timing.median, timing.reference, timing.wall);
     let mut sorted = runs.clone();
     sorted.sort_by(f64::total_cmp);
-    let med = median(&sorted);
-    let mut sorted_refs = refs.clone();
-    sorted_refs.sort_by(f64::total_cmp);
-    let med_ref = median(&sorted_refs);
 
     let cells = block[..axes]
         .iter()
@@ -345,25 +305,4 @@ runs [{}] ns; min {:.3}, max {:.3}; wall {:.2} s",
         sorted[sorted.len() - 1],
         wall.as_secs_f64()
     );
-}
-
-/// The reference workload: a fixed scalar computation per particle (a 32-term polynomial by
-/// Horner's rule, a dependent chain of 32 multiply-adds, over 4 interleaved streams), in ns per
-/// particle. It does not depend on the kernel, so its time tracks only the machine's speed at
-/// that moment.
-fn reference_ns_per_particle(particles: usize) -> f64 {
-    let xs: Vec<f64> = (0..particles).map(|i| (i % 1024) as f64 * 1.0e-3).collect();
-    let t0 = Instant::now();
-    let mut acc = [0.0f64; 4];
-    for chunk in xs.chunks_exact(4) {
-        for (a, &x) in acc.iter_mut().zip(chunk) {
-            let mut p = 1.0f64;
-            for k in 0..32 {
-                p = p * x + (k as f64) * 1.0e-3;
-            }
-            *a += p;
-        }
-    }
-    std::hint::black_box(acc);
-    t0.elapsed().as_nanos() as f64 / particles as f64
 }

@@ -184,6 +184,29 @@ pub struct SceneDef {
     pub block: [u32; 3],
     /// The effect declared, if any.
     pub effect: Effect,
+    /// Velocity transfer, FLIP fraction and terms of `exp(grad v dt)` (the kernel's defaults
+    /// unless a caller prices another method).
+    pub transfer: Transfer,
+    pub flip_beta: Real,
+    pub exp_terms: u32,
+}
+
+impl SceneDef {
+    /// The 2D step_cost scene (a 256 x 128 cell block in a 260 x 132 grid: 131072 particles)
+    /// with the kernel's default method and no effect.
+    pub const PLANE_2D: SceneDef = SceneDef {
+        dimension: Dimension::Plane2D,
+        shape: WorldDef::DEFAULT.shape,
+        material: MaterialModel::NeoHookean,
+        order: WorldDef::DEFAULT.update_order,
+        grid: [260, 132, 1],
+        first: [2, 2, 0],
+        block: [256, 128, 1],
+        effect: Effect::None,
+        transfer: WorldDef::DEFAULT.transfer,
+        flip_beta: WorldDef::DEFAULT.flip_beta,
+        exp_terms: WorldDef::DEFAULT.exp_terms,
+    };
 }
 
 /// A world holding the scene, in its own storage.
@@ -214,6 +237,9 @@ impl Scene {
             shape: s.shape,
             particles_per_cell: PPC,
             update_order: s.order,
+            transfer: s.transfer,
+            flip_beta: s.flip_beta,
+            exp_terms: s.exp_terms,
             ..WorldDef::DEFAULT
         };
         s.effect.declare(&mut def, expected)?;
