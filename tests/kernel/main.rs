@@ -7,6 +7,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+#[cfg(feature = "effects")]
+mod accuracy;
 mod api_contract;
 #[cfg(feature = "effects")]
 mod axisymmetric;

@@ -1,0 +1,116 @@
+//! What a correct kernel shows on the report's problems, as checks that can fail. The report
+//! prints them; `tests/kernel/accuracy.rs` asserts them on the quick refinement series.
+
+use super::problems::order;
+
+/// One claim and whether the measured errors bear it out.
+pub struct Claim {
+    pub text: &'static str,
+    pub holds: bool,
+    /// The numbers the verdict rests on.
+    pub detail: String,
+}
+
+/// Errors of one (problem key, metric index, scheme label), by cells per unit length,
+/// coarsest first.
+pub type Series<'a> = &'a dyn Fn(&str, usize, &str) -> Vec<(u32, f64)>;
+
+/// The order between the last two levels of a series (NaN if it has fewer than two).
+fn last_order(s: &[(u32, f64)]) -> f64 {
+    match s {
+        [.., a, b] => order(*a, *b),
+        _ => f64::NAN,
+    }
+}
+
+fn show(s: &[(u32, f64)]) -> String {
+    s.iter()
+        .map(|(n, e)| format!("{n}: {e:.3e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Smoothest shape functions, by scheme label: those that must converge at large deformation.
+pub const SMOOTH: [&str; 5] = ["defaults", "cpGIMP", "cpGIMP FLIP", "B2", "B3"];
+
+/// Those whose large-deformation error falls at every refinement. uGIMP's undeformed domains
+/// stop tiling the body (gaps where it stretches, overlaps where it is compressed) and the
+/// quadratic B-spline keeps the particle quadrature error of unevenly spaced particles: both
+/// stop converging once that error dominates (past 32 and 64 cells per unit length here),
+/// as Wallstedt and Guilkey (2008) and Steffen, Kirby and Berzins (2008) found. cpGIMP with the
+/// default FLIP blend stops at the blend's damping error (see `check`).
+pub const KEEP_CONVERGING: [&str; 2] = ["cpGIMP FLIP", "B3"];
+
+/// Lower bounds of cpGIMP's observed order on the manufactured problem ("about second
+/// order"): over the whole series, and between any two successive levels.
+pub const CPGIMP_MIN_ORDER: f64 = 1.7;
+pub const CPGIMP_MIN_STEP_ORDER: f64 = 1.5;
+
+/// Linear MPM's observed order on the manufactured problem stays below this: it does not
+/// converge (a converging scheme is at least first order).
+pub const LINEAR_MAX_ORDER: f64 = 0.5;
+
+/// APIC's angular-momentum error is at most this fraction of FLIP's (pure and blended).
+pub const APIC_FRACTION: f64 = 0.01;
+
+/// Evaluates every claim on the errors `series` gives.
+pub fn check(series: Series) -> Vec<Claim> {
+    let mut claims = vec![];
+    let linear = series("mms", 0, "linear");
+    let p = last_order(&linear);
+    claims.push(Claim {
+        text: "linear MPM does not converge on the large-deformation problem",
+        // A failed run (NaN) does not converge either.
+        holds: linear.len() >= 2 && (p.is_nan() || p < LINEAR_MAX_ORDER),
+        detail: format!(
+            "errors {}; last order {p:.2} (< {LINEAR_MAX_ORDER})",
+            show(&linear)
+        ),
+    });
+    let mut first = true;
+    let mut every = true;
+    let mut detail = vec![];
+    for label in SMOOTH {
+        let s = series("mms", 0, label);
+        first &= s.len() >= 2 && s[1].1 < s[0].1;
+        if KEEP_CONVERGING.contains(&label) {
+            every &= s.len() >= 2 && s.windows(2).all(|w| w[1].1 < w[0].1);
+        }
+        detail.push(format!("{label}: {}", show(&s)));
+    }
+    claims.push(Claim {
+        text: "uGIMP, cpGIMP and the B-splines reduce the large-deformation error from the \
+first refinement to the second; cpGIMP (pure FLIP) and the cubic B-spline at every refinement",
+        holds: first && every,
+        detail: detail.join("; "),
+    });
+    // Pure FLIP: the default blend's PIC part damps by 1 % of the particle-grid velocity
+    // difference per step whatever the step, and with dt ~ h^2 the steps grow as n^2, so its
+    // damping error grows under refinement (the "cpGIMP" rows show it past 64 cells).
+    let cp = series("mms", 0, "cpGIMP FLIP");
+    let orders: Vec<f64> = cp.windows(2).map(|w| order(w[0], w[1])).collect();
+    let overall = match cp.as_slice() {
+        [a, .., b] => order(*a, *b),
+        _ => f64::NAN,
+    };
+    claims.push(Claim {
+        text: "cpGIMP (pure FLIP) converges at about second order on the large-deformation problem",
+        holds: overall >= CPGIMP_MIN_ORDER && orders.iter().all(|&p| p >= CPGIMP_MIN_STEP_ORDER),
+        detail: format!(
+            "errors {}; order over the series {overall:.2} (>= {CPGIMP_MIN_ORDER}), between \
+levels {orders:.2?} (each >= {CPGIMP_MIN_STEP_ORDER})",
+            show(&cp)
+        ),
+    });
+    let finest = |label: &str| series("disk", 0, label).last().map_or(f64::NAN, |e| e.1);
+    let (apic, flip, blend) = (finest("APIC"), finest("FLIP"), finest("defaults"));
+    claims.push(Claim {
+        text: "APIC keeps angular momentum where FLIP loses it (spinning disk)",
+        holds: apic <= APIC_FRACTION * flip.min(blend),
+        detail: format!(
+            "|dL|/L: APIC {apic:.2e}, FLIP {flip:.2e}, FLIP 0.99 {blend:.2e} \
+(APIC <= {APIC_FRACTION} x FLIP's)"
+        ),
+    });
+    claims
+}
