@@ -15,10 +15,10 @@ pub struct Claim {
 /// coarsest first.
 pub type Series<'a> = &'a dyn Fn(&str, usize, &str) -> Vec<(u32, f64)>;
 
-/// The order between the last two levels of a series (NaN if it has fewer than two).
-fn last_order(s: &[(u32, f64)]) -> f64 {
+/// The order from the first to the last level of a series (NaN if it has fewer than two).
+fn overall_order(s: &[(u32, f64)]) -> f64 {
     match s {
-        [.., a, b] => order(*a, *b),
+        [a, .., b] => order(*a, *b),
         _ => f64::NAN,
     }
 }
@@ -46,8 +46,9 @@ pub const KEEP_CONVERGING: [&str; 2] = ["cpGIMP FLIP", "B3"];
 pub const CPGIMP_MIN_ORDER: f64 = 1.7;
 pub const CPGIMP_MIN_STEP_ORDER: f64 = 1.5;
 
-/// Linear MPM's observed order on the manufactured problem stays below this: it does not
-/// converge (a converging scheme is at least first order).
+/// Linear MPM's observed order from the coarsest to the finest level of the manufactured
+/// problem stays below this: it does not converge (a converging scheme is at least first
+/// order).
 pub const LINEAR_MAX_ORDER: f64 = 0.5;
 
 /// APIC's angular-momentum error is at most this fraction of FLIP's (pure and blended).
@@ -56,14 +57,16 @@ pub const APIC_FRACTION: f64 = 0.01;
 /// Evaluates every claim on the errors `series` gives.
 pub fn check(series: Series) -> Vec<Claim> {
     let mut claims = vec![];
+    // Over the whole series: linear MPM's error under refinement is erratic (cell crossings),
+    // so a single pair of levels can show it falling.
     let linear = series("mms", 0, "linear");
-    let p = last_order(&linear);
+    let p = overall_order(&linear);
     claims.push(Claim {
         text: "linear MPM does not converge on the large-deformation problem",
         // A failed run (NaN) does not converge either.
         holds: linear.len() >= 2 && (p.is_nan() || p < LINEAR_MAX_ORDER),
         detail: format!(
-            "errors {}; last order {p:.2} (< {LINEAR_MAX_ORDER})",
+            "errors {}; order from the coarsest to the finest {p:.2} (< {LINEAR_MAX_ORDER})",
             show(&linear)
         ),
     });
@@ -89,10 +92,7 @@ first refinement to the second; cpGIMP (pure FLIP) and the cubic B-spline at eve
     // damping error grows under refinement (the "cpGIMP" rows show it past 64 cells).
     let cp = series("mms", 0, "cpGIMP FLIP");
     let orders: Vec<f64> = cp.windows(2).map(|w| order(w[0], w[1])).collect();
-    let overall = match cp.as_slice() {
-        [a, .., b] => order(*a, *b),
-        _ => f64::NAN,
-    };
+    let overall = overall_order(&cp);
     claims.push(Claim {
         text: "cpGIMP (pure FLIP) converges at about second order on the large-deformation problem",
         holds: overall >= CPGIMP_MIN_ORDER && orders.iter().all(|&p| p >= CPGIMP_MIN_STEP_ORDER),

@@ -314,9 +314,10 @@ fn svg(title: &str, points: &[Point]) -> String {
         x0.log10() - 0.05,
         (x1.log10() + 0.05).max(x0.log10() + 0.25),
     );
+    // A fifth of a decade above the highest point keeps its label inside the frame.
     let (ly0, ly1) = (
         decade(y0, false),
-        decade(y1, true).max(decade(y0, false) + 1.0),
+        decade(y1 * 1.6, true).max(decade(y0, false) + 1.0),
     );
     let px = |x: f64| left + (x.log10() - lx0) / (lx1 - lx0) * (w - left - right);
     let py = |y: f64| top + (ly1 - y.log10()) / (ly1 - ly0) * (h - top - bottom);
@@ -435,7 +436,7 @@ stroke-width=\"1.5\"/>",
         let mut ly = y + 3.0;
         for k in 0..24 {
             let dy = 11.0 * ((k + 1) / 2) as f64 * if k % 2 == 1 { -1.0 } else { 1.0 };
-            if !overlaps(y + 3.0 + dy) {
+            if y + 3.0 + dy > top + 10.0 && !overlaps(y + 3.0 + dy) {
                 ly = y + 3.0 + dy;
                 break;
             }

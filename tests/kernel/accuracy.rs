@@ -25,7 +25,8 @@ fn quick_series(key: &str, metric: usize, label: &str) -> Vec<(u32, f64)> {
 }
 
 /// Every claim holds on the quick series (16, 32 and 64 cells per unit length; the disk at 8):
-/// linear MPM does not converge at large deformation (last order < 0.5; measured -0.29), the
+/// linear MPM does not converge at large deformation (order from 16 to 64 cells < 0.5;
+/// measured -0.92 in f32, -0.25 in f64: its error is erratic, 0.39 at 32 cells), the
 /// smooth shape functions reduce the error from 16 to 32 cells (cpGIMP with pure FLIP and B3
 /// at each refinement), cpGIMP's order with pure FLIP is >= 1.7 over the series and >= 1.5 at
 /// each refinement (measured 1.93; 1.88 and 1.98), and APIC's angular-momentum error is at most 1 % of FLIP's (measured 6e-7
