@@ -21,6 +21,7 @@
 
 mod claims;
 mod problems;
+mod report;
 #[path = "../../benches/common/scene.rs"]
 mod scene;
 // Only the median and the reference of a timing are reported here.
@@ -30,7 +31,7 @@ mod timing;
 
 use problems::{Declares, PROBLEMS, SCHEMES};
 use scene::{Effect, Scene, SceneDef};
-use std::collections::BTreeMap;
+use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::process::{exit, Command};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -368,8 +369,6 @@ fn series(rows: &[Row], problem: &str, metric: usize, scheme: &str, prec: &str) 
     s
 }
 
-mod report;
-
 /// Cost (ns per particle-step) of a scheme, precision and effect.
 fn cost_of(costs: &[Cost], scheme: &str, prec: &str, declares: Declares) -> Option<f64> {
     costs
@@ -382,9 +381,6 @@ fn cost_of(costs: &[Cost], scheme: &str, prec: &str, declares: Declares) -> Opti
 
 /// The precisions present in the rows, f32 first.
 fn precisions(rows: &[Row]) -> Vec<String> {
-    let mut p: BTreeMap<String, ()> = BTreeMap::new();
-    for r in rows {
-        p.insert(r.precision.clone(), ());
-    }
-    p.into_keys().collect()
+    let p: BTreeSet<String> = rows.iter().map(|r| r.precision.clone()).collect();
+    p.into_iter().collect()
 }
