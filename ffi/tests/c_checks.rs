@@ -613,6 +613,25 @@ fn world_memory<'a>(def: &WorldDef, storage: &'a mut Vec<u8>, text: &mut Text) -
     &mut storage[offset..offset + req.bytes]
 }
 
+/// Starts a scene as `tests/c/same_state.c` does: the world of `def` in `storage`, and its empty
+/// state.
+fn open_scene<'a>(t: &mut Text, def: &WorldDef, storage: &'a mut Vec<u8>) -> World<'a> {
+    let w = World::init(def, world_memory(def, storage, t)).expect("init");
+    t.state("empty", &w);
+    w
+}
+
+/// The conducting, diffusing rubber of `tests/c/same_state.c`: thermal diffusivity
+/// 4096 / (1000 * 512) = 0.008 m^2/s.
+fn conducting_rubber() -> MaterialDef {
+    MaterialDef {
+        heat_capacity: 512.0,
+        conductivity: 4096.0,
+        diffusivity: 0.0078125,
+        ..MaterialDef::DEFAULT
+    }
+}
+
 /// The scenes of `tests/c/same_state.c`, through `kernel::World`.
 fn rust_same_state() -> String {
     let mut t = Text(String::new());
@@ -630,8 +649,7 @@ fn rust_same_state() -> String {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, &mut t)).expect("init");
-    t.state("empty", &w);
+    let mut w = open_scene(&mut t, &def, &mut storage);
     let soft = MaterialDef {
         model: MaterialModel::LinearElastic,
         youngs_modulus: 500000.0,
@@ -705,8 +723,7 @@ fn rust_same_state() -> String {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, &mut t)).expect("init");
-    t.state("empty", &w);
+    let mut w = open_scene(&mut t, &def, &mut storage);
     let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
     t.line(format!("materials {id}"));
     let ids = w
@@ -786,14 +803,8 @@ fn effects2d(t: &mut Text) {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
-    t.state("empty", &w);
-    let rubber = MaterialDef {
-        heat_capacity: 512.0,
-        conductivity: 4096.0,
-        diffusivity: 0.0078125,
-        ..MaterialDef::DEFAULT
-    };
+    let mut w = open_scene(t, &def, &mut storage);
+    let rubber = conducting_rubber();
     let id = w.add_material(&rubber).expect("rubber");
     t.line(format!("materials {id}"));
     let ids = w
@@ -872,8 +883,7 @@ fn effects3d(t: &mut Text) {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
-    t.state("empty", &w);
+    let mut w = open_scene(t, &def, &mut storage);
     let id = w.add_material(&MaterialDef::DEFAULT).expect("rubber");
     t.line(format!("materials {id}"));
     let ids = w
@@ -928,17 +938,13 @@ fn axisym2d(t: &mut Text) {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
-    t.state("empty", &w);
+    let mut w = open_scene(t, &def, &mut storage);
     let rubber = MaterialDef {
-        heat_capacity: 512.0,
-        conductivity: 4096.0,
-        diffusivity: 0.0078125,
         thermal_expansion: 1.0 / 4096.0,
         reference_temperature: 256.0,
         swelling: 0.03125,
         reference_concentration: 0.0,
-        ..MaterialDef::DEFAULT
+        ..conducting_rubber()
     };
     let id = w.add_material(&rubber).expect("rubber");
     t.line(format!("materials {id}"));
@@ -994,8 +1000,7 @@ fn cpgimp(t: &mut Text, dimension: Dimension) {
         ..WorldDef::DEFAULT
     };
     let mut storage = Vec::new();
-    let mut w = World::init(&def, world_memory(&def, &mut storage, t)).expect("init");
-    t.state("empty", &w);
+    let mut w = open_scene(t, &def, &mut storage);
     let soft = MaterialDef {
         youngs_modulus: 500000.0,
         poisson_ratio: 0.25,

@@ -286,6 +286,24 @@ static void scratch(size_t capacity) {
     }
 }
 
+/* Starts a scene: scratch arrays for `def`'s capacity, its world, and the empty state. */
+static MpmWorld *open_scene(const MpmWorldDef *def, void **raw) {
+    MpmWorld *w;
+    scratch(def->particle_capacity);
+    w = new_world(def, raw);
+    print_state("empty", w);
+    return w;
+}
+
+/* A conducting, diffusing rubber: thermal diffusivity 4096 / (1000 * 512) = 0.008 m^2/s. */
+static MpmMaterialDef conducting_rubber(void) {
+    MpmMaterialDef rubber = mpm_material_def_default();
+    rubber.heat_capacity = (mpm_real)512.0;
+    rubber.conductivity = (mpm_real)4096.0;
+    rubber.diffusivity = (mpm_real)0.0078125;
+    return rubber;
+}
+
 static void plane2d(void) {
     MpmWorldDef def = mpm_world_def_default();
     MpmMaterialDef rubber = mpm_material_def_default();
@@ -305,9 +323,7 @@ static void plane2d(void) {
     def.particle_capacity = 1024;
     def.material_capacity = 2;
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
     soft.model = MPM_MATERIAL_MODEL_LINEAR_ELASTIC;
     soft.youngs_modulus = (mpm_real)500000.0;
@@ -376,9 +392,7 @@ static void space3d(void) {
     def.faces[MPM_FACE_X_MAX] = MPM_BOUNDARY_OPEN;
     def.exp_terms = 3;
     def.cfl = (mpm_real)0.375;
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
     CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
     printf("materials %lu\n", (unsigned long)id);
@@ -455,14 +469,9 @@ static void effects2d(void) {
     def.effects.diffusion.faces[MPM_FACE_X_MAX].value = (mpm_real)1.0;
     def.effects.diffusion.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX;
     def.effects.diffusion.faces[MPM_FACE_Y_MIN].value = (mpm_real)0.25;
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
-    /* A conducting, diffusing rubber: thermal diffusivity 4096 / (1000 * 512) = 0.008 m^2/s. */
-    rubber.heat_capacity = (mpm_real)512.0;
-    rubber.conductivity = (mpm_real)4096.0;
-    rubber.diffusivity = (mpm_real)0.0078125;
+    rubber = conducting_rubber();
     CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
     printf("materials %lu\n", (unsigned long)id);
     CALL("fill_box", mpm_world_fill_box(w, v3(0.25f, 0.125f, 0), v3(0.5f, 0.25f, 0), id,
@@ -543,9 +552,7 @@ static void effects3d(void) {
     def.effects.traction_capacity = 8;
     def.effects.body_force = v3(0, 0, -2.0f);
     def.effects.body_force_scale = schedule(1, one_t, one_v);
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
     CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
     printf("materials %lu\n", (unsigned long)id);
@@ -598,14 +605,11 @@ static void axisym2d(void) {
     def.effects.diffusion.declared = 1;
     def.effects.diffusion.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
     def.effects.diffusion.faces[MPM_FACE_X_MAX].value = (mpm_real)1.0;
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
-    /* Stress-free at 256 K and no concentration; 56 K more is a strain of 1.4 %. */
-    rubber.heat_capacity = (mpm_real)512.0;
-    rubber.conductivity = (mpm_real)4096.0;
-    rubber.diffusivity = (mpm_real)0.0078125;
+    /* The conducting rubber, stress-free at 256 K and no concentration; 56 K more is a strain
+       of 1.4 %. */
+    rubber = conducting_rubber();
     rubber.thermal_expansion = (mpm_real)(1.0 / 4096.0);
     rubber.reference_temperature = (mpm_real)256.0;
     rubber.swelling = (mpm_real)0.03125;
@@ -656,9 +660,7 @@ static void cpgimp(MpmDimension dimension) {
     def.update_order = three ? MPM_UPDATE_ORDER_USF : MPM_UPDATE_ORDER_USL;
     def.transfer = three ? MPM_TRANSFER_APIC : MPM_TRANSFER_FLIP;
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
-    scratch(def.particle_capacity);
-    w = new_world(&def, &raw);
-    print_state("empty", w);
+    w = open_scene(&def, &raw);
 
     soft.youngs_modulus = (mpm_real)500000.0;
     soft.poisson_ratio = (mpm_real)0.25;
