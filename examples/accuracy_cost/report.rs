@@ -75,16 +75,8 @@ error at the finest resolution | Pareto front (cost, then error) |\n|---|---|---
                     let Some(ns) = cost_of(costs, s.label, prec, p.declares) else {
                         continue;
                     };
-                    let mut runs: Vec<&Row> = rows
-                        .iter()
-                        .filter(|r| {
-                            r.problem == p.key && r.scheme == s.label && &r.precision == prec
-                        })
-                        .collect();
-                    runs.sort_by_key(|r| r.cells);
-                    let series: Vec<(f64, f64)> =
-                        runs.iter().map(|r| (r.errors[m], run_ms(r, ns))).collect();
-                    if let Some(v) = reach_ms(&series, p.targets[m]) {
+                    let runs = runs_of(rows, p, s.label, prec);
+                    if let Some(v) = reach_ms(&work_series(&runs, m, ns), p.targets[m]) {
                         if cheapest.as_ref().map_or(true, |c| v < c.0) {
                             cheapest = Some((v, format!("{} {prec}", s.label)));
                         }
@@ -130,9 +122,22 @@ fn cpu() -> String {
         .unwrap_or_else(|| "an unnamed CPU".into())
 }
 
-/// Milliseconds of one run (one core): ns per particle-step x particles x steps.
-fn run_ms(r: &Row, ns: f64) -> f64 {
-    ns * r.particles as f64 * r.steps as f64 * 1e-6
+/// The runs of one problem, scheme and precision, coarsest first.
+fn runs_of<'a>(rows: &'a [Row], p: &Problem, scheme: &str, prec: &str) -> Vec<&'a Row> {
+    let mut runs: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.problem == p.key && r.scheme == scheme && r.precision == prec)
+        .collect();
+    runs.sort_by_key(|r| r.cells);
+    runs
+}
+
+/// (error of metric `m`, single-core ms of the run) along a refinement series, at `ns` per
+/// particle-step: ns x particles x steps.
+fn work_series(runs: &[&Row], m: usize, ns: f64) -> Vec<(f64, f64)> {
+    runs.iter()
+        .map(|r| (r.errors[m], ns * r.particles as f64 * r.steps as f64 * 1e-6))
+        .collect()
 }
 
 /// The cost (ms) to reach `target` along a refinement series of (error, ms), coarsest first:
@@ -184,18 +189,9 @@ particle-step | ms to reach {target:e} |\n|---|---|---|---:|---:|---:|---:|---:|
     for s in SCHEMES {
         for prec in precs {
             let ns = cost_of(costs, s.label, prec, p.declares);
-            let runs: Vec<&Row> = {
-                let mut v: Vec<&Row> = rows
-                    .iter()
-                    .filter(|r| r.problem == p.key && r.scheme == s.label && &r.precision == prec)
-                    .collect();
-                v.sort_by_key(|r| r.cells);
-                v
-            };
+            let runs = runs_of(rows, p, s.label, prec);
             let reach = ns.map_or("n/a".into(), |ns| {
-                let series: Vec<(f64, f64)> =
-                    runs.iter().map(|r| (r.errors[m], run_ms(r, ns))).collect();
-                cost_to_reach(&series, target)
+                cost_to_reach(&work_series(&runs, m, ns), target)
             });
             for (k, r) in runs.iter().enumerate() {
                 let e = r.errors[m];
