@@ -1239,21 +1239,8 @@ fn defaults_match_the_kernel() {
     let mut d = wd;
     d.cells = [8, 8, 1];
     d.particle_capacity = 16;
-    let mut req = MpmMemoryRequirements::default();
-    // SAFETY: valid pointers to locals.
-    assert_eq!(
-        unsafe { mpm_memory_requirements(&d, &mut req) },
-        MpmStatus::Ok
-    );
-    let mut storage = vec![0u8; req.bytes + req.align];
-    let offset = storage.as_ptr().align_offset(req.align);
-    let mem = storage[offset..].as_mut_ptr().cast();
-    let mut world = core::ptr::null_mut();
-    // SAFETY: `mem` holds `req.bytes` bytes at the required alignment.
-    assert_eq!(
-        unsafe { mpm_world_init(&d, mem, req.bytes, &mut world) },
-        MpmStatus::Ok
-    );
+    let mut storage = Vec::new();
+    let (world, _, _) = c_world(&d, &mut storage);
     let mut back = wd;
     back.internal_cookie = 0;
     // SAFETY: `world` is the world just made; `back` is a local.
@@ -1288,26 +1275,14 @@ fn shapes_match_the_kernel() {
         let mut d = base;
         d.shape = shape as u32;
         assert_eq!(stored_def(&d).shape, kernel_shape, "{shape:?}");
-        let mut req = MpmMemoryRequirements::default();
-        // SAFETY: valid pointers to locals.
+        let mut storage = Vec::new();
+        let (world, _, _) = c_world(&d, &mut storage);
+        let mut back = base;
+        // SAFETY: `world` is the world just made; `back` is a local.
         assert_eq!(
-            unsafe { mpm_memory_requirements(&d, &mut req) },
+            unsafe { mpm_world_get_def(world, &mut back) },
             MpmStatus::Ok
         );
-        let mut storage = vec![0u8; req.bytes + req.align];
-        let offset = storage.as_ptr().align_offset(req.align);
-        let mut world = core::ptr::null_mut();
-        let mut back = base;
-        // SAFETY: the memory holds `req.bytes` bytes at the required alignment; `back` is a
-        // local.
-        unsafe {
-            let mem = storage[offset..].as_mut_ptr();
-            assert_eq!(
-                mpm_world_init(&d, mem.cast(), req.bytes, &mut world),
-                MpmStatus::Ok
-            );
-            assert_eq!(mpm_world_get_def(world, &mut back), MpmStatus::Ok);
-        }
         assert_eq!(back.shape, shape as u32, "{shape:?}");
     }
     assert_eq!(ShapeFunction::from_code(shapes.len() as u32), None);
@@ -1380,13 +1355,23 @@ fn transport_of(d: &mut MpmWorldDef, heat: bool) -> &mut MpmTransport {
 
 /// The definition stored in a world made from `c` (which must be accepted).
 fn stored_def(c: &MpmWorldDef) -> WorldDef {
+    let mut storage = Vec::new();
+    let (_, mem, len) = c_world(c, &mut storage);
+    // SAFETY: the world spans `len` bytes from `mem`, and nothing else uses it here.
+    let bytes = unsafe { core::slice::from_raw_parts(mem, len) };
+    kernel::WorldRef::open(bytes).expect("a world").def()
+}
+
+/// A world made through the C interface from `c`, in `storage` (sized here to its requirement
+/// plus its alignment): the handle, and the start and length of the bytes it spans.
+fn c_world(c: &MpmWorldDef, storage: &mut Vec<u8>) -> (*mut MpmWorld, *mut u8, usize) {
     let mut req = MpmMemoryRequirements::default();
     // SAFETY: valid pointers to locals.
     assert_eq!(
         unsafe { mpm_memory_requirements(c, &mut req) },
         MpmStatus::Ok
     );
-    let mut storage = vec![0u8; req.bytes + req.align];
+    *storage = vec![0u8; req.bytes + req.align];
     let offset = storage.as_ptr().align_offset(req.align);
     let mem = storage[offset..].as_mut_ptr();
     let mut world = core::ptr::null_mut();
@@ -1395,9 +1380,7 @@ fn stored_def(c: &MpmWorldDef) -> WorldDef {
         unsafe { mpm_world_init(c, mem.cast(), req.bytes, &mut world) },
         MpmStatus::Ok
     );
-    // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
-    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
-    kernel::WorldRef::open(bytes).expect("a world").def()
+    (world, mem, req.bytes)
 }
 
 /// Expectation: a definition that declares every effect (APIC, damping with schedules, a
@@ -1516,27 +1499,11 @@ fn effects_definition_round_trip() {
         ..WorldDef::DEFAULT
     };
 
-    let mut req = MpmMemoryRequirements::default();
-    // SAFETY: valid pointers to locals.
-    assert_eq!(
-        unsafe { mpm_memory_requirements(&c, &mut req) },
-        MpmStatus::Ok
-    );
-    assert_eq!(
-        req.bytes,
-        memory_requirements(&expected).expect("valid").bytes
-    );
-    let mut storage = vec![0u8; req.bytes + req.align];
-    let offset = storage.as_ptr().align_offset(req.align);
-    let mem = storage[offset..].as_mut_ptr();
-    let mut world = core::ptr::null_mut();
-    // SAFETY: `mem` holds `req.bytes` bytes at the required alignment.
-    assert_eq!(
-        unsafe { mpm_world_init(&c, mem.cast(), req.bytes, &mut world) },
-        MpmStatus::Ok
-    );
-    // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
-    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+    let mut storage = Vec::new();
+    let (world, mem, len) = c_world(&c, &mut storage);
+    assert_eq!(len, memory_requirements(&expected).expect("valid").bytes);
+    // SAFETY: the world spans `len` bytes from `mem`, and nothing else uses it here.
+    let bytes = unsafe { core::slice::from_raw_parts(mem, len) };
     let stored = kernel::WorldRef::open(bytes).expect("a world").def();
     assert_eq!(stored, expected);
     let mut back = c;
@@ -1569,7 +1536,7 @@ fn effects_definition_round_trip() {
         MpmStatus::Ok
     );
     // SAFETY: as above.
-    let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+    let bytes = unsafe { core::slice::from_raw_parts(mem, len) };
     assert_eq!(
         kernel::WorldRef::open(bytes).expect("a world").material(id),
         Some(MaterialDef {
@@ -1611,27 +1578,12 @@ fn effects_definition_round_trip() {
     };
     assert_eq!(stored_def(&no_transport), without);
     {
-        let mut req3 = MpmMemoryRequirements::default();
-        // SAFETY: valid pointers to locals.
-        assert_eq!(
-            unsafe { mpm_memory_requirements(&no_transport, &mut req3) },
-            MpmStatus::Ok
-        );
-        assert!(req3.bytes < req.bytes, "declared transports take memory");
-        let mut storage = vec![0u8; req3.bytes + req3.align];
-        let offset = storage.as_ptr().align_offset(req3.align);
-        let mut w = core::ptr::null_mut();
+        let mut storage = Vec::new();
+        let (w, _, bare) = c_world(&no_transport, &mut storage);
+        assert!(bare < len, "declared transports take memory");
         let mut back = c;
-        // SAFETY: the memory holds `req3.bytes` bytes at the required alignment; `back` is a
-        // local.
-        unsafe {
-            let mem = storage[offset..].as_mut_ptr().cast();
-            assert_eq!(
-                mpm_world_init(&no_transport, mem, req3.bytes, &mut w),
-                MpmStatus::Ok
-            );
-            assert_eq!(mpm_world_get_def(w, &mut back), MpmStatus::Ok);
-        }
+        // SAFETY: `w` is the world just made; `back` is a local.
+        assert_eq!(unsafe { mpm_world_get_def(w, &mut back) }, MpmStatus::Ok);
         let zero = MpmTransport {
             declared: 0,
             faces: [scalar_face(MpmScalarBoundaryKind::Insulated, 0.0); 6],
@@ -1818,24 +1770,11 @@ fn axisymmetric_definition_and_hoop_column() {
     ] {
         let mut d = c;
         d.dimension = dimension as u32;
-        let mut req = MpmMemoryRequirements::default();
-        // SAFETY: valid pointers to locals.
-        assert_eq!(
-            unsafe { mpm_memory_requirements(&d, &mut req) },
-            MpmStatus::Ok
-        );
-        let mut storage = vec![0u8; req.bytes + req.align];
-        let offset = storage.as_ptr().align_offset(req.align);
-        let mem = storage[offset..].as_mut_ptr();
-        let mut world = core::ptr::null_mut();
+        let mut storage = Vec::new();
+        let (world, mem, len) = c_world(&d, &mut storage);
         let mut view = core::mem::MaybeUninit::<MpmParticlesView>::uninit();
-        // SAFETY: `mem` holds `req.bytes` bytes at the required alignment; the other pointers
-        // are locals.
+        // SAFETY: `world` is the world just made; the other pointers are locals.
         unsafe {
-            assert_eq!(
-                mpm_world_init(&d, mem.cast(), req.bytes, &mut world),
-                MpmStatus::Ok
-            );
             #[cfg(not(feature = "f64"))]
             let m = mpm_material_def_default_f32();
             #[cfg(feature = "f64")]
@@ -1873,8 +1812,8 @@ fn axisymmetric_definition_and_hoop_column() {
         }
         // SAFETY: written by the successful call above.
         let view = unsafe { view.assume_init() };
-        // SAFETY: the world spans `req.bytes` bytes from `mem`, and nothing else uses it here.
-        let bytes = unsafe { core::slice::from_raw_parts(mem, req.bytes) };
+        // SAFETY: the world spans `len` bytes from `mem`, and nothing else uses it here.
+        let bytes = unsafe { core::slice::from_raw_parts(mem, len) };
         let w = kernel::WorldRef::open(bytes).expect("a world");
         let hoop = w.particles().hoop;
         assert_eq!(view.dimension, dimension as u32);
