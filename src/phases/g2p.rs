@@ -70,12 +70,108 @@ mod grad {
     pub const REMAP: u8 = 2;
 }
 
+/// A set of a chunk's lanes, one bit each (bit `ln` for lane `ln`). The passes keep their
+/// per-lane flags (live, updated, frozen, stopped, escaped) as such sets: an array of `bool`s
+/// cost a byte insert per lane and flag, about 7 % of the default step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Lanes(u32);
+
+const _: () = assert!(W <= 32);
+
+impl Lanes {
+    pub const NONE: Lanes = Lanes(0);
+    pub const ALL: Lanes = Lanes(u32::MAX >> (32 - W));
+
+    /// The lanes `ln` for which `f(ln)` holds.
+    #[inline(always)]
+    pub fn from_fn(mut f: impl FnMut(usize) -> bool) -> Lanes {
+        let mut bits = 0;
+        for ln in 0..W {
+            bits |= (f(ln) as u32) << ln;
+        }
+        Lanes(bits)
+    }
+
+    /// The lanes where `mask(row)` holds, `row` each group of four lanes as a [`Row4`]
+    /// (compares on vectors: one bit mask per four lanes).
+    #[inline(always)]
+    fn where_rows(values: &Lane, mask: impl Fn(Row4) -> Mask4) -> Lanes {
+        let mut bits = 0;
+        for q in (0..W).step_by(4) {
+            bits |= mask(Row4::from_slice(&values[q..q + 4])).bitmask() << q;
+        }
+        Lanes(bits)
+    }
+
+    /// The lanes whose value is finite.
+    #[inline(always)]
+    fn finite(values: &Lane) -> Lanes {
+        Lanes::where_rows(values, Row4::is_finite_mask)
+    }
+
+    /// Lane `ln` alone.
+    #[inline(always)]
+    pub fn one(ln: usize) -> Lanes {
+        Lanes(1 << ln)
+    }
+
+    #[inline(always)]
+    pub fn has(self, ln: usize) -> bool {
+        self.0 >> ln & 1 != 0
+    }
+
+    #[inline(always)]
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    #[inline(always)]
+    pub fn count(self) -> u32 {
+        self.0.count_ones()
+    }
+
+    /// The lanes in the set, in increasing order.
+    #[inline(always)]
+    pub fn iter(self) -> impl Iterator<Item = usize> {
+        let mut bits = self.0;
+        core::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let ln = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                ln
+            })
+        })
+    }
+
+    /// The lanes in `self` but not in `other`.
+    #[inline(always)]
+    pub fn minus(self, other: Lanes) -> Lanes {
+        Lanes(self.0 & !other.0)
+    }
+}
+
+impl core::ops::BitAnd for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn bitand(self, o: Lanes) -> Lanes {
+        Lanes(self.0 & o.0)
+    }
+}
+
+impl core::ops::BitOr for Lanes {
+    type Output = Lanes;
+    #[inline(always)]
+    fn bitor(self, o: Lanes) -> Lanes {
+        Lanes(self.0 | o.0)
+    }
+}
+
 /// Lanes `start..start + W` that hold active particles (`< count`).
 #[inline(always)]
-fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> [bool; W] {
+fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> Lanes {
     let n = W.min(count.saturating_sub(start));
     let status = load(p.status, start);
-    core::array::from_fn(|l| l < n && status[l] == ACTIVE)
+    Lanes::from_fn(|l| l < n && status[l] == ACTIVE)
 }
 
 /// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient;
@@ -120,13 +216,11 @@ fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, 
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
-    live: &[bool; W],
+    live: Lanes,
 ) -> Gathered<D> {
     let mut rows = [[Row4::ZERO; GATHERED / 4]; W];
-    for ln in 0..W {
-        if live[ln] {
-            rows[ln] = gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln));
-        }
+    for ln in live.iter() {
+        rows[ln] = gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln));
     }
     // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
     // (axisymmetric) when GRAD.
@@ -320,7 +414,7 @@ fn commit_gradient_affine<const D: usize>(
     p: &mut ParticleCols<'_, D>,
     start: usize,
     l: &LaneMat<D>,
-    ok: &[bool; W],
+    ok: Lanes,
 ) {
     for r in 0..D {
         for c in 0..D {
@@ -355,18 +449,16 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
     st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
 }
 
-/// `dst[lane] = if keep[lane] { new[lane] } else { dst[lane] }` over a column slice.
+/// `dst[lane] = if keep has lane { new[lane] } else { dst[lane] }` over a column slice.
 #[inline(always)]
-fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: &[bool; W]) {
+fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: Lanes) {
     if let Some(d) = dst.get_mut(start..start + W) {
-        if keep.iter().all(|&k| k) {
+        if keep == Lanes::ALL {
             // The common case: every lane was updated.
             d.copy_from_slice(new);
         } else {
-            for l in 0..W {
-                if keep[l] {
-                    d[l] = new[l];
-                }
+            for l in keep.iter() {
+                d[l] = new[l];
             }
         }
     }
@@ -416,9 +508,9 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     start: usize,
-    update: &[bool; W],
+    update: Lanes,
     gathered: &Gathered<D>,
-) -> [bool; W] {
+) -> Lanes {
     let l = &gathered.l;
     // Plain loops over lanes here, not `core::array::from_fn`: a closure that indexes is not
     // always inlined, and a helper that is not inlined runs baseline code in the AVX2 instance.
@@ -486,24 +578,21 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
     // material (the common case, vectorised); otherwise lane by lane.
     let ids = load(p.material, start).map(|id| id as usize);
-    let first = (0..W).find(|&ln| update[ln]).map(|ln| ids[ln]);
+    let first = update.iter().next().map(|ln| ids[ln]);
     let uniform = first.and_then(|id| {
-        let mut same = true;
-        for ln in 0..W {
-            same &= !update[ln] || ids[ln] == id;
-        }
+        let same = update.minus(Lanes::from_fn(|ln| ids[ln] == id)).is_empty();
         ctx.materials
             .get(id)
             .filter(|r| same && model_of(r) == MaterialModel::NeoHookean)
     });
     let ns = crate::layout::stress_components(D);
     let mut tau = [[0.0; W]; 6];
-    let mut ok = [false; W];
+    let mut ok = Lanes::NONE;
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
     if let Some(rec) = uniform {
         let params = Params::of(rec);
-        let mut admissible = [true; W];
+        let mut admissible = Lanes::ALL;
         match &eigen {
             None => neo_hookean_lanes(&params, &h, &hzz, &jm1, &mut tau),
             Some(d) => {
@@ -523,9 +612,9 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                         }
                     }
                     (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
-                    // The eigenstrain must not invert the material either.
-                    admissible[ln] = d[ln] > -1.0;
                 }
+                // The eigenstrain must not invert the material either.
+                admissible = Lanes::where_rows(d, |d| d.cmpgt(Row4::splat(-1.0)));
                 neo_hookean_lanes(&params, &he, &hzze, &jm1e, &mut tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
@@ -534,9 +623,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                 }
             }
         }
-        for ln in 0..W {
-            ok[ln] = admissible[ln] && update[ln] && jm1[ln] > -1.0;
-        }
+        ok = admissible & update & Lanes::where_rows(&jm1, |j| j.cmpgt(Row4::splat(-1.0)));
     } else {
         for ln in 0..W {
             // NaN-safe: a NaN jm1 is not > -1.
@@ -544,7 +631,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                 jm1[ln].partial_cmp(&-1.0),
                 Some(core::cmp::Ordering::Greater)
             );
-            if !update[ln] || inverted {
+            if !update.has(ln) || inverted {
                 continue;
             }
             let Some(rec) = ctx.materials.get(ids[ln]) else {
@@ -568,33 +655,34 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
             if D == 2 {
                 tau[3][ln] = s.zz * scale;
             }
-            ok[ln] = true;
+            ok = ok | Lanes::one(ln);
         }
     }
     // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
+    let mut sum = [0.0; W];
     for ln in 0..W {
-        let mut sum = jm1[ln] + hzz[ln];
+        sum[ln] = jm1[ln] + hzz[ln];
         for k in 0..ns {
-            sum += tau[k][ln];
+            sum[ln] += tau[k][ln];
         }
         for r in 0..D {
             for c in 0..D {
-                sum += h[r][c][ln];
+                sum[ln] += h[r][c][ln];
             }
         }
-        ok[ln] = ok[ln] && sum.is_finite();
     }
+    let ok = ok & Lanes::finite(&sum);
     for r in 0..D {
         for c in 0..D {
-            commit(p.h[r][c], start, &h[r][c], &ok);
+            commit(p.h[r][c], start, &h[r][c], ok);
         }
     }
     for k in 0..ns {
-        commit(p.tau[k], start, &tau[k], &ok);
+        commit(p.tau[k], start, &tau[k], ok);
     }
     if S::AXISYMMETRIC {
-        commit(p.hoop, start, &hzz, &ok);
+        commit(p.hoop, start, &hzz, ok);
     }
     ok
 }
@@ -679,21 +767,19 @@ pub(crate) fn particles<
         // `commit_gradient_affine`).
         let mut affine = [[[0.0; W]; D]; D];
         if APIC && !S::GRADIENT_AFFINE {
-            for ln in 0..W {
-                if live[ln] {
-                    let b = gather_affine(ctx, g, st.lane(ln));
-                    for r in 0..D {
-                        for c in 0..D {
-                            affine[r][c][ln] = b[r][c];
-                        }
+            for ln in live.iter() {
+                let b = gather_affine(ctx, g, st.lane(ln));
+                for r in 0..D {
+                    for c in 0..D {
+                        affine[r][c][ln] = b[r][c];
                     }
                 }
             }
         }
         let gathered = if FUSED_STRESS {
-            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, &live)
+            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, live)
         } else {
-            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, &live)
+            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, live)
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
@@ -701,9 +787,7 @@ pub(crate) fn particles<
         // scalar, 13 instructions per lane and axis).
         let mut v_new = [[0.0; W]; D];
         let mut x_new = [[0.0; W]; D];
-        let mut moved = [false; W];
-        let mut stopped = [false; W];
-        let mut escaped = [false; W];
+        let (mut finite, mut stopped, mut escaped) = (0, 0, 0);
         for q in (0..W).step_by(4) {
             let row = |c: &Lane| Row4::from_slice(&c[q..q + 4]);
             let mut sum = Row4::ZERO;
@@ -741,7 +825,7 @@ pub(crate) fn particles<
                     }
                 }
             }
-            let finite = sum.is_finite_mask().bitmask();
+            finite |= sum.is_finite_mask().bitmask() << q;
             let (mut open_any, mut wall_any) = (Mask4::splat(false), Mask4::splat(false));
             for a in 0..D {
                 let [lo_bc, hi_bc] = geom.faces[a];
@@ -767,54 +851,52 @@ pub(crate) fn particles<
                 x_new[a][q..q + 4].copy_from_slice(&xn[a].to_array());
                 v_new[a][q..q + 4].copy_from_slice(&vn[a].to_array());
             }
-            let (open_bits, wall_bits) = (open_any.bitmask(), wall_any.bitmask());
-            for i in 0..4 {
-                moved[q + i] = live[q + i] && finite & (1 << i) != 0;
-                escaped[q + i] = open_bits & (1 << i) != 0;
-                stopped[q + i] = wall_bits & (1 << i) != 0;
-            }
+            escaped |= open_any.bitmask() << q;
+            stopped |= wall_any.bitmask() << q;
         }
+        let moved = live & Lanes(finite);
         let ok = if FUSED_STRESS {
-            update_stress::<D, K, S>(ctx, p, start, &moved, &gathered)
+            update_stress::<D, K, S>(ctx, p, start, moved, &gathered)
         } else {
             moved
         };
         if APIC && FUSED_STRESS && S::GRADIENT_AFFINE {
-            commit_gradient_affine(p, start, l, &ok);
+            commit_gradient_affine(p, start, l, ok);
         }
         // Commit: updated lanes take the new state; live lanes that failed freeze.
-        let frozen: [bool; W] = core::array::from_fn(|ln| live[ln] && !ok[ln]);
+        let frozen = live.minus(ok);
         let zero = [0.0; W];
         for a in 0..D {
-            commit(p.v[a], start, &v_new[a], &ok);
-            commit(p.v[a], start, &zero, &frozen);
+            commit(p.v[a], start, &v_new[a], ok);
+            commit(p.v[a], start, &zero, frozen);
             if TO_NEXT {
-                let keep_all = [true; W];
-                let next: Lane =
-                    core::array::from_fn(|ln| if ok[ln] { x_new[a][ln] } else { x[a][ln] });
-                commit(p.x_next[a], start, &next, &keep_all);
+                // Lanes not updated keep the position of the start of the step.
+                let mut next = x[a];
+                for ln in ok.iter() {
+                    next[ln] = x_new[a][ln];
+                }
+                commit(p.x_next[a], start, &next, Lanes::ALL);
             } else {
-                commit(p.x[a], start, &x_new[a], &ok);
+                commit(p.x[a], start, &x_new[a], ok);
             }
         }
         if APIC && !S::GRADIENT_AFFINE {
             for r in 0..D {
                 for c in 0..D {
-                    commit(p.affine[r][c], start, &affine[r][c], &ok);
+                    commit(p.affine[r][c], start, &affine[r][c], ok);
                 }
             }
         }
-        for ln in 0..W {
-            if frozen[ln] {
-                p.status[start + ln] = FROZEN;
-                report.note_frozen((start + ln) as u32);
-            } else if ok[ln] && escaped[ln] {
-                p.status[start + ln] = ESCAPED;
-                report.escaped += 1;
-            } else if ok[ln] && stopped[ln] {
-                report.stopped += 1;
-            }
+        for ln in frozen.iter() {
+            p.status[start + ln] = FROZEN;
+            report.note_frozen((start + ln) as u32);
         }
+        let escaped = ok & Lanes(escaped);
+        for ln in escaped.iter() {
+            p.status[start + ln] = ESCAPED;
+        }
+        report.escaped += escaped.count();
+        report.stopped += (ok & Lanes(stopped)).minus(escaped).count();
         if TO_NEXT {
             let n = W.min(count - start);
             for t in 0..W {
@@ -862,25 +944,23 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
-        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, &live);
-        let ok = update_stress::<D, K, S>(ctx, p, start, &live, &gathered);
+        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, live);
+        let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered);
         if S::GRADIENT_AFFINE {
-            commit_gradient_affine(p, start, &gathered.l, &ok);
+            commit_gradient_affine(p, start, &gathered.l, ok);
         }
         let n = W.min(count - start);
-        for ln in 0..n {
+        for ln in live.minus(ok).iter() {
             let i = start + ln;
-            if live[ln] && !ok[ln] {
-                for a in 0..D {
-                    p.v[a][i] = 0.0;
-                    if COMMIT_NEXT {
-                        // Keep the position of the start of the step, as for any frozen particle.
-                        p.x_next[a][i] = p.x[a][i];
-                    }
+            for a in 0..D {
+                p.v[a][i] = 0.0;
+                if COMMIT_NEXT {
+                    // Keep the position of the start of the step, as for any frozen particle.
+                    p.x_next[a][i] = p.x[a][i];
                 }
-                p.status[i] = FROZEN;
-                report.note_frozen(i as u32);
             }
+            p.status[i] = FROZEN;
+            report.note_frozen(i as u32);
         }
         if COMMIT_NEXT {
             // x = x_next for the chunk's particles, as one copy per column.
