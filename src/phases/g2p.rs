@@ -92,13 +92,14 @@ impl Lanes {
         Lanes(bits)
     }
 
-    /// The lanes where `mask(row)` holds, `row` each group of four lanes as a [`Row4`]
-    /// (compares on vectors: one bit mask per four lanes).
+    /// The lanes whose value is above `bound` (compares on vectors, one bit mask per four
+    /// lanes; no closure, which might not be inlined: see `update_stress`).
     #[inline(always)]
-    fn where_rows(values: &Lane, mask: impl Fn(Row4) -> Mask4) -> Lanes {
+    fn above(values: &Lane, bound: Real) -> Lanes {
         let mut bits = 0;
         for q in (0..W).step_by(4) {
-            bits |= mask(Row4::from_slice(&values[q..q + 4])).bitmask() << q;
+            let row = Row4::from_slice(&values[q..q + 4]);
+            bits |= row.cmpgt(Row4::splat(bound)).bitmask() << q;
         }
         Lanes(bits)
     }
@@ -106,7 +107,14 @@ impl Lanes {
     /// The lanes whose value is finite.
     #[inline(always)]
     fn finite(values: &Lane) -> Lanes {
-        Lanes::where_rows(values, Row4::is_finite_mask)
+        let mut bits = 0;
+        for q in (0..W).step_by(4) {
+            bits |= Row4::from_slice(&values[q..q + 4])
+                .is_finite_mask()
+                .bitmask()
+                << q;
+        }
+        Lanes(bits)
     }
 
     /// Lane `ln` alone.
@@ -178,6 +186,11 @@ fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usiz
 /// axisymmetric: 9).
 const GATHERED: usize = 16;
 
+/// What the gathers of a chunk's lanes return, four results per [`Row4`], before the
+/// transpose into lane vectors. A pass makes one and refills it for every chunk (a new one per
+/// chunk cost a kilobyte memset each time).
+type GatherRows = [[Row4; GATHERED / 4]; W];
+
 /// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]`, the velocity gradient `l[a][b]` and,
 /// axisymmetric, the hoop rate `v_r / r` of every lane (zero where not gathered).
 struct Gathered<const D: usize> {
@@ -217,10 +230,14 @@ fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, 
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
     live: Lanes,
+    rows: &mut GatherRows,
 ) -> Gathered<D> {
-    let mut rows = [[Row4::ZERO; GATHERED / 4]; W];
-    for ln in live.iter() {
-        rows[ln] = gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln));
+    for ln in 0..W {
+        rows[ln] = if live.has(ln) {
+            gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln))
+        } else {
+            [Row4::ZERO; GATHERED / 4]
+        };
     }
     // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
     // (axisymmetric) when GRAD.
@@ -614,7 +631,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                     (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
                 }
                 // The eigenstrain must not invert the material either.
-                admissible = Lanes::where_rows(d, |d| d.cmpgt(Row4::splat(-1.0)));
+                admissible = Lanes::above(d, -1.0);
                 neo_hookean_lanes(&params, &he, &hzze, &jm1e, &mut tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
@@ -623,7 +640,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                 }
             }
         }
-        ok = admissible & update & Lanes::where_rows(&jm1, |j| j.cmpgt(Row4::splat(-1.0)));
+        ok = admissible & update & Lanes::above(&jm1, -1.0);
     } else {
         for ln in 0..W {
             // NaN-safe: a NaN jm1 is not > -1.
@@ -747,6 +764,7 @@ pub(crate) fn particles<
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let mut st = Stencils::<D, K, W>::default();
+    let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
@@ -777,9 +795,9 @@ pub(crate) fn particles<
             }
         }
         let gathered = if FUSED_STRESS {
-            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, live)
+            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, live, &mut rows)
         } else {
-            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, live)
+            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, live, &mut rows)
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
@@ -871,10 +889,15 @@ pub(crate) fn particles<
             commit(p.v[a], start, &zero, frozen);
             if TO_NEXT {
                 // Lanes not updated keep the position of the start of the step.
-                let mut next = x[a];
-                for ln in ok.iter() {
-                    next[ln] = x_new[a][ln];
-                }
+                let next = if ok == Lanes::ALL {
+                    x_new[a]
+                } else {
+                    let mut next = x[a];
+                    for ln in ok.iter() {
+                        next[ln] = x_new[a][ln];
+                    }
+                    next
+                };
                 commit(p.x_next[a], start, &next, Lanes::ALL);
             } else {
                 commit(p.x[a], start, &x_new[a], ok);
@@ -940,11 +963,13 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let mut st = Stencils::<D, K, W>::default();
+    let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
-        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, live);
+        let gathered =
+            gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, live, &mut rows);
         let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
