@@ -38,7 +38,7 @@ use crate::material::{
 };
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Row4, Shape1D, Stencil, Stencils};
+use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
 use crate::{Real, StepReport};
 
 /// Particles per chunk: a multiple of 4 (the vector code works on groups of 4 lanes) that
@@ -279,21 +279,25 @@ fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, 
 fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const GRAD: u8>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
-    st: &Stencil<D, K>,
+    st: LaneStencil<'_, D, K, W>,
 ) -> [Row4; GATHERED / 4] {
     let geom = &ctx.geom;
     let dt = ctx.dt;
     // The pass checked that every column has this length (and that the remap columns exist
     // when GRAD reads them).
     let len = g.len();
-    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
+    if !rows_fit(
+        st.base(),
+        Stencil::<D, K>::last_row_offset(geom.stride),
+        len,
+    ) {
         // Unreachable by construction; keeps the unchecked row access below sound.
         return [Row4::ZERO; GATHERED / 4];
     }
     // Separable form ([`Stencil::row`]): per row, the nodal values are weighted by the row's
     // scalar factors r[b] into 4-wide partial sums over the rows; the x weights are applied once
     // at the end, and the results summed across x four at a time.
-    let (wx, dwx) = (st.w[0], st.dw[0]);
+    let (wx, dwx) = (st.wx(), st.dwx());
     // sum_rows r[0] v_i, sum_rows r[0] a_i (over x still separate).
     let mut rv = [Row4::ZERO; D];
     let mut ra = [Row4::ZERO; D];
@@ -354,7 +358,7 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
             }
             if S::AXISYMMETRIC && a == 0 {
                 // v_r / r = sum_i u_r,i t_i w_z: the x sum of the rows' z-weighted u_r.
-                terms[n + D * D] = st.t * ux;
+                terms[n + D * D] = st.t() * ux;
             }
         }
     }
@@ -375,12 +379,11 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
 fn gather_affine<const D: usize, const K: usize>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
-    st: &Stencil<D, K>,
+    st: LaneStencil<'_, D, K, W>,
 ) -> [[Real; D]; D] {
-    let e = &st.e;
     let geom = &ctx.geom;
     if !rows_fit(
-        st.base,
+        st.base(),
         Stencil::<D, K>::last_row_offset(geom.stride),
         g.len(),
     ) {
@@ -393,9 +396,9 @@ fn gather_affine<const D: usize, const K: usize>(
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
             let re: [Real; D] = core::array::from_fn(|b| match (b, D) {
-                (1, 3) => e[1][j] * st.w[2][k],
-                (2, _) => st.w[1][j] * e[2][k],
-                (1, _) => e[1][j],
+                (1, 3) => st.e(1, j) * st.w(2, k),
+                (2, _) => st.w(1, j) * st.e(2, k),
+                (1, _) => st.e(1, j),
                 _ => 0.0,
             });
             for a in 0..D {
@@ -411,9 +414,9 @@ fn gather_affine<const D: usize, const K: usize>(
     core::array::from_fn(|a| {
         core::array::from_fn(|b| {
             if b == 0 {
-                (e[0] * u0[a]).element_sum()
+                (st.ex() * u0[a]).element_sum()
             } else {
-                (st.w[0] * ue[a][b]).element_sum()
+                (st.wx() * ue[a][b]).element_sum()
             }
         })
     })
@@ -936,7 +939,7 @@ pub(crate) fn particles<
                             // Zero for a family that keeps the gradient form: its C_p is
                             // taken from this re-map (see `commit_gradient_affine`).
                             core::array::from_fn(|c| {
-                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d[c])
+                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c))
                             })
                         }),
                     };

@@ -11,7 +11,7 @@ use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::{Row4, Shape1D, Stencil, Stencils};
+use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
 use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
@@ -103,7 +103,7 @@ pub(crate) fn scatter<
                 force: core::array::from_fn(|a| f_ext[a][ln]),
                 affine: core::array::from_fn(|a| {
                     core::array::from_fn(|b| {
-                        affine_velocity::<K, S>(affine[a][b][ln], stn.inv_d[b])
+                        affine_velocity::<K, S>(affine[a][b][ln], stn.inv_d(b))
                     })
                 }),
             };
@@ -163,27 +163,30 @@ pub(crate) fn scatter_one<
 >(
     ctx: &Ctx<'_, D>,
     pt: &Scattered<D>,
-    st: &Stencil<D, K>,
+    st: LaneStencil<'_, D, K, W>,
     g: &mut GridCols<'_, D>,
 ) {
     let (m, v, tau) = (pt.m, &pt.v, &pt.tau);
     let geom = &ctx.geom;
     // The pass checked that every column has this length.
     let len = g.len();
-    if !rows_fit(st.base, Stencil::<D, K>::last_row_offset(geom.stride), len) {
+    if !rows_fit(
+        st.base(),
+        Stencil::<D, K>::last_row_offset(geom.stride),
+        len,
+    ) {
         return; // Unreachable by construction; keeps the unchecked row access below sound.
     }
     // Separable form (seeds/000 eqs 16-17): node (i, j, k) has S = wx_i wy_j wz_k and
     // G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k). The particle's factors times the
     // x weights (4-wide vectors) are multiplied by the y factors once per j; each row (j, k)
     // then costs one multiply by wz_k per quantity, plus one by dwz_k for the force (3D).
-    let (wx, dwx) = (st.w[0], st.dw[0]);
-    let (wy, dwy) = (st.w[1], st.dw[1]);
+    let (wx, dwx) = (st.wx(), st.dwx());
     let mass_x = wx * m;
     // Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC); S (x_b,i - x_b,p)
     // has the form of G_b with the moments e in place of dw: mom_x[a][b] = m C_ab times ex
     // (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
-    let (ex, ey) = (st.e[0], st.e[1]);
+    let ex = st.ex();
     let mom_x: [[Row4; D]; D] = core::array::from_fn(|a| {
         core::array::from_fn(|b| {
             let plain = if b == 0 { wx * (m * v[a]) } else { Row4::ZERO };
@@ -204,7 +207,7 @@ pub(crate) fn scatter_one<
                 f += wx * pt.force[a];
             }
             if S::AXISYMMETRIC && a == 0 && b == 0 {
-                f += st.t * (-m * pt.hoop);
+                f += st.t() * (-m * pt.hoop);
             }
             f
         })
@@ -212,26 +215,26 @@ pub(crate) fn scatter_one<
     for j in 0..K {
         // Per y node j: mass times wy_j; the momentum's and force's terms that carry wz_k
         // (`_wz`: x and y factors) and the z factor dwz_k or ez_k (`_dz`, 3D only).
-        let mass_j = mass_x * wy[j];
+        let (wy, dwy, ey) = (st.w(1, j), st.dw(1, j), st.e(1, j));
+        let mass_j = mass_x * wy;
         let mom_wz: [Row4; D] = core::array::from_fn(|a| {
             if APIC {
-                mom_x[a][0] * wy[j] + mom_x[a][1] * ey[j]
+                mom_x[a][0] * wy + mom_x[a][1] * ey
             } else {
-                mom_x[a][0] * wy[j]
+                mom_x[a][0] * wy
             }
         });
         let mom_dz: [Row4; D] = core::array::from_fn(|a| {
             if APIC && D == 3 {
-                mom_x[a][D - 1] * wy[j]
+                mom_x[a][D - 1] * wy
             } else {
                 Row4::ZERO
             }
         });
-        let f_wz: [Row4; D] =
-            core::array::from_fn(|a| force_x[a][0] * wy[j] + force_x[a][1] * dwy[j]);
+        let f_wz: [Row4; D] = core::array::from_fn(|a| force_x[a][0] * wy + force_x[a][1] * dwy);
         let f_dwz: [Row4; D] = core::array::from_fn(|a| {
             if D == 3 {
-                force_x[a][D - 1] * wy[j]
+                force_x[a][D - 1] * wy
             } else {
                 Row4::ZERO
             }
@@ -240,7 +243,7 @@ pub(crate) fn scatter_one<
             let row = st.row_start(j, k, geom.stride);
             // The z factors (1 and 0 in 2D, where the products are skipped).
             let (wz, dwz, ez) = if D == 3 {
-                (st.w[D - 1][k], st.dw[D - 1][k], st.e[D - 1][k])
+                (st.w(D - 1, k), st.dw(D - 1, k), st.e(D - 1, k))
             } else {
                 (1.0, 0.0, 0.0)
             };

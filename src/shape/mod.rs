@@ -153,12 +153,15 @@ pub struct Stencil<const D: usize, const K: usize> {
 }
 
 /// The stencils of `W` particles. They are computed lane-fastest (loops over lanes the compiler
-/// vectorises), then transposed four lanes at a time into one [`Stencil`] per particle. A pass
-/// makes one `Stencils` and refills it for every chunk ([`Stencils::compute`]): building a new
-/// one per chunk zeroed and copied over a kilobyte each time.
+/// vectorises); the x factors, which the hot loops multiply whole rows by, are then transposed
+/// four lanes at a time into one [`XFactors`] per particle, while the factors along the other
+/// axes, which they read one at a time, stay where they were computed ([`LaneStencil`];
+/// transposing those too cost about 6 % of a 2D step). A pass makes one `Stencils` and refills
+/// it for every chunk ([`Stencils::compute`]): building a new one per chunk zeroed and copied
+/// over a kilobyte each time.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencils<const D: usize, const K: usize, const W: usize> {
-    lanes: [Stencil<D, K>; W],
+    lanes: [XFactors<D>; W],
     /// Lane-fastest weights and derivatives, `w[axis][k][lane]`; rows `k >= K` stay zero.
     w: [[[Real; W]; ROW]; D],
     dw: [[[Real; W]; ROW]; D],
@@ -166,15 +169,134 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     t: [[Real; W]; ROW],
 }
 
+/// One particle's first node and x factors in a [`Stencils`], with the fields of [`Stencil`]
+/// of the same names (`w`, `dw`, `e` of the first axis).
+#[derive(Clone, Copy, Debug)]
+pub struct XFactors<const D: usize> {
+    base: usize,
+    w: Row4,
+    dw: Row4,
+    e: Row4,
+    inv_d: [Real; D],
+    t: Row4,
+}
+
+/// One particle's stencil in a [`Stencils`] ([`Stencils::lane`]): what [`Stencil`] holds, read
+/// through accessors: the x factors as vectors, the factors along axis `a >= 1` as scalars.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneStencil<'a, const D: usize, const K: usize, const W: usize> {
+    x: &'a XFactors<D>,
+    all: &'a Stencils<D, K, W>,
+    ln: usize,
+}
+
+impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
+    /// [`Stencil::base`].
+    #[inline(always)]
+    pub fn base(&self) -> usize {
+        self.x.base
+    }
+
+    /// The x weights, `w[0]` of [`Stencil::w`].
+    #[inline(always)]
+    pub fn wx(&self) -> Row4 {
+        self.x.w
+    }
+
+    /// The x derivatives, `dw[0]` of [`Stencil::dw`].
+    #[inline(always)]
+    pub fn dwx(&self) -> Row4 {
+        self.x.dw
+    }
+
+    /// The x first moments, `e[0]` of [`Stencil::e`].
+    #[inline(always)]
+    pub fn ex(&self) -> Row4 {
+        self.x.e
+    }
+
+    /// [`Stencil::t`].
+    #[inline(always)]
+    pub fn t(&self) -> Row4 {
+        self.x.t
+    }
+
+    /// [`Stencil::inv_d`] of axis `a`.
+    #[inline(always)]
+    pub fn inv_d(&self, a: usize) -> Real {
+        self.x.inv_d[a]
+    }
+
+    /// Weight `w[a][k]` of [`Stencil::w`], for an axis `a >= 1`.
+    #[inline(always)]
+    pub fn w(&self, a: usize, k: usize) -> Real {
+        self.all.w[a][k][self.ln]
+    }
+
+    /// Derivative `dw[a][k]` of [`Stencil::dw`], for an axis `a >= 1`.
+    #[inline(always)]
+    pub fn dw(&self, a: usize, k: usize) -> Real {
+        self.all.dw[a][k][self.ln]
+    }
+
+    /// First moment `e[a][k]` of [`Stencil::e`], for an axis `a >= 1`.
+    #[inline(always)]
+    pub fn e(&self, a: usize, k: usize) -> Real {
+        self.all.e[a][k][self.ln]
+    }
+
+    /// [`Stencil::row`].
+    #[inline(always)]
+    pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> (usize, [Real; D]) {
+        let (wz, dwz) = if D == 3 {
+            (self.w(D - 1, k), self.dw(D - 1, k))
+        } else {
+            (0.0, 0.0)
+        };
+        (
+            row_start(self.x.base, j, k, stride),
+            row_factors(self.w(1, j), self.dw(1, j), wz, dwz),
+        )
+    }
+
+    /// Flat index of the first node of row `j` along y, layer `k` along z.
+    #[inline(always)]
+    pub fn row_start(&self, j: usize, k: usize, stride: [usize; D]) -> usize {
+        row_start(self.x.base, j, k, stride)
+    }
+}
+
+/// Flat index of the first node of row `j` along y, layer `k` along z, of a stencil whose
+/// first node is `base`.
+#[inline(always)]
+fn row_start<const D: usize>(base: usize, j: usize, k: usize, stride: [usize; D]) -> usize {
+    base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 }
+}
+
+/// The factors `r` of a row ([`Stencil::row`]) from its y weight and derivative and, in 3D,
+/// its z weight and derivative.
+#[inline(always)]
+fn row_factors<const D: usize>(wy: Real, dwy: Real, wz: Real, dwz: Real) -> [Real; D] {
+    if D == 3 {
+        core::array::from_fn(|b| match b {
+            0 => wy * wz,
+            1 => dwy * wz,
+            _ => wy * dwz,
+        })
+    } else {
+        core::array::from_fn(|b| if b == 0 { wy } else { dwy })
+    }
+}
+
 impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, W> {
     fn default() -> Self {
         const { assert!(W % 4 == 0 && K <= ROW) };
         Stencils {
-            lanes: [Stencil {
+            lanes: [XFactors {
                 base: 0,
-                w: [Row4::ZERO; D],
-                dw: [Row4::ZERO; D],
-                e: [Row4::ZERO; D],
+                w: Row4::ZERO,
+                dw: Row4::ZERO,
+                e: Row4::ZERO,
                 inv_d: [0.0; D],
                 t: Row4::ZERO,
             }; W],
@@ -245,17 +367,17 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
             }
         }
         for l0 in (0..W).step_by(4) {
-            for a in 0..D {
-                let tw = transpose4(&w[a], l0);
-                let tdw = transpose4(&dw[a], l0);
+            let tw = transpose4(&w[0], l0);
+            let tdw = transpose4(&dw[0], l0);
+            for i in 0..4 {
+                self.lanes[l0 + i].w = tw[i];
+                self.lanes[l0 + i].dw = tdw[i];
+            }
+            if AFFINE {
+                let te = transpose4(&e[0], l0);
                 for i in 0..4 {
-                    self.lanes[l0 + i].w[a] = tw[i];
-                    self.lanes[l0 + i].dw[a] = tdw[i];
-                }
-                if AFFINE {
-                    let te = transpose4(&e[a], l0);
-                    for i in 0..4 {
-                        self.lanes[l0 + i].e[a] = te[i];
+                    self.lanes[l0 + i].e = te[i];
+                    for a in 0..D {
                         self.lanes[l0 + i].inv_d[a] = inv_d[a][l0 + i];
                     }
                 }
@@ -274,8 +396,12 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
 
     /// The stencil of lane `ln`.
     #[inline(always)]
-    pub fn lane(&self, ln: usize) -> &Stencil<D, K> {
-        &self.lanes[ln]
+    pub fn lane(&self, ln: usize) -> LaneStencil<'_, D, K, W> {
+        LaneStencil {
+            x: &self.lanes[ln],
+            all: self,
+            ln,
+        }
     }
 }
 
@@ -449,23 +575,15 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     #[inline(always)]
     pub fn row(&self, j: usize, k: usize, stride: [usize; D]) -> (usize, [Real; D]) {
         let (w, dw) = (&self.w, &self.dw);
-        let row = self.row_start(j, k, stride);
-        let r: [Real; D] = if D == 3 {
-            core::array::from_fn(|b| match b {
-                0 => w[1][j] * w[D - 1][k],
-                1 => dw[1][j] * w[D - 1][k],
-                _ => w[1][j] * dw[D - 1][k],
-            })
+        let (wz, dwz) = if D == 3 {
+            (w[D - 1][k], dw[D - 1][k])
         } else {
-            core::array::from_fn(|b| if b == 0 { w[1][j] } else { dw[1][j] })
+            (0.0, 0.0)
         };
-        (row, r)
-    }
-
-    /// Flat index of the first node of row `j` along y, layer `k` along z.
-    #[inline(always)]
-    pub fn row_start(&self, j: usize, k: usize, stride: [usize; D]) -> usize {
-        self.base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 }
+        (
+            row_start(self.base, j, k, stride),
+            row_factors(w[1][j], dw[1][j], wz, dwz),
+        )
     }
 
     /// Calls `f(node, S_ip, G_ip)` for every node of the stencil (K^D of them), x fastest.
