@@ -543,22 +543,28 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     for k in (1..n).rev() {
         let mut next = a;
         mul_add_lanes(&mut next, &a, &q);
-        scale_lanes(&mut next, INV[k]);
+        if k > 1 {
+            // INV[1] = 1: the last scaling would change nothing.
+            scale_lanes(&mut next, INV[k]);
+        }
         q = next;
     }
-    // H <- H + Q + Q H.
+    // H <- H + Q + Q H, in one loop per entry: (H + sum_m Q_rm H_mc) + Q_rc.
     let mut h_old = [[[0.0; W]; D]; D];
     for r in 0..D {
         for c in 0..D {
             h_old[r][c] = load(p.h[r][c], start);
         }
     }
-    let mut h = h_old;
-    mul_add_lanes(&mut h, &q, &h_old);
+    let mut h = [[[0.0; W]; D]; D];
     for r in 0..D {
         for c in 0..D {
             for ln in 0..W {
-                h[r][c][ln] += q[r][c][ln];
+                let mut v = h_old[r][c][ln];
+                for m in 0..D {
+                    v += q[r][m][ln] * h_old[m][c][ln];
+                }
+                h[r][c][ln] = v + q[r][c][ln];
             }
         }
     }
