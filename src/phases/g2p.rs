@@ -28,6 +28,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
+use super::lanes::{commit, load, Lane, Lanes, Mask4, W};
 use super::p2g::{affine_velocity, mode, scatter_lane, scatter_one, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
@@ -41,21 +42,6 @@ use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
 use crate::{Real, StepReport};
 
-/// Particles per chunk: a multiple of 4 (the vector code works on groups of 4 lanes) that
-/// divides the particle columns' padding ([`crate::CHUNK`]), so a chunk never reads or writes
-/// past a column. 16 measured faster than 8 in the AVX2 instance (its lane loops run on two
-/// 256-bit registers per value).
-pub(crate) const W: usize = 16;
-const _: () = assert!(W % 4 == 0 && crate::CHUNK % W == 0);
-
-/// The comparison mask of four [`Row4`] lanes.
-#[cfg(not(feature = "f64"))]
-type Mask4 = glam::BVec4A;
-#[cfg(feature = "f64")]
-type Mask4 = glam::BVec4;
-
-/// One value per lane of a chunk.
-pub(crate) type Lane = [Real; W];
 /// A D x D matrix per lane, `m[a][b][lane]`.
 type LaneMat<const D: usize> = [[Lane; D]; D];
 
@@ -68,110 +54,6 @@ mod grad {
     pub const UPDATED: u8 = 1;
     /// The wall-constrained stress-update velocity (USF, MUSL).
     pub const REMAP: u8 = 2;
-}
-
-/// A set of a chunk's lanes, one bit each (bit `ln` for lane `ln`). The passes keep their
-/// per-lane flags (live, updated, frozen, stopped, escaped) as such sets: an array of `bool`s
-/// cost a byte insert per lane and flag, about 7 % of the default step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Lanes(u32);
-
-const _: () = assert!(W <= 32);
-
-impl Lanes {
-    pub const NONE: Lanes = Lanes(0);
-    pub const ALL: Lanes = Lanes(u32::MAX >> (32 - W));
-
-    /// The lanes `ln` for which `f(ln)` holds.
-    #[inline(always)]
-    pub fn from_fn(mut f: impl FnMut(usize) -> bool) -> Lanes {
-        let mut bits = 0;
-        for ln in 0..W {
-            bits |= (f(ln) as u32) << ln;
-        }
-        Lanes(bits)
-    }
-
-    /// The lanes whose value is above `bound` (compares on vectors, one bit mask per four
-    /// lanes; no closure, which might not be inlined: see `update_stress`).
-    #[inline(always)]
-    fn above(values: &Lane, bound: Real) -> Lanes {
-        let mut bits = 0;
-        for q in (0..W).step_by(4) {
-            let row = Row4::from_slice(&values[q..q + 4]);
-            bits |= row.cmpgt(Row4::splat(bound)).bitmask() << q;
-        }
-        Lanes(bits)
-    }
-
-    /// The lanes whose value is finite.
-    #[inline(always)]
-    fn finite(values: &Lane) -> Lanes {
-        let mut bits = 0;
-        for q in (0..W).step_by(4) {
-            bits |= Row4::from_slice(&values[q..q + 4])
-                .is_finite_mask()
-                .bitmask()
-                << q;
-        }
-        Lanes(bits)
-    }
-
-    /// Lane `ln` alone.
-    #[inline(always)]
-    pub fn one(ln: usize) -> Lanes {
-        Lanes(1 << ln)
-    }
-
-    #[inline(always)]
-    pub fn has(self, ln: usize) -> bool {
-        self.0 >> ln & 1 != 0
-    }
-
-    #[inline(always)]
-    pub fn is_empty(self) -> bool {
-        self.0 == 0
-    }
-
-    #[inline(always)]
-    pub fn count(self) -> u32 {
-        self.0.count_ones()
-    }
-
-    /// The lanes in the set, in increasing order.
-    #[inline(always)]
-    pub fn iter(self) -> impl Iterator<Item = usize> {
-        let mut bits = self.0;
-        core::iter::from_fn(move || {
-            (bits != 0).then(|| {
-                let ln = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                ln
-            })
-        })
-    }
-
-    /// The lanes in `self` but not in `other`.
-    #[inline(always)]
-    pub fn minus(self, other: Lanes) -> Lanes {
-        Lanes(self.0 & !other.0)
-    }
-}
-
-impl core::ops::BitAnd for Lanes {
-    type Output = Lanes;
-    #[inline(always)]
-    fn bitand(self, o: Lanes) -> Lanes {
-        Lanes(self.0 & o.0)
-    }
-}
-
-impl core::ops::BitOr for Lanes {
-    type Output = Lanes;
-    #[inline(always)]
-    fn bitor(self, o: Lanes) -> Lanes {
-        Lanes(self.0 | o.0)
-    }
 }
 
 /// Lanes `start..start + W` that hold active particles (`< count`).
@@ -467,31 +349,6 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
         }
     });
     st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
-}
-
-/// `dst[lane] = if keep has lane { new[lane] } else { dst[lane] }` over a column slice.
-#[inline(always)]
-fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: Lanes) {
-    if let Some(d) = dst.get_mut(start..start + W) {
-        if keep == Lanes::ALL {
-            // The common case: every lane was updated.
-            d.copy_from_slice(new);
-        } else {
-            for l in keep.iter() {
-                d[l] = new[l];
-            }
-        }
-    }
-}
-
-/// Loads lanes `start..start + W` of a column (zeros past its end), with one bounds check for
-/// the chunk (a check per lane kept `from_fn` from being inlined).
-#[inline(always)]
-pub(crate) fn load<T: Copy + Default>(col: &[T], start: usize) -> [T; W] {
-    col.get(start..start + W)
-        .and_then(|c| <&[T; W]>::try_from(c).ok())
-        .copied()
-        .unwrap_or([T::default(); W])
 }
 
 /// `m *= s`, lane by lane.
@@ -814,7 +671,7 @@ pub(crate) fn particles<
         // scalar, 13 instructions per lane and axis).
         let mut v_new = [[0.0; W]; D];
         let mut x_new = [[0.0; W]; D];
-        let (mut finite, mut stopped, mut escaped) = (0, 0, 0);
+        let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
         for q in (0..W).step_by(4) {
             let row = |c: &Lane| Row4::from_slice(&c[q..q + 4]);
             let mut sum = Row4::ZERO;
@@ -852,7 +709,7 @@ pub(crate) fn particles<
                     }
                 }
             }
-            finite |= sum.is_finite_mask().bitmask() << q;
+            finite = finite | Lanes::group(q, sum.is_finite_mask());
             let (mut open_any, mut wall_any) = (Mask4::splat(false), Mask4::splat(false));
             for a in 0..D {
                 let [lo_bc, hi_bc] = geom.faces[a];
@@ -878,10 +735,10 @@ pub(crate) fn particles<
                 x_new[a][q..q + 4].copy_from_slice(&xn[a].to_array());
                 v_new[a][q..q + 4].copy_from_slice(&vn[a].to_array());
             }
-            escaped |= open_any.bitmask() << q;
-            stopped |= wall_any.bitmask() << q;
+            escaped = escaped | Lanes::group(q, open_any);
+            stopped = stopped | Lanes::group(q, wall_any);
         }
-        let moved = live & Lanes(finite);
+        let moved = live & finite;
         let ok = if FUSED_STRESS {
             update_stress::<D, K, S>(ctx, p, start, moved, &gathered)
         } else {
@@ -923,12 +780,12 @@ pub(crate) fn particles<
             p.status[start + ln] = FROZEN;
             report.note_frozen((start + ln) as u32);
         }
-        let escaped = ok & Lanes(escaped);
+        let escaped = ok & escaped;
         for ln in escaped.iter() {
             p.status[start + ln] = ESCAPED;
         }
         report.escaped += escaped.count();
-        report.stopped += (ok & Lanes(stopped)).minus(escaped).count();
+        report.stopped += (ok & stopped).minus(escaped).count();
         if TO_NEXT {
             let n = W.min(count - start);
             for t in 0..W {

@@ -8,6 +8,7 @@
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
 mod isa;
+pub(crate) mod lanes;
 pub(crate) mod p2g;
 pub(crate) mod transport;
 

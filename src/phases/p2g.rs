@@ -6,7 +6,8 @@
 //! affine momentum `S_ip m_p C_p (x_i - x_p)` (seeds/001). Tractions (eq 21) are a pass of
 //! their own over the traction table ([`tractions`]).
 
-use super::g2p::{load, stencils, Lane, W};
+use super::g2p::stencils;
+use super::lanes::{load, Lane, W};
 use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::math::Mat;
