@@ -432,7 +432,7 @@ static void effects2d(void) {
     static const double particle_t[] = {0.0}, particle_v[] = {0.25};
     static const double ramp_t[] = {0.0, 0.03125, 0.0625}, ramp_v[] = {0.0, 1.0, 0.0};
     MpmWorldDef def = mpm_world_def_default();
-    MpmMaterialDef rubber = mpm_material_def_default();
+    MpmMaterialDef rubber = conducting_rubber();
     uint32_t id = 0, i, n;
     MpmIdRange ids;
     void *raw;
@@ -471,7 +471,6 @@ static void effects2d(void) {
     def.effects.diffusion.faces[MPM_FACE_Y_MIN].value = (mpm_real)0.25;
     w = open_scene(&def, &raw);
 
-    rubber = conducting_rubber();
     CALL("add rubber", mpm_world_add_material(w, &rubber, &id));
     printf("materials %lu\n", (unsigned long)id);
     CALL("fill_box", mpm_world_fill_box(w, v3(0.25f, 0.125f, 0), v3(0.5f, 0.25f, 0), id,
@@ -582,7 +581,7 @@ static void effects3d(void) {
 
 static void axisym2d(void) {
     MpmWorldDef def = mpm_world_def_default();
-    MpmMaterialDef rubber = mpm_material_def_default();
+    MpmMaterialDef rubber = conducting_rubber();
     uint32_t id = 0, i, n;
     MpmIdRange ids;
     void *raw;
@@ -609,7 +608,6 @@ static void axisym2d(void) {
 
     /* The conducting rubber, stress-free at 256 K and no concentration; 56 K more is a strain
        of 1.4 %. */
-    rubber = conducting_rubber();
     rubber.thermal_expansion = (mpm_real)(1.0 / 4096.0);
     rubber.reference_temperature = (mpm_real)256.0;
     rubber.swelling = (mpm_real)0.03125;
