@@ -25,7 +25,9 @@
 //! effect's marginal cost). `thermal_expansion` declares heat conduction too (its cost includes
 //! heat's); `axisymmetric` makes the 2D scene axisymmetric (same grid and block, the origin
 //! moved so that the block sits at r >= 0) and is 2D only: with `--dim 3` step_cost says so on
-//! stderr and exits with code 1.
+//! stderr and exits with code 1. `--grid-scale N` (default 1) puts the same block in the
+//! middle of a grid N times larger per axis: what empty grid costs (the grid passes work on
+//! the nodes the particles reach).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -34,7 +36,7 @@ use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
-[--simd auto|baseline] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
+[--simd auto|baseline] [--grid-scale N (1..=16)] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
 body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
@@ -53,6 +55,7 @@ struct Options {
     steps: u32,
     simd: Simd,
     effect: Effect,
+    grid_scale: u32,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -71,6 +74,7 @@ fn parse_options() -> Options {
         steps: 10,
         simd: Simd::Detect,
         effect: Effect::None,
+        grid_scale: 1,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -92,6 +96,7 @@ fn parse_options() -> Options {
             "--steps",
             "--simd",
             "--effect",
+            "--grid-scale",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -159,6 +164,12 @@ fn parse_options() -> Options {
                     None => bad(),
                 }
             }
+            "--grid-scale" => {
+                o.grid_scale = match value.parse::<u32>() {
+                    Ok(n) if (1..=16).contains(&n) => n,
+                    _ => bad(),
+                }
+            }
             _ => unreachable!("checked against the known options"),
         }
     }
@@ -213,6 +224,13 @@ fn main() {
     let o = parse_options();
     let axes = o.dim as usize;
     let (grid, first, block) = scene(o.dim);
+    // --grid-scale: the same block in the middle of a grid N times larger per axis.
+    let axes_scaled = |v: [u32; 3], f: &dyn Fn(u32, usize) -> u32| -> [u32; 3] {
+        core::array::from_fn(|a| if a < axes { f(v[a], a) } else { v[a] })
+    };
+    let n = o.grid_scale;
+    let first = axes_scaled(first, &|f, a| f + grid[a] * (n - 1) / 2);
+    let grid = axes_scaled(grid, &|g, _| g * n);
     let mut scene = match Scene::new(&SceneDef {
         dimension: if o.dim == 3 {
             Dimension::ThreeD

@@ -3,7 +3,7 @@
 
 use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, WorldDef};
 use crate::effects::Feedback;
-use crate::grid::{Geom, GridCols};
+use crate::grid::{Geom, GridCols, NodeBox};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
 use crate::material::{eigenstrain_part, elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
@@ -1011,8 +1011,12 @@ impl<'a> World<'a> {
             Some(d) => (d.grid.at(time) + feedback_alpha, d.particle.at(time)),
             None => (0.0, 0.0),
         };
+        let geom = Geom::<D>::new(def);
+        let active =
+            NodeBox::of_particles::<K, S>(&geom, &p.x.each_ref().map(|c| &**c), p.status, count);
         let ctx = Ctx {
-            geom: Geom::<D>::new(def),
+            geom,
+            active,
             dt,
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
             beta: def.flip_beta,
@@ -1477,7 +1481,7 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
                 transport::substep(s, ctx, p, count, g, f, t);
             }
         }
-        grid_update::reset(g);
+        grid_update::reset(ctx, g);
         match self.order {
             UpdateOrder::Usf => {
                 I::scatter::<D, K, S, { mode::MASS_MOMENTUM }, false, APIC>(s, ctx, p, count, g);
@@ -1514,7 +1518,7 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
-    /// Zero the grid columns.
+    /// Zero the grid columns on the nodes the particles reach.
     ResetGrid,
     /// Reset, then scatter mass, momentum and force to the grid.
     ParticleToGrid,
@@ -1539,10 +1543,10 @@ impl Kernel for PhaseRun {
         g: &mut GridCols<'_, D>,
     ) {
         match self.phase {
-            Phase::ResetGrid => grid_update::reset(g),
+            Phase::ResetGrid => grid_update::reset(ctx, g),
             Phase::ParticleToGrid => {
                 p.freeze_domain_stretch::<K, S>(count);
-                grid_update::reset(g);
+                grid_update::reset(ctx, g);
                 I::scatter::<D, K, S, { mode::ALL }, false, false>(s, ctx, p, count, g);
             }
             Phase::GridUpdate => {

@@ -6,13 +6,24 @@ use super::Ctx;
 use crate::grid::GridCols;
 use crate::Real;
 
-/// Zeroes every nodal column the step accumulates into.
-pub(crate) fn reset<const D: usize>(g: &mut GridCols<'_, D>) {
-    g.mass.fill(0.0);
-    for a in 0..D {
-        g.vel[a].fill(0.0);
-        g.acc[a].fill(0.0);
-        g.remap[a].fill(0.0);
+/// Zeroes every nodal column the step accumulates into, on the nodes of the substep
+/// ([`crate::grid::NodeBox`]).
+pub(crate) fn reset<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    let len = g.len();
+    ctx.active.for_each_line(ctx.geom.stride, len, |r| {
+        zero(g.mass, r.clone());
+        for a in 0..D {
+            zero(g.vel[a], r.clone());
+            zero(g.acc[a], r.clone());
+            zero(g.remap[a], r.clone());
+        }
+    });
+}
+
+/// Zeroes `col[r]` (nothing for an empty column: the remap columns with USL).
+fn zero(col: &mut [Real], r: core::ops::Range<usize>) {
+    if let Some(c) = col.get_mut(r) {
+        c.fill(0.0);
     }
 }
 
@@ -23,16 +34,20 @@ fn divide_by_mass<const D: usize>(
     cols: &mut [&mut [Real]; D],
     add: [Real; D],
 ) {
-    for (a, col) in cols.iter_mut().enumerate() {
-        let n = col.len().min(mass.len());
-        for (c, &m) in col[..n].iter_mut().zip(&mass[..n]) {
-            *c = if m > ctx.mass_cutoff {
-                *c / m + add[a]
-            } else {
-                0.0
-            };
+    let len = mass.len();
+    ctx.active.for_each_line(ctx.geom.stride, len, |r| {
+        for (a, col) in cols.iter_mut().enumerate() {
+            if let (Some(col), Some(mass)) = (col.get_mut(r.clone()), mass.get(r.clone())) {
+                for (c, &m) in col.iter_mut().zip(mass) {
+                    *c = if m > ctx.mass_cutoff {
+                        *c / m + add[a]
+                    } else {
+                        0.0
+                    };
+                }
+            }
         }
-    }
+    });
 }
 
 /// Axisymmetric: folds the nodes before the axis onto their images, or reads the images back
@@ -42,9 +57,9 @@ fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], 
     for (a, col) in cols.iter_mut().enumerate() {
         let sign = if a == 0 { -1.0 } else { 1.0 };
         if fold {
-            ctx.geom.fold_mirror(col, sign);
+            ctx.geom.fold_mirror(col, sign, &ctx.active);
         } else {
-            ctx.geom.mirror(col, sign);
+            ctx.geom.mirror(col, sign, &ctx.active);
         }
     }
 }
@@ -52,7 +67,7 @@ fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], 
 /// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.geom.fold_mirror(g.mass, 1.0);
+    ctx.geom.fold_mirror(g.mass, 1.0, &ctx.active);
     mirror_vector(ctx, &mut g.vel, true);
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
     mirror_vector(ctx, &mut g.vel, false);
@@ -66,7 +81,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
     mirror_vector(ctx, &mut g.acc, true);
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
     let inv_dt = 1.0 / ctx.dt;
-    ctx.geom.for_each_wall_node(|i, axes| {
+    ctx.geom.for_each_wall_node(&ctx.active, |i, axes| {
         for a in 0..D {
             if axes[a] {
                 g.acc[a][i] = -g.vel[a][i] * inv_dt;
@@ -87,14 +102,19 @@ pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<
 /// USF: the lagged velocity with the walls applied, for the stress update; the unconstrained
 /// one stays in `vel` for the particle update and the wall reaction.
 pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    for a in 0..D {
-        g.remap[a].copy_from_slice(g.vel[a]);
-    }
+    ctx.active.for_each_line(ctx.geom.stride, g.len(), |r| {
+        for a in 0..D {
+            if let (Some(to), Some(from)) = (g.remap[a].get_mut(r.clone()), g.vel[a].get(r.clone()))
+            {
+                to.copy_from_slice(from);
+            }
+        }
+    });
     constrain_remap(ctx, g);
 }
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.geom.for_each_wall_node(|i, axes| {
+    ctx.geom.for_each_wall_node(&ctx.active, |i, axes| {
         for a in 0..D {
             if axes[a] {
                 g.remap[a][i] = 0.0;

@@ -16,7 +16,7 @@ pub(crate) mod transport;
 pub(crate) use isa::Avx2;
 pub(crate) use isa::{Baseline, Isa};
 
-use crate::grid::Geom;
+use crate::grid::{Geom, NodeBox};
 use crate::layout::{MaterialRecord, TractionRecord};
 use crate::Real;
 
@@ -24,6 +24,8 @@ use crate::Real;
 #[derive(Clone, Copy)]
 pub(crate) struct Ctx<'m, const D: usize> {
     pub geom: Geom<D>,
+    /// The nodes this substep touches; the grid passes work on them alone.
+    pub active: NodeBox<D>,
     pub dt: Real,
     pub gravity: [Real; D],
     pub beta: Real,

@@ -28,7 +28,7 @@
 
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
-use crate::grid::GridCols;
+use crate::grid::{GridCols, NodeBox};
 use crate::material::Deformation;
 use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
@@ -56,6 +56,8 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         c.fill(0.0);
     }
     let geom = &ctx.geom;
+    // The transported scalars' passes work on the whole grid.
+    let all = NodeBox::all(geom.nodes);
     let stencil = |p: &ParticleCols<'_, D>, i: usize| {
         let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
         let stretch = p.domain_stretch::<K, S>(i);
@@ -80,8 +82,8 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     let cutoff = ctx.mass_cutoff;
     {
         let [c_col, m_col, v_col, _] = &mut g.scalar[f];
-        geom.fold_mirror(c_col, 1.0);
-        geom.fold_mirror(m_col, 1.0);
+        geom.fold_mirror(c_col, 1.0, &all);
+        geom.fold_mirror(m_col, 1.0, &all);
         for ((v, &m), &c) in v_col.iter_mut().zip(m_col.iter()).zip(c_col.iter()) {
             *v = if c > cutoff { m / c } else { 0.0 };
         }
@@ -90,7 +92,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 *v = value;
             }
         });
-        geom.mirror(v_col, 1.0);
+        geom.mirror(v_col, 1.0, &all);
     }
     // 2. Flow.
     for i in 0..count {
@@ -124,7 +126,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
         // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
         // to its value.
         let [c_col, _, _, q_col] = &mut g.scalar[f];
-        geom.fold_mirror(q_col, 1.0);
+        geom.fold_mirror(q_col, 1.0, &all);
         for_each_face(ctx, t, |node, bc, axis, on_wall| {
             if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
             {
@@ -139,7 +141,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 *q = 0.0;
             }
         });
-        geom.mirror(q_col, 1.0);
+        geom.mirror(q_col, 1.0, &all);
     }
     // 3. FLIP update of the particles' values.
     for i in 0..count {
@@ -241,8 +243,9 @@ fn for_each_face<const D: usize>(
         for side in 0..2 {
             let bc = t.faces[2 * axis + side];
             if bc != ScalarBoundary::Insulated {
+                let all = NodeBox::all(ctx.geom.nodes);
                 ctx.geom
-                    .for_each_face_node(axis, side, |node, wall| f(node, bc, axis, wall));
+                    .for_each_face_node(axis, side, &all, |node, wall| f(node, bc, axis, wall));
             }
         }
     }
