@@ -460,14 +460,23 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     }
     // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
     // material (the common case, vectorised); otherwise lane by lane.
-    let ids = load(p.material, start).map(|id| id as usize);
-    let first = update.iter().next().map(|ln| ids[ln]);
-    let uniform = first.and_then(|id| {
-        let same = update.minus(Lanes::from_fn(|ln| ids[ln] == id)).is_empty();
-        ctx.materials
-            .get(id)
-            .filter(|r| same && model_of(r) == MaterialModel::NeoHookean)
-    });
+    // Without `Option` combinators: their closures were left out of line (a profile showed
+    // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
+    let raw = load(p.material, start);
+    let mut ids = [0usize; W];
+    for ln in 0..W {
+        ids[ln] = raw[ln] as usize;
+    }
+    let mut uniform = None;
+    if let Some(l0) = update.first() {
+        let id = raw[l0];
+        let same = update.minus(Lanes::from_fn(|ln| raw[ln] == id)).is_empty();
+        if let Some(r) = ctx.materials.get(ids[l0]) {
+            if same && model_of(r) == MaterialModel::NeoHookean {
+                uniform = Some(r);
+            }
+        }
+    }
     let ns = crate::layout::stress_components(D);
     let mut tau = [[0.0; W]; 6];
     let mut ok = Lanes::NONE;

@@ -93,6 +93,16 @@ impl Lanes {
         self.0.count_ones()
     }
 
+    /// The lowest lane in the set.
+    #[inline(always)]
+    pub fn first(self) -> Option<usize> {
+        if self.0 == 0 {
+            None
+        } else {
+            Some(self.0.trailing_zeros() as usize)
+        }
+    }
+
     /// The lanes in the set, in increasing order.
     #[inline(always)]
     pub fn iter(self) -> impl Iterator<Item = usize> {
