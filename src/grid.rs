@@ -137,6 +137,18 @@ pub(crate) struct NodeBox<const D: usize> {
     pub tail: usize,
 }
 
+/// [`NodeBox::of_particles`] as a free function, for the instruction-set instances of
+/// `phases::isa`.
+#[inline(always)]
+pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
+    geom: &Geom<D>,
+    x: &[&[Real]; D],
+    status: &[u32],
+    count: usize,
+) -> NodeBox<D> {
+    NodeBox::of_particles::<K, S>(geom, x, status, count)
+}
+
 impl<const D: usize> NodeBox<D> {
     /// Every node of the grid (the transported scalars, whose passes work on the whole grid).
     pub fn all(nodes: [usize; D]) -> Self {
@@ -150,6 +162,7 @@ impl<const D: usize> NodeBox<D> {
     /// The box of the stencils of the active particles `0..count` (first nodes as the
     /// stencils clamp them, [`crate::shape::first_node`], for any position), widened to the
     /// nodes before the axis and their images in the axisymmetric form.
+    #[inline(always)]
     pub fn of_particles<const K: usize, S: crate::shape::Shape1D<K>>(
         geom: &Geom<D>,
         x: &[&[Real]; D],

@@ -3,7 +3,7 @@
 
 use crate::def::{Dimension, MaterialDef, ShapeFunction, Transfer, UpdateOrder, WorldDef};
 use crate::effects::Feedback;
-use crate::grid::{Geom, GridCols, NodeBox};
+use crate::grid::{Geom, GridCols};
 use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecord, ALIGN};
 use crate::material::{eigenstrain_part, elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
@@ -844,7 +844,7 @@ impl<'a> World<'a> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::InvalidTimeStep);
         }
-        let stable = self.stable_dt();
+        let stable = self.read().stable_dt_with_simd(simd);
         let ratio = dt / stable;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
         // NaN-safe: a NaN ratio fails `<=`.
@@ -1012,8 +1012,13 @@ impl<'a> World<'a> {
             None => (0.0, 0.0),
         };
         let geom = Geom::<D>::new(def);
-        let active =
-            NodeBox::of_particles::<K, S>(&geom, &p.x.each_ref().map(|c| &**c), p.status, count);
+        let active = crate::phases::node_box::<D, K, S>(
+            simd,
+            &geom,
+            &p.x.each_ref().map(|c| &**c),
+            p.status,
+            count,
+        );
         let ctx = Ctx {
             geom,
             active,
@@ -1147,6 +1152,11 @@ impl<'a> WorldRef<'a> {
     /// dilatational wave speed of the materials, `|v|_max` the fastest active particle.
     /// Infinite when nothing moves and there is no material.
     pub fn stable_dt(&self) -> Real {
+        self.stable_dt_with_simd(Simd::Detect)
+    }
+
+    /// [`WorldRef::stable_dt`], its scan of the particles run in the instruction set `simd`.
+    pub(crate) fn stable_dt_with_simd(&self, simd: Simd) -> Real {
         let layout = self.layout();
         let def = self.def();
         let c_max = self
@@ -1163,38 +1173,7 @@ impl<'a> WorldRef<'a> {
                 &[]
             }
         });
-        // In f64: a speed near f32's range (1e19 m/s and up) would overflow v^2 in f32 and
-        // make the stable step 0, which no step could take, although the true step is
-        // representable.
-        // Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then
-        // the tail: the same maximum as a particle-by-particle scan.
-        const L: usize = 8;
-        let mut lanes = [0.0f64; L];
-        let full = n - n % L;
-        for from in (0..full).step_by(L) {
-            let mut v2 = [0.0f64; L];
-            for va in v.iter().take(d) {
-                let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
-                for l in 0..L {
-                    v2[l] += va[l] as f64 * va[l] as f64;
-                }
-            }
-            let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
-            for l in 0..L {
-                lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
-                    v2[l]
-                } else {
-                    lanes[l]
-                };
-            }
-        }
-        let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
-        for i in full..n {
-            let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
-            if status[i] == ACTIVE && v2 > v2_max {
-                v2_max = v2;
-            }
-        }
+        let v2_max = crate::phases::fastest_squared(simd, &v, &status[..n], d);
         let speed = c_max as f64 + libm::sqrt(v2_max);
         // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
         // most the Courant number, with alpha the largest total damping any particle can see
@@ -1634,4 +1613,43 @@ impl Iterator for Sites {
         };
         Some(cur)
     }
+}
+
+/// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
+/// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
+/// make the stable step 0, which no step could take, although the true step is representable.
+/// Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then the tail:
+/// the same maximum as a particle-by-particle scan. Run in the step's instruction set
+/// (`phases::isa`).
+#[inline(always)]
+pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
+    let n = status.len();
+    const L: usize = 8;
+    let mut lanes = [0.0f64; L];
+    let full = n - n % L;
+    for from in (0..full).step_by(L) {
+        let mut v2 = [0.0f64; L];
+        for va in v.iter().take(d) {
+            let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
+            for l in 0..L {
+                v2[l] += va[l] as f64 * va[l] as f64;
+            }
+        }
+        let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
+        for l in 0..L {
+            lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
+                v2[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
+    for i in full..n {
+        let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
+        if status[i] == ACTIVE && v2 > v2_max {
+            v2_max = v2;
+        }
+    }
+    v2_max
 }

@@ -1,14 +1,16 @@
 //! The particle passes of a substep, instantiated once per instruction set (see
 //! [`crate::simd`]). Each pass is one function per instance, with the pass's code inlined into
 //! it, so that the AVX2 instance compiles all of it with AVX2 and every pass keeps its own
-//! register allocation (one function for a whole substep measured about 10 % slower). The node
-//! passes (grid update) are short loops and run in the baseline instance.
+//! register allocation (one function for a whole substep measured about 10 % slower). The two
+//! scans of the particles before a substep (the node box, the fastest particle for
+//! `stable_dt`) are instanced the same way; the node passes (grid update) are short loops and
+//! run in the baseline instance.
 
 use super::{g2p, p2g, Ctx};
-use crate::grid::GridCols;
+use crate::grid::{Geom, GridCols, NodeBox};
 use crate::particles::ParticleCols;
 use crate::shape::Shape1D;
-use crate::StepReport;
+use crate::{Real, StepReport};
 
 /// Declares the [`Isa`] trait with one method per pass, and its two implementations: the
 /// baseline one (each pass its own function) and the AVX2 one (each pass compiled in a
@@ -17,11 +19,11 @@ macro_rules! passes {
     ($(
         $(#[$doc:meta])*
         fn $name:ident [$($generics:tt)*] [$($garg:ident),*]
-            ($($arg:ident: $ty:ty),* $(,)?) => $($target:ident)::+;
+            ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? => $($target:ident)::+;
     )*) => {
         /// One set of particle passes; [`crate::world`] calls a substep's passes through it.
         pub(crate) trait Isa {
-            $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*);)*
+            $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)?;)*
         }
 
         /// The target's baseline instruction set.
@@ -30,7 +32,7 @@ macro_rules! passes {
         impl Isa for Baseline {
             $(
                 #[inline(never)]
-                fn $name<$($generics)*>($($arg: $ty),*) {
+                fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
                     $($target)::+::<$($garg),*>($($arg),*)
                 }
             )*
@@ -44,7 +46,7 @@ macro_rules! passes {
         impl Isa for Avx2 {
             $(
                 #[inline(always)]
-                fn $name<$($generics)*>($($arg: $ty),*) {
+                fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
                     // SAFETY: `Avx2` is only chosen when the CPU and the OS support AVX2.
                     unsafe { avx2::$name::<$($garg),*>($($arg),*) }
                 }
@@ -58,7 +60,7 @@ macro_rules! passes {
             use super::*;
             $(
                 #[target_feature(enable = "avx,avx2")]
-                pub(super) fn $name<$($generics)*>($($arg: $ty),*) {
+                pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
                     $($target)::+::<$($garg),*>($($arg),*)
                 }
             )*
@@ -102,4 +104,16 @@ passes! {
         g: &GridCols<'_, D>,
         report: &mut StepReport,
     ) => g2p::stress;
+
+    /// [`NodeBox::of_particles`] ([`crate::grid::node_box`]).
+    fn node_box [const D: usize, const K: usize, S: Shape1D<K>] [D, K, S] (
+        geom: &Geom<D>,
+        x: &[&[Real]; D],
+        status: &[u32],
+        count: usize,
+    ) -> NodeBox<D> => crate::grid::node_box;
+
+    /// [`crate::world::fastest_squared`].
+    fn fastest_squared [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
+        => crate::world::fastest_squared;
 }

@@ -48,6 +48,39 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub eigenstrain: [bool; 2],
 }
 
+/// The node box of a substep ([`NodeBox::of_particles`]), scanned in the instruction set
+/// `simd`.
+pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
+    simd: crate::simd::Simd,
+    geom: &Geom<D>,
+    x: &[&[Real]; D],
+    status: &[u32],
+    count: usize,
+) -> NodeBox<D> {
+    #[cfg(target_arch = "x86_64")]
+    if simd.uses_avx2() {
+        return Avx2::node_box::<D, K, S>(geom, x, status, count);
+    }
+    let _ = simd;
+    Baseline::node_box::<D, K, S>(geom, x, status, count)
+}
+
+/// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),
+/// scanned in the instruction set `simd`.
+pub(crate) fn fastest_squared(
+    simd: crate::simd::Simd,
+    v: &[&[Real]; 3],
+    status: &[u32],
+    d: usize,
+) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if simd.uses_avx2() {
+        return Avx2::fastest_squared(v, status, d);
+    }
+    let _ = simd;
+    Baseline::fastest_squared(v, status, d)
+}
+
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored
 /// component is the out-of-plane `zz`.
 pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
