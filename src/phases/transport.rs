@@ -239,11 +239,12 @@ fn for_each_face<const D: usize>(
     t: &Transport,
     mut f: impl FnMut(usize, ScalarBoundary, usize, bool),
 ) {
+    // The transported scalars' passes work on the whole grid.
+    let all = NodeBox::all(ctx.geom.nodes);
     for axis in 0..D {
         for side in 0..2 {
             let bc = t.faces[2 * axis + side];
             if bc != ScalarBoundary::Insulated {
-                let all = NodeBox::all(ctx.geom.nodes);
                 ctx.geom
                     .for_each_face_node(axis, side, &all, |node, wall| f(node, bc, axis, wall));
             }
