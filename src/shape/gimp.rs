@@ -54,7 +54,9 @@ impl Gimp {
     /// (continuous at `a = l` and `a = 1 - l`, zero from `a = 1 + l`).
     ///
     /// Multiplies by 1/3 and 1/6 rather than dividing (divisions are the slowest operations
-    /// here; the axisymmetric stencil evaluates this for every particle and node).
+    /// here; the axisymmetric stencil evaluates this for every particle and node). Like
+    /// [`Gimp::eval`], every branch is evaluated and the result selected, so the stencil's loop
+    /// over a chunk's lanes vectorises (as jumps it ran one lane at a time).
     #[inline(always)]
     fn moment_and_ends(&self, xi: Real) -> (Real, Real) {
         const THIRD: Real = 1.0 / 3.0;
@@ -63,12 +65,16 @@ impl Gimp {
         let a = xi.abs();
         let sign: Real = if xi >= 0.0 { 1.0 } else { -1.0 };
         let c = (1.0 - a).max(-l);
-        let m = if a < l {
-            xi * (xi * xi * THIRD - l * l) * 0.5 * self.inv_l
-        } else if a <= 1.0 - l {
-            -sign * l * l * THIRD
+        let m_in = xi * (xi * xi * THIRD - l * l) * 0.5 * self.inv_l;
+        let m_mid = -sign * l * l * THIRD;
+        let m_out = -sign * (l * l * l * THIRD + c * l * l * 0.5 - c * c * c * SIXTH) * self.inv_2l;
+        let (inner, middle) = (a < l, a <= 1.0 - l);
+        let m = if inner {
+            m_in
+        } else if middle {
+            m_mid
         } else {
-            -sign * (l * l * l * THIRD + c * l * l * 0.5 - c * c * c * SIXTH) * self.inv_2l
+            m_out
         };
         let hat = |x: Real| (1.0 - x.abs()).max(0.0);
         (m, 0.5 * (hat(xi - l) + hat(xi + l)))

@@ -334,14 +334,23 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 base[ln] = base[ln].wrapping_add((first as u32).wrapping_mul(stride[a] as u32));
                 f[ln] = s[a][ln] - first as Real;
             }
-            for ln in 0..W {
-                let (wa, dwa, ta) =
-                    axis_weights::<K, S>(shape, a, f[ln], s[a][ln], stretch[a][ln], (h, inv_h));
-                for k in 0..K {
-                    w[a][k][ln] = wa[k];
-                    dw[a][k][ln] = dwa[k];
-                    if S::AXISYMMETRIC && a == 0 {
+            // One lane loop per kind of axis, with no branch inside, so that each vectorises.
+            if S::AXISYMMETRIC && a == 0 {
+                for ln in 0..W {
+                    let (wa, dwa, ta) =
+                        radial_stencil::<K, S>(shape, f[ln], s[a][ln], stretch[a][ln], h);
+                    for k in 0..K {
+                        w[a][k][ln] = wa[k];
+                        dw[a][k][ln] = dwa[k];
                         t[k][ln] = ta[k];
+                    }
+                }
+            } else {
+                for ln in 0..W {
+                    let (wa, dwa) = shape.stencil_stretched(f[ln], stretch[a][ln]);
+                    for k in 0..K {
+                        w[a][k][ln] = wa[k];
+                        dw[a][k][ln] = dwa[k] * inv_h;
                     }
                 }
             }
