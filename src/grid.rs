@@ -150,15 +150,6 @@ pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<
 }
 
 impl<const D: usize> NodeBox<D> {
-    /// Every node of the grid (the transported scalars, whose passes work on the whole grid).
-    pub fn all(nodes: [usize; D]) -> Self {
-        NodeBox {
-            lo: [0; D],
-            hi: nodes,
-            tail: 0,
-        }
-    }
-
     /// The box of the stencils of the active particles `0..count` (first nodes as the
     /// stencils clamp them, [`crate::shape::first_node`], for any position), widened to the
     /// nodes before the axis and their images in the axisymmetric form.

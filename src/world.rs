@@ -13,7 +13,7 @@ use crate::phases::p2g::mode;
 #[cfg(target_arch = "x86_64")]
 use crate::phases::Avx2;
 use crate::phases::Baseline;
-use crate::phases::{grid_update, p2g, transport, Ctx, Isa};
+use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
@@ -1457,7 +1457,7 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
         // Heat and diffusion first, with the particles where the substep starts.
         for (f, t) in ctx.transport.iter().enumerate() {
             if let Some(t) = t {
-                transport::substep(s, ctx, p, count, g, f, t);
+                I::transport::<D, K, S>(s, ctx, p, count, g, f, t);
             }
         }
         grid_update::reset(ctx, g);

@@ -1,12 +1,14 @@
 //! The particle passes of a substep, instantiated once per instruction set (see
 //! [`crate::simd`]). Each pass is one function per instance, with the pass's code inlined into
 //! it, so that the AVX2 instance compiles all of it with AVX2 and every pass keeps its own
-//! register allocation (one function for a whole substep measured about 10 % slower). The two
+//! register allocation (one function for a whole substep measured about 10 % slower). The
+//! transported scalars' substep (heat, diffusion) is one such function too. The two
 //! scans of the particles before a substep (the node box, the fastest particle for
 //! `stable_dt`) are instanced the same way; the node passes (grid update) are short loops and
 //! run in the baseline instance.
 
-use super::{g2p, p2g, Ctx};
+use super::{g2p, p2g, transport, Ctx};
+use crate::effects::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
 use crate::particles::ParticleCols;
 use crate::shape::Shape1D;
@@ -104,6 +106,17 @@ passes! {
         g: &GridCols<'_, D>,
         report: &mut StepReport,
     ) => g2p::stress;
+
+    /// [`transport::substep`] (heat conduction or diffusion, one field).
+    fn transport [const D: usize, const K: usize, S: Shape1D<K>] [D, K, S] (
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+        f: usize,
+        t: &Transport,
+    ) => transport::substep;
 
     /// [`NodeBox::of_particles`] ([`crate::grid::node_box`]).
     fn node_box [const D: usize, const K: usize, S: Shape1D<K>] [D, K, S] (

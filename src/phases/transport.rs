@@ -23,22 +23,29 @@
 //!    `phi_g->p = sum S_ip (phi_i + a_i dt)` (eq 144), which features that depend on the field
 //!    read (section 8.2).
 //!
-//! These passes are scalar loops over the particles (the mechanics' vectorised passes are not
-//! shared); they run only for a declared field.
+//! The particle loops work as the momentum passes do: chunk by chunk, with the chunk's stencils
+//! computed lane-fastest ([`chunk_stencils`]) and each particle's nodes added to or read from
+//! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
+//! field.
 
+use super::g2p::stencils;
+use super::lanes::{load, Lane, Lanes, W};
+use super::p2g::scatter_lane;
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
-use crate::grid::{GridCols, NodeBox};
+use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::material::Deformation;
 use crate::math::Mat;
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::{Shape1D, Stencil};
+use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
 use crate::Real;
 
 /// Index of heat conduction in the per-field arrays (diffusion is 1: [`crate::ScalarField`]).
 const HEAT: usize = crate::ScalarField::Temperature as usize;
 
-/// One substep of field `f` (HEAT or DIFFUSION) with its definition `t`.
+/// One substep of field `f` (HEAT or DIFFUSION) with its definition `t` (inlined into each
+/// instruction set's instance, [`super::isa`]).
+#[inline(always)]
 pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -52,125 +59,241 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     if p.scalar[f][0].len() < count || g.scalar[f].iter().any(|c| c.len() != n) {
         return; // Unreachable: the field is declared, so its columns exist.
     }
-    for c in g.scalar[f].iter_mut() {
-        c.fill(0.0);
-    }
     let geom = &ctx.geom;
-    // The transported scalars' passes work on the whole grid.
-    let all = NodeBox::all(geom.nodes);
-    let stencil = |p: &ParticleCols<'_, D>, i: usize| {
-        let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
-        let stretch = p.domain_stretch::<K, S>(i);
-        Stencil::<D, K>::new(shape, s, stretch, geom.nodes, geom.stride, geom.inv_h)
-    };
-    // 1. Capacity and momentum.
-    for i in 0..count {
-        if p.status[i] != ACTIVE {
-            continue;
-        }
-        let (cap, _) = capacity_and_conductance(ctx, p, i, f);
-        let phi = p.scalar[f][0][i];
-        let st = stencil(p, i);
-        let [c_col, m_col, _, _] = &mut g.scalar[f];
-        st.for_each_node(geom.stride, |node, w, _| {
-            if let (Some(c), Some(m)) = (c_col.get_mut(node), m_col.get_mut(node)) {
-                *c += w * cap;
-                *m += w * cap * phi;
+    // The grid passes work on the substep's node box, as the momentum's do: every node a
+    // particle's stencil row reads is in it and reset here.
+    let bx = &ctx.active;
+    for c in g.scalar[f].iter_mut() {
+        bx.for_each_line(geom.stride, n, |r| {
+            if let Some(c) = c.get_mut(r) {
+                c.fill(0.0);
             }
         });
+    }
+    let mut st = Stencils::<D, K, W>::default();
+    // 1. Capacity and momentum.
+    for start in (0..count).step_by(W) {
+        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
+        let [c_col, m_col, _, _] = &mut g.scalar[f];
+        for t in 0..W {
+            let ln = scatter_lane(t);
+            if live.has(ln) {
+                let i = start + ln;
+                let (cap, _) = capacity_and_conductance(ctx, p, i, f);
+                let phi = p.scalar[f][0][i];
+                // SAFETY: `chunk_stencils` checked the rows of a live lane against every
+                // column of length `n`.
+                let cols = [&mut **c_col, &mut **m_col];
+                unsafe {
+                    scatter_rows::<D, K, false, 2>(
+                        st.lane(ln),
+                        geom.stride,
+                        cols,
+                        [cap, cap * phi],
+                        |r| (r[0], 0.0),
+                    );
+                }
+            }
+        }
     }
     let cutoff = ctx.mass_cutoff;
     {
         let [c_col, m_col, v_col, _] = &mut g.scalar[f];
-        geom.fold_mirror(c_col, 1.0, &all);
-        geom.fold_mirror(m_col, 1.0, &all);
-        for ((v, &m), &c) in v_col.iter_mut().zip(m_col.iter()).zip(c_col.iter()) {
-            *v = if c > cutoff { m / c } else { 0.0 };
-        }
+        geom.fold_mirror(c_col, 1.0, bx);
+        geom.fold_mirror(m_col, 1.0, bx);
+        bx.for_each_line(geom.stride, n, |r| {
+            let (Some(v), Some(m), Some(c)) =
+                (v_col.get_mut(r.clone()), m_col.get(r.clone()), c_col.get(r))
+            else {
+                return; // Unreachable: every line lies within the columns.
+            };
+            for ((v, &m), &c) in v.iter_mut().zip(m).zip(c) {
+                *v = if c > cutoff { m / c } else { 0.0 };
+            }
+        });
         for_each_face(ctx, t, |node, bc, _, _| {
             if let (ScalarBoundary::Fixed(value), Some(v)) = (bc, v_col.get_mut(node)) {
                 *v = value;
             }
         });
-        geom.mirror(v_col, 1.0, &all);
+        geom.mirror(v_col, 1.0, bx);
     }
-    // 2. Flow.
-    for i in 0..count {
-        if p.status[i] != ACTIVE {
-            continue;
-        }
-        let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
-        let volume = current_volume(p, i);
-        let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
-        let st = stencil(p, i);
+    // 2. Flow: the gradient of the nodal values at the particle, then
+    // `V_p (q_p . G_ip + s_p S_ip)` on its nodes.
+    for start in (0..count).step_by(W) {
+        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [_, _, v_col, q_col] = &mut g.scalar[f];
-        let mut grad = [0.0 as Real; D];
-        st.for_each_node(geom.stride, |node, _, gw| {
-            let v = v_col.get(node).copied().unwrap_or(0.0);
-            for a in 0..D {
-                grad[a] += v * gw[a];
+        for t in 0..W {
+            let ln = scatter_lane(t);
+            if !live.has(ln) {
+                continue;
             }
-        });
-        st.for_each_node(geom.stride, |node, w, gw| {
-            let mut q_dot_g = 0.0;
-            for a in 0..D {
-                q_dot_g -= kappa * grad[a] * gw[a];
+            let i = start + ln;
+            let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
+            let volume = current_volume(p, i);
+            let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
+            let lane = st.lane(ln);
+            // SAFETY: as in pass 1.
+            let (_, grad) = unsafe { gather_rows::<D, K, true, 1>(lane, geom.stride, [v_col]) };
+            // V (q . G + s S), q = -kappa grad: per row, wx V (s r_0 + sum_{b >= 1} q_b r_b)
+            // + dwx V q_0 r_0.
+            let vq: [Real; D] = core::array::from_fn(|a| -(volume * kappa) * grad[a]);
+            let vs = volume * source;
+            unsafe {
+                scatter_rows::<D, K, true, 1>(lane, geom.stride, [q_col], [1.0], |r| {
+                    (
+                        (1..D).fold(vs * r[0], |c, b| c + vq[b] * r[b]),
+                        vq[0] * r[0],
+                    )
+                });
             }
-            if let Some(q) = q_col.get_mut(node) {
-                *q += volume * (q_dot_g + source * w);
-            }
-        });
+        }
     }
     {
         // The flux faces' inflow on the wall plane, by the trapezoid rule over the admissible
         // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
         // to its value.
         let [c_col, _, _, q_col] = &mut g.scalar[f];
-        geom.fold_mirror(q_col, 1.0, &all);
+        geom.fold_mirror(q_col, 1.0, bx);
         for_each_face(ctx, t, |node, bc, axis, on_wall| {
             if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
             {
                 *q += flux * face_area(geom, axis, node, S::AXISYMMETRIC);
             }
         });
-        for (q, &c) in q_col.iter_mut().zip(c_col.iter()) {
-            *q = if c > cutoff { *q / c } else { 0.0 };
-        }
+        bx.for_each_line(geom.stride, n, |r| {
+            let (Some(q), Some(c)) = (q_col.get_mut(r.clone()), c_col.get(r)) else {
+                return; // Unreachable: every line lies within the columns.
+            };
+            for (q, &c) in q.iter_mut().zip(c) {
+                *q = if c > cutoff { *q / c } else { 0.0 };
+            }
+        });
         for_each_face(ctx, t, |node, bc, _, _| {
             if let (ScalarBoundary::Fixed(_), Some(q)) = (bc, q_col.get_mut(node)) {
                 *q = 0.0;
             }
         });
-        geom.mirror(q_col, 1.0, &all);
+        geom.mirror(q_col, 1.0, bx);
     }
-    // 3. FLIP update of the particles' values.
-    for i in 0..count {
-        if p.status[i] != ACTIVE {
-            continue;
-        }
-        let st = stencil(p, i);
+    // 3. FLIP update of the particles' values, and the grid's value at each particle.
+    for start in (0..count).step_by(W) {
+        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [_, _, value, rate] = &g.scalar[f];
-        let (mut a, mut on_grid) = (0.0, 0.0);
-        st.for_each_node(geom.stride, |node, w, _| {
-            let r = rate.get(node).copied().unwrap_or(0.0);
-            a += w * r;
-            on_grid += w * (value.get(node).copied().unwrap_or(0.0) + r * ctx.dt);
-        });
-        let next = p.scalar[f][0][i] + a * ctx.dt;
-        // A non-finite rate (from a non-finite source or value set by the host) leaves the
-        // values as they were rather than spreading NaN.
-        if next.is_finite() && on_grid.is_finite() {
-            p.scalar[f][0][i] = next;
-            if let Some(gv) = p.scalar[f][1].get_mut(i) {
-                *gv = on_grid;
+        for ln in live.iter() {
+            let i = start + ln;
+            // SAFETY: as in pass 1.
+            let (a, v) = unsafe {
+                let lane = st.lane(ln);
+                let ([a, v], _) = gather_rows::<D, K, false, 2>(lane, geom.stride, [rate, value]);
+                (a, v)
+            };
+            let next = p.scalar[f][0][i] + a * ctx.dt;
+            let on_grid = v + a * ctx.dt;
+            // A non-finite rate (from a non-finite source or value set by the host) leaves the
+            // values as they were rather than spreading NaN.
+            if next.is_finite() && on_grid.is_finite() {
+                p.scalar[f][0][i] = next;
+                if let Some(gv) = p.scalar[f][1].get_mut(i) {
+                    *gv = on_grid;
+                }
             }
         }
     }
 }
 
+/// Replaces `st` by the stencils of the chunk at `start` and returns its live lanes: active
+/// particles below `count` whose every stencil row fits in node columns of length `len`
+/// (always, by construction; the unchecked row accesses rely on it).
+#[inline(always)]
+fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+    st: &mut Stencils<D, K, W>,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    count: usize,
+    len: usize,
+) -> Lanes {
+    let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+    stencils::<D, K, S, false>(st, shape, ctx, p, start, &x);
+    let n = W.min(count - start);
+    let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
+    Lanes::from_fn(|ln| {
+        ln < n && p.status[start + ln] == ACTIVE && rows_fit(st.lane(ln).base(), last, len)
+    })
+}
+
+/// Adds `(wx_i c_x(r) + dwx_i c_dx(r)) scale[c]` to `cols[c]` at every node `i` of the
+/// stencil, row by row, `(c_x, c_dx) = factors(r)` from the row's factors `r`
+/// ([`Stencil::row`]): `S_ip scale` for `factors(r) = (r_0, 0)`, `G_ip . q` for
+/// `(sum_{b >= 1} q_b r_b, q_0 r_0)` and a scale of 1. `DX`: whether `c_dx` is used (else
+/// skipped).
+///
+/// # Safety
+/// Every row of the stencil fits in every column ([`rows_fit`]).
+#[inline(always)]
+unsafe fn scatter_rows<const D: usize, const K: usize, const DX: bool, const N: usize>(
+    st: LaneStencil<'_, D, K, W>,
+    stride: [usize; D],
+    cols: [&mut [Real]; N],
+    scale: [Real; N],
+    factors: impl Fn([Real; D]) -> (Real, Real),
+) {
+    let (wx, dwx) = (st.wx(), st.dwx());
+    for k in 0..Stencil::<D, K>::layers() {
+        for j in 0..K {
+            let (row, r) = st.row(j, k, stride);
+            let (c_x, c_dx) = factors(r);
+            let v = if DX { wx * c_x + dwx * c_dx } else { wx * c_x };
+            for c in 0..N {
+                // SAFETY: the caller guarantees that the row fits.
+                unsafe { add_row(cols[c], row, v * scale[c]) };
+            }
+        }
+    }
+}
+
+/// `sum_i S_ip u_i` for the nodal values `u = cols[c]` and, with `GRAD`, `sum_i G_ip u_i` of
+/// `cols[0]` (else zeros), row by row as the momentum gathers do.
+///
+/// # Safety
+/// Every row of the stencil fits in every column ([`rows_fit`]).
+#[inline(always)]
+unsafe fn gather_rows<const D: usize, const K: usize, const GRAD: bool, const N: usize>(
+    st: LaneStencil<'_, D, K, W>,
+    stride: [usize; D],
+    cols: [&[Real]; N],
+) -> ([Real; N], [Real; D]) {
+    let mut ru = [Row4::ZERO; N];
+    let mut du = [Row4::ZERO; D];
+    for k in 0..Stencil::<D, K>::layers() {
+        for j in 0..K {
+            let (row, r) = st.row(j, k, stride);
+            for c in 0..N {
+                // SAFETY: the caller guarantees that the row fits.
+                let u = unsafe { load_row(cols[c], row) };
+                ru[c] += u * r[0];
+                if GRAD && c == 0 {
+                    for b in 1..D {
+                        du[b] += u * r[b];
+                    }
+                }
+            }
+        }
+    }
+    let values = core::array::from_fn(|c| (st.wx() * ru[c]).element_sum());
+    let grad = core::array::from_fn(|b| match (GRAD, b) {
+        (false, _) => 0.0,
+        (true, 0) => (st.dwx() * ru[0]).element_sum(),
+        _ => (st.wx() * du[b]).element_sum(),
+    });
+    (values, grad)
+}
+
 /// Capacity `c_p` and conductance `kappa_p` of particle `i` for field `f` (see the module's
 /// table); zeros for a material id that names no material.
-#[inline]
+#[inline(always)]
 fn capacity_and_conductance<const D: usize>(
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
@@ -225,7 +348,7 @@ fn face_area<const D: usize>(
 }
 
 /// `J V0` of particle `i` (with `F_thetatheta` when axisymmetric).
-#[inline]
+#[inline(always)]
 fn current_volume<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Real {
     let h: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]));
     let hoop = p.hoop.get(i).copied().unwrap_or(0.0);
@@ -239,14 +362,14 @@ fn for_each_face<const D: usize>(
     t: &Transport,
     mut f: impl FnMut(usize, ScalarBoundary, usize, bool),
 ) {
-    // The transported scalars' passes work on the whole grid.
-    let all = NodeBox::all(ctx.geom.nodes);
     for axis in 0..D {
         for side in 0..2 {
             let bc = t.faces[2 * axis + side];
             if bc != ScalarBoundary::Insulated {
                 ctx.geom
-                    .for_each_face_node(axis, side, &all, |node, wall| f(node, bc, axis, wall));
+                    .for_each_face_node(axis, side, &ctx.active, |node, wall| {
+                        f(node, bc, axis, wall)
+                    });
             }
         }
     }
