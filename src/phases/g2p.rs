@@ -9,7 +9,8 @@
 //!
 //! With APIC (seeds/001) instead: `v_p(n+1) = v_gp + a_gp dt - d dt` (the grid velocity),
 //! `x_p(n+1) = x_p + v_p(n+1) dt`, and the moment matrix `B_p` from the updated nodal
-//! velocities ([`gather_affine`]; the next scatter turns it into `C_p = B_p D_p^-1`).
+//! velocities (gathered with them, [`gather`]; the next scatter turns it into
+//! `C_p = B_p D_p^-1`).
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
 //! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
@@ -107,16 +108,33 @@ impl<const D: usize> Gathered<D> {
 /// four lanes' rows are then transposed in registers, so that every lane vector is written
 /// whole rather than one scalar per lane.
 #[inline(always)]
-fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const GRAD: u8>(
+fn gather_chunk<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const VEL: bool,
+    const GRAD: u8,
+    const AFFINE: bool,
+>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
     live: Lanes,
     rows: &mut GatherRows,
+    affine: &mut [[Lane; D]; D],
 ) -> Gathered<D> {
     for ln in 0..W {
         rows[ln] = if live.has(ln) {
-            gather::<D, K, S, VEL, GRAD>(ctx, g, st.lane(ln))
+            let mut b = [[0.0; D]; D];
+            let r = gather::<D, K, S, VEL, GRAD, AFFINE>(ctx, g, st.lane(ln), &mut b);
+            if AFFINE {
+                for r in 0..D {
+                    for c in 0..D {
+                        affine[r][c][ln] = b[r][c];
+                    }
+                }
+            }
+            r
         } else {
             [Row4::ZERO; GATHERED / 4]
         };
@@ -156,12 +174,23 @@ fn gather_chunk<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, 
 
 /// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`; with the hoop
 /// rate `sum u_r,i T_ip` axisymmetric) of the particle with stencil `st`, in the flat order of
-/// [`gather_chunk`], four results per [`Row4`].
+/// [`gather_chunk`], four results per [`Row4`]. With `AFFINE` (APIC, with `VEL`), also the
+/// moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into `affine`, from the
+/// same rows: the gradient's form with the first moments `e` in place of the weight
+/// derivatives (see [`Stencil::e`]).
 #[inline(always)]
-fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const GRAD: u8>(
+fn gather<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const VEL: bool,
+    const GRAD: u8,
+    const AFFINE: bool,
+>(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: LaneStencil<'_, D, K, W>,
+    affine: &mut [[Real; D]; D],
 ) -> [Row4; GATHERED / 4] {
     let geom = &ctx.geom;
     let dt = ctx.dt;
@@ -187,9 +216,23 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
     // the differentiated velocity.
     let mut ru = [Row4::ZERO; D];
     let mut du = [[Row4::ZERO; D]; D];
+    // APIC: sum_rows r[0] u_i and sum_rows re[b] u_i, u = v + a dt, re[b] the row's factor
+    // with the moment on axis b.
+    let mut au0 = [Row4::ZERO; D];
+    let mut aue = [[Row4::ZERO; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
+            let mut re = [0.0; D];
+            if AFFINE {
+                for (b, e) in re.iter_mut().enumerate().skip(1) {
+                    *e = match (b, D) {
+                        (1, 3) => st.e(1, j) * st.w(2, k),
+                        (2, _) => st.w(1, j) * st.e(2, k),
+                        _ => st.e(1, j),
+                    };
+                }
+            }
             for a in 0..D {
                 // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
                 // column read has the length it was checked against.
@@ -201,6 +244,13 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
                 if VEL || GRAD == grad::UPDATED {
                     rv[a] += vi * r[0];
                     ra[a] += ai * r[0];
+                }
+                if AFFINE {
+                    let u = vi + ai * dt;
+                    au0[a] += u * r[0];
+                    for b in 1..D {
+                        aue[a][b] += u * re[b];
+                    }
                 }
                 if GRAD != grad::NONE {
                     let u = if GRAD == grad::UPDATED {
@@ -214,6 +264,14 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
                         du[a][b] += u * r[b];
                     }
                 }
+            }
+        }
+    }
+    if AFFINE {
+        for a in 0..D {
+            affine[a][0] = (st.ex() * au0[a]).element_sum();
+            for b in 1..D {
+                affine[a][b] = (st.wx() * aue[a][b]).element_sum();
             }
         }
     }
@@ -251,56 +309,6 @@ fn gather<const D: usize, const K: usize, S: Shape1D<K>, const VEL: bool, const 
             terms[4 * q + 2],
             terms[4 * q + 3],
         ])
-    })
-}
-
-/// `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` of the particle with stencil `st` (APIC,
-/// seeds/001): the gradient gather of the updated velocity with the first moments `e` in place
-/// of the weight derivatives (see [`Stencil::e`]).
-#[inline(always)]
-fn gather_affine<const D: usize, const K: usize>(
-    ctx: &Ctx<'_, D>,
-    g: &GridCols<'_, D>,
-    st: LaneStencil<'_, D, K, W>,
-) -> [[Real; D]; D] {
-    let geom = &ctx.geom;
-    if !rows_fit(
-        st.base(),
-        Stencil::<D, K>::last_row_offset(geom.stride),
-        g.len(),
-    ) {
-        return [[0.0; D]; D]; // Unreachable by construction, as in `gather`.
-    }
-    // Per row: the y (and z) factor with no moment (r0) and with the moment on axis b (re[b]).
-    let mut u0 = [Row4::ZERO; D];
-    let mut ue = [[Row4::ZERO; D]; D];
-    for k in 0..Stencil::<D, K>::layers() {
-        for j in 0..K {
-            let (row, r) = st.row(j, k, geom.stride);
-            let re: [Real; D] = core::array::from_fn(|b| match (b, D) {
-                (1, 3) => st.e(1, j) * st.w(2, k),
-                (2, _) => st.w(1, j) * st.e(2, k),
-                (1, _) => st.e(1, j),
-                _ => 0.0,
-            });
-            for a in 0..D {
-                // SAFETY: rows_fit checked above; every column read has that length.
-                let u = unsafe { load_row(g.vel[a], row) + load_row(g.acc[a], row) * ctx.dt };
-                u0[a] += u * r[0];
-                for b in 1..D {
-                    ue[a][b] += u * re[b];
-                }
-            }
-        }
-    }
-    core::array::from_fn(|a| {
-        core::array::from_fn(|b| {
-            if b == 0 {
-                (st.ex() * u0[a]).element_sum()
-            } else {
-                (st.wx() * ue[a][b]).element_sum()
-            }
-        })
     })
 }
 
@@ -659,20 +667,39 @@ pub(crate) fn particles<
         // form takes the stress update's velocity gradient instead: see
         // `commit_gradient_affine`).
         let mut affine = [[[0.0; W]; D]; D];
-        if APIC && !S::GRADIENT_AFFINE {
-            for ln in live.iter() {
-                let b = gather_affine(ctx, g, st.lane(ln));
-                for r in 0..D {
-                    for c in 0..D {
-                        affine[r][c][ln] = b[r][c];
-                    }
-                }
-            }
-        }
-        let gathered = if FUSED_STRESS {
-            gather_chunk::<D, K, S, true, { grad::UPDATED }>(ctx, g, &st, live, &mut rows)
-        } else {
-            gather_chunk::<D, K, S, true, { grad::NONE }>(ctx, g, &st, live, &mut rows)
+        let gathered = match (FUSED_STRESS, APIC && !S::GRADIENT_AFFINE) {
+            (true, false) => gather_chunk::<D, K, S, true, { grad::UPDATED }, false>(
+                ctx,
+                g,
+                &st,
+                live,
+                &mut rows,
+                &mut affine,
+            ),
+            (true, true) => gather_chunk::<D, K, S, true, { grad::UPDATED }, true>(
+                ctx,
+                g,
+                &st,
+                live,
+                &mut rows,
+                &mut affine,
+            ),
+            (false, false) => gather_chunk::<D, K, S, true, { grad::NONE }, false>(
+                ctx,
+                g,
+                &st,
+                live,
+                &mut rows,
+                &mut affine,
+            ),
+            (false, true) => gather_chunk::<D, K, S, true, { grad::NONE }, true>(
+                ctx,
+                g,
+                &st,
+                live,
+                &mut rows,
+                &mut affine,
+            ),
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
@@ -801,20 +828,25 @@ pub(crate) fn particles<
                 let ln = scatter_lane(t);
                 if ln < n && p.status[start + ln] == ACTIVE {
                     // An active lane was committed: its velocity is v_new.
-                    let pt = Scattered {
+                    let mut pt = Scattered {
                         m: p.mass[start + ln],
                         v: core::array::from_fn(|a| v_new[a][ln]),
                         tau: [[0.0; D]; D],
                         hoop: 0.0,
                         force: [0.0; D],
-                        affine: core::array::from_fn(|r| {
-                            // Zero for a family that keeps the gradient form: its C_p is
-                            // taken from this re-map (see `commit_gradient_affine`).
-                            core::array::from_fn(|c| {
-                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c))
-                            })
-                        }),
+                        affine: [[0.0; D]; D],
                     };
+                    if APIC {
+                        // Zero for a family that keeps the gradient form: its C_p is taken
+                        // from this re-map (see `commit_gradient_affine`). Loops rather than
+                        // `core::array::from_fn`, whose closures were left out of line.
+                        for r in 0..D {
+                            for c in 0..D {
+                                pt.affine[r][c] =
+                                    affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c));
+                            }
+                        }
+                    }
                     scatter_one::<D, K, S, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
                 }
             }
@@ -839,12 +871,20 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     }
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
+    // The moment matrices this pass does not gather.
+    let mut unused_affine = [[[0.0; W]; D]; D];
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
-        let gathered =
-            gather_chunk::<D, K, S, false, { grad::REMAP }>(ctx, g, &st, live, &mut rows);
+        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
+            ctx,
+            g,
+            &st,
+            live,
+            &mut rows,
+            &mut unused_affine,
+        );
         let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);

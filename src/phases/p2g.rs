@@ -72,15 +72,15 @@ pub(crate) fn scatter<
                 [0.0; W]
             }
         });
-        let affine: [[Lane; D]; D] = core::array::from_fn(|a| {
-            core::array::from_fn(|b| {
-                if APIC && with_momentum {
-                    load(p.affine[a][b], start)
-                } else {
-                    [0.0; W]
+        // Loops rather than `core::array::from_fn`, whose closures were left out of line.
+        let mut affine = [[[0.0; W]; D]; D];
+        if APIC && with_momentum {
+            for (a, row) in affine.iter_mut().enumerate() {
+                for (b, lanes) in row.iter_mut().enumerate() {
+                    *lanes = load(p.affine[a][b], start);
                 }
-            })
-        });
+            }
+        }
         stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         let n = W.min(count - start);
         for t in 0..W {
