@@ -216,9 +216,8 @@ fn gather<
     // the differentiated velocity.
     let mut ru = [Row4::ZERO; D];
     let mut du = [[Row4::ZERO; D]; D];
-    // APIC: sum_rows r[0] u_i and sum_rows re[b] u_i, u = v + a dt, re[b] the row's factor
-    // with the moment on axis b.
-    let mut au0 = [Row4::ZERO; D];
+    // APIC: sum_rows re[b] u_i for b >= 1, u = v + a dt, re[b] the row's factor with the
+    // moment on axis b (for b = 0 the rows' sums of v and a serve).
     let mut aue = [[Row4::ZERO; D]; D];
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
@@ -247,7 +246,6 @@ fn gather<
                 }
                 if AFFINE {
                     let u = vi + ai * dt;
-                    au0[a] += u * r[0];
                     for b in 1..D {
                         aue[a][b] += u * re[b];
                     }
@@ -269,7 +267,7 @@ fn gather<
     }
     if AFFINE {
         for a in 0..D {
-            affine[a][0] = (st.ex() * au0[a]).element_sum();
+            affine[a][0] = (st.ex() * (rv[a] + ra[a] * dt)).element_sum();
             for b in 1..D {
                 affine[a][b] = (st.wx() * aue[a][b]).element_sum();
             }
