@@ -59,7 +59,11 @@ mod grad {
 
 /// Lanes `start..start + W` that hold active particles (`< count`).
 #[inline(always)]
-fn live_lanes<const D: usize>(p: &ParticleCols<'_, D>, start: usize, count: usize) -> Lanes {
+pub(crate) fn live_lanes<const D: usize>(
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    count: usize,
+) -> Lanes {
     let n = W.min(count.saturating_sub(start));
     let status = load(p.status, start);
     Lanes::from_fn(|l| l < n && status[l] == ACTIVE)
@@ -127,7 +131,7 @@ fn gather_chunk<
         rows[ln] = if live.has(ln) {
             let mut b = [[0.0; D]; D];
             let r = gather::<D, K, S, VEL, GRAD, AFFINE>(ctx, g, st.lane(ln), &mut b);
-            if AFFINE {
+            if AFFINE && !S::GRADIENT_AFFINE {
                 for r in 0..D {
                     for c in 0..D {
                         affine[r][c][ln] = b[r][c];
@@ -177,7 +181,8 @@ fn gather_chunk<
 /// [`gather_chunk`], four results per [`Row4`]. With `AFFINE` (APIC, with `VEL`), also the
 /// moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into `affine`, from the
 /// same rows: the gradient's form with the first moments `e` in place of the weight
-/// derivatives (see [`Stencil::e`]).
+/// derivatives (see [`Stencil::e`]); not for a family that keeps the gradient form
+/// ([`Shape1D::GRADIENT_AFFINE`], see `commit_gradient_affine`).
 #[inline(always)]
 fn gather<
     const D: usize,
@@ -194,6 +199,7 @@ fn gather<
 ) -> [Row4; GATHERED / 4] {
     let geom = &ctx.geom;
     let dt = ctx.dt;
+    let moments = AFFINE && !S::GRADIENT_AFFINE;
     // The pass checked that every column has this length (and that the remap columns exist
     // when GRAD reads them).
     let len = g.len();
@@ -223,7 +229,7 @@ fn gather<
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
             let mut re = [0.0; D];
-            if AFFINE {
+            if moments {
                 for (b, e) in re.iter_mut().enumerate().skip(1) {
                     *e = match (b, D) {
                         (1, 3) => st.e(1, j) * st.w(2, k),
@@ -244,15 +250,16 @@ fn gather<
                     rv[a] += vi * r[0];
                     ra[a] += ai * r[0];
                 }
-                if AFFINE {
-                    let u = vi + ai * dt;
+                // The updated velocity v + a dt (USL's gradient, APIC's moments).
+                let updated = vi + ai * dt;
+                if moments {
                     for b in 1..D {
-                        aue[a][b] += u * re[b];
+                        aue[a][b] += updated * re[b];
                     }
                 }
                 if GRAD != grad::NONE {
                     let u = if GRAD == grad::UPDATED {
-                        vi + ai * dt
+                        updated
                     } else {
                         let u = unsafe { load_row(g.remap[a], row) };
                         ru[a] += u * r[0];
@@ -265,7 +272,7 @@ fn gather<
             }
         }
     }
-    if AFFINE {
+    if moments {
         for a in 0..D {
             affine[a][0] = (st.ex() * (rv[a] + ra[a] * dt)).element_sum();
             for b in 1..D {
@@ -665,39 +672,24 @@ pub(crate) fn particles<
         // form takes the stress update's velocity gradient instead: see
         // `commit_gradient_affine`).
         let mut affine = [[[0.0; W]; D]; D];
-        let gathered = match (FUSED_STRESS, APIC && !S::GRADIENT_AFFINE) {
-            (true, false) => gather_chunk::<D, K, S, true, { grad::UPDATED }, false>(
+        let gathered = if FUSED_STRESS {
+            gather_chunk::<D, K, S, true, { grad::UPDATED }, APIC>(
                 ctx,
                 g,
                 &st,
                 live,
                 &mut rows,
                 &mut affine,
-            ),
-            (true, true) => gather_chunk::<D, K, S, true, { grad::UPDATED }, true>(
+            )
+        } else {
+            gather_chunk::<D, K, S, true, { grad::NONE }, APIC>(
                 ctx,
                 g,
                 &st,
                 live,
                 &mut rows,
                 &mut affine,
-            ),
-            (false, false) => gather_chunk::<D, K, S, true, { grad::NONE }, false>(
-                ctx,
-                g,
-                &st,
-                live,
-                &mut rows,
-                &mut affine,
-            ),
-            (false, true) => gather_chunk::<D, K, S, true, { grad::NONE }, true>(
-                ctx,
-                g,
-                &st,
-                live,
-                &mut rows,
-                &mut affine,
-            ),
+            )
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open

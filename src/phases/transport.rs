@@ -28,7 +28,7 @@
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
 //! field.
 
-use super::g2p::stencils;
+use super::g2p::{live_lanes, stencils};
 use super::lanes::{load, Lane, Lanes, W};
 use super::p2g::scatter_lane;
 use super::Ctx;
@@ -36,7 +36,7 @@ use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::material::Deformation;
 use crate::math::Mat;
-use crate::particles::{ParticleCols, ACTIVE};
+use crate::particles::ParticleCols;
 use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
 use crate::Real;
 
@@ -81,9 +81,9 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 let i = start + ln;
                 let (cap, _) = capacity_and_conductance(ctx, p, i, f);
                 let phi = p.scalar[f][0][i];
+                let cols = [&mut **c_col, &mut **m_col];
                 // SAFETY: `chunk_stencils` checked the rows of a live lane against every
                 // column of length `n`.
-                let cols = [&mut **c_col, &mut **m_col];
                 unsafe {
                     scatter_rows::<D, K, false, 2>(
                         st.lane(ln),
@@ -217,11 +217,8 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
 ) -> Lanes {
     let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
     stencils::<D, K, S, false>(st, shape, ctx, p, start, &x);
-    let n = W.min(count - start);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
-    Lanes::from_fn(|ln| {
-        ln < n && p.status[start + ln] == ACTIVE && rows_fit(st.lane(ln).base(), last, len)
-    })
+    live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }
 
 /// Adds `(wx_i c_x(r) + dwx_i c_dx(r)) scale[c]` to `cols[c]` at every node `i` of the

@@ -347,10 +347,10 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             } else {
                 for ln in 0..W {
-                    let (wa, dwa) = shape.stencil_stretched(f[ln], stretch[a][ln]);
+                    let (wa, dwa) = cartesian_weights::<K, S>(shape, f[ln], stretch[a][ln], inv_h);
                     for k in 0..K {
                         w[a][k][ln] = wa[k];
-                        dw[a][k][ln] = dwa[k] * inv_h;
+                        dw[a][k][ln] = dwa[k];
                     }
                 }
             }
@@ -430,11 +430,24 @@ fn axis_weights<const K: usize, S: Shape1D<K>>(
     if S::AXISYMMETRIC && a == 0 {
         return radial_stencil::<K, S>(shape, f, s, stretch, h);
     }
+    let (w, dw) = cartesian_weights::<K, S>(shape, f, stretch, inv_h);
+    (w, dw, [0.0; K])
+}
+
+/// Weights and derivatives (per unit length) along a Cartesian axis of a particle at offset
+/// `f` from its first node, its domain stretched by `stretch`.
+#[inline(always)]
+fn cartesian_weights<const K: usize, S: Shape1D<K>>(
+    shape: &S,
+    f: Real,
+    stretch: Real,
+    inv_h: Real,
+) -> ([Real; K], [Real; K]) {
     let (w, mut dw) = shape.stencil_stretched(f, stretch);
     for d in dw.iter_mut() {
         *d *= inv_h;
     }
-    (w, dw, [0.0; K])
+    (w, dw)
 }
 
 /// The radial axis of the axisymmetric form for a particle at offset `f` from its first node
