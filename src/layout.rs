@@ -257,11 +257,11 @@ pub(crate) struct Layout {
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
-    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_next[D] (MUSL),
+    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_start[D] (MUSL),
     /// then the effect columns (see [`EffectColumns`]).
     pub particle_real_columns: usize,
     /// First column and count of each optional group of particle Real columns.
-    pub x_next: ColumnGroup,
+    pub x_start: ColumnGroup,
     pub force: ColumnGroup,
     pub damping: ColumnGroup,
     pub affine: ColumnGroup,
@@ -293,7 +293,7 @@ pub(crate) struct ColumnGroup {
 pub(crate) struct EffectColumns;
 
 impl EffectColumns {
-    /// Groups `(x_next, force, damping, affine, heat, diffusion, hoop)` for a definition,
+    /// Groups `(x_start, force, damping, affine, heat, diffusion, hoop)` for a definition,
     /// starting at column `first`; returns them and the column after the last.
     fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 8], usize) {
         let musl = def.update_order == UpdateOrder::Musl;
@@ -340,7 +340,7 @@ impl Layout {
         let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
         let u32_column_bytes = round_up(cap * 4, ALIGN);
         let (
-            [x_next, force, damping, affine, heat, diffusion, hoop, stretch],
+            [x_start, force, damping, affine, heat, diffusion, hoop, stretch],
             particle_real_columns,
         ) = EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
@@ -378,7 +378,7 @@ impl Layout {
             real_column_bytes,
             u32_column_bytes,
             particle_real_columns,
-            x_next,
+            x_start,
             force,
             damping,
             affine,

@@ -4,7 +4,7 @@
 //! gradient `H = F - I` [D][D] (row-major, one column per entry; storing `F - I` rather than F
 //! keeps small strains at full precision in f32), stress tau/rho0 (symmetric components, see
 //! [`crate::layout::stress_components`]), material id, status. With MUSL the step also reserves
-//! D scratch columns for the new positions.
+//! D scratch columns for the positions of the start of the step.
 //!
 //! Per effect, only when declared: external force `F_p` [D] (particle forces), local damping
 //! `alpha_g`, `alpha_p` (per-particle damping), moment matrix `B_p` [D][D] (APIC, see
@@ -59,9 +59,9 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub h: [[&'a mut [Real]; D]; D],
     /// First `stress_components(D)` used; the rest are empty.
     pub tau: [&'a mut [Real]; 6],
-    /// MUSL scratch: positions after the particle update, committed after the stress update.
-    /// Empty slices otherwise.
-    pub x_next: [&'a mut [Real]; D],
+    /// MUSL scratch: the positions of the start of the step, kept by the particle update for the
+    /// stress update's stencils. Empty slices otherwise.
+    pub x_start: [&'a mut [Real]; D],
     /// External force `F_p`, N (particle forces).
     pub force: [&'a mut [Real]; D],
     /// Local grid and particle damping, 1/s (per-particle damping).
@@ -165,7 +165,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let vol0 = c.take(rb, n);
         let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
-        let x_next = core::array::from_fn(|_| group(&mut c, layout.x_next.count > 0));
+        let x_start = core::array::from_fn(|_| group(&mut c, layout.x_start.count > 0));
         let force = core::array::from_fn(|_| group(&mut c, layout.force.count > 0));
         let damping = core::array::from_fn(|_| group(&mut c, layout.damping.count > 0));
         let affine = core::array::from_fn(|_| {
@@ -186,7 +186,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             vol0,
             h,
             tau,
-            x_next,
+            x_start,
             force,
             damping,
             affine,

@@ -622,8 +622,9 @@ fn eigenstrain<const D: usize>(
 }
 
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
-/// from `v_i + a_i dt` in the same pass (USL). `TO_NEXT` (MUSL) writes the new positions to
-/// the scratch columns instead of the positions, and scatters the new momenta to the remap
+/// from `v_i + a_i dt` in the same pass (USL). `KEEP_START` (MUSL) also keeps the positions
+/// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
+/// new momenta to the remap
 /// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
 /// remap columns are free to fill; particles contribute chunk by chunk in the order of
 /// [`scatter_lane`], as the scatter pass does). `DAMP` adds the damping of the module docs;
@@ -634,7 +635,7 @@ pub(crate) fn particles<
     const K: usize,
     S: Shape1D<K>,
     const FUSED_STRESS: bool,
-    const TO_NEXT: bool,
+    const KEEP_START: bool,
     const DAMP: bool,
     const APIC: bool,
 >(
@@ -779,20 +780,11 @@ pub(crate) fn particles<
         for a in 0..D {
             commit(p.v[a], start, &v_new[a], ok);
             commit(p.v[a], start, &zero, frozen);
-            if TO_NEXT {
-                // Lanes not updated keep the position of the start of the step.
-                let next = if ok == Lanes::ALL {
-                    x_new[a]
-                } else {
-                    let mut next = x[a];
-                    for ln in ok.iter() {
-                        next[ln] = x_new[a][ln];
-                    }
-                    next
-                };
-                commit(p.x_next[a], start, &next, Lanes::ALL);
-            } else {
-                commit(p.x[a], start, &x_new[a], ok);
+            commit(p.x[a], start, &x_new[a], ok);
+            if KEEP_START {
+                // Whole chunks (the columns are padded to the chunk width): one store per
+                // vector, not a select.
+                commit(p.x_start[a], start, &x[a], Lanes::ALL);
             }
         }
         if APIC && !S::GRADIENT_AFFINE {
@@ -812,7 +804,7 @@ pub(crate) fn particles<
         }
         report.escaped += escaped.count();
         report.stopped += (ok & stopped).minus(escaped).count();
-        if TO_NEXT {
+        if KEEP_START {
             let n = W.min(count - start);
             for t in 0..W {
                 let ln = scatter_lane(t);
@@ -845,10 +837,11 @@ pub(crate) fn particles<
 }
 
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
-/// from the wall-constrained velocity in the `remap` columns. `COMMIT_NEXT` (MUSL) commits
-/// the new positions afterwards.
+/// from the wall-constrained velocity in the `remap` columns. `FROM_START` (MUSL, after the
+/// particle pass has moved the particles) takes the stencils at the positions of the start of
+/// the step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
-pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool>(
+pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_START: bool>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -865,7 +858,11 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
     let mut unused_affine = [[[0.0; W]; D]; D];
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
-        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
+        // The stencils at the positions of the start of the step (MUSL: the particle pass has
+        // moved the particles).
+        let x: [Lane; D] = core::array::from_fn(|a| {
+            load(if FROM_START { &*p.x_start[a] } else { &*p.x[a] }, start)
+        });
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
         let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
             ctx,
@@ -879,29 +876,18 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const COMMIT
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
         }
-        let n = W.min(count - start);
         for ln in live.minus(ok).iter() {
             let i = start + ln;
             for a in 0..D {
                 p.v[a][i] = 0.0;
-                if COMMIT_NEXT {
-                    // Keep the position of the start of the step, as for any frozen particle.
-                    p.x_next[a][i] = p.x[a][i];
+                if FROM_START {
+                    // Back to the position of the start of the step, as for any frozen
+                    // particle.
+                    p.x[a][i] = p.x_start[a][i];
                 }
             }
             p.status[i] = FROZEN;
             report.note_frozen(i as u32);
-        }
-        if COMMIT_NEXT {
-            // x = x_next for the chunk's particles, as one copy per column.
-            for a in 0..D {
-                if let (Some(dst), Some(src)) = (
-                    p.x[a].get_mut(start..start + n),
-                    p.x_next[a].get(start..start + n),
-                ) {
-                    dst.copy_from_slice(src);
-                }
-            }
         }
     }
 }

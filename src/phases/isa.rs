@@ -85,9 +85,9 @@ passes! {
 
     /// [`g2p::particles`].
     fn particles
-        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const TO_NEXT: bool,
+        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const KEEP_START: bool,
             const DAMP: bool, const APIC: bool]
-        [D, K, S, FUSED_STRESS, TO_NEXT, DAMP, APIC] (
+        [D, K, S, FUSED_STRESS, KEEP_START, DAMP, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -97,8 +97,8 @@ passes! {
     ) => g2p::particles;
 
     /// [`g2p::stress`].
-    fn stress [const D: usize, const K: usize, S: Shape1D<K>, const COMMIT_NEXT: bool]
-        [D, K, S, COMMIT_NEXT] (
+    fn stress [const D: usize, const K: usize, S: Shape1D<K>, const FROM_START: bool]
+        [D, K, S, FROM_START] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
