@@ -30,7 +30,7 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::lanes::{commit, load, Lane, Lanes, Mask4, W};
-use super::p2g::{affine_velocity, mode, scatter_lane, scatter_one, Scattered};
+use super::p2g::{affine_velocity, mode, scatter_one, Scattered, SCATTER_ORDER};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -65,8 +65,7 @@ pub(crate) fn live_lanes<const D: usize>(
     count: usize,
 ) -> Lanes {
     let n = W.min(count.saturating_sub(start));
-    let status = load(p.status, start);
-    Lanes::from_fn(|l| l < n && status[l] == ACTIVE)
+    Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
 }
 
 /// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient;
@@ -88,6 +87,17 @@ struct Gathered<const D: usize> {
 }
 
 impl<const D: usize> Gathered<D> {
+    /// All zero. A pass makes one and [`gather_chunk`] overwrites what it gathers for every
+    /// chunk (a new one per chunk was a memset of every field).
+    fn zero() -> Self {
+        Gathered {
+            v_gp: [[0.0; W]; D],
+            a_gp: [[0.0; W]; D],
+            l: [[[0.0; W]; D]; D],
+            hoop: [0.0; W],
+        }
+    }
+
     /// The lanes of flat result `r`: `v_gp` (D) and `a_gp` (D) below `grad0`, then `l` (D x D),
     /// then the hoop rate.
     #[inline(always)]
@@ -126,23 +136,8 @@ fn gather_chunk<
     live: Lanes,
     rows: &mut GatherRows,
     affine: &mut [[Lane; D]; D],
-) -> Gathered<D> {
-    for ln in 0..W {
-        rows[ln] = if live.has(ln) {
-            let mut b = [[0.0; D]; D];
-            let r = gather::<D, K, S, VEL, GRAD, AFFINE>(ctx, g, st.lane(ln), &mut b);
-            if AFFINE && !S::GRADIENT_AFFINE {
-                for r in 0..D {
-                    for c in 0..D {
-                        affine[r][c][ln] = b[r][c];
-                    }
-                }
-            }
-            r
-        } else {
-            [Row4::ZERO; GATHERED / 4]
-        };
-    }
+    out: &mut Gathered<D>,
+) {
     // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
     // (axisymmetric) when GRAD.
     let grad0 = if VEL { 2 * D } else { 0 };
@@ -152,14 +147,26 @@ fn gather_chunk<
         } else {
             0
         };
-    let mut out = Gathered {
-        v_gp: [[0.0; W]; D],
-        a_gp: [[0.0; W]; D],
-        l: [[[0.0; W]; D]; D],
-        hoop: [0.0; W],
-    };
+    // Only the rows that hold results are stored (2D: one of the four).
+    let used = n.div_ceil(4);
+    for ln in 0..W {
+        if live.has(ln) {
+            let mut b = [[0.0; D]; D];
+            let r = gather::<D, K, S, VEL, GRAD, AFFINE>(ctx, g, st.lane(ln), &mut b);
+            if AFFINE && !S::GRADIENT_AFFINE {
+                for r in 0..D {
+                    for c in 0..D {
+                        affine[r][c][ln] = b[r][c];
+                    }
+                }
+            }
+            rows[ln][..used].copy_from_slice(&r[..used]);
+        } else {
+            rows[ln][..used].fill(Row4::ZERO);
+        }
+    }
     for l0 in (0..W).step_by(4) {
-        for q in 0..n.div_ceil(4) {
+        for q in 0..used {
             let t = crate::shape::transpose4_rows([
                 rows[l0][q],
                 rows[l0 + 1][q],
@@ -173,7 +180,6 @@ fn gather_chunk<
             }
         }
     }
-    out
 }
 
 /// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`; with the hoop
@@ -627,7 +633,7 @@ fn eigenstrain<const D: usize>(
 /// new momenta to the remap
 /// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
 /// remap columns are free to fill; particles contribute chunk by chunk in the order of
-/// [`scatter_lane`], as the scatter pass does). `DAMP` adds the damping of the module docs;
+/// [`SCATTER_ORDER`], as the scatter pass does). `DAMP` adds the damping of the module docs;
 /// `APIC` replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
@@ -654,6 +660,7 @@ pub(crate) fn particles<
     }
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
+    let mut gathered = Gathered::zero();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
@@ -673,7 +680,7 @@ pub(crate) fn particles<
         // form takes the stress update's velocity gradient instead: see
         // `commit_gradient_affine`).
         let mut affine = [[[0.0; W]; D]; D];
-        let gathered = if FUSED_STRESS {
+        if FUSED_STRESS {
             gather_chunk::<D, K, S, true, { grad::UPDATED }, APIC>(
                 ctx,
                 g,
@@ -681,6 +688,7 @@ pub(crate) fn particles<
                 live,
                 &mut rows,
                 &mut affine,
+                &mut gathered,
             )
         } else {
             gather_chunk::<D, K, S, true, { grad::NONE }, APIC>(
@@ -690,6 +698,7 @@ pub(crate) fn particles<
                 live,
                 &mut rows,
                 &mut affine,
+                &mut gathered,
             )
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
@@ -805,10 +814,9 @@ pub(crate) fn particles<
         report.escaped += escaped.count();
         report.stopped += (ok & stopped).minus(escaped).count();
         if KEEP_START {
-            let n = W.min(count - start);
-            for t in 0..W {
-                let ln = scatter_lane(t);
-                if ln < n && p.status[start + ln] == ACTIVE {
+            let active = live_lanes(p, start, count);
+            for ln in SCATTER_ORDER {
+                if active.has(ln) {
                     // An active lane was committed: its velocity is v_new.
                     let mut pt = Scattered {
                         m: p.mass[start + ln],
@@ -854,6 +862,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
     }
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
+    let mut gathered = Gathered::zero();
     // The moment matrices this pass does not gather.
     let mut unused_affine = [[[0.0; W]; D]; D];
     for start in (0..count).step_by(W) {
@@ -864,13 +873,14 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
             load(if FROM_START { &*p.x_start[a] } else { &*p.x[a] }, start)
         });
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
-        let gathered = gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
+        gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
             ctx,
             g,
             &st,
             live,
             &mut rows,
             &mut unused_affine,
+            &mut gathered,
         );
         let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered);
         if S::GRADIENT_AFFINE {

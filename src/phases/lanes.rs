@@ -72,6 +72,35 @@ impl Lanes {
         set
     }
 
+    /// The lanes whose value equals `v`, for values that fit in an i32 (statuses): compared
+    /// as reals, four lanes at a time, since the exact conversion of four integers and one
+    /// vector compare is what both instruction sets have (a plain loop of integer compares
+    /// ran lane by lane, 6.5 instructions per particle-step in the baseline instance).
+    #[inline(always)]
+    pub fn equal(values: &[u32; W], v: u32) -> Lanes {
+        let mut set = Lanes::NONE;
+        for q in (0..W).step_by(4) {
+            let row = Row4::new(
+                values[q] as i32 as Real,
+                values[q + 1] as i32 as Real,
+                values[q + 2] as i32 as Real,
+                values[q + 3] as i32 as Real,
+            );
+            set = set | Lanes::group(q, row.cmpeq(Row4::splat(v as i32 as Real)));
+        }
+        set
+    }
+
+    /// These lanes among the first `n` (all of them from `n >= W`).
+    #[inline(always)]
+    pub fn first_n(self, n: usize) -> Lanes {
+        if n >= W {
+            self
+        } else {
+            Lanes(self.0 & ((1u32 << n) - 1))
+        }
+    }
+
     /// Lane `ln` alone.
     #[inline(always)]
     pub fn one(ln: usize) -> Lanes {

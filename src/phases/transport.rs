@@ -30,7 +30,7 @@
 
 use super::g2p::{live_lanes, stencils};
 use super::lanes::{load, Lane, Lanes, W};
-use super::p2g::scatter_lane;
+use super::p2g::SCATTER_ORDER;
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
@@ -75,8 +75,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     for start in (0..count).step_by(W) {
         let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [c_col, m_col, _, _] = &mut g.scalar[f];
-        for t in 0..W {
-            let ln = scatter_lane(t);
+        for ln in SCATTER_ORDER {
             if live.has(ln) {
                 let i = start + ln;
                 let (cap, _) = capacity_and_conductance(ctx, p, i, f);
@@ -123,8 +122,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     for start in (0..count).step_by(W) {
         let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [_, _, v_col, q_col] = &mut g.scalar[f];
-        for t in 0..W {
-            let ln = scatter_lane(t);
+        for ln in SCATTER_ORDER {
             if !live.has(ln) {
                 continue;
             }

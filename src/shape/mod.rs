@@ -173,7 +173,8 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
 /// of the same names (`w`, `dw`, `e` of the first axis).
 #[derive(Clone, Copy, Debug)]
 pub struct XFactors<const D: usize> {
-    base: usize,
+    /// First node's flat index (below 2^30: see `compute`).
+    base: u32,
     w: Row4,
     dw: Row4,
     e: Row4,
@@ -194,7 +195,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
     /// [`Stencil::base`].
     #[inline(always)]
     pub fn base(&self) -> usize {
-        self.x.base
+        self.x.base as usize
     }
 
     /// The x weights, `w[0]` of [`Stencil::w`].
@@ -254,7 +255,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
             (0.0, 0.0)
         };
         (
-            row_start(self.x.base, j, k, stride),
+            row_start(self.x.base as usize, j, k, stride),
             row_factors(self.w(1, j), self.dw(1, j), wz, dwz),
         )
     }
@@ -262,7 +263,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
     /// Flat index of the first node of row `j` along y, layer `k` along z.
     #[inline(always)]
     pub fn row_start(&self, j: usize, k: usize, stride: [usize; D]) -> usize {
-        row_start(self.x.base, j, k, stride)
+        row_start(self.x.base as usize, j, k, stride)
     }
 }
 
@@ -398,7 +399,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             }
             for i in 0..4 {
-                self.lanes[l0 + i].base = base[l0 + i] as usize;
+                self.lanes[l0 + i].base = base[l0 + i];
             }
         }
     }
