@@ -630,10 +630,9 @@ fn eigenstrain<const D: usize>(
 /// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
 /// from `v_i + a_i dt` in the same pass (USL). `KEEP_START` (MUSL) also keeps the positions
 /// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
-/// new momenta to the remap
-/// columns with the stencils already computed (the pass reads only `vel` and `acc`, so the
-/// remap columns are free to fill; particles contribute chunk by chunk in the order of
-/// [`SCATTER_ORDER`], as the scatter pass does). `DAMP` adds the damping of the module docs;
+/// new momenta to the remap columns with the stencils already computed (the pass reads only
+/// `vel` and `acc`, so the remap columns are free to fill; particles contribute chunk by chunk
+/// in the order of [`SCATTER_ORDER`], as the scatter pass does). `DAMP` adds the damping of the module docs;
 /// `APIC` replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<

@@ -72,10 +72,12 @@ impl Lanes {
         set
     }
 
-    /// The lanes whose value equals `v`, for values that fit in an i32 (statuses): compared
-    /// as reals, four lanes at a time, since the exact conversion of four integers and one
-    /// vector compare is what both instruction sets have (a plain loop of integer compares
-    /// ran lane by lane, 6.5 instructions per particle-step in the baseline instance).
+    /// The lanes whose value equals `v`, for a `v` below 2^24 (statuses): compared as reals,
+    /// four lanes at a time, since converting four integers and one vector compare is what
+    /// both instruction sets have (a plain loop of integer compares ran lane by lane, 6.5
+    /// instructions per particle-step in the baseline instance). Exact: such a `v` converts
+    /// exactly, and a value converts to `v` only if it is `v` (one above 2^24 rounds to a
+    /// real above 2^24).
     #[inline(always)]
     pub fn equal(values: &[u32; W], v: u32) -> Lanes {
         let mut set = Lanes::NONE;
