@@ -226,6 +226,17 @@ impl<const D: usize> NodeBox<D> {
             b.lo[0] = 0;
             b.hi[0] = b.hi[0].max((2 * geom.margin + 1).min(geom.nodes[0]));
         }
+        // A box that reaches past a wall plane also holds the images of the nodes it reaches
+        // there ([`Geom::for_each_wall_image`]).
+        for a in 0..D {
+            let (n, m) = (geom.nodes[a], geom.margin);
+            if geom.faces[a][0] != Boundary::Open && b.lo[a] < m {
+                b.hi[a] = b.hi[a].max((2 * m + 1).min(n));
+            }
+            if geom.faces[a][1] != Boundary::Open && b.hi[a] + m > n {
+                b.lo[a] = b.lo[a].min((n - 1).saturating_sub(2 * m));
+            }
+        }
         b
     }
 
@@ -353,6 +364,94 @@ impl<const D: usize> Geom<D> {
         for layer in layers {
             self.for_each_node_in_plane(axis, layer, bx, |i| f(i, layer == wall));
         }
+    }
+
+    /// Calls `f(ghost, image, signs)` for every node of box `bx` past the wall plane of a stick
+    /// or slip face (between the plane and the grid face) and its mirror image across the plane.
+    /// A vector's component `a` at the ghost is `signs[a]` times the image's: the wall is a plane
+    /// of symmetry for the material near it. At a slip wall the normal component flips
+    /// (`signs[axis] = -1`) and the others do not: the image slides with the material and the
+    /// velocity is zero across the plane only. At a stick wall every component flips: the
+    /// velocity is zero on the plane, where the odd extension keeps a velocity field that is
+    /// linear in the distance to the wall linear (the axisymmetric axis, a stick or slip face,
+    /// mirrors as a slip wall: the body is symmetric about it). The wider stencils (B-splines)
+    /// reach these nodes from material near the wall; without the images, zeroing them with the
+    /// wall plane froze the strain of the material's first cell (a settled column's stress near
+    /// its floor was off by up to 35 % of its weight).
+    ///
+    /// Faces in the order x low, x high, y low, ... or, `reversed`, the other way: folding in
+    /// that order and reading back in reverse carries a corner node (past two walls) to its
+    /// image across both.
+    pub fn for_each_wall_image(
+        &self,
+        bx: &NodeBox<D>,
+        reversed: bool,
+        mut f: impl FnMut(usize, usize, [Real; D]),
+    ) {
+        for q in 0..2 * D {
+            let face = if reversed { 2 * D - 1 - q } else { q };
+            let (axis, side) = (face / 2, face % 2);
+            let stick = match self.faces[axis][side] {
+                Boundary::Open => continue,
+                Boundary::Stick => !(self.axis_mirror && axis == 0 && side == 0),
+                Boundary::Slip => false,
+            };
+            let signs: [Real; D] =
+                core::array::from_fn(|a| if stick || a == axis { -1.0 } else { 1.0 });
+            let (n, m) = (self.nodes[axis], self.margin);
+            for k in 1..=m {
+                // Ghost layer k past the wall plane, image layer k inside it.
+                let (ghost, image) = if side == 0 {
+                    (m - k, m + k)
+                } else {
+                    (n - 1 - m + k, n - 1 - m - k)
+                };
+                if image >= n {
+                    continue;
+                }
+                self.for_each_node_in_plane(axis, ghost, bx, |i| {
+                    let j = if side == 0 {
+                        i + 2 * k * self.stride[axis]
+                    } else {
+                        i - 2 * k * self.stride[axis]
+                    };
+                    f(i, j, signs)
+                });
+            }
+        }
+    }
+
+    /// Adds what the particles put on each node past a wall plane to its image, component `a`
+    /// of vector `cols` times the face's `signs[a]`, and empties it
+    /// ([`Geom::for_each_wall_image`]; a scalar such as the mass is a vector of one component
+    /// that never flips: pass it with `SCALAR`). Every index is below the node count, which
+    /// every column exceeds: the bound checks never fail.
+    pub fn fold_wall_images<const N: usize, const SCALAR: bool>(
+        &self,
+        cols: &mut [&mut [Real]; N],
+        bx: &NodeBox<D>,
+    ) {
+        self.for_each_wall_image(bx, false, |ghost, image, signs| {
+            for (a, col) in cols.iter_mut().enumerate() {
+                let sign = if SCALAR { 1.0 } else { signs[a] };
+                if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
+                    col[image] += sign * v;
+                    col[ghost] = 0.0;
+                }
+            }
+        });
+    }
+
+    /// Each node past a wall plane takes its image's value, component `a` of vector `cols`
+    /// times the face's `signs[a]` ([`Geom::for_each_wall_image`], faces in reverse).
+    pub fn read_wall_images<const N: usize>(&self, cols: &mut [&mut [Real]; N], bx: &NodeBox<D>) {
+        self.for_each_wall_image(bx, true, |ghost, image, signs| {
+            for (a, col) in cols.iter_mut().enumerate() {
+                if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
+                    col[ghost] = signs[a] * v;
+                }
+            }
+        });
     }
 
     /// Axisymmetric: calls `f(ghost, image)` for every node before the axis (r < 0) and its

@@ -50,24 +50,21 @@ fn divide_by_mass<const D: usize>(
     });
 }
 
-/// Axisymmetric: folds the nodes before the axis onto their images, or reads the images back
-/// into them ([`crate::grid::Geom::fold_mirror`], [`crate::grid::Geom::mirror`]), for every
-/// component of a nodal vector, the radial one with its sign flipped.
+/// Folds the nodes past the wall planes onto their images, or reads the images back into them
+/// ([`crate::grid::Geom::for_each_wall_image`]), for every component of a nodal vector.
 fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], fold: bool) {
-    for (a, col) in cols.iter_mut().enumerate() {
-        let sign = if a == 0 { -1.0 } else { 1.0 };
-        if fold {
-            ctx.geom.fold_mirror(col, sign, &ctx.active);
-        } else {
-            ctx.geom.mirror(col, sign, &ctx.active);
-        }
+    if fold {
+        ctx.geom.fold_wall_images::<D, false>(cols, &ctx.active);
+    } else {
+        ctx.geom.read_wall_images(cols, &ctx.active);
     }
 }
 
 /// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.geom.fold_mirror(g.mass, 1.0, &ctx.active);
+    ctx.geom
+        .fold_wall_images::<1, true>(&mut [&mut *g.mass], &ctx.active);
     mirror_vector(ctx, &mut g.vel, true);
     divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
     mirror_vector(ctx, &mut g.vel, false);
@@ -88,7 +85,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
             }
         }
     });
-    // Past the axis the wall does not hold: those nodes mirror theirs images.
+    // Past the wall planes the nodes take their images' values.
     mirror_vector(ctx, &mut g.acc, false);
 }
 

@@ -17,6 +17,8 @@ mod conservation;
 mod effects;
 #[cfg(feature = "effects")]
 mod eigenstrain;
+#[cfg(feature = "effects")]
+mod equilibrium;
 mod hard_cases;
 mod robustness;
 #[cfg(feature = "effects")]
