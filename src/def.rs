@@ -155,8 +155,12 @@ impl Transfer {
 #[repr(u32)]
 pub enum Boundary {
     /// Nodes at the wall have zero velocity; particles reaching the wall stop against it.
+    /// Nodes past the wall plane (reached by the B-splines) mirror those inside with every
+    /// velocity component flipped.
     Stick = 0,
-    /// Nodes at the wall have zero normal velocity; particles slide along the wall.
+    /// Nodes at the wall have zero normal velocity; particles slide along the wall. Nodes past
+    /// the wall plane mirror those inside with the normal component flipped: the wall is a
+    /// plane of symmetry.
     Slip = 1,
     /// No condition on the nodes; a particle that crosses this face leaves the simulation
     /// (status [`crate::ParticleStatus::Escaped`]) and is counted in the step report.

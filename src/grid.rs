@@ -296,7 +296,9 @@ pub(crate) struct Geom<const D: usize> {
     /// Boundary condition of the lower and upper face of each axis.
     pub faces: [[Boundary; 2]; D],
     /// Axisymmetric: the nodes between the grid's first face and the axis (the wall plane of
-    /// the lower r face) are the mirror images of those past the axis ([`Geom::for_each_mirror`]).
+    /// the lower r face) are the mirror images of those past the axis, for the momentum as past
+    /// any wall ([`Geom::for_each_wall_image`]) and, here only, for heat and diffusion's
+    /// scalars ([`Geom::for_each_mirror`]).
     pub axis_mirror: bool,
 }
 
