@@ -494,7 +494,7 @@ impl Fast {
         blk
     }
 
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn scatter<const F: bool, const S: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let mut local = Block([0.0; SW]);
@@ -571,6 +571,7 @@ impl Fast {
 
     /// v = p / m, a = f / m + g (zero on empty nodes), then the slip walls on a; zeroes the
     /// re-map lanes.
+    #[inline(never)]
     unsafe fn grid_update(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let keep0 = mask([true, false, false, false, false, false, false, false]);
@@ -617,6 +618,7 @@ impl Fast {
     }
 
     /// v' = p' / m (zero on empty nodes), then the slip walls.
+    #[inline(never)]
     unsafe fn remap_update(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let lanes23 = mask([false, false, true, true, false, false, false, false]);
@@ -733,7 +735,7 @@ impl Fast {
         (vn, xn)
     }
 
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn particles<const F: bool, const S: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let mut local = Block([0.0; SW]);
@@ -892,7 +894,7 @@ impl Fast {
         bad
     }
 
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn stress<const F: bool, const S: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_ptr().cast::<f32>();
         let mut local = Block([0.0; SW]);
@@ -1119,7 +1121,7 @@ const BLK: usize = 64;
 struct Buf<const N: usize>([f32; N]);
 
 impl Fast {
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn scatter2<const F: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let stp = self.st.as_mut_ptr().cast::<f32>();
@@ -1242,7 +1244,7 @@ impl Fast {
         }
     }
 
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn particles2<const F: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_mut_ptr().cast::<f32>();
         let stp = self.st.as_mut_ptr().cast::<f32>();
@@ -1349,7 +1351,7 @@ impl Fast {
         self.bad += bad as usize;
     }
 
-    #[inline(always)]
+    #[inline(never)]
     unsafe fn stress2<const F: bool, const B: bool>(&mut self, p: &Params) {
         let g = self.grid.as_ptr().cast::<f32>();
         let stp = self.st.as_mut_ptr().cast::<f32>();
