@@ -104,9 +104,9 @@ fn settle(
     let layer = (RHO * G * h) as f64;
     let mut worst: f64 = 0.0;
     let mut fastest: f64 = 0.0;
-    for i in 0..v.count {
+    for (i, &y) in y0.iter().enumerate().take(v.count) {
         let sigma_yy = RHO as f64 / v.jacobian(i) as f64 * v.stress[1][i] as f64;
-        let exact = -(RHO * G) as f64 * (top - y0[i]) as f64;
+        let exact = -(RHO * G) as f64 * (top - y) as f64;
         worst = worst.max((sigma_yy - exact).abs() / layer);
         let speed: f64 = (0..def.axes())
             .map(|a| (v.velocity[a][i] as f64).powi(2))
