@@ -5,7 +5,8 @@
 //! 2. the material table, `material_capacity` [`MaterialRecord`]s;
 //! 3. the traction table, `traction_capacity` [`TractionRecord`]s (none unless declared);
 //! 4. the particle columns, one per scalar component, each `capacity` rounded up to
-//!    [`CHUNK`] entries and starting on a [`ALIGN`]-byte boundary;
+//!    [`CHUNK`] entries and starting on a [`ALIGN`]-byte boundary, columns of 4 KiB or more
+//!    a page multiple plus 5 cache lines apart (`column_stride`: no 4K aliasing);
 //!    The columns of an effect come after the always-present ones and exist only when the
 //!    definition declares the effect;
 //! 5. the grid node columns, likewise, one entry per node.
@@ -28,7 +29,7 @@ pub const CHUNK: usize = 16;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 4;
+const VERSION: u64 = 5;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -331,23 +332,37 @@ const fn round_up(x: usize, to: usize) -> usize {
     x.div_ceil(to) * to
 }
 
+/// Bytes between the starts of two columns of `bytes` each: rounded up to [`ALIGN`], and, for
+/// columns of a page or more, to a stride of 5 cache lines past a multiple of 4 KiB. Columns
+/// whose starts are a multiple of 4 KiB apart put a chunk's entries of every column at the same
+/// address bits 0..12, where a load after a store to another column is taken as dependent on
+/// it until the full addresses compare (4K aliasing); with the stride of 5 lines, the chunks of
+/// up to 64 columns fall on distinct lines of the page.
+const fn column_stride(bytes: usize) -> usize {
+    const LINES_PER_PAGE: usize = 4096 / ALIGN;
+    let lines = bytes.div_ceil(ALIGN);
+    if lines < LINES_PER_PAGE {
+        return lines * ALIGN;
+    }
+    let past = lines % LINES_PER_PAGE;
+    (lines + (5 + LINES_PER_PAGE - past) % LINES_PER_PAGE) * ALIGN
+}
+
 impl Layout {
     /// Layout of a validated definition.
     pub fn of(def: &WorldDef) -> Layout {
         let d = def.axes();
         let cap = round_up(def.particle_capacity as usize, CHUNK);
         let nodes: usize = (0..d).map(|a| def.cells[a] as usize + 1).product();
-        let real_column_bytes = round_up(cap * size_of::<Real>(), ALIGN);
-        let u32_column_bytes = round_up(cap * 4, ALIGN);
+        let real_column_bytes = column_stride(cap * size_of::<Real>());
+        let u32_column_bytes = column_stride(cap * 4);
         let (
             [x_start, force, damping, affine, heat, diffusion, hoop, stretch],
             particle_real_columns,
         ) = EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
-        let node_column_bytes = round_up(
-            round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>(),
-            ALIGN,
-        );
+        let node_column_bytes =
+            column_stride(round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>());
         let stress_velocity = def.update_order != UpdateOrder::Usl;
         let scalar_grid = [def.effects.heat.is_some(), def.effects.diffusion.is_some()];
         let grid_columns = 1
@@ -650,5 +665,34 @@ impl Layout {
             + self.particle_real_columns * self.real_column_bytes
             + j * self.u32_column_bytes;
         start..start + count * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Property of `column_stride` over column sizes from one byte to 64 MiB: it holds the
+    /// column, is a whole number of cache lines, adds less than a page, and, for columns of a
+    /// page or more, puts the starts of 64 consecutive columns on 64 distinct lines of the page
+    /// (so no two of them alias modulo 4 KiB).
+    #[test]
+    fn column_strides_hold_the_column_and_spread_over_the_page() {
+        let mut bytes = 1usize;
+        while bytes <= 64 << 20 {
+            for b in [bytes, bytes + 4, bytes + 60, bytes * 3] {
+                let s = column_stride(b);
+                assert!(s >= b && s % ALIGN == 0 && s < b + 4096 + ALIGN, "{b}: {s}");
+                if b >= 4096 {
+                    let mut lines = [false; 64];
+                    for j in 0..64 {
+                        let line = (j * s) % 4096 / ALIGN;
+                        assert!(!lines[line], "{b}: columns alias at line {line}");
+                        lines[line] = true;
+                    }
+                }
+            }
+            bytes *= 2;
+        }
     }
 }
