@@ -234,6 +234,9 @@ fn gather<
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
+            // The first row starts every sum (the loops unroll, so this is resolved at compile
+            // time).
+            let first = k == 0 && j == 0;
             let mut re = [0.0; D];
             if moments {
                 for (b, e) in re.iter_mut().enumerate().skip(1) {
@@ -253,14 +256,14 @@ fn gather<
                     (Row4::ZERO, Row4::ZERO)
                 };
                 if VEL || GRAD == grad::UPDATED {
-                    rv[a] += vi * r[0];
-                    ra[a] += ai * r[0];
+                    add_term(&mut rv[a], vi * r[0], first);
+                    add_term(&mut ra[a], ai * r[0], first);
                 }
                 // The updated velocity v + a dt (USL's gradient, APIC's moments).
                 let updated = vi + ai * dt;
                 if moments {
                     for b in 1..D {
-                        aue[a][b] += updated * re[b];
+                        add_term(&mut aue[a][b], updated * re[b], first);
                     }
                 }
                 if GRAD != grad::NONE {
@@ -268,11 +271,11 @@ fn gather<
                         updated
                     } else {
                         let u = unsafe { load_row(g.remap[a], row) };
-                        ru[a] += u * r[0];
+                        add_term(&mut ru[a], u * r[0], first);
                         u
                     };
                     for b in 1..D {
-                        du[a][b] += u * r[b];
+                        add_term(&mut du[a][b], u * r[b], first);
                     }
                 }
             }
@@ -321,6 +324,17 @@ fn gather<
             terms[4 * q + 3],
         ])
     })
+}
+
+/// `acc += term`, or `acc = term` for the first term: the compiler keeps `0 + term` as an add
+/// (it is not `term` for `term = -0`), one per accumulator and particle in every gather.
+#[inline(always)]
+fn add_term(acc: &mut Row4, term: Row4, first: bool) {
+    if first {
+        *acc = term;
+    } else {
+        *acc += term;
+    }
 }
 
 /// APIC for a family that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`], linear):
