@@ -13,7 +13,8 @@ fn bytes(def: &WorldDef) -> usize {
 }
 
 /// Declaring an effect reserves exactly its columns (one per scalar, each the padded capacity
-/// rounded to the 64-byte alignment) or its table; not declaring it reserves nothing.
+/// in whole cache lines, and, for a column of a page or more, 5 lines past a multiple of 4 KiB:
+/// ARCHITECTURE.md, "Memory layout") or its table; not declaring it reserves nothing.
 #[test]
 fn each_effect_reserves_its_columns_only_when_declared() {
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
@@ -25,7 +26,14 @@ fn each_effect_reserves_its_columns_only_when_declared() {
         };
         let d = base.axes();
         let padded = (1000usize).div_ceil(CHUNK) * CHUNK;
-        let column = (padded * size_of::<Real>()).div_ceil(64) * 64;
+        // 4032 bytes in f32, 8064 in f64 (padded to 133 lines).
+        let lines = (padded * size_of::<Real>()).div_ceil(64);
+        let column = 64
+            * if lines < 64 {
+                lines
+            } else {
+                lines + (5 + 64 - lines % 64) % 64
+            };
         let with = |f: &dyn Fn(&mut WorldDef)| {
             let mut def = base;
             f(&mut def);
