@@ -234,9 +234,6 @@ fn gather<
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, r) = st.row(j, k, geom.stride);
-            // The first row starts every sum (the loops unroll, so this is resolved at compile
-            // time).
-            let first = k == 0 && j == 0;
             let mut re = [0.0; D];
             if moments {
                 for (b, e) in re.iter_mut().enumerate().skip(1) {
@@ -256,14 +253,14 @@ fn gather<
                     (Row4::ZERO, Row4::ZERO)
                 };
                 if VEL || GRAD == grad::UPDATED {
-                    add_term(&mut rv[a], vi * r[0], first);
-                    add_term(&mut ra[a], ai * r[0], first);
+                    rv[a] += vi * r[0];
+                    ra[a] += ai * r[0];
                 }
                 // The updated velocity v + a dt (USL's gradient, APIC's moments).
                 let updated = vi + ai * dt;
                 if moments {
                     for b in 1..D {
-                        add_term(&mut aue[a][b], updated * re[b], first);
+                        aue[a][b] += updated * re[b];
                     }
                 }
                 if GRAD != grad::NONE {
@@ -271,11 +268,11 @@ fn gather<
                         updated
                     } else {
                         let u = unsafe { load_row(g.remap[a], row) };
-                        add_term(&mut ru[a], u * r[0], first);
+                        ru[a] += u * r[0];
                         u
                     };
                     for b in 1..D {
-                        add_term(&mut du[a][b], u * r[b], first);
+                        du[a][b] += u * r[b];
                     }
                 }
             }
@@ -324,17 +321,6 @@ fn gather<
             terms[4 * q + 3],
         ])
     })
-}
-
-/// `acc += term`, or `acc = term` for the first term: the compiler keeps `0 + term` as an add
-/// (it is not `term` for `term = -0`), one per accumulator and particle in every gather.
-#[inline(always)]
-fn add_term(acc: &mut Row4, term: Row4, first: bool) {
-    if first {
-        *acc = term;
-    } else {
-        *acc += term;
-    }
 }
 
 /// APIC for a family that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`], linear):
