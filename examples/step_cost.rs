@@ -27,7 +27,10 @@
 //! moved so that the block sits at r >= 0) and is 2D only: with `--dim 3` step_cost says so on
 //! stderr and exits with code 1. `--grid-scale N` (default 1) puts the same block in the
 //! middle of a grid N times larger per axis: what empty grid costs (the grid passes work on
-//! the nodes the particles reach).
+//! the nodes the particles reach). `--shrink N` (default 1; 1, 2, 4 or 8) divides the block's
+//! cells per axis by N, the grid shrinking with it (the room around the block stays): N^D
+//! times fewer particles, to see what the step costs once its data fits in the caches (3D
+//! `--shrink 4`: 4096 particles).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -36,7 +39,7 @@ use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
-[--simd auto|baseline] [--grid-scale N (1..=16)] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
+[--simd auto|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
 body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
@@ -56,6 +59,7 @@ struct Options {
     simd: Simd,
     effect: Effect,
     grid_scale: u32,
+    shrink: u32,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -75,6 +79,7 @@ fn parse_options() -> Options {
         simd: Simd::Detect,
         effect: Effect::None,
         grid_scale: 1,
+        shrink: 1,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -97,6 +102,7 @@ fn parse_options() -> Options {
             "--simd",
             "--effect",
             "--grid-scale",
+            "--shrink",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -170,6 +176,12 @@ fn parse_options() -> Options {
                     _ => bad(),
                 }
             }
+            "--shrink" => {
+                o.shrink = match value.parse::<u32>() {
+                    Ok(n) if [1, 2, 4, 8].contains(&n) => n,
+                    _ => bad(),
+                }
+            }
             _ => unreachable!("checked against the known options"),
         }
     }
@@ -224,6 +236,11 @@ fn main() {
     let o = parse_options();
     let axes = o.dim as usize;
     let (grid, first, block) = scene(o.dim);
+    // --shrink: the block's cells per axis divided by N (every block dimension is a multiple
+    // of 8), the grid smaller by as many cells.
+    let shrunk = |b: u32, a: usize| if a < axes { b / o.shrink } else { b };
+    let grid: [u32; 3] = core::array::from_fn(|a| grid[a] - (block[a] - shrunk(block[a], a)));
+    let block: [u32; 3] = core::array::from_fn(|a| shrunk(block[a], a));
     // --grid-scale: the same block in the middle of a grid N times larger per axis.
     let axes_scaled = |v: [u32; 3], f: &dyn Fn(u32, usize) -> u32| -> [u32; 3] {
         core::array::from_fn(|a| if a < axes { f(v[a], a) } else { v[a] })
