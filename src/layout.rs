@@ -335,9 +335,10 @@ const fn round_up(x: usize, to: usize) -> usize {
 /// Bytes between the starts of two columns of `bytes` each: rounded up to [`ALIGN`], and, for
 /// columns of a page or more, to a stride of 5 cache lines past a multiple of 4 KiB. Columns
 /// whose starts are a multiple of 4 KiB apart put a chunk's entries of every column at the same
-/// address bits 0..12, where a load after a store to another column is taken as dependent on
-/// it until the full addresses compare (4K aliasing); with the stride of 5 lines, the chunks of
-/// up to 64 columns fall on distinct lines of the page.
+/// low 12 address bits, where a load after a store to another column can be taken as dependent
+/// on it until the full addresses compare (4K aliasing; the likely reason the default 3D step
+/// took about 10 % longer with such strides, ARCHITECTURE.md); with the stride of 5 lines, the
+/// chunks of up to 64 columns fall on distinct lines of the page.
 const fn column_stride(bytes: usize) -> usize {
     const LINES_PER_PAGE: usize = 4096 / ALIGN;
     let lines = bytes.div_ceil(ALIGN);

@@ -481,8 +481,8 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     // material (the common case, vectorised); otherwise lane by lane.
     // Without `Option` combinators: their closures were left out of line (a profile showed
     // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
-    // The ids stay u32 here and are widened only where a lane's record is looked up: widening
-    // all sixteen up front was 1.5 % of the default 2D step in a profile.
+    // The ids stay u32 here and are widened only where a lane's record is looked up (widening
+    // all sixteen up front cost 2 instructions per 2D particle-step).
     let ids = load(p.material, start);
     let mut uniform = None;
     if let Some(l0) = update.first() {
