@@ -16,9 +16,10 @@
 //!
 //! Options: `--dim 2|3`, `--shape linear|gimp|quadratic|cubic`,
 //! `--material neo_hookean|linear_elastic`, `--order usf|usl|musl`, `--runs N`, `--steps S`,
-//! `--simd auto|baseline` (`auto`, the default, is what `World::step` does: the AVX2 instance
-//! on CPUs that have it; `baseline` forces the SSE2 instance, e.g. under valgrind, which cannot
-//! decode every AVX instruction). The JSON line says which instance ran (`"simd"`).
+//! `--simd auto|avx2|baseline` (`auto`, the default, is what `World::step` does: the widest
+//! instance the CPU has, AVX-512 or AVX2; `avx2` caps it at AVX2; `baseline` forces the SSE2
+//! instance, e.g. under valgrind, which cannot decode every AVX instruction). The JSON line
+//! says which instance ran (`"simd"`).
 //! `--effect none|damping|feedback|local_damping|particle_forces|tractions|body_force|apic|heat|diffusion|thermal_expansion|axisymmetric`
 //! declares one effect (see `benches/common/scene.rs`; default none) to price it; the JSON line
 //! names it and gives the world's bytes per particle (`benches/effect_cost.sh` tabulates every
@@ -39,7 +40,7 @@ use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
-[--simd auto|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
+[--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
 body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
@@ -160,6 +161,7 @@ fn parse_options() -> Options {
             "--simd" => {
                 o.simd = match value.as_str() {
                     "auto" => Simd::Detect,
+                    "avx2" => Simd::Avx2,
                     "baseline" => Simd::Baseline,
                     _ => bad(),
                 }
@@ -299,11 +301,7 @@ fn main() {
         material_name(o.material),
         order_name(o.order),
         precision_name(),
-        if o.simd.uses_avx2() {
-            "avx2"
-        } else {
-            "baseline"
-        },
+        o.simd.instance().name(),
         med,
         runs_json,
         med_ref,

@@ -1,91 +1,175 @@
 //! Which instruction set a step runs with.
 //!
 //! The kernel is built for the target's baseline (SSE2 on x86-64), so it runs on every CPU of
-//! the target. On x86-64 the step is compiled a second time with AVX and AVX2 enabled and chosen
-//! at run time when the CPU has them: the same source, with three-operand instructions, unaligned
-//! memory operands and blends, which take about a fifth of the instructions out of the hot
-//! loops. FMA is deliberately not enabled, and the kernel never calls `mul_add`: both instances
-//! round every operation the same way, so a step gives bit-identical results on either path
-//! (tested), and results do not depend on which CPU ran them.
+//! the target. On x86-64 the particle passes are compiled twice more from the same source and
+//! one instance is chosen at run time, the widest the CPU and the operating system support:
+//! - AVX and AVX2: three-operand instructions, unaligned memory operands and blends, which
+//!   take about a fifth of the instructions out of the hot loops;
+//! - AVX-512 (F, VL, BW and DQ): the 16-lane loops in one register, and 32 vector registers.
+//!   Faster in 3D on the machines measured (ARCHITECTURE.md, "Performance").
+//!
+//! FMA is deliberately not enabled, and the kernel never calls `mul_add`: every instance rounds
+//! every operation the same way, so a step gives bit-identical results on any path (tested), and
+//! results do not depend on which CPU ran them.
+//!
+//! Process-wide caps: [`use_baseline_only`] (for tools that cannot decode the wider
+//! instructions) and [`use_avx2_at_most`] (for hosts on CPUs that lower their clock while
+//! 512-bit instructions run, which slows the host's other code too).
 
 /// The instruction-set choice for a step. Not part of the stable API: tests use it to check
-/// that both paths give bit-identical state.
+/// that every path gives bit-identical state.
 #[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Simd {
     /// The widest path the CPU supports (what [`crate::World::step`] uses).
     Detect,
+    /// The widest path up to AVX2.
+    Avx2,
     /// The target's baseline instructions only.
     Baseline,
 }
 
+/// The instance of the particle passes that runs.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Instance {
+    /// The target's baseline (SSE2 on x86-64).
+    Baseline,
+    /// AVX and AVX2 (x86-64).
+    Avx2,
+    /// AVX-512 F, VL, BW and DQ (x86-64).
+    Avx512,
+}
+
+impl Instance {
+    /// Its name in reports (`step_cost`'s JSON).
+    pub fn name(self) -> &'static str {
+        match self {
+            Instance::Baseline => "baseline",
+            Instance::Avx2 => "avx2",
+            Instance::Avx512 => "avx512",
+        }
+    }
+}
+
 impl Simd {
-    /// Whether this choice runs the AVX2 instance on this CPU.
+    /// The instance this choice runs on this CPU (within the process-wide cap).
     #[inline]
-    pub fn uses_avx2(self) -> bool {
-        self == Simd::Detect && has_avx2()
+    pub fn instance(self) -> Instance {
+        let widest = widest();
+        match self {
+            Simd::Detect => widest,
+            Simd::Avx2 => widest.min(Instance::Avx2),
+            Simd::Baseline => Instance::Baseline,
+        }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod state {
-    use core::sync::atomic::AtomicU8;
-    pub const UNKNOWN: u8 = 0;
-    pub const NO: u8 = 1;
-    pub const YES: u8 = 2;
-    /// The detection result, or NO after [`super::use_baseline_only`].
-    pub static STATE: AtomicU8 = AtomicU8::new(UNKNOWN);
+    use core::sync::atomic::{AtomicU8, Ordering};
+
+    const UNKNOWN: u8 = u8::MAX;
+    /// The widest instance the CPU supports (`Instance as u8`), UNKNOWN before detection.
+    static DETECTED: AtomicU8 = AtomicU8::new(UNKNOWN);
+    /// The process-wide cap (`Instance as u8`).
+    static CAP: AtomicU8 = AtomicU8::new(super::Instance::Avx512 as u8);
+
+    fn of(v: u8) -> super::Instance {
+        match v {
+            0 => super::Instance::Baseline,
+            1 => super::Instance::Avx2,
+            _ => super::Instance::Avx512,
+        }
+    }
+
+    /// The widest instance, detected once (`cpuid` can be slow under a hypervisor), capped.
+    pub fn widest() -> super::Instance {
+        let mut d = DETECTED.load(Ordering::Relaxed);
+        if d == UNKNOWN {
+            d = super::detect() as u8;
+            DETECTED.store(d, Ordering::Relaxed);
+        }
+        of(d.min(CAP.load(Ordering::Relaxed)))
+    }
+
+    /// Lowers the cap to `to` (never raises it).
+    pub fn cap(to: super::Instance) {
+        CAP.fetch_min(to as u8, Ordering::Relaxed);
+    }
+}
+
+/// The widest instance this CPU runs, within the process-wide cap.
+#[cfg(target_arch = "x86_64")]
+fn widest() -> Instance {
+    state::widest()
+}
+
+/// Only the baseline instance on other architectures.
+#[cfg(not(target_arch = "x86_64"))]
+fn widest() -> Instance {
+    Instance::Baseline
 }
 
 /// Makes every later step of every world in the process run the baseline instance, whatever
 /// the CPU supports. For tools that emulate the CPU and cannot decode every AVX instruction
-/// (valgrind 3.19); results do not change, only speed.
+/// (valgrind 3.19); results do not change, only speed. Irreversible for the process.
 pub fn use_baseline_only() {
     #[cfg(target_arch = "x86_64")]
-    state::STATE.store(state::NO, core::sync::atomic::Ordering::Relaxed);
+    state::cap(Instance::Baseline);
 }
 
-/// Whether the CPU and the operating system support AVX and AVX2 (cached after the first call:
-/// `cpuid` can be slow under a hypervisor), and [`use_baseline_only`] was not called.
-#[cfg(target_arch = "x86_64")]
+/// Makes every later step of every world in the process run at most the AVX2 instance. For
+/// hosts on CPUs that lower their clock while 512-bit instructions run (some Intel server
+/// parts), where that would slow the host's other code; results do not change, only speed.
+/// Irreversible for the process.
+pub fn use_avx2_at_most() {
+    #[cfg(target_arch = "x86_64")]
+    state::cap(Instance::Avx2);
+}
+
+/// Whether a step runs an instance wider than the baseline: the CPU and the operating system
+/// support AVX and AVX2 (at least), and [`use_baseline_only`] was not called.
 pub fn has_avx2() -> bool {
-    use core::sync::atomic::Ordering;
-    use state::{NO, STATE, YES};
-    match STATE.load(Ordering::Relaxed) {
-        YES => true,
-        NO => false,
-        _ => {
-            let yes = detect_avx2();
-            STATE.store(if yes { YES } else { NO }, Ordering::Relaxed);
-            yes
-        }
-    }
+    widest() >= Instance::Avx2
 }
 
-/// No second instance on other architectures.
-#[cfg(not(target_arch = "x86_64"))]
-pub fn has_avx2() -> bool {
-    false
+/// Whether a step runs the AVX-512 instance: the CPU and the operating system support
+/// AVX-512 F, VL, BW and DQ, and neither cap was set.
+pub fn has_avx512() -> bool {
+    widest() == Instance::Avx512
 }
 
-/// CPUID leaf 1 (ECX bit 27 OSXSAVE, bit 28 AVX), XCR0 bits 1-2 (the OS saves the XMM and YMM
-/// registers) and CPUID leaf 7 (EBX bit 5 AVX2), as the Intel and AMD manuals prescribe.
+/// The widest instance the CPU and the operating system support, as the Intel and AMD manuals
+/// prescribe: CPUID leaf 1 (ECX bit 27 OSXSAVE, bit 28 AVX) and XCR0 bits 1-2 (the OS saves the
+/// XMM and YMM registers), CPUID leaf 7 EBX bit 5 (AVX2); for AVX-512, XCR0 bits 5-7 (the
+/// opmask registers and the upper ZMM state) and leaf 7 EBX bits 16 (F), 17 (DQ), 30 (BW) and
+/// 31 (VL).
 #[cfg(target_arch = "x86_64")]
-fn detect_avx2() -> bool {
+fn detect() -> Instance {
     use core::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
     let max_leaf = __cpuid(0).eax;
     if max_leaf < 7 {
-        return false;
+        return Instance::Baseline;
     }
     let ecx = __cpuid(1).ecx;
     let (osxsave, avx) = (ecx & (1 << 27) != 0, ecx & (1 << 28) != 0);
     if !(osxsave && avx) {
-        return false;
+        return Instance::Baseline;
     }
     // SAFETY: OSXSAVE is set, so XGETBV is available and XCR0 readable.
     let xcr0 = unsafe { _xgetbv(0) };
     if xcr0 & 0b110 != 0b110 {
-        return false;
+        return Instance::Baseline;
     }
-    __cpuid_count(7, 0).ebx & (1 << 5) != 0
+    let ebx = __cpuid_count(7, 0).ebx;
+    if ebx & (1 << 5) == 0 {
+        return Instance::Baseline;
+    }
+    let avx512 = (1 << 16) | (1 << 17) | (1 << 30) | (1 << 31);
+    if xcr0 & 0b1110_0000 == 0b1110_0000 && ebx & avx512 == avx512 {
+        Instance::Avx512
+    } else {
+        Instance::Avx2
+    }
 }

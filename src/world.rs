@@ -10,9 +10,6 @@ use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::phases::p2g::mode;
-#[cfg(target_arch = "x86_64")]
-use crate::phases::Avx2;
-use crate::phases::Baseline;
 use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
@@ -1412,8 +1409,8 @@ trait Kernel {
     );
 }
 
-/// Runs `kernel` with its passes in the AVX2 instance when `simd` picks it (see
-/// [`crate::simd`]), otherwise in the baseline one.
+/// Runs `kernel` with its passes in the instance `simd` picks on this CPU (see
+/// [`crate::simd`]).
 fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
     kernel: &mut impl Kernel,
     simd: Simd,
@@ -1423,13 +1420,7 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if simd.uses_avx2() {
-        kernel.body::<Avx2, D, K, S>(shape, ctx, p, count, g);
-        return;
-    }
-    let _ = simd;
-    kernel.body::<Baseline, D, K, S>(shape, ctx, p, count, g);
+    crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S>(shape, ctx, p, count, g));
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is

@@ -1,15 +1,18 @@
-//! `mpm_gimp::simd::use_baseline_only` is process-wide, so it is tested in its own test binary:
-//! after it, no step takes the AVX2 instance, and stepping gives the same state as a step
-//! forced to the baseline instance.
+//! The caps `mpm_gimp::simd::use_avx2_at_most` and `use_baseline_only` are process-wide and
+//! irreversible, so they are tested in their own test binary, in one test that sets them in
+//! turn: after each, no step takes a wider instance, and stepping gives the same state as a
+//! step forced to the baseline instance.
 
 mod common;
 
 use common::{buffer_for, free_space};
-use mpm_gimp::simd::{has_avx2, use_baseline_only, Simd};
+use mpm_gimp::simd::{has_avx2, has_avx512, use_avx2_at_most, use_baseline_only, Instance, Simd};
 use mpm_gimp::{Dimension, MaterialDef, Vec3, World};
 
-#[test]
-fn use_baseline_only_turns_the_avx2_instance_off() {
+/// Steps two copies of a moving block 20 times, one with `World::step` (the instance the caps
+/// allow) and one forced to the baseline instance, and checks that their positions are
+/// bit-identical.
+fn steps_like_the_baseline() {
     let def = free_space(Dimension::Plane2D, 16, 0.1);
     let mut buf_a = buffer_for(&def);
     let mut buf_b = buffer_for(&def);
@@ -25,9 +28,6 @@ fn use_baseline_only_turns_the_avx2_instance_off() {
         .expect("fill");
         w
     });
-    use_baseline_only();
-    assert!(!has_avx2(), "use_baseline_only must turn detection off");
-    assert!(!Simd::Detect.uses_avx2());
     let [a, b] = &mut worlds;
     let x0 = a.particles().position[0][0];
     for _ in 0..20 {
@@ -41,4 +41,22 @@ fn use_baseline_only_turns_the_avx2_instance_off() {
             assert_eq!(x.to_bits(), y.to_bits());
         }
     }
+}
+
+#[test]
+fn the_caps_turn_the_wider_instances_off() {
+    let widest = Simd::Detect.instance();
+    eprintln!("widest instance on this CPU: {}", widest.name());
+    use_avx2_at_most();
+    assert!(!has_avx512(), "use_avx2_at_most must turn AVX-512 off");
+    assert_eq!(Simd::Detect.instance(), widest.min(Instance::Avx2));
+    steps_like_the_baseline();
+    use_baseline_only();
+    assert!(!has_avx2(), "use_baseline_only must turn detection off");
+    assert_eq!(Simd::Detect.instance(), Instance::Baseline);
+    assert_eq!(Simd::Avx2.instance(), Instance::Baseline);
+    // A cap is never raised again.
+    use_avx2_at_most();
+    assert_eq!(Simd::Detect.instance(), Instance::Baseline);
+    steps_like_the_baseline();
 }

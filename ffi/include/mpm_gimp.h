@@ -932,9 +932,15 @@ MpmStatus mpm_world_stable_dt(const struct MpmWorld *world, mpm_real *dt_out);
 MpmStatus mpm_world_step(struct MpmWorld *world, mpm_real dt, struct MpmStepReport *report_out);
 
 // Makes every later step of this process use the baseline (SSE2) instance of the particle
-// passes instead of the AVX2 one. Both give bit-identical results; this exists for tools that
-// cannot decode AVX2 instructions (valgrind 3.19). Irreversible for the process.
+// passes instead of the AVX2 or AVX-512 one. All give bit-identical results; this exists for
+// tools that cannot decode AVX instructions (valgrind 3.19). Irreversible for the process.
 void mpm_simd_use_baseline_only(void);
+
+// Makes every later step of this process use at most the AVX2 instance of the particle passes,
+// never the AVX-512 one, for hosts on CPUs that lower their clock while 512-bit instructions
+// run (some Intel server parts), which would slow the host's own code too. Results do not
+// change, only speed. Irreversible for the process.
+void mpm_simd_use_avx2_at_most(void);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -474,9 +474,18 @@ pub unsafe extern "C" fn mpm_world_step(
 }
 
 /// Makes every later step of this process use the baseline (SSE2) instance of the particle
-/// passes instead of the AVX2 one. Both give bit-identical results; this exists for tools that
-/// cannot decode AVX2 instructions (valgrind 3.19). Irreversible for the process.
+/// passes instead of the AVX2 or AVX-512 one. All give bit-identical results; this exists for
+/// tools that cannot decode AVX instructions (valgrind 3.19). Irreversible for the process.
 #[no_mangle]
 pub extern "C" fn mpm_simd_use_baseline_only() {
     kernel::simd::use_baseline_only();
+}
+
+/// Makes every later step of this process use at most the AVX2 instance of the particle passes,
+/// never the AVX-512 one, for hosts on CPUs that lower their clock while 512-bit instructions
+/// run (some Intel server parts), which would slow the host's own code too. Results do not
+/// change, only speed. Irreversible for the process.
+#[no_mangle]
+pub extern "C" fn mpm_simd_use_avx2_at_most() {
+    kernel::simd::use_avx2_at_most();
 }

@@ -1,6 +1,7 @@
 //! The particle passes of a substep, instantiated once per instruction set (see
 //! [`crate::simd`]). Each pass is one function per instance, with the pass's code inlined into
-//! it, so that the AVX2 instance compiles all of it with AVX2 and every pass keeps its own
+//! it, so that the AVX2 instance compiles all of it with AVX2 (the AVX-512 one with AVX-512)
+//! and every pass keeps its own
 //! register allocation (one function for a whole substep measured about 10 % slower). The
 //! transported scalars' substep (heat, diffusion) is one such function too. The two
 //! scans of the particles before a substep (the node box, the fastest particle for
@@ -14,9 +15,51 @@ use crate::particles::ParticleCols;
 use crate::shape::Shape1D;
 use crate::{Real, StepReport};
 
-/// Declares the [`Isa`] trait with one method per pass, and its two implementations: the
-/// baseline one (each pass its own function) and the AVX2 one (each pass compiled in a
-/// `#[target_feature]` function). Each pass is written once, here, by its signature.
+/// One instance of the passes compiled with more instruction-set features: the type that
+/// implements [`Isa`] and the module of `#[target_feature]` functions it calls (the passes are
+/// `#[inline(always)]`, so their whole code is compiled there).
+macro_rules! wide {
+    (
+        $(#[$tdoc:meta])* $isa:ident, $module:ident, $features:literal;
+        $(
+            $(#[$doc:meta])*
+            fn $name:ident [$($generics:tt)*] [$($garg:ident),*]
+                ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? => $($target:ident)::+;
+        )*
+    ) => {
+        $(#[$tdoc])*
+        #[cfg(target_arch = "x86_64")]
+        pub(crate) struct $isa;
+
+        #[cfg(target_arch = "x86_64")]
+        impl Isa for $isa {
+            $(
+                #[inline(always)]
+                fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
+                    // SAFETY: this instance is only chosen when the CPU and the OS support its
+                    // features (`crate::simd::Simd::instance`).
+                    unsafe { $module::$name::<$($garg),*>($($arg),*) }
+                }
+            )*
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        mod $module {
+            use super::*;
+            $(
+                #[target_feature(enable = $features)]
+                pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
+                    $($target)::+::<$($garg),*>($($arg),*)
+                }
+            )*
+        }
+    };
+}
+
+/// Declares the [`Isa`] trait with one method per pass, and its implementations: the baseline
+/// one (each pass its own function), the AVX2 one and the AVX-512 one (each pass compiled in a
+/// `#[target_feature]` function, [`wide!`]). Each pass is written once, here, by its
+/// signature.
 macro_rules! passes {
     ($(
         $(#[$doc:meta])*
@@ -40,32 +83,19 @@ macro_rules! passes {
             )*
         }
 
-        /// AVX and AVX2 (x86-64). Chosen only when [`crate::simd::has_avx2`] is true.
-        #[cfg(target_arch = "x86_64")]
-        pub(crate) struct Avx2;
-
-        #[cfg(target_arch = "x86_64")]
-        impl Isa for Avx2 {
-            $(
-                #[inline(always)]
-                fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    // SAFETY: `Avx2` is only chosen when the CPU and the OS support AVX2.
-                    unsafe { avx2::$name::<$($garg),*>($($arg),*) }
-                }
-            )*
+        wide! {
+            /// AVX and AVX2 (x86-64). Chosen only when the CPU supports them
+            /// ([`crate::simd::Instance::Avx2`]).
+            Avx2, avx2, "avx,avx2";
+            $($(#[$doc])* fn $name [$($generics)*] [$($garg),*] ($($arg: $ty),*) $(-> $ret)?
+                => $($target)::+;)*
         }
-
-        /// The passes compiled with AVX and AVX2 enabled (the passes are `#[inline(always)]`,
-        /// so their whole code is compiled here).
-        #[cfg(target_arch = "x86_64")]
-        mod avx2 {
-            use super::*;
-            $(
-                #[target_feature(enable = "avx,avx2")]
-                pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    $($target)::+::<$($garg),*>($($arg),*)
-                }
-            )*
+        wide! {
+            /// AVX-512 F, VL, BW and DQ (x86-64). Chosen only when the CPU supports them
+            /// ([`crate::simd::Instance::Avx512`]).
+            Avx512, avx512, "avx,avx2,avx512f,avx512vl,avx512bw,avx512dq";
+            $($(#[$doc])* fn $name [$($generics)*] [$($garg),*] ($($arg: $ty),*) $(-> $ret)?
+                => $($target)::+;)*
         }
     };
 }

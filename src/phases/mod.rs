@@ -7,14 +7,36 @@
 
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
-mod isa;
+pub(crate) mod isa;
 pub(crate) mod lanes;
 pub(crate) mod p2g;
 pub(crate) mod transport;
 
-#[cfg(target_arch = "x86_64")]
-pub(crate) use isa::Avx2;
-pub(crate) use isa::{Baseline, Isa};
+pub(crate) use isa::Isa;
+
+/// Evaluates `$body` with `$isa` naming the instance of the passes that `$simd` (a
+/// [`crate::simd::Simd`]) picks on this CPU: the one place that maps the choice to a type.
+macro_rules! with_instance {
+    ($simd:expr, $isa:ident => $body:expr) => {
+        match $simd.instance() {
+            #[cfg(target_arch = "x86_64")]
+            $crate::simd::Instance::Avx512 => {
+                type $isa = $crate::phases::isa::Avx512;
+                $body
+            }
+            #[cfg(target_arch = "x86_64")]
+            $crate::simd::Instance::Avx2 => {
+                type $isa = $crate::phases::isa::Avx2;
+                $body
+            }
+            _ => {
+                type $isa = $crate::phases::isa::Baseline;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_instance;
 
 use crate::grid::{Geom, NodeBox};
 use crate::layout::{MaterialRecord, TractionRecord};
@@ -57,12 +79,7 @@ pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<
     status: &[u32],
     count: usize,
 ) -> NodeBox<D> {
-    #[cfg(target_arch = "x86_64")]
-    if simd.uses_avx2() {
-        return Avx2::node_box::<D, K, S>(geom, x, status, count);
-    }
-    let _ = simd;
-    Baseline::node_box::<D, K, S>(geom, x, status, count)
+    with_instance!(simd, I => I::node_box::<D, K, S>(geom, x, status, count))
 }
 
 /// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),
@@ -73,12 +90,7 @@ pub(crate) fn fastest_squared(
     status: &[u32],
     d: usize,
 ) -> f64 {
-    #[cfg(target_arch = "x86_64")]
-    if simd.uses_avx2() {
-        return Avx2::fastest_squared(v, status, d);
-    }
-    let _ = simd;
-    Baseline::fastest_squared(v, status, d)
+    with_instance!(simd, I => I::fastest_squared(v, status, d))
 }
 
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored

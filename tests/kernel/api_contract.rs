@@ -489,17 +489,20 @@ fn identical_worlds_stepped_identically_are_bit_identical() {
     }
 }
 
-/// The step has a baseline instance and, on x86-64 CPUs with AVX2, a second one compiled for
-/// AVX2 (`mpm_gimp::simd`). Both round every operation identically, so a result must not depend
-/// on which one ran: every shape, order and dimension, 30 frames of a block dropped on the
-/// floor, compared bit for bit. (On a CPU without AVX2 both runs take the baseline path and the
-/// test checks only determinism.)
+/// The step has a baseline instance and, on x86-64, instances compiled for AVX2 and for
+/// AVX-512 (`mpm_gimp::simd`). All round every operation identically, so a result must not
+/// depend on which one ran: every shape, order and dimension, 30 frames of a block dropped on
+/// the floor, stepped by the widest instance, by the widest up to AVX2 and by the baseline,
+/// compared bit for bit. (Where the CPU lacks AVX-512 or AVX2, two or all three runs take the
+/// same path and the test checks only determinism for them.)
 #[test]
-fn the_avx2_and_baseline_instances_give_bit_identical_state() {
-    use mpm_gimp::simd::{has_avx2, Simd};
-    if !has_avx2() {
-        eprintln!("no AVX2 on this CPU: both runs use the baseline instance");
-    }
+fn every_instruction_set_instance_gives_bit_identical_state() {
+    use mpm_gimp::simd::Simd;
+    let choices = [Simd::Detect, Simd::Avx2, Simd::Baseline];
+    eprintln!(
+        "instances compared: {:?}",
+        choices.map(|c| c.instance().name())
+    );
     for base in [def_2d(), def_3d()] {
         for shape in [
             ShapeFunction::Linear,
@@ -514,21 +517,28 @@ fn the_avx2_and_baseline_instances_give_bit_identical_state() {
                     ..base
                 };
                 let what = format!("{:?} {shape:?} {order:?}", def.dimension);
-                let mut buf_a = buffer_for(&def);
-                let mut buf_b = buffer_for(&def);
-                let mut a = drop_scene(&def, buf_a.as_mut_bytes());
-                let mut b = drop_scene(&def, buf_b.as_mut_bytes());
-                let initial = column_hashes(&a);
+                let mut bufs = choices.map(|_| buffer_for(&def));
+                let mut worlds = bufs.each_mut().map(|b| drop_scene(&def, b.as_mut_bytes()));
+                let initial = column_hashes(&worlds[0]);
                 for frame in 0..30 {
-                    let ra = a.step_with_simd(1.0 / 240.0, Simd::Detect).expect("step a");
-                    let rb = b
-                        .step_with_simd(1.0 / 240.0, Simd::Baseline)
-                        .expect("step b");
-                    assert_eq!(ra, rb, "{what}: step reports differ at frame {frame}");
+                    let reports = choices
+                        .iter()
+                        .zip(worlds.iter_mut())
+                        .map(|(&simd, w)| w.step_with_simd(1.0 / 240.0, simd).expect("step"))
+                        .collect::<Vec<_>>();
+                    for (r, simd) in reports.iter().zip(choices).skip(1) {
+                        assert_eq!(
+                            &reports[0], r,
+                            "{what}: step reports of {:?} and {simd:?} differ at frame {frame}",
+                            choices[0]
+                        );
+                    }
                 }
-                let ha = column_hashes(&a);
-                assert_ne!(ha, initial, "{what}: nothing changed");
-                assert_hashes_equal(&ha, &column_hashes(&b), &what);
+                let hashes = worlds.each_ref().map(column_hashes);
+                assert_ne!(hashes[0], initial, "{what}: nothing changed");
+                for (h, simd) in hashes.iter().zip(choices).skip(1) {
+                    assert_hashes_equal(&hashes[0], h, &format!("{what}, {simd:?}"));
+                }
             }
         }
     }
