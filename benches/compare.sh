@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Interleaved wall-clock comparison of step_cost binaries on a shared, noisy machine: each
 # round runs every binary once, in turn, so that they see the same load; prints, per binary,
-# the minimum and the median of the per-round medians (ns per particle-step).
+# the minimum and the median of the per-round medians (ns per particle-step) and, for every BIN
+# after the first, the median of its per-round ratios to the first (the ratio of two runs in the
+# same round cancels most of the machine's slow drifts, which the plain medians do not).
 #   bash benches/compare.sh ROUNDS BIN [BIN ...] -- [step_cost options for every BIN]
 # A BIN may carry its own options in one quoted word. E.g.
 #   bash benches/compare.sh 5 ./old_step_cost target/release/examples/step_cost -- --dim 2
@@ -18,11 +20,11 @@ done
 [ $# -gt 0 ] && shift
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-for _ in $(seq "$rounds"); do
+for round in $(seq "$rounds"); do
     for b in "${bins[@]}"; do
         read -ra cmd <<<"$b"
         v=$("${cmd[@]}" "$@" --runs 5 --steps 10 2>/dev/null | grep -o '"ns_per_particle_step":[0-9.]*' | cut -d: -f2)
-        echo "$b|$v" >>"$out"
+        echo "$b|$v|$round" >>"$out"
     done
 done
 for b in "${bins[@]}"; do
@@ -30,5 +32,13 @@ for b in "${bins[@]}"; do
     n=$(echo "$vals" | wc -l)
     min=$(echo "$vals" | head -1)
     med=$(echo "$vals" | sed -n "$(( (n + 1) / 2 ))p")
-    echo "$b: min $min median $med ns per particle-step over $n rounds ($(echo $vals | tr '\n' ' '))"
+    ratio=""
+    if [ "$b" != "${bins[0]}" ]; then
+        ratio=$(awk -F'|' -v a="${bins[0]}" -v b="$b" '
+            $1 == a { ref[$3] = $2 } $1 == b { val[$3] = $2 }
+            END { for (r in val) if (r in ref && ref[r] > 0) print val[r] / ref[r] }' "$out" | sort -g)
+        k=$(echo "$ratio" | wc -l)
+        ratio="; ratio to the first: median $(echo "$ratio" | sed -n "$(( (k + 1) / 2 ))p" | xargs printf '%.3f')"
+    fi
+    echo "$b: min $min median $med ns per particle-step over $n rounds ($(echo $vals | tr '\n' ' '))$ratio"
 done
