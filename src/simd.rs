@@ -1,8 +1,9 @@
 //! Which instruction set a step runs with.
 //!
 //! The kernel is built for the target's baseline (SSE2 on x86-64), so it runs on every CPU of
-//! the target. On x86-64 the particle passes are compiled twice more from the same source and
-//! one instance is chosen at run time, the widest the CPU and the operating system support:
+//! the target. On x86-64, with the `wide-simd` feature (on by default), the particle passes are
+//! compiled twice more from the same source and one instance is chosen at run time, the widest
+//! the CPU and the operating system support:
 //! - AVX and AVX2: three-operand instructions, unaligned memory operands and blends, which
 //!   take about a fifth of the instructions out of the hot loops;
 //! - AVX-512 (F, VL, BW and DQ): the 16-lane loops in one register, and 32 vector registers.
@@ -65,7 +66,7 @@ impl Simd {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
 mod state {
     use core::sync::atomic::{AtomicU8, Ordering};
 
@@ -100,13 +101,13 @@ mod state {
 }
 
 /// The widest instance this CPU runs, within the process-wide cap.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
 fn widest() -> Instance {
     state::widest()
 }
 
-/// Only the baseline instance on other architectures.
-#[cfg(not(target_arch = "x86_64"))]
+/// Only the baseline instance on other architectures, and without the `wide-simd` feature.
+#[cfg(not(all(target_arch = "x86_64", feature = "wide-simd")))]
 fn widest() -> Instance {
     Instance::Baseline
 }
@@ -115,7 +116,7 @@ fn widest() -> Instance {
 /// the CPU supports. For tools that emulate the CPU and cannot decode every AVX instruction
 /// (valgrind 3.19); results do not change, only speed. Irreversible for the process.
 pub fn use_baseline_only() {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
     state::cap(Instance::Baseline);
 }
 
@@ -124,7 +125,7 @@ pub fn use_baseline_only() {
 /// parts), where that would slow the host's other code; results do not change, only speed.
 /// Irreversible for the process.
 pub fn use_avx2_at_most() {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
     state::cap(Instance::Avx2);
 }
 
@@ -145,7 +146,7 @@ pub fn has_avx512() -> bool {
 /// XMM and YMM registers), CPUID leaf 7 EBX bit 5 (AVX2); for AVX-512, XCR0 bits 5-7 (the
 /// opmask registers and the upper ZMM state) and leaf 7 EBX bits 16 (F), 17 (DQ), 30 (BW) and
 /// 31 (VL).
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
 fn detect() -> Instance {
     use core::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
     let max_leaf = __cpuid(0).eax;

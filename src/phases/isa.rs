@@ -28,10 +28,10 @@ macro_rules! wide {
         )*
     ) => {
         $(#[$tdoc])*
-        #[cfg(target_arch = "x86_64")]
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         pub(crate) struct $isa;
 
-        #[cfg(target_arch = "x86_64")]
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         impl Isa for $isa {
             $(
                 #[inline(always)]
@@ -43,7 +43,7 @@ macro_rules! wide {
             )*
         }
 
-        #[cfg(target_arch = "x86_64")]
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         mod $module {
             use super::*;
             $(

@@ -19,12 +19,12 @@ pub(crate) use isa::Isa;
 macro_rules! with_instance {
     ($simd:expr, $isa:ident => $body:expr) => {
         match $simd.instance() {
-            #[cfg(target_arch = "x86_64")]
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
             $crate::simd::Instance::Avx512 => {
                 type $isa = $crate::phases::isa::Avx512;
                 $body
             }
-            #[cfg(target_arch = "x86_64")]
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
             $crate::simd::Instance::Avx2 => {
                 type $isa = $crate::phases::isa::Avx2;
                 $body
