@@ -1,12 +1,11 @@
 //! The particle passes of a substep, instantiated once per instruction set (see
 //! [`crate::simd`]). Each pass is one function per instance, with the pass's code inlined into
 //! it, so that the AVX2 instance compiles all of it with AVX2 (the AVX-512 one with AVX-512)
-//! and every pass keeps its own
-//! register allocation (one function for a whole substep measured about 10 % slower). The
-//! transported scalars' substep (heat, diffusion) is one such function too. The two
-//! scans of the particles before a substep (the node box, the fastest particle for
-//! `stable_dt`) are instanced the same way; the node passes (grid update) are short loops and
-//! run in the baseline instance.
+//! and every pass keeps its own register allocation (one function for a whole substep measured
+//! about 10 % slower). The transported scalars' substep (heat, diffusion) is one such function
+//! too. The two scans of the particles before a substep (the node box, the fastest particle
+//! for `stable_dt`) are instanced the same way; the node passes (grid update) are short loops
+//! and run in the baseline instance.
 
 use super::{g2p, p2g, transport, Ctx};
 use crate::effects::Transport;
