@@ -78,6 +78,16 @@ impl ShapeFunction {
 }
 
 impl ShapeFunction {
+    /// Twice the shift of the first node of a stencil: a particle at `s` cells from the grid
+    /// origin has its first node at `floor(s + shift) - lead` (`shape::Shape1D::SHIFT`),
+    /// `shift` being 0 or 1/2.
+    pub(crate) const fn first_node_shift_halves(self) -> i64 {
+        match self {
+            ShapeFunction::Linear | ShapeFunction::CubicBspline => 0,
+            _ => 1,
+        }
+    }
+
     /// Width of the layer of cells, at each face of the grid, that particles may not enter:
     /// the nodes of a particle's stencil must exist. 0 for linear, 1 for the others.
     pub const fn margin_cells(self) -> u32 {

@@ -688,6 +688,10 @@ impl<'a> World<'a> {
     /// with the volume of its sub-cell and the mass of that volume at the material's density
     /// (axisymmetric: per radian, the sub-cell's area times the site's radius).
     /// All or nothing; the box must lie inside the admissible region.
+    ///
+    /// The particles are written in stencil-bin order, not x fastest: the sites whose stencils
+    /// start at the same node come together (one run per node), which lets the step's scatter
+    /// sum a run in registers before it touches the grid. Find a face's particles by position.
     pub fn fill_box(
         &mut self,
         min: Vec3,
@@ -803,7 +807,15 @@ impl<'a> World<'a> {
                 }
             })
         };
-        let sites = || Sites::new(k_lo, k_hi).map(site).filter(|x| inside(*x));
+        let bins = Bins {
+            n: def.particles_per_cell as i64,
+            shift_halves: def.shape.first_node_shift_halves(),
+        };
+        let sites = || {
+            BinnedSites::new(k_lo, k_hi, bins)
+                .map(site)
+                .filter(|x| inside(*x))
+        };
         // Pass 1: count and validate (nothing is written on failure). Stops at the first
         // problem, so a region far larger than the capacity costs no more than the capacity.
         let room = def.particle_capacity as usize - self.particle_count();
@@ -1606,6 +1618,74 @@ impl Iterator for Sites {
     }
 }
 
+/// How lattice sites fall into stencil bins along an axis: site `k` sits at `s = (k + 1/2) / n`
+/// cells from the grid origin, and its stencil's first node is `floor(s + shift) - lead`, so
+/// the sites of bin `b = floor((2k + 1 + 2 n shift) / 2n)` share their first node.
+#[derive(Clone, Copy)]
+struct Bins {
+    /// Sites per cell per axis.
+    n: i64,
+    /// `2 shift` ([`crate::ShapeFunction::first_node_shift_halves`]).
+    shift_halves: i64,
+}
+
+impl Bins {
+    /// The bin of site `k`.
+    fn of(self, k: i64) -> i64 {
+        (2 * k + 1 + self.shift_halves * self.n).div_euclid(2 * self.n)
+    }
+
+    /// The first site of bin `b` (the least `k` whose bin is at least `b`).
+    fn first(self, b: i64) -> i64 {
+        -((1 + self.shift_halves * self.n - 2 * self.n * b).div_euclid(2))
+    }
+}
+
+/// Lattice indices in `[lo, hi]` (inclusive per axis) in stencil-bin order: the bins x
+/// fastest, and within a bin its sites x fastest. The sites of a bin share their stencil's
+/// first node, so they come one after another and the scatter sums them before it adds to the
+/// grid ([`crate::phases::p2g`]'s runs): one load and store per node row for the bin rather
+/// than one per particle.
+struct BinnedSites {
+    lo: [i64; 3],
+    hi: [i64; 3],
+    bins: Bins,
+    outer: Sites,
+    inner: Sites,
+}
+
+impl BinnedSites {
+    fn new(lo: [i64; 3], hi: [i64; 3], bins: Bins) -> Self {
+        BinnedSites {
+            lo,
+            hi,
+            bins,
+            outer: Sites::new(
+                core::array::from_fn(|a| bins.of(lo[a])),
+                core::array::from_fn(|a| bins.of(hi[a])),
+            ),
+            inner: Sites::new([0; 3], [-1; 3]),
+        }
+    }
+}
+
+impl Iterator for BinnedSites {
+    type Item = [i64; 3];
+    fn next(&mut self) -> Option<[i64; 3]> {
+        loop {
+            if let Some(k) = self.inner.next() {
+                return Some(k);
+            }
+            let b = self.outer.next()?;
+            let bins = self.bins;
+            self.inner = Sites::new(
+                core::array::from_fn(|a| self.lo[a].max(bins.first(b[a]))),
+                core::array::from_fn(|a| self.hi[a].min(bins.first(b[a] + 1) - 1)),
+            );
+        }
+    }
+}
+
 /// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
 /// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
 /// make the stable step 0, which no step could take, although the true step is representable.
@@ -1643,4 +1723,123 @@ pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
         }
     }
     v2_max
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::shape::{first_node, CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
+    use crate::{HeapBuffer, MaterialDef};
+    use std::vec::Vec;
+
+    /// A small deterministic generator in `[0, 1)`.
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The bin order visits exactly the sites of the plain lattice order, each once, for boxes
+    /// anywhere (negative indices included), every bin width and shift.
+    #[test]
+    fn binned_sites_are_a_permutation_of_the_lattice() {
+        let mut state = 7;
+        for n in 1..=4 {
+            for shift_halves in [0, 1] {
+                let bins = Bins { n, shift_halves };
+                for _ in 0..200 {
+                    let mut lo = [0i64; 3];
+                    let mut hi = [0i64; 3];
+                    for a in 0..3 {
+                        lo[a] = (lcg(&mut state) * 30.0) as i64 - 15;
+                        hi[a] = lo[a] + (lcg(&mut state) * 9.0) as i64 - 1;
+                    }
+                    let mut plain: Vec<[i64; 3]> = Sites::new(lo, hi).collect();
+                    let mut binned: Vec<[i64; 3]> = BinnedSites::new(lo, hi, bins).collect();
+                    plain.sort_unstable();
+                    binned.sort_unstable();
+                    assert_eq!(plain, binned, "n {n}, shift {shift_halves}, {lo:?}..{hi:?}");
+                }
+            }
+        }
+    }
+
+    /// The particles a fill seeds come in runs that share their stencil's first node, one run
+    /// per first node (what the scatter's run sums rely on), for every shape, 2D and 3D, 1 to 4
+    /// particles per cell per axis and boxes at random places. The first node is the one the
+    /// step computes ([`first_node`] with the shape's own shift and lead).
+    #[test]
+    fn filled_particles_come_in_one_run_per_first_node() {
+        fn check<const K: usize, S: Shape1D<K>>(shape: ShapeFunction) {
+            let mut state = 11;
+            for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+                for ppc in 1..=4u32 {
+                    let cells = 12u32;
+                    let def = WorldDef {
+                        dimension: dim,
+                        cells: if dim == Dimension::ThreeD {
+                            [cells; 3]
+                        } else {
+                            [cells, cells, 1]
+                        },
+                        cell_size: 0.5,
+                        origin: Vec3::new(-1.25, 0.75, -2.0),
+                        shape,
+                        particles_per_cell: ppc,
+                        particle_capacity: 20_000,
+                        ..WorldDef::DEFAULT
+                    };
+                    let d = def.axes();
+                    let h = def.cell_size;
+                    let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
+                    for _ in 0..6 {
+                        let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
+                        let mat = world.add_material(&MaterialDef::DEFAULT).unwrap();
+                        // A box within the cells 2..10 of each axis (inside every margin).
+                        let corner = |t: f64| 2.0 + 8.0 * t;
+                        let (mut lo, mut hi) = ([0.0; 3], [0.0; 3]);
+                        for a in 0..3 {
+                            let (p, q) = (corner(lcg(&mut state)), corner(lcg(&mut state)));
+                            lo[a] = def.origin[a] + h * p.min(q) as Real;
+                            hi[a] = def.origin[a] + h * p.max(q) as Real;
+                        }
+                        let filled = world
+                            .fill_box(Vec3::from(lo), Vec3::from(hi), mat, Vec3::ZERO)
+                            .unwrap();
+                        let v = world.particles();
+                        let key = |i: usize| -> [i32; 3] {
+                            core::array::from_fn(|a| {
+                                if a < d {
+                                    let s = (v.position[a][i] - def.origin[a]) / h;
+                                    first_node::<K, S>(s, cells as usize + 1)
+                                } else {
+                                    0
+                                }
+                            })
+                        };
+                        let keys: Vec<[i32; 3]> = (filled.start as usize..filled.end as usize)
+                            .map(key)
+                            .collect();
+                        let runs = 1 + keys.windows(2).filter(|w| w[0] != w[1]).count();
+                        let mut distinct = keys.clone();
+                        distinct.sort_unstable();
+                        distinct.dedup();
+                        if !keys.is_empty() {
+                            assert_eq!(
+                                runs,
+                                distinct.len(),
+                                "{shape:?} {dim:?} ppc {ppc}: a first node in two runs"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        check::<2, Linear>(ShapeFunction::Linear);
+        check::<3, Gimp>(ShapeFunction::Gimp);
+        check::<3, QuadraticBspline>(ShapeFunction::QuadraticBspline);
+        check::<4, CubicBspline>(ShapeFunction::CubicBspline);
+        check::<3, CpGimp>(ShapeFunction::CpGimp);
+    }
 }

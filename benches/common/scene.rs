@@ -134,7 +134,7 @@ impl Effect {
         m
     }
 
-    fn set_up(self, world: &mut World, block: [u32; 3], axes: usize) -> Result<(), String> {
+    fn set_up(self, world: &mut World) -> Result<(), String> {
         let n = world.particle_count();
         let err = |e| format!("setting up {}: {e:?}", self.name());
         match self {
@@ -149,14 +149,16 @@ impl Effect {
                     .map_err(err)
             }
             Effect::Tractions => {
-                // The fill is x fastest: every (block[0] PPC)-th particle ends a row.
-                let row = (block[0] * PPC) as usize;
-                let rows = n / row;
-                let _ = axes;
-                for r in 0..rows {
-                    let last = (r * row + row - 1) as u32;
+                // One traction per particle of the block's +x face: those on the last lattice
+                // column (the fill's order is not x fastest, so pick them by position).
+                let x = &world.particles().position[0];
+                let x_max = x.iter().fold(Real::MIN, |m, &v| m.max(v));
+                let last: Vec<u32> = (0..n as u32)
+                    .filter(|&i| x[i as usize] > x_max - 0.25 * CELL / PPC as Real)
+                    .collect();
+                for i in last {
                     world
-                        .add_tractions(last..last + 1, Face::XMax, Vec3::new(1.0e3, 0.0, 0.0))
+                        .add_tractions(i..i + 1, Face::XMax, Vec3::new(1.0e3, 0.0, 0.0))
                         .map_err(err)?;
                 }
                 Ok(())
@@ -266,7 +268,7 @@ impl Scene {
         if ids.len() as u32 != expected {
             return Err(format!("{} particles, expected {expected}", ids.len()));
         }
-        s.effect.set_up(&mut world, s.block, axes)?;
+        s.effect.set_up(&mut world)?;
         Ok(Scene {
             storage,
             particles: expected,
