@@ -30,7 +30,7 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::lanes::{commit, load, Lane, Lanes, Mask4, W};
-use super::p2g::{affine_velocity, mode, scatter_one, Scattered, SCATTER_ORDER};
+use super::p2g::{affine_velocity, mode, RunSums, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -629,9 +629,9 @@ fn eigenstrain<const D: usize>(
 /// from `v_i + a_i dt` in the same pass (USL). `KEEP_START` (MUSL) also keeps the positions
 /// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
 /// new momenta to the remap columns with the stencils already computed (the pass reads only
-/// `vel` and `acc`, so the remap columns are free to fill; particles contribute chunk by chunk
-/// in the order of [`SCATTER_ORDER`], as the scatter pass does). `DAMP` adds the damping of the module docs;
-/// `APIC` replaces FLIP by APIC.
+/// `vel` and `acc`, so the remap columns are free to fill; particles contribute in their order,
+/// summed over runs that share a stencil base, as the scatter pass does: see
+/// [`RunSums`]). `DAMP` adds the damping of the module docs; `APIC` replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
     const D: usize,
@@ -658,6 +658,9 @@ pub(crate) fn particles<
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     let mut gathered = Gathered::zero();
+    // MUSL's re-map momenta, summed over runs of particles that share a stencil base (they go
+    // to the remap columns, which this pass does not read).
+    let mut run = RunSums::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
@@ -812,7 +815,7 @@ pub(crate) fn particles<
         report.stopped += (ok & stopped).minus(escaped).count();
         if KEEP_START {
             let active = live_lanes(p, start, count);
-            for ln in SCATTER_ORDER {
+            for ln in 0..W {
                 if active.has(ln) {
                     // An active lane was committed: its velocity is v_new.
                     let mut pt = Scattered {
@@ -834,11 +837,12 @@ pub(crate) fn particles<
                             }
                         }
                     }
-                    scatter_one::<D, K, S, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
+                    run.scatter::<D, K, S, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
                 }
             }
         }
     }
+    run.flush::<D, K, { mode::REMAP }>(g, geom.stride);
 }
 
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),

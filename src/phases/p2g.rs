@@ -51,6 +51,7 @@ pub(crate) fn scatter<
     let with_force = MODE == mode::ALL || MODE == mode::FORCE;
     let with_momentum = MODE != mode::FORCE;
     let mut st = Stencils::<D, K, W>::default();
+    let mut run = RunSums::new();
     for start in (0..count).step_by(W) {
         // The chunk's particle values as lane vectors (one load per column, no per-particle
         // bounds checks).
@@ -83,7 +84,7 @@ pub(crate) fn scatter<
         }
         stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         let live = super::g2p::live_lanes(p, start, count);
-        for ln in SCATTER_ORDER {
+        for ln in 0..W {
             if !live.has(ln) {
                 continue;
             }
@@ -107,27 +108,131 @@ pub(crate) fn scatter<
                     })
                 }),
             };
-            scatter_one::<D, K, S, MODE, FORCE, APIC>(ctx, &pt, stn, g);
+            run.scatter::<D, K, S, MODE, FORCE, APIC>(ctx, &pt, stn, g);
         }
+    }
+    run.flush::<D, K, MODE>(g, ctx.geom.stride);
+}
+
+/// The grid columns a scatter adds to, numbered for [`RunSums`]: the mass, then the momentum,
+/// force and remap columns of each axis (room for three axes each).
+pub(crate) mod slot {
+    pub const MASS: usize = 0;
+    pub const MOMENTUM: usize = 1;
+    pub const FORCE: usize = 4;
+    pub const REMAP: usize = 7;
+    /// Number of slots.
+    pub const COUNT: usize = 10;
+}
+
+/// Grid column `c` (a [`slot`]).
+#[inline(always)]
+fn column<'g, const D: usize>(g: &'g mut GridCols<'_, D>, c: usize) -> &'g mut [Real] {
+    if c == slot::MASS {
+        g.mass
+    } else if c < slot::FORCE {
+        g.vel[c - slot::MOMENTUM]
+    } else if c < slot::REMAP {
+        g.acc[c - slot::FORCE]
+    } else {
+        g.remap[c - slot::REMAP]
     }
 }
 
-/// The order in which a chunk's lanes are scattered: 0, W/2, 1, W/2 + 1, ... Two particles
-/// scattered one after the other then come from two halves of the chunk, which in a lattice
-/// fill are cells apart, so the second does not load a stencil row that overlaps, at an offset,
-/// a row the first has just stored (a load that partly overlaps a pending store waits for the
-/// store to complete instead of taking its value from the store buffer). A table, not a
-/// formula per lane: the scatter loop is not unrolled, and the formula cost 10 instructions
-/// per particle-step (callgrind).
-pub(crate) const SCATTER_ORDER: [usize; W] = {
-    let mut order = [0; W];
-    let mut t = 0;
-    while t < W {
-        order[t] = (t % 2) * (W / 2) + t / 2;
-        t += 1;
+/// Whether a scatter in `MODE` adds to slot `c` of a `D`-dimensional grid.
+#[inline(always)]
+fn slot_used<const D: usize>(mode: u8, c: usize) -> bool {
+    let axis_ok = |first: usize| c >= first && c < first + D;
+    let mass = mode == mode::ALL || mode == mode::MASS_MOMENTUM;
+    (mass && (c == slot::MASS || axis_ok(slot::MOMENTUM)))
+        || ((mode == mode::ALL || mode == mode::FORCE) && axis_ok(slot::FORCE))
+        || (mode == mode::REMAP && axis_ok(slot::REMAP))
+}
+
+/// Largest number of stencil rows (cubic B-spline in 3D: 4 x 4).
+const MAX_ROWS: usize = 16;
+
+/// The row values of a run of consecutive particles that share a stencil base, summed before
+/// they are added to the grid: one load, add and store per row and column for the whole run
+/// instead of one per particle. Particles seeded in a lattice come in such runs (see
+/// [`crate::World::fill_box`]). The sum is formed in the particles' order, then added to the
+/// node, so the result does not depend on the instruction set.
+pub(crate) struct RunSums {
+    sums: [[Row4; slot::COUNT]; MAX_ROWS],
+    /// The run's stencil base, [`RunSums::NONE`] when empty.
+    pub base: usize,
+}
+
+impl RunSums {
+    /// The base of an empty run.
+    pub const NONE: usize = usize::MAX;
+
+    /// Adds `v` to slot `c` (a [`slot`]) of stencil row `r` (`j + K k`).
+    #[inline(always)]
+    fn add(&mut self, r: usize, c: usize, v: Row4) {
+        self.sums[r][c] += v;
     }
-    order
-};
+
+    #[inline(always)]
+    pub fn new() -> Self {
+        RunSums {
+            sums: [[Row4::ZERO; slot::COUNT]; MAX_ROWS],
+            base: Self::NONE,
+        }
+    }
+
+    /// Scatters one particle: adds its rows to the run when it shares the run's stencil base,
+    /// else flushes the run and starts a new one with it.
+    #[inline(always)]
+    pub fn scatter<
+        const D: usize,
+        const K: usize,
+        S: Shape1D<K>,
+        const MODE: u8,
+        const FORCE: bool,
+        const APIC: bool,
+    >(
+        &mut self,
+        ctx: &Ctx<'_, D>,
+        pt: &Scattered<D>,
+        st: LaneStencil<'_, D, K, W>,
+        g: &mut GridCols<'_, D>,
+    ) {
+        if st.base() != self.base {
+            self.flush::<D, K, MODE>(g, ctx.geom.stride);
+            self.base = st.base();
+        }
+        scatter_one::<D, K, S, MODE, FORCE, APIC>(pt, st, self);
+    }
+
+    /// Adds the run's sums to the grid (the rows are checked against it here) and empties it.
+    #[inline(always)]
+    pub fn flush<const D: usize, const K: usize, const MODE: u8>(
+        &mut self,
+        g: &mut GridCols<'_, D>,
+        stride: [usize; D],
+    ) {
+        let base = self.base;
+        self.base = Self::NONE;
+        if base == Self::NONE || !rows_fit(base, Stencil::<D, K>::last_row_offset(stride), g.len())
+        {
+            return;
+        }
+        for k in 0..Stencil::<D, K>::layers() {
+            for j in 0..K {
+                let r = j + K * k;
+                let row = crate::shape::row_start(base, j, k, stride);
+                for c in 0..slot::COUNT {
+                    if slot_used::<D>(MODE, c) {
+                        // SAFETY: rows_fit checked above; every column has g.len() entries.
+                        unsafe { add_row(column(g, c), row, self.sums[r][c]) };
+                        self.sums[r][c] = Row4::ZERO;
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// Entry (a, b) of the affine velocity matrix `C_p` from the stored column value and
 /// `1 / D_p[b][b]`: the stored `B_p` divided by `D_p`, or the stored `C_p` itself for a family
@@ -157,8 +262,8 @@ pub(crate) struct Scattered<const D: usize> {
     pub affine: Mat<D>,
 }
 
-/// Scatters one particle with stencil `st` (also used by the MUSL particle update, which
-/// scatters the new momenta as it goes).
+/// Adds one particle's row values, for stencil `st`, to the run sums (the grid gets them when
+/// the run is flushed).
 #[inline(always)]
 pub(crate) fn scatter_one<
     const D: usize,
@@ -168,22 +273,11 @@ pub(crate) fn scatter_one<
     const FORCE: bool,
     const APIC: bool,
 >(
-    ctx: &Ctx<'_, D>,
     pt: &Scattered<D>,
     st: LaneStencil<'_, D, K, W>,
-    g: &mut GridCols<'_, D>,
+    sums: &mut RunSums,
 ) {
     let (m, v, tau) = (pt.m, &pt.v, &pt.tau);
-    let geom = &ctx.geom;
-    // The pass checked that every column has this length.
-    let len = g.len();
-    if !rows_fit(
-        st.base(),
-        Stencil::<D, K>::last_row_offset(geom.stride),
-        len,
-    ) {
-        return; // Unreachable by construction; keeps the unchecked row access below sound.
-    }
     // Separable form (seeds/000 eqs 16-17): node (i, j, k) has S = wx_i wy_j wz_k and
     // G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k). The particle's factors times the
     // x weights (4-wide vectors) are multiplied by the y factors once per j; each row (j, k)
@@ -247,7 +341,6 @@ pub(crate) fn scatter_one<
             }
         });
         for k in 0..Stencil::<D, K>::layers() {
-            let row = st.row_start(j, k, geom.stride);
             // The z factors (1 and 0 in 2D, where the products are skipped).
             let (wz, dwz, ez) = if D == 3 {
                 (st.w(D - 1, k), st.dw(D - 1, k), st.e(D - 1, k))
@@ -262,17 +355,16 @@ pub(crate) fn scatter_one<
                     z(mom_wz[a])
                 }
             };
-            // SAFETY (every add_row here): rows_fit checked above for this stencil, and all
-            // columns share the length it was checked against.
+            let r = j + K * k;
             if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                unsafe { add_row(g.mass, row, z(mass_j)) };
+                sums.add(r, slot::MASS, z(mass_j));
                 for a in 0..D {
-                    unsafe { add_row(g.vel[a], row, mom(a)) };
+                    sums.add(r, slot::MOMENTUM + a, mom(a));
                 }
             }
             if MODE == mode::REMAP {
                 for a in 0..D {
-                    unsafe { add_row(g.remap[a], row, mom(a)) };
+                    sums.add(r, slot::REMAP + a, mom(a));
                 }
             }
             if MODE == mode::ALL || MODE == mode::FORCE {
@@ -282,7 +374,7 @@ pub(crate) fn scatter_one<
                     } else {
                         f_wz[a]
                     };
-                    unsafe { add_row(g.acc[a], row, f) };
+                    sums.add(r, slot::FORCE + a, f);
                 }
             }
         }

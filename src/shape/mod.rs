@@ -270,7 +270,12 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
 /// Flat index of the first node of row `j` along y, layer `k` along z, of a stencil whose
 /// first node is `base`.
 #[inline(always)]
-fn row_start<const D: usize>(base: usize, j: usize, k: usize, stride: [usize; D]) -> usize {
+pub(crate) fn row_start<const D: usize>(
+    base: usize,
+    j: usize,
+    k: usize,
+    stride: [usize; D],
+) -> usize {
     base + j * stride[1] + if D == 3 { k * stride[D - 1] } else { 0 }
 }
 
