@@ -31,7 +31,10 @@
 //! the nodes the particles reach). `--shrink N` (default 1; 1, 2, 4 or 8) divides the block's
 //! cells per axis by N, the grid shrinking with it (the room around the block stays): N^D
 //! times fewer particles, to see what the step costs once its data fits in the caches (3D
-//! `--shrink 4`: 4096 particles).
+//! `--shrink 4`: 4096 particles). `--particle-order fill|rows|shuffled` (default fill) sets the
+//! order of the particles in their columns: as `fill_box` writes them (the sites of each
+//! stencil bin together, which the scatter sums in runs), lattice rows x fastest (a host that
+//! adds its particles row by row), or a fixed random permutation (no runs, no locality).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -40,12 +43,13 @@ use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
-[--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
+[--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
+[--particle-order fill|rows|shuffled] [--effect none|damping|feedback|local_damping|particle_forces|tractions|\
 body_force|apic|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;
-use scene::{Effect, Scene, SceneDef};
+use scene::{Effect, ParticleOrder, Scene, SceneDef};
 #[path = "../benches/common/timing.rs"]
 mod timing;
 use timing::time_steps;
@@ -61,6 +65,7 @@ struct Options {
     effect: Effect,
     grid_scale: u32,
     shrink: u32,
+    particle_order: ParticleOrder,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -81,6 +86,7 @@ fn parse_options() -> Options {
         effect: Effect::None,
         grid_scale: 1,
         shrink: 1,
+        particle_order: ParticleOrder::Fill,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -104,6 +110,7 @@ fn parse_options() -> Options {
             "--effect",
             "--grid-scale",
             "--shrink",
+            "--particle-order",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -182,6 +189,12 @@ fn parse_options() -> Options {
                 o.shrink = match value.parse::<u32>() {
                     Ok(n) if [1, 2, 4, 8].contains(&n) => n,
                     _ => bad(),
+                }
+            }
+            "--particle-order" => {
+                o.particle_order = match ParticleOrder::ALL.iter().find(|(_, n)| *n == value) {
+                    Some((p, _)) => *p,
+                    None => bad(),
                 }
             }
             _ => unreachable!("checked against the known options"),
@@ -263,6 +276,7 @@ fn main() {
         first,
         block,
         effect: o.effect,
+        particle_order: o.particle_order,
         ..SceneDef::PLANE_2D
     }) {
         Ok(s) => s,
@@ -293,7 +307,7 @@ fn main() {
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
 \"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
-\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1}}}",
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\"}}",
         o.dim,
         particles,
         cells,
@@ -307,7 +321,8 @@ fn main() {
         med_ref,
         med / med_ref,
         o.effect.name(),
-        bytes_per_particle
+        bytes_per_particle,
+        o.particle_order.name()
     );
     eprintln!(
         "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \

@@ -5,8 +5,8 @@
 
 use mpm_gimp::{
     memory_requirements, Boundary, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
-    MaterialModel, Real, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder, Vec3, World,
-    WorldDef,
+    MaterialModel, ParticleBatch, Real, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder,
+    Vec3, World, WorldDef,
 };
 
 /// One effect declared in the scene (or none), to price it: what the scene declares and what
@@ -168,6 +168,61 @@ impl Effect {
     }
 }
 
+/// The order of the particles in their columns (which the step's scatter sums in runs that
+/// share a stencil: [`World::fill_box`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(dead_code)] // The criterion benches use the fill order only.
+pub enum ParticleOrder {
+    /// As `fill_box` writes them: the sites of each stencil bin together.
+    Fill,
+    /// Lattice rows, x fastest (a host adding its particles row by row): runs of about 2.
+    Rows,
+    /// A fixed random permutation: runs of 1 and no locality.
+    Shuffled,
+}
+
+#[allow(dead_code)]
+impl ParticleOrder {
+    pub const ALL: [(ParticleOrder, &'static str); 3] = [
+        (ParticleOrder::Fill, "fill"),
+        (ParticleOrder::Rows, "rows"),
+        (ParticleOrder::Shuffled, "shuffled"),
+    ];
+
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(o, _)| *o == self)
+            .map_or("?", |(_, n)| n)
+    }
+
+    /// The permutation that puts the particles of `world` (positions `x`) in this order: entry
+    /// `i` is the index of the particle that goes to place `i`.
+    fn permutation(self, x: &[&[Real]; 3]) -> Vec<usize> {
+        let n = x[0].len();
+        let mut p: Vec<usize> = (0..n).collect();
+        match self {
+            ParticleOrder::Fill => {}
+            ParticleOrder::Rows => p.sort_by(|&i, &j| {
+                let at = |a: usize, k: usize| x[a].get(k).copied().unwrap_or(0.0); // 2D: no z
+                let key = |k: usize| [at(2, k), at(1, k), at(0, k)];
+                key(i).partial_cmp(&key(j)).expect("finite positions")
+            }),
+            ParticleOrder::Shuffled => {
+                // Fisher-Yates with a fixed 64-bit LCG: the same permutation every run.
+                let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+                for i in (1..n).rev() {
+                    state = state
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    p.swap(i, ((state >> 33) % (i as u64 + 1)) as usize);
+                }
+            }
+        }
+        p
+    }
+}
+
 /// Particles per cell per axis of the filled block.
 pub const PPC: u32 = 2;
 /// Cell size, m.
@@ -186,6 +241,8 @@ pub struct SceneDef {
     pub block: [u32; 3],
     /// The effect declared, if any.
     pub effect: Effect,
+    /// The order of the particles in their columns.
+    pub particle_order: ParticleOrder,
     /// Velocity transfer, FLIP fraction and terms of `exp(grad v dt)` (the kernel's defaults
     /// unless a caller prices another method).
     pub transfer: Transfer,
@@ -205,6 +262,7 @@ impl SceneDef {
         first: [2, 2, 0],
         block: [256, 128, 1],
         effect: Effect::None,
+        particle_order: ParticleOrder::Fill,
         transfer: WorldDef::DEFAULT.transfer,
         flip_beta: WorldDef::DEFAULT.flip_beta,
         exp_terms: WorldDef::DEFAULT.exp_terms,
@@ -267,6 +325,36 @@ impl Scene {
             .map_err(|e| format!("fill_box failed: {e:?}"))?;
         if ids.len() as u32 != expected {
             return Err(format!("{} particles, expected {expected}", ids.len()));
+        }
+        if s.particle_order != ParticleOrder::Fill {
+            // Read the filled block back, permute it, and add it again to a fresh world.
+            let v = world.particles();
+            let perm = s.particle_order.permutation(&v.position);
+            let take = |c: &[Real]| -> Vec<Real> {
+                if c.is_empty() {
+                    Vec::new()
+                } else {
+                    perm.iter().map(|&i| c[i]).collect()
+                }
+            };
+            let position = v.position.map(take);
+            let velocity = v.velocity.map(take);
+            let (mass, volume) = (take(v.mass), take(v.volume0));
+            let ids: Vec<u32> = perm.iter().map(|&i| v.material[i]).collect();
+            world = World::init(&def, storage.as_mut_bytes())
+                .map_err(|e| format!("World::init failed: {e:?}"))?;
+            world
+                .add_material(&s.effect.material(s.material))
+                .map_err(|e| format!("add_material failed: {e:?}"))?;
+            world
+                .add_particles(&ParticleBatch {
+                    position: position.each_ref().map(|c| c.as_slice()),
+                    velocity: velocity.each_ref().map(|c| c.as_slice()),
+                    mass: &mass,
+                    volume: &volume,
+                    material: &ids,
+                })
+                .map_err(|e| format!("add_particles failed: {e:?}"))?;
         }
         s.effect.set_up(&mut world)?;
         Ok(Scene {

@@ -30,7 +30,7 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::lanes::{commit, load, Lane, Lanes, Mask4, W};
-use super::p2g::{affine_velocity, mode, RunSums, Scattered};
+use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::{load_row, rows_fit, GridCols};
@@ -629,9 +629,9 @@ fn eigenstrain<const D: usize>(
 /// from `v_i + a_i dt` in the same pass (USL). `KEEP_START` (MUSL) also keeps the positions
 /// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
 /// new momenta to the remap columns with the stencils already computed (the pass reads only
-/// `vel` and `acc`, so the remap columns are free to fill; particles contribute in their order,
-/// summed over runs that share a stencil base, as the scatter pass does: see
-/// [`RunSums`]). `DAMP` adds the damping of the module docs; `APIC` replaces FLIP by APIC.
+/// `vel` and `acc`, so the remap columns are free to fill; particles contribute as in the
+/// scatter pass: [`scatter_lanes`]). `DAMP` adds the damping of the module docs; `APIC`
+/// replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
     const D: usize,
@@ -658,9 +658,6 @@ pub(crate) fn particles<
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     let mut gathered = Gathered::zero();
-    // MUSL's re-map momenta, summed over runs of particles that share a stencil base (they go
-    // to the remap columns, which this pass does not read).
-    let mut run = RunSums::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
@@ -815,34 +812,38 @@ pub(crate) fn particles<
         report.stopped += (ok & stopped).minus(escaped).count();
         if KEEP_START {
             let active = live_lanes(p, start, count);
-            for ln in 0..W {
-                if active.has(ln) {
-                    // An active lane was committed: its velocity is v_new.
-                    let mut pt = Scattered {
-                        m: p.mass[start + ln],
-                        v: core::array::from_fn(|a| v_new[a][ln]),
-                        tau: [[0.0; D]; D],
-                        hoop: 0.0,
-                        force: [0.0; D],
-                        affine: [[0.0; D]; D],
-                    };
-                    if APIC {
-                        // Zero for a family that keeps the gradient form: its C_p is taken
-                        // from this re-map (see `commit_gradient_affine`). Loops rather than
-                        // `core::array::from_fn`, whose closures were left out of line.
-                        for r in 0..D {
-                            for c in 0..D {
-                                pt.affine[r][c] =
-                                    affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c));
-                            }
+            // An active lane was committed: its velocity is v_new.
+            let make = |ln: usize| {
+                let mut pt = Scattered {
+                    m: p.mass[start + ln],
+                    v: core::array::from_fn(|a| v_new[a][ln]),
+                    tau: [[0.0; D]; D],
+                    hoop: 0.0,
+                    force: [0.0; D],
+                    affine: [[0.0; D]; D],
+                };
+                if APIC {
+                    // Zero for a family that keeps the gradient form: its C_p is taken from
+                    // this re-map (see `commit_gradient_affine`). Loops rather than
+                    // `core::array::from_fn`, whose closures were left out of line.
+                    for r in 0..D {
+                        for c in 0..D {
+                            pt.affine[r][c] =
+                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c));
                         }
                     }
-                    run.scatter::<D, K, S, { mode::REMAP }, false, APIC>(ctx, &pt, st.lane(ln), g);
                 }
-            }
+                pt
+            };
+            scatter_lanes::<D, K, S, { mode::REMAP }, false, APIC>(
+                &st,
+                |ln| active.has(ln),
+                make,
+                geom.stride,
+                g,
+            );
         }
     }
-    run.flush::<D, K, { mode::REMAP }>(g, geom.stride);
 }
 
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),

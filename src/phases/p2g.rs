@@ -51,7 +51,6 @@ pub(crate) fn scatter<
     let with_force = MODE == mode::ALL || MODE == mode::FORCE;
     let with_momentum = MODE != mode::FORCE;
     let mut st = Stencils::<D, K, W>::default();
-    let mut run = RunSums::new();
     for start in (0..count).step_by(W) {
         // The chunk's particle values as lane vectors (one load per column, no per-particle
         // bounds checks).
@@ -84,10 +83,7 @@ pub(crate) fn scatter<
         }
         stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         let live = super::g2p::live_lanes(p, start, count);
-        for ln in 0..W {
-            if !live.has(ln) {
-                continue;
-            }
+        let make = |ln: usize| {
             let mut t = [[0.0; D]; D];
             if with_force {
                 for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
@@ -96,7 +92,7 @@ pub(crate) fn scatter<
                 }
             }
             let stn = st.lane(ln);
-            let pt = Scattered {
+            Scattered {
                 m: mass[ln],
                 v: core::array::from_fn(|a| v[a][ln]),
                 tau: t,
@@ -107,14 +103,19 @@ pub(crate) fn scatter<
                         affine_velocity::<K, S>(affine[a][b][ln], stn.inv_d(b))
                     })
                 }),
-            };
-            run.scatter::<D, K, S, MODE, FORCE, APIC>(ctx, &pt, stn, g);
-        }
+            }
+        };
+        scatter_lanes::<D, K, S, MODE, FORCE, APIC>(
+            &st,
+            |ln| live.has(ln),
+            make,
+            ctx.geom.stride,
+            g,
+        );
     }
-    run.flush::<D, K, MODE>(g, ctx.geom.stride);
 }
 
-/// The grid columns a scatter adds to, numbered for [`RunSums`]: the mass, then the momentum,
+/// The grid columns a scatter adds to, numbered for [`scatter_group`]: the mass, then the momentum,
 /// force and remap columns of each axis (room for three axes each).
 pub(crate) mod slot {
     pub const MASS: usize = 0;
@@ -149,87 +150,82 @@ fn slot_used<const D: usize>(mode: u8, c: usize) -> bool {
         || (mode == mode::REMAP && axis_ok(slot::REMAP))
 }
 
-/// Largest number of stencil rows (cubic B-spline in 3D: 4 x 4).
-const MAX_ROWS: usize = 16;
-
-/// The row values of a run of consecutive particles that share a stencil base, summed before
-/// they are added to the grid: one load, add and store per row and column for the whole run
-/// instead of one per particle. Particles seeded in a lattice come in such runs (see
-/// [`crate::World::fill_box`]). The sum is formed in the particles' order, then added to the
-/// node, so the result does not depend on the instruction set.
-pub(crate) struct RunSums {
-    sums: [[Row4; slot::COUNT]; MAX_ROWS],
-    /// The run's stencil base, [`RunSums::NONE`] when empty.
-    pub base: usize,
+/// The grid rows of a stencil, checked against the grid when made.
+pub(crate) struct Direct<'a, 'g, const D: usize> {
+    g: &'a mut GridCols<'g, D>,
+    base: usize,
+    stride: [usize; D],
 }
 
-impl RunSums {
-    /// The base of an empty run.
-    pub const NONE: usize = usize::MAX;
-
-    /// Adds `v` to slot `c` (a [`slot`]) of stencil row `r` (`j + K k`).
+impl<'a, 'g, const D: usize> Direct<'a, 'g, D> {
+    /// The rows of the `K`-node stencil at `base`, or `None` if they do not fit in the grid.
     #[inline(always)]
-    fn add(&mut self, r: usize, c: usize, v: Row4) {
-        self.sums[r][c] += v;
-    }
-
-    #[inline(always)]
-    pub fn new() -> Self {
-        RunSums {
-            sums: [[Row4::ZERO; slot::COUNT]; MAX_ROWS],
-            base: Self::NONE,
-        }
-    }
-
-    /// Scatters one particle: adds its rows to the run when it shares the run's stencil base,
-    /// else flushes the run and starts a new one with it.
-    #[inline(always)]
-    pub fn scatter<
-        const D: usize,
-        const K: usize,
-        S: Shape1D<K>,
-        const MODE: u8,
-        const FORCE: bool,
-        const APIC: bool,
-    >(
-        &mut self,
-        ctx: &Ctx<'_, D>,
-        pt: &Scattered<D>,
-        st: LaneStencil<'_, D, K, W>,
-        g: &mut GridCols<'_, D>,
-    ) {
-        if st.base() != self.base {
-            self.flush::<D, K, MODE>(g, ctx.geom.stride);
-            self.base = st.base();
-        }
-        scatter_one::<D, K, S, MODE, FORCE, APIC>(pt, st, self);
-    }
-
-    /// Adds the run's sums to the grid (the rows are checked against it here) and empties it.
-    #[inline(always)]
-    pub fn flush<const D: usize, const K: usize, const MODE: u8>(
-        &mut self,
-        g: &mut GridCols<'_, D>,
+    pub fn new<const K: usize>(
+        g: &'a mut GridCols<'g, D>,
+        base: usize,
         stride: [usize; D],
-    ) {
-        let base = self.base;
-        self.base = Self::NONE;
-        if base == Self::NONE || !rows_fit(base, Stencil::<D, K>::last_row_offset(stride), g.len())
-        {
-            return;
+    ) -> Option<Self> {
+        rows_fit(base, Stencil::<D, K>::last_row_offset(stride), g.len()).then_some(Direct {
+            g,
+            base,
+            stride,
+        })
+    }
+}
+
+impl<const D: usize> Direct<'_, '_, D> {
+    /// Adds `v` to slot `c` (a [`slot`]) of stencil row `j` along y, layer `k` along z.
+    #[inline(always)]
+    fn add<const K: usize>(&mut self, j: usize, k: usize, c: usize, v: Row4) {
+        let row = crate::shape::row_start(self.base, j, k, self.stride);
+        // SAFETY: `new` checked the stencil's rows (j, k < K) against the grid, and every
+        // column has g.len() entries.
+        unsafe { add_row(column(self.g, c), row, v) };
+    }
+}
+
+/// Scatters the live lanes of a chunk (`make(ln)` gives lane `ln`'s values) straight to the
+/// grid, two at a time where two consecutive live lanes share a stencil base (particles seeded
+/// in a lattice do: see [`crate::World::fill_box`]), one at a time elsewhere. The grouping
+/// depends on the particle order alone, so the result does not depend on the instruction set.
+#[inline(always)]
+pub(crate) fn scatter_lanes<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const MODE: u8,
+    const FORCE: bool,
+    const APIC: bool,
+>(
+    st: &Stencils<D, K, W>,
+    live: impl Fn(usize) -> bool,
+    make: impl Fn(usize) -> Scattered<D>,
+    stride: [usize; D],
+    g: &mut GridCols<'_, D>,
+) {
+    let mut ln = 0;
+    while ln < W {
+        if !live(ln) {
+            ln += 1;
+            continue;
         }
-        for k in 0..Stencil::<D, K>::layers() {
-            for j in 0..K {
-                let r = j + K * k;
-                let row = crate::shape::row_start(base, j, k, stride);
-                for c in 0..slot::COUNT {
-                    if slot_used::<D>(MODE, c) {
-                        // SAFETY: rows_fit checked above; every column has g.len() entries.
-                        unsafe { add_row(column(g, c), row, self.sums[r][c]) };
-                        self.sums[r][c] = Row4::ZERO;
-                    }
-                }
-            }
+        let base = st.lane(ln).base();
+        let Some(mut sink) = Direct::new::<K>(g, base, stride) else {
+            ln += 1;
+            continue; // Unreachable by construction (first_node clamps).
+        };
+        if ln + 1 < W && live(ln + 1) && st.lane(ln + 1).base() == base {
+            let (a, b) = (make(ln), make(ln + 1));
+            scatter_group::<D, K, S, MODE, FORCE, APIC, 2>(
+                [&a, &b],
+                [st.lane(ln), st.lane(ln + 1)],
+                &mut sink,
+            );
+            ln += 2;
+        } else {
+            let a = make(ln);
+            scatter_group::<D, K, S, MODE, FORCE, APIC, 1>([&a], [st.lane(ln)], &mut sink);
+            ln += 1;
         }
     }
 }
@@ -262,119 +258,184 @@ pub(crate) struct Scattered<const D: usize> {
     pub affine: Mat<D>,
 }
 
-/// Adds one particle's row values, for stencil `st`, to the run sums (the grid gets them when
-/// the run is flushed).
+/// One particle's factors along x, the part of its row values that does not depend on the row.
+struct XFactors<const D: usize> {
+    /// m wx.
+    mass: Row4,
+    /// Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC); S (x_b,i - x_b,p)
+    /// has the form of G_b with the moments e in place of dw: `mom[a][b]` = m C_ab times ex
+    /// (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
+    mom: [[Row4; D]; D],
+    /// Force on a node: f_a = -m sum_b tau_ab G_b + S F_a; `force[a][b]` = -m tau_ab times
+    /// dwx (b = 0) or wx (b >= 1), plus F_a wx in b = 0. Axisymmetric, the radial force also
+    /// has the hoop term -m tau_thetatheta T_ip (eq 120), T_ip = t_i w_z: in b = 0 with t.
+    force: [[Row4; D]; D],
+}
+
+impl<const D: usize> XFactors<D> {
+    #[inline(always)]
+    fn new<const K: usize, S: Shape1D<K>, const FORCE: bool, const APIC: bool>(
+        pt: &Scattered<D>,
+        st: &LaneStencil<'_, D, K, W>,
+    ) -> Self {
+        let (m, v, tau) = (pt.m, &pt.v, &pt.tau);
+        let (wx, dwx, ex) = (st.wx(), st.dwx(), st.ex());
+        XFactors {
+            mass: wx * m,
+            mom: core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    let plain = if b == 0 { wx * (m * v[a]) } else { Row4::ZERO };
+                    if APIC {
+                        plain + (if b == 0 { ex } else { wx }) * (m * pt.affine[a][b])
+                    } else {
+                        plain
+                    }
+                })
+            }),
+            force: core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    let mut f = (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]);
+                    if FORCE && b == 0 {
+                        f += wx * pt.force[a];
+                    }
+                    if S::AXISYMMETRIC && a == 0 && b == 0 {
+                        f += st.t() * (-m * pt.hoop);
+                    }
+                    f
+                })
+            }),
+        }
+    }
+}
+
+/// One particle's factors for the rows of y node `j`: mass times wy_j; the momentum's and
+/// force's terms that carry wz_k (`_wz`: x and y factors) and the z factor dwz_k or ez_k
+/// (`_dz`, 3D only).
+struct YFactors<const D: usize> {
+    mass: Row4,
+    mom_wz: [Row4; D],
+    mom_dz: [Row4; D],
+    f_wz: [Row4; D],
+    f_dwz: [Row4; D],
+}
+
+impl<const D: usize> YFactors<D> {
+    #[inline(always)]
+    fn new<const K: usize, const APIC: bool>(
+        x: &XFactors<D>,
+        st: &LaneStencil<'_, D, K, W>,
+        j: usize,
+    ) -> Self {
+        let (wy, dwy, ey) = (st.w(1, j), st.dw(1, j), st.e(1, j));
+        YFactors {
+            mass: x.mass * wy,
+            mom_wz: core::array::from_fn(|a| {
+                if APIC {
+                    x.mom[a][0] * wy + x.mom[a][1] * ey
+                } else {
+                    x.mom[a][0] * wy
+                }
+            }),
+            mom_dz: core::array::from_fn(|a| {
+                if APIC && D == 3 {
+                    x.mom[a][D - 1] * wy
+                } else {
+                    Row4::ZERO
+                }
+            }),
+            f_wz: core::array::from_fn(|a| x.force[a][0] * wy + x.force[a][1] * dwy),
+            f_dwz: core::array::from_fn(|a| {
+                if D == 3 {
+                    x.force[a][D - 1] * wy
+                } else {
+                    Row4::ZERO
+                }
+            }),
+        }
+    }
+
+    /// Adds this particle's values of row (j, k), per [`slot`], to `acc` (the slots `MODE`
+    /// fills; the others stay as they are).
+    #[inline(always)]
+    fn add_row<const K: usize, const MODE: u8, const APIC: bool>(
+        &self,
+        st: &LaneStencil<'_, D, K, W>,
+        k: usize,
+        acc: &mut [Row4; slot::COUNT],
+    ) {
+        // The z factors (1 and 0 in 2D, where the products are skipped).
+        let (wz, dwz, ez) = if D == 3 {
+            (st.w(D - 1, k), st.dw(D - 1, k), st.e(D - 1, k))
+        } else {
+            (1.0, 0.0, 0.0)
+        };
+        let z = |x: Row4| if D == 3 { x * wz } else { x };
+        let mom = |a: usize| {
+            if APIC && D == 3 {
+                self.mom_wz[a] * wz + self.mom_dz[a] * ez
+            } else {
+                z(self.mom_wz[a])
+            }
+        };
+        if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+            acc[slot::MASS] += z(self.mass);
+            for a in 0..D {
+                acc[slot::MOMENTUM + a] += mom(a);
+            }
+        }
+        if MODE == mode::REMAP {
+            for a in 0..D {
+                acc[slot::REMAP + a] += mom(a);
+            }
+        }
+        if MODE == mode::ALL || MODE == mode::FORCE {
+            for a in 0..D {
+                acc[slot::FORCE + a] += if D == 3 {
+                    self.f_wz[a] * wz + self.f_dwz[a] * dwz
+                } else {
+                    self.f_wz[a]
+                };
+            }
+        }
+    }
+}
+
+/// Scatters `N` particles that share a stencil base to `sink`, row by row: each row's values
+/// are summed over the particles in registers, in the particles' order, and then added to the
+/// sink once ([`slot_used`] names what `MODE` adds), so a group of N costs one load, add and
+/// store per row and column where N single particles cost N.
+///
+/// Separable form (seeds/000 eqs 16-17): node (i, j, k) has S = wx_i wy_j wz_k and
+/// G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k). The particle's factors times the
+/// x weights (4-wide vectors) are multiplied by the y factors once per j; each row (j, k) then
+/// costs one multiply by wz_k per quantity, plus one by dwz_k for the force (3D).
 #[inline(always)]
-pub(crate) fn scatter_one<
+pub(crate) fn scatter_group<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
+    const N: usize,
 >(
-    pt: &Scattered<D>,
-    st: LaneStencil<'_, D, K, W>,
-    sums: &mut RunSums,
+    pts: [&Scattered<D>; N],
+    sts: [LaneStencil<'_, D, K, W>; N],
+    sink: &mut Direct<'_, '_, D>,
 ) {
-    let (m, v, tau) = (pt.m, &pt.v, &pt.tau);
-    // Separable form (seeds/000 eqs 16-17): node (i, j, k) has S = wx_i wy_j wz_k and
-    // G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k). The particle's factors times the
-    // x weights (4-wide vectors) are multiplied by the y factors once per j; each row (j, k)
-    // then costs one multiply by wz_k per quantity, plus one by dwz_k for the force (3D).
-    let (wx, dwx) = (st.wx(), st.dwx());
-    let mass_x = wx * m;
-    // Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC); S (x_b,i - x_b,p)
-    // has the form of G_b with the moments e in place of dw: mom_x[a][b] = m C_ab times ex
-    // (b = 0) or wx (b >= 1), plus m v_a wx in b = 0.
-    let ex = st.ex();
-    let mom_x: [[Row4; D]; D] = core::array::from_fn(|a| {
-        core::array::from_fn(|b| {
-            let plain = if b == 0 { wx * (m * v[a]) } else { Row4::ZERO };
-            if APIC {
-                plain + (if b == 0 { ex } else { wx }) * (m * pt.affine[a][b])
-            } else {
-                plain
-            }
-        })
-    });
-    // Force on a node: f_a = -m sum_b tau_ab G_b + S F_a; force_x[a][b] = -m tau_ab times dwx
-    // (b = 0) or wx (b >= 1), plus F_a wx in b = 0. Axisymmetric, the radial force also has
-    // the hoop term -m tau_thetatheta T_ip (eq 120), T_ip = t_i w_z: in b = 0 with t.
-    let force_x: [[Row4; D]; D] = core::array::from_fn(|a| {
-        core::array::from_fn(|b| {
-            let mut f = (if b == 0 { dwx } else { wx }) * (-m * tau[a][b]);
-            if FORCE && b == 0 {
-                f += wx * pt.force[a];
-            }
-            if S::AXISYMMETRIC && a == 0 && b == 0 {
-                f += st.t() * (-m * pt.hoop);
-            }
-            f
-        })
-    });
+    let x: [XFactors<D>; N] =
+        core::array::from_fn(|n| XFactors::new::<K, S, FORCE, APIC>(pts[n], &sts[n]));
     for j in 0..K {
-        // Per y node j: mass times wy_j; the momentum's and force's terms that carry wz_k
-        // (`_wz`: x and y factors) and the z factor dwz_k or ez_k (`_dz`, 3D only).
-        let (wy, dwy, ey) = (st.w(1, j), st.dw(1, j), st.e(1, j));
-        let mass_j = mass_x * wy;
-        let mom_wz: [Row4; D] = core::array::from_fn(|a| {
-            if APIC {
-                mom_x[a][0] * wy + mom_x[a][1] * ey
-            } else {
-                mom_x[a][0] * wy
-            }
-        });
-        let mom_dz: [Row4; D] = core::array::from_fn(|a| {
-            if APIC && D == 3 {
-                mom_x[a][D - 1] * wy
-            } else {
-                Row4::ZERO
-            }
-        });
-        let f_wz: [Row4; D] = core::array::from_fn(|a| force_x[a][0] * wy + force_x[a][1] * dwy);
-        let f_dwz: [Row4; D] = core::array::from_fn(|a| {
-            if D == 3 {
-                force_x[a][D - 1] * wy
-            } else {
-                Row4::ZERO
-            }
-        });
+        let y: [YFactors<D>; N] =
+            core::array::from_fn(|n| YFactors::new::<K, APIC>(&x[n], &sts[n], j));
         for k in 0..Stencil::<D, K>::layers() {
-            // The z factors (1 and 0 in 2D, where the products are skipped).
-            let (wz, dwz, ez) = if D == 3 {
-                (st.w(D - 1, k), st.dw(D - 1, k), st.e(D - 1, k))
-            } else {
-                (1.0, 0.0, 0.0)
-            };
-            let z = |x: Row4| if D == 3 { x * wz } else { x };
-            let mom = |a: usize| {
-                if APIC && D == 3 {
-                    mom_wz[a] * wz + mom_dz[a] * ez
-                } else {
-                    z(mom_wz[a])
-                }
-            };
-            let r = j + K * k;
-            if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-                sums.add(r, slot::MASS, z(mass_j));
-                for a in 0..D {
-                    sums.add(r, slot::MOMENTUM + a, mom(a));
-                }
+            let mut acc = [Row4::ZERO; slot::COUNT];
+            for (yn, stn) in y.iter().zip(&sts) {
+                yn.add_row::<K, MODE, APIC>(stn, k, &mut acc);
             }
-            if MODE == mode::REMAP {
-                for a in 0..D {
-                    sums.add(r, slot::REMAP + a, mom(a));
-                }
-            }
-            if MODE == mode::ALL || MODE == mode::FORCE {
-                for a in 0..D {
-                    let f = if D == 3 {
-                        f_wz[a] * wz + f_dwz[a] * dwz
-                    } else {
-                        f_wz[a]
-                    };
-                    sums.add(r, slot::FORCE + a, f);
+            for (c, v) in acc.into_iter().enumerate() {
+                if slot_used::<D>(MODE, c) {
+                    sink.add::<K>(j, k, c, v);
                 }
             }
         }
