@@ -357,7 +357,9 @@ unsafe fn seed(
 /// Fills the box `[min, max]` with particles of `material` moving at `velocity`, on the lattice
 /// of `particles_per_cell` sites per cell per axis, each with its sub-cell's volume and the
 /// mass of that volume (axisymmetric: per radian, the sub-cell's area times the site's
-/// radius). All or nothing; the box must lie inside the admissible region.
+/// radius). All or nothing; the box must lie inside the admissible region. The particles come
+/// in stencil-bin order, not x fastest (the sites whose stencils start at the same node
+/// together, which the step's scatter sums once): find a face's particles by position.
 ///
 /// # Safety
 /// `world` is NULL or a world; `ids_out` is NULL or valid.

@@ -185,9 +185,10 @@ impl<const D: usize> Direct<'_, '_, D> {
 }
 
 /// Scatters the live lanes of a chunk (`make(ln)` gives lane `ln`'s values) straight to the
-/// grid, two at a time where two consecutive live lanes share a stencil base (particles seeded
-/// in a lattice do: see [`crate::World::fill_box`]), one at a time elsewhere. The grouping
-/// depends on the particle order alone, so the result does not depend on the instruction set.
+/// grid in groups of consecutive live lanes that share a stencil base ([`scatter_group`]):
+/// four where four do, else two where two do, else one (particles seeded in a lattice come in
+/// runs of a cell's worth: see [`crate::World::fill_box`]). The grouping depends on the
+/// particle order alone, so the result does not depend on the instruction set.
 #[inline(always)]
 pub(crate) fn scatter_lanes<
     const D: usize,
@@ -214,19 +215,35 @@ pub(crate) fn scatter_lanes<
             ln += 1;
             continue; // Unreachable by construction (first_node clamps).
         };
-        if ln + 1 < W && live(ln + 1) && st.lane(ln + 1).base() == base {
+        let shares = |n: usize| ln + n < W && live(ln + n) && st.lane(ln + n).base() == base;
+        let n = if shares(1) && shares(2) && shares(3) {
+            // Literal arrays: `core::array::from_fn`'s closures were left out of line here.
+            let pts = [make(ln), make(ln + 1), make(ln + 2), make(ln + 3)];
+            scatter_group::<D, K, S, MODE, FORCE, APIC, 4>(
+                [&pts[0], &pts[1], &pts[2], &pts[3]],
+                [
+                    st.lane(ln),
+                    st.lane(ln + 1),
+                    st.lane(ln + 2),
+                    st.lane(ln + 3),
+                ],
+                &mut sink,
+            );
+            4
+        } else if shares(1) {
             let (a, b) = (make(ln), make(ln + 1));
             scatter_group::<D, K, S, MODE, FORCE, APIC, 2>(
                 [&a, &b],
                 [st.lane(ln), st.lane(ln + 1)],
                 &mut sink,
             );
-            ln += 2;
+            2
         } else {
             let a = make(ln);
             scatter_group::<D, K, S, MODE, FORCE, APIC, 1>([&a], [st.lane(ln)], &mut sink);
-            ln += 1;
-        }
+            1
+        };
+        ln += n;
     }
 }
 
@@ -273,6 +290,12 @@ struct XFactors<const D: usize> {
 }
 
 impl<const D: usize> XFactors<D> {
+    const ZERO: Self = XFactors {
+        mass: Row4::ZERO,
+        mom: [[Row4::ZERO; D]; D],
+        force: [[Row4::ZERO; D]; D],
+    };
+
     #[inline(always)]
     fn new<const K: usize, S: Shape1D<K>, const FORCE: bool, const APIC: bool>(
         pt: &Scattered<D>,
@@ -320,6 +343,14 @@ struct YFactors<const D: usize> {
 }
 
 impl<const D: usize> YFactors<D> {
+    const ZERO: Self = YFactors {
+        mass: Row4::ZERO,
+        mom_wz: [Row4::ZERO; D],
+        mom_dz: [Row4::ZERO; D],
+        f_wz: [Row4::ZERO; D],
+        f_dwz: [Row4::ZERO; D],
+    };
+
     #[inline(always)]
     fn new<const K: usize, const APIC: bool>(
         x: &XFactors<D>,
@@ -354,10 +385,12 @@ impl<const D: usize> YFactors<D> {
         }
     }
 
-    /// Adds this particle's values of row (j, k), per [`slot`], to `acc` (the slots `MODE`
-    /// fills; the others stay as they are).
+    /// Adds this particle's values of row (j, k), per [`slot`], to `acc`, or with `FIRST`
+    /// writes them there (the slots `MODE` fills; the others stay as they are). The first
+    /// particle of a group writes: adding to zeros would cost an add per value (the compiler
+    /// keeps `0 + x`, which is not `x` for `x = -0`).
     #[inline(always)]
-    fn add_row<const K: usize, const MODE: u8, const APIC: bool>(
+    fn add_row<const K: usize, const MODE: u8, const APIC: bool, const FIRST: bool>(
         &self,
         st: &LaneStencil<'_, D, K, W>,
         k: usize,
@@ -377,24 +410,32 @@ impl<const D: usize> YFactors<D> {
                 z(self.mom_wz[a])
             }
         };
+        let mut put = |c: usize, v: Row4| {
+            if FIRST {
+                acc[c] = v;
+            } else {
+                acc[c] += v;
+            }
+        };
         if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
-            acc[slot::MASS] += z(self.mass);
+            put(slot::MASS, z(self.mass));
             for a in 0..D {
-                acc[slot::MOMENTUM + a] += mom(a);
+                put(slot::MOMENTUM + a, mom(a));
             }
         }
         if MODE == mode::REMAP {
             for a in 0..D {
-                acc[slot::REMAP + a] += mom(a);
+                put(slot::REMAP + a, mom(a));
             }
         }
         if MODE == mode::ALL || MODE == mode::FORCE {
             for a in 0..D {
-                acc[slot::FORCE + a] += if D == 3 {
+                let f = if D == 3 {
                     self.f_wz[a] * wz + self.f_dwz[a] * dwz
                 } else {
                     self.f_wz[a]
                 };
+                put(slot::FORCE + a, f);
             }
         }
     }
@@ -423,15 +464,23 @@ pub(crate) fn scatter_group<
     sts: [LaneStencil<'_, D, K, W>; N],
     sink: &mut Direct<'_, '_, D>,
 ) {
-    let x: [XFactors<D>; N] =
-        core::array::from_fn(|n| XFactors::new::<K, S, FORCE, APIC>(pts[n], &sts[n]));
+    const { assert!(N >= 1) };
+    // Loops over the particles, not `core::array::from_fn`, whose closures are not always
+    // inlined (ARCHITECTURE.md, "Performance").
+    let mut x = [XFactors::ZERO; N];
+    for ((xn, pt), stn) in x.iter_mut().zip(pts).zip(&sts) {
+        *xn = XFactors::new::<K, S, FORCE, APIC>(pt, stn);
+    }
     for j in 0..K {
-        let y: [YFactors<D>; N] =
-            core::array::from_fn(|n| YFactors::new::<K, APIC>(&x[n], &sts[n], j));
+        let mut y = [YFactors::ZERO; N];
+        for ((yn, xn), stn) in y.iter_mut().zip(&x).zip(&sts) {
+            *yn = YFactors::new::<K, APIC>(xn, stn, j);
+        }
         for k in 0..Stencil::<D, K>::layers() {
             let mut acc = [Row4::ZERO; slot::COUNT];
-            for (yn, stn) in y.iter().zip(&sts) {
-                yn.add_row::<K, MODE, APIC>(stn, k, &mut acc);
+            y[0].add_row::<K, MODE, APIC, true>(&sts[0], k, &mut acc);
+            for (yn, stn) in y.iter().zip(&sts).skip(1) {
+                yn.add_row::<K, MODE, APIC, false>(stn, k, &mut acc);
             }
             for (c, v) in acc.into_iter().enumerate() {
                 if slot_used::<D>(MODE, c) {
