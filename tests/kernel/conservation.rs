@@ -113,7 +113,9 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
 /// differ by the share itself (order 1 of the velocities); the sums differ only in their order
 /// of addition, f32 round-off of sums over 16 to 64 terms (about 1e-6 relative per step),
 /// which 20 steps of an elastic block carry to about 1e-5 of the velocity scale: tolerance
-/// 1e-4 of it (1 m/s here), and 1e-4 of a cell in position.
+/// 1e-4 of it (1 m/s here), and 1e-4 of a cell in position. Measured in f32: positions at most
+/// 1.2e-6 cells apart; a group of 4 scattering one particle twice and another not at all gave
+/// 2.5e-3 cells and 0.1 m/s.
 #[test]
 fn particle_order_changes_the_step_by_round_off_only() {
     use mpm_gimp::Vec3;
