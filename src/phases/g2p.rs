@@ -29,7 +29,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, load, Lane, Lanes, Mask4, W};
+use super::lanes::{commit, load, load_into, Lane, Lanes, Mask4, W};
 use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
@@ -357,9 +357,12 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
     x: &[Lane; D],
 ) {
     let geom = &ctx.geom;
-    let s: [Lane; D] = core::array::from_fn(|a| {
-        core::array::from_fn(|ln| (x[a][ln] - geom.origin[a]) * geom.inv_h)
-    });
+    let mut s = [[0.0; W]; D];
+    for a in 0..D {
+        for ln in 0..W {
+            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
+        }
+    }
     let stretch: [Lane; D] = core::array::from_fn(|a| {
         if S::STRETCHES {
             load(p.stretch[a], start)
@@ -370,28 +373,30 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
     st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
 }
 
-/// `m *= s`, lane by lane.
-#[inline(always)]
-fn scale_lanes<const D: usize>(m: &mut LaneMat<D>, s: Real) {
-    for row in m.iter_mut() {
-        for lanes in row.iter_mut() {
-            for v in lanes.iter_mut() {
-                *v *= s;
-            }
-        }
-    }
+/// The lane matrices of a stress update, kept by the pass across chunks (see
+/// `lanes::load_into`): built per chunk, `exp(grad v dt)`'s copies of whole matrices went
+/// through the stack, and 256-bit loads that straddled two earlier stores there waited for
+/// them (store forwarding fails for such loads).
+struct StressScratch<const D: usize> {
+    /// `A = L dt`.
+    a: LaneMat<D>,
+    /// The Horner term of `exp(A) - I`, and the next one.
+    q: LaneMat<D>,
+    next: LaneMat<D>,
+    h_old: LaneMat<D>,
+    h: LaneMat<D>,
+    tau: [Lane; 6],
 }
 
-/// `acc += x y`, lane by lane.
-#[inline(always)]
-fn mul_add_lanes<const D: usize>(acc: &mut LaneMat<D>, x: &LaneMat<D>, y: &LaneMat<D>) {
-    for r in 0..D {
-        for c in 0..D {
-            for m in 0..D {
-                for ln in 0..W {
-                    acc[r][c][ln] += x[r][m][ln] * y[m][c][ln];
-                }
-            }
+impl<const D: usize> StressScratch<D> {
+    fn new() -> Self {
+        StressScratch {
+            a: [[[0.0; W]; D]; D],
+            q: [[[0.0; W]; D]; D],
+            next: [[[0.0; W]; D]; D],
+            h_old: [[[0.0; W]; D]; D],
+            h: [[[0.0; W]; D]; D],
+            tau: [[0.0; W]; 6],
         }
     }
 }
@@ -406,33 +411,54 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     start: usize,
     update: Lanes,
     gathered: &Gathered<D>,
+    scratch: &mut StressScratch<D>,
 ) -> Lanes {
     let l = &gathered.l;
+    let StressScratch {
+        a,
+        q,
+        next,
+        h_old,
+        h,
+        tau,
+    } = scratch;
     // Plain loops over lanes here, not `core::array::from_fn`: a closure that indexes is not
     // always inlined, and a helper that is not inlined runs baseline code in the AVX2 instance.
-    // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane).
-    let mut a = *l;
-    scale_lanes(&mut a, ctx.dt);
+    // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane):
+    // Q = A / n, then Q <- (A + A Q) / k for k = n - 1 down to 1 (the division by 1 skipped).
     let n = ctx.exp_terms.clamp(1, 8) as usize;
-    let mut q = a;
-    scale_lanes(&mut q, INV[n]);
-    for k in (1..n).rev() {
-        let mut next = a;
-        mul_add_lanes(&mut next, &a, &q);
-        if k > 1 {
-            // INV[1] = 1: the last scaling would change nothing.
-            scale_lanes(&mut next, INV[k]);
-        }
-        q = next;
-    }
-    // H <- H + Q + Q H, in one loop per entry: (H + sum_m Q_rm H_mc) + Q_rc.
-    let mut h_old = [[[0.0; W]; D]; D];
     for r in 0..D {
         for c in 0..D {
-            h_old[r][c] = load(p.h[r][c], start);
+            for ln in 0..W {
+                a[r][c][ln] = l[r][c][ln] * ctx.dt;
+                q[r][c][ln] = a[r][c][ln] * INV[n];
+            }
         }
     }
-    let mut h = [[[0.0; W]; D]; D];
+    for k in (1..n).rev() {
+        for r in 0..D {
+            for c in 0..D {
+                for ln in 0..W {
+                    let mut v = a[r][c][ln];
+                    for m in 0..D {
+                        v += a[r][m][ln] * q[m][c][ln];
+                    }
+                    next[r][c][ln] = if k > 1 { v * INV[k] } else { v };
+                }
+            }
+        }
+        for r in 0..D {
+            for c in 0..D {
+                q[r][c] = next[r][c];
+            }
+        }
+    }
+    // H <- H + Q + Q H, in one loop per entry: (H + sum_m Q_rm H_mc) + Q_rc.
+    for r in 0..D {
+        for c in 0..D {
+            load_into(&mut h_old[r][c], p.h[r][c], start);
+        }
+    }
     for r in 0..D {
         for c in 0..D {
             for ln in 0..W {
@@ -495,7 +521,6 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
         }
     }
     let ns = crate::layout::stress_components(D);
-    let mut tau = [[0.0; W]; 6];
     let mut ok = Lanes::NONE;
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
@@ -503,9 +528,9 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
         let params = Params::of(rec);
         let mut admissible = Lanes::ALL;
         match &eigen {
-            None => neo_hookean_lanes(&params, &h, &hzz, &jm1, &mut tau),
+            None => neo_hookean_lanes(&params, h, &hzz, &jm1, tau),
             Some(d) => {
-                let (mut he, mut hzze, mut jm1e, mut cube) = (h, hzz, jm1, [1.0; W]);
+                let (mut he, mut hzze, mut jm1e, mut cube) = (*h, hzz, jm1, [1.0; W]);
                 for ln in 0..W {
                     let m: [[Real; D]; D] =
                         core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
@@ -524,7 +549,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                 }
                 // The eigenstrain must not invert the material either.
                 admissible = Lanes::above(d, -1.0);
-                neo_hookean_lanes(&params, &he, &hzze, &jm1e, &mut tau);
+                neo_hookean_lanes(&params, &he, &hzze, &jm1e, tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
                         row[ln] *= cube[ln];
@@ -658,25 +683,33 @@ pub(crate) fn particles<
     let mut st = Stencils::<D, K, W>::default();
     let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     let mut gathered = Gathered::zero();
+    // The chunk's positions, velocities, damping rates and new state, in buffers kept across
+    // chunks (see `lanes::load_into`).
+    let (mut x, mut v) = ([[0.0; W]; D], [[0.0; W]; D]);
+    let (mut alpha_g, mut alpha_p) = ([ctx.alpha_g; W], [ctx.alpha_p; W]);
+    let (mut v_new, mut x_new) = ([[0.0; W]; D], [[0.0; W]; D]);
+    let mut mass = [0.0; W];
+    // APIC: the new moment matrix B_p of each live lane (a family that keeps the gradient
+    // form takes the stress update's velocity gradient instead: see
+    // `commit_gradient_affine`).
+    let mut affine = [[[0.0; W]; D]; D];
+    let mut scratch = StressScratch::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
-        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
+        for a in 0..D {
+            load_into(&mut x[a], p.x[a], start);
+            load_into(&mut v[a], p.v[a], start);
+        }
         stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
-        let (mut alpha_g, mut alpha_p) = ([ctx.alpha_g; W], [ctx.alpha_p; W]);
         if DAMP {
             let (lg, lp) = (load(p.damping[0], start), load(p.damping[1], start));
             for ln in 0..W {
-                alpha_g[ln] += lg[ln];
-                alpha_p[ln] += lp[ln];
+                alpha_g[ln] = ctx.alpha_g + lg[ln];
+                alpha_p[ln] = ctx.alpha_p + lp[ln];
             }
         }
-        // APIC: the new moment matrix B_p of each live lane (a family that keeps the gradient
-        // form takes the stress update's velocity gradient instead: see
-        // `commit_gradient_affine`).
-        let mut affine = [[[0.0; W]; D]; D];
         if FUSED_STRESS {
             gather_chunk::<D, K, S, true, { grad::UPDATED }, APIC>(
                 ctx,
@@ -702,8 +735,6 @@ pub(crate) fn particles<
         // FLIP with PIC damping and the second-order position update, then the walls and open
         // faces as selects: written on 4-wide vectors (the auto-vectoriser left the selects
         // scalar, 13 instructions per lane and axis).
-        let mut v_new = [[0.0; W]; D];
-        let mut x_new = [[0.0; W]; D];
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
         for q in (0..W).step_by(4) {
             let row = |c: &Lane| Row4::from_slice(&c[q..q + 4]);
@@ -773,7 +804,7 @@ pub(crate) fn particles<
         }
         let moved = live & finite;
         let ok = if FUSED_STRESS {
-            update_stress::<D, K, S>(ctx, p, start, moved, &gathered)
+            update_stress::<D, K, S>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             moved
         };
@@ -812,10 +843,11 @@ pub(crate) fn particles<
         report.stopped += (ok & stopped).minus(escaped).count();
         if KEEP_START {
             let active = live_lanes(p, start, count);
+            load_into(&mut mass, p.mass, start);
             // An active lane was committed: its velocity is v_new.
             let make = |ln: usize| {
                 let mut pt = Scattered {
-                    m: p.mass[start + ln],
+                    m: mass[ln],
                     v: core::array::from_fn(|a| v_new[a][ln]),
                     tau: [[0.0; D]; D],
                     hoop: 0.0,
@@ -867,13 +899,19 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
     let mut gathered = Gathered::zero();
     // The moment matrices this pass does not gather.
     let mut unused_affine = [[[0.0; W]; D]; D];
+    let mut x = [[0.0; W]; D];
+    let mut scratch = StressScratch::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         // The stencils at the positions of the start of the step (MUSL: the particle pass has
         // moved the particles).
-        let x: [Lane; D] = core::array::from_fn(|a| {
-            load(if FROM_START { &*p.x_start[a] } else { &*p.x[a] }, start)
-        });
+        for a in 0..D {
+            load_into(
+                &mut x[a],
+                if FROM_START { &*p.x_start[a] } else { &*p.x[a] },
+                start,
+            );
+        }
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
         gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
             ctx,
@@ -884,7 +922,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
             &mut unused_affine,
             &mut gathered,
         );
-        let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered);
+        let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
         }

@@ -189,8 +189,18 @@ pub(crate) fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: Lanes) {
 /// the chunk (a check per lane kept `from_fn` from being inlined).
 #[inline(always)]
 pub(crate) fn load<T: Copy + Default>(col: &[T], start: usize) -> [T; W] {
-    col.get(start..start + W)
-        .and_then(|c| <&[T; W]>::try_from(c).ok())
-        .copied()
-        .unwrap_or([T::default(); W])
+    let mut lanes = [T::default(); W];
+    load_into(&mut lanes, col, start);
+    lanes
+}
+
+/// [`load`] into a buffer the pass keeps across chunks. The chunk loops load into such
+/// buffers rather than into new arrays: arrays built per chunk (by `core::array::from_fn` or
+/// returned through an `Option`) were copied two or three times on the stack before use.
+#[inline(always)]
+pub(crate) fn load_into<T: Copy + Default>(dst: &mut [T; W], col: &[T], start: usize) {
+    match col.get(start..start + W) {
+        Some(c) => dst.copy_from_slice(c),
+        None => dst.fill(T::default()),
+    }
 }

@@ -7,7 +7,7 @@
 //! their own over the traction table ([`tractions`]).
 
 use super::g2p::stencils;
-use super::lanes::{load, Lane, W};
+use super::lanes::{load_into, W};
 use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::math::Mat;
@@ -51,33 +51,34 @@ pub(crate) fn scatter<
     let with_force = MODE == mode::ALL || MODE == mode::FORCE;
     let with_momentum = MODE != mode::FORCE;
     let mut st = Stencils::<D, K, W>::default();
+    // The chunk's particle values as lane vectors (one copy per column, no per-particle
+    // bounds checks), in buffers kept across chunks; what this mode does not read stays zero.
+    let mut x = [[0.0; W]; D];
+    let mut v = [[0.0; W]; D];
+    let mut mass = [0.0; W];
+    let mut tau = [[0.0; W]; 6];
+    let mut f_ext = [[0.0; W]; D];
+    let mut affine = [[[0.0; W]; D]; D];
     for start in (0..count).step_by(W) {
-        // The chunk's particle values as lane vectors (one load per column, no per-particle
-        // bounds checks).
-        let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-        let mass = load(p.mass, start);
-        let v: [Lane; D] = core::array::from_fn(|a| load(p.v[a], start));
-        let mut tau = [[0.0; W]; 6];
+        for a in 0..D {
+            load_into(&mut x[a], p.x[a], start);
+            load_into(&mut v[a], p.v[a], start);
+            if FORCE && with_force {
+                load_into(&mut f_ext[a], p.force[a], start);
+            }
+        }
+        load_into(&mut mass, p.mass, start);
         if with_force {
             // Axisymmetric, the fourth 2D component (zz) is the hoop stress.
             let n = sym_pairs(D).len() + (S::AXISYMMETRIC as usize);
             for k in 0..n {
-                tau[k] = load(p.tau[k], start);
+                load_into(&mut tau[k], p.tau[k], start);
             }
         }
-        let f_ext: [Lane; D] = core::array::from_fn(|a| {
-            if FORCE && with_force {
-                load(p.force[a], start)
-            } else {
-                [0.0; W]
-            }
-        });
-        // Loops rather than `core::array::from_fn`, whose closures were left out of line.
-        let mut affine = [[[0.0; W]; D]; D];
         if APIC && with_momentum {
             for (a, row) in affine.iter_mut().enumerate() {
                 for (b, lanes) in row.iter_mut().enumerate() {
-                    *lanes = load(p.affine[a][b], start);
+                    load_into(lanes, p.affine[a][b], start);
                 }
             }
         }
