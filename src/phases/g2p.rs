@@ -29,7 +29,7 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, load, load_into, Lane, Lanes, Mask4, W};
+use super::lanes::{commit, load, load_into, Block, Lane, Lanes, Mask4, W};
 use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
@@ -79,6 +79,7 @@ type GatherRows = [[Row4; GATHERED / 4]; W];
 
 /// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]`, the velocity gradient `l[a][b]` and,
 /// axisymmetric, the hoop rate `v_r / r` of every lane (zero where not gathered).
+#[repr(C, align(64))]
 struct Gathered<const D: usize> {
     v_gp: [Lane; D],
     a_gp: [Lane; D],
@@ -377,6 +378,7 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
 /// `lanes::load_into`): built per chunk, `exp(grad v dt)`'s copies of whole matrices went
 /// through the stack, and 256-bit loads that straddled two earlier stores there waited for
 /// them (store forwarding fails for such loads).
+#[repr(C, align(64))]
 struct StressScratch<const D: usize> {
     /// `A = L dt`.
     a: LaneMat<D>,
@@ -685,14 +687,14 @@ pub(crate) fn particles<
     let mut gathered = Gathered::zero();
     // The chunk's positions, velocities, damping rates and new state, in buffers kept across
     // chunks (see `lanes::load_into`).
-    let (mut x, mut v) = ([[0.0; W]; D], [[0.0; W]; D]);
-    let (mut alpha_g, mut alpha_p) = ([ctx.alpha_g; W], [ctx.alpha_p; W]);
-    let (mut v_new, mut x_new) = ([[0.0; W]; D], [[0.0; W]; D]);
-    let mut mass = [0.0; W];
+    let (mut x, mut v) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
+    let (mut alpha_g, mut alpha_p) = (Block([ctx.alpha_g; W]), Block([ctx.alpha_p; W]));
+    let (mut v_new, mut x_new) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
+    let mut mass = Block([0.0; W]);
     // APIC: the new moment matrix B_p of each live lane (a family that keeps the gradient
     // form takes the stress update's velocity gradient instead: see
     // `commit_gradient_affine`).
-    let mut affine = [[[0.0; W]; D]; D];
+    let mut affine = Block([[[0.0; W]; D]; D]);
     let mut scratch = StressScratch::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
@@ -899,7 +901,7 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
     let mut gathered = Gathered::zero();
     // The moment matrices this pass does not gather.
     let mut unused_affine = [[[0.0; W]; D]; D];
-    let mut x = [[0.0; W]; D];
+    let mut x = Block([[0.0; W]; D]);
     let mut scratch = StressScratch::new();
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);

@@ -7,7 +7,7 @@
 //! their own over the traction table ([`tractions`]).
 
 use super::g2p::stencils;
-use super::lanes::{load_into, W};
+use super::lanes::{load_into, Block, W};
 use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::math::Mat;
@@ -53,12 +53,12 @@ pub(crate) fn scatter<
     let mut st = Stencils::<D, K, W>::default();
     // The chunk's particle values as lane vectors (one copy per column, no per-particle
     // bounds checks), in buffers kept across chunks; what this mode does not read stays zero.
-    let mut x = [[0.0; W]; D];
-    let mut v = [[0.0; W]; D];
-    let mut mass = [0.0; W];
-    let mut tau = [[0.0; W]; 6];
-    let mut f_ext = [[0.0; W]; D];
-    let mut affine = [[[0.0; W]; D]; D];
+    let mut x = Block([[0.0; W]; D]);
+    let mut v = Block([[0.0; W]; D]);
+    let mut mass = Block([0.0; W]);
+    let mut tau = Block([[0.0; W]; 6]);
+    let mut f_ext = Block([[0.0; W]; D]);
+    let mut affine = Block([[[0.0; W]; D]; D]);
     for start in (0..count).step_by(W) {
         for a in 0..D {
             load_into(&mut x[a], p.x[a], start);
