@@ -233,10 +233,10 @@ impl Effects {
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
     pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
-        let ok_damping = self.damping.map_or(true, |d| {
+        let ok_damping = self.damping.is_none_or(|d| {
             d.grid.is_valid(true)
                 && d.particle.is_valid(true)
-                && d.feedback.map_or(true, |f| {
+                && d.feedback.is_none_or(|f| {
                     f.gain.is_finite()
                         && f.gain > 0.0
                         && f.target.is_valid(true)
@@ -248,7 +248,7 @@ impl Effects {
             && self.body_force_scale.is_valid(false);
         let ok_transport = [self.heat, self.diffusion]
             .iter()
-            .all(|t| t.map_or(true, |t| t.is_valid(axes)));
+            .all(|t| t.is_none_or(|t| t.is_valid(axes)));
         if ok_damping && ok_body && ok_transport && self.traction_capacity <= 1 << 24 {
             Ok(())
         } else {

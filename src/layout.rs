@@ -683,7 +683,10 @@ mod tests {
         while bytes <= 64 << 20 {
             for b in [bytes, bytes + 4, bytes + 60, bytes * 3] {
                 let s = column_stride(b);
-                assert!(s >= b && s % ALIGN == 0 && s < b + 4096 + ALIGN, "{b}: {s}");
+                assert!(
+                    s >= b && s.is_multiple_of(ALIGN) && s < b + 4096 + ALIGN,
+                    "{b}: {s}"
+                );
                 if b >= 4096 {
                     let mut lines = [false; 64];
                     for j in 0..64 {

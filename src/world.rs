@@ -211,7 +211,7 @@ fn check_buffer(buf: &[u8], bytes: usize) -> Result<(), Error> {
     if buf.len() < bytes {
         return Err(Error::BufferTooSmall);
     }
-    if (buf.as_ptr() as usize) % ALIGN != 0 {
+    if !(buf.as_ptr() as usize).is_multiple_of(ALIGN) {
         return Err(Error::BufferMisaligned);
     }
     Ok(())

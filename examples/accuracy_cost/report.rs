@@ -77,7 +77,7 @@ error at the finest resolution | Pareto front (cost, then error) |\n|---|---|---
                     };
                     let runs = runs_of(rows, p, s.label, prec);
                     if let Some(v) = reach_ms(&work_series(&runs, m, ns), p.targets[m]) {
-                        if cheapest.as_ref().map_or(true, |c| v < c.0) {
+                        if cheapest.as_ref().is_none_or(|c| v < c.0) {
                             cheapest = Some((v, format!("{} {prec}", s.label)));
                         }
                     }

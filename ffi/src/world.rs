@@ -78,7 +78,7 @@ pub struct MpmStepReport {
 /// memory the host still owns).
 unsafe fn extent(w: *const MpmWorld) -> Result<usize, MpmStatus> {
     non_null(w)?;
-    if (w as usize) % kernel::ALIGN != 0 {
+    if !(w as usize).is_multiple_of(kernel::ALIGN) {
         return Err(MpmStatus::BufferMisaligned);
     }
     // SAFETY: the caller promises a world at `w`, which is at least a header long.
@@ -172,7 +172,7 @@ pub unsafe extern "C" fn mpm_world_init(
         if memory_len < r.bytes {
             return Err(MpmStatus::BufferTooSmall);
         }
-        if (memory as usize) % r.align != 0 {
+        if !(memory as usize).is_multiple_of(r.align) {
             return Err(MpmStatus::BufferMisaligned);
         }
         // SAFETY: the caller promises `memory_len` bytes at `memory`.

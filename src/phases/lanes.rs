@@ -10,7 +10,7 @@ use crate::Real;
 /// past a column. 16 measured faster than 8 in the AVX2 instance (its lane loops run on two
 /// 256-bit registers per value).
 pub(crate) const W: usize = 16;
-const _: () = assert!(W % 4 == 0 && crate::CHUNK % W == 0);
+const _: () = assert!(W.is_multiple_of(4) && crate::CHUNK.is_multiple_of(W));
 
 /// The comparison mask of four [`Row4`] lanes.
 #[cfg(not(feature = "f64"))]

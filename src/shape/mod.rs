@@ -296,7 +296,7 @@ fn row_factors<const D: usize>(wy: Real, dwy: Real, wz: Real, dwz: Real) -> [Rea
 
 impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, W> {
     fn default() -> Self {
-        const { assert!(W % 4 == 0 && K <= ROW) };
+        const { assert!(W.is_multiple_of(4) && K <= ROW) };
         Stencils {
             lanes: [XFactors {
                 base: 0,
