@@ -9,6 +9,9 @@
 //! - AVX-512 (F, VL, BW and DQ): the 16-lane loops in one register, and 32 vector registers.
 //!   Faster in 3D on the machines measured (ARCHITECTURE.md, "Performance").
 //!
+//! The gathers' arithmetic is written once on each instance's own vector type
+//! (`phases::rows::Rows`: 4, 8 or 16 lanes); everything else is the same source.
+//!
 //! FMA is deliberately not enabled, and the kernel never calls `mul_add`: every instance rounds
 //! every operation the same way, so a step gives bit-identical results on any path (tested), and
 //! results do not depend on which CPU ran them.

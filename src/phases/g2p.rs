@@ -9,7 +9,7 @@
 //!
 //! With APIC (seeds/001) instead: `v_p(n+1) = v_gp + a_gp dt - d dt` (the grid velocity),
 //! `x_p(n+1) = x_p + v_p(n+1) dt`, and the moment matrix `B_p` from the updated nodal
-//! velocities (gathered with them, [`gather`]; the next scatter turns it into
+//! velocities (gathered with them, [`gather_chunk`]; the next scatter turns it into
 //! `C_p = B_p D_p^-1`).
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
@@ -31,16 +31,17 @@
 
 use super::lanes::{commit, load, load_into, Block, Lane, Lanes, Mask4, W};
 use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
+use super::rows::{self, Rows};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
-use crate::grid::{load_row, rows_fit, GridCols};
+use crate::grid::GridCols;
 use crate::material::{
     eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation,
     Params,
 };
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
+use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
 /// A D x D matrix per lane, `m[a][b][lane]`.
@@ -68,17 +69,9 @@ pub(crate) fn live_lanes<const D: usize>(
     Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
 }
 
-/// Largest number of values one gather returns (3D: `v_gp`, `a_gp` and the velocity gradient;
-/// axisymmetric: 9).
-const GATHERED: usize = 16;
-
-/// What the gathers of a chunk's lanes return, four results per [`Row4`], before the
-/// transpose into lane vectors. A pass makes one and refills it for every chunk (a new one per
-/// chunk cost a kilobyte memset each time).
-type GatherRows = [[Row4; GATHERED / 4]; W];
-
 /// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]`, the velocity gradient `l[a][b]` and,
-/// axisymmetric, the hoop rate `v_r / r` of every lane (zero where not gathered).
+/// axisymmetric, the hoop rate `v_r / r` of every lane. What a pass does not gather stays
+/// zero; lanes that hold no active particle carry values that are never committed.
 #[repr(C, align(64))]
 struct Gathered<const D: usize> {
     v_gp: [Lane; D],
@@ -98,32 +91,34 @@ impl<const D: usize> Gathered<D> {
             hoop: [0.0; W],
         }
     }
-
-    /// The lanes of flat result `r`: `v_gp` (D) and `a_gp` (D) below `grad0`, then `l` (D x D),
-    /// then the hoop rate.
-    #[inline(always)]
-    fn slot(&mut self, r: usize, grad0: usize) -> &mut Lane {
-        if r < grad0 {
-            if r < D {
-                &mut self.v_gp[r]
-            } else {
-                &mut self.a_gp[r - D]
-            }
-        } else if r - grad0 < D * D {
-            let i = r - grad0;
-            &mut self.l[i / D][i % D]
-        } else {
-            &mut self.hoop
-        }
-    }
 }
 
-/// Gathers, for every live lane of a chunk, `v_gp` and `a_gp` (when `VEL`) and the velocity
-/// gradient (per `GRAD`). Each particle's results come back as [`Row4`]s (four results each);
-/// four lanes' rows are then transposed in registers, so that every lane vector is written
-/// whole rather than one scalar per lane.
+/// The sum along x of a stencil row's nodes `n` weighted by `w` (weights, derivatives, moments
+/// or hoop factors), in node order.
+#[inline(always)]
+fn sum_x<I: Rows, const K: usize>(w: &[I::V; K], n: &[I::V; ROW]) -> I::V {
+    let mut s = I::mul(w[0], n[0]);
+    for i in 1..K {
+        s = I::add(s, I::mul(w[i], n[i]));
+    }
+    s
+}
+
+/// Gathers, for every lane of a chunk, `v_gp` and `a_gp` (when `VEL`), the velocity gradient
+/// (per `GRAD`; with the hoop rate `sum u_r,i T_ip` axisymmetric) and, with `AFFINE` (APIC,
+/// with `VEL`), the moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into
+/// `affine` (not for a family that keeps the gradient form, [`Shape1D::GRADIENT_AFFINE`]:
+/// see `commit_gradient_affine`).
+///
+/// Lane-major, [`Rows::N`] lanes at a time in the instance's vectors: each stencil row of
+/// those lanes is read as one vector per node ([`Rows::rows`]), summed along x with the x
+/// weights (`X = sum_i w_i u_i`, `DX = sum_i dw_i u_i`, the moments or hoop factors in place
+/// of `w` where needed), and the sums weighted by the row's factors into sums held in
+/// registers (seeds/000 eqs 16-17, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and
+/// `G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k)`).
 #[inline(always)]
 fn gather_chunk<
+    I: Rows,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -134,194 +129,134 @@ fn gather_chunk<
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
-    live: Lanes,
-    rows: &mut GatherRows,
     affine: &mut [[Lane; D]; D],
     out: &mut Gathered<D>,
 ) {
-    // Flat result index r: v_gp (D), a_gp (D) when VEL, then l (D x D) and the hoop rate
-    // (axisymmetric) when GRAD.
-    let grad0 = if VEL { 2 * D } else { 0 };
-    let n = grad0
-        + if GRAD != grad::NONE {
-            D * D + S::AXISYMMETRIC as usize
-        } else {
-            0
-        };
-    // Only the rows that hold results are stored (2D: one of the four).
-    let used = n.div_ceil(4);
-    for ln in 0..W {
-        if live.has(ln) {
-            let mut b = [[0.0; D]; D];
-            let r = gather::<D, K, S, VEL, GRAD, AFFINE>(ctx, g, st.lane(ln), &mut b);
-            if AFFINE && !S::GRADIENT_AFFINE {
-                for r in 0..D {
-                    for c in 0..D {
-                        affine[r][c][ln] = b[r][c];
-                    }
-                }
-            }
-            rows[ln][..used].copy_from_slice(&r[..used]);
-        } else {
-            rows[ln][..used].fill(Row4::ZERO);
-        }
-    }
-    for l0 in (0..W).step_by(4) {
-        for q in 0..used {
-            let t = crate::shape::transpose4_rows([
-                rows[l0][q],
-                rows[l0 + 1][q],
-                rows[l0 + 2][q],
-                rows[l0 + 3][q],
-            ]);
-            for r in 0..4 {
-                if 4 * q + r < n {
-                    out.slot(4 * q + r, grad0)[l0..l0 + 4].copy_from_slice(&t[r].to_array());
-                }
-            }
-        }
-    }
-}
-
-/// Gathers `v_gp`, `a_gp` (when `VEL`) and the velocity gradient (per `GRAD`; with the hoop
-/// rate `sum u_r,i T_ip` axisymmetric) of the particle with stencil `st`, in the flat order of
-/// [`gather_chunk`], four results per [`Row4`]. With `AFFINE` (APIC, with `VEL`), also the
-/// moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into `affine`, from the
-/// same rows: the gradient's form with the first moments `e` in place of the weight
-/// derivatives (see [`Stencil::e`]); not for a family that keeps the gradient form
-/// ([`Shape1D::GRADIENT_AFFINE`], see `commit_gradient_affine`).
-#[inline(always)]
-fn gather<
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const VEL: bool,
-    const GRAD: u8,
-    const AFFINE: bool,
->(
-    ctx: &Ctx<'_, D>,
-    g: &GridCols<'_, D>,
-    st: LaneStencil<'_, D, K, W>,
-    affine: &mut [[Real; D]; D],
-) -> [Row4; GATHERED / 4] {
-    let geom = &ctx.geom;
-    let dt = ctx.dt;
     let moments = AFFINE && !S::GRADIENT_AFFINE;
-    // The pass checked that every column has this length (and that the remap columns exist
-    // when GRAD reads them).
-    let len = g.len();
-    if !rows_fit(
-        st.base(),
-        Stencil::<D, K>::last_row_offset(geom.stride),
-        len,
-    ) {
-        // Unreachable by construction; keeps the unchecked row access below sound.
-        return [Row4::ZERO; GATHERED / 4];
+    // The moments take v + a dt, which only a gather of the velocities reads.
+    const { assert!(!AFFINE || (VEL && GRAD != grad::REMAP)) };
+    let (stride, base) = (ctx.geom.stride, st.bases());
+    // The pass checked that every column read has g.len() entries (and that the remap columns
+    // exist when GRAD reads them).
+    if !rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len()) {
+        return; // Unreachable (first_node clamps); keeps the unchecked row reads sound.
     }
-    // Separable form ([`Stencil::row`]): per row, the nodal values are weighted by the row's
-    // scalar factors r[b] into 4-wide partial sums over the rows; the x weights are applied once
-    // at the end, and the results summed across x four at a time.
-    let (wx, dwx) = (st.wx(), st.dwx());
-    // sum_rows r[0] v_i, sum_rows r[0] a_i (over x still separate).
-    let mut rv = [Row4::ZERO; D];
-    let mut ra = [Row4::ZERO; D];
-    // sum_rows r[0] u_i (REMAP only; USL uses rv + dt ra) and sum_rows r[b] u_i for b >= 1, u
-    // the differentiated velocity.
-    let mut ru = [Row4::ZERO; D];
-    let mut du = [[Row4::ZERO; D]; D];
-    // APIC: sum_rows re[b] u_i for b >= 1, u = v + a dt, re[b] the row's factor with the
-    // moment on axis b (for b = 0 the rows' sums of v and a serve).
-    let mut aue = [[Row4::ZERO; D]; D];
-    for k in 0..Stencil::<D, K>::layers() {
-        for j in 0..K {
-            let (row, r) = st.row(j, k, geom.stride);
-            let mut re = [0.0; D];
-            if moments {
-                for (b, e) in re.iter_mut().enumerate().skip(1) {
-                    *e = match (b, D) {
-                        (1, 3) => st.e(1, j) * st.w(2, k),
-                        (2, _) => st.w(1, j) * st.e(2, k),
-                        _ => st.e(1, j),
-                    };
-                }
-            }
-            for a in 0..D {
-                // SAFETY (every load_row here): rows_fit checked above for this stencil, and every
-                // column read has the length it was checked against.
-                let (vi, ai) = if VEL || GRAD == grad::UPDATED {
-                    unsafe { (load_row(g.vel[a], row), load_row(g.acc[a], row)) }
-                } else {
-                    (Row4::ZERO, Row4::ZERO)
-                };
-                if VEL || GRAD == grad::UPDATED {
-                    rv[a] += vi * r[0];
-                    ra[a] += ai * r[0];
-                }
-                // The updated velocity v + a dt (USL's gradient, APIC's moments).
-                let updated = vi + ai * dt;
-                if moments {
-                    for b in 1..D {
-                        aue[a][b] += updated * re[b];
-                    }
-                }
+    let (add, mul) = (I::add, I::mul);
+    // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it;
+    // `fit` checked every lane's rows above, and every column read has g.len() entries.
+    let (zero, dt) = unsafe { (I::splat(0.0), I::splat(ctx.dt)) };
+    for at in (0..W).step_by(I::N) {
+        // The x factors of each node: weights, derivatives, moments (APIC), hoop factors.
+        let (mut wx, mut dwx, mut ex, mut tx) = ([zero; K], [zero; K], [zero; K], [zero; K]);
+        for i in 0..K {
+            unsafe {
+                wx[i] = I::load(&st.weights(0)[i], at);
                 if GRAD != grad::NONE {
-                    let u = if GRAD == grad::UPDATED {
-                        updated
+                    dwx[i] = I::load(&st.derivatives(0)[i], at);
+                }
+                if moments {
+                    ex[i] = I::load(&st.moments(0)[i], at);
+                }
+                if S::AXISYMMETRIC && GRAD != grad::NONE {
+                    tx[i] = I::load(&st.hoop_factors()[i], at);
+                }
+            }
+        }
+        let (mut v_gp, mut a_gp) = ([zero; D], [zero; D]);
+        let (mut l, mut b_p) = ([[zero; D]; D], [[zero; D]; D]);
+        let mut hoop = zero;
+        for k in 0..Stencil::<D, K>::layers() {
+            for j in 0..K {
+                let off = crate::shape::row_start(0, j, k, stride);
+                // The row's factors: r[0] = wy_j wz_k (S and G_x), r[b] the same with axis
+                // b's factor differentiated (G_b), re[b] with the moment on axis b (APIC).
+                let (mut r, mut re) = ([zero; D], [zero; D]);
+                unsafe {
+                    let (wy, dwy) = (
+                        I::load(&st.weights(1)[j], at),
+                        I::load(&st.derivatives(1)[j], at),
+                    );
+                    let ey = if moments {
+                        I::load(&st.moments(1)[j], at)
                     } else {
-                        let u = unsafe { load_row(g.remap[a], row) };
-                        ru[a] += u * r[0];
-                        u
+                        zero
                     };
-                    for b in 1..D {
-                        du[a][b] += u * r[b];
+                    if D == 3 {
+                        let wz = I::load(&st.weights(D - 1)[k], at);
+                        r[0] = mul(wy, wz);
+                        r[1] = mul(dwy, wz);
+                        r[D - 1] = mul(wy, I::load(&st.derivatives(D - 1)[k], at));
+                        if moments {
+                            re[1] = mul(ey, wz);
+                            re[D - 1] = mul(wy, I::load(&st.moments(D - 1)[k], at));
+                        }
+                    } else {
+                        (r[0], r[1], re[1]) = (wy, dwy, ey);
+                    }
+                }
+                for a in 0..D {
+                    let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
+                    if VEL || GRAD == grad::UPDATED {
+                        unsafe {
+                            nv = I::rows::<K>(g.vel[a], base, at, off);
+                            na = I::rows::<K>(g.acc[a], base, at, off);
+                        }
+                    }
+                    // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
+                    // or the re-mapped one (USF, MUSL).
+                    if GRAD == grad::REMAP {
+                        nu = unsafe { I::rows::<K>(g.remap[a], base, at, off) };
+                    } else if GRAD == grad::UPDATED || moments {
+                        for i in 0..K {
+                            nu[i] = add(nv[i], mul(na[i], dt));
+                        }
+                    }
+                    if VEL {
+                        v_gp[a] = add(v_gp[a], mul(r[0], sum_x::<I, K>(&wx, &nv)));
+                        a_gp[a] = add(a_gp[a], mul(r[0], sum_x::<I, K>(&wx, &na)));
+                    }
+                    let su = if GRAD != grad::NONE || moments {
+                        sum_x::<I, K>(&wx, &nu)
+                    } else {
+                        zero
+                    };
+                    if GRAD != grad::NONE {
+                        l[a][0] = add(l[a][0], mul(r[0], sum_x::<I, K>(&dwx, &nu)));
+                        for b in 1..D {
+                            l[a][b] = add(l[a][b], mul(r[b], su));
+                        }
+                        if S::AXISYMMETRIC && a == 0 {
+                            // v_r / r = sum_i u_r,i T_ip, T_ip = t_i wy_j.
+                            hoop = add(hoop, mul(r[0], sum_x::<I, K>(&tx, &nu)));
+                        }
+                    }
+                    if moments {
+                        b_p[a][0] = add(b_p[a][0], mul(r[0], sum_x::<I, K>(&ex, &nu)));
+                        for b in 1..D {
+                            b_p[a][b] = add(b_p[a][b], mul(re[b], su));
+                        }
                     }
                 }
             }
         }
-    }
-    if moments {
         for a in 0..D {
-            affine[a][0] = (st.ex() * (rv[a] + ra[a] * dt)).element_sum();
-            for b in 1..D {
-                affine[a][b] = (st.wx() * aue[a][b]).element_sum();
+            if VEL {
+                I::store(v_gp[a], &mut out.v_gp[a], at);
+                I::store(a_gp[a], &mut out.a_gp[a], at);
+            }
+            for b in 0..D {
+                if GRAD != grad::NONE {
+                    I::store(l[a][b], &mut out.l[a][b], at);
+                }
+                if moments {
+                    I::store(b_p[a][b], &mut affine[a][b], at);
+                }
             }
         }
-    }
-    // Each result is the element sum of one vector: sum four of them at a time.
-    let mut terms = [Row4::ZERO; GATHERED];
-    let mut n = 0;
-    if VEL {
-        for a in 0..D {
-            terms[a] = wx * rv[a];
-            terms[D + a] = wx * ra[a];
-        }
-        n = 2 * D;
-    }
-    if GRAD != grad::NONE {
-        for a in 0..D {
-            let ux = if GRAD == grad::UPDATED {
-                rv[a] + ra[a] * dt
-            } else {
-                ru[a]
-            };
-            terms[n + a * D] = dwx * ux;
-            for b in 1..D {
-                terms[n + a * D + b] = wx * du[a][b];
-            }
-            if S::AXISYMMETRIC && a == 0 {
-                // v_r / r = sum_i u_r,i t_i w_z: the x sum of the rows' z-weighted u_r.
-                terms[n + D * D] = st.t() * ux;
-            }
+        if GRAD != grad::NONE && S::AXISYMMETRIC {
+            I::store(hoop, &mut out.hoop, at);
         }
     }
-    core::array::from_fn(|q| {
-        crate::shape::element_sums([
-            terms[4 * q],
-            terms[4 * q + 1],
-            terms[4 * q + 2],
-            terms[4 * q + 3],
-        ])
-    })
 }
 
 /// APIC for a family that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`], linear):
@@ -661,6 +596,7 @@ fn eigenstrain<const D: usize>(
 /// replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
+    I: Rows,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -683,7 +619,6 @@ pub(crate) fn particles<
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let mut st = Stencils::<D, K, W>::default();
-    let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     let mut gathered = Gathered::zero();
     // The chunk's positions, velocities, damping rates and new state, in buffers kept across
     // chunks (see `lanes::load_into`).
@@ -713,22 +648,18 @@ pub(crate) fn particles<
             }
         }
         if FUSED_STRESS {
-            gather_chunk::<D, K, S, true, { grad::UPDATED }, APIC>(
+            gather_chunk::<I, D, K, S, true, { grad::UPDATED }, APIC>(
                 ctx,
                 g,
                 &st,
-                live,
-                &mut rows,
                 &mut affine,
                 &mut gathered,
             )
         } else {
-            gather_chunk::<D, K, S, true, { grad::NONE }, APIC>(
+            gather_chunk::<I, D, K, S, true, { grad::NONE }, APIC>(
                 ctx,
                 g,
                 &st,
-                live,
-                &mut rows,
                 &mut affine,
                 &mut gathered,
             )
@@ -885,7 +816,13 @@ pub(crate) fn particles<
 /// particle pass has moved the particles) takes the stencils at the positions of the start of
 /// the step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
-pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_START: bool>(
+pub(crate) fn stress<
+    I: Rows,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const FROM_START: bool,
+>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -897,7 +834,6 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     let mut st = Stencils::<D, K, W>::default();
-    let mut rows: GatherRows = [[Row4::ZERO; GATHERED / 4]; W];
     let mut gathered = Gathered::zero();
     // The moment matrices this pass does not gather.
     let mut unused_affine = [[[0.0; W]; D]; D];
@@ -915,12 +851,10 @@ pub(crate) fn stress<const D: usize, const K: usize, S: Shape1D<K>, const FROM_S
             );
         }
         stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
-        gather_chunk::<D, K, S, false, { grad::REMAP }, false>(
+        gather_chunk::<I, D, K, S, false, { grad::REMAP }, false>(
             ctx,
             g,
             &st,
-            live,
-            &mut rows,
             &mut unused_affine,
             &mut gathered,
         );

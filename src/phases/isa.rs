@@ -22,7 +22,7 @@ macro_rules! wide {
         $(#[$tdoc:meta])* $isa:ident, $module:ident, $features:literal;
         $(
             $(#[$doc:meta])*
-            fn $name:ident [$($generics:tt)*] [$($garg:ident),*]
+            fn $name:ident [$($generics:tt)*] [$($inst:ident)?] [$($garg:ident),*]
                 ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? => $($target:ident)::+;
         )*
     ) => {
@@ -48,7 +48,10 @@ macro_rules! wide {
             $(
                 #[target_feature(enable = $features)]
                 pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    $($target)::+::<$($garg),*>($($arg),*)
+                    // The instance, for the passes that take it ([`super::super::rows::Rows`]).
+                    #[allow(dead_code)]
+                    type I = $isa;
+                    $($target)::+::<$($inst,)? $($garg),*>($($arg),*)
                 }
             )*
         }
@@ -58,11 +61,12 @@ macro_rules! wide {
 /// Declares the [`Isa`] trait with one method per pass, and its implementations: the baseline
 /// one (each pass its own function), the AVX2 one and the AVX-512 one (each pass compiled in a
 /// `#[target_feature]` function, [`wide!`]). Each pass is written once, here, by its
-/// signature.
+/// signature; a pass that reads stencil rows lane-major says `[I]` and takes the instance as
+/// its first type argument (its [`super::rows::Rows`]).
 macro_rules! passes {
     ($(
         $(#[$doc:meta])*
-        fn $name:ident [$($generics:tt)*] [$($garg:ident),*]
+        fn $name:ident [$($generics:tt)*] [$($inst:ident)?] [$($garg:ident),*]
             ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? => $($target:ident)::+;
     )*) => {
         /// One set of particle passes; [`crate::world`] calls a substep's passes through it.
@@ -77,7 +81,10 @@ macro_rules! passes {
             $(
                 #[inline(never)]
                 fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    $($target)::+::<$($garg),*>($($arg),*)
+                    // The instance, for the passes that take it ([`super::rows::Rows`]).
+                    #[allow(dead_code)]
+                    type I = Baseline;
+                    $($target)::+::<$($inst,)? $($garg),*>($($arg),*)
                 }
             )*
         }
@@ -86,15 +93,15 @@ macro_rules! passes {
             /// AVX and AVX2 (x86-64). Chosen only when the CPU supports them
             /// ([`crate::simd::Instance::Avx2`]).
             Avx2, avx2, "avx,avx2";
-            $($(#[$doc])* fn $name [$($generics)*] [$($garg),*] ($($arg: $ty),*) $(-> $ret)?
-                => $($target)::+;)*
+            $($(#[$doc])* fn $name [$($generics)*] [$($inst)?] [$($garg),*] ($($arg: $ty),*)
+                $(-> $ret)? => $($target)::+;)*
         }
         wide! {
             /// AVX-512 F, VL, BW and DQ (x86-64). Chosen only when the CPU supports them
             /// ([`crate::simd::Instance::Avx512`]).
             Avx512, avx512, "avx,avx2,avx512f,avx512vl,avx512bw,avx512dq";
-            $($(#[$doc])* fn $name [$($generics)*] [$($garg),*] ($($arg: $ty),*) $(-> $ret)?
-                => $($target)::+;)*
+            $($(#[$doc])* fn $name [$($generics)*] [$($inst)?] [$($garg),*] ($($arg: $ty),*)
+                $(-> $ret)? => $($target)::+;)*
         }
     };
 }
@@ -104,7 +111,7 @@ passes! {
     fn scatter
         [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8, const FORCE: bool,
             const APIC: bool]
-        [D, K, S, MODE, FORCE, APIC] (
+        [] [D, K, S, MODE, FORCE, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
@@ -116,7 +123,7 @@ passes! {
     fn particles
         [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const KEEP_START: bool,
             const DAMP: bool, const APIC: bool]
-        [D, K, S, FUSED_STRESS, KEEP_START, DAMP, APIC] (
+        [I] [D, K, S, FUSED_STRESS, KEEP_START, DAMP, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -127,7 +134,7 @@ passes! {
 
     /// [`g2p::stress`].
     fn stress [const D: usize, const K: usize, S: Shape1D<K>, const FROM_START: bool]
-        [D, K, S, FROM_START] (
+        [I] [D, K, S, FROM_START] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -137,7 +144,7 @@ passes! {
     ) => g2p::stress;
 
     /// [`transport::substep`] (heat conduction or diffusion, one field).
-    fn transport [const D: usize, const K: usize, S: Shape1D<K>] [D, K, S] (
+    fn transport [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -148,7 +155,7 @@ passes! {
     ) => transport::substep;
 
     /// [`NodeBox::of_particles`] ([`crate::grid::node_box`]).
-    fn node_box [const D: usize, const K: usize, S: Shape1D<K>] [D, K, S] (
+    fn node_box [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (
         geom: &Geom<D>,
         x: &[&[Real]; D],
         status: &[u32],
@@ -156,6 +163,6 @@ passes! {
     ) -> NodeBox<D> => crate::grid::node_box;
 
     /// [`crate::world::fastest_squared`].
-    fn fastest_squared [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
+    fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
         => crate::world::fastest_squared;
 }

@@ -10,6 +10,7 @@ pub(crate) mod grid_update;
 pub(crate) mod isa;
 pub(crate) mod lanes;
 pub(crate) mod p2g;
+pub(crate) mod rows;
 pub(crate) mod transport;
 
 pub(crate) use isa::Isa;

@@ -162,6 +162,8 @@ pub struct Stencil<const D: usize, const K: usize> {
 #[derive(Clone, Copy, Debug)]
 pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     lanes: [XFactors<D>; W],
+    /// Lane-fastest first nodes (flat indices, below 2^30).
+    base: [u32; W],
     /// Lane-fastest weights and derivatives, `w[axis][k][lane]`; rows `k >= K` stay zero.
     w: [[[Real; W]; ROW]; D],
     dw: [[[Real; W]; ROW]; D],
@@ -306,6 +308,7 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
                 inv_d: [0.0; D],
                 t: Row4::ZERO,
             }; W],
+            base: [0; W],
             w: [[[0.0; W]; ROW]; D],
             dw: [[[0.0; W]; ROW]; D],
             e: [[[0.0; W]; ROW]; D],
@@ -329,8 +332,14 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         inv_h: Real,
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
-        let mut base = [0u32; W];
-        let (w, dw, e, t) = (&mut self.w, &mut self.dw, &mut self.e, &mut self.t);
+        let (base, w, dw, e, t) = (
+            &mut self.base,
+            &mut self.w,
+            &mut self.dw,
+            &mut self.e,
+            &mut self.t,
+        );
+        base.fill(0);
         let h = 1.0 / inv_h;
         let mut inv_d = [[0.0; W]; D];
         for a in 0..D {
@@ -407,6 +416,38 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 self.lanes[l0 + i].base = base[l0 + i];
             }
         }
+    }
+
+    /// The first node of every lane's stencil (flat indices, lane-fastest).
+    #[inline(always)]
+    pub fn bases(&self) -> &[u32; W] {
+        &self.base
+    }
+
+    /// The weights along `axis` of every lane, `[node][lane]` (nodes `k >= K` zero).
+    #[inline(always)]
+    pub fn weights(&self, axis: usize) -> &[[Real; W]; ROW] {
+        &self.w[axis]
+    }
+
+    /// The derivatives along `axis` (per unit length) of every lane, `[node][lane]`.
+    #[inline(always)]
+    pub fn derivatives(&self, axis: usize) -> &[[Real; W]; ROW] {
+        &self.dw[axis]
+    }
+
+    /// APIC only (else zero): the first moments along `axis` of every lane, `[node][lane]`
+    /// ([`Stencil::e`]).
+    #[inline(always)]
+    pub fn moments(&self, axis: usize) -> &[[Real; W]; ROW] {
+        &self.e[axis]
+    }
+
+    /// Axisymmetric only (else zero): the hoop factors of every lane, `[node][lane]`
+    /// ([`Stencil::t`]).
+    #[inline(always)]
+    pub fn hoop_factors(&self) -> &[[Real; W]; ROW] {
+        &self.t
     }
 
     /// The stencil of lane `ln`.
@@ -525,14 +566,6 @@ fn transpose4<const W: usize>(rows: &[[Real; W]; ROW], l0: usize) -> [Row4; 4] {
 pub(crate) fn transpose4_rows(rows: [Row4; 4]) -> [Row4; 4] {
     let t = Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
     [t.x_axis, t.y_axis, t.z_axis, t.w_axis]
-}
-
-/// The element sums of four [`Row4`]s, as one [`Row4`] (a transpose and three adds instead of
-/// four horizontal sums). Element `i` is `(x + y) + (z + w)` over the elements of `v[i]`.
-#[inline(always)]
-pub(crate) fn element_sums(v: [Row4; 4]) -> Row4 {
-    let t = transpose4_rows(v);
-    (t[0] + t[1]) + (t[2] + t[3])
 }
 
 impl<const D: usize, const K: usize> Stencil<D, K> {

@@ -1,0 +1,338 @@
+//! Reading a chunk's stencil rows lane-major, in the registers of the instance that runs: for
+//! each node `i` along x of a stencil row, one vector of [`Rows::N`] lanes holding that node's
+//! value for each of those lanes. The gathers then weight and sum the nodes with vector
+//! arithmetic over the lanes (16 per operation in the AVX-512 instance, 8 in the AVX2 one),
+//! their sums held in registers, instead of weighting each particle's 4-wide rows and
+//! transposing the sums back into lanes.
+//!
+//! Each instance of the passes ([`crate::phases::isa`]) has its own [`Rows`]: the lanes' rows
+//! are loaded as 4-wide vectors and transposed four lanes at a time, in the 128-bit blocks of
+//! 256-bit (AVX2) or 512-bit (AVX-512) registers where the instance has them. Every
+//! implementation computes the same operations on the same values in the same order, so
+//! results do not depend on it.
+
+use super::lanes::W;
+use crate::shape::{Row4, ROW};
+use crate::Real;
+
+/// The vectors an instance of the passes sums stencil rows with.
+///
+/// Making a vector ([`Rows::splat`], [`Rows::load`], [`Rows::rows`]) is `unsafe`: only an
+/// instance the CPU supports may run it. Arithmetic on vectors made so is safe: the wide
+/// instances' vector types can be made by those functions alone.
+pub(crate) trait Rows {
+    /// Lanes per vector: divides [`W`].
+    const N: usize;
+    /// `N` lanes of reals.
+    type V: Copy;
+
+    /// Every lane `x`.
+    ///
+    /// # Safety
+    /// The CPU supports this instance (the passes are only run by an instance
+    /// [`crate::simd`] chose).
+    unsafe fn splat(x: Real) -> Self::V;
+
+    /// Lanes `at..at + N` of a chunk's lane array.
+    ///
+    /// # Safety
+    /// As for [`Rows::splat`].
+    unsafe fn load(lanes: &[Real; W], at: usize) -> Self::V;
+
+    /// Writes `v` to lanes `at..at + N` of a chunk's lane array.
+    fn store(v: Self::V, lanes: &mut [Real; W], at: usize);
+
+    fn add(a: Self::V, b: Self::V) -> Self::V;
+
+    fn mul(a: Self::V, b: Self::V) -> Self::V;
+
+    /// The nodes `i < K` of a stencil row of lanes `at..at + N`: lane `q` of result `i` is
+    /// `col[base[at + q] + off + i]` (results `i >= K` unspecified).
+    ///
+    /// # Safety
+    /// As for [`Rows::splat`], and `base[ln] + off + ROW <= col.len()` for every lane `ln` of
+    /// the chunk (see [`fit`]).
+    unsafe fn rows<const K: usize>(
+        col: &[Real],
+        base: &[u32; W],
+        at: usize,
+        off: usize,
+    ) -> [Self::V; ROW];
+}
+
+/// Whether the stencil rows of every lane fit in columns of `len` entries: the rows of a
+/// stencil whose first node is `base` reach `base + last_row_offset + ROW`. Checked once per
+/// chunk, so that [`Rows::rows`] may read without a check per lane.
+#[inline(always)]
+pub(crate) fn fit(base: &[u32; W], last_row_offset: usize, len: usize) -> bool {
+    let mut top = 0;
+    for &b in base {
+        top = top.max(b);
+    }
+    crate::grid::rows_fit(top as usize, last_row_offset, len)
+}
+
+/// Four lanes per vector, glam's [`Row4`]: each lane's row loaded as one, the four transposed
+/// (SSE2 shuffles in f32). What the baseline instance runs, and every instance in f64.
+macro_rules! by_four {
+    () => {
+        const N: usize = 4;
+        type V = Row4;
+
+        #[inline(always)]
+        unsafe fn splat(x: Real) -> Row4 {
+            Row4::splat(x)
+        }
+
+        #[inline(always)]
+        unsafe fn load(lanes: &[Real; W], at: usize) -> Row4 {
+            Row4::from_slice(&lanes[at..at + 4])
+        }
+
+        #[inline(always)]
+        fn store(v: Row4, lanes: &mut [Real; W], at: usize) {
+            v.write_to_slice(&mut lanes[at..at + 4]);
+        }
+
+        #[inline(always)]
+        fn add(a: Row4, b: Row4) -> Row4 {
+            a + b
+        }
+
+        #[inline(always)]
+        fn mul(a: Row4, b: Row4) -> Row4 {
+            a * b
+        }
+
+        #[inline(always)]
+        unsafe fn rows<const K: usize>(
+            col: &[Real],
+            base: &[u32; W],
+            at: usize,
+            off: usize,
+        ) -> [Row4; ROW] {
+            let b = &base[at..at + 4];
+            // SAFETY: the caller guarantees that every lane's row is inside `col`.
+            let rows = unsafe {
+                [
+                    crate::grid::load_row(col, b[0] as usize + off),
+                    crate::grid::load_row(col, b[1] as usize + off),
+                    crate::grid::load_row(col, b[2] as usize + off),
+                    crate::grid::load_row(col, b[3] as usize + off),
+                ]
+            };
+            crate::shape::transpose4_rows(rows)
+        }
+    };
+}
+
+impl Rows for super::isa::Baseline {
+    by_four!();
+}
+
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
+impl Rows for super::isa::Avx2 {
+    by_four!();
+}
+
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
+impl Rows for super::isa::Avx512 {
+    by_four!();
+}
+
+/// The f32 instances with 256-bit and 512-bit registers.
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd", not(feature = "f64")))]
+mod x86 {
+    use super::*;
+    use crate::phases::isa::{Avx2, Avx512};
+    use core::arch::x86_64::*;
+
+    /// Eight lanes in a 256-bit register. Only [`Rows`] for [`Avx2`] makes one (its field is
+    /// private), so holding one means the CPU has AVX2.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Y(__m256);
+
+    /// Sixteen lanes in a 512-bit register. Only [`Rows`] for [`Avx512`] makes one, so holding
+    /// one means the CPU has AVX-512 F.
+    #[derive(Clone, Copy)]
+    pub(crate) struct Z(__m512);
+
+    /// The stencil rows (4 reals from `p + b[l] + off`) of lanes `q` and `q + 4` in the two
+    /// 128-bit blocks of a register.
+    ///
+    /// # Safety
+    /// AVX2, and those rows are inside the column `p` points into.
+    #[inline(always)]
+    unsafe fn blocks_y(p: *const f32, b: &[u32], off: usize, q: usize) -> __m256 {
+        // SAFETY: as required of the caller.
+        unsafe {
+            let lo = _mm_loadu_ps(p.add(b[q] as usize + off));
+            let hi = _mm_loadu_ps(p.add(b[q + 4] as usize + off));
+            _mm256_insertf128_ps::<1>(_mm256_castps128_ps256(lo), hi)
+        }
+    }
+
+    /// The stencil rows of lanes `q`, `q + 4`, `q + 8` and `q + 12` in the four 128-bit blocks
+    /// of a register.
+    ///
+    /// # Safety
+    /// AVX-512 F and DQ, and those rows are inside the column `p` points into.
+    #[inline(always)]
+    unsafe fn blocks_z(p: *const f32, b: &[u32], off: usize, q: usize) -> __m512 {
+        // SAFETY: as required of the caller.
+        unsafe {
+            let lo = blocks_y(p, b, off, q);
+            let hi = blocks_y(p, &b[8..], off, q);
+            _mm512_insertf32x8::<1>(_mm512_castps256_ps512(lo), hi)
+        }
+    }
+
+    /// [`Rows`] for an instance whose vector `$v` wraps one register of `$n` lanes,
+    /// with the register's intrinsics and `$blocks`, which loads lanes `q`, `q + 4`, ... into
+    /// its 128-bit blocks.
+    macro_rules! wide_rows {
+        (
+            $isa:ident, $v:ident, $n:literal, $blocks:ident;
+            $set1:ident, $loadu:ident, $storeu:ident, $add:ident, $mul:ident, $setzero:ident;
+            $unpacklo:ident, $unpackhi:ident, $unpacklo_pd:ident, $unpackhi_pd:ident,
+            $to_pd:ident, $to_ps:ident
+        ) => {
+            impl Rows for $isa {
+                const N: usize = $n;
+                type V = $v;
+
+                #[inline(always)]
+                unsafe fn splat(x: f32) -> $v {
+                    // SAFETY: the caller runs this instance only on a CPU that supports it.
+                    $v(unsafe { $set1(x) })
+                }
+
+                #[inline(always)]
+                unsafe fn load(lanes: &[f32; W], at: usize) -> $v {
+                    let l = &lanes[at..at + $n];
+                    // SAFETY: `$n` reals; the instance as for splat.
+                    $v(unsafe { $loadu(l.as_ptr()) })
+                }
+
+                #[inline(always)]
+                fn store(v: $v, lanes: &mut [f32; W], at: usize) {
+                    let l = &mut lanes[at..at + $n];
+                    // SAFETY: `$n` reals; a vector of this instance exists only where the CPU
+                    // supports the instance.
+                    unsafe { $storeu(l.as_mut_ptr(), v.0) }
+                }
+
+                #[inline(always)]
+                fn add(a: $v, b: $v) -> $v {
+                    // SAFETY: as for store.
+                    $v(unsafe { $add(a.0, b.0) })
+                }
+
+                #[inline(always)]
+                fn mul(a: $v, b: $v) -> $v {
+                    // SAFETY: as for store.
+                    $v(unsafe { $mul(a.0, b.0) })
+                }
+
+                #[inline(always)]
+                unsafe fn rows<const K: usize>(
+                    col: &[f32],
+                    base: &[u32; W],
+                    at: usize,
+                    off: usize,
+                ) -> [$v; ROW] {
+                    let (b, p) = (&base[at..at + $n], col.as_ptr());
+                    // SAFETY: the caller guarantees that every lane's row is inside `col`, and
+                    // that the CPU supports the instance.
+                    unsafe {
+                        let mut z = [$setzero(); 4];
+                        for (q, zq) in z.iter_mut().enumerate() {
+                            *zq = $blocks(p, b, off, q);
+                        }
+                        // The 4 x 4 transpose of each 128-bit block: block `c` of `z[q]` holds
+                        // the row of lane `4 c + q`, block `c` of result `i` node `i` of lanes
+                        // `4 c .. 4 c + 4`.
+                        let t0 = $unpacklo(z[0], z[1]);
+                        let t1 = $unpackhi(z[0], z[1]);
+                        let t2 = $unpacklo(z[2], z[3]);
+                        let t3 = $unpackhi(z[2], z[3]);
+                        [
+                            $v($to_ps($unpacklo_pd($to_pd(t0), $to_pd(t2)))),
+                            $v($to_ps($unpackhi_pd($to_pd(t0), $to_pd(t2)))),
+                            $v($to_ps($unpacklo_pd($to_pd(t1), $to_pd(t3)))),
+                            $v($to_ps($unpackhi_pd($to_pd(t1), $to_pd(t3)))),
+                        ]
+                    }
+                }
+            }
+        };
+    }
+
+    wide_rows!(
+        Avx2, Y, 8, blocks_y;
+        _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_mul_ps,
+        _mm256_setzero_ps;
+        _mm256_unpacklo_ps, _mm256_unpackhi_ps, _mm256_unpacklo_pd, _mm256_unpackhi_pd,
+        _mm256_castps_pd, _mm256_castpd_ps
+    );
+
+    wide_rows!(
+        Avx512, Z, 16, blocks_z;
+        _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_mul_ps,
+        _mm512_setzero_ps;
+        _mm512_unpacklo_ps, _mm512_unpackhi_ps, _mm512_unpacklo_pd, _mm512_unpackhi_pd,
+        _mm512_castps_pd, _mm512_castpd_ps
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reads the rows of every lane of a chunk with instance `I` and checks them against the
+    /// column.
+    fn check<I: Rows>(col: &[Real], base: &[u32; W], off: usize) {
+        for at in (0..W).step_by(I::N) {
+            let nodes = unsafe { I::rows::<4>(col, base, at, off) };
+            for (i, &node) in nodes.iter().enumerate() {
+                let mut lanes = [0.0; W];
+                I::store(node, &mut lanes, at);
+                for q in 0..I::N {
+                    let ln = at + q;
+                    assert_eq!(
+                        lanes[ln],
+                        col[base[ln] as usize + off + i],
+                        "node {i} lane {ln}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Every instance the CPU supports moves the same values: lane `q` of node `i` is
+    /// `col[base[at + q] + off + i]`, for lanes spread over the column.
+    #[test]
+    fn every_instance_reads_every_lanes_row() {
+        let col: [Real; 1000] = core::array::from_fn(|i| i as Real * 0.5 - 7.0);
+        let mut base = [0u32; W];
+        for (ln, b) in base.iter_mut().enumerate() {
+            *b = ((ln * 613) % 990) as u32;
+        }
+        let off = 3;
+        assert!(fit(&base, off, col.len()));
+        check::<super::super::isa::Baseline>(&col, &base, off);
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+        {
+            use crate::simd::{Instance, Simd};
+            if Simd::Detect.instance() >= Instance::Avx2 {
+                check::<super::super::isa::Avx2>(&col, &base, off);
+            }
+            if Simd::Detect.instance() == Instance::Avx512 {
+                check::<super::super::isa::Avx512>(&col, &base, off);
+            }
+        }
+        // A row that would end past the column does not fit.
+        base[5] = 997;
+        assert!(!fit(&base, off, col.len()));
+    }
+}
