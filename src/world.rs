@@ -691,7 +691,9 @@ impl<'a> World<'a> {
     ///
     /// The particles are written in stencil-bin order, not x fastest: the sites whose stencils
     /// start at the same node come together (one run per node), which lets the step's scatter
-    /// sum a run in registers before it touches the grid. Find a face's particles by position.
+    /// sum a run in registers before it touches the grid and its gathers read a stencil row
+    /// once for four particles; the runs of a multiple of 4 particles come first, those at the
+    /// box's edges last. Find a face's particles by position.
     pub fn fill_box(
         &mut self,
         min: Vec3,
@@ -1646,12 +1648,21 @@ impl Bins {
 /// first node, so they come one after another and the scatter sums them before it adds to the
 /// grid ([`crate::phases::p2g`]'s runs): one load and store per node row for the bin rather
 /// than one per particle.
+///
+/// The bins whose number of sites is a multiple of 4 come first, the others (the partial bins
+/// at the box's edges) after them: a run of the first kind then starts where a 4-lane block
+/// of the passes' chunks starts (when the fill itself starts there), so that the gathers read
+/// one stencil row for the block's four particles ([`crate::phases::rows::blocks_share`]).
+/// At 2 sites per cell per axis that is every bin inside the box (4 sites in 2D, 8 in 3D) and,
+/// in 3D, those on its faces (4).
 struct BinnedSites {
     lo: [i64; 3],
     hi: [i64; 3],
     bins: Bins,
     outer: Sites,
     inner: Sites,
+    /// Visiting the bins whose site count is a multiple of 4 (else the others).
+    whole: bool,
 }
 
 impl BinnedSites {
@@ -1660,12 +1671,18 @@ impl BinnedSites {
             lo,
             hi,
             bins,
-            outer: Sites::new(
-                core::array::from_fn(|a| bins.of(lo[a])),
-                core::array::from_fn(|a| bins.of(hi[a])),
-            ),
+            outer: Self::all_bins(lo, hi, bins),
             inner: Sites::new([0; 3], [-1; 3]),
+            whole: true,
         }
+    }
+
+    /// The bins the sites `[lo, hi]` fall into.
+    fn all_bins(lo: [i64; 3], hi: [i64; 3], bins: Bins) -> Sites {
+        Sites::new(
+            core::array::from_fn(|a| bins.of(lo[a])),
+            core::array::from_fn(|a| bins.of(hi[a])),
+        )
     }
 }
 
@@ -1676,12 +1693,22 @@ impl Iterator for BinnedSites {
             if let Some(k) = self.inner.next() {
                 return Some(k);
             }
-            let b = self.outer.next()?;
+            let Some(b) = self.outer.next() else {
+                if !self.whole {
+                    return None;
+                }
+                // Then the bins of the other kind.
+                self.whole = false;
+                self.outer = Self::all_bins(self.lo, self.hi, self.bins);
+                continue;
+            };
             let bins = self.bins;
-            self.inner = Sites::new(
-                core::array::from_fn(|a| self.lo[a].max(bins.first(b[a]))),
-                core::array::from_fn(|a| self.hi[a].min(bins.first(b[a] + 1) - 1)),
-            );
+            let from: [i64; 3] = core::array::from_fn(|a| self.lo[a].max(bins.first(b[a])));
+            let to: [i64; 3] = core::array::from_fn(|a| self.hi[a].min(bins.first(b[a] + 1) - 1));
+            let count: i64 = (0..3).map(|a| (to[a] - from[a] + 1).max(0)).product();
+            if (count % 4 == 0) == self.whole {
+                self.inner = Sites::new(from, to);
+            }
         }
     }
 }
@@ -1766,9 +1793,11 @@ mod tests {
     }
 
     /// The particles a fill seeds come in runs that share their stencil's first node, one run
-    /// per first node (what the scatter's run sums rely on), for every shape, 2D and 3D, 1 to 4
-    /// particles per cell per axis and boxes at random places. The first node is the one the
-    /// step computes ([`first_node`] with the shape's own shift and lead).
+    /// per first node (what the scatter's run sums rely on), the runs of a multiple of 4
+    /// first and each on a 4-lane block (what the gathers' shared row reads rely on), for
+    /// every shape, 2D and 3D, 1 to 4 particles per cell per axis and boxes at random places.
+    /// The first node is the one the step computes ([`first_node`] with the shape's own shift
+    /// and lead).
     #[test]
     fn filled_particles_come_in_one_run_per_first_node() {
         fn check<const K: usize, S: Shape1D<K>>(shape: ShapeFunction) {
@@ -1831,6 +1860,24 @@ mod tests {
                                 distinct.len(),
                                 "{shape:?} {dim:?} ppc {ppc}: a first node in two runs"
                             );
+                        }
+                        // The runs of a multiple of 4 particles come first, each starting a
+                        // multiple of 4 particles after the fill's first.
+                        let mut start = 0;
+                        let mut others = false;
+                        for (i, w) in keys.iter().enumerate() {
+                            if i + 1 == keys.len() || keys[i + 1] != *w {
+                                let len = i + 1 - start;
+                                if len % 4 == 0 {
+                                    assert!(
+                                        !others && start % 4 == 0,
+                                        "{shape:?} {dim:?} ppc {ppc}: a run of {len} at {start}"
+                                    );
+                                } else {
+                                    others = true;
+                                }
+                                start = i + 1;
+                            }
                         }
                     }
                 }

@@ -887,7 +887,8 @@ MpmStatus mpm_world_add_particles(struct MpmWorld *world,
 // mass of that volume (axisymmetric: per radian, the sub-cell's area times the site's
 // radius). All or nothing; the box must lie inside the admissible region. The particles come
 // in stencil-bin order, not x fastest (the sites whose stencils start at the same node
-// together, which the step's scatter sums once): find a face's particles by position.
+// together, which the step's scatter sums once; the runs at the box's edges last): find a
+// face's particles by position.
 //
 // # Safety
 // `world` is NULL or a world; `ids_out` is NULL or valid.

@@ -141,6 +141,8 @@ fn gather_chunk<
     if !rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len()) {
         return; // Unreachable (first_node clamps); keeps the unchecked row reads sound.
     }
+    // Lanes sharing their first node four by four (a stencil-bin fill) read one row per four.
+    let shared = rows::blocks_share(base);
     let (add, mul) = (I::add, I::mul);
     // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it;
     // `fit` checked every lane's rows above, and every column read has g.len() entries.
@@ -198,14 +200,14 @@ fn gather_chunk<
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
                     if VEL || GRAD == grad::UPDATED {
                         unsafe {
-                            nv = I::rows::<K>(g.vel[a], base, at, off);
-                            na = I::rows::<K>(g.acc[a], base, at, off);
+                            nv = rows::read::<I, K>(g.vel[a], base, at, off, shared);
+                            na = rows::read::<I, K>(g.acc[a], base, at, off, shared);
                         }
                     }
                     // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
                     // or the re-mapped one (USF, MUSL).
                     if GRAD == grad::REMAP {
-                        nu = unsafe { I::rows::<K>(g.remap[a], base, at, off) };
+                        nu = unsafe { rows::read::<I, K>(g.remap[a], base, at, off, shared) };
                     } else if GRAD == grad::UPDATED || moments {
                         for i in 0..K {
                             nu[i] = add(nv[i], mul(na[i], dt));
@@ -281,10 +283,17 @@ fn commit_gradient_affine<const D: usize>(
 }
 
 /// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
-/// `x[axis][lane]` (with their first moments when `AFFINE`). A family whose domain stretches
-/// (cpGIMP) also reads the chunk's deformation gradients.
+/// `x[axis][lane]` (with their first moments when `AFFINE`, and each lane's x factors when
+/// `LANES`: see [`Stencils::compute`]). A family whose domain stretches (cpGIMP) also reads the
+/// chunk's deformation gradients.
 #[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFINE: bool>(
+pub(crate) fn stencils<
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const AFFINE: bool,
+    const LANES: bool,
+>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -306,7 +315,7 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const AFFI
             [1.0; W]
         }
     });
-    st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
+    st.compute::<S, AFFINE, LANES>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
 }
 
 /// The lane matrices of a stress update, kept by the pass across chunks (see
@@ -637,7 +646,8 @@ pub(crate) fn particles<
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
+        // The x factors per lane for MUSL's scatter of the new momenta.
+        stencils::<D, K, S, APIC, KEEP_START>(&mut st, shape, ctx, p, start, &x);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
         if DAMP {
@@ -850,7 +860,7 @@ pub(crate) fn stress<
                 start,
             );
         }
-        stencils::<D, K, S, false>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, false, false>(&mut st, shape, ctx, p, start, &x);
         gather_chunk::<I, D, K, S, false, { grad::REMAP }, false>(
             ctx,
             g,

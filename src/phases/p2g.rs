@@ -82,7 +82,7 @@ pub(crate) fn scatter<
                 }
             }
         }
-        stencils::<D, K, S, APIC>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, APIC, true>(&mut st, shape, ctx, p, start, &x);
         let live = super::g2p::live_lanes(p, start, count);
         let make = |ln: usize| {
             let mut t = [[0.0; D]; D];

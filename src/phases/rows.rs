@@ -58,6 +58,55 @@ pub(crate) trait Rows {
         at: usize,
         off: usize,
     ) -> [Self::V; ROW];
+
+    /// [`Rows::rows`] for a chunk whose lanes share their first node four by four (see
+    /// [`blocks_share`]): the row of the first lane of each four, its nodes spread over the
+    /// four lanes. One row load per four lanes and no transposes; the same values where the
+    /// lanes do share (else the first lane's values).
+    ///
+    /// # Safety
+    /// As for [`Rows::rows`].
+    unsafe fn rows_shared<const K: usize>(
+        col: &[Real],
+        base: &[u32; W],
+        at: usize,
+        off: usize,
+    ) -> [Self::V; ROW];
+}
+
+/// Whether the lanes of a chunk share their stencil's first node four by four (lanes `4 c` to
+/// `4 c + 3` for every `c`): what the fills' stencil-bin order gives at 2 particles per cell
+/// per axis, 4 or 8 to a bin ([`crate::World::fill_box`]).
+#[inline(always)]
+pub(crate) fn blocks_share(base: &[u32; W]) -> bool {
+    let mut same = true;
+    for ln in 0..W {
+        same &= base[ln] == base[ln & !3];
+    }
+    same
+}
+
+/// The nodes of a stencil row of lanes `at..at + N` ([`Rows::rows`], or [`Rows::rows_shared`]
+/// where `shared`, from [`blocks_share`]).
+///
+/// # Safety
+/// As for [`Rows::rows`].
+#[inline(always)]
+pub(crate) unsafe fn read<I: Rows, const K: usize>(
+    col: &[Real],
+    base: &[u32; W],
+    at: usize,
+    off: usize,
+    shared: bool,
+) -> [I::V; ROW] {
+    // SAFETY: as required of the caller.
+    unsafe {
+        if shared {
+            I::rows_shared::<K>(col, base, at, off)
+        } else {
+            I::rows::<K>(col, base, at, off)
+        }
+    }
 }
 
 /// Whether the stencil rows of every lane fit in columns of `len` entries: the rows of a
@@ -122,6 +171,23 @@ macro_rules! by_four {
                 ]
             };
             crate::shape::transpose4_rows(rows)
+        }
+
+        #[inline(always)]
+        unsafe fn rows_shared<const K: usize>(
+            col: &[Real],
+            base: &[u32; W],
+            at: usize,
+            off: usize,
+        ) -> [Row4; ROW] {
+            // SAFETY: the caller guarantees that every lane's row is inside `col`.
+            let r = unsafe { crate::grid::load_row(col, base[at] as usize + off) };
+            [
+                Row4::splat(r.x),
+                Row4::splat(r.y),
+                Row4::splat(r.z),
+                Row4::splat(r.w),
+            ]
         }
     };
 }
@@ -195,7 +261,7 @@ mod x86 {
             $isa:ident, $v:ident, $n:literal, $blocks:ident;
             $set1:ident, $loadu:ident, $storeu:ident, $add:ident, $mul:ident, $setzero:ident;
             $unpacklo:ident, $unpackhi:ident, $unpacklo_pd:ident, $unpackhi_pd:ident,
-            $to_pd:ident, $to_ps:ident
+            $to_pd:ident, $to_ps:ident, $permute:ident
         ) => {
             impl Rows for $isa {
                 const N: usize = $n;
@@ -264,6 +330,27 @@ mod x86 {
                         ]
                     }
                 }
+
+                #[inline(always)]
+                unsafe fn rows_shared<const K: usize>(
+                    col: &[f32],
+                    base: &[u32; W],
+                    at: usize,
+                    off: usize,
+                ) -> [$v; ROW] {
+                    let (b, p) = (&base[at..at + $n], col.as_ptr());
+                    // SAFETY: as for rows.
+                    unsafe {
+                        // The rows of lanes 0, 4, ..., node i broadcast within each block.
+                        let z = $blocks(p, b, off, 0);
+                        [
+                            $v($permute::<0x00>(z)),
+                            $v($permute::<0x55>(z)),
+                            $v($permute::<0xAA>(z)),
+                            $v($permute::<0xFF>(z)),
+                        ]
+                    }
+                }
             }
         };
     }
@@ -273,7 +360,7 @@ mod x86 {
         _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_mul_ps,
         _mm256_setzero_ps;
         _mm256_unpacklo_ps, _mm256_unpackhi_ps, _mm256_unpacklo_pd, _mm256_unpackhi_pd,
-        _mm256_castps_pd, _mm256_castpd_ps
+        _mm256_castps_pd, _mm256_castpd_ps, _mm256_permute_ps
     );
 
     wide_rows!(
@@ -281,7 +368,7 @@ mod x86 {
         _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_mul_ps,
         _mm512_setzero_ps;
         _mm512_unpacklo_ps, _mm512_unpackhi_ps, _mm512_unpacklo_pd, _mm512_unpackhi_pd,
-        _mm512_castps_pd, _mm512_castpd_ps
+        _mm512_castps_pd, _mm512_castpd_ps, _mm512_permute_ps
     );
 }
 
@@ -290,27 +377,45 @@ mod tests {
     use super::*;
 
     /// Reads the rows of every lane of a chunk with instance `I` and checks them against the
-    /// column.
+    /// column; where the lanes share their bases four by four, also with the shared read.
     fn check<I: Rows>(col: &[Real], base: &[u32; W], off: usize) {
-        for at in (0..W).step_by(I::N) {
-            let nodes = unsafe { I::rows::<4>(col, base, at, off) };
-            for (i, &node) in nodes.iter().enumerate() {
-                let mut lanes = [0.0; W];
-                I::store(node, &mut lanes, at);
-                for q in 0..I::N {
-                    let ln = at + q;
-                    assert_eq!(
-                        lanes[ln],
-                        col[base[ln] as usize + off + i],
-                        "node {i} lane {ln}"
-                    );
+        for shared in [false, true] {
+            if shared && !blocks_share(base) {
+                continue;
+            }
+            for at in (0..W).step_by(I::N) {
+                let nodes = unsafe { read::<I, 4>(col, base, at, off, shared) };
+                for (i, &node) in nodes.iter().enumerate() {
+                    let mut lanes = [0.0; W];
+                    I::store(node, &mut lanes, at);
+                    for q in 0..I::N {
+                        let ln = at + q;
+                        let expect = col[base[ln] as usize + off + i];
+                        assert_eq!(lanes[ln], expect, "node {i} lane {ln} shared {shared}");
+                    }
                 }
             }
         }
     }
 
+    /// [`check`] for every instance the CPU supports.
+    fn check_all(col: &[Real], base: &[u32; W], off: usize) {
+        check::<super::super::isa::Baseline>(col, base, off);
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+        {
+            use crate::simd::{Instance, Simd};
+            if Simd::Detect.instance() >= Instance::Avx2 {
+                check::<super::super::isa::Avx2>(col, base, off);
+            }
+            if Simd::Detect.instance() == Instance::Avx512 {
+                check::<super::super::isa::Avx512>(col, base, off);
+            }
+        }
+    }
+
     /// Every instance the CPU supports moves the same values: lane `q` of node `i` is
-    /// `col[base[at + q] + off + i]`, for lanes spread over the column.
+    /// `col[base[at + q] + off + i]`, for lanes spread over the column and for lanes that share
+    /// their bases four by four (read either way).
     #[test]
     fn every_instance_reads_every_lanes_row() {
         let col: [Real; 1000] = core::array::from_fn(|i| i as Real * 0.5 - 7.0);
@@ -320,17 +425,18 @@ mod tests {
         }
         let off = 3;
         assert!(fit(&base, off, col.len()));
-        check::<super::super::isa::Baseline>(&col, &base, off);
-        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
-        {
-            use crate::simd::{Instance, Simd};
-            if Simd::Detect.instance() >= Instance::Avx2 {
-                check::<super::super::isa::Avx2>(&col, &base, off);
-            }
-            if Simd::Detect.instance() == Instance::Avx512 {
-                check::<super::super::isa::Avx512>(&col, &base, off);
-            }
+        assert!(!blocks_share(&base));
+        check_all(&col, &base, off);
+        // Lanes sharing their bases four by four, as a stencil-bin fill gives.
+        let mut shared = [0u32; W];
+        for (ln, b) in shared.iter_mut().enumerate() {
+            *b = ((ln / 4 * 211) % 990) as u32;
         }
+        assert!(blocks_share(&shared));
+        check_all(&col, &shared, off);
+        // One lane off its block's base: not shared.
+        shared[6] += 1;
+        assert!(!blocks_share(&shared));
         // A row that would end past the column does not fit.
         base[5] = 997;
         assert!(!fit(&base, off, col.len()));

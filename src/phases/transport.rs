@@ -230,7 +230,7 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
     len: usize,
 ) -> Lanes {
     let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-    stencils::<D, K, S, false>(st, shape, ctx, p, start, &x);
+    stencils::<D, K, S, false, true>(st, shape, ctx, p, start, &x);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }

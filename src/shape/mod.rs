@@ -321,8 +321,10 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units) whose
     /// domains are stretched by `stretch[axis][lane]` (read only by a family that
     /// [`Shape1D::STRETCHES`]); with `AFFINE`, also their first moments and `D_p^-1` (APIC).
+    /// With `LANES`, also each lane's x factors for the row code ([`Stencils::lane`], which the
+    /// scatters read); the lane-major gathers read only the lane-fastest arrays.
     #[inline(always)]
-    pub fn compute<S: Shape1D<K>, const AFFINE: bool>(
+    pub fn compute<S: Shape1D<K>, const AFFINE: bool, const LANES: bool>(
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
@@ -389,6 +391,9 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                     inv_d[a][ln] = moment_inverse(d2, h);
                 }
             }
+        }
+        if !LANES {
+            return;
         }
         for l0 in (0..W).step_by(4) {
             let tw = transpose4(&w[0], l0);
