@@ -15,6 +15,9 @@ pub struct State {
 
 pub struct Kernel {
     storage: HeapBuffer,
+    /// The lattice index (x fastest, the prototypes' order) of each kernel particle: the
+    /// kernel's fill writes them in stencil-bin order.
+    lattice: Vec<usize>,
 }
 
 impl Kernel {
@@ -56,24 +59,43 @@ impl Kernel {
         world
             .fill_box(lo, hi, mat, Vec3::new(0.0, -0.1, 0.0))
             .unwrap();
-        Kernel { storage }
+        // Each particle's lattice site from its position (sites at (k + 1/2) spacing).
+        let p = world.particles();
+        let site = |x: f32, first: usize| ((x / spacing - 0.5).round() as usize) - first * PPC;
+        let lattice = (0..p.count)
+            .map(|i| {
+                let kx = site(p.position[0][i], FIRST[0]);
+                let ky = site(p.position[1][i], FIRST[1]);
+                ky * BLOCK[0] * PPC + kx
+            })
+            .collect();
+        Kernel { storage, lattice }
     }
 
     pub fn world(&mut self) -> World<'_> {
         World::open(self.storage.as_mut_bytes()).unwrap()
     }
 
+    /// The kernel's state in the prototypes' particle order.
     pub fn state(&mut self) -> State {
+        let lattice = self.lattice.clone();
         let w = self.world();
         let p = w.particles();
+        let order = |c: &[f32]| {
+            let mut o = vec![0.0f32; c.len()];
+            for (i, &v) in c.iter().enumerate() {
+                o[lattice[i]] = v;
+            }
+            o
+        };
         State {
-            x: [p.position[0].to_vec(), p.position[1].to_vec()],
-            v: [p.velocity[0].to_vec(), p.velocity[1].to_vec()],
+            x: [order(p.position[0]), order(p.position[1])],
+            v: [order(p.velocity[0]), order(p.velocity[1])],
             tau: [
-                p.stress[0].to_vec(),
-                p.stress[1].to_vec(),
-                p.stress[2].to_vec(),
-                p.stress[3].to_vec(),
+                order(p.stress[0]),
+                order(p.stress[1]),
+                order(p.stress[2]),
+                order(p.stress[3]),
             ],
         }
     }
