@@ -200,14 +200,14 @@ fn gather_chunk<
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
                     if VEL || GRAD == grad::UPDATED {
                         unsafe {
-                            nv = rows::read::<I, K>(g.vel[a], base, at, off, shared);
-                            na = rows::read::<I, K>(g.acc[a], base, at, off, shared);
+                            nv = rows::read::<I>(g.vel[a], base, at, off, shared);
+                            na = rows::read::<I>(g.acc[a], base, at, off, shared);
                         }
                     }
                     // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
                     // or the re-mapped one (USF, MUSL).
                     if GRAD == grad::REMAP {
-                        nu = unsafe { rows::read::<I, K>(g.remap[a], base, at, off, shared) };
+                        nu = unsafe { rows::read::<I>(g.remap[a], base, at, off, shared) };
                     } else if GRAD == grad::UPDATED || moments {
                         for i in 0..K {
                             nu[i] = add(nv[i], mul(na[i], dt));

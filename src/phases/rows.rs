@@ -46,18 +46,14 @@ pub(crate) trait Rows {
 
     fn mul(a: Self::V, b: Self::V) -> Self::V;
 
-    /// The nodes `i < K` of a stencil row of lanes `at..at + N`: lane `q` of result `i` is
-    /// `col[base[at + q] + off + i]` (results `i >= K` unspecified).
+    /// The [`ROW`] nodes of a stencil row of lanes `at..at + N` (those past the stencil's own
+    /// nodes are read and left for the caller to ignore): lane `q` of result `i` is
+    /// `col[base[at + q] + off + i]`.
     ///
     /// # Safety
     /// As for [`Rows::splat`], and `base[ln] + off + ROW <= col.len()` for every lane `ln` of
     /// the chunk (see [`fit`]).
-    unsafe fn rows<const K: usize>(
-        col: &[Real],
-        base: &[u32; W],
-        at: usize,
-        off: usize,
-    ) -> [Self::V; ROW];
+    unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW];
 
     /// [`Rows::rows`] for a chunk whose lanes share their first node four by four (see
     /// [`blocks_share`]): the row of the first lane of each four, its nodes spread over the
@@ -66,12 +62,7 @@ pub(crate) trait Rows {
     ///
     /// # Safety
     /// As for [`Rows::rows`].
-    unsafe fn rows_shared<const K: usize>(
-        col: &[Real],
-        base: &[u32; W],
-        at: usize,
-        off: usize,
-    ) -> [Self::V; ROW];
+    unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW];
 }
 
 /// Whether the lanes of a chunk share their stencil's first node four by four (lanes `4 c` to
@@ -92,7 +83,7 @@ pub(crate) fn blocks_share(base: &[u32; W]) -> bool {
 /// # Safety
 /// As for [`Rows::rows`].
 #[inline(always)]
-pub(crate) unsafe fn read<I: Rows, const K: usize>(
+pub(crate) unsafe fn read<I: Rows>(
     col: &[Real],
     base: &[u32; W],
     at: usize,
@@ -102,9 +93,9 @@ pub(crate) unsafe fn read<I: Rows, const K: usize>(
     // SAFETY: as required of the caller.
     unsafe {
         if shared {
-            I::rows_shared::<K>(col, base, at, off)
+            I::rows_shared(col, base, at, off)
         } else {
-            I::rows::<K>(col, base, at, off)
+            I::rows(col, base, at, off)
         }
     }
 }
@@ -154,12 +145,7 @@ macro_rules! by_four {
         }
 
         #[inline(always)]
-        unsafe fn rows<const K: usize>(
-            col: &[Real],
-            base: &[u32; W],
-            at: usize,
-            off: usize,
-        ) -> [Row4; ROW] {
+        unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Row4; ROW] {
             let b = &base[at..at + 4];
             // SAFETY: the caller guarantees that every lane's row is inside `col`.
             let rows = unsafe {
@@ -174,12 +160,7 @@ macro_rules! by_four {
         }
 
         #[inline(always)]
-        unsafe fn rows_shared<const K: usize>(
-            col: &[Real],
-            base: &[u32; W],
-            at: usize,
-            off: usize,
-        ) -> [Row4; ROW] {
+        unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Row4; ROW] {
             // SAFETY: the caller guarantees that every lane's row is inside `col`.
             let r = unsafe { crate::grid::load_row(col, base[at] as usize + off) };
             [
@@ -301,12 +282,7 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn rows<const K: usize>(
-                    col: &[f32],
-                    base: &[u32; W],
-                    at: usize,
-                    off: usize,
-                ) -> [$v; ROW] {
+                unsafe fn rows(col: &[f32], base: &[u32; W], at: usize, off: usize) -> [$v; ROW] {
                     let (b, p) = (&base[at..at + $n], col.as_ptr());
                     // SAFETY: the caller guarantees that every lane's row is inside `col`, and
                     // that the CPU supports the instance.
@@ -332,7 +308,7 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn rows_shared<const K: usize>(
+                unsafe fn rows_shared(
                     col: &[f32],
                     base: &[u32; W],
                     at: usize,
@@ -384,7 +360,7 @@ mod tests {
                 continue;
             }
             for at in (0..W).step_by(I::N) {
-                let nodes = unsafe { read::<I, 4>(col, base, at, off, shared) };
+                let nodes = unsafe { read::<I>(col, base, at, off, shared) };
                 for (i, &node) in nodes.iter().enumerate() {
                     let mut lanes = [0.0; W];
                     I::store(node, &mut lanes, at);

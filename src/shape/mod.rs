@@ -171,12 +171,10 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     t: [[Real; W]; ROW],
 }
 
-/// One particle's first node and x factors in a [`Stencils`], with the fields of [`Stencil`]
+/// One particle's x factors in a [`Stencils`], with the fields of [`Stencil`]
 /// of the same names (`w`, `dw`, `e` of the first axis).
 #[derive(Clone, Copy, Debug)]
 pub struct XFactors<const D: usize> {
-    /// First node's flat index (below 2^30: see `compute`).
-    base: u32,
     w: Row4,
     dw: Row4,
     e: Row4,
@@ -197,7 +195,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
     /// [`Stencil::base`].
     #[inline(always)]
     pub fn base(&self) -> usize {
-        self.x.base as usize
+        self.all.base[self.ln] as usize
     }
 
     /// The x weights, `w[0]` of [`Stencil::w`].
@@ -257,7 +255,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
             (0.0, 0.0)
         };
         (
-            row_start(self.x.base as usize, j, k, stride),
+            row_start(self.base(), j, k, stride),
             row_factors(self.w(1, j), self.dw(1, j), wz, dwz),
         )
     }
@@ -265,7 +263,7 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
     /// Flat index of the first node of row `j` along y, layer `k` along z.
     #[inline(always)]
     pub fn row_start(&self, j: usize, k: usize, stride: [usize; D]) -> usize {
-        row_start(self.x.base as usize, j, k, stride)
+        row_start(self.base(), j, k, stride)
     }
 }
 
@@ -301,7 +299,6 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
         const { assert!(W.is_multiple_of(4) && K <= ROW) };
         Stencils {
             lanes: [XFactors {
-                base: 0,
                 w: Row4::ZERO,
                 dw: Row4::ZERO,
                 e: Row4::ZERO,
@@ -416,9 +413,6 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 for i in 0..4 {
                     self.lanes[l0 + i].t = tt[i];
                 }
-            }
-            for i in 0..4 {
-                self.lanes[l0 + i].base = base[l0 + i];
             }
         }
     }
