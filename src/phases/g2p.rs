@@ -29,9 +29,9 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, load, load_into, Block, Lane, Lanes, Mask4, W};
+use super::lanes::{commit, load, load_into, Block, Lane, Lanes, W};
 use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
-use super::rows::{self, Rows};
+use super::rows::{self, Compare, Rows};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
 use crate::grid::GridCols;
@@ -41,7 +41,7 @@ use crate::material::{
 };
 use crate::math::INV;
 use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
-use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
+use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
 /// A D x D matrix per lane, `m[a][b][lane]`.
@@ -351,7 +351,7 @@ impl<const D: usize> StressScratch<D> {
 /// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
 /// keeps its H and stress.
 #[inline(always)]
-fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
+fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     start: usize,
@@ -459,7 +459,9 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
     let mut uniform = None;
     if let Some(l0) = update.first() {
         let id = ids[l0];
-        let same = update.minus(Lanes::from_fn(|ln| ids[ln] == id)).is_empty();
+        // Compared four lanes at a time (`Lanes::equal`, exact: ids are below the material
+        // capacity, at most 2^16; one lane at a time it held 6 % of the stress pass's samples).
+        let same = update.minus(Lanes::equal(&ids, id)).is_empty();
         if let Some(r) = ctx.materials.get(id as usize) {
             if same && model_of(r) == MaterialModel::NeoHookean {
                 uniform = Some(r);
@@ -494,7 +496,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                     (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
                 }
                 // The eigenstrain must not invert the material either.
-                admissible = Lanes::above(d, -1.0);
+                admissible = rows::above::<I>(d, -1.0);
                 neo_hookean_lanes(&params, &he, &hzze, &jm1e, tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
@@ -503,7 +505,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
                 }
             }
         }
-        ok = admissible & update & Lanes::above(&jm1, -1.0);
+        ok = admissible & update & rows::above::<I>(&jm1, -1.0);
     } else {
         for ln in 0..W {
             // NaN-safe: a NaN jm1 is not > -1.
@@ -552,7 +554,7 @@ fn update_stress<const D: usize, const K: usize, S: Shape1D<K>>(
             }
         }
     }
-    let ok = ok & Lanes::finite(&sum);
+    let ok = ok & rows::finite::<I>(&sum);
     for r in 0..D {
         for c in 0..D {
             commit(p.h[r][c], start, &h[r][c], ok);
@@ -605,7 +607,7 @@ fn eigenstrain<const D: usize>(
 /// replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
-    I: Rows,
+    I: Compare,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -676,78 +678,102 @@ pub(crate) fn particles<
         };
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
-        // faces as selects: written on 4-wide vectors (the auto-vectoriser left the selects
-        // scalar, 13 instructions per lane and axis).
+        // faces as selects, on as many lanes at once as the instance's vectors hold (the
+        // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
-        for q in (0..W).step_by(4) {
-            let row = |c: &Lane| Row4::from_slice(&c[q..q + 4]);
-            let mut sum = Row4::ZERO;
-            let mut vn: [Row4; D] = [Row4::ZERO; D];
-            let mut xn: [Row4; D] = [Row4::ZERO; D];
+        // SAFETY: this instance runs only on a CPU that supports it.
+        let (zero, dt_v, half, half_dt2, pic_v, none) = unsafe {
+            (
+                I::splat(0.0),
+                I::splat(dt),
+                I::splat(0.5),
+                I::splat(0.5 * dt * dt),
+                I::splat(pic),
+                I::splat_mask(false),
+            )
+        };
+        for q in (0..W).step_by(I::N) {
+            // SAFETY: as above.
+            let ld = |c: &Lane| unsafe { I::load(c, q) };
+            let mut sum = zero;
+            let mut vn = [zero; D];
+            let mut xn = [zero; D];
             for a in 0..D {
-                let (vg, ag, vp) = (row(&v_gp[a]), row(&a_gp[a]), row(&v[a]));
+                let (vg, ag, vp) = (ld(&v_gp[a]), ld(&a_gp[a]), ld(&v[a]));
                 // Damping acceleration (eqs 47, 107); zero and skipped unless declared.
                 let damp = if DAMP {
-                    vg * row(&alpha_g) + vp * row(&alpha_p)
+                    I::add(I::mul(vg, ld(&alpha_g)), I::mul(vp, ld(&alpha_p)))
                 } else {
-                    Row4::ZERO
+                    zero
                 };
                 if APIC {
-                    vn[a] = vg + ag * dt;
+                    vn[a] = I::add(vg, I::mul(ag, dt_v));
                     if DAMP {
-                        vn[a] -= damp * dt;
+                        vn[a] = I::sub(vn[a], I::mul(damp, dt_v));
                     }
-                    xn[a] = row(&x[a]) + vn[a] * dt;
+                    xn[a] = I::add(ld(&x[a]), I::mul(vn[a], dt_v));
                 } else {
-                    let inversion = (vp - vg) * pic;
-                    vn[a] = vp + ag * dt - inversion;
-                    xn[a] = row(&x[a]) + (vg + ag * 0.5 * dt - inversion * 0.5) * dt;
+                    let inversion = I::mul(I::sub(vp, vg), pic_v);
+                    vn[a] = I::sub(I::add(vp, I::mul(ag, dt_v)), inversion);
+                    let drift = I::sub(
+                        I::add(vg, I::mul(I::mul(ag, half), dt_v)),
+                        I::mul(inversion, half),
+                    );
+                    xn[a] = I::add(ld(&x[a]), I::mul(drift, dt_v));
                     if DAMP {
-                        vn[a] -= damp * dt;
-                        xn[a] -= damp * (0.5 * dt * dt);
+                        vn[a] = I::sub(vn[a], I::mul(damp, dt_v));
+                        xn[a] = I::sub(xn[a], I::mul(damp, half_dt2));
                     }
                 }
-                sum += vn[a] + xn[a];
+                sum = I::add(sum, I::add(vn[a], xn[a]));
             }
             if APIC {
                 for r in 0..D {
                     for c in 0..D {
-                        sum += row(&affine[r][c]);
+                        sum = I::add(sum, ld(&affine[r][c]));
                     }
                 }
             }
-            finite = finite | Lanes::group(q, sum.is_finite_mask());
-            let (mut open_any, mut wall_any) = (Mask4::splat(false), Mask4::splat(false));
+            finite = finite | Lanes::at(q, I::bits(I::finite(sum)));
+            let (mut open_any, mut wall_any) = (none, none);
             for a in 0..D {
                 let [lo_bc, hi_bc] = geom.faces[a];
-                let (lo_x, hi_x) = (
-                    geom.origin[a] + geom.lo[a] * geom.h,
-                    geom.origin[a] + geom.hi[a] * geom.h,
+                // SAFETY: as above.
+                let (origin, inv_h, lo, hi, lo_x, hi_x) = unsafe {
+                    (
+                        I::splat(geom.origin[a]),
+                        I::splat(geom.inv_h),
+                        I::splat(geom.lo[a]),
+                        I::splat(geom.hi[a]),
+                        I::splat(geom.origin[a] + geom.lo[a] * geom.h),
+                        I::splat(geom.origin[a] + geom.hi[a] * geom.h),
+                    )
+                };
+                let s = I::mul(I::sub(xn[a], origin), inv_h);
+                let below = I::lt(s, lo);
+                let above = I::gt(s, hi);
+                xn[a] = I::select(below, lo_x, I::select(above, hi_x, xn[a]));
+                let open = I::or(
+                    if lo_bc == Boundary::Open { below } else { none },
+                    if hi_bc == Boundary::Open { above } else { none },
                 );
-                let s = (xn[a] - geom.origin[a]) * geom.inv_h;
-                let below = s.cmplt(Row4::splat(geom.lo[a]));
-                let above = s.cmpgt(Row4::splat(geom.hi[a]));
-                xn[a] = Row4::select(
-                    below,
-                    Row4::splat(lo_x),
-                    Row4::select(above, Row4::splat(hi_x), xn[a]),
+                let wall = I::and_not(I::or(below, above), open);
+                let outward = I::or(
+                    I::and(below, I::lt(vn[a], zero)),
+                    I::and(above, I::gt(vn[a], zero)),
                 );
-                let open = (below & Mask4::splat(lo_bc == Boundary::Open))
-                    | (above & Mask4::splat(hi_bc == Boundary::Open));
-                let wall = (below | above) & !open;
-                let outward = (below & vn[a].cmplt(Row4::ZERO)) | (above & vn[a].cmpgt(Row4::ZERO));
-                vn[a] = Row4::select(wall & outward, Row4::ZERO, vn[a]);
-                open_any |= open;
-                wall_any |= wall;
-                x_new[a][q..q + 4].copy_from_slice(&xn[a].to_array());
-                v_new[a][q..q + 4].copy_from_slice(&vn[a].to_array());
+                vn[a] = I::select(I::and(wall, outward), zero, vn[a]);
+                open_any = I::or(open_any, open);
+                wall_any = I::or(wall_any, wall);
+                I::store(xn[a], &mut x_new[a], q);
+                I::store(vn[a], &mut v_new[a], q);
             }
-            escaped = escaped | Lanes::group(q, open_any);
-            stopped = stopped | Lanes::group(q, wall_any);
+            escaped = escaped | Lanes::at(q, I::bits(open_any));
+            stopped = stopped | Lanes::at(q, I::bits(wall_any));
         }
         let moved = live & finite;
         let ok = if FUSED_STRESS {
-            update_stress::<D, K, S>(ctx, p, start, moved, &gathered, &mut scratch)
+            update_stress::<I, D, K, S>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             moved
         };
@@ -827,7 +853,7 @@ pub(crate) fn particles<
 /// the step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
 pub(crate) fn stress<
-    I: Rows,
+    I: Compare,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -868,7 +894,7 @@ pub(crate) fn stress<
             &mut unused_affine,
             &mut gathered,
         );
-        let ok = update_stress::<D, K, S>(ctx, p, start, live, &gathered, &mut scratch);
+        let ok = update_stress::<I, D, K, S>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
         }

@@ -50,26 +50,11 @@ impl Lanes {
         Lanes((mask.bitmask() << q) & Lanes::ALL.0)
     }
 
-    /// The lanes whose value is above `bound` (compares on vectors, four lanes at a time; no
-    /// closure, which might not be inlined: see `g2p::update_stress`).
+    /// Lanes `q..q + n` from `bits`, bit `i` for lane `q + i` (a [`crate::phases::rows::Compare`]
+    /// mask's bits; `q` a multiple of the vectors' lane count `n`, below `W`).
     #[inline(always)]
-    pub fn above(values: &Lane, bound: Real) -> Lanes {
-        let mut set = Lanes::NONE;
-        for q in (0..W).step_by(4) {
-            let row = Row4::from_slice(&values[q..q + 4]);
-            set = set | Lanes::group(q, row.cmpgt(Row4::splat(bound)));
-        }
-        set
-    }
-
-    /// The lanes whose value is finite.
-    #[inline(always)]
-    pub fn finite(values: &Lane) -> Lanes {
-        let mut set = Lanes::NONE;
-        for q in (0..W).step_by(4) {
-            set = set | Lanes::group(q, Row4::from_slice(&values[q..q + 4]).is_finite_mask());
-        }
-        set
+    pub fn at(q: usize, bits: u32) -> Lanes {
+        Lanes((bits << q) & Lanes::ALL.0)
     }
 
     /// The lanes whose value equals `v`, for a `v` below 2^24 (statuses): compared as reals,

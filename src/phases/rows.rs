@@ -11,7 +11,7 @@
 //! implementation computes the same operations on the same values in the same order, so
 //! results do not depend on it.
 
-use super::lanes::W;
+use super::lanes::{Lanes, Mask4, W};
 use crate::shape::{Row4, ROW};
 use crate::Real;
 
@@ -63,6 +63,70 @@ pub(crate) trait Rows {
     /// # Safety
     /// As for [`Rows::rows`].
     unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW];
+}
+
+/// Comparisons and selects on an instance's vectors, for the particle update's walls and
+/// checks (`g2p::particles`), which run on as many lanes at once as the instance's vectors
+/// hold. A comparison is false where either value is NaN, in every instance.
+pub(crate) trait Compare: Rows {
+    /// One truth value per lane of a [`Rows::V`].
+    type M: Copy;
+
+    fn sub(a: Self::V, b: Self::V) -> Self::V;
+
+    /// `a < b` per lane.
+    fn lt(a: Self::V, b: Self::V) -> Self::M;
+
+    /// `a > b` per lane.
+    fn gt(a: Self::V, b: Self::V) -> Self::M;
+
+    /// Whether each lane of `v` is finite.
+    fn finite(v: Self::V) -> Self::M;
+
+    /// `a` where `m` holds, else `b`.
+    fn select(m: Self::M, a: Self::V, b: Self::V) -> Self::V;
+
+    fn and(a: Self::M, b: Self::M) -> Self::M;
+
+    fn or(a: Self::M, b: Self::M) -> Self::M;
+
+    /// `a` and not `b`.
+    fn and_not(a: Self::M, b: Self::M) -> Self::M;
+
+    /// Every lane `b`.
+    ///
+    /// # Safety
+    /// As for [`Rows::splat`].
+    unsafe fn splat_mask(b: bool) -> Self::M;
+
+    /// Bit `q` set where lane `q` holds.
+    fn bits(m: Self::M) -> u32;
+}
+
+/// The lanes of a chunk whose value is above `bound`, [`Rows::N`] lanes per compare.
+#[inline(always)]
+pub(crate) fn above<I: Compare>(values: &[Real; W], bound: Real) -> Lanes {
+    let mut set = Lanes::NONE;
+    // SAFETY: this instance runs only on a CPU that supports it.
+    let b = unsafe { I::splat(bound) };
+    for q in (0..W).step_by(I::N) {
+        // SAFETY: as above.
+        let v = unsafe { I::load(values, q) };
+        set = set | Lanes::at(q, I::bits(I::gt(v, b)));
+    }
+    set
+}
+
+/// The lanes of a chunk whose value is finite, [`Rows::N`] lanes per test.
+#[inline(always)]
+pub(crate) fn finite<I: Compare>(values: &[Real; W]) -> Lanes {
+    let mut set = Lanes::NONE;
+    for q in (0..W).step_by(I::N) {
+        // SAFETY: this instance runs only on a CPU that supports it.
+        let v = unsafe { I::load(values, q) };
+        set = set | Lanes::at(q, I::bits(I::finite(v)));
+    }
+    set
 }
 
 /// Whether the lanes of a chunk share their stencil's first node four by four (lanes `4 c` to
@@ -185,6 +249,78 @@ impl Rows for super::isa::Avx2 {
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
 impl Rows for super::isa::Avx512 {
     by_four!();
+}
+
+/// [`Compare`] on glam's [`Row4`] and its masks: the baseline instance, and every instance in
+/// f64.
+macro_rules! by_four_compare {
+    () => {
+        type M = Mask4;
+
+        #[inline(always)]
+        fn sub(a: Row4, b: Row4) -> Row4 {
+            a - b
+        }
+
+        #[inline(always)]
+        fn lt(a: Row4, b: Row4) -> Mask4 {
+            a.cmplt(b)
+        }
+
+        #[inline(always)]
+        fn gt(a: Row4, b: Row4) -> Mask4 {
+            a.cmpgt(b)
+        }
+
+        #[inline(always)]
+        fn finite(v: Row4) -> Mask4 {
+            v.is_finite_mask()
+        }
+
+        #[inline(always)]
+        fn select(m: Mask4, a: Row4, b: Row4) -> Row4 {
+            Row4::select(m, a, b)
+        }
+
+        #[inline(always)]
+        fn and(a: Mask4, b: Mask4) -> Mask4 {
+            a & b
+        }
+
+        #[inline(always)]
+        fn or(a: Mask4, b: Mask4) -> Mask4 {
+            a | b
+        }
+
+        #[inline(always)]
+        fn and_not(a: Mask4, b: Mask4) -> Mask4 {
+            a & !b
+        }
+
+        #[inline(always)]
+        unsafe fn splat_mask(b: bool) -> Mask4 {
+            Mask4::splat(b)
+        }
+
+        #[inline(always)]
+        fn bits(m: Mask4) -> u32 {
+            m.bitmask()
+        }
+    };
+}
+
+impl Compare for super::isa::Baseline {
+    by_four_compare!();
+}
+
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
+impl Compare for super::isa::Avx2 {
+    by_four_compare!();
+}
+
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
+impl Compare for super::isa::Avx512 {
+    by_four_compare!();
 }
 
 /// The f32 instances with 256-bit and 512-bit registers.
@@ -346,6 +482,147 @@ mod x86 {
         _mm512_unpacklo_ps, _mm512_unpackhi_ps, _mm512_unpacklo_pd, _mm512_unpackhi_pd,
         _mm512_castps_pd, _mm512_castpd_ps, _mm512_permute_ps
     );
+
+    /// Eight lanes' truth values: all bits set or clear per lane of a 256-bit register (the
+    /// compare results of [`Avx2`]).
+    #[derive(Clone, Copy)]
+    pub(crate) struct YM(__m256);
+
+    /// Sixteen lanes' truth values in an AVX-512 mask register.
+    #[derive(Clone, Copy)]
+    pub(crate) struct ZM(__mmask16);
+
+    impl Compare for Avx2 {
+        type M = YM;
+
+        #[inline(always)]
+        fn sub(a: Y, b: Y) -> Y {
+            // SAFETY: a vector of this instance exists only where the CPU supports it.
+            Y(unsafe { _mm256_sub_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn lt(a: Y, b: Y) -> YM {
+            // SAFETY: as for sub.
+            YM(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn gt(a: Y, b: Y) -> YM {
+            // SAFETY: as for sub.
+            YM(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn finite(v: Y) -> YM {
+            // SAFETY: as for sub.
+            unsafe {
+                let abs = _mm256_andnot_ps(_mm256_set1_ps(-0.0), v.0);
+                YM(_mm256_cmp_ps::<_CMP_LT_OQ>(
+                    abs,
+                    _mm256_set1_ps(f32::INFINITY),
+                ))
+            }
+        }
+
+        #[inline(always)]
+        fn select(m: YM, a: Y, b: Y) -> Y {
+            // SAFETY: as for sub (a mask of this instance exists only where a vector does).
+            Y(unsafe { _mm256_blendv_ps(b.0, a.0, m.0) })
+        }
+
+        #[inline(always)]
+        fn and(a: YM, b: YM) -> YM {
+            // SAFETY: as for select.
+            YM(unsafe { _mm256_and_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn or(a: YM, b: YM) -> YM {
+            // SAFETY: as for select.
+            YM(unsafe { _mm256_or_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn and_not(a: YM, b: YM) -> YM {
+            // SAFETY: as for select.
+            YM(unsafe { _mm256_andnot_ps(b.0, a.0) })
+        }
+
+        #[inline(always)]
+        unsafe fn splat_mask(b: bool) -> YM {
+            // SAFETY: the caller runs this instance only on a CPU that supports it.
+            YM(unsafe { _mm256_castsi256_ps(_mm256_set1_epi32(-(b as i32))) })
+        }
+
+        #[inline(always)]
+        fn bits(m: YM) -> u32 {
+            // SAFETY: as for select.
+            unsafe { _mm256_movemask_ps(m.0) as u32 }
+        }
+    }
+
+    impl Compare for Avx512 {
+        type M = ZM;
+
+        #[inline(always)]
+        fn sub(a: Z, b: Z) -> Z {
+            // SAFETY: a vector of this instance exists only where the CPU supports it.
+            Z(unsafe { _mm512_sub_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn lt(a: Z, b: Z) -> ZM {
+            // SAFETY: as for sub.
+            ZM(unsafe { _mm512_cmp_ps_mask::<_CMP_LT_OQ>(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn gt(a: Z, b: Z) -> ZM {
+            // SAFETY: as for sub.
+            ZM(unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn finite(v: Z) -> ZM {
+            // SAFETY: as for sub.
+            unsafe {
+                let inf = _mm512_set1_ps(f32::INFINITY);
+                ZM(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(_mm512_abs_ps(v.0), inf))
+            }
+        }
+
+        #[inline(always)]
+        fn select(m: ZM, a: Z, b: Z) -> Z {
+            // SAFETY: as for sub (a mask of this instance exists only where a vector does).
+            Z(unsafe { _mm512_mask_blend_ps(m.0, b.0, a.0) })
+        }
+
+        #[inline(always)]
+        fn and(a: ZM, b: ZM) -> ZM {
+            ZM(a.0 & b.0)
+        }
+
+        #[inline(always)]
+        fn or(a: ZM, b: ZM) -> ZM {
+            ZM(a.0 | b.0)
+        }
+
+        #[inline(always)]
+        fn and_not(a: ZM, b: ZM) -> ZM {
+            ZM(a.0 & !b.0)
+        }
+
+        #[inline(always)]
+        unsafe fn splat_mask(b: bool) -> ZM {
+            ZM(if b { 0xFFFF } else { 0 })
+        }
+
+        #[inline(always)]
+        fn bits(m: ZM) -> u32 {
+            m.0 as u32
+        }
+    }
 }
 
 #[cfg(test)]
@@ -385,6 +662,94 @@ mod tests {
             }
             if Simd::Detect.instance() == Instance::Avx512 {
                 check::<super::super::isa::Avx512>(col, base, off);
+            }
+        }
+    }
+
+    /// Checks `I`'s compares, selects and mask operations lane by lane against the scalar
+    /// definitions, over values that include zeros of both signs, infinities, NaN and the
+    /// largest finite values, and [`above`] and [`finite`] over whole chunks.
+    fn check_compare<I: Compare>() {
+        let special = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            Real::INFINITY,
+            Real::NEG_INFINITY,
+            Real::NAN,
+            Real::MAX,
+            -Real::MAX,
+            Real::MIN_POSITIVE,
+            3.0,
+            -2.5,
+            1.0e-30,
+            -1.0e30,
+            2.0,
+        ];
+        let mut a = [0.0; W];
+        let mut b = [0.0; W];
+        for ln in 0..W {
+            a[ln] = special[ln % special.len()];
+            b[ln] = special[(ln * 7 + 3) % special.len()];
+        }
+        for at in (0..W).step_by(I::N) {
+            // SAFETY: `check_all` runs only the instances the CPU supports.
+            let (va, vb, on, off) = unsafe {
+                (
+                    I::load(&a, at),
+                    I::load(&b, at),
+                    I::splat_mask(true),
+                    I::splat_mask(false),
+                )
+            };
+            let lt = I::bits(I::lt(va, vb));
+            let gt = I::bits(I::gt(va, vb));
+            let fin = I::bits(I::finite(va));
+            let mut picked = [0.0; W];
+            I::store(I::select(I::lt(va, vb), va, vb), &mut picked, at);
+            let mut diff = [0.0; W];
+            I::store(I::sub(va, vb), &mut diff, at);
+            for q in 0..I::N {
+                let (x, y) = (a[at + q], b[at + q]);
+                assert_eq!(lt >> q & 1 == 1, x < y, "lt lane {q}: {x} {y}");
+                assert_eq!(gt >> q & 1 == 1, x > y, "gt lane {q}: {x} {y}");
+                assert_eq!(fin >> q & 1 == 1, x.is_finite(), "finite lane {q}: {x}");
+                let min = if x < y { x } else { y };
+                assert_eq!(picked[at + q].to_bits(), min.to_bits(), "select lane {q}");
+                assert_eq!(diff[at + q].to_bits(), (x - y).to_bits(), "sub lane {q}");
+            }
+            let full = if I::N == 32 {
+                u32::MAX
+            } else {
+                (1u32 << I::N) - 1
+            };
+            assert_eq!(I::bits(on), full);
+            assert_eq!(I::bits(off), 0);
+            let (l, g) = (I::lt(va, vb), I::gt(va, vb));
+            assert_eq!(I::bits(I::and(l, g)), lt & gt);
+            assert_eq!(I::bits(I::or(l, g)), lt | gt);
+            assert_eq!(I::bits(I::and_not(l, g)), lt & !gt);
+        }
+        let expect_above = Lanes::from_fn(|ln| a[ln] > 0.5);
+        assert_eq!(above::<I>(&a, 0.5), expect_above);
+        assert_eq!(finite::<I>(&a), Lanes::from_fn(|ln| a[ln].is_finite()));
+    }
+
+    /// Every instance the CPU supports compares, selects and combines masks as the scalar
+    /// operations do, NaN and infinities included.
+    #[test]
+    fn every_instance_compares_as_scalars_do() {
+        check_compare::<super::super::isa::Baseline>();
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+        {
+            use crate::simd::{Instance, Simd};
+            if Simd::Detect.instance() >= Instance::Avx2 {
+                check_compare::<super::super::isa::Avx2>();
+            }
+            if Simd::Detect.instance() == Instance::Avx512 {
+                check_compare::<super::super::isa::Avx512>();
             }
         }
     }
