@@ -247,7 +247,7 @@ fn scene(dim: u32) -> ([u32; 3], [u32; 3], [u32; 3]) {
     }
 }
 
-fn main() {
+pub fn main() {
     let o = parse_options();
     let axes = o.dim as usize;
     let (grid, first, block) = scene(o.dim);
