@@ -642,6 +642,32 @@ pub(crate) fn particles<
     // `commit_gradient_affine`).
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut scratch = StressScratch::new();
+    // The constants of the update and the walls, made once per pass. SAFETY: this instance
+    // runs only on a CPU that supports it.
+    let (zero, dt_v, half, half_dt2, pic_v, inv_h, none) = unsafe {
+        (
+            I::splat(0.0),
+            I::splat(dt),
+            I::splat(0.5),
+            I::splat(0.5 * dt * dt),
+            I::splat(pic),
+            I::splat(geom.inv_h),
+            I::splat_mask(false),
+        )
+    };
+    // Per axis: the origin, the admissible range in cells and its ends in metres.
+    let walls: [_; D] = core::array::from_fn(|a| {
+        // SAFETY: as above.
+        unsafe {
+            (
+                I::splat(geom.origin[a]),
+                I::splat(geom.lo[a]),
+                I::splat(geom.hi[a]),
+                I::splat(geom.origin[a] + geom.lo[a] * geom.h),
+                I::splat(geom.origin[a] + geom.hi[a] * geom.h),
+            )
+        }
+    });
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         for a in 0..D {
@@ -681,19 +707,8 @@ pub(crate) fn particles<
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
-        // SAFETY: this instance runs only on a CPU that supports it.
-        let (zero, dt_v, half, half_dt2, pic_v, none) = unsafe {
-            (
-                I::splat(0.0),
-                I::splat(dt),
-                I::splat(0.5),
-                I::splat(0.5 * dt * dt),
-                I::splat(pic),
-                I::splat_mask(false),
-            )
-        };
         for q in (0..W).step_by(I::N) {
-            // SAFETY: as above.
+            // SAFETY: this instance runs only on a CPU that supports it.
             let ld = |c: &Lane| unsafe { I::load(c, q) };
             let mut sum = zero;
             let mut vn = [zero; D];
@@ -738,17 +753,7 @@ pub(crate) fn particles<
             let (mut open_any, mut wall_any) = (none, none);
             for a in 0..D {
                 let [lo_bc, hi_bc] = geom.faces[a];
-                // SAFETY: as above.
-                let (origin, inv_h, lo, hi, lo_x, hi_x) = unsafe {
-                    (
-                        I::splat(geom.origin[a]),
-                        I::splat(geom.inv_h),
-                        I::splat(geom.lo[a]),
-                        I::splat(geom.hi[a]),
-                        I::splat(geom.origin[a] + geom.lo[a] * geom.h),
-                        I::splat(geom.origin[a] + geom.hi[a] * geom.h),
-                    )
-                };
+                let (origin, lo, hi, lo_x, hi_x) = walls[a];
                 let s = I::mul(I::sub(xn[a], origin), inv_h);
                 let below = I::lt(s, lo);
                 let above = I::gt(s, hi);

@@ -47,7 +47,7 @@ impl Lanes {
     /// multiple of 4 below `W`).
     #[inline(always)]
     pub fn group(q: usize, mask: Mask4) -> Lanes {
-        Lanes((mask.bitmask() << q) & Lanes::ALL.0)
+        Lanes::at(q, mask.bitmask())
     }
 
     /// Lanes `q..q + n` from `bits`, bit `i` for lane `q + i` (a [`crate::phases::rows::Compare`]
