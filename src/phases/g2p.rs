@@ -30,7 +30,7 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::lanes::{commit, load, load_into, Block, Lane, Lanes, W};
-use super::p2g::{affine_velocity, mode, scatter_lanes, Scattered};
+use super::p2g::{mode, scatter_chunk, Products};
 use super::rows::{self, Compare, Rows};
 use super::Ctx;
 use crate::def::{Boundary, MaterialModel};
@@ -284,7 +284,7 @@ fn commit_gradient_affine<const D: usize>(
 
 /// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
 /// `x[axis][lane]` (with their first moments when `AFFINE`, and each lane's x factors when
-/// `LANES`: see [`Stencils::compute`]). A family whose domain stretches (cpGIMP) also reads the
+/// `LANES`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
 /// chunk's deformation gradients.
 #[inline(always)]
 pub(crate) fn stencils<
@@ -315,7 +315,10 @@ pub(crate) fn stencils<
             [1.0; W]
         }
     });
-    st.compute::<S, AFFINE, LANES>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
+    st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
+    if LANES {
+        st.fill_lanes::<S, AFFINE>();
+    }
 }
 
 /// The lane matrices of a stress update, kept by the pass across chunks (see
@@ -603,7 +606,7 @@ fn eigenstrain<const D: usize>(
 /// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
 /// new momenta to the remap columns with the stencils already computed (the pass reads only
 /// `vel` and `acc`, so the remap columns are free to fill; particles contribute as in the
-/// scatter pass: [`scatter_lanes`]). `DAMP` adds the damping of the module docs; `APIC`
+/// scatter pass: [`scatter_chunk`]). `DAMP` adds the damping of the module docs; `APIC`
 /// replaces FLIP by APIC.
 #[inline(always)]
 pub(crate) fn particles<
@@ -642,6 +645,9 @@ pub(crate) fn particles<
     // `commit_gradient_affine`).
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut scratch = StressScratch::new();
+    // MUSL: what the re-map scatters (it reads no stress).
+    let mut products = Products::zero();
+    let no_tau = [[0.0; W]; 6];
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
     let (zero, dt_v, half, half_dt2, pic_v, inv_h, none) = unsafe {
@@ -674,8 +680,7 @@ pub(crate) fn particles<
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        // The x factors per lane for MUSL's scatter of the new momenta.
-        stencils::<D, K, S, APIC, KEEP_START>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, APIC, false>(&mut st, shape, ctx, p, start, &x);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
         if DAMP {
@@ -818,33 +823,16 @@ pub(crate) fn particles<
         if KEEP_START {
             let active = live_lanes(p, start, count);
             load_into(&mut mass, p.mass, start);
-            // An active lane was committed: its velocity is v_new.
-            let make = |ln: usize| {
-                let mut pt = Scattered {
-                    m: mass[ln],
-                    v: core::array::from_fn(|a| v_new[a][ln]),
-                    tau: [[0.0; D]; D],
-                    hoop: 0.0,
-                    force: [0.0; D],
-                    affine: [[0.0; D]; D],
-                };
-                if APIC {
-                    // Zero for a family that keeps the gradient form: its C_p is taken from
-                    // this re-map (see `commit_gradient_affine`). Loops rather than
-                    // `core::array::from_fn`, whose closures were left out of line.
-                    for r in 0..D {
-                        for c in 0..D {
-                            pt.affine[r][c] =
-                                affine_velocity::<K, S>(affine[r][c][ln], st.lane(ln).inv_d(c));
-                        }
-                    }
-                }
-                pt
-            };
-            scatter_lanes::<D, K, S, { mode::REMAP }, false, APIC>(
-                &st,
-                |ln| active.has(ln),
-                make,
+            // An active lane was committed: its velocity is v_new. The B_p of a family that
+            // keeps the gradient form are zero here: its C_p is taken from this re-map (see
+            // `commit_gradient_affine`).
+            products.set::<K, S, { mode::REMAP }, false, APIC>(
+                &st, &mass, &v_new, &no_tau, &v_new, &affine,
+            );
+            scatter_chunk::<I, D, K, S, { mode::REMAP }, false, APIC>(
+                &mut st,
+                &products,
+                active,
                 geom.stride,
                 g,
             );

@@ -111,7 +111,7 @@ passes! {
     fn scatter
         [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8, const FORCE: bool,
             const APIC: bool]
-        [] [D, K, S, MODE, FORCE, APIC] (
+        [I] [D, K, S, MODE, FORCE, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,

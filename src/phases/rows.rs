@@ -25,6 +25,9 @@ pub(crate) trait Rows {
     const N: usize;
     /// `N` lanes of reals.
     type V: Copy;
+    /// An instance with vectors of at most 8 lanes that every CPU running this one supports
+    /// (the AVX2 one for AVX-512, else itself).
+    type Narrow: Rows;
 
     /// Every lane `x`.
     ///
@@ -46,14 +49,33 @@ pub(crate) trait Rows {
 
     fn mul(a: Self::V, b: Self::V) -> Self::V;
 
-    /// The [`ROW`] nodes of a stencil row of lanes `at..at + N` (those past the stencil's own
-    /// nodes are read and left for the caller to ignore): lane `q` of result `i` is
-    /// `col[base[at + q] + off + i]`.
+    /// The stencil rows (the [`ROW`] reals from `col[base[ln] + off]`) of lanes `ln = at + q`,
+    /// `at + q + 4`, ... in the 128-bit blocks of a vector, for `q < 4`.
     ///
     /// # Safety
     /// As for [`Rows::splat`], and `base[ln] + off + ROW <= col.len()` for every lane `ln` of
     /// the chunk (see [`fit`]).
-    unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW];
+    unsafe fn blocks(col: &[Real], base: &[u32; W], at: usize, off: usize, q: usize) -> Self::V;
+
+    /// The [`ROW`] nodes of a stencil row of lanes `at..at + N` (those past the stencil's own
+    /// nodes are read and left for the caller to ignore): lane `q` of result `i` is
+    /// `col[base[at + q] + off + i]`. The lanes' rows, four lanes to a vector's blocks, then
+    /// transposed within the blocks.
+    ///
+    /// # Safety
+    /// As for [`Rows::blocks`].
+    #[inline(always)]
+    unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW] {
+        // SAFETY: as required of the caller.
+        unsafe {
+            Self::transpose([
+                Self::blocks(col, base, at, off, 0),
+                Self::blocks(col, base, at, off, 1),
+                Self::blocks(col, base, at, off, 2),
+                Self::blocks(col, base, at, off, 3),
+            ])
+        }
+    }
 
     /// [`Rows::rows`] for a chunk whose lanes share their first node four by four (see
     /// [`blocks_share`]): the row of the first lane of each four, its nodes spread over the
@@ -61,8 +83,29 @@ pub(crate) trait Rows {
     /// lanes do share (else the first lane's values).
     ///
     /// # Safety
-    /// As for [`Rows::rows`].
-    unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW];
+    /// As for [`Rows::blocks`].
+    #[inline(always)]
+    unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW] {
+        // SAFETY: as required of the caller.
+        let z = unsafe { Self::blocks(col, base, at, off, 0) };
+        [
+            Self::spread(z, 0),
+            Self::spread(z, 1),
+            Self::spread(z, 2),
+            Self::spread(z, 3),
+        ]
+    }
+
+    /// The 4 x 4 transpose within each 128-bit block: element `q` of block `c` of result `i`
+    /// is element `i` of block `c` of `z[q]`. Turns rows of four lanes into lanes of four
+    /// rows, and back.
+    fn transpose(z: [Self::V; 4]) -> [Self::V; 4];
+
+    /// Block `c < N / 4` of `v`: lanes `4 c .. 4 c + 4`.
+    fn block(v: Self::V, c: usize) -> Row4;
+
+    /// Lane `q < 4` of each 128-bit block of `v`, spread over its block.
+    fn spread(v: Self::V, q: usize) -> Self::V;
 }
 
 /// Comparisons and selects on an instance's vectors, for the particle update's walls and
@@ -182,6 +225,7 @@ macro_rules! by_four {
     () => {
         const N: usize = 4;
         type V = Row4;
+        type Narrow = Self;
 
         #[inline(always)]
         unsafe fn splat(x: Real) -> Row4 {
@@ -209,30 +253,30 @@ macro_rules! by_four {
         }
 
         #[inline(always)]
-        unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Row4; ROW] {
-            let b = &base[at..at + 4];
+        unsafe fn blocks(col: &[Real], base: &[u32; W], at: usize, off: usize, q: usize) -> Row4 {
             // SAFETY: the caller guarantees that every lane's row is inside `col`.
-            let rows = unsafe {
-                [
-                    crate::grid::load_row(col, b[0] as usize + off),
-                    crate::grid::load_row(col, b[1] as usize + off),
-                    crate::grid::load_row(col, b[2] as usize + off),
-                    crate::grid::load_row(col, b[3] as usize + off),
-                ]
-            };
-            crate::shape::transpose4_rows(rows)
+            unsafe { crate::grid::load_row(col, base[at + q] as usize + off) }
         }
 
         #[inline(always)]
-        unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Row4; ROW] {
-            // SAFETY: the caller guarantees that every lane's row is inside `col`.
-            let r = unsafe { crate::grid::load_row(col, base[at] as usize + off) };
-            [
-                Row4::splat(r.x),
-                Row4::splat(r.y),
-                Row4::splat(r.z),
-                Row4::splat(r.w),
-            ]
+        fn transpose(z: [Row4; 4]) -> [Row4; 4] {
+            crate::shape::transpose4_rows(z)
+        }
+
+        #[inline(always)]
+        fn block(v: Row4, _c: usize) -> Row4 {
+            v
+        }
+
+        #[inline(always)]
+        fn spread(v: Row4, q: usize) -> Row4 {
+            use glam::Vec4Swizzles;
+            match q {
+                0 => v.xxxx(),
+                1 => v.yyyy(),
+                2 => v.zzzz(),
+                _ => v.wwww(),
+            }
         }
     };
 }
@@ -370,19 +414,53 @@ mod x86 {
         }
     }
 
+    /// Block `c` (0 or 1) of a 256-bit register.
+    ///
+    /// # Safety
+    /// AVX.
+    #[inline(always)]
+    unsafe fn block_y(v: __m256, c: usize) -> __m128 {
+        // SAFETY: as required of the caller.
+        unsafe {
+            if c == 0 {
+                _mm256_castps256_ps128(v)
+            } else {
+                _mm256_extractf128_ps::<1>(v)
+            }
+        }
+    }
+
+    /// Block `c` (0 to 3) of a 512-bit register.
+    ///
+    /// # Safety
+    /// AVX-512 F.
+    #[inline(always)]
+    unsafe fn block_z(v: __m512, c: usize) -> __m128 {
+        // SAFETY: as required of the caller.
+        unsafe {
+            match c {
+                0 => _mm512_castps512_ps128(v),
+                1 => _mm512_extractf32x4_ps::<1>(v),
+                2 => _mm512_extractf32x4_ps::<2>(v),
+                _ => _mm512_extractf32x4_ps::<3>(v),
+            }
+        }
+    }
+
     /// [`Rows`] for an instance whose vector `$v` wraps one register of `$n` lanes,
     /// with the register's intrinsics and `$blocks`, which loads lanes `q`, `q + 4`, ... into
     /// its 128-bit blocks.
     macro_rules! wide_rows {
         (
-            $isa:ident, $v:ident, $n:literal, $blocks:ident;
-            $set1:ident, $loadu:ident, $storeu:ident, $add:ident, $mul:ident, $setzero:ident;
+            $isa:ident, $v:ident, $n:literal, $narrow:ident, $blocks:ident;
+            $set1:ident, $loadu:ident, $storeu:ident, $add:ident, $mul:ident;
             $unpacklo:ident, $unpackhi:ident, $unpacklo_pd:ident, $unpackhi_pd:ident,
-            $to_pd:ident, $to_ps:ident, $permute:ident
+            $to_pd:ident, $to_ps:ident, $permute:ident, $block:ident
         ) => {
             impl Rows for $isa {
                 const N: usize = $n;
                 type V = $v;
+                type Narrow = $narrow;
 
                 #[inline(always)]
                 unsafe fn splat(x: f32) -> $v {
@@ -418,22 +496,26 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn rows(col: &[f32], base: &[u32; W], at: usize, off: usize) -> [$v; ROW] {
-                    let (b, p) = (&base[at..at + $n], col.as_ptr());
+                unsafe fn blocks(
+                    col: &[f32],
+                    base: &[u32; W],
+                    at: usize,
+                    off: usize,
+                    q: usize,
+                ) -> $v {
                     // SAFETY: the caller guarantees that every lane's row is inside `col`, and
                     // that the CPU supports the instance.
+                    $v(unsafe { $blocks(col.as_ptr(), &base[at..at + $n], off, q) })
+                }
+
+                #[inline(always)]
+                fn transpose(z: [$v; 4]) -> [$v; 4] {
+                    // SAFETY: a vector of this instance exists only where the CPU supports it.
                     unsafe {
-                        let mut z = [$setzero(); 4];
-                        for (q, zq) in z.iter_mut().enumerate() {
-                            *zq = $blocks(p, b, off, q);
-                        }
-                        // The 4 x 4 transpose of each 128-bit block: block `c` of `z[q]` holds
-                        // the row of lane `4 c + q`, block `c` of result `i` node `i` of lanes
-                        // `4 c .. 4 c + 4`.
-                        let t0 = $unpacklo(z[0], z[1]);
-                        let t1 = $unpackhi(z[0], z[1]);
-                        let t2 = $unpacklo(z[2], z[3]);
-                        let t3 = $unpackhi(z[2], z[3]);
+                        let t0 = $unpacklo(z[0].0, z[1].0);
+                        let t1 = $unpackhi(z[0].0, z[1].0);
+                        let t2 = $unpacklo(z[2].0, z[3].0);
+                        let t3 = $unpackhi(z[2].0, z[3].0);
                         [
                             $v($to_ps($unpacklo_pd($to_pd(t0), $to_pd(t2)))),
                             $v($to_ps($unpackhi_pd($to_pd(t0), $to_pd(t2)))),
@@ -444,43 +526,39 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn rows_shared(
-                    col: &[f32],
-                    base: &[u32; W],
-                    at: usize,
-                    off: usize,
-                ) -> [$v; ROW] {
-                    let (b, p) = (&base[at..at + $n], col.as_ptr());
-                    // SAFETY: as for rows.
+                fn spread(v: $v, q: usize) -> $v {
+                    // SAFETY: as for transpose.
                     unsafe {
-                        // The rows of lanes 0, 4, ..., node i broadcast within each block.
-                        let z = $blocks(p, b, off, 0);
-                        [
-                            $v($permute::<0x00>(z)),
-                            $v($permute::<0x55>(z)),
-                            $v($permute::<0xAA>(z)),
-                            $v($permute::<0xFF>(z)),
-                        ]
+                        $v(match q {
+                            0 => $permute::<0x00>(v.0),
+                            1 => $permute::<0x55>(v.0),
+                            2 => $permute::<0xAA>(v.0),
+                            _ => $permute::<0xFF>(v.0),
+                        })
                     }
+                }
+
+                #[inline(always)]
+                fn block(v: $v, c: usize) -> Row4 {
+                    // SAFETY: as for transpose.
+                    Row4::from(unsafe { $block(v.0, c) })
                 }
             }
         };
     }
 
     wide_rows!(
-        Avx2, Y, 8, blocks_y;
-        _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_mul_ps,
-        _mm256_setzero_ps;
+        Avx2, Y, 8, Avx2, blocks_y;
+        _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_mul_ps;
         _mm256_unpacklo_ps, _mm256_unpackhi_ps, _mm256_unpacklo_pd, _mm256_unpackhi_pd,
-        _mm256_castps_pd, _mm256_castpd_ps, _mm256_permute_ps
+        _mm256_castps_pd, _mm256_castpd_ps, _mm256_permute_ps, block_y
     );
 
     wide_rows!(
-        Avx512, Z, 16, blocks_z;
-        _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_mul_ps,
-        _mm512_setzero_ps;
+        Avx512, Z, 16, Avx2, blocks_z;
+        _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_mul_ps;
         _mm512_unpacklo_ps, _mm512_unpackhi_ps, _mm512_unpacklo_pd, _mm512_unpackhi_pd,
-        _mm512_castps_pd, _mm512_castpd_ps, _mm512_permute_ps
+        _mm512_castps_pd, _mm512_castpd_ps, _mm512_permute_ps, block_z
     );
 
     /// Eight lanes' truth values: all bits set or clear per lane of a 256-bit register (the

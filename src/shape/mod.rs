@@ -161,7 +161,7 @@ pub struct Stencil<const D: usize, const K: usize> {
 /// over a kilobyte each time.
 #[derive(Clone, Copy, Debug)]
 pub struct Stencils<const D: usize, const K: usize, const W: usize> {
-    lanes: [XFactors<D>; W],
+    lanes: [XFactors; W],
     /// Lane-fastest first nodes (flat indices, below 2^30).
     base: [u32; W],
     /// Lane-fastest weights and derivatives, `w[axis][k][lane]`; rows `k >= K` stay zero.
@@ -169,16 +169,17 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     dw: [[[Real; W]; ROW]; D],
     e: [[[Real; W]; ROW]; D],
     t: [[Real; W]; ROW],
+    /// Lane-fastest `1 / D_p` per axis (APIC, else zero).
+    inv_d: [[Real; W]; D],
 }
 
 /// One particle's x factors in a [`Stencils`], with the fields of [`Stencil`]
 /// of the same names (`w`, `dw`, `e` of the first axis).
 #[derive(Clone, Copy, Debug)]
-pub struct XFactors<const D: usize> {
+pub struct XFactors {
     w: Row4,
     dw: Row4,
     e: Row4,
-    inv_d: [Real; D],
     t: Row4,
 }
 
@@ -186,7 +187,7 @@ pub struct XFactors<const D: usize> {
 /// through accessors: the x factors as vectors, the factors along axis `a >= 1` as scalars.
 #[derive(Clone, Copy, Debug)]
 pub struct LaneStencil<'a, const D: usize, const K: usize, const W: usize> {
-    x: &'a XFactors<D>,
+    x: &'a XFactors,
     all: &'a Stencils<D, K, W>,
     ln: usize,
 }
@@ -220,12 +221,6 @@ impl<const D: usize, const K: usize, const W: usize> LaneStencil<'_, D, K, W> {
     #[inline(always)]
     pub fn t(&self) -> Row4 {
         self.x.t
-    }
-
-    /// [`Stencil::inv_d`] of axis `a`.
-    #[inline(always)]
-    pub fn inv_d(&self, a: usize) -> Real {
-        self.x.inv_d[a]
     }
 
     /// Weight `w[a][k]` of [`Stencil::w`], for an axis `a >= 1`.
@@ -302,7 +297,6 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
                 w: Row4::ZERO,
                 dw: Row4::ZERO,
                 e: Row4::ZERO,
-                inv_d: [0.0; D],
                 t: Row4::ZERO,
             }; W],
             base: [0; W],
@@ -310,6 +304,7 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
             dw: [[[0.0; W]; ROW]; D],
             e: [[[0.0; W]; ROW]; D],
             t: [[0.0; W]; ROW],
+            inv_d: [[0.0; W]; D],
         }
     }
 }
@@ -318,10 +313,10 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units) whose
     /// domains are stretched by `stretch[axis][lane]` (read only by a family that
     /// [`Shape1D::STRETCHES`]); with `AFFINE`, also their first moments and `D_p^-1` (APIC).
-    /// With `LANES`, also each lane's x factors for the row code ([`Stencils::lane`], which the
-    /// scatters read); the lane-major gathers read only the lane-fastest arrays.
+    /// Only the lane-fastest arrays, which the lane-major passes read: the row code's per-lane
+    /// x factors ([`Stencils::lane`]) follow from [`Stencils::fill_lanes`].
     #[inline(always)]
-    pub fn compute<S: Shape1D<K>, const AFFINE: bool, const LANES: bool>(
+    pub fn compute<S: Shape1D<K>, const AFFINE: bool>(
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
@@ -331,16 +326,16 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         inv_h: Real,
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
-        let (base, w, dw, e, t) = (
+        let (base, w, dw, e, t, inv_d) = (
             &mut self.base,
             &mut self.w,
             &mut self.dw,
             &mut self.e,
             &mut self.t,
+            &mut self.inv_d,
         );
         base.fill(0);
         let h = 1.0 / inv_h;
-        let mut inv_d = [[0.0; W]; D];
         for a in 0..D {
             let mut f = [0.0; W];
             for ln in 0..W {
@@ -389,27 +384,28 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 }
             }
         }
-        if !LANES {
-            return;
-        }
+    }
+
+    /// Each lane's x factors for the row code ([`Stencils::lane`]), transposed four lanes at a
+    /// time from the lane-fastest arrays of the last [`Stencils::compute`] (with its `AFFINE`
+    /// and family `S`).
+    #[inline(always)]
+    pub fn fill_lanes<S: Shape1D<K>, const AFFINE: bool>(&mut self) {
         for l0 in (0..W).step_by(4) {
-            let tw = transpose4(&w[0], l0);
-            let tdw = transpose4(&dw[0], l0);
+            let tw = transpose4(&self.w[0], l0);
+            let tdw = transpose4(&self.dw[0], l0);
             for i in 0..4 {
                 self.lanes[l0 + i].w = tw[i];
                 self.lanes[l0 + i].dw = tdw[i];
             }
             if AFFINE {
-                let te = transpose4(&e[0], l0);
+                let te = transpose4(&self.e[0], l0);
                 for i in 0..4 {
                     self.lanes[l0 + i].e = te[i];
-                    for a in 0..D {
-                        self.lanes[l0 + i].inv_d[a] = inv_d[a][l0 + i];
-                    }
                 }
             }
             if S::AXISYMMETRIC {
-                let tt = transpose4(t, l0);
+                let tt = transpose4(&self.t, l0);
                 for i in 0..4 {
                     self.lanes[l0 + i].t = tt[i];
                 }
@@ -447,6 +443,12 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     #[inline(always)]
     pub fn hoop_factors(&self) -> &[[Real; W]; ROW] {
         &self.t
+    }
+
+    /// APIC only (else zero): `1 / D_p` along `axis` of every lane ([`Stencil::inv_d`]).
+    #[inline(always)]
+    pub fn inverse_moments(&self, axis: usize) -> &[Real; W] {
+        &self.inv_d[axis]
     }
 
     /// The stencil of lane `ln`.
