@@ -647,7 +647,7 @@ pub(crate) fn particles<
     let mut scratch = StressScratch::new();
     // MUSL: what the re-map scatters (it reads no stress).
     let mut products = Products::zero();
-    let no_tau = [[0.0; W]; 6];
+    let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
     let (zero, dt_v, half, half_dt2, pic_v, inv_h, none) = unsafe {
@@ -827,7 +827,7 @@ pub(crate) fn particles<
             // keeps the gradient form are zero here: its C_p is taken from this re-map (see
             // `commit_gradient_affine`).
             products.set::<K, S, { mode::REMAP }, false, APIC>(
-                &st, &mass, &v_new, &no_tau, &v_new, &affine,
+                &st, &mass, &v_new, &no_tau, &no_force, &affine,
             );
             scatter_chunk::<I, D, K, S, { mode::REMAP }, false, APIC>(
                 &mut st,
