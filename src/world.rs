@@ -303,6 +303,12 @@ impl<'a> World<'a> {
         self.read().as_bytes()
     }
 
+    /// The world's state: [`as_bytes`](Self::as_bytes) without the grid at its end
+    /// ([`WorldRef::state_bytes`]).
+    pub fn state_bytes(&self) -> &[u8] {
+        self.read().state_bytes()
+    }
+
     /// The definition of material `id`.
     pub fn material(&self, id: u32) -> Option<MaterialDef> {
         self.read().material(id)
@@ -1123,6 +1129,16 @@ impl<'a> WorldRef<'a> {
     pub fn as_bytes(&self) -> &'a [u8] {
         let total = self.header().total_bytes as usize;
         &self.buf[..total]
+    }
+
+    /// The world's state: [`as_bytes`](Self::as_bytes) without the grid columns at its end.
+    /// The grid is scratch: every substep resets each node value before it reads it, so
+    /// whatever those bytes hold cannot change a step (tested). A snapshot therefore needs
+    /// only these bytes: copied to the start of a buffer of
+    /// [`memory_requirements`](crate::memory_requirements) bytes, they open
+    /// ([`World::open`]) as a world that steps as this one does.
+    pub fn state_bytes(&self) -> &'a [u8] {
+        &self.buf[..self.layout().grid_offset]
     }
 
     fn materials(&self, layout: &Layout) -> &'a [MaterialRecord] {
