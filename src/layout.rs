@@ -25,11 +25,11 @@ use core::mem::size_of;
 /// Alignment of the buffer and of every column, bytes (a cache line; enough for any SIMD width).
 pub const ALIGN: usize = 64;
 /// Columns are padded to a multiple of this many entries so chunked loops need no remainder.
-pub const CHUNK: usize = 16;
+pub const CHUNK: usize = 32;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 5;
+const VERSION: u64 = 6;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

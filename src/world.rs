@@ -9,6 +9,7 @@ use crate::material::{eigenstrain_part, elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ACTIVE};
+use crate::phases::lanes::width;
 use crate::phases::p2g::mode;
 use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
@@ -937,10 +938,15 @@ impl<'a> World<'a> {
         macro_rules! by_shape {
             ($d:literal, $wrap:expr) => {
                 match def.shape {
-                    ShapeFunction::Linear => {
-                        self.run::<$d, 2, _>($wrap(Linear, &def), run, &def, &layout, kernel, simd)
-                    }
-                    ShapeFunction::Gimp => self.run::<$d, 3, _>(
+                    ShapeFunction::Linear => self.run::<$d, 2, _, { width($d) }>(
+                        $wrap(Linear, &def),
+                        run,
+                        &def,
+                        &layout,
+                        kernel,
+                        simd,
+                    ),
+                    ShapeFunction::Gimp => self.run::<$d, 3, _, { width($d) }>(
                         $wrap(Gimp::new(ppc), &def),
                         run,
                         &def,
@@ -948,7 +954,7 @@ impl<'a> World<'a> {
                         kernel,
                         simd,
                     ),
-                    ShapeFunction::QuadraticBspline => self.run::<$d, 3, _>(
+                    ShapeFunction::QuadraticBspline => self.run::<$d, 3, _, { width($d) }>(
                         $wrap(QuadraticBspline, &def),
                         run,
                         &def,
@@ -956,7 +962,7 @@ impl<'a> World<'a> {
                         kernel,
                         simd,
                     ),
-                    ShapeFunction::CubicBspline => self.run::<$d, 4, _>(
+                    ShapeFunction::CubicBspline => self.run::<$d, 4, _, { width($d) }>(
                         $wrap(CubicBspline, &def),
                         run,
                         &def,
@@ -964,7 +970,7 @@ impl<'a> World<'a> {
                         kernel,
                         simd,
                     ),
-                    ShapeFunction::CpGimp => self.run::<$d, 3, _>(
+                    ShapeFunction::CpGimp => self.run::<$d, 3, _, { width($d) }>(
                         $wrap(CpGimp::new(ppc), &def),
                         run,
                         &def,
@@ -996,7 +1002,7 @@ impl<'a> World<'a> {
 
     /// Carves the columns and the step context of a substep of length `dt` starting at `time`,
     /// then runs `kernel` on them.
-    fn run<const D: usize, const K: usize, S: Shape1D<K>>(
+    fn run<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         shape: S,
         (dt, time): (Real, f64),
@@ -1055,7 +1061,7 @@ impl<'a> World<'a> {
                 fx.diffusion.is_some() && materials.iter().any(|m| m.swelling != 0.0),
             ],
         };
-        run_kernel(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
+        run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }
 
     /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
@@ -1429,7 +1435,7 @@ fn view_max(col: &[Real], status: &[u32]) -> f64 {
 /// time; [`World::dispatch`] picks the instance once per call. `I` is the instruction set each
 /// pass runs in: a body calls every pass as `I::run(|| pass(..))`.
 trait Kernel {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -1441,7 +1447,7 @@ trait Kernel {
 
 /// Runs `kernel` with its passes in the instance `simd` picks on this CPU (see
 /// [`crate::simd`]).
-fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
+fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     kernel: &mut impl Kernel,
     simd: Simd,
     shape: &S,
@@ -1450,7 +1456,7 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>>(
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S>(shape, ctx, p, count, g));
+    crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
@@ -1465,7 +1471,7 @@ struct Substep<'r, const FORCE: bool, const APIC: bool, const DAMP: bool> {
 impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
     for Substep<'_, FORCE, APIC, DAMP>
 {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -1478,37 +1484,37 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
         // Heat and diffusion first, with the particles where the substep starts.
         for (f, t) in ctx.transport.iter().enumerate() {
             if let Some(t) = t {
-                I::transport::<D, K, S>(s, ctx, p, count, g, f, t);
+                I::transport::<D, K, S, W>(s, ctx, p, count, g, f, t);
             }
         }
         grid_update::reset(ctx, g);
         match self.order {
             UpdateOrder::Usf => {
-                I::scatter::<D, K, S, { mode::MASS_MOMENTUM }, false, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W, { mode::MASS_MOMENTUM }, false, APIC>(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
-                I::stress::<D, K, S, false>(s, ctx, p, count, g, report);
-                I::scatter::<D, K, S, { mode::FORCE }, FORCE, false>(s, ctx, p, count, g);
+                I::stress::<D, K, S, W, false>(s, ctx, p, count, g, report);
+                I::scatter::<D, K, S, W, { mode::FORCE }, FORCE, false>(s, ctx, p, count, g);
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, false, false, DAMP, APIC>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, W, false, false, DAMP, APIC>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                I::scatter::<D, K, S, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, true, false, DAMP, APIC>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, W, true, false, DAMP, APIC>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                I::scatter::<D, K, S, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).
-                I::particles::<D, K, S, false, true, DAMP, APIC>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, W, false, true, DAMP, APIC>(s, ctx, p, count, g, report);
                 grid_update::remap_velocity(ctx, g);
-                I::stress::<D, K, S, true>(s, ctx, p, count, g, report);
+                I::stress::<D, K, S, W, true>(s, ctx, p, count, g, report);
             }
         }
     }
@@ -1534,7 +1540,7 @@ struct PhaseRun {
 }
 
 impl Kernel for PhaseRun {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>>(
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -1547,7 +1553,7 @@ impl Kernel for PhaseRun {
             Phase::ParticleToGrid => {
                 p.freeze_domain_stretch::<K, S>(count);
                 grid_update::reset(ctx, g);
-                I::scatter::<D, K, S, { mode::ALL }, false, false>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W, { mode::ALL }, false, false>(s, ctx, p, count, g);
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
@@ -1555,7 +1561,7 @@ impl Kernel for PhaseRun {
             }
             Phase::GridToParticle => {
                 let report = &mut self.report;
-                I::particles::<D, K, S, true, false, false, false>(s, ctx, p, count, g, report)
+                I::particles::<D, K, S, W, true, false, false, false>(s, ctx, p, count, g, report)
             }
         }
     }

@@ -24,12 +24,12 @@
 //! particle whose new state is not finite, or whose F inverts, is frozen: it keeps its last
 //! finite position, F and stress, its velocity is zeroed, and it leaves the grid.
 //!
-//! Particles are processed in chunks of [`W`]: each particle gathers from its stencil rows into
+//! Particles are processed in chunks of `W` ([`super::lanes::width`]): each particle gathers from its stencil rows into
 //! the chunk's arrays, then the update and the material run as loops over the chunk's lanes
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, load, load_into, Block, Lane, Lanes, W};
+use super::lanes::{commit, load, load_into, Block, Lane, Lanes};
 use super::p2g::{mode, scatter_chunk, Products};
 use super::rows::{self, Compare, Rows};
 use super::Ctx;
@@ -45,7 +45,7 @@ use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
 /// A D x D matrix per lane, `m[a][b][lane]`.
-type LaneMat<const D: usize> = [[Lane; D]; D];
+type LaneMat<const D: usize, const W: usize> = [[Lane<W>; D]; D];
 
 /// Which nodal velocity a gather differentiates for the velocity gradient (a const parameter,
 /// so each instance has straight-line loops).
@@ -60,11 +60,11 @@ mod grad {
 
 /// Lanes `start..start + W` that hold active particles (`< count`).
 #[inline(always)]
-pub(crate) fn live_lanes<const D: usize>(
+pub(crate) fn live_lanes<const D: usize, const W: usize>(
     p: &ParticleCols<'_, D>,
     start: usize,
     count: usize,
-) -> Lanes {
+) -> Lanes<W> {
     let n = W.min(count.saturating_sub(start));
     Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
 }
@@ -73,14 +73,14 @@ pub(crate) fn live_lanes<const D: usize>(
 /// axisymmetric, the hoop rate `v_r / r` of every lane. What a pass does not gather stays
 /// zero; lanes that hold no active particle carry values that are never committed.
 #[repr(C, align(64))]
-struct Gathered<const D: usize> {
-    v_gp: [Lane; D],
-    a_gp: [Lane; D],
-    l: LaneMat<D>,
-    hoop: Lane,
+struct Gathered<const D: usize, const W: usize> {
+    v_gp: [Lane<W>; D],
+    a_gp: [Lane<W>; D],
+    l: LaneMat<D, W>,
+    hoop: Lane<W>,
 }
 
-impl<const D: usize> Gathered<D> {
+impl<const D: usize, const W: usize> Gathered<D, W> {
     /// All zero. A pass makes one and [`gather_chunk`] overwrites what it gathers for every
     /// chunk (a new one per chunk was a memset of every field).
     fn zero() -> Self {
@@ -122,6 +122,7 @@ fn gather_chunk<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const VEL: bool,
     const GRAD: u8,
     const AFFINE: bool,
@@ -129,8 +130,8 @@ fn gather_chunk<
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
-    affine: &mut [[Lane; D]; D],
-    out: &mut Gathered<D>,
+    affine: &mut [[Lane<W>; D]; D],
+    out: &mut Gathered<D, W>,
 ) {
     let moments = AFFINE && !S::GRADIENT_AFFINE;
     // The moments take v + a dt, which only a gather of the velocities reads.
@@ -200,14 +201,14 @@ fn gather_chunk<
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
                     if VEL || GRAD == grad::UPDATED {
                         unsafe {
-                            nv = rows::read::<I>(g.vel[a], base, at, off, shared);
-                            na = rows::read::<I>(g.acc[a], base, at, off, shared);
+                            nv = rows::read::<I, W>(g.vel[a], base, at, off, shared);
+                            na = rows::read::<I, W>(g.acc[a], base, at, off, shared);
                         }
                     }
                     // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
                     // or the re-mapped one (USF, MUSL).
                     if GRAD == grad::REMAP {
-                        nu = unsafe { rows::read::<I>(g.remap[a], base, at, off, shared) };
+                        nu = unsafe { rows::read::<I, W>(g.remap[a], base, at, off, shared) };
                     } else if GRAD == grad::UPDATED || moments {
                         for i in 0..K {
                             nu[i] = add(nv[i], mul(na[i], dt));
@@ -269,11 +270,11 @@ fn gather_chunk<
 /// would enter the next transfer through `C_p`, so USF and MUSL keep linear APIC stable where
 /// USL does not. Does nothing when the affine columns are not reserved.
 #[inline(always)]
-fn commit_gradient_affine<const D: usize>(
+fn commit_gradient_affine<const D: usize, const W: usize>(
     p: &mut ParticleCols<'_, D>,
     start: usize,
-    l: &LaneMat<D>,
-    ok: Lanes,
+    l: &LaneMat<D, W>,
+    ok: Lanes<W>,
 ) {
     for r in 0..D {
         for c in 0..D {
@@ -291,6 +292,7 @@ pub(crate) fn stencils<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const AFFINE: bool,
     const LANES: bool,
 >(
@@ -299,7 +301,7 @@ pub(crate) fn stencils<
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     start: usize,
-    x: &[Lane; D],
+    x: &[Lane<W>; D],
 ) {
     let geom = &ctx.geom;
     let mut s = [[0.0; W]; D];
@@ -308,7 +310,7 @@ pub(crate) fn stencils<
             s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
         }
     }
-    let stretch: [Lane; D] = core::array::from_fn(|a| {
+    let stretch: [Lane<W>; D] = core::array::from_fn(|a| {
         if S::STRETCHES {
             load(p.stretch[a], start)
         } else {
@@ -326,18 +328,18 @@ pub(crate) fn stencils<
 /// through the stack, and 256-bit loads that straddled two earlier stores there waited for
 /// them (store forwarding fails for such loads).
 #[repr(C, align(64))]
-struct StressScratch<const D: usize> {
+struct StressScratch<const D: usize, const W: usize> {
     /// `A = L dt`.
-    a: LaneMat<D>,
+    a: LaneMat<D, W>,
     /// The Horner term of `exp(A) - I`, and the next one.
-    q: LaneMat<D>,
-    next: LaneMat<D>,
-    h_old: LaneMat<D>,
-    h: LaneMat<D>,
-    tau: [Lane; 6],
+    q: LaneMat<D, W>,
+    next: LaneMat<D, W>,
+    h_old: LaneMat<D, W>,
+    h: LaneMat<D, W>,
+    tau: [Lane<W>; 6],
 }
 
-impl<const D: usize> StressScratch<D> {
+impl<const D: usize, const W: usize> StressScratch<D, W> {
     fn new() -> Self {
         StressScratch {
             a: [[[0.0; W]; D]; D],
@@ -354,14 +356,14 @@ impl<const D: usize> StressScratch<D> {
 /// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
 /// keeps its H and stress.
 #[inline(always)]
-fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
+fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     start: usize,
-    update: Lanes,
-    gathered: &Gathered<D>,
-    scratch: &mut StressScratch<D>,
-) -> Lanes {
+    update: Lanes<W>,
+    gathered: &Gathered<D, W>,
+    scratch: &mut StressScratch<D, W>,
+) -> Lanes<W> {
     let l = &gathered.l;
     let StressScratch {
         a,
@@ -423,7 +425,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
     // as `F_thetatheta - 1` (the out-of-plane `hzz` the materials read; 0 in plane strain).
     let mut hzz = [0.0; W];
     if S::AXISYMMETRIC {
-        let old = load(p.hoop, start);
+        let old: Lane<W> = load(p.hoop, start);
         let mut a = gathered.hoop;
         for v in a.iter_mut() {
             *v *= ctx.dt;
@@ -499,7 +501,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
                     (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
                 }
                 // The eigenstrain must not invert the material either.
-                admissible = rows::above::<I>(d, -1.0);
+                admissible = rows::above::<I, W>(d, -1.0);
                 neo_hookean_lanes(&params, &he, &hzze, &jm1e, tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
@@ -508,7 +510,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
                 }
             }
         }
-        ok = admissible & update & rows::above::<I>(&jm1, -1.0);
+        ok = admissible & update & rows::above::<I, W>(&jm1, -1.0);
     } else {
         for ln in 0..W {
             // NaN-safe: a NaN jm1 is not > -1.
@@ -557,7 +559,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
             }
         }
     }
-    let ok = ok & rows::finite::<I>(&sum);
+    let ok = ok & rows::finite::<I, W>(&sum);
     for r in 0..D {
         for c in 0..D {
             commit(p.h[r][c], start, &h[r][c], ok);
@@ -577,12 +579,12 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>>(
 /// (seeds/000 section 8 advises features to read `T_g->p`) and each lane's material; `None`
 /// when no declared field has a material that expands or swells.
 #[inline(always)]
-fn eigenstrain<const D: usize>(
+fn eigenstrain<const D: usize, const W: usize>(
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     start: usize,
     ids: &[u32; W],
-) -> Option<Lane> {
+) -> Option<Lane<W>> {
     if !ctx.eigenstrain.iter().any(|&e| e) {
         return None;
     }
@@ -591,7 +593,7 @@ fn eigenstrain<const D: usize>(
         if !on {
             continue;
         }
-        let value = load(p.scalar[f][1], start);
+        let value: Lane<W> = load(p.scalar[f][1], start);
         for ln in 0..W {
             if let Some(r) = ctx.materials.get(ids[ln] as usize) {
                 d[ln] += eigenstrain_part(r, f, value[ln]);
@@ -614,6 +616,7 @@ pub(crate) fn particles<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const FUSED_STRESS: bool,
     const KEEP_START: bool,
     const DAMP: bool,
@@ -680,18 +683,19 @@ pub(crate) fn particles<
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        stencils::<D, K, S, APIC, false>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, W, APIC, false>(&mut st, shape, ctx, p, start, &x);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
         if DAMP {
-            let (lg, lp) = (load(p.damping[0], start), load(p.damping[1], start));
+            let (lg, lp): (Lane<W>, Lane<W>) =
+                (load(p.damping[0], start), load(p.damping[1], start));
             for ln in 0..W {
                 alpha_g[ln] = ctx.alpha_g + lg[ln];
                 alpha_p[ln] = ctx.alpha_p + lp[ln];
             }
         }
         if FUSED_STRESS {
-            gather_chunk::<I, D, K, S, true, { grad::UPDATED }, APIC>(
+            gather_chunk::<I, D, K, S, W, true, { grad::UPDATED }, APIC>(
                 ctx,
                 g,
                 &st,
@@ -699,7 +703,7 @@ pub(crate) fn particles<
                 &mut gathered,
             )
         } else {
-            gather_chunk::<I, D, K, S, true, { grad::NONE }, APIC>(
+            gather_chunk::<I, D, K, S, W, true, { grad::NONE }, APIC>(
                 ctx,
                 g,
                 &st,
@@ -714,7 +718,7 @@ pub(crate) fn particles<
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
         for q in (0..W).step_by(I::N) {
             // SAFETY: this instance runs only on a CPU that supports it.
-            let ld = |c: &Lane| unsafe { I::load(c, q) };
+            let ld = |c: &Lane<W>| unsafe { I::load(c, q) };
             let mut sum = zero;
             let mut vn = [zero; D];
             let mut xn = [zero; D];
@@ -783,7 +787,7 @@ pub(crate) fn particles<
         }
         let moved = live & finite;
         let ok = if FUSED_STRESS {
-            update_stress::<I, D, K, S>(ctx, p, start, moved, &gathered, &mut scratch)
+            update_stress::<I, D, K, S, W>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             moved
         };
@@ -829,7 +833,7 @@ pub(crate) fn particles<
             products.set::<K, S, { mode::REMAP }, false, APIC>(
                 &st, &mass, &v_new, &no_tau, &no_force, &affine,
             );
-            scatter_chunk::<I, D, K, S, { mode::REMAP }, false, APIC>(
+            scatter_chunk::<I, D, K, S, W, { mode::REMAP }, false, APIC>(
                 &mut st,
                 &products,
                 active,
@@ -850,6 +854,7 @@ pub(crate) fn stress<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const FROM_START: bool,
 >(
     shape: &S,
@@ -879,15 +884,15 @@ pub(crate) fn stress<
                 start,
             );
         }
-        stencils::<D, K, S, false, false>(&mut st, shape, ctx, p, start, &x);
-        gather_chunk::<I, D, K, S, false, { grad::REMAP }, false>(
+        stencils::<D, K, S, W, false, false>(&mut st, shape, ctx, p, start, &x);
+        gather_chunk::<I, D, K, S, W, false, { grad::REMAP }, false>(
             ctx,
             g,
             &st,
             &mut unused_affine,
             &mut gathered,
         );
-        let ok = update_stress::<I, D, K, S>(ctx, p, start, live, &gathered, &mut scratch);
+        let ok = update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
         }

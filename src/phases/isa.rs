@@ -109,9 +109,9 @@ macro_rules! passes {
 passes! {
     /// [`p2g::scatter`].
     fn scatter
-        [const D: usize, const K: usize, S: Shape1D<K>, const MODE: u8, const FORCE: bool,
-            const APIC: bool]
-        [I] [D, K, S, MODE, FORCE, APIC] (
+        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8,
+            const FORCE: bool, const APIC: bool]
+        [I] [D, K, S, W, MODE, FORCE, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
@@ -121,9 +121,9 @@ passes! {
 
     /// [`g2p::particles`].
     fn particles
-        [const D: usize, const K: usize, S: Shape1D<K>, const FUSED_STRESS: bool, const KEEP_START: bool,
-            const DAMP: bool, const APIC: bool]
-        [I] [D, K, S, FUSED_STRESS, KEEP_START, DAMP, APIC] (
+        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const FUSED_STRESS: bool,
+            const KEEP_START: bool, const DAMP: bool, const APIC: bool]
+        [I] [D, K, S, W, FUSED_STRESS, KEEP_START, DAMP, APIC] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -133,8 +133,9 @@ passes! {
     ) => g2p::particles;
 
     /// [`g2p::stress`].
-    fn stress [const D: usize, const K: usize, S: Shape1D<K>, const FROM_START: bool]
-        [I] [D, K, S, FROM_START] (
+    fn stress
+        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const FROM_START: bool]
+        [I] [D, K, S, W, FROM_START] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -144,7 +145,7 @@ passes! {
     ) => g2p::stress;
 
     /// [`transport::substep`] (heat conduction or diffusion, one field).
-    fn transport [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (
+    fn transport [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,

@@ -1,16 +1,37 @@
-//! A chunk of [`W`] particles seen as lanes: the chunk width, one value per lane ([`Lane`]), a
+//! A chunk of particles seen as lanes: the chunk width ([`width`]), one value per lane ([`Lane`]), a
 //! set of lanes ([`Lanes`]), and a chunk's slice of a column loaded ([`load`]) and written back
 //! lane by lane ([`commit`]). The particle passes work chunk by chunk with these.
 
 use crate::shape::Row4;
 use crate::Real;
 
-/// Particles per chunk: a multiple of 4 (the vector code works on groups of 4 lanes) that
-/// divides the particle columns' padding ([`crate::CHUNK`]), so a chunk never reads or writes
-/// past a column. 16 measured faster than 8 in the AVX2 instance (its lane loops run on two
-/// 256-bit registers per value).
-pub(crate) const W: usize = 16;
-const _: () = assert!(W.is_multiple_of(4) && crate::CHUNK.is_multiple_of(W));
+/// Particles per chunk in a `D`-dimensional world: a multiple of 4 (the vector code works
+/// on groups of 4 lanes) that divides the particle columns' padding ([`crate::CHUNK`]), so a
+/// chunk never reads or writes past a column. Every pass takes it as its const parameter `W`
+/// ([`crate::world`] picks it with the dimension). In 2D, 32: a chunk's lane loops then run
+/// two 512-bit registers per value (four 256-bit ones in the AVX2 instance), whose work
+/// overlaps, and each chunk's fixed costs are shared by twice the particles (the default 2D
+/// step 0.90 of its time with 16 in the AVX-512 instance, 0.87 in the AVX2 one); in 3D, 16:
+/// with 32 the 3D passes' larger lane state took 1.2 to 1.4 times as long. 16 measured
+/// faster than 8 in the AVX2 instance.
+pub(crate) const fn width(d: usize) -> usize {
+    if d == 3 {
+        16
+    } else {
+        32
+    }
+}
+
+/// The widest chunk ([`width`]): the chunk buffers' bit sets hold this many lanes.
+pub(crate) const MAX_W: usize = 32;
+const _: () = assert!(
+    width(2).is_multiple_of(4)
+        && width(3).is_multiple_of(4)
+        && width(2) <= MAX_W
+        && width(3) <= MAX_W
+        && crate::CHUNK.is_multiple_of(width(2))
+        && crate::CHUNK.is_multiple_of(width(3))
+);
 
 /// The comparison mask of four [`Row4`] lanes.
 #[cfg(not(feature = "f64"))]
@@ -18,24 +39,24 @@ pub(crate) type Mask4 = glam::BVec4A;
 #[cfg(feature = "f64")]
 pub(crate) type Mask4 = glam::BVec4;
 
-/// One value per lane of a chunk.
-pub(crate) type Lane = [Real; W];
+/// One value per lane of a chunk of `W`.
+pub(crate) type Lane<const W: usize> = [Real; W];
 
 /// A set of a chunk's lanes, one bit each (bit `ln` for lane `ln`). The passes keep their
 /// per-lane flags (live, updated, frozen, stopped, escaped) as such sets: an array of `bool`s
 /// cost a byte insert per lane and flag, about 7 % of the default step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Lanes(u32);
+pub(crate) struct Lanes<const W: usize>(u32);
 
-const _: () = assert!(W <= 32);
+const _: () = assert!(MAX_W <= 32);
 
-impl Lanes {
-    pub const NONE: Lanes = Lanes(0);
-    pub const ALL: Lanes = Lanes(u32::MAX >> (32 - W));
+impl<const W: usize> Lanes<W> {
+    pub const NONE: Self = Lanes(0);
+    pub const ALL: Self = Lanes(u32::MAX >> (32 - W));
 
     /// The lanes `ln` for which `f(ln)` holds.
     #[inline(always)]
-    pub fn from_fn(mut f: impl FnMut(usize) -> bool) -> Lanes {
+    pub fn from_fn(mut f: impl FnMut(usize) -> bool) -> Self {
         let mut bits = 0;
         for ln in 0..W {
             bits |= (f(ln) as u32) << ln;
@@ -46,15 +67,15 @@ impl Lanes {
     /// Lanes `q..q + 4` where the compare mask `mask` of those four lanes holds (`q` a
     /// multiple of 4 below `W`).
     #[inline(always)]
-    pub fn group(q: usize, mask: Mask4) -> Lanes {
+    pub fn group(q: usize, mask: Mask4) -> Self {
         Lanes::at(q, mask.bitmask())
     }
 
     /// Lanes `q..q + n` from `bits`, bit `i` for lane `q + i` (a [`crate::phases::rows::Compare`]
     /// mask's bits; `q` a multiple of the vectors' lane count `n`, below `W`).
     #[inline(always)]
-    pub fn at(q: usize, bits: u32) -> Lanes {
-        Lanes((bits << q) & Lanes::ALL.0)
+    pub fn at(q: usize, bits: u32) -> Self {
+        Lanes((bits << q) & Self::ALL.0)
     }
 
     /// The lanes whose value equals `v`, for a `v` below 2^24 (statuses): compared as reals,
@@ -64,7 +85,7 @@ impl Lanes {
     /// exactly, and a value converts to `v` only if it is `v` (one above 2^24 rounds to a
     /// real above 2^24).
     #[inline(always)]
-    pub fn equal(values: &[u32; W], v: u32) -> Lanes {
+    pub fn equal(values: &[u32; W], v: u32) -> Self {
         let mut set = Lanes::NONE;
         for q in (0..W).step_by(4) {
             let row = Row4::new(
@@ -80,7 +101,7 @@ impl Lanes {
 
     /// These lanes among the first `n` (all of them from `n >= W`).
     #[inline(always)]
-    pub fn first_n(self, n: usize) -> Lanes {
+    pub fn first_n(self, n: usize) -> Self {
         if n >= W {
             self
         } else {
@@ -90,7 +111,7 @@ impl Lanes {
 
     /// Lane `ln` alone.
     #[inline(always)]
-    pub fn one(ln: usize) -> Lanes {
+    pub fn one(ln: usize) -> Self {
         Lanes(1 << ln)
     }
 
@@ -134,30 +155,35 @@ impl Lanes {
 
     /// The lanes in `self` but not in `other`.
     #[inline(always)]
-    pub fn minus(self, other: Lanes) -> Lanes {
+    pub fn minus(self, other: Self) -> Self {
         Lanes(self.0 & !other.0)
     }
 }
 
-impl core::ops::BitAnd for Lanes {
-    type Output = Lanes;
+impl<const W: usize> core::ops::BitAnd for Lanes<W> {
+    type Output = Self;
     #[inline(always)]
-    fn bitand(self, o: Lanes) -> Lanes {
+    fn bitand(self, o: Self) -> Self {
         Lanes(self.0 & o.0)
     }
 }
 
-impl core::ops::BitOr for Lanes {
-    type Output = Lanes;
+impl<const W: usize> core::ops::BitOr for Lanes<W> {
+    type Output = Self;
     #[inline(always)]
-    fn bitor(self, o: Lanes) -> Lanes {
+    fn bitor(self, o: Self) -> Self {
         Lanes(self.0 | o.0)
     }
 }
 
 /// `dst[lane] = if keep has lane { new[lane] } else { dst[lane] }` over a column slice.
 #[inline(always)]
-pub(crate) fn commit(dst: &mut [Real], start: usize, new: &Lane, keep: Lanes) {
+pub(crate) fn commit<const W: usize>(
+    dst: &mut [Real],
+    start: usize,
+    new: &Lane<W>,
+    keep: Lanes<W>,
+) {
     if let Some(d) = dst.get_mut(start..start + W) {
         if keep == Lanes::ALL {
             // The common case: every lane was updated.
@@ -195,7 +221,7 @@ impl<T> core::ops::DerefMut for Block<T> {
 /// Loads lanes `start..start + W` of a column (zeros past its end), with one bounds check for
 /// the chunk (a check per lane kept `from_fn` from being inlined).
 #[inline(always)]
-pub(crate) fn load<T: Copy + Default>(col: &[T], start: usize) -> [T; W] {
+pub(crate) fn load<T: Copy + Default, const W: usize>(col: &[T], start: usize) -> [T; W] {
     let mut lanes = [T::default(); W];
     load_into(&mut lanes, col, start);
     lanes
@@ -205,7 +231,11 @@ pub(crate) fn load<T: Copy + Default>(col: &[T], start: usize) -> [T; W] {
 /// buffers rather than into new arrays: arrays built per chunk (by `core::array::from_fn` or
 /// returned through an `Option`) were copied two or three times on the stack before use.
 #[inline(always)]
-pub(crate) fn load_into<T: Copy + Default>(dst: &mut [T; W], col: &[T], start: usize) {
+pub(crate) fn load_into<T: Copy + Default, const W: usize>(
+    dst: &mut [T; W],
+    col: &[T],
+    start: usize,
+) {
     match col.get(start..start + W) {
         Some(c) => dst.copy_from_slice(c),
         None => dst.fill(T::default()),

@@ -13,7 +13,7 @@
 //! ([`scatter_blocks`]). Both run the one row code ([`for_each_row`]).
 
 use super::g2p::stencils;
-use super::lanes::{load_into, Block, Lane, Lanes, W};
+use super::lanes::{load_into, Block, Lane, Lanes};
 use super::rows::{self, Rows};
 use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
@@ -43,6 +43,7 @@ pub(crate) fn scatter<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
@@ -91,10 +92,10 @@ pub(crate) fn scatter<
                 }
             }
         }
-        stencils::<D, K, S, APIC, false>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, W, APIC, false>(&mut st, shape, ctx, p, start, &x);
         let live = super::g2p::live_lanes(p, start, count);
         products.set::<K, S, MODE, FORCE, APIC>(&st, &mass, &v, &tau, &f_ext, &affine);
-        scatter_chunk::<I, D, K, S, MODE, FORCE, APIC>(
+        scatter_chunk::<I, D, K, S, W, MODE, FORCE, APIC>(
             &mut st,
             &products,
             live,
@@ -177,22 +178,22 @@ impl<const D: usize> Direct<'_, '_, D> {
 /// values that the row code scales the weights by, formed once per chunk. What a mode does not
 /// read stays zero.
 #[repr(C, align(64))]
-pub(crate) struct Products<const D: usize> {
+pub(crate) struct Products<const D: usize, const W: usize> {
     /// m_p.
-    m: Lane,
+    m: Lane<W>,
     /// m_p v_p (modes with momentum).
-    mv: [Lane; D],
+    mv: [Lane<W>; D],
     /// m_p C_p (APIC, modes with momentum).
-    mc: [[Lane; D]; D],
+    mc: [[Lane<W>; D]; D],
     /// -m_p tau_p/rho0, symmetric (modes with force).
-    mt: [[Lane; D]; D],
+    mt: [[Lane<W>; D]; D],
     /// Axisymmetric: -m_p tau_thetatheta/rho0 (modes with force).
-    mh: Lane,
+    mh: Lane<W>,
     /// The particle force F_p (`FORCE`, modes with force).
-    f: [Lane; D],
+    f: [Lane<W>; D],
 }
 
-impl<const D: usize> Products<D> {
+impl<const D: usize, const W: usize> Products<D, W> {
     /// All zero; a pass makes one and sets it per chunk.
     pub fn zero() -> Self {
         Products {
@@ -219,11 +220,11 @@ impl<const D: usize> Products<D> {
     >(
         &mut self,
         st: &Stencils<D, K, W>,
-        mass: &Lane,
-        v: &[Lane; D],
-        tau: &[Lane; 6],
-        force: &[Lane; D],
-        affine: &[[Lane; D]; D],
+        mass: &Lane<W>,
+        v: &[Lane<W>; D],
+        tau: &[Lane<W>; 6],
+        force: &[Lane<W>; D],
+        affine: &[[Lane<W>; D]; D],
     ) {
         let with_force = MODE == mode::ALL || MODE == mode::FORCE;
         let with_momentum = MODE != mode::FORCE;
@@ -282,13 +283,14 @@ pub(crate) fn scatter_chunk<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
 >(
     st: &mut Stencils<D, K, W>,
-    pr: &Products<D>,
-    live: Lanes,
+    pr: &Products<D, W>,
+    live: Lanes<W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
 ) {
@@ -297,12 +299,12 @@ pub(crate) fn scatter_chunk<
         && rows::blocks_share(base)
         && rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len());
     if blocks && D == 2 && I::N >= 8 {
-        scatter_blocks::<I, D, K, S, MODE, FORCE, APIC>(st, pr, stride, g);
+        scatter_blocks::<I, D, K, S, W, MODE, FORCE, APIC>(st, pr, stride, g);
     } else if blocks && D == 3 && I::Narrow::N == 8 {
-        scatter_blocks::<I::Narrow, D, K, S, MODE, FORCE, APIC>(st, pr, stride, g);
+        scatter_blocks::<I::Narrow, D, K, S, W, MODE, FORCE, APIC>(st, pr, stride, g);
     } else {
         st.fill_lanes::<S, APIC>();
-        scatter_lanes::<D, K, S, MODE, FORCE, APIC>(st, pr, live, stride, g);
+        scatter_lanes::<D, K, S, W, MODE, FORCE, APIC>(st, pr, live, stride, g);
     }
 }
 
@@ -316,13 +318,14 @@ fn scatter_lanes<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
 >(
     st: &Stencils<D, K, W>,
-    pr: &Products<D>,
-    live: Lanes,
+    pr: &Products<D, W>,
+    live: Lanes<W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
 ) {
@@ -339,13 +342,13 @@ fn scatter_lanes<
         };
         let shares = |n: usize| ln + n < W && live.has(ln + n) && st.lane(ln + n).base() == base;
         let n = if shares(1) && shares(2) && shares(3) {
-            scatter_group::<D, K, S, MODE, FORCE, APIC, 4>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 4>(st, pr, ln, &mut sink);
             4
         } else if shares(1) {
-            scatter_group::<D, K, S, MODE, FORCE, APIC, 2>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 2>(st, pr, ln, &mut sink);
             2
         } else {
-            scatter_group::<D, K, S, MODE, FORCE, APIC, 1>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 1>(st, pr, ln, &mut sink);
             1
         };
         ln += n;
@@ -470,15 +473,21 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
     /// # Safety
     /// As for [`RowMath::zero`].
     #[inline(always)]
-    unsafe fn new<const K: usize, S: Shape1D<K>, const FORCE: bool, const APIC: bool>(
+    unsafe fn new<
+        const K: usize,
+        S: Shape1D<K>,
+        const W: usize,
+        const FORCE: bool,
+        const APIC: bool,
+    >(
         x: &XRow<T>,
-        pr: &Products<D>,
-        pick: &impl Pick<T>,
+        pr: &Products<D, W>,
+        pick: &impl Pick<T, W>,
         n: usize,
     ) -> Self {
         // SAFETY: as required of the caller.
         let zero = unsafe { T::zero() };
-        let at = |c: &Lane| pick.at(n, c);
+        let at = |c: &Lane<W>| pick.at(n, c);
         // Loops, not `core::array::from_fn`, whose closures are not always inlined: one left
         // out of line runs the target's baseline code (ARCHITECTURE.md, "Performance").
         let mut f = XFactors {
@@ -615,9 +624,9 @@ fn put<T: RowMath, const FIRST: bool>(acc: &mut [T; slot::COUNT], c: usize, v: T
 /// Where the row code reads the particles' values ([`Products`]) and stencil factors from
 /// the chunk's lane arrays: one lane's real per particle of a group ([`OneLane`]), or one
 /// particle of each four-lane block of a vector of lanes ([`BlockAt`]).
-trait Pick<T: RowMath> {
+trait Pick<T: RowMath, const W: usize> {
     /// Particle `n`'s value in `lanes`.
-    fn at(&self, n: usize, lanes: &Lane) -> T::S;
+    fn at(&self, n: usize, lanes: &Lane<W>) -> T::S;
 
     /// Particle `n`'s factors of node `i` along axis `a`.
     #[inline(always)]
@@ -639,9 +648,9 @@ trait Pick<T: RowMath> {
 /// The particles of a group, from lane `.0` on, one lane each.
 struct OneLane(usize);
 
-impl Pick<Row4> for OneLane {
+impl<const W: usize> Pick<Row4, W> for OneLane {
     #[inline(always)]
-    fn at(&self, n: usize, lanes: &Lane) -> Real {
+    fn at(&self, n: usize, lanes: &Lane<W>) -> Real {
         lanes[self.0 + n]
     }
 }
@@ -667,7 +676,7 @@ impl<I: Rows> BlockAt<I> {
     /// The rows of a stencil's lane arrays (`[node][lane]`): element `n` holds particle `n`'s
     /// row of each block.
     #[inline(always)]
-    fn rows(&self, c: &[Lane; ROW]) -> [I::V; 4] {
+    fn rows<const W: usize>(&self, c: &[Lane<W>; ROW]) -> [I::V; 4] {
         // SAFETY: `new` required the instance's CPU support.
         unsafe {
             I::transpose([
@@ -680,9 +689,9 @@ impl<I: Rows> BlockAt<I> {
     }
 }
 
-impl<I: Rows> Pick<BlockRow<I>> for BlockAt<I> {
+impl<I: Rows, const W: usize> Pick<BlockRow<I>, W> for BlockAt<I> {
     #[inline(always)]
-    fn at(&self, n: usize, lanes: &Lane) -> I::V {
+    fn at(&self, n: usize, lanes: &Lane<W>) -> I::V {
         // SAFETY: `new` required the instance's CPU support.
         I::spread(unsafe { I::load(lanes, self.at) }, n)
     }
@@ -749,13 +758,14 @@ unsafe fn for_each_row<
     T: RowMath,
     const D: usize,
     const K: usize,
+    const W: usize,
     const MODE: u8,
     const APIC: bool,
     const N: usize,
 >(
     x: &[XFactors<T, D>; N],
     st: &Stencils<D, K, W>,
-    pick: &impl Pick<T>,
+    pick: &impl Pick<T, W>,
     sink: &mut impl RowSink<T>,
 ) {
     const { assert!(N >= 1) };
@@ -789,13 +799,14 @@ fn scatter_group<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
     const N: usize,
 >(
     st: &Stencils<D, K, W>,
-    pr: &Products<D>,
+    pr: &Products<D, W>,
     ln: usize,
     sink: &mut Direct<'_, '_, D>,
 ) {
@@ -810,11 +821,11 @@ fn scatter_group<
         }
     };
     // SAFETY (every unsafe block): Row4 is the target's baseline, which every instance has.
-    let mut x = [unsafe { XFactors::new::<K, S, FORCE, APIC>(&xrow(0), pr, &pick, 0) }; N];
+    let mut x = [unsafe { XFactors::new::<K, S, W, FORCE, APIC>(&xrow(0), pr, &pick, 0) }; N];
     for n in 1..N {
-        x[n] = unsafe { XFactors::new::<K, S, FORCE, APIC>(&xrow(n), pr, &pick, n) };
+        x[n] = unsafe { XFactors::new::<K, S, W, FORCE, APIC>(&xrow(n), pr, &pick, n) };
     }
-    unsafe { for_each_row::<Row4, D, K, MODE, APIC, N>(&x, st, &pick, sink) };
+    unsafe { for_each_row::<Row4, D, K, W, MODE, APIC, N>(&x, st, &pick, sink) };
 }
 
 /// Scatters a chunk whose lanes are all live and share their first node four by four
@@ -834,12 +845,13 @@ fn scatter_blocks<
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
+    const W: usize,
     const MODE: u8,
     const FORCE: bool,
     const APIC: bool,
 >(
     st: &Stencils<D, K, W>,
-    pr: &Products<D>,
+    pr: &Products<D, W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
 ) {
@@ -865,12 +877,12 @@ fn scatter_blocks<
         // SAFETY: as for `pick`.
         unsafe {
             let x = [
-                XFactors::new::<K, S, FORCE, APIC>(&xrow(0), pr, &pick, 0),
-                XFactors::new::<K, S, FORCE, APIC>(&xrow(1), pr, &pick, 1),
-                XFactors::new::<K, S, FORCE, APIC>(&xrow(2), pr, &pick, 2),
-                XFactors::new::<K, S, FORCE, APIC>(&xrow(3), pr, &pick, 3),
+                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(0), pr, &pick, 0),
+                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(1), pr, &pick, 1),
+                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(2), pr, &pick, 2),
+                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(3), pr, &pick, 3),
             ];
-            for_each_row::<BlockRow<I>, D, K, MODE, APIC, 4>(&x, st, &pick, &mut sums);
+            for_each_row::<BlockRow<I>, D, K, W, MODE, APIC, 4>(&x, st, &pick, &mut sums);
         }
         // Block by block, each block's rows and columns in the order `scatter_group` adds
         // them. (Row by row, the blocks one after another, a block's row load overlapped the
@@ -993,7 +1005,7 @@ mod tests {
 
     /// Node entries per grid column in these tests (with room past the last row).
     const LEN: usize = NODES * NODES * NODES + 64;
-    const NODES: usize = 10;
+    const NODES: usize = 16;
 
     /// A small deterministic generator (64-bit LCG, top bits).
     struct Rng(u64);
@@ -1037,6 +1049,7 @@ mod tests {
         const D: usize,
         const K: usize,
         S: Shape1D<K>,
+        const W: usize,
         const MODE: u8,
         const FORCE: bool,
         const APIC: bool,
@@ -1080,7 +1093,7 @@ mod tests {
             Stencil::<D, K>::last_row_offset(stride),
             LEN
         ));
-        let mut pr = Products::<D>::zero();
+        let mut pr = Products::<D, W>::zero();
         for ln in 0..W {
             pr.m[ln] = rng.range(0.5, 2.0);
             pr.mh[ln] = rng.range(-2.0, 2.0);
@@ -1107,14 +1120,14 @@ mod tests {
             }
         }
         let (mut by_blocks, mut by_groups) = (before, before);
-        scatter_blocks::<I, D, K, S, MODE, FORCE, APIC>(
+        scatter_blocks::<I, D, K, S, W, MODE, FORCE, APIC>(
             &st,
             &pr,
             stride,
             &mut grid(&mut by_blocks),
         );
         st.fill_lanes::<S, APIC>();
-        scatter_lanes::<D, K, S, MODE, FORCE, APIC>(
+        scatter_lanes::<D, K, S, W, MODE, FORCE, APIC>(
             &st,
             &pr,
             Lanes::ALL,
@@ -1138,15 +1151,17 @@ mod tests {
 
     /// [`check`] over every mode, with and without particle forces and APIC, and blocks
     /// placed apart, overlapping and on one node.
-    fn check_modes<I: Rows, const D: usize, const K: usize, S: Shape1D<K>>(shape: &S) {
+    fn check_modes<I: Rows, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+        shape: &S,
+    ) {
         let mut rng = Rng(0x5eed + D as u64 * 31 + K as u64);
         for step in [0, 1, 3] {
-            check::<I, D, K, S, { mode::ALL }, false, false>(shape, &mut rng, step);
-            check::<I, D, K, S, { mode::ALL }, true, true>(shape, &mut rng, step);
-            check::<I, D, K, S, { mode::MASS_MOMENTUM }, false, true>(shape, &mut rng, step);
-            check::<I, D, K, S, { mode::FORCE }, true, false>(shape, &mut rng, step);
-            check::<I, D, K, S, { mode::REMAP }, false, false>(shape, &mut rng, step);
-            check::<I, D, K, S, { mode::REMAP }, false, true>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::ALL }, false, false>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::ALL }, true, true>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::MASS_MOMENTUM }, false, true>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::FORCE }, true, false>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::REMAP }, false, false>(shape, &mut rng, step);
+            check::<I, D, K, S, W, { mode::REMAP }, false, true>(shape, &mut rng, step);
         }
     }
 
@@ -1157,21 +1172,22 @@ mod tests {
     #[test]
     fn every_instance_scatters_blocks_as_groups_do() {
         use crate::phases::isa::{Avx2, Avx512};
+        use crate::phases::lanes::width;
         use crate::simd::{Instance, Simd};
         let gimp = Gimp::new(2);
         let axisymmetric = Axisymmetric::new(gimp, 0.0, 0.5, 0.125);
         let widest = Simd::Detect.instance();
         if widest >= Instance::Avx2 {
-            check_modes::<Avx2, 2, 3, _>(&gimp);
-            check_modes::<Avx2, 2, 2, _>(&Linear);
-            check_modes::<Avx2, 2, 3, _>(&axisymmetric);
-            check_modes::<Avx2, 3, 3, _>(&gimp);
-            check_modes::<Avx2, 3, 4, _>(&CubicBspline);
+            check_modes::<Avx2, 2, 3, _, { width(2) }>(&gimp);
+            check_modes::<Avx2, 2, 2, _, { width(2) }>(&Linear);
+            check_modes::<Avx2, 2, 3, _, { width(2) }>(&axisymmetric);
+            check_modes::<Avx2, 3, 3, _, { width(3) }>(&gimp);
+            check_modes::<Avx2, 3, 4, _, { width(3) }>(&CubicBspline);
         }
         if widest == Instance::Avx512 {
-            check_modes::<Avx512, 2, 3, _>(&gimp);
-            check_modes::<Avx512, 2, 2, _>(&Linear);
-            check_modes::<Avx512, 2, 3, _>(&axisymmetric);
+            check_modes::<Avx512, 2, 3, _, { width(2) }>(&gimp);
+            check_modes::<Avx512, 2, 2, _, { width(2) }>(&Linear);
+            check_modes::<Avx512, 2, 3, _, { width(2) }>(&axisymmetric);
         }
     }
 }

@@ -11,7 +11,7 @@
 //! implementation computes the same operations on the same values in the same order, so
 //! results do not depend on it.
 
-use super::lanes::{Lanes, Mask4, W};
+use super::lanes::{Lanes, Mask4};
 use crate::shape::{Row4, ROW};
 use crate::Real;
 
@@ -21,7 +21,7 @@ use crate::Real;
 /// instance the CPU supports may run it. Arithmetic on vectors made so is safe: the wide
 /// instances' vector types can be made by those functions alone.
 pub(crate) trait Rows {
-    /// Lanes per vector: divides [`W`].
+    /// Lanes per vector: divides every chunk width ([`super::lanes::width`]).
     const N: usize;
     /// `N` lanes of reals.
     type V: Copy;
@@ -40,10 +40,10 @@ pub(crate) trait Rows {
     ///
     /// # Safety
     /// As for [`Rows::splat`].
-    unsafe fn load(lanes: &[Real; W], at: usize) -> Self::V;
+    unsafe fn load<const W: usize>(lanes: &[Real; W], at: usize) -> Self::V;
 
     /// Writes `v` to lanes `at..at + N` of a chunk's lane array.
-    fn store(v: Self::V, lanes: &mut [Real; W], at: usize);
+    fn store<const W: usize>(v: Self::V, lanes: &mut [Real; W], at: usize);
 
     fn add(a: Self::V, b: Self::V) -> Self::V;
 
@@ -55,7 +55,13 @@ pub(crate) trait Rows {
     /// # Safety
     /// As for [`Rows::splat`], and `base[ln] + off + ROW <= col.len()` for every lane `ln` of
     /// the chunk (see [`fit`]).
-    unsafe fn blocks(col: &[Real], base: &[u32; W], at: usize, off: usize, q: usize) -> Self::V;
+    unsafe fn blocks<const W: usize>(
+        col: &[Real],
+        base: &[u32; W],
+        at: usize,
+        off: usize,
+        q: usize,
+    ) -> Self::V;
 
     /// The [`ROW`] nodes of a stencil row of lanes `at..at + N` (those past the stencil's own
     /// nodes are read and left for the caller to ignore): lane `q` of result `i` is
@@ -65,7 +71,12 @@ pub(crate) trait Rows {
     /// # Safety
     /// As for [`Rows::blocks`].
     #[inline(always)]
-    unsafe fn rows(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW] {
+    unsafe fn rows<const W: usize>(
+        col: &[Real],
+        base: &[u32; W],
+        at: usize,
+        off: usize,
+    ) -> [Self::V; ROW] {
         // SAFETY: as required of the caller.
         unsafe {
             Self::transpose([
@@ -85,7 +96,12 @@ pub(crate) trait Rows {
     /// # Safety
     /// As for [`Rows::blocks`].
     #[inline(always)]
-    unsafe fn rows_shared(col: &[Real], base: &[u32; W], at: usize, off: usize) -> [Self::V; ROW] {
+    unsafe fn rows_shared<const W: usize>(
+        col: &[Real],
+        base: &[u32; W],
+        at: usize,
+        off: usize,
+    ) -> [Self::V; ROW] {
         // SAFETY: as required of the caller.
         let z = unsafe { Self::blocks(col, base, at, off, 0) };
         [
@@ -148,7 +164,7 @@ pub(crate) trait Compare: Rows {
 
 /// The lanes of a chunk whose value is above `bound`, [`Rows::N`] lanes per compare.
 #[inline(always)]
-pub(crate) fn above<I: Compare>(values: &[Real; W], bound: Real) -> Lanes {
+pub(crate) fn above<I: Compare, const W: usize>(values: &[Real; W], bound: Real) -> Lanes<W> {
     let mut set = Lanes::NONE;
     // SAFETY: this instance runs only on a CPU that supports it.
     let b = unsafe { I::splat(bound) };
@@ -162,7 +178,7 @@ pub(crate) fn above<I: Compare>(values: &[Real; W], bound: Real) -> Lanes {
 
 /// The lanes of a chunk whose value is finite, [`Rows::N`] lanes per test.
 #[inline(always)]
-pub(crate) fn finite<I: Compare>(values: &[Real; W]) -> Lanes {
+pub(crate) fn finite<I: Compare, const W: usize>(values: &[Real; W]) -> Lanes<W> {
     let mut set = Lanes::NONE;
     for q in (0..W).step_by(I::N) {
         // SAFETY: this instance runs only on a CPU that supports it.
@@ -176,7 +192,7 @@ pub(crate) fn finite<I: Compare>(values: &[Real; W]) -> Lanes {
 /// `4 c + 3` for every `c`): what the fills' stencil-bin order gives at 2 particles per cell
 /// per axis, 4 or 8 to a bin ([`crate::World::fill_box`]).
 #[inline(always)]
-pub(crate) fn blocks_share(base: &[u32; W]) -> bool {
+pub(crate) fn blocks_share<const W: usize>(base: &[u32; W]) -> bool {
     let mut same = true;
     for ln in 0..W {
         same &= base[ln] == base[ln & !3];
@@ -190,7 +206,7 @@ pub(crate) fn blocks_share(base: &[u32; W]) -> bool {
 /// # Safety
 /// As for [`Rows::rows`].
 #[inline(always)]
-pub(crate) unsafe fn read<I: Rows>(
+pub(crate) unsafe fn read<I: Rows, const W: usize>(
     col: &[Real],
     base: &[u32; W],
     at: usize,
@@ -211,7 +227,7 @@ pub(crate) unsafe fn read<I: Rows>(
 /// stencil whose first node is `base` reach `base + last_row_offset + ROW`. Checked once per
 /// chunk, so that [`Rows::rows`] may read without a check per lane.
 #[inline(always)]
-pub(crate) fn fit(base: &[u32; W], last_row_offset: usize, len: usize) -> bool {
+pub(crate) fn fit<const W: usize>(base: &[u32; W], last_row_offset: usize, len: usize) -> bool {
     let mut top = 0;
     for &b in base {
         top = top.max(b);
@@ -233,12 +249,12 @@ macro_rules! by_four {
         }
 
         #[inline(always)]
-        unsafe fn load(lanes: &[Real; W], at: usize) -> Row4 {
+        unsafe fn load<const W: usize>(lanes: &[Real; W], at: usize) -> Row4 {
             Row4::from_slice(&lanes[at..at + 4])
         }
 
         #[inline(always)]
-        fn store(v: Row4, lanes: &mut [Real; W], at: usize) {
+        fn store<const W: usize>(v: Row4, lanes: &mut [Real; W], at: usize) {
             v.write_to_slice(&mut lanes[at..at + 4]);
         }
 
@@ -253,7 +269,13 @@ macro_rules! by_four {
         }
 
         #[inline(always)]
-        unsafe fn blocks(col: &[Real], base: &[u32; W], at: usize, off: usize, q: usize) -> Row4 {
+        unsafe fn blocks<const W: usize>(
+            col: &[Real],
+            base: &[u32; W],
+            at: usize,
+            off: usize,
+            q: usize,
+        ) -> Row4 {
             // SAFETY: the caller guarantees that every lane's row is inside `col`.
             unsafe { crate::grid::load_row(col, base[at + q] as usize + off) }
         }
@@ -469,14 +491,14 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn load(lanes: &[f32; W], at: usize) -> $v {
+                unsafe fn load<const W: usize>(lanes: &[f32; W], at: usize) -> $v {
                     let l = &lanes[at..at + $n];
                     // SAFETY: `$n` reals; the instance as for splat.
                     $v(unsafe { $loadu(l.as_ptr()) })
                 }
 
                 #[inline(always)]
-                fn store(v: $v, lanes: &mut [f32; W], at: usize) {
+                fn store<const W: usize>(v: $v, lanes: &mut [f32; W], at: usize) {
                     let l = &mut lanes[at..at + $n];
                     // SAFETY: `$n` reals; a vector of this instance exists only where the CPU
                     // supports the instance.
@@ -496,7 +518,7 @@ mod x86 {
                 }
 
                 #[inline(always)]
-                unsafe fn blocks(
+                unsafe fn blocks<const W: usize>(
                     col: &[f32],
                     base: &[u32; W],
                     at: usize,
@@ -706,16 +728,17 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::phases::lanes::width;
 
     /// Reads the rows of every lane of a chunk with instance `I` and checks them against the
     /// column; where the lanes share their bases four by four, also with the shared read.
-    fn check<I: Rows>(col: &[Real], base: &[u32; W], off: usize) {
+    fn check<I: Rows, const W: usize>(col: &[Real], base: &[u32; W], off: usize) {
         for shared in [false, true] {
             if shared && !blocks_share(base) {
                 continue;
             }
             for at in (0..W).step_by(I::N) {
-                let nodes = unsafe { read::<I>(col, base, at, off, shared) };
+                let nodes = unsafe { read::<I, W>(col, base, at, off, shared) };
                 for (i, &node) in nodes.iter().enumerate() {
                     let mut lanes = [0.0; W];
                     I::store(node, &mut lanes, at);
@@ -730,16 +753,16 @@ mod tests {
     }
 
     /// [`check`] for every instance the CPU supports.
-    fn check_all(col: &[Real], base: &[u32; W], off: usize) {
-        check::<super::super::isa::Baseline>(col, base, off);
+    fn check_all<const W: usize>(col: &[Real], base: &[u32; W], off: usize) {
+        check::<super::super::isa::Baseline, W>(col, base, off);
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         {
             use crate::simd::{Instance, Simd};
             if Simd::Detect.instance() >= Instance::Avx2 {
-                check::<super::super::isa::Avx2>(col, base, off);
+                check::<super::super::isa::Avx2, W>(col, base, off);
             }
             if Simd::Detect.instance() == Instance::Avx512 {
-                check::<super::super::isa::Avx512>(col, base, off);
+                check::<super::super::isa::Avx512, W>(col, base, off);
             }
         }
     }
@@ -747,7 +770,7 @@ mod tests {
     /// Checks `I`'s compares, selects and mask operations lane by lane against the scalar
     /// definitions, over values that include zeros of both signs, infinities, NaN and the
     /// largest finite values, and [`above`] and [`finite`] over whole chunks.
-    fn check_compare<I: Compare>() {
+    fn check_compare<I: Compare, const W: usize>() {
         let special = [
             0.0,
             -0.0,
@@ -811,23 +834,29 @@ mod tests {
             assert_eq!(I::bits(I::and_not(l, g)), lt & !gt);
         }
         let expect_above = Lanes::from_fn(|ln| a[ln] > 0.5);
-        assert_eq!(above::<I>(&a, 0.5), expect_above);
-        assert_eq!(finite::<I>(&a), Lanes::from_fn(|ln| a[ln].is_finite()));
+        assert_eq!(above::<I, W>(&a, 0.5), expect_above);
+        assert_eq!(finite::<I, W>(&a), Lanes::from_fn(|ln| a[ln].is_finite()));
     }
 
     /// Every instance the CPU supports compares, selects and combines masks as the scalar
     /// operations do, NaN and infinities included.
     #[test]
     fn every_instance_compares_as_scalars_do() {
-        check_compare::<super::super::isa::Baseline>();
+        compare_all::<{ width(2) }>();
+        compare_all::<{ width(3) }>();
+    }
+
+    /// [`check_compare`] on chunks of `W` for every instance the CPU supports.
+    fn compare_all<const W: usize>() {
+        check_compare::<super::super::isa::Baseline, W>();
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         {
             use crate::simd::{Instance, Simd};
             if Simd::Detect.instance() >= Instance::Avx2 {
-                check_compare::<super::super::isa::Avx2>();
+                check_compare::<super::super::isa::Avx2, W>();
             }
             if Simd::Detect.instance() == Instance::Avx512 {
-                check_compare::<super::super::isa::Avx512>();
+                check_compare::<super::super::isa::Avx512, W>();
             }
         }
     }
@@ -837,6 +866,12 @@ mod tests {
     /// their bases four by four (read either way).
     #[test]
     fn every_instance_reads_every_lanes_row() {
+        reads_every_lanes_row::<{ width(2) }>();
+        reads_every_lanes_row::<{ width(3) }>();
+    }
+
+    /// [`every_instance_reads_every_lanes_row`] for chunks of `W`.
+    fn reads_every_lanes_row<const W: usize>() {
         let col: [Real; 1000] = core::array::from_fn(|i| i as Real * 0.5 - 7.0);
         let mut base = [0u32; W];
         for (ln, b) in base.iter_mut().enumerate() {

@@ -29,7 +29,7 @@
 //! field.
 
 use super::g2p::{live_lanes, stencils};
-use super::lanes::{load, Lane, Lanes, W};
+use super::lanes::{load, Lane, Lanes};
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
@@ -45,8 +45,8 @@ use crate::Real;
 /// overlaps, at an offset, a row the first has just stored (a load that partly overlaps a
 /// pending store waits for the store to complete instead of taking its value from the store
 /// buffer). A table, not a formula per lane: the scatter loop is not unrolled, and the formula
-/// cost 10 instructions per particle-step (callgrind).
-const SCATTER_ORDER: [usize; W] = {
+/// cost 10 instructions per particle-step (callgrind); the passes evaluate it at compile time.
+const fn scatter_order<const W: usize>() -> [usize; W] {
     let mut order = [0; W];
     let mut t = 0;
     while t < W {
@@ -54,7 +54,7 @@ const SCATTER_ORDER: [usize; W] = {
         t += 1;
     }
     order
-};
+}
 
 /// Index of heat conduction in the per-field arrays (diffusion is 1: [`crate::ScalarField`]).
 const HEAT: usize = crate::ScalarField::Temperature as usize;
@@ -62,7 +62,7 @@ const HEAT: usize = crate::ScalarField::Temperature as usize;
 /// One substep of field `f` (HEAT or DIFFUSION) with its definition `t` (inlined into each
 /// instruction set's instance, [`super::isa`]).
 #[inline(always)]
-pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
+pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -91,7 +91,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     for start in (0..count).step_by(W) {
         let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [c_col, m_col, _, _] = &mut g.scalar[f];
-        for ln in SCATTER_ORDER {
+        for ln in const { scatter_order::<W>() } {
             if live.has(ln) {
                 let i = start + ln;
                 let (cap, _) = capacity_and_conductance(ctx, p, i, f);
@@ -100,7 +100,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
                 // SAFETY: `chunk_stencils` checked the rows of a live lane against every
                 // column of length `n`.
                 unsafe {
-                    scatter_rows::<D, K, false, 2>(
+                    scatter_rows::<D, K, W, false, 2>(
                         st.lane(ln),
                         geom.stride,
                         cols,
@@ -138,7 +138,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
     for start in (0..count).step_by(W) {
         let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
         let [_, _, v_col, q_col] = &mut g.scalar[f];
-        for ln in SCATTER_ORDER {
+        for ln in const { scatter_order::<W>() } {
             if !live.has(ln) {
                 continue;
             }
@@ -148,13 +148,13 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
             let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
             let lane = st.lane(ln);
             // SAFETY: as in pass 1.
-            let (_, grad) = unsafe { gather_rows::<D, K, true, 1>(lane, geom.stride, [v_col]) };
+            let (_, grad) = unsafe { gather_rows::<D, K, W, true, 1>(lane, geom.stride, [v_col]) };
             // V (q . G + s S), q = -kappa grad: per row, wx V (s r_0 + sum_{b >= 1} q_b r_b)
             // + dwx V q_0 r_0.
             let vq: [Real; D] = core::array::from_fn(|a| -(volume * kappa) * grad[a]);
             let vs = volume * source;
             unsafe {
-                scatter_rows::<D, K, true, 1>(lane, geom.stride, [q_col], [1.0], |r| {
+                scatter_rows::<D, K, W, true, 1>(lane, geom.stride, [q_col], [1.0], |r| {
                     (
                         (1..D).fold(vs * r[0], |c, b| c + vq[b] * r[b]),
                         vq[0] * r[0],
@@ -199,7 +199,8 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
             // SAFETY: as in pass 1.
             let (a, v) = unsafe {
                 let lane = st.lane(ln);
-                let ([a, v], _) = gather_rows::<D, K, false, 2>(lane, geom.stride, [rate, value]);
+                let ([a, v], _) =
+                    gather_rows::<D, K, W, false, 2>(lane, geom.stride, [rate, value]);
                 (a, v)
             };
             let next = p.scalar[f][0][i] + a * ctx.dt;
@@ -220,7 +221,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>>(
 /// particles below `count` whose every stencil row fits in node columns of length `len`
 /// (always, by construction; the unchecked row accesses rely on it).
 #[inline(always)]
-fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
+fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -228,9 +229,9 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
     start: usize,
     count: usize,
     len: usize,
-) -> Lanes {
-    let x: [Lane; D] = core::array::from_fn(|a| load(p.x[a], start));
-    stencils::<D, K, S, false, true>(st, shape, ctx, p, start, &x);
+) -> Lanes<W> {
+    let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
+    stencils::<D, K, S, W, false, true>(st, shape, ctx, p, start, &x);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }
@@ -244,7 +245,13 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>>(
 /// # Safety
 /// Every row of the stencil fits in every column ([`rows_fit`]).
 #[inline(always)]
-unsafe fn scatter_rows<const D: usize, const K: usize, const DX: bool, const N: usize>(
+unsafe fn scatter_rows<
+    const D: usize,
+    const K: usize,
+    const W: usize,
+    const DX: bool,
+    const N: usize,
+>(
     st: LaneStencil<'_, D, K, W>,
     stride: [usize; D],
     cols: [&mut [Real]; N],
@@ -271,7 +278,13 @@ unsafe fn scatter_rows<const D: usize, const K: usize, const DX: bool, const N: 
 /// # Safety
 /// Every row of the stencil fits in every column ([`rows_fit`]).
 #[inline(always)]
-unsafe fn gather_rows<const D: usize, const K: usize, const GRAD: bool, const N: usize>(
+unsafe fn gather_rows<
+    const D: usize,
+    const K: usize,
+    const W: usize,
+    const GRAD: bool,
+    const N: usize,
+>(
     st: LaneStencil<'_, D, K, W>,
     stride: [usize; D],
     cols: [&[Real]; N],
