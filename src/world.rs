@@ -933,51 +933,31 @@ impl<'a> World<'a> {
         let layout = Layout::of(&def);
         let ppc = def.particles_per_cell;
         let run = (dt, time);
-        // One arm per shape family, each family's stencil width `K` fixed with it; `$wrap`
-        // turns the family into the shape the step uses.
+        // One run of the family `$family` in dimension `$d`, its stencil width `$k` fixed with
+        // it and the chunk width with the dimension; `$wrap` turns the family into the shape
+        // the step uses.
+        macro_rules! run_family {
+            ($d:literal, $k:literal, $family:expr, $wrap:expr) => {
+                self.run::<$d, $k, _, { width($d) }>(
+                    $wrap($family, &def),
+                    run,
+                    &def,
+                    &layout,
+                    kernel,
+                    simd,
+                )
+            };
+        }
         macro_rules! by_shape {
             ($d:literal, $wrap:expr) => {
                 match def.shape {
-                    ShapeFunction::Linear => self.run::<$d, 2, _, { width($d) }>(
-                        $wrap(Linear, &def),
-                        run,
-                        &def,
-                        &layout,
-                        kernel,
-                        simd,
-                    ),
-                    ShapeFunction::Gimp => self.run::<$d, 3, _, { width($d) }>(
-                        $wrap(Gimp::new(ppc), &def),
-                        run,
-                        &def,
-                        &layout,
-                        kernel,
-                        simd,
-                    ),
-                    ShapeFunction::QuadraticBspline => self.run::<$d, 3, _, { width($d) }>(
-                        $wrap(QuadraticBspline, &def),
-                        run,
-                        &def,
-                        &layout,
-                        kernel,
-                        simd,
-                    ),
-                    ShapeFunction::CubicBspline => self.run::<$d, 4, _, { width($d) }>(
-                        $wrap(CubicBspline, &def),
-                        run,
-                        &def,
-                        &layout,
-                        kernel,
-                        simd,
-                    ),
-                    ShapeFunction::CpGimp => self.run::<$d, 3, _, { width($d) }>(
-                        $wrap(CpGimp::new(ppc), &def),
-                        run,
-                        &def,
-                        &layout,
-                        kernel,
-                        simd,
-                    ),
+                    ShapeFunction::Linear => run_family!($d, 2, Linear, $wrap),
+                    ShapeFunction::Gimp => run_family!($d, 3, Gimp::new(ppc), $wrap),
+                    ShapeFunction::QuadraticBspline => {
+                        run_family!($d, 3, QuadraticBspline, $wrap)
+                    }
+                    ShapeFunction::CubicBspline => run_family!($d, 4, CubicBspline, $wrap),
+                    ShapeFunction::CpGimp => run_family!($d, 3, CpGimp::new(ppc), $wrap),
                 }
             };
         }

@@ -349,66 +349,95 @@ fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
 }
 
 /// A block dropped from 0.3 m onto a stick floor, 2D and 3D, every shape and order but linear
-/// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second.
+/// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second: one test per
+/// dimension and order, so that the test threads share the work (as one test it was the
+/// longest of the suite by seven times).
 #[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded() {
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usf() {
+    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Usf);
+}
+
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usl() {
+    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Usl);
+}
+
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_musl() {
+    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Musl);
+}
+
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usf() {
+    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Usf);
+}
+
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usl() {
+    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Usl);
+}
+
+#[test]
+fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_musl() {
+    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Musl);
+}
+
+/// The drop of `block_dropped_on_stick_floor_stays_finite_and_bounded_*` in dimension `dim`
+/// and order `order`, for every shape and every effect.
+fn drop_on_stick_floor(dim: Dimension, order: UpdateOrder) {
     for fx in EFFECTS.iter().filter(|fx| built(fx)) {
-        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-            for shape in SHAPES {
-                for order in ORDERS {
-                    if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
-                        continue;
-                    }
-                    let mut def = WorldDef {
-                        dimension: dim,
-                        shape,
-                        update_order: order,
-                        cell_size: 0.05,
-                        cells: if dim == Dimension::ThreeD {
-                            [20; 3]
-                        } else {
-                            [20, 20, 1]
-                        },
-                        particle_capacity: 20_000,
-                        ..WorldDef::DEFAULT
-                    };
-                    def.faces[Face::YMin as usize] = Boundary::Stick;
-                    (fx.def)(&mut def);
-                    let mut buf = buffer_for(&def);
-                    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-                    let mat = w
-                        .add_material(&MaterialDef {
-                            youngs_modulus: 2.0e5,
-                            ..MaterialDef::DEFAULT
-                        })
-                        .unwrap();
-                    let z = if dim == Dimension::ThreeD { 0.3 } else { 0.0 };
-                    let z1 = if dim == Dimension::ThreeD { 0.7 } else { 0.0 };
-                    w.fill_box(
-                        Vec3::new(0.3, 0.4, z),
-                        Vec3::new(0.7, 0.7, z1),
-                        mat,
-                        Vec3::ZERO,
-                    )
-                    .unwrap();
-                    let label = format!("{dim:?} {shape:?} {order:?} {}", fx.name);
-                    let (y0, y_low) = drop_and_check(&mut w, fx, &label);
-                    if fx.loads || fx.damps {
-                        continue;
-                    }
-                    // Resting on the floor, the centre of mass is at the wall plus half the block's
-                    // height (0.15 m): the block must get near that and never through the floor.
-                    let wall = shape.margin_cells() as f64 * def.cell_size as f64;
-                    assert!(
-                        y_low < wall + 0.2,
-                        "{label}: block did not reach the floor ({y0} -> {y_low})"
-                    );
-                    assert!(
-                        y_low > wall + 0.05,
-                        "{label}: block went through the floor ({y_low})"
-                    );
-                }
+        for shape in SHAPES {
+            if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
+                continue;
             }
+            let mut def = WorldDef {
+                dimension: dim,
+                shape,
+                update_order: order,
+                cell_size: 0.05,
+                cells: if dim == Dimension::ThreeD {
+                    [20; 3]
+                } else {
+                    [20, 20, 1]
+                },
+                particle_capacity: 20_000,
+                ..WorldDef::DEFAULT
+            };
+            def.faces[Face::YMin as usize] = Boundary::Stick;
+            (fx.def)(&mut def);
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let mat = w
+                .add_material(&MaterialDef {
+                    youngs_modulus: 2.0e5,
+                    ..MaterialDef::DEFAULT
+                })
+                .unwrap();
+            let z = if dim == Dimension::ThreeD { 0.3 } else { 0.0 };
+            let z1 = if dim == Dimension::ThreeD { 0.7 } else { 0.0 };
+            w.fill_box(
+                Vec3::new(0.3, 0.4, z),
+                Vec3::new(0.7, 0.7, z1),
+                mat,
+                Vec3::ZERO,
+            )
+            .unwrap();
+            let label = format!("{dim:?} {shape:?} {order:?} {}", fx.name);
+            let (y0, y_low) = drop_and_check(&mut w, fx, &label);
+            if fx.loads || fx.damps {
+                continue;
+            }
+            // Resting on the floor, the centre of mass is at the wall plus half the block's
+            // height (0.15 m): the block must get near that and never through the floor.
+            let wall = shape.margin_cells() as f64 * def.cell_size as f64;
+            assert!(
+                y_low < wall + 0.2,
+                "{label}: block did not reach the floor ({y0} -> {y_low})"
+            );
+            assert!(
+                y_low > wall + 0.05,
+                "{label}: block went through the floor ({y_low})"
+            );
         }
     }
 }
