@@ -348,38 +348,29 @@ fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
     }
 }
 
-/// A block dropped from 0.3 m onto a stick floor, 2D and 3D, every shape and order but linear
-/// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second: one test per
-/// dimension and order, so that the test threads share the work (as one test it was the
-/// longest of the suite by seven times).
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usf() {
-    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Usf);
+/// One test per dimension and update order, each calling `$run(dimension, order)`.
+macro_rules! tests_per_dimension_and_order {
+    ($run:ident: $($name:ident => $dim:ident, $order:ident;)*) => {
+        $(
+            #[test]
+            fn $name() {
+                $run(Dimension::$dim, UpdateOrder::$order);
+            }
+        )*
+    };
 }
 
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usl() {
-    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Usl);
-}
-
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_2d_musl() {
-    drop_on_stick_floor(Dimension::Plane2D, UpdateOrder::Musl);
-}
-
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usf() {
-    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Usf);
-}
-
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usl() {
-    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Usl);
-}
-
-#[test]
-fn block_dropped_on_stick_floor_stays_finite_and_bounded_3d_musl() {
-    drop_on_stick_floor(Dimension::ThreeD, UpdateOrder::Musl);
+// A block dropped from 0.3 m onto a stick floor, 2D and 3D, every shape and order but linear
+// USL (see `linear_usl_cell_crossing_instability_is_contained`), one second: one test per
+// dimension and order, so that the test threads share the work (as one test it was the
+// longest of the suite by seven times).
+tests_per_dimension_and_order! { drop_on_stick_floor:
+    block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usf => Plane2D, Usf;
+    block_dropped_on_stick_floor_stays_finite_and_bounded_2d_usl => Plane2D, Usl;
+    block_dropped_on_stick_floor_stays_finite_and_bounded_2d_musl => Plane2D, Musl;
+    block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usf => ThreeD, Usf;
+    block_dropped_on_stick_floor_stays_finite_and_bounded_3d_usl => ThreeD, Usl;
+    block_dropped_on_stick_floor_stays_finite_and_bounded_3d_musl => ThreeD, Musl;
 }
 
 /// The drop of `block_dropped_on_stick_floor_stays_finite_and_bounded_*` in dimension `dim`
