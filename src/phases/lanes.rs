@@ -13,9 +13,11 @@ use crate::Real;
 /// overlaps, and each chunk's fixed costs are shared by twice the particles (the default 2D
 /// step 0.90 of its time with 16 in the AVX-512 instance, 0.87 in the AVX2 one); in 3D, 16:
 /// with 32 the 3D passes' larger lane state took 1.2 to 1.4 times as long. 16 measured
-/// faster than 8 in the AVX2 instance.
+/// faster than 8 in the AVX2 instance. With the `f64` feature 16 in 2D as well: a value of 32
+/// f64 lanes is eight 256-bit registers, and the 2D f64 step took 1.17 times as long in the
+/// AVX2 instance (1.03 with 16, against the step before chunks of 32; 5 interleaved rounds).
 pub(crate) const fn width(d: usize) -> usize {
-    if d == 3 {
+    if d == 3 || cfg!(feature = "f64") {
         16
     } else {
         32
