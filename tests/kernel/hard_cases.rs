@@ -281,6 +281,27 @@ fn bar_crossing_cells_stays_finite_and_bounded() {
     }
 }
 
+/// The world of the stick-floor hard cases: `n` cells of 0.05 m per axis (`n` x `n` in 2D),
+/// room for 20000 particles, a stick floor (the y-min face), slip walls elsewhere (the
+/// default), and effect `fx` declared.
+fn stick_floor_def(dim: Dimension, shape: ShapeFunction, n: u32, fx: &Fx) -> WorldDef {
+    let mut def = WorldDef {
+        dimension: dim,
+        shape,
+        cell_size: 0.05,
+        cells: if dim == Dimension::ThreeD {
+            [n; 3]
+        } else {
+            [n, n, 1]
+        },
+        particle_capacity: 20_000,
+        ..WorldDef::DEFAULT
+    };
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    (fx.def)(&mut def);
+    def
+}
+
 /// Particles placed exactly on grid nodes and exactly on cell edges (where linear weights'
 /// gradients jump and uGIMP switches branches), in 2D and 3D, falling onto a stick floor.
 #[test]
@@ -288,21 +309,8 @@ fn particles_exactly_on_nodes_and_cell_edges_stay_finite_and_bounded() {
     for fx in EFFECTS.iter().filter(|fx| built(fx)) {
         for dim in [Dimension::Plane2D, Dimension::ThreeD] {
             for shape in SHAPES {
-                let h: Real = 0.05;
-                let mut def = WorldDef {
-                    dimension: dim,
-                    shape,
-                    cell_size: h,
-                    cells: if dim == Dimension::ThreeD {
-                        [16; 3]
-                    } else {
-                        [16, 16, 1]
-                    },
-                    particle_capacity: 20_000,
-                    ..WorldDef::DEFAULT
-                };
-                def.faces[Face::YMin as usize] = Boundary::Stick;
-                (fx.def)(&mut def);
+                let def = stick_floor_def(dim, shape, 16, fx);
+                let h = def.cell_size;
                 let mut buf = buffer_for(&def);
                 let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
                 let mat = w.add_material(&MaterialDef::DEFAULT).unwrap();
@@ -381,21 +389,10 @@ fn drop_on_stick_floor(dim: Dimension, order: UpdateOrder) {
             if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
                 continue;
             }
-            let mut def = WorldDef {
-                dimension: dim,
-                shape,
+            let def = WorldDef {
                 update_order: order,
-                cell_size: 0.05,
-                cells: if dim == Dimension::ThreeD {
-                    [20; 3]
-                } else {
-                    [20, 20, 1]
-                },
-                particle_capacity: 20_000,
-                ..WorldDef::DEFAULT
+                ..stick_floor_def(dim, shape, 20, fx)
             };
-            def.faces[Face::YMin as usize] = Boundary::Stick;
-            (fx.def)(&mut def);
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
             let mat = w
