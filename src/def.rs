@@ -358,6 +358,20 @@ pub struct WorldDef {
     /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)`, in (0, 1].
     /// Default 0.5: the usual margin for explicit MPM with FLIP.
     pub cfl: Real,
+    /// Most substeps one [`crate::World::step`] call may take, in `1..=`[`crate::MAX_SUBSTEPS`]:
+    /// a `dt` that needs more is refused with [`crate::Error::SubstepLimit`] and changes
+    /// nothing, so a call's cost is bounded by this times the particles' cost of a substep.
+    /// Default 1000: a 60 Hz frame of a stiff solid at centimetre cells (steel on the default
+    /// grid needs about 20,000 substeps) is refused at once instead of taking seconds; a host
+    /// that wants such a frame raises the limit or steps with a smaller `dt`.
+    pub max_substeps: u32,
+    /// Runaway bound on the volume ratio `J = det F`, > 1: a particle whose `J` leaves
+    /// `[1 / max_volume_ratio, max_volume_ratio]` in a step is frozen like one whose state
+    /// turned non-finite, and counted in [`crate::StepReport::runaway`]. Default 100: no
+    /// material the kernel models changes its volume a hundredfold, while an unstable scheme
+    /// (linear shapes with USL) drives `J` past it long before stresses overflow. `INFINITY`
+    /// removes the bound (inverted `F` still freezes).
+    pub max_volume_ratio: Real,
     /// The optional effects the scene uses. Default [`Effects::NONE`]: a scene pays only for
     /// what it declares.
     pub effects: Effects,
@@ -381,6 +395,8 @@ impl WorldDef {
         faces: [Boundary::Slip; 6],
         exp_terms: 2,
         cfl: 0.5,
+        max_substeps: 1000,
+        max_volume_ratio: 100.0,
         effects: Effects::NONE,
     };
 

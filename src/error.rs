@@ -70,6 +70,20 @@ pub enum Error {
     /// An axisymmetric world whose lower r face is open, or whose wall plane there is not the
     /// axis `r = 0` (set `origin.x = -margin_cells * cell_size`).
     InvalidAxis = 27,
+    /// The time step needs more substeps than the definition's
+    /// [`max_substeps`](crate::WorldDef::max_substeps) allows (nothing was stepped): take a
+    /// smaller `dt` per call or raise the limit.
+    SubstepLimit = 28,
+    /// The buffer holds a world of this build whose state is not valid ([`crate::World::open`]
+    /// checks it): a time, minimum particle mass or thermostat alpha not finite or out of
+    /// range; a particle with a mass or volume not finite or <= 0, an unknown status or
+    /// material; an active particle with a position outside the admissible region, a value not
+    /// finite or an inverted F; a material or traction record out of range.
+    InvalidState = 29,
+    /// A limit of the definition out of range: [`max_substeps`](crate::WorldDef::max_substeps)
+    /// outside `1..=MAX_SUBSTEPS`, or [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
+    /// not > 1.
+    InvalidLimit = 30,
 }
 
 impl Error {
@@ -121,11 +135,20 @@ impl Error {
             Error::InvalidAxis => {
                 c"axisymmetric: the lower r face must be a wall whose plane is the axis r = 0"
             }
+            Error::SubstepLimit => {
+                c"time step needs more substeps than the definition's max_substeps"
+            }
+            Error::InvalidState => {
+                c"world state invalid: a value not finite or out of range, or an unknown status or material"
+            }
+            Error::InvalidLimit => {
+                c"max_substeps must be in 1..=2^20 and max_volume_ratio > 1"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 27] = [
+    pub const ALL: [Error; 30] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -153,6 +176,9 @@ impl Error {
         Error::UnknownParticle,
         Error::TractionCapacityExceeded,
         Error::InvalidAxis,
+        Error::SubstepLimit,
+        Error::InvalidState,
+        Error::InvalidLimit,
     ];
 }
 

@@ -27,9 +27,9 @@ pub const ALIGN: usize = 64;
 /// Columns are padded to a multiple of this many entries so chunked loops need no remainder.
 pub const CHUNK: usize = 32;
 
-const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
+pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 6;
+const VERSION: u64 = 7;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,6 +91,9 @@ pub(crate) struct Header {
     pub traction_count: u64,
     /// The thermostat's current alpha, 1/s.
     pub feedback_alpha: f64,
+    // The definition's limits (`WorldDef::max_substeps`, `max_volume_ratio`).
+    pub max_substeps: u64,
+    pub max_volume_ratio: f64,
 }
 
 /// An optional [`Transport`] widened to 8-byte fields: declared flag, each face's condition
@@ -190,7 +193,7 @@ unsafe impl Zeroable for Header {}
 unsafe impl Pod for Header {}
 
 const _: () =
-    assert!(size_of::<Header>() == 8 * (34 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14));
+    assert!(size_of::<Header>() == 8 * (36 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14));
 
 /// One material in the buffer's table: parameters and what the step derives from them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -465,6 +468,11 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     if !(1..=8).contains(&def.particles_per_cell) {
         return Err(Error::InvalidParticlesPerCell);
     }
+    // NaN-safe: a NaN ratio is not greater than 1.
+    let ratio_ok = def.max_volume_ratio.partial_cmp(&1.0) == Some(core::cmp::Ordering::Greater);
+    if !(1..=crate::MAX_SUBSTEPS).contains(&def.max_substeps) || !ratio_ok {
+        return Err(Error::InvalidLimit);
+    }
     def.effects.validate(def.axes())?;
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")
@@ -537,6 +545,8 @@ impl Header {
             diffusion: TransportRecord::of(&fx.diffusion),
             traction_count: 0,
             feedback_alpha: 0.0,
+            max_substeps: def.max_substeps as u64,
+            max_volume_ratio: def.max_volume_ratio as f64,
         }
     }
 
@@ -622,6 +632,8 @@ impl Header {
             faces,
             exp_terms: small(self.exp_terms)?,
             cfl: self.cfl as Real,
+            max_substeps: small(self.max_substeps)?,
+            max_volume_ratio: self.max_volume_ratio as Real,
             effects,
         })
     }

@@ -8,17 +8,18 @@ use crate::layout::{col, validate, Header, Layout, MaterialRecord, TractionRecor
 use crate::material::{eigenstrain_part, elastic_part, Deformation};
 use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
-use crate::particles::{ParticleCols, ACTIVE};
+use crate::particles::{ParticleCols, ParticleStatus, ACTIVE};
 use crate::phases::lanes::width;
 use crate::phases::p2g::mode;
 use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
 use crate::{Error, Real, Vec3};
+use core::cmp::Ordering;
 use core::mem::size_of;
 use core::ops::Range;
 
-/// Largest number of substeps one `step` call takes; a larger `dt / stable_dt` is rejected.
+/// The largest [`WorldDef::max_substeps`] a definition may set.
 pub const MAX_SUBSTEPS: u32 = 1 << 20;
 
 /// Nodes lighter than this fraction of the lightest particle are treated as empty: epsilon^2,
@@ -39,17 +40,31 @@ pub struct StepReport {
     pub stopped: u32,
     /// Particles that crossed an open face and left the simulation.
     pub escaped: u32,
-    /// Particles frozen because their state turned non-finite or their F inverted.
+    /// Particles frozen in this call: their state turned non-finite, their F inverted, or
+    /// their volume ran away. Nonzero means the step went bad somewhere
+    /// ([`StepReport::went_bad`]).
     pub frozen: u32,
+    /// Of the frozen, those frozen because their volume ratio `J` left
+    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`WorldDef::max_volume_ratio`]): the sign
+    /// of an unstable scheme or a time step too long for the scene.
+    pub runaway: u32,
     /// The ids of the first frozen particles (up to 8), for diagnosis.
     pub first_frozen: heapless::Vec<u32, 8>,
 }
 
 impl StepReport {
-    pub(crate) fn note_frozen(&mut self, id: u32) {
+    pub(crate) fn note_frozen(&mut self, id: u32, runaway: bool) {
         self.frozen += 1;
+        self.runaway += runaway as u32;
         // A full list only means more than 8 froze; the count says how many.
         let _ = self.first_frozen.push(id);
+    }
+
+    /// Whether a particle froze in this call (non-finite state, inverted F or runaway volume):
+    /// the flag a host checks after each step. Frozen particles leave the simulation; the
+    /// rest of the world goes on.
+    pub fn went_bad(&self) -> bool {
+        self.frozen > 0
     }
 }
 
@@ -232,18 +247,34 @@ impl<'a> World<'a> {
         Ok(World { buf })
     }
 
-    /// Opens a world that `buf` already holds (for example a byte copy of another world's
-    /// [`World::as_bytes`]). Checks the header, the size and the alignment.
+    /// Opens a world that `buf` already holds, such as a byte copy of another world's
+    /// [`World::as_bytes`] read from disk or a network: untrusted bytes. Checks the header, the
+    /// size and the alignment (else [`Error::NotAWorld`], [`Error::BufferTooSmall`],
+    /// [`Error::BufferMisaligned`]) and then the whole state, every particle included
+    /// ([`WorldRef::check_state`], else [`Error::InvalidState`]): a world that opens steps
+    /// with meaningful results. Costs one pass over the particles.
     pub fn open(buf: &'a mut [u8]) -> Result<World<'a>, Error> {
-        let total = World::stored_bytes(buf)?;
-        check_buffer(buf, total)?;
+        WorldRef::open(buf)?;
+        Ok(World { buf })
+    }
+
+    /// Opens a world that this program laid out ([`World::init`]) or opened ([`World::open`])
+    /// before and has changed since only through this API: the header, size and alignment
+    /// checks of [`World::open`], in constant time, without the state check. Whatever the
+    /// buffer holds, no call on the world reads or writes outside it; a state changed
+    /// behind the API's back may give meaningless results. For hosts that hold a world by its
+    /// address between calls (the C interface opens the world this way on every call).
+    pub fn reopen(buf: &'a mut [u8]) -> Result<World<'a>, Error> {
+        WorldRef::reopen(buf)?;
         Ok(World { buf })
     }
 
     /// Bytes of the world whose header starts `buf` (at least [`World::HEADER_BYTES`] long and
     /// aligned to [`crate::ALIGN`]): what a byte copy must hold, and what [`World::open`] needs.
-    /// Checks the header as [`World::open`] does. For hosts that hold a world by its address
-    /// alone (the C interface) and must learn its extent before they can open it.
+    /// Checks the header as [`World::reopen`] does. For hosts that hold a world by its address
+    /// alone (the C interface) and must learn its extent before they can open it; such a host
+    /// first checks [`World::has_magic`] on the first [`World::MAGIC_BYTES`] bytes, so that a
+    /// pointer to something else is not read any further.
     pub fn stored_bytes(buf: &[u8]) -> Result<usize, Error> {
         check_buffer(buf, size_of::<Header>())?;
         let h = *bytemuck::from_bytes::<Header>(&buf[..size_of::<Header>()]);
@@ -254,12 +285,19 @@ impl<'a> World<'a> {
             || h.particle_count > def.particle_capacity as u64
             || h.material_count > def.material_capacity as u64
             || h.traction_count > def.effects.traction_capacity as u64
-            || !h.feedback_alpha.is_finite()
-            || h.feedback_alpha < 0.0
         {
             return Err(Error::NotAWorld);
         }
         Ok(layout.total)
+    }
+
+    /// Bytes at the start of a world that identify it (its magic number).
+    pub const MAGIC_BYTES: usize = 8;
+
+    /// Whether `prefix` (at least [`World::MAGIC_BYTES`] long) starts like a world of this
+    /// library: the first check, before anything else of a buffer is read.
+    pub fn has_magic(prefix: &[u8]) -> bool {
+        prefix.get(..Self::MAGIC_BYTES) == Some(&crate::layout::MAGIC.to_le_bytes()[..])
     }
 
     /// Size of the header at the start of every world buffer, bytes.
@@ -354,30 +392,7 @@ impl<'a> World<'a> {
 
     /// Adds a material; returns its id.
     pub fn add_material(&mut self, m: &MaterialDef) -> Result<u32, Error> {
-        let ok = m.youngs_modulus.is_finite()
-            && m.youngs_modulus > 0.0
-            && m.poisson_ratio > -1.0
-            && m.poisson_ratio < 0.5
-            && m.density.is_finite()
-            && m.density > 0.0
-            && m.heat_capacity.is_finite()
-            && m.heat_capacity > 0.0
-            && m.conductivity.is_finite()
-            && m.conductivity >= 0.0
-            && m.diffusivity.is_finite()
-            && m.diffusivity >= 0.0
-            && m.thermal_expansion.is_finite()
-            && m.reference_temperature.is_finite()
-            && m.swelling.is_finite()
-            && m.reference_concentration.is_finite();
-        if !ok {
-            return Err(Error::InvalidMaterial);
-        }
-        let (lambda, mu) = m.lame();
-        let c = m.wave_speed();
-        if !(lambda.is_finite() && mu.is_finite() && c.is_finite()) {
-            return Err(Error::InvalidMaterial);
-        }
+        let record = material_record(m)?;
         let def = self.def();
         let id = self.material_count();
         if id >= def.material_capacity as usize {
@@ -387,23 +402,7 @@ impl<'a> World<'a> {
         let start = layout.materials_offset + id * size_of::<MaterialRecord>();
         let rec: &mut MaterialRecord =
             bytemuck::from_bytes_mut(&mut self.buf[start..start + size_of::<MaterialRecord>()]);
-        *rec = MaterialRecord {
-            model: m.model as u32 as Real,
-            youngs_modulus: m.youngs_modulus,
-            poisson_ratio: m.poisson_ratio,
-            density: m.density,
-            lambda,
-            mu,
-            wave_speed: c,
-            heat_capacity: m.heat_capacity,
-            conductivity: m.conductivity,
-            diffusivity: m.diffusivity,
-            thermal_expansion: m.thermal_expansion,
-            reference_temperature: m.reference_temperature,
-            swelling: m.swelling,
-            reference_concentration: m.reference_concentration,
-            reserved: [0.0; 2],
-        };
+        *rec = record;
         self.header_mut().material_count += 1;
         Ok(id as u32)
     }
@@ -639,15 +638,19 @@ impl<'a> World<'a> {
     }
 
     /// The thermostat (NairnMPM's feedback damping): `alpha += 2 gain (KE - target) dt / M`,
-    /// clamped to `[0, max_alpha]`, from the active particles' kinetic energy and mass.
-    fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real) {
+    /// clamped to `[0, min(max_alpha, room)]`, from the active particles' kinetic energy and
+    /// mass; `room` is the largest alpha the substep integrates stably. The stored alpha stays
+    /// finite: a rate that is not a number (no finite energy to compare) leaves it as it was.
+    fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real, room: f64) {
         let (kinetic, mass) = self.read().kinetic_energy_and_mass();
         let h = self.header_mut();
         if mass > 0.0 {
             let target = f.target.at(time) as f64;
             let rate = 2.0 * f.gain as f64 * (kinetic - target) / mass;
             let alpha = h.feedback_alpha + rate * dt as f64;
-            h.feedback_alpha = alpha.clamp(0.0, f.max_alpha as f64);
+            if !alpha.is_nan() {
+                h.feedback_alpha = alpha.clamp(0.0, (f.max_alpha as f64).min(room));
+            }
         }
     }
 
@@ -708,7 +711,14 @@ impl<'a> World<'a> {
         material: u32,
         velocity: Vec3,
     ) -> Result<Range<u32>, Error> {
-        self.fill(min, max, material, velocity, |_| true)
+        self.fill(
+            min,
+            max,
+            material,
+            velocity,
+            |_| true,
+            |_, _| Some([min.x, max.x]),
+        )
     }
 
     /// Fills the disk (2D) of `center` and `radius` like [`World::fill_box`]. In 3D the disk is
@@ -751,16 +761,37 @@ impl<'a> World<'a> {
         }
         let r = Vec3::splat(radius);
         let d = self.def().axes();
-        self.fill(center - r, center + r, material, velocity, |x| {
+        let inside = |x: [Real; 3]| {
             let mut q = 0.0;
             for a in 0..d {
                 q += (x[a] - center[a]) * (x[a] - center[a]);
             }
             q <= radius * radius
-        })
+        };
+        // The ball's chord along x through the sites of `y` and `z` (ranges of coordinates;
+        // z is [0, 0] in 2D): `c_x -+ sqrt(r^2 - dy^2 - dz^2)`, with dy, dz the distances
+        // from the centre to those ranges; none where the ball does not reach them.
+        let chord = |y: [Real; 2], z: [Real; 2]| {
+            let gap = |c: Real, [lo, hi]: [Real; 2]| (lo - c).max(c - hi).max(0.0);
+            let (dy, dz) = (
+                gap(center.y, y),
+                if d == 3 { gap(center.z, z) } else { 0.0 },
+            );
+            let q = radius * radius - dy * dy - dz * dz;
+            (q >= 0.0).then(|| {
+                let half = crate::math::sqrt(q);
+                [center.x - half, center.x + half]
+            })
+        };
+        self.fill(center - r, center + r, material, velocity, inside, chord)
     }
 
-    /// Lattice sites of the bounding box `[min, max]` for which `inside` holds.
+    /// Lattice sites of the bounding box `[min, max]` for which `inside` holds. `chord(y, z)`
+    /// bounds the region's x extent over the sites whose y and z coordinates lie in the
+    /// ranges `y` and `z` (`None`: the region misses them), so that the sites visited are
+    /// those of the region's rows, not of its whole bounding box: a call costs in proportion
+    /// to the particles it seeds, plus one test per row of bins of the bounding box within
+    /// the grid.
     fn fill(
         &mut self,
         min: Vec3,
@@ -768,11 +799,13 @@ impl<'a> World<'a> {
         material: u32,
         velocity: Vec3,
         inside: impl Fn([Real; 3]) -> bool,
+        chord: impl Fn([Real; 2], [Real; 2]) -> Option<[Real; 2]>,
     ) -> Result<Range<u32>, Error> {
         let def = self.def();
         let d = def.axes();
+        // The axes the dimension uses (z is ignored in 2D, as `add_particles` ignores it).
         let finite =
-            (0..3).all(|a| min[a].is_finite() && max[a].is_finite() && velocity[a].is_finite());
+            (0..d).all(|a| min[a].is_finite() && max[a].is_finite() && velocity[a].is_finite());
         if !finite || (0..d).any(|a| min[a] > max[a]) {
             return Err(if finite {
                 Error::InvalidRegion
@@ -793,43 +826,67 @@ impl<'a> World<'a> {
             let v = if axisymmetric { volume * x[0] } else { volume };
             (v * rec.density, v)
         };
-        // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [min, max],
+        // Lattice index range per axis: sites at origin + (k + 1/2) spacing inside [lo, hi],
         // clipped to the admissible region widened by one site, so that a huge region costs
         // no more than the grid while a region reaching out of the grid still meets a site
         // outside it (and is rejected). The sites, not the region's corners, are checked.
-        let mut k_lo = [0i64; 3];
-        let mut k_hi = [0i64; 3];
-        let lattice = |x: Real, a: usize| (x - def.origin[a]) / spacing - 0.5;
         let margin = def.shape.margin_cells() as Real * def.particles_per_cell as Real;
-        for a in 0..d {
+        let sites_in = |a: usize, lo: Real, hi: Real| -> [i64; 2] {
             let sites_per_axis = (def.cells[a] * def.particles_per_cell) as Real;
             let (adm_lo, adm_hi) = (margin - 1.5, sites_per_axis - margin + 0.5);
-            k_lo[a] = ceil(lattice(min[a], a).clamp(adm_lo, adm_hi)) as i64;
-            k_hi[a] = libm_floor(lattice(max[a], a).clamp(adm_lo, adm_hi)) as i64;
+            let lattice = |x: Real| ((x - def.origin[a]) / spacing - 0.5).clamp(adm_lo, adm_hi);
+            [ceil(lattice(lo)) as i64, libm_floor(lattice(hi)) as i64]
+        };
+        let mut k_lo = [0i64; 3];
+        let mut k_hi = [0i64; 3];
+        for a in 0..d {
+            [k_lo[a], k_hi[a]] = sites_in(a, min[a], max[a]);
         }
+        let coordinate = |a: usize, k: i64| def.origin[a] + (k as Real + 0.5) * spacing;
         let site = |k: [i64; 3]| -> [Real; 3] {
-            core::array::from_fn(|a| {
-                if a < d {
-                    def.origin[a] + (k[a] as Real + 0.5) * spacing
-                } else {
-                    0.0
-                }
-            })
+            core::array::from_fn(|a| if a < d { coordinate(a, k[a]) } else { 0.0 })
         };
         let bins = Bins {
             n: def.particles_per_cell as i64,
             shift_halves: def.shape.first_node_shift_halves(),
         };
+        // The x sites of the region's chord through the sites `y`, `z` (inclusive index
+        // ranges), widened by a site on each side against the chord's round-off (the sites
+        // themselves are tested with `inside`).
+        let row = |y: [i64; 2], z: [i64; 2]| -> [i64; 2] {
+            let at = |a: usize, k: [i64; 2]| {
+                if a < d {
+                    [coordinate(a, k[0]), coordinate(a, k[1])]
+                } else {
+                    [0.0; 2]
+                }
+            };
+            match chord(at(1, y), at(2, z)) {
+                Some([lo, hi]) => {
+                    let [l, h] = sites_in(0, lo, hi);
+                    [l - 1, h + 1]
+                }
+                None => [1, 0],
+            }
+        };
         let sites = || {
-            BinnedSites::new(k_lo, k_hi, bins)
+            BinnedSites::new(k_lo, k_hi, bins, &row)
                 .map(site)
                 .filter(|x| inside(*x))
         };
-        // Pass 1: count and validate (nothing is written on failure). Stops at the first
-        // problem, so a region far larger than the capacity costs no more than the capacity.
+        // Pass 1: count and validate as `add_particles` does (nothing is written on failure).
+        // Stops at the first problem, so a region far larger than the capacity costs no more
+        // than the capacity.
         let room = def.particle_capacity as usize - self.particle_count();
         let mut n = 0usize;
         for x in sites() {
+            let (mass, volume) = per_site(x);
+            if !(mass.is_finite() && volume.is_finite()) {
+                return Err(Error::NonFiniteInput);
+            }
+            if !(mass > 0.0 && volume > 0.0) {
+                return Err(Error::NonPositiveMassOrVolume);
+            }
             if !geom.admits(x) {
                 return Err(Error::PositionOutsideDomain);
             }
@@ -839,7 +896,7 @@ impl<'a> World<'a> {
             }
         }
         // Pass 2: write the same sites in the same order.
-        let v3 = [velocity.x, velocity.y, velocity.z];
+        let v3 = core::array::from_fn(|a| if a < d { velocity[a] } else { 0.0 });
         Ok(self.append(
             &def,
             sites().map(|x| {
@@ -862,22 +919,26 @@ impl<'a> World<'a> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::InvalidTimeStep);
         }
-        let stable = self.read().stable_dt_with_simd(simd);
-        let ratio = dt / stable;
+        let def = self.def();
+        let limits = self.read().time_step_limits(simd);
+        let ratio = dt / limits.stable_dt;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
         // NaN-safe: a NaN ratio fails `<=`.
-        let within = substeps <= MAX_SUBSTEPS as Real;
+        let within = substeps <= def.max_substeps as Real;
         if !within {
-            return Err(Error::InvalidTimeStep);
+            return Err(Error::SubstepLimit);
         }
         let substeps = substeps as u32;
         let sub_dt = dt / substeps as Real;
+        // The thermostat's alpha is kept to what a substep of this length integrates stably
+        // besides the other damping (`alpha dt <= cfl`, as `stable_dt` keeps the other
+        // damping): it adapts to the substep and never sets its length, whatever its gain.
+        let feedback_room = (def.cfl as f64 / sub_dt as f64 - limits.other_damping).max(0.0);
         let mut report = StepReport {
             substeps,
             substep_dt: sub_dt,
             ..StepReport::default()
         };
-        let def = self.def();
         let order = def.update_order;
         let fx = def.effects;
         let (force, apic, damp) = (
@@ -889,7 +950,7 @@ impl<'a> World<'a> {
         for k in 0..substeps {
             let time = time0 + k as f64 * sub_dt as f64;
             if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
-                self.update_feedback(&feedback, time, sub_dt);
+                self.update_feedback(&feedback, time, sub_dt, feedback_room);
             }
             // One monomorphised substep per combination of the declared effects.
             macro_rules! substep {
@@ -1032,6 +1093,7 @@ impl<'a> World<'a> {
             alpha_p,
             half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
             exp_terms: def.exp_terms,
+            jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
@@ -1070,11 +1132,122 @@ pub struct WorldRef<'a> {
 }
 
 impl<'a> WorldRef<'a> {
-    /// Reads the world that `buf` holds, with the checks of [`World::open`].
+    /// Reads the world that `buf` holds, with the checks of [`World::open`] (the state
+    /// included).
     pub fn open(buf: &'a [u8]) -> Result<WorldRef<'a>, Error> {
+        let w = WorldRef::reopen(buf)?;
+        w.check_state()?;
+        Ok(w)
+    }
+
+    /// Reads the world that `buf` holds, with the constant-time checks of [`World::reopen`].
+    pub fn reopen(buf: &'a [u8]) -> Result<WorldRef<'a>, Error> {
         let total = World::stored_bytes(buf)?;
         check_buffer(buf, total)?;
         Ok(WorldRef { buf })
+    }
+
+    /// Checks the state of a world whose header is sound, as [`World::open`] does; the first
+    /// problem found is [`Error::InvalidState`]. What holds in every world this API produced:
+    /// - the time is finite and >= 0; the thermostat's alpha finite, in `[0, max_alpha]`
+    ///   (0 without one); the smallest particle mass is the smallest of the particles' masses
+    ///   (infinite before the first particle);
+    /// - each material record is what [`World::add_material`] makes of a valid definition;
+    ///   each traction names an existing particle and a face of the dimension, with a finite
+    ///   traction;
+    /// - every particle has a known status and material, a finite mass and volume > 0, a
+    ///   position inside the grid, and every value it carries is finite (velocity, `H` with
+    ///   `J > 0`, stress, and the columns of its declared effects: forces, damping >= 0,
+    ///   moment matrix, transported values and sources, hoop stretch > -1): a particle
+    ///   frozen in a step keeps its last finite state;
+    /// - every active particle lies inside the admissible region (the grid less the shape
+    ///   function's margin).
+    pub fn check_state(&self) -> Result<(), Error> {
+        let invalid = Err(Error::InvalidState);
+        let h = self.header();
+        let def = self.def();
+        let layout = self.layout();
+        let d = layout.d;
+        let n = self.particle_count();
+        let max_alpha = def
+            .effects
+            .damping
+            .and_then(|dm| dm.feedback)
+            .map_or(0.0, |f| f.max_alpha as f64);
+        let alpha_ok = (0.0..=max_alpha).contains(&h.feedback_alpha);
+        if !(h.time.is_finite() && h.time >= 0.0 && alpha_ok) {
+            return invalid;
+        }
+        for (id, rec) in self.materials(&layout).iter().enumerate() {
+            let again = self.material(id as u32).map(|m| material_record(&m));
+            if !matches!(again, Some(Ok(r)) if bytemuck::bytes_of(&r) == bytemuck::bytes_of(rec)) {
+                return invalid;
+            }
+        }
+        let trac_start = layout.tractions_offset;
+        let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
+        let tractions: &[TractionRecord] =
+            bytemuck::cast_slice(&self.buf[trac_start..trac_start + trac_bytes]);
+        for t in tractions {
+            let finite = t.traction.iter().all(|c| c.is_finite());
+            if t.particle as usize >= n || t.face as usize >= 2 * d || !finite {
+                return invalid;
+            }
+        }
+        let v = self.particles();
+        let materials = self.material_count();
+        let admissible = GeomAny::new(&def);
+        let grid = GeomAny {
+            lo: [0.0; 3],
+            hi: def.cells.map(|c| c as Real),
+            ..admissible
+        };
+        // Every particle Real column a particle's state lives in: those of `H`, the stress,
+        // the declared effects (the MUSL start positions and the cpGIMP stretches are scratch).
+        let real = |j: usize| self.real_col(&layout, j, n);
+        let groups = [
+            layout.force,
+            layout.damping,
+            layout.affine,
+            layout.scalar[0],
+            layout.scalar[1],
+            layout.hoop,
+        ];
+        let columns = (0..d * d)
+            .map(|k| col::h(d, k / d, k % d))
+            .chain((0..crate::layout::stress_components(d)).map(|k| col::tau(d, k)))
+            .chain(groups.iter().flat_map(|g| g.first..g.first + g.count))
+            .map(real);
+        let mut min_mass = f64::INFINITY;
+        for i in 0..n {
+            let (m, vol) = (v.mass[i], v.volume0[i]);
+            min_mass = min_mass.min(m as f64);
+            let x: [Real; 3] = core::array::from_fn(|a| if a < d { v.position[a][i] } else { 0.0 });
+            let active = v.status[i] == ACTIVE;
+            let sound = ParticleStatus::from_code(v.status[i]).is_some()
+                && (v.material[i] as usize) < materials
+                && m.is_finite()
+                && m > 0.0
+                && vol.is_finite()
+                && vol > 0.0
+                && (0..d).all(|a| v.velocity[a][i].is_finite())
+                && columns.clone().all(|c| c[i].is_finite())
+                && v.damping.iter().all(|c| c.get(i).is_none_or(|&x| x >= 0.0))
+                && v.hoop.get(i).is_none_or(|&x| x > -1.0)
+                && v.jacobian_minus_one(i).partial_cmp(&-1.0) == Some(Ordering::Greater)
+                && if active {
+                    admissible.admits(x)
+                } else {
+                    grid.admits(x)
+                };
+            if !sound {
+                return invalid;
+            }
+        }
+        if h.min_particle_mass != min_mass {
+            return invalid;
+        }
+        Ok(())
     }
 
     fn header(&self) -> &'a Header {
@@ -1162,7 +1335,9 @@ impl<'a> WorldRef<'a> {
     }
 
     /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
-    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle.
+    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle; shorter
+    /// where damping (`alpha dt <= cfl`, the thermostat's alpha excepted: it is clamped to what
+    /// the substep allows), conduction or diffusion (`dt <= h^2 / (2 d kappa)`) need it.
     /// Infinite when nothing moves and there is no material.
     pub fn stable_dt(&self) -> Real {
         self.stable_dt_with_simd(Simd::Detect)
@@ -1170,6 +1345,11 @@ impl<'a> WorldRef<'a> {
 
     /// [`WorldRef::stable_dt`], its scan of the particles run in the instruction set `simd`.
     pub(crate) fn stable_dt_with_simd(&self, simd: Simd) -> Real {
+        self.time_step_limits(simd).stable_dt
+    }
+
+    /// The stable time step and the damping besides the thermostat that it allows for.
+    fn time_step_limits(&self, simd: Simd) -> TimeStepLimits {
         let layout = self.layout();
         let def = self.def();
         let c_max = self
@@ -1189,16 +1369,14 @@ impl<'a> WorldRef<'a> {
         let v2_max = crate::phases::fastest_squared(simd, &v, &status[..n], d);
         let speed = c_max as f64 + libm::sqrt(v2_max);
         // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
-        // most the Courant number, with alpha the largest total damping any particle can see
-        // (the schedules' maxima, the thermostat's current alpha, the largest local values).
-        let alpha = def.effects.damping.map_or(0.0, |dm| {
+        // most the Courant number, with alpha the largest damping any particle can see (the
+        // schedules' maxima, the largest local values). The thermostat's alpha is not among
+        // them: the step clamps it to the room this leaves (`World::update_feedback`).
+        let other_damping = def.effects.damping.map_or(0.0, |dm| {
             let local = |k: usize| view_max(self.particles().damping[k], status);
-            dm.grid.max_value() as f64
-                + dm.particle.max_value() as f64
-                + self.feedback_alpha()
-                + local(0)
-                + local(1)
+            dm.grid.max_value() as f64 + dm.particle.max_value() as f64 + local(0) + local(1)
         });
+        let alpha = other_damping;
         // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
         // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.
         let fx = &def.effects;
@@ -1219,10 +1397,14 @@ impl<'a> WorldRef<'a> {
         let conduction = h * h / (2.0 * d as f64 * kappa);
         // Never 0: a step below the smallest positive Real is not a step.
         let dt = def.cfl as f64 * (h / speed).min(1.0 / alpha).min(conduction);
-        if dt.is_finite() {
+        let stable_dt = if dt.is_finite() {
             (dt as Real).max(Real::MIN_POSITIVE)
         } else {
             Real::INFINITY
+        };
+        TimeStepLimits {
+            stable_dt,
+            other_damping,
         }
     }
 
@@ -1392,6 +1574,52 @@ impl<'a> WorldRef<'a> {
     }
 }
 
+/// The record of a valid material definition, with what the step derives from it (Lame
+/// parameters, wave speed), or `InvalidMaterial`.
+fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> {
+    let ok = m.youngs_modulus.is_finite()
+        && m.youngs_modulus > 0.0
+        && m.poisson_ratio > -1.0
+        && m.poisson_ratio < 0.5
+        && m.density.is_finite()
+        && m.density > 0.0
+        && m.heat_capacity.is_finite()
+        && m.heat_capacity > 0.0
+        && m.conductivity.is_finite()
+        && m.conductivity >= 0.0
+        && m.diffusivity.is_finite()
+        && m.diffusivity >= 0.0
+        && m.thermal_expansion.is_finite()
+        && m.reference_temperature.is_finite()
+        && m.swelling.is_finite()
+        && m.reference_concentration.is_finite();
+    if !ok {
+        return Err(Error::InvalidMaterial);
+    }
+    let (lambda, mu) = m.lame();
+    let c = m.wave_speed();
+    if !(lambda.is_finite() && mu.is_finite() && c.is_finite()) {
+        return Err(Error::InvalidMaterial);
+    }
+    Ok(MaterialRecord {
+        model: m.model as u32 as Real,
+        youngs_modulus: m.youngs_modulus,
+        poisson_ratio: m.poisson_ratio,
+        density: m.density,
+        lambda,
+        mu,
+        wave_speed: c,
+        heat_capacity: m.heat_capacity,
+        conductivity: m.conductivity,
+        diffusivity: m.diffusivity,
+        thermal_expansion: m.thermal_expansion,
+        reference_temperature: m.reference_temperature,
+        swelling: m.swelling,
+        reference_concentration: m.reference_concentration,
+        reserved: [0.0; 2],
+    })
+}
+
 /// The isotropic eigenstrain `d` of particle `i` of material `rec` (thermal expansion and
 /// swelling, from the grid values at the particle; 0 for a field not declared), as the stress
 /// update takes it out.
@@ -1401,6 +1629,14 @@ fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> R
         .enumerate()
         .filter_map(|(f, col)| col.get(i).map(|&v| eigenstrain_part(rec, f, v)))
         .sum()
+}
+
+/// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the
+/// thermostat's that any particle can see (1/s), whose room the thermostat's alpha must stay
+/// within.
+struct TimeStepLimits {
+    stable_dt: Real,
+    other_damping: f64,
 }
 
 /// Largest value of `col` over active particles (0 for an empty column).
@@ -1645,11 +1881,16 @@ impl Bins {
     }
 }
 
+/// The x sites of a row of a region: given the row's y and z site ranges (inclusive), the
+/// inclusive x range that holds every site of the region in those rows (empty if lo > hi).
+type RowSpan<'r> = &'r dyn Fn([i64; 2], [i64; 2]) -> [i64; 2];
+
 /// Lattice indices in `[lo, hi]` (inclusive per axis) in stencil-bin order: the bins x
 /// fastest, and within a bin its sites x fastest. The sites of a bin share their stencil's
 /// first node, so they come one after another and the scatter sums them before it adds to the
 /// grid ([`crate::phases::p2g`]'s runs): one load and store per node row for the bin rather
-/// than one per particle.
+/// than one per particle. In each row of bins (y and z fixed) only the bins that meet the
+/// region's x span for that row ([`RowSpan`]) are visited.
 ///
 /// The bins whose number of sites is a multiple of 4 come first, the others (the partial bins
 /// at the box's edges) after them: a run of the first kind then starts where a 4-lane block
@@ -1657,60 +1898,87 @@ impl Bins {
 /// one stencil row for the block's four particles ([`crate::phases::rows::blocks_share`]).
 /// At 2 sites per cell per axis that is every bin inside the box (4 sites in 2D, 8 in 3D) and,
 /// in 3D, those on its faces (4).
-struct BinnedSites {
+struct BinnedSites<'r> {
     lo: [i64; 3],
     hi: [i64; 3],
     bins: Bins,
-    outer: Sites,
+    span: RowSpan<'r>,
+    /// The rows of bins (x index 0; y and z the row's).
+    rows: Sites,
+    /// The bins of the current row still to visit.
+    row: Sites,
     inner: Sites,
     /// Visiting the bins whose site count is a multiple of 4 (else the others).
     whole: bool,
 }
 
-impl BinnedSites {
-    fn new(lo: [i64; 3], hi: [i64; 3], bins: Bins) -> Self {
+impl<'r> BinnedSites<'r> {
+    fn new(lo: [i64; 3], hi: [i64; 3], bins: Bins, span: RowSpan<'r>) -> Self {
         BinnedSites {
             lo,
             hi,
             bins,
-            outer: Self::all_bins(lo, hi, bins),
+            span,
+            rows: Self::rows(lo, hi, bins),
+            row: Sites::new([0; 3], [-1; 3]),
             inner: Sites::new([0; 3], [-1; 3]),
             whole: true,
         }
     }
 
-    /// The bins the sites `[lo, hi]` fall into.
-    fn all_bins(lo: [i64; 3], hi: [i64; 3], bins: Bins) -> Sites {
+    /// The rows of the bins the sites `[lo, hi]` fall into.
+    fn rows(lo: [i64; 3], hi: [i64; 3], bins: Bins) -> Sites {
         Sites::new(
-            core::array::from_fn(|a| bins.of(lo[a])),
-            core::array::from_fn(|a| bins.of(hi[a])),
+            [0, bins.of(lo[1]), bins.of(lo[2])],
+            [0, bins.of(hi[1]), bins.of(hi[2])],
         )
+    }
+
+    /// The sites of bin `b` inside `[lo, hi]` (inclusive; empty on an axis where lo > hi).
+    fn sites_of(&self, b: [i64; 3]) -> ([i64; 3], [i64; 3]) {
+        let bins = self.bins;
+        let from = core::array::from_fn(|a| self.lo[a].max(bins.first(b[a])));
+        let to = core::array::from_fn(|a| self.hi[a].min(bins.first(b[a] + 1) - 1));
+        (from, to)
     }
 }
 
-impl Iterator for BinnedSites {
+impl Iterator for BinnedSites<'_> {
     type Item = [i64; 3];
     fn next(&mut self) -> Option<[i64; 3]> {
         loop {
             if let Some(k) = self.inner.next() {
                 return Some(k);
             }
-            let Some(b) = self.outer.next() else {
+            if let Some(b) = self.row.next() {
+                let (from, to) = self.sites_of(b);
+                let count: i64 = (0..3).map(|a| (to[a] - from[a] + 1).max(0)).product();
+                if (count % 4 == 0) == self.whole {
+                    self.inner = Sites::new(from, to);
+                }
+                continue;
+            }
+            let Some(r) = self.rows.next() else {
                 if !self.whole {
                     return None;
                 }
                 // Then the bins of the other kind.
                 self.whole = false;
-                self.outer = Self::all_bins(self.lo, self.hi, self.bins);
+                self.rows = Self::rows(self.lo, self.hi, self.bins);
                 continue;
             };
-            let bins = self.bins;
-            let from: [i64; 3] = core::array::from_fn(|a| self.lo[a].max(bins.first(b[a])));
-            let to: [i64; 3] = core::array::from_fn(|a| self.hi[a].min(bins.first(b[a] + 1) - 1));
-            let count: i64 = (0..3).map(|a| (to[a] - from[a] + 1).max(0)).product();
-            if (count % 4 == 0) == self.whole {
-                self.inner = Sites::new(from, to);
-            }
+            // The row's sites in y and z, and the region's x span over them, in bins.
+            let (from, to) = self.sites_of(r);
+            let [x0, x1] = (self.span)([from[1], to[1]], [from[2], to[2]]);
+            let (x0, x1) = (x0.max(self.lo[0]), x1.min(self.hi[0]));
+            self.row = if x0 > x1 {
+                Sites::new([0; 3], [-1; 3])
+            } else {
+                Sites::new(
+                    [self.bins.of(x0), r[1], r[2]],
+                    [self.bins.of(x1), r[1], r[2]],
+                )
+            };
         }
     }
 }
@@ -1769,6 +2037,93 @@ mod tests {
         (*state >> 11) as f64 / (1u64 << 53) as f64
     }
 
+    /// `open` checks the header's state and the tables as well as the particles: each edit
+    /// of a snapshot that no call produces is `InvalidState` (a particle count raised over
+    /// empty slots, a time, minimum mass or thermostat alpha out of range, a material record
+    /// that is not what `add_material` makes of its definition, a traction naming no particle
+    /// or face, or not finite), and the bytes stay as they were; the intact snapshot opens.
+    #[cfg(feature = "effects")]
+    #[test]
+    fn open_refuses_damaged_header_state_and_tables() {
+        use crate::{Damping, Effects, Face, Feedback, Schedule};
+        let def = WorldDef {
+            cells: [16, 16, 1],
+            cell_size: 0.1,
+            particle_capacity: 512,
+            effects: Effects {
+                damping: Some(Damping {
+                    feedback: Some(Feedback {
+                        gain: 1.0,
+                        target: Schedule::ZERO,
+                        max_alpha: 10.0,
+                    }),
+                    ..Damping::NONE
+                }),
+                traction_capacity: 8,
+                ..Effects::NONE
+            },
+            ..WorldDef::DEFAULT
+        };
+        let layout = Layout::of(&def);
+        let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
+        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
+        w.fill_box(
+            Vec3::new(0.4, 0.4, 0.0),
+            Vec3::new(0.8, 0.8, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .unwrap();
+        w.add_tractions(0..2, Face::XMax, Vec3::new(1.0, 0.0, 0.0))
+            .unwrap();
+        let snapshot = w.as_bytes().to_vec();
+        type Edit = fn(&mut Header, &mut MaterialRecord, &mut TractionRecord);
+        let edits: [(&str, Edit); 15] = [
+            ("count over empty slots", |h, _, _| h.particle_count += 30),
+            ("time NaN", |h, _, _| h.time = f64::NAN),
+            ("time negative", |h, _, _| h.time = -1.0),
+            ("min mass NaN", |h, _, _| h.min_particle_mass = f64::NAN),
+            ("min mass negative", |h, _, _| h.min_particle_mass = -1.0),
+            ("min mass not the least", |h, _, _| {
+                h.min_particle_mass *= 0.5
+            }),
+            ("alpha NaN", |h, _, _| h.feedback_alpha = f64::NAN),
+            ("alpha negative", |h, _, _| h.feedback_alpha = -1.0),
+            ("alpha over its bound", |h, _, _| h.feedback_alpha = 11.0),
+            ("modulus NaN", |_, r, _| r.youngs_modulus = Real::NAN),
+            ("Lame parameter edited", |_, r, _| r.lambda *= 2.0),
+            ("unknown model", |_, r, _| r.model = 7.0),
+            ("traction of no particle", |_, _, t| t.particle = 999),
+            ("traction on a 3D face", |_, _, t| {
+                t.face = Face::ZMax as u32
+            }),
+            ("traction NaN", |_, _, t| t.traction[1] = Real::NAN),
+        ];
+        let mut copy = HeapBuffer::new(snapshot.len());
+        for (what, edit) in edits {
+            let mem = copy.as_mut_bytes();
+            mem.copy_from_slice(&snapshot);
+            let (head, rest) = mem.split_at_mut(layout.materials_offset);
+            let h: &mut Header = bytemuck::from_bytes_mut(&mut head[..size_of::<Header>()]);
+            let (mat, rest) = rest.split_at_mut(size_of::<MaterialRecord>());
+            let r: &mut MaterialRecord = bytemuck::from_bytes_mut(mat);
+            let at =
+                layout.tractions_offset - layout.materials_offset - size_of::<MaterialRecord>();
+            let t: &mut TractionRecord =
+                bytemuck::from_bytes_mut(&mut rest[at..at + size_of::<TractionRecord>()]);
+            edit(h, r, t);
+            let before = mem.to_vec();
+            assert_eq!(World::open(mem).err(), Some(Error::InvalidState), "{what}");
+            assert!(
+                *mem == before[..],
+                "{what}: the refused open changed the bytes"
+            );
+        }
+        copy.as_mut_bytes().copy_from_slice(&snapshot);
+        assert!(World::open(copy.as_mut_bytes()).is_ok());
+    }
+
     /// The bin order visits exactly the sites of the plain lattice order, each once, for boxes
     /// anywhere (negative indices included), every bin width and shift.
     #[test]
@@ -1785,7 +2140,8 @@ mod tests {
                         hi[a] = lo[a] + (lcg(&mut state) * 9.0) as i64 - 1;
                     }
                     let mut plain: Vec<[i64; 3]> = Sites::new(lo, hi).collect();
-                    let mut binned: Vec<[i64; 3]> = BinnedSites::new(lo, hi, bins).collect();
+                    let mut binned: Vec<[i64; 3]> =
+                        BinnedSites::new(lo, hi, bins, &|_, _| [i64::MIN, i64::MAX]).collect();
                     plain.sort_unstable();
                     binned.sort_unstable();
                     assert_eq!(plain, binned, "n {n}, shift {shift_halves}, {lo:?}..{hi:?}");

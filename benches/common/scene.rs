@@ -366,6 +366,6 @@ impl Scene {
 
     /// The scene's world.
     pub fn world(&mut self) -> World<'_> {
-        World::open(self.storage.as_mut_bytes()).expect("the scene's world")
+        World::reopen(self.storage.as_mut_bytes()).expect("the scene's world")
     }
 }

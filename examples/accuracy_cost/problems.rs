@@ -255,7 +255,7 @@ impl Run {
     }
 
     fn world(&mut self) -> World<'_> {
-        World::open(self.storage.as_mut_bytes()).expect("the run's world")
+        World::reopen(self.storage.as_mut_bytes()).expect("the run's world")
     }
 }
 

@@ -7,6 +7,19 @@
  * Precision: mpm_real is float. To use the double-precision library (built with the
  * mpm-gimp-ffi/f64 feature) define MPM_GIMP_F64 before including this header. Code compiled
  * for one precision does not link against the library of the other.
+ *
+ * Threads: the library keeps no state of its own besides the instruction-set choice of the
+ * mpm_simd_use_* functions (set it before any step). Separate worlds may be used from
+ * separate threads at the same time. On one world, calls that take a const MpmWorld * may
+ * run at the same time as each other, but never while a call that takes an MpmWorld * (add,
+ * seed, set, step) runs on it; the pointers of an MpmParticlesView must not be read during
+ * such a call either, and are invalid after it.
+ *
+ * Errors: every call returns an MpmStatus; anything but MPM_STATUS_OK means the call wrote no
+ * output and changed nothing. Input arrays and outputs must not lie in the world's memory
+ * (MPM_STATUS_OVERLAPPING_MEMORY). Calls on a world check its header in constant time;
+ * mpm_world_open also checks the whole state of memory that came from elsewhere (a file, a
+ * network): MPM_STATUS_INVALID_STATE.
  */
 
 #ifndef MPM_GIMP_H
@@ -32,6 +45,12 @@
 // Most points an `MpmSchedule` holds.
 #define MPM_SCHEDULE_POINTS 8
 
+// `MpmStepReport::flags`: some particle froze in the step.
+#define MPM_STEP_FLAG_FROZE 1
+
+// `MpmStepReport::flags`: some particle froze because its volume ran away.
+#define MPM_STEP_FLAG_RUNAWAY 2
+
 // Result of a C call. The numbers are stable: the kernel's errors keep the numbers of
 // `mpm_gimp::Error`, and the conditions only the C interface can meet start at 64.
 // A call that returns anything but `MPM_STATUS_OK` has written nothing and changed nothing.
@@ -46,7 +65,9 @@ enum MpmStatus
   MPM_STATUS_BUFFER_TOO_SMALL = 1,
   // The memory does not start at the alignment `mpm_memory_requirements` says.
   MPM_STATUS_BUFFER_MISALIGNED = 2,
-  // The memory does not hold a world of this build (wrong magic, version, precision or size).
+  // The memory does not hold a world of this build: wrong magic (checked first, on the
+  // first 8 bytes alone), version, precision, definition or size. (A world of this build
+  // whose state is not valid is `MPM_STATUS_INVALID_STATE`.)
   MPM_STATUS_NOT_A_WORLD = 3,
   // The definition declares an effect (the axisymmetric form included) and the build lacks
   // the kernel's `effects` feature (this library is built with it).
@@ -86,7 +107,8 @@ enum MpmStatus
   MPM_STATUS_POSITION_OUTSIDE_DOMAIN = 19,
   // Input arrays of different lengths (Rust API only: C passes one count for all arrays).
   MPM_STATUS_LENGTH_MISMATCH = 20,
-  // A time step that is <= 0 or not finite.
+  // A time step that is <= 0 or not finite. (A finite positive dt that needs too many
+  // substeps is `MPM_STATUS_SUBSTEP_LIMIT`.)
   MPM_STATUS_INVALID_TIME_STEP = 21,
   // A box inverted on an axis (min > max), a radius not finite or <= 0, or a disk in 3D or
   // a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
@@ -107,6 +129,19 @@ enum MpmStatus
   // there is not the axis r = 0 (set `origin.x = -margin * cell_size`, see
   // `MPM_DIMENSION_AXISYMMETRIC2D`).
   MPM_STATUS_INVALID_AXIS = 27,
+  // `mpm_world_step`: the dt needs more substeps than the definition's `max_substeps`
+  // allows (nothing was stepped). Step with a smaller dt or raise the limit.
+  MPM_STATUS_SUBSTEP_LIMIT = 28,
+  // `mpm_world_open`: the memory holds a world of this build whose state is not valid: a
+  // time, minimum particle mass or thermostat alpha not finite or out of range; a particle
+  // with a mass or volume not finite or <= 0, an unknown status or material id; an active
+  // particle outside the grid's admissible region, with a value not finite or an inverted F;
+  // a material or traction record out of range. Calls on a world pointer (every other
+  // call) check only the header, in constant time.
+  MPM_STATUS_INVALID_STATE = 29,
+  // A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
+  // `max_volume_ratio` not > 1.
+  MPM_STATUS_INVALID_LIMIT = 30,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -117,9 +152,18 @@ enum MpmStatus
   MPM_STATUS_INVALID_ENUM = 66,
   // An output buffer shorter than the data to copy.
   MPM_STATUS_OUTPUT_TOO_SMALL = 67,
-  // The library hit an internal error (a Rust panic, caught at the boundary). The world may
-  // be in an intermediate state; report it as a bug.
+  // The library hit an internal error: a Rust panic caught at the boundary, in builds that
+  // unwind (the test builds, or a host that builds the crate with `panic = "unwind"`). The
+  // release libraries are built with `panic = "abort"`: there a panic aborts the process
+  // and this status is never returned. No panic is known to be reachable; report one as a
+  // bug. The world may be in an intermediate state.
   MPM_STATUS_INTERNAL = 68,
+  // An input array or an output pointer of the call overlaps the world's memory (its first
+  // `mpm_world_bytes` bytes; for `mpm_world_init` and `mpm_world_open`, the world they lay
+  // out or open in the memory handed in):
+  // passing a column of the particle view back as input, or copying out into the world.
+  // Nothing is read from the arrays and nothing is written.
+  MPM_STATUS_OVERLAPPING_MEMORY = 69,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmStatus;
@@ -464,6 +508,14 @@ typedef struct MpmWorldDef {
   uint32_t exp_terms;
   // Courant number in (0, 1]. Default 0.5.
   mpm_real cfl;
+  // Most substeps one `mpm_world_step` call may take, 1..=1048576; a dt that needs more is
+  // refused with `MPM_STATUS_SUBSTEP_LIMIT` (nothing changes), so a call costs at most this
+  // many substeps. Default 1000.
+  uint32_t max_substeps;
+  // Runaway bound on the volume ratio J = det F, > 1 (`INFINITY`: none): a particle whose J
+  // leaves [1 / max_volume_ratio, max_volume_ratio] in a step is frozen and counted in
+  // `MpmStepReport::runaway`. Default 100.
+  mpm_real max_volume_ratio;
   // The optional effects. Default: none declared.
   struct MpmEffects effects;
   // Set by `mpm_world_def_default`; do not change.
@@ -624,8 +676,17 @@ typedef struct MpmStepReport {
   uint32_t stopped;
   // Particles that crossed an open face and left the simulation.
   uint32_t escaped;
-  // Particles frozen because their state turned non-finite or their F inverted.
+  // Particles frozen in this call: their state turned non-finite, their F inverted, or
+  // their volume ran away (see `runaway`). Nonzero means the step went bad somewhere:
+  // `flags` has `MPM_STEP_FLAG_FROZE`.
   uint32_t frozen;
+  // Of the frozen, those whose volume ratio J left
+  // [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`): the sign
+  // of an unstable scheme or a time step too long for the scene.
+  uint32_t runaway;
+  // `MPM_STEP_FLAG_FROZE` if any particle froze in this call, `MPM_STEP_FLAG_RUNAWAY` if
+  // any froze as runaway; 0 for a step that went well.
+  uint32_t flags;
   // How many entries of `first_frozen` are set (at most 8).
   uint32_t first_frozen_count;
   // Ids of the first frozen particles.
@@ -845,7 +906,10 @@ MpmStatus mpm_world_init(const struct MpmWorldDef *def,
                          struct MpmWorld **world_out);
 
 // Opens a world that `memory` already holds, such as a byte copy of another world's first
-// `mpm_world_bytes` bytes (a snapshot), and returns it in `world_out`.
+// `mpm_world_bytes` bytes (a snapshot), and returns it in `world_out`. The memory is
+// untrusted: besides the header (`MPM_STATUS_NOT_A_WORLD`) the whole state is checked, every
+// particle included (`MPM_STATUS_INVALID_STATE`), in one pass over the particles; a world that
+// opens steps with meaningful results.
 //
 // # Safety
 // As `mpm_world_init`.
@@ -928,7 +992,9 @@ MpmStatus mpm_world_fill_sphere(struct MpmWorld *world,
 MpmStatus mpm_world_stable_dt(const struct MpmWorld *world, mpm_real *dt_out);
 
 // Advances the world by `dt` seconds (> 0, finite), in equal substeps no longer than the
-// stable one, and reports what happened in `report_out`.
+// stable one (at most the definition's `max_substeps`, else `MPM_STATUS_SUBSTEP_LIMIT` and
+// nothing changes), and reports what happened in `report_out`: check its `flags` (or
+// `frozen`) to learn whether the step went bad for some particles.
 //
 // # Safety
 // `world` is NULL or a world; `report_out` is NULL or valid.

@@ -319,6 +319,14 @@ pub struct MpmWorldDef {
     pub exp_terms: u32,
     /// Courant number in (0, 1]. Default 0.5.
     pub cfl: mpm_real,
+    /// Most substeps one `mpm_world_step` call may take, 1..=1048576; a dt that needs more is
+    /// refused with `MPM_STATUS_SUBSTEP_LIMIT` (nothing changes), so a call costs at most this
+    /// many substeps. Default 1000.
+    pub max_substeps: u32,
+    /// Runaway bound on the volume ratio J = det F, > 1 (`INFINITY`: none): a particle whose J
+    /// leaves [1 / max_volume_ratio, max_volume_ratio] in a step is frozen and counted in
+    /// `MpmStepReport::runaway`. Default 100.
+    pub max_volume_ratio: mpm_real,
     /// The optional effects. Default: none declared.
     pub effects: MpmEffects,
     /// Set by `mpm_world_def_default`; do not change.
@@ -396,6 +404,8 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         faces: d.faces.map(|f| f as u32),
         exp_terms: d.exp_terms,
         cfl: d.cfl,
+        max_substeps: d.max_substeps,
+        max_volume_ratio: d.max_volume_ratio,
         effects: effects_to_c(&d.effects),
         internal_cookie: WORLD_COOKIE,
     }
@@ -610,6 +620,8 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
         faces,
         exp_terms: d.exp_terms,
         cfl: d.cfl,
+        max_substeps: d.max_substeps,
+        max_volume_ratio: d.max_volume_ratio,
         effects,
     })
 }

@@ -2,6 +2,9 @@
 //! per-particle forces and damping, tractions, the thermostat's state, and the values and
 //! sources of the transported scalars (temperature, concentration potential).
 //!
+//! No input array may lie in the world's memory (`MPM_STATUS_OVERLAPPING_MEMORY`: copy a
+//! column of the particle view to memory of your own first).
+//!
 //! Every call that sets an effect's data needs that effect declared
 //! (`MPM_STATUS_EFFECT_NOT_DECLARED` otherwise), and names existing particles
 //! (`MPM_STATUS_UNKNOWN_PARTICLE` otherwise, checked before any array is read). The setters of
@@ -13,7 +16,7 @@
 use crate::defs::{face_from_c, scalar_field_from_c, vec3, MpmFaceValue, MpmScalarFieldValue};
 use crate::status::MpmStatus;
 use crate::world::{id_range, put, world_at, world_ref, MpmIdRange, MpmWorld};
-use crate::{guard, mpm_real, non_null, MpmVec3};
+use crate::{apart, guard, mpm_real, non_null, MpmVec3};
 use kernel::{ScalarField, World};
 
 /// `Err(UnknownParticle)` unless particles `first .. first + count` exist: checked before any
@@ -62,6 +65,9 @@ pub unsafe extern "C" fn mpm_world_set_particle_forces(
         for &p in &arrays[..d] {
             non_null(p)?;
         }
+        for &p in &arrays[..d] {
+            apart(w.as_bytes(), p, count)?;
+        }
         if !def.effects.particle_forces {
             return Err(MpmStatus::EffectNotDeclared);
         }
@@ -101,6 +107,8 @@ pub unsafe extern "C" fn mpm_world_set_particle_damping(
         let mut w = unsafe { world_at(world) }?;
         non_null(alpha_g)?;
         non_null(alpha_p)?;
+        apart(w.as_bytes(), alpha_g, count)?;
+        apart(w.as_bytes(), alpha_p, count)?;
         if !w.def().effects.damping.is_some_and(|d| d.per_particle) {
             return Err(MpmStatus::EffectNotDeclared);
         }
@@ -139,6 +147,7 @@ unsafe fn set_scalar(
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
         non_null(values)?;
+        apart(w.as_bytes(), values, count)?;
         let field = scalar_field_from_c(field)?;
         let effects = w.def().effects;
         let transport = match field {
@@ -228,6 +237,7 @@ pub unsafe extern "C" fn mpm_world_add_tractions(
         non_null(ids_out)?;
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), ids_out, 1)?;
         let face = face_from_c(face)?;
         // A range past u32 saturates: its end lies past any world's particles (at most 2^30),
         // so the kernel refuses it as an unknown particle, after its other checks.
@@ -269,6 +279,7 @@ pub unsafe extern "C" fn mpm_world_traction_count(
         non_null(count_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), count_out, 1)?;
         let n = w.traction_count();
         // SAFETY: checked non-NULL.
         unsafe { put(count_out, n) };
@@ -290,6 +301,7 @@ pub unsafe extern "C" fn mpm_world_feedback_alpha(
         non_null(alpha_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), alpha_out, 1)?;
         let alpha = w.feedback_alpha();
         // SAFETY: checked non-NULL.
         unsafe { put(alpha_out, alpha) };

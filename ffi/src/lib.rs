@@ -11,10 +11,17 @@
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
 //!
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer
-//! followed by its length, every pointer checked for NULL, nothing written and nothing changed
-//! on failure. No panic crosses the boundary: the libraries are built with `panic = "abort"`,
+//! followed by its length, every pointer checked for NULL, no input array or output inside the
+//! world's memory (`MPM_STATUS_OVERLAPPING_MEMORY`), nothing written and nothing changed on
+//! failure. No panic crosses the boundary: the libraries are built with `panic = "abort"`,
 //! and every entry point also catches unwinding (where the build unwinds) and answers
 //! `MPM_STATUS_INTERNAL`.
+//!
+//! Threads: the library keeps no global state but the instruction-set choice of
+//! `mpm_simd_use_*`. Separate worlds may be used from separate threads at once. On one world,
+//! calls that take a `const MpmWorld *` may run at the same time as each other, never at the
+//! same time as a call that takes an `MpmWorld *` (add, seed, set, step), and the pointers of
+//! a particle view may not be read while such a call runs.
 //!
 //! A world lives in memory the host owns: `mpm_world_init` lays it out there and hands back
 //! the same address as an `MpmWorld *`. The library keeps no state of its own and never
@@ -107,5 +114,22 @@ pub(crate) fn non_null<T>(p: *const T) -> Result<(), MpmStatus> {
         Err(MpmStatus::NullPointer)
     } else {
         Ok(())
+    }
+}
+
+/// `Err(OverlappingMemory)` if the `count` values of `T` at `p` (an input array or an output
+/// of the call; NULL or empty: nothing) share a byte with the world's memory `world`. Checked
+/// before an input slice is formed or an output written, so that no call reads its input
+/// from, or writes its output into, the memory it works on.
+pub(crate) fn apart<T>(world: &[u8], p: *const T, count: usize) -> Result<(), MpmStatus> {
+    let (start, bytes) = (p as usize, count.saturating_mul(core::mem::size_of::<T>()));
+    let (w_start, w_end) = (
+        world.as_ptr() as usize,
+        world.as_ptr() as usize + world.len(),
+    );
+    if p.is_null() || bytes == 0 || start >= w_end || start.saturating_add(bytes) <= w_start {
+        Ok(())
+    } else {
+        Err(MpmStatus::OverlappingMemory)
     }
 }

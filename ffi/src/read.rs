@@ -3,7 +3,7 @@
 
 use crate::status::MpmStatus;
 use crate::world::{put, world_ref, MpmWorld};
-use crate::{guard, mpm_real, non_null};
+use crate::{apart, guard, mpm_real, non_null};
 use kernel::{ParticlesView, WorldRef};
 
 /// Borrowed view of every particle column, from `mpm_world_particles`. Valid until the next
@@ -102,6 +102,7 @@ pub unsafe extern "C" fn mpm_world_particles(
         non_null(view_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), view_out, 1)?;
         let v = w.particles();
         let def = w.def();
         let d = def.axes();
@@ -171,8 +172,10 @@ unsafe fn copy_out<T: Copy>(
         if out_len < n {
             return Err(MpmStatus::OutputTooSmall);
         }
-        // SAFETY: non-NULL and the caller promises `out_len >= n` writable values; the output
-        // cannot overlap the world's columns without breaking the caller's contract.
+        apart(w.as_bytes(), out, n)?;
+        apart(w.as_bytes(), written_out, 1)?;
+        // SAFETY: non-NULL, the caller promises `out_len >= n` writable values, and they lie
+        // outside the world's memory (checked).
         let dst = unsafe { core::slice::from_raw_parts_mut(out, n) };
         for i in 0..v.count {
             for j in 0..k {
@@ -316,6 +319,7 @@ pub unsafe extern "C" fn mpm_world_diagnostics(
         non_null(diagnostics_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), diagnostics_out, 1)?;
         let s = w.diagnostics();
         let out = MpmDiagnostics {
             particle_count: w.particle_count(),

@@ -14,7 +14,9 @@ pub enum MpmStatus {
     BufferTooSmall = 1,
     /// The memory does not start at the alignment `mpm_memory_requirements` says.
     BufferMisaligned = 2,
-    /// The memory does not hold a world of this build (wrong magic, version, precision or size).
+    /// The memory does not hold a world of this build: wrong magic (checked first, on the
+    /// first 8 bytes alone), version, precision, definition or size. (A world of this build
+    /// whose state is not valid is `MPM_STATUS_INVALID_STATE`.)
     NotAWorld = 3,
     /// The definition declares an effect (the axisymmetric form included) and the build lacks
     /// the kernel's `effects` feature (this library is built with it).
@@ -54,7 +56,8 @@ pub enum MpmStatus {
     PositionOutsideDomain = 19,
     /// Input arrays of different lengths (Rust API only: C passes one count for all arrays).
     LengthMismatch = 20,
-    /// A time step that is <= 0 or not finite.
+    /// A time step that is <= 0 or not finite. (A finite positive dt that needs too many
+    /// substeps is `MPM_STATUS_SUBSTEP_LIMIT`.)
     InvalidTimeStep = 21,
     /// A box inverted on an axis (min > max), a radius not finite or <= 0, or a disk in 3D or
     /// a sphere in 2D. (Non-finite corners, centres or velocities are `NON_FINITE_INPUT`; a
@@ -75,6 +78,19 @@ pub enum MpmStatus {
     /// there is not the axis r = 0 (set `origin.x = -margin * cell_size`, see
     /// `MPM_DIMENSION_AXISYMMETRIC2D`).
     InvalidAxis = 27,
+    /// `mpm_world_step`: the dt needs more substeps than the definition's `max_substeps`
+    /// allows (nothing was stepped). Step with a smaller dt or raise the limit.
+    SubstepLimit = 28,
+    /// `mpm_world_open`: the memory holds a world of this build whose state is not valid: a
+    /// time, minimum particle mass or thermostat alpha not finite or out of range; a particle
+    /// with a mass or volume not finite or <= 0, an unknown status or material id; an active
+    /// particle outside the grid's admissible region, with a value not finite or an inverted F;
+    /// a material or traction record out of range. Calls on a world pointer (every other
+    /// call) check only the header, in constant time.
+    InvalidState = 29,
+    /// A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
+    /// `max_volume_ratio` not > 1.
+    InvalidLimit = 30,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -85,9 +101,18 @@ pub enum MpmStatus {
     InvalidEnum = 66,
     /// An output buffer shorter than the data to copy.
     OutputTooSmall = 67,
-    /// The library hit an internal error (a Rust panic, caught at the boundary). The world may
-    /// be in an intermediate state; report it as a bug.
+    /// The library hit an internal error: a Rust panic caught at the boundary, in builds that
+    /// unwind (the test builds, or a host that builds the crate with `panic = "unwind"`). The
+    /// release libraries are built with `panic = "abort"`: there a panic aborts the process
+    /// and this status is never returned. No panic is known to be reachable; report one as a
+    /// bug. The world may be in an intermediate state.
     Internal = 68,
+    /// An input array or an output pointer of the call overlaps the world's memory (its first
+    /// `mpm_world_bytes` bytes; for `mpm_world_init` and `mpm_world_open`, the world they lay
+    /// out or open in the memory handed in):
+    /// passing a column of the particle view back as input, or copying out into the world.
+    /// Nothing is read from the arrays and nothing is written.
+    OverlappingMemory = 69,
 }
 
 impl From<Error> for MpmStatus {
@@ -120,13 +145,16 @@ impl From<Error> for MpmStatus {
             Error::UnknownParticle => MpmStatus::UnknownParticle,
             Error::TractionCapacityExceeded => MpmStatus::TractionCapacityExceeded,
             Error::InvalidAxis => MpmStatus::InvalidAxis,
+            Error::SubstepLimit => MpmStatus::SubstepLimit,
+            Error::InvalidState => MpmStatus::InvalidState,
+            Error::InvalidLimit => MpmStatus::InvalidLimit,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 33] = [
+    pub const ALL: [MpmStatus; 37] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -155,11 +183,15 @@ impl MpmStatus {
         MpmStatus::UnknownParticle,
         MpmStatus::TractionCapacityExceeded,
         MpmStatus::InvalidAxis,
+        MpmStatus::SubstepLimit,
+        MpmStatus::InvalidState,
+        MpmStatus::InvalidLimit,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,
         MpmStatus::OutputTooSmall,
         MpmStatus::Internal,
+        MpmStatus::OverlappingMemory,
     ];
 
     /// The description `mpm_status_string` returns, NUL-terminated: the kernel's own for its
@@ -174,6 +206,9 @@ impl MpmStatus {
             MpmStatus::InvalidEnum => c"enum value out of range",
             MpmStatus::OutputTooSmall => c"output buffer shorter than the data",
             MpmStatus::Internal => c"internal error (caught panic): please report",
+            MpmStatus::OverlappingMemory => {
+                c"an input array or output pointer overlaps the world's memory"
+            }
             kernel => Error::ALL
                 .iter()
                 .find(|e| **e as u32 == kernel as u32)

@@ -3,7 +3,7 @@
 
 use crate::defs::{material_def_from_c, vec3, world_def_from_c, world_def_to_c, MpmMaterialDef};
 use crate::status::MpmStatus;
-use crate::{guard, mpm_real, non_null, MpmVec3, MpmWorldDef};
+use crate::{apart, guard, mpm_real, non_null, MpmVec3, MpmWorldDef};
 use core::ffi::c_void;
 use kernel::{memory_requirements, ParticleBatch, World, WorldRef};
 
@@ -63,15 +63,31 @@ pub struct MpmStepReport {
     pub stopped: u32,
     /// Particles that crossed an open face and left the simulation.
     pub escaped: u32,
-    /// Particles frozen because their state turned non-finite or their F inverted.
+    /// Particles frozen in this call: their state turned non-finite, their F inverted, or
+    /// their volume ran away (see `runaway`). Nonzero means the step went bad somewhere:
+    /// `flags` has `MPM_STEP_FLAG_FROZE`.
     pub frozen: u32,
+    /// Of the frozen, those whose volume ratio J left
+    /// [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`): the sign
+    /// of an unstable scheme or a time step too long for the scene.
+    pub runaway: u32,
+    /// `MPM_STEP_FLAG_FROZE` if any particle froze in this call, `MPM_STEP_FLAG_RUNAWAY` if
+    /// any froze as runaway; 0 for a step that went well.
+    pub flags: u32,
     /// How many entries of `first_frozen` are set (at most 8).
     pub first_frozen_count: u32,
     /// Ids of the first frozen particles.
     pub first_frozen: [u32; 8],
 }
 
-/// The extent of the world at `w`, read from its header, or why there is none.
+/// `MpmStepReport::flags`: some particle froze in the step.
+pub const MPM_STEP_FLAG_FROZE: u32 = 1;
+/// `MpmStepReport::flags`: some particle froze because its volume ran away.
+pub const MPM_STEP_FLAG_RUNAWAY: u32 = 2;
+
+/// The extent of the world at `w`, read from its header, or why there is none. Reads the
+/// magic number (the first 8 bytes) before anything else, so that a pointer to something
+/// else, however small, is not read past them.
 ///
 /// # Safety
 /// `w` is NULL or points to a world (what `mpm_world_init` or `mpm_world_open` returned, in
@@ -81,7 +97,13 @@ unsafe fn extent(w: *const MpmWorld) -> Result<usize, MpmStatus> {
     if !(w as usize).is_multiple_of(kernel::ALIGN) {
         return Err(MpmStatus::BufferMisaligned);
     }
-    // SAFETY: the caller promises a world at `w`, which is at least a header long.
+    // SAFETY: the caller promises a world at `w`; anything readable starts with the 8 bytes
+    // of the magic (the pointer is aligned to 64, so they lie in one page).
+    let magic = unsafe { core::slice::from_raw_parts(w as *const u8, World::MAGIC_BYTES) };
+    if !World::has_magic(magic) {
+        return Err(MpmStatus::NotAWorld);
+    }
+    // SAFETY: the magic says a world starts here, and a world is at least a header long.
     let head = unsafe { core::slice::from_raw_parts(w as *const u8, World::HEADER_BYTES) };
     Ok(World::stored_bytes(head)?)
 }
@@ -96,7 +118,7 @@ pub(crate) unsafe fn world_at<'a>(w: *mut MpmWorld) -> Result<World<'a>, MpmStat
     // SAFETY: the header says the world spans `total` bytes, all of which the caller owns and
     // nothing else accesses during the call.
     let buf = unsafe { core::slice::from_raw_parts_mut(w as *mut u8, total) };
-    Ok(World::open(buf)?)
+    Ok(World::reopen(buf)?)
 }
 
 /// The world at `w`, opened for reading only (calls that take a `const MpmWorld *`; several
@@ -110,7 +132,7 @@ pub(crate) unsafe fn world_ref<'a>(w: *const MpmWorld) -> Result<WorldRef<'a>, M
     // SAFETY: the header says the world spans `total` bytes, which nothing writes during the
     // call.
     let buf = unsafe { core::slice::from_raw_parts(w as *const u8, total) };
-    Ok(WorldRef::open(buf)?)
+    Ok(WorldRef::reopen(buf)?)
 }
 
 /// Writes `v` to `out` (checked non-NULL by the caller).
@@ -177,6 +199,7 @@ pub unsafe extern "C" fn mpm_world_init(
         }
         // SAFETY: the caller promises `memory_len` bytes at `memory`.
         let buf = unsafe { core::slice::from_raw_parts_mut(memory as *mut u8, memory_len) };
+        apart(&buf[..r.bytes], world_out, 1)?;
         World::init(&d, buf)?;
         // SAFETY: checked non-NULL.
         unsafe { put(world_out, memory as *mut MpmWorld) };
@@ -185,7 +208,10 @@ pub unsafe extern "C" fn mpm_world_init(
 }
 
 /// Opens a world that `memory` already holds, such as a byte copy of another world's first
-/// `mpm_world_bytes` bytes (a snapshot), and returns it in `world_out`.
+/// `mpm_world_bytes` bytes (a snapshot), and returns it in `world_out`. The memory is
+/// untrusted: besides the header (`MPM_STATUS_NOT_A_WORLD`) the whole state is checked, every
+/// particle included (`MPM_STATUS_INVALID_STATE`), in one pass over the particles; a world that
+/// opens steps with meaningful results.
 ///
 /// # Safety
 /// As `mpm_world_init`.
@@ -200,7 +226,8 @@ pub unsafe extern "C" fn mpm_world_open(
         non_null(world_out)?;
         // SAFETY: the caller promises `memory_len` bytes at `memory`.
         let buf = unsafe { core::slice::from_raw_parts_mut(memory as *mut u8, memory_len) };
-        World::open(buf)?;
+        let w = World::open(buf)?;
+        apart(w.as_bytes(), world_out, 1)?;
         // SAFETY: checked non-NULL.
         unsafe { put(world_out, memory as *mut MpmWorld) };
         Ok(())
@@ -220,6 +247,7 @@ pub unsafe extern "C" fn mpm_world_bytes(
         non_null(bytes_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), bytes_out, 1)?;
         let n = w.as_bytes().len();
         // SAFETY: checked non-NULL.
         unsafe { put(bytes_out, n) };
@@ -240,6 +268,7 @@ pub unsafe extern "C" fn mpm_world_get_def(
         non_null(def_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), def_out, 1)?;
         // SAFETY: checked non-NULL.
         unsafe { put(def_out, world_def_to_c(&w.def())) };
         Ok(())
@@ -263,6 +292,7 @@ pub unsafe extern "C" fn mpm_world_add_material(
         let m = material_def_from_c(unsafe { &*def })?;
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), id_out, 1)?;
         let id = w.add_material(&m)?;
         // SAFETY: checked non-NULL.
         unsafe { put(id_out, id) };
@@ -286,22 +316,28 @@ pub unsafe extern "C" fn mpm_world_add_particles(
     guard(|| {
         non_null(arrays)?;
         non_null(ids_out)?;
+        // SAFETY: checked non-NULL; copied before the world is opened for writing (the caller
+        // may keep the struct anywhere).
+        let a = unsafe { *arrays };
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
         let def = w.def();
         if count > def.particle_capacity as usize - w.particle_count() {
             return Err(MpmStatus::ParticleCapacityExceeded);
         }
-        // SAFETY: checked non-NULL.
-        let a = unsafe { &*arrays };
         let d = def.axes();
         let required = (0..d)
             .flat_map(|i| [a.position[i], a.velocity[i]])
             .chain([a.mass, a.volume]);
-        for p in required {
+        for p in required.clone() {
             non_null(p)?;
         }
         non_null(a.material)?;
+        for p in required {
+            apart(w.as_bytes(), p, count)?;
+        }
+        apart(w.as_bytes(), a.material, count)?;
+        apart(w.as_bytes(), ids_out, 1)?;
         let empty: &[mpm_real] = &[];
         // SAFETY (every slice): non-NULL, and the caller promises `count` values; `count` is at
         // most the capacity, so the byte length fits in isize.
@@ -347,6 +383,7 @@ unsafe fn seed(
         non_null(ids_out)?;
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), ids_out, 1)?;
         let ids = fill(&mut w)?;
         // SAFETY: checked non-NULL.
         unsafe { put(ids_out, id_range(ids)) };
@@ -436,6 +473,7 @@ pub unsafe extern "C" fn mpm_world_stable_dt(
         non_null(dt_out)?;
         // SAFETY: the caller promises a world.
         let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), dt_out, 1)?;
         let dt = w.stable_dt();
         // SAFETY: checked non-NULL.
         unsafe { put(dt_out, dt) };
@@ -444,7 +482,9 @@ pub unsafe extern "C" fn mpm_world_stable_dt(
 }
 
 /// Advances the world by `dt` seconds (> 0, finite), in equal substeps no longer than the
-/// stable one, and reports what happened in `report_out`.
+/// stable one (at most the definition's `max_substeps`, else `MPM_STATUS_SUBSTEP_LIMIT` and
+/// nothing changes), and reports what happened in `report_out`: check its `flags` (or
+/// `frozen`) to learn whether the step went bad for some particles.
 ///
 /// # Safety
 /// `world` is NULL or a world; `report_out` is NULL or valid.
@@ -458,15 +498,20 @@ pub unsafe extern "C" fn mpm_world_step(
         non_null(report_out)?;
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), report_out, 1)?;
         let r = w.step(dt)?;
         let mut first_frozen = [0u32; 8];
         first_frozen[..r.first_frozen.len()].copy_from_slice(&r.first_frozen);
+        let flag = |on: bool, bit: u32| if on { bit } else { 0 };
         let out = MpmStepReport {
             substeps: r.substeps,
             substep_dt: r.substep_dt,
             stopped: r.stopped,
             escaped: r.escaped,
             frozen: r.frozen,
+            runaway: r.runaway,
+            flags: flag(r.went_bad(), MPM_STEP_FLAG_FROZE)
+                | flag(r.runaway > 0, MPM_STEP_FLAG_RUNAWAY),
             first_frozen_count: r.first_frozen.len() as u32,
             first_frozen,
         };

@@ -2,11 +2,11 @@
 //! transfer and effects, axisymmetric worlds with their axis mostly in place, heat conduction and
 //! diffusion included; add material, thermal expansion and swelling included; add particles, seed,
 //! set particle forces, damping, temperatures, concentrations and sources, add and clear tractions,
-//! step, read) with arbitrary values, through the same `extern "C"` functions a C host calls. After
-//! every call, either it returned a status and the world's bytes are unchanged, or it succeeded and
-//! every particle value (forces, damping, APIC moments, temperatures and concentrations and their
-//! grid values, hoop stretches included) is finite and every position inside the grid box. Single
-//! precision (the default build of the library).
+//! step, read, open a damaged snapshot) with arbitrary values, through the same `extern "C"`
+//! functions a C host calls. After every call, either it returned a status and the world's bytes
+//! are unchanged, or it succeeded and every particle value (forces, damping, APIC moments,
+//! temperatures and concentrations and their grid values, hoop stretches included) is finite
+//! and every position inside the grid box. Single precision (the default build of the library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -166,6 +166,46 @@ fn check_state(w: *const MpmWorld) {
     }
 }
 
+/// A snapshot of `world` with up to 8 bytes anywhere in it overwritten, opened from `memory`:
+/// `mpm_world_open` must refuse it (a damaged header is `NOT_A_WORLD`, a damaged state
+/// `INVALID_STATE`) or open a world whose every value is finite and inside the grid, which
+/// then steps (or refuses a dt past its substep limit) and stays so.
+fn corrupted_snapshot(inp: &mut Input<'_>, world: *const MpmWorld, memory: &mut Memory) {
+    let mut n = 0usize;
+    // SAFETY: `world` is a world this target initialised, in memory it still owns.
+    assert_eq!(unsafe { mpm_world_bytes(world, &mut n) }, MpmStatus::Ok);
+    let p = memory.aligned(n, 64);
+    // SAFETY: the world spans `n` bytes, and `p` has room for `n` bytes in other memory.
+    unsafe { core::ptr::copy_nonoverlapping(world as *const u8, p, n) };
+    for _ in 0..1 + inp.byte() % 8 {
+        let at = inp.u32_below(n as u32) as usize;
+        // SAFETY: `at < n`.
+        unsafe { *p.add(at) = inp.byte() };
+    }
+    let mut copy = core::ptr::null_mut();
+    // SAFETY: `p` has `n` bytes; `copy` is valid.
+    let s = unsafe { mpm_world_open(p.cast(), n, &mut copy) };
+    match s {
+        MpmStatus::Ok => {
+            check_state(copy);
+            let mut dt = 0.0;
+            // SAFETY: `copy` is the world just opened; the outputs are valid.
+            unsafe {
+                assert_eq!(mpm_world_stable_dt(copy, &mut dt), MpmStatus::Ok);
+                let mut report = MpmStepReport::default();
+                let s = mpm_world_step(copy, dt, &mut report);
+                assert!(
+                    matches!(s, MpmStatus::Ok | MpmStatus::SubstepLimit),
+                    "a snapshot that opened did not step: {s:?}"
+                );
+            }
+            check_state(copy);
+        }
+        MpmStatus::NotAWorld | MpmStatus::InvalidState => {}
+        other => panic!("open answered {other:?} for a damaged snapshot"),
+    }
+}
+
 /// A schedule of up to 9 points (one more than allowed), mostly with increasing times.
 fn schedule(inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real) -> MpmSchedule {
     let mut s = MpmSchedule {
@@ -261,6 +301,11 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     def.exp_terms = inp.u32_below(10);
     def.cfl = inp.real_in(0.05, 1.0);
     def.transfer = inp.u32_below(3);
+    // The limits: mostly the defaults, sometimes anything (0 and NaN refused).
+    if inp.byte() % 8 == 0 {
+        def.max_substeps = inp.u32_below(2000);
+        def.max_volume_ratio = inp.real_in(0.5, 4.0);
+    }
     def.effects = effects(inp);
     // Axisymmetric: mostly with the lower x face a wall at the axis r = 0 (the grid's face
     // `margin` cells below it), else the definition is refused with `InvalidAxis`.
@@ -298,11 +343,12 @@ fuzz_target!(|data: &[u8]| {
     let mut inp = Input(data);
     let mut memory = Memory { bytes: Vec::new() };
     let mut world: *mut MpmWorld = core::ptr::null_mut();
+    let mut snapshot = Memory { bytes: Vec::new() };
     for _ in 0..64 {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 13;
+        let op = inp.byte() % 14;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -330,6 +376,10 @@ fuzz_target!(|data: &[u8]| {
                 );
                 world = core::ptr::null_mut();
             }
+            continue;
+        }
+        if op == 13 {
+            corrupted_snapshot(&mut inp, world, &mut snapshot);
             continue;
         }
         let before = world_hash(world);
@@ -509,8 +559,8 @@ fuzz_target!(|data: &[u8]| {
                     assert_eq!(mpm_world_stable_dt(world, &mut dt), MpmStatus::Ok);
                     assert!(dt > 0.0, "stable dt {dt}");
                     // Mostly up to 8 stable steps (so an input stays fast), sometimes a value
-                    // that must be refused or is harmlessly tiny (a large finite dt is only
-                    // slow: it is split into up to 2^20 substeps).
+                    // that must be refused or is harmlessly tiny (a large finite dt needs more
+                    // substeps than the definition allows and is refused).
                     const ODD: [mpm_real; 7] = [
                         mpm_real::NAN,
                         mpm_real::INFINITY,

@@ -21,8 +21,9 @@
 //!
 //! A particle that reaches a stick or slip wall is put back on the wall plane with its outward
 //! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
-//! particle whose new state is not finite, or whose F inverts, is frozen: it keeps its last
-//! finite position, F and stress, its velocity is zeroed, and it leaves the grid.
+//! particle whose new state is not finite, whose F inverts, or whose volume ratio `J` runs away
+//! (leaves `[1 / r, r]`, `r` the definition's `max_volume_ratio`), is frozen: it keeps its
+//! last finite position, F and stress, its velocity is zeroed, and it leaves the grid.
 //!
 //! Particles are processed in chunks of `W` ([`super::lanes::width`]): each particle gathers from its stencil rows into
 //! the chunk's arrays, then the update and the material run as loops over the chunk's lanes
@@ -353,8 +354,9 @@ impl<const D: usize, const W: usize> StressScratch<D, W> {
 }
 
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
-/// per lane whether the update succeeded; a lane that fails (non-finite result or inverted F)
-/// keeps its H and stress.
+/// per lane whether the update succeeded, and the lanes that failed because their volume ran
+/// away (`J - 1` outside [`Ctx::jm1_band`], F not inverted); a lane that fails (non-finite
+/// result, inverted F or runaway) keeps its H and stress.
 #[inline(always)]
 fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,
@@ -363,7 +365,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
     update: Lanes<W>,
     gathered: &Gathered<D, W>,
     scratch: &mut StressScratch<D, W>,
-) -> Lanes<W> {
+) -> (Lanes<W>, Lanes<W>) {
     let l = &gathered.l;
     let StressScratch {
         a,
@@ -545,6 +547,11 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
             ok = ok | Lanes::one(ln);
         }
     }
+    // The runaway bound: an updated lane whose volume ratio left the band freezes (the
+    // inverted and NaN lanes failed above).
+    let [lo, hi] = ctx.jm1_band;
+    let runaway = ok.minus(rows::above::<I, W>(&jm1, lo) & rows::below::<I, W>(&jm1, hi));
+    let ok = ok.minus(runaway);
     // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
     let mut sum = [0.0; W];
@@ -571,7 +578,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
     if S::AXISYMMETRIC {
         commit(p.hoop, start, &hzz, ok);
     }
-    ok
+    (ok, runaway)
 }
 
 /// The isotropic eigenstrain `d` of each lane (`F_0 = (1 + d) I`): `alpha (T - T_0)` with heat
@@ -786,10 +793,10 @@ pub(crate) fn particles<
             stopped = stopped | Lanes::at(q, I::bits(wall_any));
         }
         let moved = live & finite;
-        let ok = if FUSED_STRESS {
+        let (ok, runaway) = if FUSED_STRESS {
             update_stress::<I, D, K, S, W>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
-            moved
+            (moved, Lanes::NONE)
         };
         if APIC && FUSED_STRESS && S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, l, ok);
@@ -816,7 +823,7 @@ pub(crate) fn particles<
         }
         for ln in frozen.iter() {
             p.status[start + ln] = FROZEN;
-            report.note_frozen((start + ln) as u32);
+            report.note_frozen((start + ln) as u32, runaway.has(ln));
         }
         let escaped = ok & escaped;
         for ln in escaped.iter() {
@@ -892,7 +899,8 @@ pub(crate) fn stress<
             &mut unused_affine,
             &mut gathered,
         );
-        let ok = update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
+        let (ok, runaway) =
+            update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, &gathered.l, ok);
         }
@@ -907,7 +915,7 @@ pub(crate) fn stress<
                 }
             }
             p.status[i] = FROZEN;
-            report.note_frozen(i as u32);
+            report.note_frozen(i as u32, runaway.has(ln));
         }
     }
 }

@@ -59,6 +59,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// Half-width of an undeformed particle domain, `h / (2 n)`, m (tractions).
     pub half_width: Real,
     pub exp_terms: u32,
+    /// The runaway band of `J - 1`, `[1 / r - 1, r - 1]` with `r` the definition's
+    /// `max_volume_ratio`: a particle whose `J - 1` leaves it in a stress update freezes.
+    pub jm1_band: [Real; 2],
     /// Nodes lighter than this are treated as empty (velocity and acceleration zero).
     pub mass_cutoff: Real,
     pub materials: &'m [MaterialRecord],

@@ -176,6 +176,20 @@ pub(crate) fn above<I: Compare, const W: usize>(values: &[Real; W], bound: Real)
     set
 }
 
+/// The lanes of a chunk whose value is below `bound`, [`Rows::N`] lanes per compare.
+#[inline(always)]
+pub(crate) fn below<I: Compare, const W: usize>(values: &[Real; W], bound: Real) -> Lanes<W> {
+    let mut set = Lanes::NONE;
+    // SAFETY: this instance runs only on a CPU that supports it.
+    let b = unsafe { I::splat(bound) };
+    for q in (0..W).step_by(I::N) {
+        // SAFETY: as above.
+        let v = unsafe { I::load(values, q) };
+        set = set | Lanes::at(q, I::bits(I::lt(v, b)));
+    }
+    set
+}
+
 /// The lanes of a chunk whose value is finite, [`Rows::N`] lanes per test.
 #[inline(always)]
 pub(crate) fn finite<I: Compare, const W: usize>(values: &[Real; W]) -> Lanes<W> {

@@ -1402,7 +1402,6 @@ fn every_rejected_call_returns_its_error_and_changes_no_byte() {
         Real::NAN,
         Real::INFINITY,
         Real::NEG_INFINITY,
-        1.0e9, // more than MAX_SUBSTEPS stable substeps
     ] {
         assert_rejected(
             &mut world,
@@ -1411,6 +1410,10 @@ fn every_rejected_call_returns_its_error_and_changes_no_byte() {
             |w| w.step(dt),
         );
     }
+    // Finite and positive, but more than `max_substeps` stable substeps.
+    assert_rejected(&mut world, "step(1e9)", Error::SubstepLimit, |w| {
+        w.step(1.0e9)
+    });
 
     // Control: the accepted neighbours of the rejected calls do change the world, so the hash
     // comparison above could have failed.
@@ -1601,7 +1604,7 @@ fn every_error_has_a_distinct_message_and_its_one_based_position_as_number() {
     // Every variant is listed once (distinct numbers, and the last number is the count).
     let numbers: HashSet<u32> = Error::ALL.iter().map(|&e| e as u32).collect();
     assert_eq!(numbers.len(), Error::ALL.len());
-    assert_eq!(Error::InvalidAxis as u32 as usize, Error::ALL.len());
+    assert_eq!(Error::InvalidLimit as u32 as usize, Error::ALL.len());
 }
 
 // ---------------------------------------------------------------------------------------------

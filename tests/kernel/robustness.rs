@@ -124,8 +124,8 @@ fn extreme_inputs_never_panic_never_leave_the_grid_and_stay_finite() {
                     frozen += r.frozen as usize;
                     escaped += r.escaped as usize;
                 }
-                // Only a step that would need more than MAX_SUBSTEPS is refused.
-                Err(e) => assert_eq!(e, mpm_gimp::Error::InvalidTimeStep, "{label}"),
+                // Only a step that would need more than `max_substeps` is refused.
+                Err(e) => assert_eq!(e, mpm_gimp::Error::SubstepLimit, "{label}"),
             }
         }
         assert!(taken >= 6, "{label}: only {taken} of 8 steps were taken");
@@ -155,14 +155,18 @@ fn extreme_inputs_never_panic_never_leave_the_grid_and_stay_finite() {
 }
 
 /// A host may hand back a snapshot whose bytes were damaged. Corrupting random bytes of a
-/// valid world (particle columns, material table, and sometimes the header) must never make
-/// `open`, `step`, `stable_dt`, `particles` or `diagnostics` panic or touch memory outside the
-/// buffer: `open` refuses a damaged header, and whatever a damaged column holds (NaN, huge
-/// values, unknown material ids or status codes), the step only freezes or skips particles.
+/// valid world (particle columns, material table, and sometimes the header):
+/// - `open` (the untrusted path) refuses the damage with `NotAWorld` (header) or
+///   `InvalidState` (state), or opens a world whose state still holds (the damage hit
+///   scratch, padding or a value still in range), which then steps with finite diagnostics;
+/// - `reopen` (constant-time header checks, the C interface's path on every call) lets the
+///   damaged state through, and whatever a damaged column holds (NaN, huge values, unknown
+///   material ids or status codes), `step`, `stable_dt`, `particles` and `diagnostics` must
+///   not panic or touch memory outside the buffer: the step only freezes or skips particles.
 #[test]
 fn corrupted_snapshots_never_panic() {
     let mut rng = Rng(0xbad5eed);
-    let mut opened = 0;
+    let (mut stepped, mut refused) = (0, 0);
     for case in 0..200 {
         let dim = rng.pick(&[Dimension::Plane2D, Dimension::ThreeD]);
         let shape = rng.pick(&SHAPES);
@@ -191,21 +195,46 @@ fn corrupted_snapshots_never_panic() {
         }
         let mut copy = buffer_for(&def);
         copy.as_mut_bytes()[..bytes.len()].copy_from_slice(&bytes);
-        let Ok(mut w) = World::open(copy.as_mut_bytes()) else {
+        match World::open(copy.as_mut_bytes()) {
+            Ok(mut w) => {
+                let dt = w.stable_dt().min(1.0e-3);
+                if let Err(e) = w.step(dt) {
+                    assert_eq!(e, mpm_gimp::Error::SubstepLimit, "case {case}");
+                }
+                let s = w.diagnostics();
+                let sums = [s.mass, s.kinetic, s.strain, s.potential, w.time()];
+                assert!(sums.iter().all(|v| v.is_finite()), "case {case}: {s:?}");
+            }
+            Err(e) => {
+                let expected = [mpm_gimp::Error::NotAWorld, mpm_gimp::Error::InvalidState];
+                assert!(expected.contains(&e), "case {case}: {e:?}");
+                refused += 1;
+            }
+        }
+        let Ok(mut w) = World::reopen(copy.as_mut_bytes()) else {
             continue; // A damaged header is refused: fine.
         };
-        opened += 1;
+        stepped += 1;
         for _ in 0..4 {
             let dt = w.stable_dt().min(1.0e-3);
             if let Err(e) = w.step(dt) {
-                assert_eq!(e, mpm_gimp::Error::InvalidTimeStep, "case {case}");
+                assert_eq!(e, mpm_gimp::Error::SubstepLimit, "case {case}");
             }
         }
         let _ = w.particles();
         let _ = w.diagnostics();
     }
-    // Most corruptions miss the header: the test must have stepped damaged worlds.
-    assert!(opened >= 100, "only {opened} of 200 damaged worlds opened");
+    // Most corruptions miss the header: the test must have stepped damaged worlds; and open
+    // must have refused many (95 of 200 when written: the rest hit scratch columns, unused
+    // capacity or values still in range).
+    assert!(
+        stepped >= 100,
+        "only {stepped} of 200 damaged worlds stepped"
+    );
+    assert!(
+        refused >= 50,
+        "open refused only {refused} of 200 damaged worlds"
+    );
 }
 
 /// The grid is scratch: a substep resets every node value it reads, so whatever the grid's

@@ -141,6 +141,8 @@ int main(void) {
     FIELD(MpmWorldDef, faces);
     FIELD(MpmWorldDef, exp_terms);
     FIELD(MpmWorldDef, cfl);
+    FIELD(MpmWorldDef, max_substeps);
+    FIELD(MpmWorldDef, max_volume_ratio);
     FIELD(MpmWorldDef, effects);
     FIELD(MpmWorldDef, internal_cookie);
 
@@ -211,6 +213,8 @@ int main(void) {
     FIELD(MpmStepReport, stopped);
     FIELD(MpmStepReport, escaped);
     FIELD(MpmStepReport, frozen);
+    FIELD(MpmStepReport, runaway);
+    FIELD(MpmStepReport, flags);
     FIELD(MpmStepReport, first_frozen_count);
     FIELD(MpmStepReport, first_frozen);
 

@@ -2381,11 +2381,15 @@ static void status_strings(void) {
         MPM_STATUS_UNKNOWN_PARTICLE,
         MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
         MPM_STATUS_INVALID_AXIS,
+        MPM_STATUS_SUBSTEP_LIMIT,
+        MPM_STATUS_INVALID_STATE,
+        MPM_STATUS_INVALID_LIMIT,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
         MPM_STATUS_OUTPUT_TOO_SMALL,
         MPM_STATUS_INTERNAL,
+        MPM_STATUS_OVERLAPPING_MEMORY,
     };
     const size_t n_known = sizeof known / sizeof known[0];
     size_t i, j;
