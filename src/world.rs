@@ -880,15 +880,16 @@ impl<'a> World<'a> {
         let room = def.particle_capacity as usize - self.particle_count();
         let mut n = 0usize;
         for x in sites() {
+            // The position first: a site's mass follows from it (axisymmetric: its radius).
+            if !geom.admits(x) {
+                return Err(Error::PositionOutsideDomain);
+            }
             let (mass, volume) = per_site(x);
             if !(mass.is_finite() && volume.is_finite()) {
                 return Err(Error::NonFiniteInput);
             }
             if !(mass > 0.0 && volume > 0.0) {
                 return Err(Error::NonPositiveMassOrVolume);
-            }
-            if !geom.admits(x) {
-                return Err(Error::PositionOutsideDomain);
             }
             n += 1;
             if n > room {

@@ -344,24 +344,35 @@ fn layout_cpp17_matches_rust_and_c99() {
 // Misuse
 // ---------------------------------------------------------------------------------------------
 
-/// Runs the misuse program and checks its last line and that no check failed.
-fn check_misuse(name: &str, flags: &[&str]) {
-    let exe = common::build(name, Lang::C99, &["tests/c/misuse.c"], flags);
+/// Runs the check program `tests/c/{what}.c` built as `name` with `flags`, and checks that no
+/// check failed, that its last line is "all N {what} checks passed" with N its "ok" lines, and
+/// that N is at least `floor` (the program's checks as written: a shrinking count means checks
+/// went missing).
+fn check_program(what: &str, name: &str, flags: &[&str], floor: usize) {
+    let source = format!("tests/c/{what}.c");
+    let exe = common::build(name, Lang::C99, &[source.as_str()], flags);
     let out = stdout_of(&common::run(&exe, &[]));
     assert!(
         !out.lines().any(|l| l.starts_with("FAIL")),
-        "a misuse check failed:\n{out}"
+        "a {what} check failed:\n{out}"
     );
     let last = out.lines().last().unwrap_or_default();
+    let suffix = format!(" {what} checks passed");
     let n: usize = last
         .strip_prefix("all ")
-        .and_then(|r| r.strip_suffix(" misuse checks passed"))
+        .and_then(|r| r.strip_suffix(suffix.as_str()))
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("unexpected last line {last:?} of:\n{out}"));
     let ok_lines = out.lines().filter(|l| l.starts_with("ok ")).count();
     assert_eq!(n, ok_lines, "the count differs from the printed checks");
-    // The program's checks as written: a shrinking count means checks went missing.
-    assert!(n >= 1000, "only {n} misuse checks ran");
+    assert!(n >= floor, "only {n} {what} checks ran");
+}
+
+/// The misuse program's checks as written.
+const MISUSE_FLOOR: usize = 1000;
+
+fn check_misuse(name: &str, flags: &[&str]) {
+    check_program("misuse", name, flags, MISUSE_FLOOR);
 }
 
 /// Expectation: with strict warnings (C99, -Wall -Wextra -Werror -pedantic), every misuse in
@@ -1844,24 +1855,8 @@ fn axisymmetric_definition_and_hoop_column() {
 // Hostile inputs
 // ---------------------------------------------------------------------------------------------
 
-/// Runs the hostile-input program and checks its last line and that no check failed.
 fn check_hostile(name: &str, flags: &[&str]) {
-    let exe = common::build(name, Lang::C99, &["tests/c/hostile.c"], flags);
-    let out = stdout_of(&common::run(&exe, &[]));
-    assert!(
-        !out.lines().any(|l| l.starts_with("FAIL")),
-        "a hostile check failed:\n{out}"
-    );
-    let last = out.lines().last().unwrap_or_default();
-    let n: usize = last
-        .strip_prefix("all ")
-        .and_then(|r| r.strip_suffix(" hostile checks passed"))
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("unexpected last line {last:?} of:\n{out}"));
-    let ok_lines = out.lines().filter(|l| l.starts_with("ok ")).count();
-    assert_eq!(n, ok_lines, "the count differs from the printed checks");
-    // The program's checks as written: a shrinking count means checks went missing.
-    assert!(n >= HOSTILE_FLOOR, "only {n} hostile checks ran");
+    check_program("hostile", name, flags, HOSTILE_FLOOR);
 }
 
 /// About 90% of the 332 checks `tests/c/hostile.c` runs.

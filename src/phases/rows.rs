@@ -165,27 +165,29 @@ pub(crate) trait Compare: Rows {
 /// The lanes of a chunk whose value is above `bound`, [`Rows::N`] lanes per compare.
 #[inline(always)]
 pub(crate) fn above<I: Compare, const W: usize>(values: &[Real; W], bound: Real) -> Lanes<W> {
-    let mut set = Lanes::NONE;
-    // SAFETY: this instance runs only on a CPU that supports it.
-    let b = unsafe { I::splat(bound) };
-    for q in (0..W).step_by(I::N) {
-        // SAFETY: as above.
-        let v = unsafe { I::load(values, q) };
-        set = set | Lanes::at(q, I::bits(I::gt(v, b)));
-    }
-    set
+    compared::<I, W, true>(values, bound)
 }
 
 /// The lanes of a chunk whose value is below `bound`, [`Rows::N`] lanes per compare.
 #[inline(always)]
 pub(crate) fn below<I: Compare, const W: usize>(values: &[Real; W], bound: Real) -> Lanes<W> {
+    compared::<I, W, false>(values, bound)
+}
+
+/// The lanes of a chunk whose value is above (`ABOVE`) or below `bound`.
+#[inline(always)]
+fn compared<I: Compare, const W: usize, const ABOVE: bool>(
+    values: &[Real; W],
+    bound: Real,
+) -> Lanes<W> {
     let mut set = Lanes::NONE;
     // SAFETY: this instance runs only on a CPU that supports it.
     let b = unsafe { I::splat(bound) };
     for q in (0..W).step_by(I::N) {
         // SAFETY: as above.
         let v = unsafe { I::load(values, q) };
-        set = set | Lanes::at(q, I::bits(I::lt(v, b)));
+        let m = if ABOVE { I::gt(v, b) } else { I::lt(v, b) };
+        set = set | Lanes::at(q, I::bits(m));
     }
     set
 }

@@ -91,28 +91,9 @@
 #define TINY_MODULUS 1e-30
 #endif
 
+#include "check.h"
+
 /* ---- reporting ------------------------------------------------------------------------- */
-
-static unsigned long g_checks;
-
-static void fail(const char *name, const char *why) {
-    printf("FAIL %s: %s\n", name, why);
-    fflush(stdout);
-    exit(1);
-}
-
-static void pass(const char *name, MpmStatus s) {
-    g_checks++;
-    printf("ok %s: %s\n", name, mpm_status_string(s));
-}
-
-static void expect_true(const char *name, int ok) {
-    if (!ok) {
-        fail(name, "condition false");
-    }
-    g_checks++;
-    printf("ok %s\n", name);
-}
 
 /* A check whose ok line carries `detail`. */
 static void expect_detail(const char *name, int ok, const char *detail) {
@@ -129,66 +110,6 @@ static void status_fail(const char *name, const char *what, MpmStatus got) {
     char why[256];
     snprintf(why, sizeof why, "%s: got %u (%s)", what, (unsigned)got, mpm_status_string(got));
     fail(name, why);
-}
-
-/* ---- hashing and tracked worlds ------------------------------------------------------- */
-
-static uint64_t fnv1a(const void *data, size_t n) {
-    const unsigned char *p = (const unsigned char *)data;
-    uint64_t h = UINT64_C(0xcbf29ce484222325);
-    size_t i;
-    for (i = 0; i < n; i++) {
-        h ^= p[i];
-        h *= UINT64_C(0x100000001b3);
-    }
-    return h;
-}
-
-static size_t world_extent(const MpmWorld *w) {
-    size_t n = 0;
-    if (mpm_world_bytes(w, &n) != MPM_STATUS_OK) {
-        fail("world_extent", "mpm_world_bytes refused a world");
-    }
-    return n;
-}
-
-static uint64_t world_hash(const MpmWorld *w) { return fnv1a(w, world_extent(w)); }
-
-#define MAX_TRACKED 16
-static const MpmWorld *g_tracked[MAX_TRACKED];
-static uint64_t g_hash[MAX_TRACKED];
-static int g_tracked_count;
-
-static void track(const MpmWorld *w) {
-    if (g_tracked_count == MAX_TRACKED) {
-        fail("track", "too many tracked worlds");
-    }
-    g_tracked[g_tracked_count] = w;
-    g_hash[g_tracked_count] = world_hash(w);
-    g_tracked_count++;
-}
-
-static void untrack(const MpmWorld *w) {
-    int i;
-    for (i = 0; i < g_tracked_count; i++) {
-        if (g_tracked[i] == w) {
-            g_tracked[i] = g_tracked[g_tracked_count - 1];
-            g_hash[i] = g_hash[g_tracked_count - 1];
-            g_tracked_count--;
-            return;
-        }
-    }
-}
-
-/* Whether any tracked world changed; records the new hashes. */
-static int rehash(void) {
-    int i, changed = 0;
-    for (i = 0; i < g_tracked_count; i++) {
-        uint64_t h = world_hash(g_tracked[i]);
-        changed |= h != g_hash[i];
-        g_hash[i] = h;
-    }
-    return changed;
 }
 
 /* ---- memory --------------------------------------------------------------------------- */
@@ -215,18 +136,6 @@ static Block block_new2(size_t bytes, size_t align, size_t lead, size_t trail) {
 }
 
 static Block block_new(size_t bytes, size_t align) { return block_new2(bytes, align, 0, 0); }
-
-#define PATTERN 0xC3
-
-static int pattern_intact(const unsigned char *p, size_t n) {
-    size_t i;
-    for (i = 0; i < n; i++) {
-        if (p[i] != PATTERN) {
-            return 0;
-        }
-    }
-    return 1;
-}
 
 /* A world in memory of its own. */
 typedef struct {
@@ -278,33 +187,7 @@ static unsigned char *in_copy(const Block *copy, const MpmWorld *w, const void *
     return copy->at + ((const unsigned char *)p - (const unsigned char *)(const void *)w);
 }
 
-/* ---- output sentinel and guarded memory around one world ------------------------------ */
-
-#define OUT_BYTES 8192
-#define OUT_FILL 0xA5
-static union {
-    unsigned char bytes[OUT_BYTES];
-    double d;
-    uint64_t u;
-    size_t s;
-    void *p;
-} g_out;
-
-#define OUT(T) ((T *)(void *)g_out.bytes)
-#define OUT_AT(T, offset) ((T *)(void *)(g_out.bytes + (offset)))
-#define WRITTEN_AT (OUT_BYTES - 64)
-
-static void out_reset(void) { memset(g_out.bytes, OUT_FILL, OUT_BYTES); }
-
-static int out_untouched(void) {
-    size_t i;
-    for (i = 0; i < OUT_BYTES; i++) {
-        if (g_out.bytes[i] != OUT_FILL) {
-            return 0;
-        }
-    }
-    return 1;
-}
+/* ---- guarded memory around one world ------------------------------------------------ */
 
 /* The world whose caller-owned memory before and after its extent (filled with PATTERN) every
  * refused call must leave alone, if any. */
@@ -332,61 +215,7 @@ static void guards_reset(void) {
     memset(h->mem.at + h->bytes, PATTERN, h->mem.raw_len - before - h->bytes);
 }
 
-/* ---- the two kinds of check ----------------------------------------------------------- */
-
-static void refused_check(const char *name, MpmStatus want, MpmStatus got) {
-    char why[256];
-    if (got != want) {
-        snprintf(why, sizeof why, "expected status %u (%s), got %u (%s)", (unsigned)want,
-                 mpm_status_string(want), (unsigned)got, mpm_status_string(got));
-        fail(name, why);
-    }
-    if (!out_untouched()) {
-        fail(name, "the refused call wrote an output");
-    }
-    if (!guards_intact()) {
-        fail(name, "the refused call wrote to the caller's memory around the world");
-    }
-    if (rehash()) {
-        fail(name, "the refused call changed a world's bytes");
-    }
-    pass(name, got);
-}
-
-/* `call` is evaluated after the sentinel is reset. */
-#define REFUSED(name, want, call) refused_check((name), (want), (out_reset(), (call)))
-
-/* An accepted call; `changes` is 1 if it must change a tracked world, 0 if it must not, -1 if
- * either is fine. */
-static void accepted_check(const char *name, int changes, MpmStatus got) {
-    char why[256];
-    int changed;
-    if (got != MPM_STATUS_OK) {
-        snprintf(why, sizeof why, "expected MPM_STATUS_OK, got %u (%s)", (unsigned)got,
-                 mpm_status_string(got));
-        fail(name, why);
-    }
-    changed = rehash();
-    if (changes >= 0 && changed != changes) {
-        fail(name, changes ? "the accepted call did not change the world's bytes"
-                           : "the accepted call changed a world's bytes");
-    }
-    pass(name, got);
-}
-
-#define ACCEPTED(name, changes, call) accepted_check((name), (changes), (call))
-
 /* ---- scenes --------------------------------------------------------------------------- */
-
-static mpm_real R(double x) { return (mpm_real)x; }
-
-static MpmVec3 v3(double x, double y, double z) {
-    MpmVec3 v;
-    v.x = R(x);
-    v.y = R(y);
-    v.z = R(z);
-    return v;
-}
 
 /* 2D: 20 x 20 cells of 0.05 m (GIMP: particles admitted in [0.05, 0.95]). */
 static MpmWorldDef def_2d(uint32_t capacity) {
@@ -1832,6 +1661,7 @@ int main(void) {
     Host hs;
 
     out_reset();
+    g_also_intact = guards_intact;
     expect_true("abi version matches the header", mpm_abi_version() == MPM_GIMP_ABI_VERSION);
 
     new_status_strings();
