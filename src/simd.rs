@@ -8,7 +8,7 @@
 //!   take about a fifth of the instructions out of the hot loops;
 //! - AVX-512 (F, VL, BW and DQ): 16 lanes per register (a 3D chunk's lane loops in one, a 2D
 //!   chunk's in two), and 32 vector registers. Faster on the machines measured
-//!   (ARCHITECTURE.md, "Performance").
+//!   (benches/PERFORMANCE.md).
 //!
 //! The gathers' arithmetic is written once on each instance's own vector type
 //! (`phases::rows::Rows`: 4, 8 or 16 lanes); everything else is the same source.

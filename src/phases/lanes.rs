@@ -200,7 +200,7 @@ pub(crate) fn commit<const W: usize>(
 
 /// A chunk buffer that starts on a cache line. Lane arrays of reals are otherwise only
 /// 4-byte aligned, and their vector loads and stores then straddle lines and each other
-/// (ARCHITECTURE.md, "Performance": the default 2D step about 1.5 % faster).
+/// (benches/PERFORMANCE.md: the default 2D step about 1.5 % faster).
 #[repr(C, align(64))]
 #[derive(Clone, Copy)]
 pub(crate) struct Block<T>(pub T);

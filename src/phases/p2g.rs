@@ -489,7 +489,7 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
         let zero = unsafe { T::zero() };
         let at = |c: &Lane<W>| pick.at(n, c);
         // Loops, not `core::array::from_fn`, whose closures are not always inlined: one left
-        // out of line runs the target's baseline code (ARCHITECTURE.md, "Performance").
+        // out of line runs the target's baseline code (benches/PERFORMANCE.md).
         let mut f = XFactors {
             mass: x.w.scale(at(&pr.m)),
             mom: [[zero; D]; D],
