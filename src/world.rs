@@ -1157,12 +1157,12 @@ impl<'a> WorldRef<'a> {
     ///   each traction names an existing particle and a face of the dimension, with a finite
     ///   traction;
     /// - every particle has a known status and material, a finite mass and volume > 0, a
-    ///   position inside the grid, and every value it carries is finite (velocity, `H` with
-    ///   `J > 0`, stress, and the columns of its declared effects: forces, damping >= 0,
-    ///   moment matrix, transported values and sources, hoop stretch > -1): a particle
-    ///   frozen in a step keeps its last finite state;
-    /// - every active particle lies inside the admissible region (the grid less the shape
-    ///   function's margin).
+    ///   position in the admissible region (the grid less the shape function's margin; on
+    ///   its wall planes, where the step puts a particle that reaches them), and every value
+    ///   it carries is finite (velocity, `H` with `J > 0`, stress, and the columns of its
+    ///   declared effects: forces, damping >= 0, moment matrix, transported values and
+    ///   sources, hoop stretch > -1): a particle frozen or escaped in a step keeps its last
+    ///   finite state.
     pub fn check_state(&self) -> Result<(), Error> {
         let invalid = Err(Error::InvalidState);
         let h = self.header();
@@ -1197,12 +1197,7 @@ impl<'a> WorldRef<'a> {
         }
         let v = self.particles();
         let materials = self.material_count();
-        let admissible = GeomAny::new(&def);
-        let grid = GeomAny {
-            lo: [0.0; 3],
-            hi: def.cells.map(|c| c as Real),
-            ..admissible
-        };
+        let geom = GeomAny::new(&def);
         // Every particle Real column a particle's state lives in: those of `H`, the stress,
         // the declared effects (the MUSL start positions and the cpGIMP stretches are scratch).
         let real = |j: usize| self.real_col(&layout, j, n);
@@ -1224,7 +1219,6 @@ impl<'a> WorldRef<'a> {
             let (m, vol) = (v.mass[i], v.volume0[i]);
             min_mass = min_mass.min(m as f64);
             let x: [Real; 3] = core::array::from_fn(|a| if a < d { v.position[a][i] } else { 0.0 });
-            let active = v.status[i] == ACTIVE;
             let sound = ParticleStatus::from_code(v.status[i]).is_some()
                 && (v.material[i] as usize) < materials
                 && m.is_finite()
@@ -1236,11 +1230,7 @@ impl<'a> WorldRef<'a> {
                 && v.damping.iter().all(|c| c.get(i).is_none_or(|&x| x >= 0.0))
                 && v.hoop.get(i).is_none_or(|&x| x > -1.0)
                 && v.jacobian_minus_one(i).partial_cmp(&-1.0) == Some(Ordering::Greater)
-                && if active {
-                    admissible.admits(x)
-                } else {
-                    grid.admits(x)
-                };
+                && geom.holds(x);
             if !sound {
                 return invalid;
             }
@@ -1792,6 +1782,7 @@ fn libm_floor(x: Real) -> Real {
 struct GeomAny {
     d: usize,
     origin: [Real; 3],
+    h: Real,
     inv_h: Real,
     lo: [Real; 3],
     hi: [Real; 3],
@@ -1803,6 +1794,7 @@ impl GeomAny {
         GeomAny {
             d: def.axes(),
             origin: [def.origin.x, def.origin.y, def.origin.z],
+            h: def.cell_size,
             inv_h: 1.0 / def.cell_size,
             lo: [m; 3],
             hi: core::array::from_fn(|a| def.cells[a] as Real - m),
@@ -1810,9 +1802,24 @@ impl GeomAny {
     }
 
     fn admits(&self, x: [Real; 3]) -> bool {
+        (0..self.d).all(|a| self.admits_on(a, x[a]))
+    }
+
+    fn admits_on(&self, a: usize, x: Real) -> bool {
+        let s = (x - self.origin[a]) * self.inv_h;
+        s >= self.lo[a] && s <= self.hi[a]
+    }
+
+    /// Whether a step can leave a particle at `x`: admitted, or on a wall plane where the
+    /// step puts a particle that reached it (`origin + lo h`, `origin + hi h`, which may lie a
+    /// rounding outside the admitted range).
+    fn holds(&self, x: [Real; 3]) -> bool {
         (0..self.d).all(|a| {
-            let s = (x[a] - self.origin[a]) * self.inv_h;
-            s >= self.lo[a] && s <= self.hi[a]
+            let (lo, hi) = (
+                self.origin[a] + self.lo[a] * self.h,
+                self.origin[a] + self.hi[a] * self.h,
+            );
+            self.admits_on(a, x[a]) || (x[a] >= lo && x[a] <= hi)
         })
     }
 }

@@ -158,7 +158,8 @@ fn extreme_inputs_never_panic_never_leave_the_grid_and_stay_finite() {
 /// valid world (particle columns, material table, and sometimes the header):
 /// - `open` (the untrusted path) refuses the damage with `NotAWorld` (header) or
 ///   `InvalidState` (state), or opens a world whose state still holds (the damage hit
-///   scratch, padding or a value still in range), which then steps with finite diagnostics;
+///   scratch, padding or a value still in range), which then steps, with finite diagnostics
+///   in f32 (whose values cannot overflow the f64 sums);
 /// - `reopen` (constant-time header checks, the C interface's path on every call) lets the
 ///   damaged state through, and whatever a damaged column holds (NaN, huge values, unknown
 ///   material ids or status codes), `step`, `stable_dt`, `particles` and `diagnostics` must
@@ -201,9 +202,15 @@ fn corrupted_snapshots_never_panic() {
                 if let Err(e) = w.step(dt) {
                     assert_eq!(e, mpm_gimp::Error::SubstepLimit, "case {case}");
                 }
+                // f32 values cannot overflow the f64 sums; in f64 a value that opens may be as
+                // large as 1e200 (as `add_particles` accepts), whose square overflows them.
                 let s = w.diagnostics();
                 let sums = [s.mass, s.kinetic, s.strain, s.potential, w.time()];
-                assert!(sums.iter().all(|v| v.is_finite()), "case {case}: {s:?}");
+                let f32_build = core::mem::size_of::<Real>() == 4;
+                assert!(
+                    !f32_build || sums.iter().all(|v| v.is_finite()),
+                    "case {case}: {s:?}"
+                );
             }
             Err(e) => {
                 let expected = [mpm_gimp::Error::NotAWorld, mpm_gimp::Error::InvalidState];
