@@ -405,12 +405,16 @@ fn misuse_from_c_strict() {
 /// reads no array.)
 #[test]
 fn misuse_from_c_sanitized() {
-    let flags: Vec<&str> = common::STRICT
+    check_misuse("misuse-sanitized", &strict_and_sanitized());
+}
+
+/// The strict warnings and the sanitizers.
+fn strict_and_sanitized() -> Vec<&'static str> {
+    common::STRICT
         .iter()
         .chain(common::SANITIZE)
         .copied()
-        .collect();
-    check_misuse("misuse-sanitized", &flags);
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1895,10 +1899,5 @@ fn hostile_from_c_strict() {
 /// no further than its magic number.)
 #[test]
 fn hostile_from_c_sanitized() {
-    let flags: Vec<&str> = common::STRICT
-        .iter()
-        .chain(common::SANITIZE)
-        .copied()
-        .collect();
-    check_hostile("hostile-sanitized", &flags);
+    check_hostile("hostile-sanitized", &strict_and_sanitized());
 }

@@ -197,4 +197,33 @@ static inline MpmVec3 v3(double x, double y, double z) {
     return v;
 }
 
+/* Declares every effect in a 2D definition: APIC, damping (a constant grid schedule, a
+ * thermostat, per-particle columns), particle forces, 8 tractions, a body force, heat
+ * conduction (a fixed floor, a flux face) and diffusion, both with sources. */
+static inline void declare_every_effect(MpmWorldDef *def) {
+    MpmWorldDef d = *def;
+    d.transfer = MPM_TRANSFER_APIC;
+    d.effects.damping.declared = 1;
+    d.effects.damping.grid.points = 1;
+    d.effects.damping.grid.values[0] = R(1.0);
+    d.effects.damping.feedback.declared = 1;
+    d.effects.damping.feedback.gain = R(1.0);
+    d.effects.damping.feedback.max_alpha = R(8.0);
+    d.effects.damping.per_particle = 1;
+    d.effects.particle_forces = 1;
+    d.effects.traction_capacity = 8;
+    d.effects.body_force = v3(0.5, 0.0, 0.0);
+    d.effects.body_force_scale.points = 1;
+    d.effects.body_force_scale.values[0] = R(1.0);
+    d.effects.heat.declared = 1;
+    d.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
+    d.effects.heat.faces[MPM_FACE_Y_MIN].value = R(300.0);
+    d.effects.heat.faces[MPM_FACE_X_MAX].kind = MPM_SCALAR_BOUNDARY_KIND_FLUX;
+    d.effects.heat.faces[MPM_FACE_X_MAX].value = R(10.0);
+    d.effects.heat.sources = 1;
+    d.effects.diffusion.declared = 1;
+    d.effects.diffusion.sources = 1;
+    *def = d;
+}
+
 #endif
