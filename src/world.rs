@@ -1367,7 +1367,6 @@ impl<'a> WorldRef<'a> {
             let local = |k: usize| view_max(self.particles().damping[k], status);
             dm.grid.max_value() as f64 + dm.particle.max_value() as f64 + local(0) + local(1)
         });
-        let alpha = other_damping;
         // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
         // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.
         let fx = &def.effects;
@@ -1387,7 +1386,7 @@ impl<'a> WorldRef<'a> {
         let h = def.cell_size as f64;
         let conduction = h * h / (2.0 * d as f64 * kappa);
         // Never 0: a step below the smallest positive Real is not a step.
-        let dt = def.cfl as f64 * (h / speed).min(1.0 / alpha).min(conduction);
+        let dt = def.cfl as f64 * (h / speed).min(1.0 / other_damping).min(conduction);
         let stable_dt = if dt.is_finite() {
             (dt as Real).max(Real::MIN_POSITIVE)
         } else {
