@@ -10,7 +10,7 @@ use crate::material::{energy_density, model_of, Params};
 use crate::math::{ceil, Mat};
 use crate::particles::{ParticleCols, ParticleStatus, ACTIVE};
 use crate::phases::lanes::width;
-use crate::phases::p2g::mode;
+use crate::phases::p2g::{Adds, Mode};
 use crate::phases::{grid_update, p2g, Ctx, Isa};
 use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D};
 use crate::simd::Simd;
@@ -940,47 +940,17 @@ impl<'a> World<'a> {
             substep_dt: sub_dt,
             ..StepReport::default()
         };
-        let order = def.update_order;
         let fx = def.effects;
-        let (force, apic, damp) = (
-            fx.particle_forces,
-            def.transfer == Transfer::Apic,
-            fx.damping.is_some(),
-        );
         let time0 = self.time();
         for k in 0..substeps {
             let time = time0 + k as f64 * sub_dt as f64;
             if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
                 self.update_feedback(&feedback, time, sub_dt, feedback_room);
             }
-            // One monomorphised substep per combination of the declared effects.
-            macro_rules! substep {
-                ($force:literal, $apic:literal, $damp:literal) => {{
-                    let mut substep = Substep::<$force, $apic, $damp> {
-                        order,
-                        report: &mut report,
-                    };
-                    self.dispatch(sub_dt, time, &mut substep, simd)
-                }};
-            }
-            // Without the `effects` feature no world declares one (validate refuses it), and
-            // only the plain instance is compiled.
-            #[cfg(not(feature = "effects"))]
-            {
-                let _ = (force, apic, damp);
-                substep!(false, false, false)
-            }
-            #[cfg(feature = "effects")]
-            match (force, apic, damp) {
-                (false, false, false) => substep!(false, false, false),
-                (false, false, true) => substep!(false, false, true),
-                (false, true, false) => substep!(false, true, false),
-                (false, true, true) => substep!(false, true, true),
-                (true, false, false) => substep!(true, false, false),
-                (true, false, true) => substep!(true, false, true),
-                (true, true, false) => substep!(true, true, false),
-                (true, true, true) => substep!(true, true, true),
-            }
+            let mut substep = Substep {
+                report: &mut report,
+            };
+            self.dispatch(sub_dt, time, &mut substep, simd);
         }
         let h = self.header_mut();
         h.time += dt as f64;
@@ -1088,6 +1058,10 @@ impl<'a> World<'a> {
             geom,
             active,
             dt,
+            order: def.update_order,
+            apic: def.transfer == Transfer::Apic,
+            forces: fx.particle_forces,
+            damp: fx.damping.is_some(),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
             beta: def.flip_beta,
             alpha_g,
@@ -1666,17 +1640,14 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
 }
 
 /// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
-/// the only place the order of the phases is written down. The declared effects are const
-/// parameters, so an undeclared effect's code is not in the instance that runs: `FORCE`
-/// (particle forces), `APIC` (the APIC transfer), `DAMP` (damping).
-struct Substep<'r, const FORCE: bool, const APIC: bool, const DAMP: bool> {
-    order: UpdateOrder,
+/// the only place the order of the phases is written down. The update order, the transfer and
+/// the declared effects are values of the context ([`Ctx`]): one compiled substep serves them
+/// all, and the passes skip an undeclared effect's work once per chunk of lanes.
+struct Substep<'r> {
     report: &'r mut StepReport,
 }
 
-impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
-    for Substep<'_, FORCE, APIC, DAMP>
-{
+impl Kernel for Substep<'_> {
     fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         s: &S,
@@ -1694,33 +1665,35 @@ impl<const FORCE: bool, const APIC: bool, const DAMP: bool> Kernel
             }
         }
         grid_update::reset(ctx, g);
-        match self.order {
+        let adds = |mode| Adds::of(mode, ctx);
+        match ctx.order {
             UpdateOrder::Usf => {
-                I::scatter::<D, K, S, W, { mode::MASS_MOMENTUM }, false, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
-                I::stress::<D, K, S, W, false>(s, ctx, p, count, g, report);
-                I::scatter::<D, K, S, W, { mode::FORCE }, FORCE, false>(s, ctx, p, count, g);
+                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, W, false, false, DAMP, APIC>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                I::scatter::<D, K, S, W, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, W, true, false, DAMP, APIC>(s, ctx, p, count, g, report);
+                // Also updates the stress (see g2p::particles).
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                I::scatter::<D, K, S, W, { mode::ALL }, FORCE, APIC>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).
-                I::particles::<D, K, S, W, false, true, DAMP, APIC>(s, ctx, p, count, g, report);
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
                 grid_update::remap_velocity(ctx, g);
-                I::stress::<D, K, S, W, true>(s, ctx, p, count, g, report);
+                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
             }
         }
     }
@@ -1754,12 +1727,20 @@ impl Kernel for PhaseRun {
         count: usize,
         g: &mut GridCols<'_, D>,
     ) {
+        // A plain USL substep: FLIP, no damping, no particle forces.
+        let ctx = &Ctx {
+            order: UpdateOrder::Usl,
+            apic: false,
+            forces: false,
+            damp: false,
+            ..*ctx
+        };
         match self.phase {
             Phase::ResetGrid => grid_update::reset(ctx, g),
             Phase::ParticleToGrid => {
                 p.freeze_domain_stretch::<K, S>(count);
                 grid_update::reset(ctx, g);
-                I::scatter::<D, K, S, W, { mode::ALL }, false, false>(s, ctx, p, count, g);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
@@ -1767,7 +1748,7 @@ impl Kernel for PhaseRun {
             }
             Phase::GridToParticle => {
                 let report = &mut self.report;
-                I::particles::<D, K, S, W, true, false, false, false>(s, ctx, p, count, g, report)
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report)
             }
         }
     }

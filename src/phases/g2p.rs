@@ -31,10 +31,10 @@
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
 use super::lanes::{commit, load, load_into, Block, Lane, Lanes};
-use super::p2g::{mode, scatter_chunk, Products};
+use super::p2g::{rows, scatter_chunk, Adds, Mode, Products};
 use super::rows::{self, Compare, Rows};
 use super::Ctx;
-use crate::def::{Boundary, MaterialModel};
+use crate::def::{Boundary, MaterialModel, UpdateOrder};
 use crate::grid::GridCols;
 use crate::material::{
     eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation,
@@ -48,15 +48,19 @@ use crate::{Real, StepReport};
 /// A D x D matrix per lane, `m[a][b][lane]`.
 type LaneMat<const D: usize, const W: usize> = [[Lane<W>; D]; D];
 
-/// Which nodal velocity a gather differentiates for the velocity gradient (a const parameter,
-/// so each instance has straight-line loops).
-mod grad {
+/// Which nodal velocity a gather differentiates for the velocity gradient. With whether it
+/// gathers the velocities and the moments, a const parameter of the gather (`Grad::X as u8`):
+/// its loads and sums sit in the innermost loop, and tested there as values they made the
+/// default step 1.2 to 1.4 times as long (benches/PERFORMANCE.md).
+#[derive(Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+enum Grad {
     /// None (the stress is updated in its own pass).
-    pub const NONE: u8 = 0;
+    None,
     /// `v_i + a_i dt` (USL).
-    pub const UPDATED: u8 = 1;
+    Updated,
     /// The wall-constrained stress-update velocity (USF, MUSL).
-    pub const REMAP: u8 = 2;
+    Remap,
 }
 
 /// Lanes `start..start + W` that hold active particles (`< count`).
@@ -106,7 +110,7 @@ fn sum_x<I: Rows, const K: usize>(w: &[I::V; K], n: &[I::V; ROW]) -> I::V {
 }
 
 /// Gathers, for every lane of a chunk, `v_gp` and `a_gp` (when `VEL`), the velocity gradient
-/// (per `GRAD`; with the hoop rate `sum u_r,i T_ip` axisymmetric) and, with `AFFINE` (APIC,
+/// (per `GRAD`; with the hoop rate `sum u_r,i T_ip` axisymmetric) and, with `MOMENTS` (APIC,
 /// with `VEL`), the moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into
 /// `affine` (not for a family that keeps the gradient form, [`Shape1D::GRADIENT_AFFINE`]:
 /// see `commit_gradient_affine`).
@@ -126,20 +130,21 @@ fn gather_chunk<
     const W: usize,
     const VEL: bool,
     const GRAD: u8,
-    const AFFINE: bool,
+    const MOMENTS: bool,
 >(
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
-    affine: &mut [[Lane<W>; D]; D],
-    out: &mut Gathered<D, W>,
+    (affine, out): (&mut [[Lane<W>; D]; D], &mut Gathered<D, W>),
 ) {
-    let moments = AFFINE && !S::GRADIENT_AFFINE;
     // The moments take v + a dt, which only a gather of the velocities reads.
-    const { assert!(!AFFINE || (VEL && GRAD != grad::REMAP)) };
+    const { assert!(!MOMENTS || (VEL && GRAD != Grad::Remap as u8)) };
+    let moments = MOMENTS && !S::GRADIENT_AFFINE;
+    let (vel, grad) = (VEL, GRAD);
+    let (gradient, updated) = (grad != Grad::None as u8, grad == Grad::Updated as u8);
     let (stride, base) = (ctx.geom.stride, st.bases());
     // The pass checked that every column read has g.len() entries (and that the remap columns
-    // exist when GRAD reads them).
+    // exist when `grad` reads them).
     if !rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len()) {
         return; // Unreachable (first_node clamps); keeps the unchecked row reads sound.
     }
@@ -155,13 +160,13 @@ fn gather_chunk<
         for i in 0..K {
             unsafe {
                 wx[i] = I::load(&st.weights(0)[i], at);
-                if GRAD != grad::NONE {
+                if gradient {
                     dwx[i] = I::load(&st.derivatives(0)[i], at);
                 }
                 if moments {
                     ex[i] = I::load(&st.moments(0)[i], at);
                 }
-                if S::AXISYMMETRIC && GRAD != grad::NONE {
+                if S::AXISYMMETRIC && gradient {
                     tx[i] = I::load(&st.hoop_factors()[i], at);
                 }
             }
@@ -200,7 +205,7 @@ fn gather_chunk<
                 }
                 for a in 0..D {
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
-                    if VEL || GRAD == grad::UPDATED {
+                    if vel || updated {
                         unsafe {
                             nv = rows::read::<I, W>(g.vel[a], base, at, off, shared);
                             na = rows::read::<I, W>(g.acc[a], base, at, off, shared);
@@ -208,23 +213,23 @@ fn gather_chunk<
                     }
                     // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
                     // or the re-mapped one (USF, MUSL).
-                    if GRAD == grad::REMAP {
+                    if grad == Grad::Remap as u8 {
                         nu = unsafe { rows::read::<I, W>(g.remap[a], base, at, off, shared) };
-                    } else if GRAD == grad::UPDATED || moments {
+                    } else if updated || moments {
                         for i in 0..K {
                             nu[i] = add(nv[i], mul(na[i], dt));
                         }
                     }
-                    if VEL {
+                    if vel {
                         v_gp[a] = add(v_gp[a], mul(r[0], sum_x::<I, K>(&wx, &nv)));
                         a_gp[a] = add(a_gp[a], mul(r[0], sum_x::<I, K>(&wx, &na)));
                     }
-                    let su = if GRAD != grad::NONE || moments {
+                    let su = if gradient || moments {
                         sum_x::<I, K>(&wx, &nu)
                     } else {
                         zero
                     };
-                    if GRAD != grad::NONE {
+                    if gradient {
                         l[a][0] = add(l[a][0], mul(r[0], sum_x::<I, K>(&dwx, &nu)));
                         for b in 1..D {
                             l[a][b] = add(l[a][b], mul(r[b], su));
@@ -244,12 +249,12 @@ fn gather_chunk<
             }
         }
         for a in 0..D {
-            if VEL {
+            if vel {
                 I::store(v_gp[a], &mut out.v_gp[a], at);
                 I::store(a_gp[a], &mut out.a_gp[a], at);
             }
             for b in 0..D {
-                if GRAD != grad::NONE {
+                if gradient {
                     I::store(l[a][b], &mut out.l[a][b], at);
                 }
                 if moments {
@@ -257,7 +262,7 @@ fn gather_chunk<
                 }
             }
         }
-        if GRAD != grad::NONE && S::AXISYMMETRIC {
+        if gradient && S::AXISYMMETRIC {
             I::store(hoop, &mut out.hoop, at);
         }
     }
@@ -285,24 +290,20 @@ fn commit_gradient_affine<const D: usize, const W: usize>(
 }
 
 /// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
-/// `x[axis][lane]` (with their first moments when `AFFINE`, and each lane's x factors when
-/// `LANES`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
+/// `x[axis][lane]` (with their first moments when `affine`, and each lane's x factors when
+/// `lanes`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
 /// chunk's deformation gradients.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn stencils<
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
-    const AFFINE: bool,
-    const LANES: bool,
->(
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
     start: usize,
     x: &[Lane<W>; D],
+    affine: bool,
+    lanes: bool,
 ) {
     let geom = &ctx.geom;
     let mut s = [[0.0; W]; D];
@@ -318,9 +319,17 @@ pub(crate) fn stencils<
             [1.0; W]
         }
     });
-    st.compute::<S, AFFINE>(shape, &s, &stretch, geom.nodes, geom.stride, geom.inv_h);
-    if LANES {
-        st.fill_lanes::<S, AFFINE>();
+    st.compute::<S>(
+        shape,
+        &s,
+        &stretch,
+        geom.nodes,
+        geom.stride,
+        geom.inv_h,
+        affine,
+    );
+    if lanes {
+        st.fill_lanes::<S>(affine);
     }
 }
 
@@ -610,13 +619,13 @@ fn eigenstrain<const D: usize, const W: usize>(
     Some(d)
 }
 
-/// Particle update: velocity and position from the grid. `FUSED_STRESS` also updates the stress
-/// from `v_i + a_i dt` in the same pass (USL). `KEEP_START` (MUSL) also keeps the positions
-/// of the start of the step in the `x_start` columns, for the stress pass, and scatters the
-/// new momenta to the remap columns with the stencils already computed (the pass reads only
-/// `vel` and `acc`, so the remap columns are free to fill; particles contribute as in the
-/// scatter pass: [`scatter_chunk`]). `DAMP` adds the damping of the module docs; `APIC`
-/// replaces FLIP by APIC.
+/// Particle update: velocity and position from the grid. With USL it also updates the stress
+/// from `v_i + a_i dt` in the same pass. With MUSL it also keeps the positions of the start of
+/// the step in the `x_start` columns, for the stress pass, and scatters the new momenta to the
+/// remap columns with the stencils already computed (the pass reads only `vel` and `acc`, so
+/// the remap columns are free to fill; particles contribute as in the scatter pass:
+/// [`scatter_chunk`]). Declared damping adds the damping of the module docs; APIC replaces
+/// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
 pub(crate) fn particles<
     I: Compare,
@@ -624,10 +633,6 @@ pub(crate) fn particles<
     const K: usize,
     S: Shape1D<K>,
     const W: usize,
-    const FUSED_STRESS: bool,
-    const KEEP_START: bool,
-    const DAMP: bool,
-    const APIC: bool,
 >(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -639,6 +644,12 @@ pub(crate) fn particles<
     let geom = &ctx.geom;
     let dt = ctx.dt;
     let pic = 1.0 - ctx.beta;
+    let fused_stress = ctx.order == UpdateOrder::Usl;
+    let keep_start = ctx.order == UpdateOrder::Musl;
+    let (damp, apic) = (ctx.damp, ctx.apic);
+    // APIC's moment matrices, gathered (a family that keeps the gradient form takes the stress
+    // update's gradient instead).
+    let moments = apic && !S::GRADIENT_AFFINE;
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
@@ -690,10 +701,10 @@ pub(crate) fn particles<
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        stencils::<D, K, S, W, APIC, false>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
-        if DAMP {
+        if damp {
             let (lg, lp): (Lane<W>, Lane<W>) =
                 (load(p.damping[0], start), load(p.damping[1], start));
             for ln in 0..W {
@@ -701,23 +712,16 @@ pub(crate) fn particles<
                 alpha_p[ln] = ctx.alpha_p + lp[ln];
             }
         }
-        if FUSED_STRESS {
-            gather_chunk::<I, D, K, S, W, true, { grad::UPDATED }, APIC>(
-                ctx,
-                g,
-                &st,
-                &mut affine,
-                &mut gathered,
-            )
-        } else {
-            gather_chunk::<I, D, K, S, W, true, { grad::NONE }, APIC>(
-                ctx,
-                g,
-                &st,
-                &mut affine,
-                &mut gathered,
-            )
-        };
+        // One gather per (order, transfer), chosen per chunk.
+        const NONE: u8 = Grad::None as u8;
+        const UPDATED: u8 = Grad::Updated as u8;
+        let out = (&mut *affine, &mut gathered);
+        match (fused_stress, moments) {
+            (false, false) => gather_chunk::<I, D, K, S, W, true, NONE, false>(ctx, g, &st, out),
+            (false, true) => gather_chunk::<I, D, K, S, W, true, NONE, true>(ctx, g, &st, out),
+            (true, false) => gather_chunk::<I, D, K, S, W, true, UPDATED, false>(ctx, g, &st, out),
+            (true, true) => gather_chunk::<I, D, K, S, W, true, UPDATED, true>(ctx, g, &st, out),
+        }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
@@ -732,15 +736,15 @@ pub(crate) fn particles<
             for a in 0..D {
                 let (vg, ag, vp) = (ld(&v_gp[a]), ld(&a_gp[a]), ld(&v[a]));
                 // Damping acceleration (eqs 47, 107); zero and skipped unless declared.
-                let damp = if DAMP {
+                let damp_a = if damp {
                     I::add(I::mul(vg, ld(&alpha_g)), I::mul(vp, ld(&alpha_p)))
                 } else {
                     zero
                 };
-                if APIC {
+                if apic {
                     vn[a] = I::add(vg, I::mul(ag, dt_v));
-                    if DAMP {
-                        vn[a] = I::sub(vn[a], I::mul(damp, dt_v));
+                    if damp {
+                        vn[a] = I::sub(vn[a], I::mul(damp_a, dt_v));
                     }
                     xn[a] = I::add(ld(&x[a]), I::mul(vn[a], dt_v));
                 } else {
@@ -751,14 +755,14 @@ pub(crate) fn particles<
                         I::mul(inversion, half),
                     );
                     xn[a] = I::add(ld(&x[a]), I::mul(drift, dt_v));
-                    if DAMP {
-                        vn[a] = I::sub(vn[a], I::mul(damp, dt_v));
-                        xn[a] = I::sub(xn[a], I::mul(damp, half_dt2));
+                    if damp {
+                        vn[a] = I::sub(vn[a], I::mul(damp_a, dt_v));
+                        xn[a] = I::sub(xn[a], I::mul(damp_a, half_dt2));
                     }
                 }
                 sum = I::add(sum, I::add(vn[a], xn[a]));
             }
-            if APIC {
+            if apic {
                 for r in 0..D {
                     for c in 0..D {
                         sum = I::add(sum, ld(&affine[r][c]));
@@ -793,12 +797,12 @@ pub(crate) fn particles<
             stopped = stopped | Lanes::at(q, I::bits(wall_any));
         }
         let moved = live & finite;
-        let (ok, runaway) = if FUSED_STRESS {
+        let (ok, runaway) = if fused_stress {
             update_stress::<I, D, K, S, W>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             (moved, Lanes::NONE)
         };
-        if APIC && FUSED_STRESS && S::GRADIENT_AFFINE {
+        if apic && fused_stress && S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, l, ok);
         }
         // Commit: updated lanes take the new state; live lanes that failed freeze.
@@ -808,13 +812,13 @@ pub(crate) fn particles<
             commit(p.v[a], start, &v_new[a], ok);
             commit(p.v[a], start, &zero, frozen);
             commit(p.x[a], start, &x_new[a], ok);
-            if KEEP_START {
+            if keep_start {
                 // Whole chunks (the columns are padded to the chunk width): one store per
                 // vector, not a select.
                 commit(p.x_start[a], start, &x[a], Lanes::ALL);
             }
         }
-        if APIC && !S::GRADIENT_AFFINE {
+        if apic && !S::GRADIENT_AFFINE {
             for r in 0..D {
                 for c in 0..D {
                     commit(p.affine[r][c], start, &affine[r][c], ok);
@@ -831,39 +835,36 @@ pub(crate) fn particles<
         }
         report.escaped += escaped.count();
         report.stopped += (ok & stopped).minus(escaped).count();
-        if KEEP_START {
+        if keep_start {
             let active = live_lanes(p, start, count);
             load_into(&mut mass, p.mass, start);
             // An active lane was committed: its velocity is v_new. The B_p of a family that
             // keeps the gradient form are zero here: its C_p is taken from this re-map (see
             // `commit_gradient_affine`).
-            products.set::<K, S, { mode::REMAP }, false, APIC>(
-                &st, &mass, &v_new, &no_tau, &no_force, &affine,
-            );
-            scatter_chunk::<I, D, K, S, W, { mode::REMAP }, false, APIC>(
-                &mut st,
-                &products,
-                active,
-                geom.stride,
-                g,
-            );
+            let adds = Adds {
+                mode: Mode::Remap,
+                forces: false,
+                apic,
+            };
+            products.set::<K, S>(&st, &mass, &v_new, &no_tau, &no_force, &affine, adds);
+            let (stride, pr) = (geom.stride, &products);
+            if apic {
+                const REMAP: u8 = rows(Mode::Remap, true);
+                scatter_chunk::<I, D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+            } else {
+                const REMAP: u8 = rows(Mode::Remap, false);
+                scatter_chunk::<I, D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+            }
         }
     }
 }
 
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
-/// from the wall-constrained velocity in the `remap` columns. `FROM_START` (MUSL, after the
-/// particle pass has moved the particles) takes the stencils at the positions of the start of
-/// the step, kept in the `x_start` columns, and puts a particle it freezes back there.
+/// from the wall-constrained velocity in the `remap` columns. With MUSL (after the particle
+/// pass has moved the particles) it takes the stencils at the positions of the start of the
+/// step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
-pub(crate) fn stress<
-    I: Compare,
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
-    const FROM_START: bool,
->(
+pub(crate) fn stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -880,6 +881,7 @@ pub(crate) fn stress<
     let mut unused_affine = [[[0.0; W]; D]; D];
     let mut x = Block([[0.0; W]; D]);
     let mut scratch = StressScratch::new();
+    let from_start = ctx.order == UpdateOrder::Musl;
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         // The stencils at the positions of the start of the step (MUSL: the particle pass has
@@ -887,18 +889,13 @@ pub(crate) fn stress<
         for a in 0..D {
             load_into(
                 &mut x[a],
-                if FROM_START { &*p.x_start[a] } else { &*p.x[a] },
+                if from_start { &*p.x_start[a] } else { &*p.x[a] },
                 start,
             );
         }
-        stencils::<D, K, S, W, false, false>(&mut st, shape, ctx, p, start, &x);
-        gather_chunk::<I, D, K, S, W, false, { grad::REMAP }, false>(
-            ctx,
-            g,
-            &st,
-            &mut unused_affine,
-            &mut gathered,
-        );
+        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false);
+        let out = (&mut unused_affine, &mut gathered);
+        gather_chunk::<I, D, K, S, W, false, { Grad::Remap as u8 }, false>(ctx, g, &st, out);
         let (ok, runaway) =
             update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {
@@ -908,7 +905,7 @@ pub(crate) fn stress<
             let i = start + ln;
             for a in 0..D {
                 p.v[a][i] = 0.0;
-                if FROM_START {
+                if from_start {
                     // Back to the position of the start of the step, as for any frozen
                     // particle.
                     p.x[a][i] = p.x_start[a][i];

@@ -108,22 +108,17 @@ macro_rules! passes {
 
 passes! {
     /// [`p2g::scatter`].
-    fn scatter
-        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8,
-            const FORCE: bool, const APIC: bool]
-        [I] [D, K, S, W, MODE, FORCE, APIC] (
+    fn scatter [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
         count: usize,
         g: &mut GridCols<'_, D>,
+        adds: p2g::Adds,
     ) => p2g::scatter;
 
     /// [`g2p::particles`].
-    fn particles
-        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const FUSED_STRESS: bool,
-            const KEEP_START: bool, const DAMP: bool, const APIC: bool]
-        [I] [D, K, S, W, FUSED_STRESS, KEEP_START, DAMP, APIC] (
+    fn particles [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -133,9 +128,7 @@ passes! {
     ) => g2p::particles;
 
     /// [`g2p::stress`].
-    fn stress
-        [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const FROM_START: bool]
-        [I] [D, K, S, W, FROM_START] (
+    fn stress [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,

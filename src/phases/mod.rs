@@ -2,8 +2,10 @@
 //! a step calls them lives in [`crate::world`] and only there.
 //!
 //! Every phase is generic over the dimension `D`, the stencil width `K` and the shape family
-//! `S`; the world dispatches once per step to the monomorphised instance, so no hot loop
-//! branches on configuration.
+//! `S` (and compiled once per instruction set, [`isa`]); the world dispatches once per substep
+//! to the monomorphised instance. Everything else a substep is configured with (update order,
+//! transfer, damping, forces, transported scalars) is a value of [`Ctx`] that the passes test
+//! once per chunk of lanes, never per particle.
 
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
@@ -50,6 +52,14 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// The nodes this substep touches; the grid passes work on them alone.
     pub active: NodeBox<D>,
     pub dt: Real,
+    /// Where the stress update sits in the substep.
+    pub order: crate::UpdateOrder,
+    /// APIC (seeds/001) in place of FLIP.
+    pub apic: bool,
+    /// Particle forces declared: the scatter adds `S_ip F_p`.
+    pub forces: bool,
+    /// Damping declared: the particle update subtracts the damping acceleration.
+    pub damp: bool,
     pub gravity: [Real; D],
     pub beta: Real,
     /// Grid and particle damping this substep, `alpha_g(t)` (thermostat included) and

@@ -23,42 +23,138 @@ use crate::Real;
 use core::mem::MaybeUninit;
 
 /// What a particle-to-grid pass accumulates.
-pub(crate) mod mode {
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[repr(u8)]
+pub(crate) enum Mode {
     /// Mass, momentum and internal force (USL, MUSL).
-    pub const ALL: u8 = 0;
+    All,
     /// Mass and momentum (first pass of USF).
-    pub const MASS_MOMENTUM: u8 = 1;
+    MassMomentum,
     /// Internal force only (second pass of USF, after the stress update).
-    pub const FORCE: u8 = 2;
+    Force,
     /// Momentum of the updated particle velocities into the remap columns (MUSL).
-    pub const REMAP: u8 = 3;
+    Remap,
 }
 
-/// Scatters the active particles `0..count` to the grid, accumulating what `MODE` says, plus
-/// the particle forces (`FORCE`, with the force) and the affine momentum (`APIC`, with the
-/// momentum).
+/// The configuration the scatter's row code is compiled for, its const parameter `MODE`: the
+/// [`Mode`] (which grid columns a row adds to, so which sums stay in registers) and, in
+/// [`APIC_BIT`], the transfer (whether a row carries the affine momentum). Tested per row as
+/// values, they made the default step 1.12 to 1.35 times as long (benches/PERFORMANCE.md); a
+/// pass picks the instance once.
+pub(crate) const fn rows(mode: Mode, apic: bool) -> u8 {
+    mode as u8 | if apic { APIC_BIT } else { 0 }
+}
+
+/// The bit of [`rows`] that says APIC.
+pub(crate) const APIC_BIT: u8 = 0x10;
+
+/// Whether the row configuration `m` ([`rows`]) carries the affine momentum.
 #[inline(always)]
-pub(crate) fn scatter<
+const fn apic_rows(m: u8) -> bool {
+    m & APIC_BIT != 0
+}
+
+impl Mode {
+    /// The mode of the row configuration `m` ([`rows`]).
+    #[inline(always)]
+    const fn of(m: u8) -> Mode {
+        match m & !APIC_BIT {
+            0 => Mode::All,
+            1 => Mode::MassMomentum,
+            2 => Mode::Force,
+            _ => Mode::Remap,
+        }
+    }
+
+    /// Adds the nodal mass (and momentum).
+    #[inline(always)]
+    const fn mass(self) -> bool {
+        matches!(self, Mode::All | Mode::MassMomentum)
+    }
+
+    /// Reads the particles' momenta (the momentum columns or the remap columns).
+    #[inline(always)]
+    const fn momentum(self) -> bool {
+        !matches!(self, Mode::Force)
+    }
+
+    /// Adds the internal (and particle) force.
+    #[inline(always)]
+    const fn force(self) -> bool {
+        matches!(self, Mode::All | Mode::Force)
+    }
+}
+
+/// What a scatter adds: its [`Mode`], and whether the particle forces (`S_ip F_p`; only with
+/// a mode that adds the force) and APIC's affine momentum (only with a mode that adds
+/// momentum) enter. The scatter pass turns the mode and transfer into its row code's
+/// configuration ([`rows`]) once; the particle forces stay a value.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Adds {
+    pub mode: Mode,
+    pub forces: bool,
+    pub apic: bool,
+}
+
+impl Adds {
+    /// What a scatter in `mode` adds in a substep with context `ctx`: the particle forces
+    /// where it adds the force, the affine momentum where it adds momentum.
+    #[inline(always)]
+    pub fn of<const D: usize>(mode: Mode, ctx: &Ctx<'_, D>) -> Self {
+        Adds {
+            mode,
+            forces: ctx.forces && mode.force(),
+            apic: ctx.apic && mode.momentum(),
+        }
+    }
+}
+
+/// Scatters the active particles `0..count` to the grid, accumulating what `adds` says.
+#[inline(always)]
+pub(crate) fn scatter<I: Rows, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+    adds: Adds,
+) {
+    // The one dispatch on the row configuration. The re-map scatter (MUSL) is part of the
+    // particle pass (`g2p::particles`), which calls `scatter_chunk` itself.
+    use Mode::*;
+    let run = (shape, ctx, p, count);
+    match (adds.mode, adds.apic) {
+        (All, false) => scatter_in::<I, D, K, S, W, { rows(All, false) }>(run, g, adds),
+        (All, true) => scatter_in::<I, D, K, S, W, { rows(All, true) }>(run, g, adds),
+        (MassMomentum, false) => {
+            scatter_in::<I, D, K, S, W, { rows(MassMomentum, false) }>(run, g, adds)
+        }
+        (MassMomentum, true) => {
+            scatter_in::<I, D, K, S, W, { rows(MassMomentum, true) }>(run, g, adds)
+        }
+        // A force scatter carries no momentum (`Adds::of`).
+        (Force, _) => scatter_in::<I, D, K, S, W, { rows(Force, false) }>(run, g, adds),
+        (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
+    }
+}
+
+/// [`scatter`] with the row configuration `MODE` ([`rows`]).
+#[inline(always)]
+fn scatter_in<
     I: Rows,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
     const W: usize,
     const MODE: u8,
-    const FORCE: bool,
-    const APIC: bool,
 >(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    count: usize,
+    (shape, ctx, p, count): (&S, &Ctx<'_, D>, &ParticleCols<'_, D>, usize),
     g: &mut GridCols<'_, D>,
+    adds: Adds,
 ) {
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
-    let with_force = MODE == mode::ALL || MODE == mode::FORCE;
-    let with_momentum = MODE != mode::FORCE;
     let mut st = Stencils::<D, K, W>::default();
     // The chunk's particle values as lane vectors (one copy per column, no per-particle
     // bounds checks), in buffers kept across chunks; what this mode does not read stays zero.
@@ -73,35 +169,29 @@ pub(crate) fn scatter<
         for a in 0..D {
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
-            if FORCE && with_force {
+            if adds.forces {
                 load_into(&mut f_ext[a], p.force[a], start);
             }
         }
         load_into(&mut mass, p.mass, start);
-        if with_force {
+        if adds.mode.force() {
             // Axisymmetric, the fourth 2D component (zz) is the hoop stress.
             let n = sym_pairs(D).len() + (S::AXISYMMETRIC as usize);
             for k in 0..n {
                 load_into(&mut tau[k], p.tau[k], start);
             }
         }
-        if APIC && with_momentum {
+        if adds.apic {
             for (a, row) in affine.iter_mut().enumerate() {
                 for (b, lanes) in row.iter_mut().enumerate() {
                     load_into(lanes, p.affine[a][b], start);
                 }
             }
         }
-        stencils::<D, K, S, W, APIC, false>(&mut st, shape, ctx, p, start, &x);
+        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false);
         let live = super::g2p::live_lanes(p, start, count);
-        products.set::<K, S, MODE, FORCE, APIC>(&st, &mass, &v, &tau, &f_ext, &affine);
-        scatter_chunk::<I, D, K, S, W, MODE, FORCE, APIC>(
-            &mut st,
-            &products,
-            live,
-            ctx.geom.stride,
-            g,
-        );
+        products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
+        scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);
     }
 }
 
@@ -130,14 +220,14 @@ fn column<'g, const D: usize>(g: &'g mut GridCols<'_, D>, c: usize) -> &'g mut [
     }
 }
 
-/// Whether a scatter in `MODE` adds to slot `c` of a `D`-dimensional grid.
+/// Whether a scatter in mode `MODE` adds to slot `c` of a `D`-dimensional grid.
 #[inline(always)]
-fn slot_used<const D: usize>(mode: u8, c: usize) -> bool {
+fn slot_used<const D: usize, const MODE: u8>(c: usize) -> bool {
     let axis_ok = |first: usize| c >= first && c < first + D;
-    let mass = mode == mode::ALL || mode == mode::MASS_MOMENTUM;
-    (mass && (c == slot::MASS || axis_ok(slot::MOMENTUM)))
-        || ((mode == mode::ALL || mode == mode::FORCE) && axis_ok(slot::FORCE))
-        || (mode == mode::REMAP && axis_ok(slot::REMAP))
+    let mode = Mode::of(MODE);
+    (mode.mass() && (c == slot::MASS || axis_ok(slot::MOMENTUM)))
+        || (mode.force() && axis_ok(slot::FORCE))
+        || (mode == Mode::Remap && axis_ok(slot::REMAP))
 }
 
 /// The grid rows of a stencil, checked against the grid when made.
@@ -209,15 +299,10 @@ impl<const D: usize, const W: usize> Products<D, W> {
     /// The products of a chunk's masses, velocities, stresses `tau[k]` (the components of
     /// [`sym_pairs`], then the hoop stress), particle forces and stored affine matrices (`B_p`,
     /// or `C_p` for a family that keeps the gradient form: [`affine_velocity`], with the
-    /// stencils' `D_p^-1`), for a scatter in `MODE`.
+    /// stencils' `D_p^-1`), for a scatter that `adds`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub fn set<
-        const K: usize,
-        S: Shape1D<K>,
-        const MODE: u8,
-        const FORCE: bool,
-        const APIC: bool,
-    >(
+    pub fn set<const K: usize, S: Shape1D<K>>(
         &mut self,
         st: &Stencils<D, K, W>,
         mass: &Lane<W>,
@@ -225,16 +310,15 @@ impl<const D: usize, const W: usize> Products<D, W> {
         tau: &[Lane<W>; 6],
         force: &[Lane<W>; D],
         affine: &[[Lane<W>; D]; D],
+        adds: Adds,
     ) {
-        let with_force = MODE == mode::ALL || MODE == mode::FORCE;
-        let with_momentum = MODE != mode::FORCE;
         self.m = *mass;
-        if with_momentum {
+        if adds.mode.momentum() {
             for a in 0..D {
                 for ln in 0..W {
                     self.mv[a][ln] = mass[ln] * v[a][ln];
                 }
-                if APIC {
+                if adds.apic {
                     for b in 0..D {
                         let inv_d = st.inverse_moments(b);
                         for ln in 0..W {
@@ -245,7 +329,7 @@ impl<const D: usize, const W: usize> Products<D, W> {
                 }
             }
         }
-        if with_force {
+        if adds.mode.force() {
             for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
                 for ln in 0..W {
                     let t = -mass[ln] * tau[k][ln];
@@ -258,7 +342,7 @@ impl<const D: usize, const W: usize> Products<D, W> {
                     self.mh[ln] = -mass[ln] * tau[3][ln];
                 }
             }
-            if FORCE {
+            if adds.forces {
                 self.f = *force;
             }
         }
@@ -285,26 +369,25 @@ pub(crate) fn scatter_chunk<
     S: Shape1D<K>,
     const W: usize,
     const MODE: u8,
-    const FORCE: bool,
-    const APIC: bool,
 >(
     st: &mut Stencils<D, K, W>,
     pr: &Products<D, W>,
     live: Lanes<W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
+    adds: Adds,
 ) {
     let base = st.bases();
     let blocks = live == Lanes::ALL
         && rows::blocks_share(base)
         && rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len());
     if blocks && D == 2 && I::N >= 8 {
-        scatter_blocks::<I, D, K, S, W, MODE, FORCE, APIC>(st, pr, stride, g);
+        scatter_blocks::<I, D, K, S, W, MODE>(st, pr, stride, g, adds);
     } else if blocks && D == 3 && I::Narrow::N == 8 {
-        scatter_blocks::<I::Narrow, D, K, S, W, MODE, FORCE, APIC>(st, pr, stride, g);
+        scatter_blocks::<I::Narrow, D, K, S, W, MODE>(st, pr, stride, g, adds);
     } else {
-        st.fill_lanes::<S, APIC>();
-        scatter_lanes::<D, K, S, W, MODE, FORCE, APIC>(st, pr, live, stride, g);
+        st.fill_lanes::<S>(apic_rows(MODE));
+        scatter_lanes::<D, K, S, W, MODE>(st, pr, live, stride, g, adds);
     }
 }
 
@@ -314,20 +397,13 @@ pub(crate) fn scatter_chunk<
 /// [`crate::World::fill_box`]). The grouping depends on the particle order alone, so the
 /// result does not depend on the instruction set.
 #[inline(always)]
-fn scatter_lanes<
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
-    const MODE: u8,
-    const FORCE: bool,
-    const APIC: bool,
->(
+fn scatter_lanes<const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8>(
     st: &Stencils<D, K, W>,
     pr: &Products<D, W>,
     live: Lanes<W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
+    adds: Adds,
 ) {
     let mut ln = 0;
     while ln < W {
@@ -342,13 +418,13 @@ fn scatter_lanes<
         };
         let shares = |n: usize| ln + n < W && live.has(ln + n) && st.lane(ln + n).base() == base;
         let n = if shares(1) && shares(2) && shares(3) {
-            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 4>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, 4>(st, pr, ln, &mut sink, adds);
             4
         } else if shares(1) {
-            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 2>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, 2>(st, pr, ln, &mut sink, adds);
             2
         } else {
-            scatter_group::<D, K, S, W, MODE, FORCE, APIC, 1>(st, pr, ln, &mut sink);
+            scatter_group::<D, K, S, W, MODE, 1>(st, pr, ln, &mut sink, adds);
             1
         };
         ln += n;
@@ -473,17 +549,12 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
     /// # Safety
     /// As for [`RowMath::zero`].
     #[inline(always)]
-    unsafe fn new<
-        const K: usize,
-        S: Shape1D<K>,
-        const W: usize,
-        const FORCE: bool,
-        const APIC: bool,
-    >(
+    unsafe fn new<const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8>(
         x: &XRow<T>,
         pr: &Products<D, W>,
         pick: &impl Pick<T, W>,
         n: usize,
+        adds: Adds,
     ) -> Self {
         // SAFETY: as required of the caller.
         let zero = unsafe { T::zero() };
@@ -502,13 +573,13 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
                 } else {
                     zero
                 };
-                f.mom[a][b] = if APIC {
+                f.mom[a][b] = if apic_rows(MODE) {
                     plain.add((if b == 0 { x.e } else { x.w }).scale(at(&pr.mc[a][b])))
                 } else {
                     plain
                 };
                 let mut t = (if b == 0 { x.dw } else { x.w }).scale(at(&pr.mt[a][b]));
-                if FORCE && b == 0 {
+                if adds.forces && b == 0 {
                     t = t.add(x.w.scale(at(&pr.f[a])));
                 }
                 if S::AXISYMMETRIC && a == 0 && b == 0 {
@@ -542,7 +613,8 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
     /// # Safety
     /// As for [`RowMath::zero`].
     #[inline(always)]
-    unsafe fn new<const APIC: bool>(x: &XFactors<T, D>, (wy, dwy, ey): AxisFactors<T::S>) -> Self {
+    unsafe fn new<const MODE: u8>(x: &XFactors<T, D>, (wy, dwy, ey): AxisFactors<T::S>) -> Self {
+        let apic = apic_rows(MODE);
         // SAFETY: as required of the caller.
         let zero = unsafe { T::zero() };
         let mut y = YFactors {
@@ -553,12 +625,12 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
             f_dwz: [zero; D],
         };
         for a in 0..D {
-            y.mom_wz[a] = if APIC {
+            y.mom_wz[a] = if apic {
                 x.mom[a][0].scale(wy).add(x.mom[a][1].scale(ey))
             } else {
                 x.mom[a][0].scale(wy)
             };
-            if APIC && D == 3 {
+            if apic && D == 3 {
                 y.mom_dz[a] = x.mom[a][D - 1].scale(wy);
             }
             y.f_wz[a] = x.force[a][0].scale(wy).add(x.force[a][1].scale(dwy));
@@ -574,12 +646,13 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
     /// others stay as they are). The first particle of a group writes: adding to zeros would
     /// cost an add per value (the compiler keeps `0 + x`, which is not `x` for `x = -0`).
     #[inline(always)]
-    fn add_row<const MODE: u8, const APIC: bool, const FIRST: bool>(
+    fn add_row<const MODE: u8, const FIRST: bool>(
         &self,
         (wz, dwz, ez): AxisFactors<T::S>,
         acc: &mut [T; slot::COUNT],
     ) {
-        if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+        let mode = Mode::of(MODE);
+        if mode.mass() {
             let m = if D == 3 {
                 self.mass.scale(wz)
             } else {
@@ -588,21 +661,21 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
             put::<T, FIRST>(acc, slot::MASS, m);
         }
         for a in 0..D {
-            let mom = if APIC && D == 3 {
+            let mom = if apic_rows(MODE) && D == 3 {
                 self.mom_wz[a].scale(wz).add(self.mom_dz[a].scale(ez))
             } else if D == 3 {
                 self.mom_wz[a].scale(wz)
             } else {
                 self.mom_wz[a]
             };
-            if MODE == mode::ALL || MODE == mode::MASS_MOMENTUM {
+            if mode.mass() {
                 put::<T, FIRST>(acc, slot::MOMENTUM + a, mom);
             }
-            if MODE == mode::REMAP {
+            if mode == Mode::Remap {
                 put::<T, FIRST>(acc, slot::REMAP + a, mom);
             }
         }
-        if MODE == mode::ALL || MODE == mode::FORCE {
+        if mode.force() {
             for a in 0..D {
                 let f = if D == 3 {
                     self.f_wz[a].scale(wz).add(self.f_dwz[a].scale(dwz))
@@ -712,7 +785,7 @@ impl<const D: usize> RowSink<Row4> for Direct<'_, '_, D> {
         acc: &[Row4; slot::COUNT],
     ) {
         for (c, &v) in acc.iter().enumerate() {
-            if slot_used::<D>(MODE, c) {
+            if slot_used::<D, MODE>(c) {
                 self.add::<K>(j, k, c, v);
             }
         }
@@ -721,7 +794,7 @@ impl<const D: usize> RowSink<Row4> for Direct<'_, '_, D> {
 
 /// The row sums of the four-lane blocks of one of instance `I`'s vectors ([`scatter_blocks`]):
 /// per stencil row `(j, k)` (at `j K + k`) and [`slot`], block `c` holds the row summed over
-/// lanes `4 c .. 4 c + 4`. Only what the scatter's mode fills is written, and only that is
+/// lanes `4 c .. 4 c + 4`. Only what the scatter adds is written, and only that is
 /// read.
 struct BlockSums<I: Rows, const D: usize> {
     sums: [[MaybeUninit<I::V>; slot::COUNT]; ROW * ROW],
@@ -736,7 +809,7 @@ impl<I: Rows, const D: usize> RowSink<BlockRow<I>> for BlockSums<I, D> {
         acc: &[BlockRow<I>; slot::COUNT],
     ) {
         for (c, v) in acc.iter().enumerate() {
-            if slot_used::<D>(MODE, c) {
+            if slot_used::<D, MODE>(c) {
                 self.sums[j * K + k][c].write(v.0);
             }
         }
@@ -760,7 +833,6 @@ unsafe fn for_each_row<
     const K: usize,
     const W: usize,
     const MODE: u8,
-    const APIC: bool,
     const N: usize,
 >(
     x: &[XFactors<T, D>; N],
@@ -773,15 +845,15 @@ unsafe fn for_each_row<
     let zero = unsafe { T::zero() };
     for j in 0..K {
         // Loops over the particles, not `core::array::from_fn` (see `XFactors::new`).
-        let mut y = [unsafe { YFactors::new::<APIC>(&x[0], pick.axis(st, 1, j, 0)) }; N];
+        let mut y = [unsafe { YFactors::new::<MODE>(&x[0], pick.axis(st, 1, j, 0)) }; N];
         for n in 1..N {
-            y[n] = unsafe { YFactors::new::<APIC>(&x[n], pick.axis(st, 1, j, n)) };
+            y[n] = unsafe { YFactors::new::<MODE>(&x[n], pick.axis(st, 1, j, n)) };
         }
         for k in 0..Stencil::<D, K>::layers() {
             let mut acc = [zero; slot::COUNT];
-            y[0].add_row::<MODE, APIC, true>(pick.axis(st, D - 1, k, 0), &mut acc);
+            y[0].add_row::<MODE, true>(pick.axis(st, D - 1, k, 0), &mut acc);
             for n in 1..N {
-                y[n].add_row::<MODE, APIC, false>(pick.axis(st, D - 1, k, n), &mut acc);
+                y[n].add_row::<MODE, false>(pick.axis(st, D - 1, k, n), &mut acc);
             }
             sink.row::<K, MODE>(j, k, &acc);
         }
@@ -790,8 +862,8 @@ unsafe fn for_each_row<
 
 /// Scatters the `N` live lanes from `ln` on, which share a stencil base, to `sink`, row by
 /// row: each row's values are summed over the particles in registers, in the particles'
-/// order ([`for_each_row`]), and then added to the sink once ([`slot_used`] names what `MODE`
-/// adds), so a group of N costs one load, add and store per row and column where N single
+/// order ([`for_each_row`]), and then added to the sink once ([`slot_used`] names what
+/// `MODE` adds), so a group of N costs one load, add and store per row and column where N single
 /// particles cost N. The x factors are 4-wide vectors over a row's nodes (a quarter of each a
 /// padding node when `K` is 3).
 #[inline(always)]
@@ -801,14 +873,13 @@ fn scatter_group<
     S: Shape1D<K>,
     const W: usize,
     const MODE: u8,
-    const FORCE: bool,
-    const APIC: bool,
     const N: usize,
 >(
     st: &Stencils<D, K, W>,
     pr: &Products<D, W>,
     ln: usize,
     sink: &mut Direct<'_, '_, D>,
+    adds: Adds,
 ) {
     let pick = OneLane(ln);
     let xrow = |n: usize| {
@@ -821,11 +892,11 @@ fn scatter_group<
         }
     };
     // SAFETY (every unsafe block): Row4 is the target's baseline, which every instance has.
-    let mut x = [unsafe { XFactors::new::<K, S, W, FORCE, APIC>(&xrow(0), pr, &pick, 0) }; N];
+    let mut x = [unsafe { XFactors::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds) }; N];
     for n in 1..N {
-        x[n] = unsafe { XFactors::new::<K, S, W, FORCE, APIC>(&xrow(n), pr, &pick, n) };
+        x[n] = unsafe { XFactors::new::<K, S, W, MODE>(&xrow(n), pr, &pick, n, adds) };
     }
-    unsafe { for_each_row::<Row4, D, K, W, MODE, APIC, N>(&x, st, &pick, sink) };
+    unsafe { for_each_row::<Row4, D, K, W, MODE, N>(&x, st, &pick, sink) };
 }
 
 /// Scatters a chunk whose lanes are all live and share their first node four by four
@@ -847,13 +918,12 @@ fn scatter_blocks<
     S: Shape1D<K>,
     const W: usize,
     const MODE: u8,
-    const FORCE: bool,
-    const APIC: bool,
 >(
     st: &Stencils<D, K, W>,
     pr: &Products<D, W>,
     stride: [usize; D],
     g: &mut GridCols<'_, D>,
+    adds: Adds,
 ) {
     let base = st.bases();
     for at in (0..W).step_by(I::N) {
@@ -877,12 +947,12 @@ fn scatter_blocks<
         // SAFETY: as for `pick`.
         unsafe {
             let x = [
-                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(0), pr, &pick, 0),
-                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(1), pr, &pick, 1),
-                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(2), pr, &pick, 2),
-                XFactors::new::<K, S, W, FORCE, APIC>(&xrow(3), pr, &pick, 3),
+                XFactors::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds),
+                XFactors::new::<K, S, W, MODE>(&xrow(1), pr, &pick, 1, adds),
+                XFactors::new::<K, S, W, MODE>(&xrow(2), pr, &pick, 2, adds),
+                XFactors::new::<K, S, W, MODE>(&xrow(3), pr, &pick, 3, adds),
             ];
-            for_each_row::<BlockRow<I>, D, K, W, MODE, APIC, 4>(&x, st, &pick, &mut sums);
+            for_each_row::<BlockRow<I>, D, K, W, MODE, 4>(&x, st, &pick, &mut sums);
         }
         // Block by block, each block's rows and columns in the order `scatter_group` adds
         // them. (Row by row, the blocks one after another, a block's row load overlapped the
@@ -921,7 +991,7 @@ unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, con
     for j in 0..K {
         for k in 0..Stencil::<D, K>::layers() {
             for c in 0..slot::COUNT {
-                if slot_used::<D>(MODE, c) {
+                if slot_used::<D, MODE>(c) {
                     let row = crate::shape::row_start(first, j, k, stride);
                     // SAFETY: as required of the caller, and every column has g.len()
                     // entries.
@@ -1051,12 +1121,11 @@ mod tests {
         S: Shape1D<K>,
         const W: usize,
         const MODE: u8,
-        const FORCE: bool,
-        const APIC: bool,
     >(
         shape: &S,
         rng: &mut Rng,
         step: usize,
+        adds: Adds,
     ) {
         let nodes = [NODES; D];
         let stride: [usize; D] = core::array::from_fn(|a| NODES.pow(a as u32));
@@ -1085,7 +1154,7 @@ mod tests {
         }
         let stretch = [[1.0; W]; D];
         let mut st = Stencils::<D, K, W>::default();
-        st.compute::<S, APIC>(shape, &s, &stretch, nodes, stride, inv_h);
+        st.compute::<S>(shape, &s, &stretch, nodes, stride, inv_h, adds.apic);
         let base = st.bases();
         assert!(rows::blocks_share(base));
         assert!(rows::fit(
@@ -1120,19 +1189,15 @@ mod tests {
             }
         }
         let (mut by_blocks, mut by_groups) = (before, before);
-        scatter_blocks::<I, D, K, S, W, MODE, FORCE, APIC>(
-            &st,
-            &pr,
-            stride,
-            &mut grid(&mut by_blocks),
-        );
-        st.fill_lanes::<S, APIC>();
-        scatter_lanes::<D, K, S, W, MODE, FORCE, APIC>(
+        scatter_blocks::<I, D, K, S, W, MODE>(&st, &pr, stride, &mut grid(&mut by_blocks), adds);
+        st.fill_lanes::<S>(adds.apic);
+        scatter_lanes::<D, K, S, W, MODE>(
             &st,
             &pr,
             Lanes::ALL,
             stride,
             &mut grid(&mut by_groups),
+            adds,
         );
         let mut changed = 0;
         for c in 0..10 {
@@ -1141,7 +1206,7 @@ mod tests {
                 assert_eq!(
                     x.to_bits(),
                     y.to_bits(),
-                    "column {c} node {i}: {x} against {y} (D {D}, K {K}, mode {MODE}, step {step})"
+                    "column {c} node {i}: {x} against {y} (D {D}, K {K}, {adds:?}, step {step})"
                 );
                 changed += (x.to_bits() != before[c][i].to_bits()) as usize;
             }
@@ -1156,12 +1221,26 @@ mod tests {
     ) {
         let mut rng = Rng(0x5eed + D as u64 * 31 + K as u64);
         for step in [0, 1, 3] {
-            check::<I, D, K, S, W, { mode::ALL }, false, false>(shape, &mut rng, step);
-            check::<I, D, K, S, W, { mode::ALL }, true, true>(shape, &mut rng, step);
-            check::<I, D, K, S, W, { mode::MASS_MOMENTUM }, false, true>(shape, &mut rng, step);
-            check::<I, D, K, S, W, { mode::FORCE }, true, false>(shape, &mut rng, step);
-            check::<I, D, K, S, W, { mode::REMAP }, false, false>(shape, &mut rng, step);
-            check::<I, D, K, S, W, { mode::REMAP }, false, true>(shape, &mut rng, step);
+            let adds = |mode, forces, apic| Adds { mode, forces, apic };
+            const ALL: u8 = Mode::All as u8;
+            const REMAP: u8 = Mode::Remap as u8;
+            check::<I, D, K, S, W, ALL>(shape, &mut rng, step, adds(Mode::All, false, false));
+            check::<I, D, K, S, W, ALL>(shape, &mut rng, step, adds(Mode::All, true, true));
+            let (mass, force) = (Mode::MassMomentum, Mode::Force);
+            check::<I, D, K, S, W, { Mode::MassMomentum as u8 }>(
+                shape,
+                &mut rng,
+                step,
+                adds(mass, false, true),
+            );
+            check::<I, D, K, S, W, { Mode::Force as u8 }>(
+                shape,
+                &mut rng,
+                step,
+                adds(force, true, false),
+            );
+            check::<I, D, K, S, W, REMAP>(shape, &mut rng, step, adds(Mode::Remap, false, false));
+            check::<I, D, K, S, W, REMAP>(shape, &mut rng, step, adds(Mode::Remap, false, true));
         }
     }
 

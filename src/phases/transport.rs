@@ -231,7 +231,7 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>
     len: usize,
 ) -> Lanes<W> {
     let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
-    stencils::<D, K, S, W, false, true>(st, shape, ctx, p, start, &x);
+    stencils::<D, K, S, W>(st, shape, ctx, p, start, &x, false, true);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }

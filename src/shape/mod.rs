@@ -312,11 +312,12 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units) whose
     /// domains are stretched by `stretch[axis][lane]` (read only by a family that
-    /// [`Shape1D::STRETCHES`]); with `AFFINE`, also their first moments and `D_p^-1` (APIC).
+    /// [`Shape1D::STRETCHES`]); with `affine`, also their first moments and `D_p^-1` (APIC).
     /// Only the lane-fastest arrays, which the lane-major passes read: the row code's per-lane
     /// x factors ([`Stencils::lane`]) follow from [`Stencils::fill_lanes`].
     #[inline(always)]
-    pub fn compute<S: Shape1D<K>, const AFFINE: bool>(
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute<S: Shape1D<K>>(
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
@@ -324,6 +325,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         nodes: [usize; D],
         stride: [usize; D],
         inv_h: Real,
+        affine: bool,
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
         let (base, w, dw, e, t, inv_d) = (
@@ -363,7 +365,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                     }
                 }
             }
-            if AFFINE {
+            if affine {
                 for ln in 0..W {
                     // The weights' centroid: the particle, f, except for the r-weighted weights
                     // of a finite domain (then the moments are taken about the centroid, so that
@@ -387,10 +389,10 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     }
 
     /// Each lane's x factors for the row code ([`Stencils::lane`]), transposed four lanes at a
-    /// time from the lane-fastest arrays of the last [`Stencils::compute`] (with its `AFFINE`
+    /// time from the lane-fastest arrays of the last [`Stencils::compute`] (with its `affine`
     /// and family `S`).
     #[inline(always)]
-    pub fn fill_lanes<S: Shape1D<K>, const AFFINE: bool>(&mut self) {
+    pub fn fill_lanes<S: Shape1D<K>>(&mut self, affine: bool) {
         for l0 in (0..W).step_by(4) {
             let tw = transpose4(&self.w[0], l0);
             let tdw = transpose4(&self.dw[0], l0);
@@ -398,7 +400,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
                 self.lanes[l0 + i].w = tw[i];
                 self.lanes[l0 + i].dw = tdw[i];
             }
-            if AFFINE {
+            if affine {
                 let te = transpose4(&self.e[0], l0);
                 for i in 0..4 {
                     self.lanes[l0 + i].e = te[i];
