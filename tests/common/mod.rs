@@ -182,6 +182,17 @@ impl Bar {
     }
 }
 
+/// A soft neo-Hookean solid: E = 100 kPa, nu = 0.3, rho = 1000 kg/m^3.
+pub fn soft_neo_hookean() -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::NeoHookean,
+        youngs_modulus: 1.0e5,
+        poisson_ratio: 0.3,
+        density: 1000.0,
+        ..MaterialDef::DEFAULT
+    }
+}
+
 /// Builds a square (2D) or cube (3D) block of side 0.3 m centred at 0.5 m with velocity
 /// `v(x)` at 2 particles per cell per axis, in free space (no gravity, open faces).
 pub fn moving_block(

@@ -4,8 +4,8 @@
 
 use crate::common::*;
 use mpm_gimp::{
-    memory_requirements, Damping, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel,
-    Real, Schedule, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef, CHUNK,
+    memory_requirements, Damping, Dimension, Effects, Face, Feedback, MaterialDef, Real, Schedule,
+    ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef, CHUNK,
 };
 
 fn bytes(def: &WorldDef) -> usize {
@@ -512,13 +512,7 @@ fn spinning(shape: ShapeFunction, transfer: Transfer, dim: Dimension) -> (f64, f
     def.transfer = transfer;
     def.flip_beta = 1.0;
     def.update_order = UpdateOrder::Musl;
-    let material = MaterialDef {
-        model: MaterialModel::NeoHookean,
-        youngs_modulus: 1.0e5,
-        poisson_ratio: 0.3,
-        density: 1000.0,
-        ..MaterialDef::DEFAULT
-    };
+    let material = soft_neo_hookean();
     let c = Vec3::new(0.5, 0.5, 0.5);
     // The fill helper seeds the lattice sites at rest; copy them with the spin added.
     let (pos, vol, mass) = {

@@ -20,6 +20,7 @@ mod eigenstrain;
 #[cfg(feature = "effects")]
 mod equilibrium;
 mod hard_cases;
+mod reference;
 mod reliability;
 mod robustness;
 #[cfg(feature = "effects")]
