@@ -101,29 +101,25 @@ impl<'a> Carver<'a> {
 }
 
 impl<const D: usize> ParticleCols<'_, D> {
-    /// The stretch of particle `i`'s domain per axis for a family that
-    /// [`crate::shape::Shape1D::STRETCHES`] (cpGIMP); 1 for every other family.
+    /// Whether the particles carry their domains' stretch (cpGIMP, whose domains stretch
+    /// with the deformation; every other family's domain keeps its size).
     #[inline(always)]
-    pub fn domain_stretch<const K: usize, S: crate::shape::Shape1D<K>>(
-        &self,
-        i: usize,
-    ) -> [Real; D] {
-        if S::STRETCHES {
-            core::array::from_fn(|a| self.stretch[a].get(i).copied().unwrap_or(1.0))
-        } else {
-            [1.0; D]
-        }
+    pub fn stretches(&self) -> bool {
+        !self.stretch[0].is_empty()
+    }
+
+    /// The stretch of particle `i`'s domain per axis (cpGIMP); 1 for every other family.
+    #[inline(always)]
+    pub fn domain_stretch(&self, i: usize) -> [Real; D] {
+        core::array::from_fn(|a| self.stretch[a].get(i).copied().unwrap_or(1.0))
     }
 
     /// cpGIMP: freezes each particle's domain stretch for the substep, from its deformation
     /// at the substep's start, so that every pass of the substep weighs a particle with the
     /// same domain (the scatter of mass and the gather of accelerations must agree, or
     /// momentum is not conserved; USF updates F between them). Nothing for other families.
-    pub fn freeze_domain_stretch<const K: usize, S: crate::shape::Shape1D<K>>(
-        &mut self,
-        count: usize,
-    ) {
-        if !S::STRETCHES {
+    pub fn freeze_domain_stretch(&mut self, count: usize) {
+        if !self.stretches() {
             return;
         }
         for i in 0..count {

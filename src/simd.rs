@@ -2,8 +2,9 @@
 //!
 //! The kernel is built for the target's baseline (SSE2 on x86-64), so it runs on every CPU of
 //! the target. On x86-64, with the `wide-simd` feature (on by default), the particle passes are
-//! compiled twice more from the same source and one instance is chosen at run time, the widest
-//! the CPU and the operating system support:
+//! compiled once more from the same source for AVX2 (twice more, with AVX-512, when the
+//! `avx512` feature is on too) and one instance is chosen at run time, the widest the CPU and
+//! the operating system support:
 //! - AVX and AVX2: three-operand instructions, unaligned memory operands and blends, which
 //!   take about a fifth of the instructions out of the hot loops;
 //! - AVX-512 (F, VL, BW and DQ): 16 lanes per register (a 3D chunk's lane loops in one, a 2D
@@ -172,7 +173,8 @@ fn detect() -> Instance {
         return Instance::Baseline;
     }
     let avx512 = (1 << 16) | (1 << 17) | (1 << 30) | (1 << 31);
-    if xcr0 & 0b1110_0000 == 0b1110_0000 && ebx & avx512 == avx512 {
+    // Only with the `avx512` feature, which compiles that instance.
+    if cfg!(feature = "avx512") && xcr0 & 0b1110_0000 == 0b1110_0000 && ebx & avx512 == avx512 {
         Instance::Avx512
     } else {
         Instance::Avx2

@@ -7,7 +7,7 @@
 //!
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
-use super::{Deformation, Params, Stress};
+use super::{Deformation, Model, Params, Stress};
 use crate::math::{mul, polar_rotation_minus_identity, Mat};
 use crate::Real;
 
@@ -37,57 +37,62 @@ fn corotated_strain<const D: usize>(h: &Mat<D>) -> (Mat<D>, Mat<D>) {
     (e, q)
 }
 
-#[inline(always)]
-pub(super) fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
-    let (e, q) = corotated_strain(&f.h);
-    let ezz = if D == 2 { f.hzz } else { 0.0 };
-    let mut tr = ezz;
-    for (a, row) in e.iter().enumerate() {
-        tr += row[a];
-    }
-    let mut s = [[0.0; D]; D];
-    for a in 0..D {
-        for b in 0..D {
-            s[a][b] = 2.0 * p.mu * e[a][b];
-        }
-        s[a][a] += p.lambda * tr;
-    }
-    // R s R^T with R = I + Q.
-    let mut r = q;
-    for (a, row) in r.iter_mut().enumerate() {
-        row[a] += 1.0;
-    }
-    let mut rt = [[0.0; D]; D];
-    for a in 0..D {
-        for b in 0..D {
-            rt[a][b] = r[b][a];
-        }
-    }
-    let j = 1.0 + f.jm1;
-    let mut m = mul(&mul(&r, &s), &rt);
-    for row in m.iter_mut() {
-        for v in row.iter_mut() {
-            *v *= j;
-        }
-    }
-    let zz = if D == 2 {
-        j * (p.lambda * tr + 2.0 * p.mu * ezz)
-    } else {
-        0.0
-    };
-    Stress { m, zz }
-}
+/// Corotated linear elasticity. Its chunk path is the default, the formula lane by lane.
+pub(crate) struct LinearElastic;
 
-pub(super) fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
-    let (e, _) = corotated_strain(&f.h);
-    let ezz = if D == 2 { f.hzz } else { 0.0 };
-    let mut tr = ezz;
-    let mut ee = ezz * ezz;
-    for a in 0..D {
-        tr += e[a][a];
-        for b in 0..D {
-            ee += e[a][b] * e[a][b];
+impl Model for LinearElastic {
+    #[inline(always)]
+    fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
+        let (e, q) = corotated_strain(&f.h);
+        let ezz = if D == 2 { f.hzz } else { 0.0 };
+        let mut tr = ezz;
+        for (a, row) in e.iter().enumerate() {
+            tr += row[a];
         }
+        let mut s = [[0.0; D]; D];
+        for a in 0..D {
+            for b in 0..D {
+                s[a][b] = 2.0 * p.mu * e[a][b];
+            }
+            s[a][a] += p.lambda * tr;
+        }
+        // R s R^T with R = I + Q.
+        let mut r = q;
+        for (a, row) in r.iter_mut().enumerate() {
+            row[a] += 1.0;
+        }
+        let mut rt = [[0.0; D]; D];
+        for a in 0..D {
+            for b in 0..D {
+                rt[a][b] = r[b][a];
+            }
+        }
+        let j = 1.0 + f.jm1;
+        let mut m = mul(&mul(&r, &s), &rt);
+        for row in m.iter_mut() {
+            for v in row.iter_mut() {
+                *v *= j;
+            }
+        }
+        let zz = if D == 2 {
+            j * (p.lambda * tr + 2.0 * p.mu * ezz)
+        } else {
+            0.0
+        };
+        Stress { m, zz }
     }
-    p.mu * ee + 0.5 * p.lambda * tr * tr
+
+    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+        let (e, _) = corotated_strain(&f.h);
+        let ezz = if D == 2 { f.hzz } else { 0.0 };
+        let mut tr = ezz;
+        let mut ee = ezz * ezz;
+        for a in 0..D {
+            tr += e[a][a];
+            for b in 0..D {
+                ee += e[a][b] * e[a][b];
+            }
+        }
+        p.mu * ee + 0.5 * p.lambda * tr * tr
+    }
 }

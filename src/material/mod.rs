@@ -108,6 +108,72 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
     }
 }
 
+/// A constitutive model (seeds/000 eq 18): the deformation in, Kirchhoff stress out. Adding a
+/// model is one file implementing this trait, one arm of [`MaterialModel`] (and of the C enum)
+/// and of [`by_model!`], and its tests.
+pub(crate) trait Model {
+    /// The Kirchhoff stress `tau` of one particle (not yet divided by `rho0`), for
+    /// `jm1 = det F - 1 > -1`.
+    fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D>;
+
+    /// `tau / rho0` of `W` particles of this material at once, the stress update's path for a
+    /// chunk whose lanes share one material: `h[a][b][lane]`, the out-of-plane `hzz[lane]`
+    /// (2D) and `jm1[lane]` in, `tau[k][lane]` out in the stored component order
+    /// ([`crate::phases::sym_pairs`], then `zz` in 2D). Lanes that are not updated may hold any
+    /// value; their results are not used. By default [`Model::kirchhoff`] lane by lane (loops
+    /// the compiler vectorises where the formula allows); a model may write its own loops, as
+    /// long as each lane gets the bits [`kirchhoff_over_rho0`] gives it.
+    #[inline(always)]
+    fn kirchhoff_lanes<const D: usize, const W: usize>(
+        p: &Params,
+        h: &[[[Real; W]; D]; D],
+        hzz: &[Real; W],
+        jm1: &[Real; W],
+        tau: &mut [[Real; W]; 6],
+    ) {
+        for ln in 0..W {
+            let mut m = [[0.0; D]; D];
+            for r in 0..D {
+                for c in 0..D {
+                    m[r][c] = h[r][c][ln];
+                }
+            }
+            let f = Deformation::<D> {
+                h: m,
+                hzz: hzz[ln],
+                jm1: jm1[ln],
+            };
+            let s = Self::kirchhoff(p, &f);
+            for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                tau[k][ln] = s.m[r][c] * p.inv_rho0;
+            }
+            if D == 2 {
+                tau[3][ln] = s.zz * p.inv_rho0;
+            }
+        }
+    }
+
+    /// Strain energy per unit initial volume, J/m^3 (energy checks and diagnostics).
+    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real;
+}
+
+/// Evaluates `$e` with `$m` naming the [`Model`] type of `$model` (a [`MaterialModel`]): the
+/// one place that maps the enum to the models.
+macro_rules! by_model {
+    ($model:expr, $m:ident => $e:expr) => {
+        match $model {
+            MaterialModel::NeoHookean => {
+                type $m = neo_hookean::NeoHookean;
+                $e
+            }
+            MaterialModel::LinearElastic => {
+                type $m = linear_elastic::LinearElastic;
+                $e
+            }
+        }
+    };
+}
+
 /// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`.
 #[inline(always)]
 pub(crate) fn kirchhoff_over_rho0<const D: usize>(
@@ -115,10 +181,7 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     p: &Params,
     f: &Deformation<D>,
 ) -> Stress<D> {
-    let mut s = match model {
-        MaterialModel::NeoHookean => neo_hookean::kirchhoff(p, f),
-        MaterialModel::LinearElastic => linear_elastic::kirchhoff(p, f),
-    };
+    let mut s = by_model!(model, M => M::kirchhoff(p, f));
     for row in s.m.iter_mut() {
         for v in row.iter_mut() {
             *v *= p.inv_rho0;
@@ -128,18 +191,17 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize>(
     s
 }
 
-/// Neo-Hookean `tau / rho0` for `W` particles sharing one material (the vectorised path of the
-/// stress update): `h[a][b][lane]`, out-of-plane `hzz[lane]` (2D) and `jm1[lane]`; see
-/// [`neo_hookean`].
+/// `tau / rho0` of `W` particles sharing the material `model` ([`Model::kirchhoff_lanes`]).
 #[inline(always)]
-pub(crate) fn neo_hookean_lanes<const D: usize, const W: usize>(
+pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
+    model: MaterialModel,
     p: &Params,
     h: &[[[Real; W]; D]; D],
     hzz: &[Real; W],
     jm1: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
-    neo_hookean::kirchhoff_lanes(p, h, hzz, jm1, tau);
+    by_model!(model, M => M::kirchhoff_lanes(p, h, hzz, jm1, tau))
 }
 
 /// Strain energy per unit initial volume, J/m^3, of a deformation.
@@ -148,10 +210,7 @@ pub(crate) fn energy_density<const D: usize>(
     p: &Params,
     f: &Deformation<D>,
 ) -> Real {
-    match model {
-        MaterialModel::NeoHookean => neo_hookean::energy(p, f),
-        MaterialModel::LinearElastic => linear_elastic::energy(p, f),
-    }
+    by_model!(model, M => M::energy(p, f))
 }
 
 #[cfg(test)]
@@ -306,6 +365,64 @@ mod tests {
                 );
                 assert!(energy_density(model, &p, &e3).abs() < bound * 1.0e3);
             }
+        }
+    }
+
+    /// Every model's chunk path gives each lane the bits of the one-particle path
+    /// ([`Model::kirchhoff_lanes`] against [`kirchhoff_over_rho0`]), over random deformations
+    /// from small strain to large stretch and rotation, in 2D (with an out-of-plane stretch)
+    /// and 3D.
+    #[test]
+    fn every_model_gives_a_chunk_the_bits_of_one_particle() {
+        const W: usize = 16;
+        let p = Params {
+            lambda: 5.0e5,
+            mu: 4.0e5,
+            inv_rho0: 1.0e-3,
+        };
+        let mut state = 12345u64;
+        let mut next = |scale: Real| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            scale * (((state >> 40) as f64 / (1u64 << 24) as f64) as Real - 0.5)
+        };
+        fn check<const D: usize>(
+            p: &Params,
+            model: MaterialModel,
+            next: &mut impl FnMut(Real) -> Real,
+        ) {
+            for scale in [1.0e-5, 1.0e-2, 0.6] {
+                let mut h = [[[0.0; W]; D]; D];
+                let (mut hzz, mut jm1) = ([0.0; W], [0.0; W]);
+                let mut each = [Deformation::<D>::new([[0.0; D]; D], 0.0); W];
+                for ln in 0..W {
+                    let m: Mat<D> = core::array::from_fn(|_| core::array::from_fn(|_| next(scale)));
+                    let zz = if D == 2 { next(scale) } else { 0.0 };
+                    each[ln] = Deformation::new(m, zz);
+                    for r in 0..D {
+                        for c in 0..D {
+                            h[r][c][ln] = m[r][c];
+                        }
+                    }
+                    (hzz[ln], jm1[ln]) = (zz, each[ln].jm1);
+                }
+                let mut tau = [[0.0; W]; 6];
+                kirchhoff_lanes(model, p, &h, &hzz, &jm1, &mut tau);
+                for (ln, f) in each.iter().enumerate() {
+                    let s = kirchhoff_over_rho0(model, p, f);
+                    for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                        assert_eq!(tau[k][ln].to_bits(), s.m[r][c].to_bits(), "{model:?} {D}D");
+                    }
+                    if D == 2 {
+                        assert_eq!(tau[3][ln].to_bits(), s.zz.to_bits(), "{model:?} zz");
+                    }
+                }
+            }
+        }
+        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+            check::<2>(&p, model, &mut next);
+            check::<3>(&p, model, &mut next);
         }
     }
 }

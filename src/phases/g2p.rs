@@ -1,16 +1,10 @@
 //! Grid to particle (seeds/000 section 5.1).
 //!
-//! Particle update with FLIP fraction beta (eqs 44-45, 51-52), from `v_gp = sum S_ip v_i` and
-//! `a_gp = sum S_ip a_i`, with the damping acceleration `d = alpha_g v_gp + alpha_p v_p`
-//! (eqs 46-49; zero unless damping is declared, and then `alpha_g`, `alpha_p` are the
-//! global values of this substep plus the particle's own, eq 107):
-//! - `v_p(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
-//! - `x_p(n+1) = x_p + v_gp dt + a_gp dt^2 / 2 - (1 - beta)(v_p - v_gp) dt / 2 - d dt^2 / 2`
-//!
-//! With APIC (seeds/001) instead: `v_p(n+1) = v_gp + a_gp dt - d dt` (the grid velocity),
-//! `x_p(n+1) = x_p + v_p(n+1) dt`, and the moment matrix `B_p` from the updated nodal
-//! velocities (gathered with them, [`gather_chunk`]; the next scatter turns it into
-//! `C_p = B_p D_p^-1`).
+//! Particle update: from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i`, FLIP with PIC
+//! damping and the second-order position update (eqs 51-52), or APIC (seeds/001: the grid's
+//! velocity, and the moment matrix `B_p` gathered with it, [`gather_chunk`]), less the damping
+//! acceleration when damping is declared, then the walls: the equations are
+//! [`super::update`]'s, on the lane type [`super::wide::Wide`].
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
 //! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
@@ -30,18 +24,20 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, load, load_into, Block, Lane, Lanes};
+use super::lanes::{commit, live_lanes, load, load_into, stencils, Block, Lane, Lanes};
 use super::p2g::{rows, scatter_chunk, Adds, Mode, Products};
 use super::rows::{self, Compare, Rows};
+use super::update;
+use super::wide::Wide;
 use super::Ctx;
-use crate::def::{Boundary, MaterialModel, UpdateOrder};
+use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
-    eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, neo_hookean_lanes, Deformation,
+    eigenstrain_part, elastic_part, kirchhoff_lanes, kirchhoff_over_rho0, model_of, Deformation,
     Params,
 };
 use crate::math::INV;
-use crate::particles::{ParticleCols, ACTIVE, ESCAPED, FROZEN};
+use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
 
@@ -61,17 +57,6 @@ enum Grad {
     Updated,
     /// The wall-constrained stress-update velocity (USF, MUSL).
     Remap,
-}
-
-/// Lanes `start..start + W` that hold active particles (`< count`).
-#[inline(always)]
-pub(crate) fn live_lanes<const D: usize, const W: usize>(
-    p: &ParticleCols<'_, D>,
-    start: usize,
-    count: usize,
-) -> Lanes<W> {
-    let n = W.min(count.saturating_sub(start));
-    Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
 }
 
 /// What a chunk's gathers return: `v_gp[a]`, `a_gp[a]`, the velocity gradient `l[a][b]` and,
@@ -289,50 +274,6 @@ fn commit_gradient_affine<const D: usize, const W: usize>(
     }
 }
 
-/// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
-/// `x[axis][lane]` (with their first moments when `affine`, and each lane's x factors when
-/// `lanes`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
-/// chunk's deformation gradients.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-    st: &mut Stencils<D, K, W>,
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    start: usize,
-    x: &[Lane<W>; D],
-    affine: bool,
-    lanes: bool,
-) {
-    let geom = &ctx.geom;
-    let mut s = [[0.0; W]; D];
-    for a in 0..D {
-        for ln in 0..W {
-            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
-        }
-    }
-    let stretch: [Lane<W>; D] = core::array::from_fn(|a| {
-        if S::STRETCHES {
-            load(p.stretch[a], start)
-        } else {
-            [1.0; W]
-        }
-    });
-    st.compute::<S>(
-        shape,
-        &s,
-        &stretch,
-        geom.nodes,
-        geom.stride,
-        geom.inv_h,
-        affine,
-    );
-    if lanes {
-        st.fill_lanes::<S>(affine);
-    }
-}
-
 /// The lane matrices of a stress update, kept by the pass across chunks (see
 /// `lanes::load_into`): built per chunk, `exp(grad v dt)`'s copies of whole matrices went
 /// through the stack, and 256-bit loads that straddled two earlier stores there waited for
@@ -465,8 +406,8 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
             j2
         };
     }
-    // Material: one set of parameters for the chunk when every lane shares a neo-Hookean
-    // material (the common case, vectorised); otherwise lane by lane.
+    // Material: the model's chunk path when every lane shares one material (the common case,
+    // vectorised); otherwise lane by lane.
     // Without `Option` combinators: their closures were left out of line (a profile showed
     // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
     // The ids stay u32 here and are widened only where a lane's record is looked up (widening
@@ -479,7 +420,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
         // capacity, at most 2^16; one lane at a time it held 6 % of the stress pass's samples).
         let same = update.minus(Lanes::equal(&ids, id)).is_empty();
         if let Some(r) = ctx.materials.get(id as usize) {
-            if same && model_of(r) == MaterialModel::NeoHookean {
+            if same {
                 uniform = Some(r);
             }
         }
@@ -489,10 +430,10 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
     if let Some(rec) = uniform {
-        let params = Params::of(rec);
+        let (model, params) = (model_of(rec), Params::of(rec));
         let mut admissible = Lanes::ALL;
         match &eigen {
-            None => neo_hookean_lanes(&params, h, &hzz, &jm1, tau),
+            None => kirchhoff_lanes(model, &params, h, &hzz, &jm1, tau),
             Some(d) => {
                 let (mut he, mut hzze, mut jm1e, mut cube) = (*h, hzz, jm1, [1.0; W]);
                 for ln in 0..W {
@@ -513,7 +454,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
                 }
                 // The eigenstrain must not invert the material either.
                 admissible = rows::above::<I, W>(d, -1.0);
-                neo_hookean_lanes(&params, &he, &hzze, &jm1e, tau);
+                kirchhoff_lanes(model, &params, &he, &hzze, &jm1e, tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
                         row[ln] *= cube[ln];
@@ -643,7 +584,6 @@ pub(crate) fn particles<
 ) {
     let geom = &ctx.geom;
     let dt = ctx.dt;
-    let pic = 1.0 - ctx.beta;
     let fused_stress = ctx.order == UpdateOrder::Usl;
     let keep_start = ctx.order == UpdateOrder::Musl;
     let (damp, apic) = (ctx.damp, ctx.apic);
@@ -671,30 +611,13 @@ pub(crate) fn particles<
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
-    let (zero, dt_v, half, half_dt2, pic_v, inv_h, none) = unsafe {
+    let (step, faces, zero) = unsafe {
         (
-            I::splat(0.0),
-            I::splat(dt),
-            I::splat(0.5),
-            I::splat(0.5 * dt * dt),
-            I::splat(pic),
-            I::splat(geom.inv_h),
-            I::splat_mask(false),
+            update::Step::<I>::new(dt, ctx.beta),
+            core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
+            Wide::<I>::splat(0.0),
         )
     };
-    // Per axis: the origin, the admissible range in cells and its ends in metres.
-    let walls: [_; D] = core::array::from_fn(|a| {
-        // SAFETY: as above.
-        unsafe {
-            (
-                I::splat(geom.origin[a]),
-                I::splat(geom.lo[a]),
-                I::splat(geom.hi[a]),
-                I::splat(geom.origin[a] + geom.lo[a] * geom.h),
-                I::splat(geom.origin[a] + geom.hi[a] * geom.h),
-            )
-        }
-    });
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         for a in 0..D {
@@ -729,72 +652,38 @@ pub(crate) fn particles<
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
         for q in (0..W).step_by(I::N) {
             // SAFETY: this instance runs only on a CPU that supports it.
-            let ld = |c: &Lane<W>| unsafe { I::load(c, q) };
+            let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, q) };
             let mut sum = zero;
-            let mut vn = [zero; D];
-            let mut xn = [zero; D];
+            let mut open = faces[0].none();
+            let mut wall = open;
             for a in 0..D {
-                let (vg, ag, vp) = (ld(&v_gp[a]), ld(&a_gp[a]), ld(&v[a]));
-                // Damping acceleration (eqs 47, 107); zero and skipped unless declared.
-                let damp_a = if damp {
-                    I::add(I::mul(vg, ld(&alpha_g)), I::mul(vp, ld(&alpha_p)))
+                let (x_p, v_p, v_gp, a_gp) = (ld(&x[a]), ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
+                let d = if damp {
+                    Some(update::damping(v_gp, v_p, ld(&alpha_g), ld(&alpha_p)))
                 } else {
-                    zero
+                    None
                 };
-                if apic {
-                    vn[a] = I::add(vg, I::mul(ag, dt_v));
-                    if damp {
-                        vn[a] = I::sub(vn[a], I::mul(damp_a, dt_v));
-                    }
-                    xn[a] = I::add(ld(&x[a]), I::mul(vn[a], dt_v));
+                let (vn, xn) = if apic {
+                    update::apic(&step, x_p, v_gp, a_gp, d)
                 } else {
-                    let inversion = I::mul(I::sub(vp, vg), pic_v);
-                    vn[a] = I::sub(I::add(vp, I::mul(ag, dt_v)), inversion);
-                    let drift = I::sub(
-                        I::add(vg, I::mul(I::mul(ag, half), dt_v)),
-                        I::mul(inversion, half),
-                    );
-                    xn[a] = I::add(ld(&x[a]), I::mul(drift, dt_v));
-                    if damp {
-                        vn[a] = I::sub(vn[a], I::mul(damp_a, dt_v));
-                        xn[a] = I::sub(xn[a], I::mul(damp_a, half_dt2));
-                    }
-                }
-                sum = I::add(sum, I::add(vn[a], xn[a]));
+                    update::flip(&step, x_p, v_p, v_gp, a_gp, d)
+                };
+                sum = sum + (vn + xn);
+                let at = update::walls(&faces[a], xn, vn);
+                (open, wall) = (open | at.open, wall | at.wall);
+                at.x.store(&mut x_new[a], q);
+                at.v.store(&mut v_new[a], q);
             }
             if apic {
                 for r in 0..D {
                     for c in 0..D {
-                        sum = I::add(sum, ld(&affine[r][c]));
+                        sum = sum + ld(&affine[r][c]);
                     }
                 }
             }
-            finite = finite | Lanes::at(q, I::bits(I::finite(sum)));
-            let (mut open_any, mut wall_any) = (none, none);
-            for a in 0..D {
-                let [lo_bc, hi_bc] = geom.faces[a];
-                let (origin, lo, hi, lo_x, hi_x) = walls[a];
-                let s = I::mul(I::sub(xn[a], origin), inv_h);
-                let below = I::lt(s, lo);
-                let above = I::gt(s, hi);
-                xn[a] = I::select(below, lo_x, I::select(above, hi_x, xn[a]));
-                let open = I::or(
-                    if lo_bc == Boundary::Open { below } else { none },
-                    if hi_bc == Boundary::Open { above } else { none },
-                );
-                let wall = I::and_not(I::or(below, above), open);
-                let outward = I::or(
-                    I::and(below, I::lt(vn[a], zero)),
-                    I::and(above, I::gt(vn[a], zero)),
-                );
-                vn[a] = I::select(I::and(wall, outward), zero, vn[a]);
-                open_any = I::or(open_any, open);
-                wall_any = I::or(wall_any, wall);
-                I::store(xn[a], &mut x_new[a], q);
-                I::store(vn[a], &mut v_new[a], q);
-            }
-            escaped = escaped | Lanes::at(q, I::bits(open_any));
-            stopped = stopped | Lanes::at(q, I::bits(wall_any));
+            finite = finite | sum.is_finite().lanes(q);
+            escaped = escaped | open.lanes(q);
+            stopped = stopped | wall.lanes(q);
         }
         let moved = live & finite;
         let (ok, runaway) = if fused_stress {

@@ -1,8 +1,12 @@
 //! A chunk of particles seen as lanes: the chunk width ([`width`]), one value per lane ([`Lane`]), a
-//! set of lanes ([`Lanes`]), and a chunk's slice of a column loaded ([`load`]) and written back
-//! lane by lane ([`commit`]). The particle passes work chunk by chunk with these.
+//! set of lanes ([`Lanes`]), a chunk's slice of a column loaded ([`load`]) and written back
+//! lane by lane ([`commit`]), its live lanes ([`live_lanes`]) and its stencils ([`stencils`]).
+//! The particle passes work chunk by chunk with these; what the scatter and the gathers share
+//! lives here, so the phases do not import each other for it.
 
-use crate::shape::Row4;
+use super::Ctx;
+use crate::particles::{ParticleCols, ACTIVE};
+use crate::shape::{Row4, Shape1D, Stencils};
 use crate::Real;
 
 /// Particles per chunk in a `D`-dimensional world: a multiple of 4 (the vector code works
@@ -241,5 +245,59 @@ pub(crate) fn load_into<T: Copy + Default, const W: usize>(
     match col.get(start..start + W) {
         Some(c) => dst.copy_from_slice(c),
         None => dst.fill(T::default()),
+    }
+}
+
+/// Lanes `start..start + W` that hold active particles (`< count`).
+#[inline(always)]
+pub(crate) fn live_lanes<const D: usize, const W: usize>(
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    count: usize,
+) -> Lanes<W> {
+    let n = W.min(count.saturating_sub(start));
+    Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
+}
+
+/// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
+/// `x[axis][lane]` (with their first moments when `affine`, and each lane's x factors when
+/// `lanes`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
+/// chunk's deformation gradients.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    st: &mut Stencils<D, K, W>,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    x: &[Lane<W>; D],
+    affine: bool,
+    lanes: bool,
+) {
+    let geom = &ctx.geom;
+    let mut s = [[0.0; W]; D];
+    for a in 0..D {
+        for ln in 0..W {
+            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
+        }
+    }
+    // cpGIMP's domain stretches; other families read none, and the chunk loads none.
+    let stretch: Option<[Lane<W>; D]> = if p.stretches() {
+        Some(core::array::from_fn(|a| load(p.stretch[a], start)))
+    } else {
+        None
+    };
+    st.compute::<S>(
+        shape,
+        &s,
+        stretch.as_ref(),
+        geom.nodes,
+        geom.stride,
+        geom.inv_h,
+        affine,
+    );
+    if lanes {
+        st.fill_lanes::<S>(affine);
     }
 }

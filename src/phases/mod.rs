@@ -14,6 +14,8 @@ pub(crate) mod lanes;
 pub(crate) mod p2g;
 pub(crate) mod rows;
 pub(crate) mod transport;
+pub(crate) mod update;
+pub(crate) mod wide;
 
 pub(crate) use isa::Isa;
 
@@ -22,7 +24,7 @@ pub(crate) use isa::Isa;
 macro_rules! with_instance {
     ($simd:expr, $isa:ident => $body:expr) => {
         match $simd.instance() {
-            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+            #[cfg(all(target_arch = "x86_64", feature = "avx512"))]
             $crate::simd::Instance::Avx512 => {
                 type $isa = $crate::phases::isa::Avx512;
                 $body

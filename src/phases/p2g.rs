@@ -12,8 +12,7 @@
 //! the chunk shares one, the groups of all the blocks of a vector at once
 //! ([`scatter_blocks`]). Both run the one row code ([`for_each_row`]).
 
-use super::g2p::stencils;
-use super::lanes::{load_into, Block, Lane, Lanes};
+use super::lanes::{load_into, stencils, Block, Lane, Lanes};
 use super::rows::{self, Rows};
 use super::{sym_pairs, Ctx};
 use crate::grid::{add_row, rows_fit, GridCols};
@@ -189,7 +188,7 @@ fn scatter_in<
             }
         }
         stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false);
-        let live = super::g2p::live_lanes(p, start, count);
+        let live = super::lanes::live_lanes(p, start, count);
         products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);
     }
@@ -1040,7 +1039,7 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
             continue;
         }
         let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
-        let stretch = p.domain_stretch::<K, S>(i);
+        let stretch = p.domain_stretch(i);
         let st = Stencil::<D, K>::new(shape, s, stretch, geom.nodes, geom.stride, geom.inv_h);
         let area = if S::AXISYMMETRIC {
             let (r, l) = (p.x[0][i], ctx.half_width);
@@ -1152,9 +1151,8 @@ mod tests {
                 };
             }
         }
-        let stretch = [[1.0; W]; D];
         let mut st = Stencils::<D, K, W>::default();
-        st.compute::<S>(shape, &s, &stretch, nodes, stride, inv_h, adds.apic);
+        st.compute::<S>(shape, &s, None, nodes, stride, inv_h, adds.apic);
         let base = st.bases();
         assert!(rows::blocks_share(base));
         assert!(rows::fit(
@@ -1250,7 +1248,7 @@ mod tests {
     /// 2D and 3D, linear weights, the cubic B-spline in 3D and the axisymmetric form.
     #[test]
     fn every_instance_scatters_blocks_as_groups_do() {
-        use crate::phases::isa::{Avx2, Avx512};
+        use crate::phases::isa::Avx2;
         use crate::phases::lanes::width;
         use crate::simd::{Instance, Simd};
         let gimp = Gimp::new(2);
@@ -1263,7 +1261,9 @@ mod tests {
             check_modes::<Avx2, 3, 3, _, { width(3) }>(&gimp);
             check_modes::<Avx2, 3, 4, _, { width(3) }>(&CubicBspline);
         }
+        #[cfg(feature = "avx512")]
         if widest == Instance::Avx512 {
+            use crate::phases::isa::Avx512;
             check_modes::<Avx512, 2, 3, _, { width(2) }>(&gimp);
             check_modes::<Avx512, 2, 2, _, { width(2) }>(&Linear);
             check_modes::<Avx512, 2, 3, _, { width(2) }>(&axisymmetric);

@@ -777,6 +777,7 @@ mod tests {
             if Simd::Detect.instance() >= Instance::Avx2 {
                 check::<super::super::isa::Avx2, W>(col, base, off);
             }
+            #[cfg(feature = "avx512")]
             if Simd::Detect.instance() == Instance::Avx512 {
                 check::<super::super::isa::Avx512, W>(col, base, off);
             }
@@ -871,6 +872,7 @@ mod tests {
             if Simd::Detect.instance() >= Instance::Avx2 {
                 check_compare::<super::super::isa::Avx2, W>();
             }
+            #[cfg(feature = "avx512")]
             if Simd::Detect.instance() == Instance::Avx512 {
                 check_compare::<super::super::isa::Avx512, W>();
             }

@@ -28,8 +28,7 @@
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
 //! field.
 
-use super::g2p::{live_lanes, stencils};
-use super::lanes::{load, Lane, Lanes};
+use super::lanes::{live_lanes, load, stencils, Lane, Lanes};
 use super::Ctx;
 use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};

@@ -2,7 +2,7 @@
 //! and its second the axis `z`. The radial weights are r-weighted (eqs 112, 115) and the
 //! stencil carries the hoop factors `T_ip` (eq 116); see [`super::radial_stencil`].
 
-use super::Shape1D;
+use super::{Shape1D, Visit};
 use crate::Real;
 
 /// A family `S` used in the r-z plane of an axisymmetric world, whose axis `r = 0` is at the
@@ -39,7 +39,12 @@ impl<const K: usize, S: Shape1D<K>> Shape1D<K> for Axisymmetric<S> {
     const GRADIENT_AFFINE: bool = S::GRADIENT_AFFINE;
     const AXISYMMETRIC: bool = true;
     const FINITE_DOMAIN: bool = S::FINITE_DOMAIN;
-    const STRETCHES: bool = S::STRETCHES;
+
+    /// The form around the concrete family the inner one holds.
+    #[inline(always)]
+    fn visit<V: Visit<K>>(&self, v: V) -> V::Out {
+        self.inner.visit(Around { v, form: *self })
+    }
 
     #[inline(always)]
     fn radius(&self, s: Real) -> Real {
@@ -70,5 +75,27 @@ impl<const K: usize, S: Shape1D<K>> Shape1D<K> for Axisymmetric<S> {
     #[inline(always)]
     fn stencil(&self, f: Real) -> ([Real; K], [Real; K]) {
         self.inner.stencil(f)
+    }
+}
+
+/// [`Shape1D::visit`] of the axisymmetric form: runs `v` on the form around the concrete
+/// family the inner one passes.
+struct Around<V, S> {
+    v: V,
+    form: Axisymmetric<S>,
+}
+
+impl<const K: usize, V: Visit<K>, S> Visit<K> for Around<V, S> {
+    type Out = V::Out;
+
+    #[inline(always)]
+    fn visit<C: Shape1D<K>>(self, inner: &C) -> V::Out {
+        let f = self.form;
+        self.v.visit(&Axisymmetric {
+            inner: *inner,
+            origin: f.origin,
+            h: f.h,
+            min_radius: f.min_radius,
+        })
     }
 }

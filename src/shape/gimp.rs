@@ -197,7 +197,6 @@ impl Shape1D<3> for CpGimp {
     const SHIFT: Real = 0.5;
     const LEAD: i32 = 1;
     const FINITE_DOMAIN: bool = true;
-    const STRETCHES: bool = true;
 
     #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {

@@ -63,9 +63,6 @@ pub trait Shape1D<const K: usize>: Copy {
     /// than sample them at a point: then the r-weighted weights of the axisymmetric form differ
     /// from the Cartesian ones, by [`Shape1D::radial_terms`].
     const FINITE_DOMAIN: bool = false;
-    /// Whether the particle domain stretches with the deformation (cpGIMP): then the passes
-    /// give each particle its domain's stretch per axis ([`Shape1D::stencil_stretched`]).
-    const STRETCHES: bool = false;
 
     /// Axisymmetric only: the radius of a particle at `s` (cell units on the first axis), and
     /// the smallest radius the weights are evaluated at (see [`Axisymmetric`]).
@@ -83,8 +80,16 @@ pub trait Shape1D<const K: usize>: Copy {
         ([0.0; K], [0.0; K])
     }
 
+    /// Runs `v` on the family as a concrete type: `self`, except for a family chosen at run
+    /// time ([`ThreeNode`]), which passes the family it holds. The stencil computations go
+    /// through it once per chunk, so their lane loops always see one concrete family.
+    #[inline(always)]
+    fn visit<V: Visit<K>>(&self, v: V) -> V::Out {
+        v.visit(self)
+    }
+
     /// [`Shape1D::stencil`] for a particle whose domain is stretched by `stretch` along this
-    /// axis (1 undeformed); only a family that [`Shape1D::STRETCHES`] reads it.
+    /// axis (1 undeformed); only a family whose domain stretches (cpGIMP) reads it.
     #[inline(always)]
     fn stencil_stretched(&self, f: Real, _stretch: Real) -> ([Real; K], [Real; K]) {
         self.stencil(f)
@@ -105,6 +110,80 @@ pub trait Shape1D<const K: usize>: Copy {
             (w[k], dw[k]) = self.eval(f - k as Real);
         }
         (w, dw)
+    }
+}
+
+/// A computation on one concrete family ([`Shape1D::visit`]).
+pub trait Visit<const K: usize> {
+    /// What the computation returns.
+    type Out;
+    /// Runs the computation with the family `shape`.
+    fn visit<S: Shape1D<K>>(self, shape: &S) -> Self::Out;
+}
+
+/// The three-node families as one type chosen at run time: uGIMP, cpGIMP and the quadratic
+/// B-spline differ only in their weights, so the passes are compiled once for the three and
+/// the stencil computations pick the family once per chunk ([`Shape1D::visit`]). The three
+/// share the first node of their stencils (`SHIFT` and `LEAD`).
+#[derive(Clone, Copy, Debug)]
+pub enum ThreeNode {
+    /// uGIMP.
+    Gimp(Gimp),
+    /// cpGIMP.
+    CpGimp(CpGimp),
+    /// The quadratic B-spline.
+    QuadraticBspline(QuadraticBspline),
+}
+
+// The first node of a stencil is the same for the three families.
+const _: () = assert!(
+    <Gimp as Shape1D<3>>::SHIFT == <ThreeNode as Shape1D<3>>::SHIFT
+        && <CpGimp as Shape1D<3>>::SHIFT == <ThreeNode as Shape1D<3>>::SHIFT
+        && <QuadraticBspline as Shape1D<3>>::SHIFT == <ThreeNode as Shape1D<3>>::SHIFT
+        && <Gimp as Shape1D<3>>::LEAD == <ThreeNode as Shape1D<3>>::LEAD
+        && <CpGimp as Shape1D<3>>::LEAD == <ThreeNode as Shape1D<3>>::LEAD
+        && <QuadraticBspline as Shape1D<3>>::LEAD == <ThreeNode as Shape1D<3>>::LEAD
+);
+
+/// Evaluates `$e` with `$s` bound to the family a [`ThreeNode`] holds.
+macro_rules! three_node {
+    ($shape:expr, $s:ident => $e:expr) => {
+        match $shape {
+            ThreeNode::Gimp($s) => $e,
+            ThreeNode::CpGimp($s) => $e,
+            ThreeNode::QuadraticBspline($s) => $e,
+        }
+    };
+}
+
+impl Shape1D<3> for ThreeNode {
+    const SHIFT: Real = 0.5;
+    const LEAD: i32 = 1;
+
+    #[inline(always)]
+    fn visit<V: Visit<3>>(&self, v: V) -> V::Out {
+        three_node!(self, s => v.visit(s))
+    }
+
+    // The per-particle methods, for completeness: the passes reach the family through `visit`.
+    #[inline(always)]
+    fn eval(&self, xi: Real) -> (Real, Real) {
+        three_node!(self, s => s.eval(xi))
+    }
+
+    #[inline(always)]
+    fn stencil(&self, f: Real) -> ([Real; 3], [Real; 3]) {
+        three_node!(self, s => s.stencil(f))
+    }
+
+    #[inline(always)]
+    fn stencil_stretched(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
+        three_node!(self, s => s.stencil_stretched(f, stretch))
+    }
+
+    #[inline(always)]
+    fn radial_terms(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
+        three_node!(self, s => s.radial_terms(f, stretch))
     }
 }
 
@@ -171,6 +250,10 @@ pub struct Stencils<const D: usize, const K: usize, const W: usize> {
     t: [[Real; W]; ROW],
     /// Lane-fastest `1 / D_p` per axis (APIC, else zero).
     inv_d: [[Real; W]; D],
+    /// Lane-fastest domain stretch per axis, read by cpGIMP alone: 1 until a
+    /// [`Stencils::compute`] gives stretches, which then stay until the next that does (a
+    /// family that does not stretch never reads them, and a chunk of it stores none).
+    stretch: [[Real; W]; D],
 }
 
 /// One particle's x factors in a [`Stencils`], with the fields of [`Stencil`]
@@ -305,14 +388,14 @@ impl<const D: usize, const K: usize, const W: usize> Default for Stencils<D, K, 
             e: [[[0.0; W]; ROW]; D],
             t: [[0.0; W]; ROW],
             inv_d: [[0.0; W]; D],
+            stretch: [[1.0; W]; D],
         }
     }
 }
 
 impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     /// Replaces the stencils by those of particles at `s[axis][lane]` (cell units) whose
-    /// domains are stretched by `stretch[axis][lane]` (read only by a family that
-    /// [`Shape1D::STRETCHES`]); with `affine`, also their first moments and `D_p^-1` (APIC).
+    /// domains are stretched by `stretch[axis][lane]` (read only by cpGIMP); with `affine`, also their first moments and `D_p^-1` (APIC).
     /// Only the lane-fastest arrays, which the lane-major passes read: the row code's per-lane
     /// x factors ([`Stencils::lane`]) follow from [`Stencils::fill_lanes`].
     #[inline(always)]
@@ -321,20 +404,44 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         &mut self,
         shape: &S,
         s: &[[Real; W]; D],
-        stretch: &[[Real; W]; D],
+        stretch: Option<&[[Real; W]; D]>,
+        nodes: [usize; D],
+        stride: [usize; D],
+        inv_h: Real,
+        affine: bool,
+    ) {
+        if let Some(stretch) = stretch {
+            self.stretch = *stretch;
+        }
+        shape.visit(ComputeStencils {
+            st: self,
+            s,
+            grid: (nodes, stride, inv_h),
+            affine,
+        })
+    }
+
+    /// [`Stencils::compute`] for a concrete family.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn compute_family<S: Shape1D<K>>(
+        &mut self,
+        shape: &S,
+        s: &[[Real; W]; D],
         nodes: [usize; D],
         stride: [usize; D],
         inv_h: Real,
         affine: bool,
     ) {
         // Flat indices stay below 2^30 (the grid's limit), so u32 lanes hold them.
-        let (base, w, dw, e, t, inv_d) = (
+        let (base, w, dw, e, t, inv_d, stretch) = (
             &mut self.base,
             &mut self.w,
             &mut self.dw,
             &mut self.e,
             &mut self.t,
             &mut self.inv_d,
+            &self.stretch,
         );
         base.fill(0);
         let h = 1.0 / inv_h;
@@ -464,9 +571,44 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
     }
 }
 
+/// [`Stencils::compute`] as a [`Visit`].
+struct ComputeStencils<'a, const D: usize, const K: usize, const W: usize> {
+    st: &'a mut Stencils<D, K, W>,
+    s: &'a [[Real; W]; D],
+    grid: ([usize; D], [usize; D], Real),
+    affine: bool,
+}
+
+impl<const D: usize, const K: usize, const W: usize> Visit<K> for ComputeStencils<'_, D, K, W> {
+    type Out = ();
+
+    #[inline(always)]
+    fn visit<S: Shape1D<K>>(self, shape: &S) {
+        let (nodes, stride, inv_h) = self.grid;
+        (self.st).compute_family(shape, self.s, nodes, stride, inv_h, self.affine)
+    }
+}
+
+/// [`Stencil::new`] as a [`Visit`].
+struct NewStencil<const D: usize> {
+    s: [Real; D],
+    stretch: [Real; D],
+    grid: ([usize; D], [usize; D], Real),
+}
+
+impl<const D: usize, const K: usize> Visit<K> for NewStencil<D> {
+    type Out = Stencil<D, K>;
+
+    #[inline(always)]
+    fn visit<S: Shape1D<K>>(self, shape: &S) -> Stencil<D, K> {
+        let (nodes, stride, inv_h) = self.grid;
+        Stencil::of_family(shape, self.s, self.stretch, nodes, stride, inv_h)
+    }
+}
+
 /// Weights, derivatives (per unit length) and hoop factors along axis `a` of a particle at
 /// offset `f` from its first node and `s` (cell units), its domain stretched by `stretch`
-/// (read only by a family that [`Shape1D::STRETCHES`]): the radial axis of the axisymmetric
+/// (read only by cpGIMP): the radial axis of the axisymmetric
 /// form through [`radial_stencil`], every other axis with no hoop factors (zeros).
 #[inline(always)]
 fn axis_weights<const K: usize, S: Shape1D<K>>(
@@ -578,6 +720,23 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     /// inside the admissible region the clamp is exact (the dropped node's weight is zero).
     #[inline(always)]
     pub fn new<S: Shape1D<K>>(
+        shape: &S,
+        s: [Real; D],
+        stretch: [Real; D],
+        nodes: [usize; D],
+        stride: [usize; D],
+        inv_h: Real,
+    ) -> Self {
+        shape.visit(NewStencil {
+            s,
+            stretch,
+            grid: (nodes, stride, inv_h),
+        })
+    }
+
+    /// [`Stencil::new`] for a concrete family.
+    #[inline(always)]
+    fn of_family<S: Shape1D<K>>(
         shape: &S,
         s: [Real; D],
         stretch: [Real; D],
@@ -919,6 +1078,98 @@ mod tests {
         check_axisymmetric(CubicBspline, None);
         check_axisymmetric(Gimp::new(2), Some(0.25));
         check_axisymmetric(CpGimp::new(2), Some(0.25));
+    }
+
+    /// A [`ThreeNode`] gives the bits of the family it holds, one particle at a time and a
+    /// chunk at a time (with the first moments), at random positions and stretches, in 2D and
+    /// in the axisymmetric form.
+    #[test]
+    fn three_node_families_give_the_bits_of_the_family_they_hold() {
+        const W: usize = 16;
+        let (nodes, stride, inv_h) = ([12, 12], [1, 12], 4.0);
+        let mut state = 99u64;
+        let members = [
+            ThreeNode::Gimp(Gimp::new(2)),
+            ThreeNode::CpGimp(CpGimp::new(3)),
+            ThreeNode::QuadraticBspline(QuadraticBspline),
+        ];
+        fn same<const W: usize>(a: &Stencils<2, 3, W>, b: &Stencils<2, 3, W>) -> bool {
+            let bits = |x: &[[[Real; W]; ROW]; 2]| x.map(|a| a.map(|r| r.map(Real::to_bits)));
+            a.bases() == b.bases()
+                && bits(&a.w) == bits(&b.w)
+                && bits(&a.dw) == bits(&b.dw)
+                && bits(&a.e) == bits(&b.e)
+                && a.t.map(|r| r.map(Real::to_bits)) == b.t.map(|r| r.map(Real::to_bits))
+                && a.inv_d.map(|r| r.map(Real::to_bits)) == b.inv_d.map(|r| r.map(Real::to_bits))
+        }
+        fn check<const W: usize, S: Shape1D<3>, T: Shape1D<3>>(
+            held: &S,
+            three: &T,
+            s: &[[Real; W]; 2],
+            stretch: &[[Real; W]; 2],
+            grid: ([usize; 2], [usize; 2], Real),
+        ) {
+            let (nodes, stride, inv_h) = grid;
+            let (mut a, mut b) = (Stencils::<2, 3, W>::default(), Stencils::default());
+            a.compute(held, s, Some(stretch), nodes, stride, inv_h, true);
+            b.compute(three, s, Some(stretch), nodes, stride, inv_h, true);
+            assert!(same(&a, &b));
+            for ln in 0..W {
+                let at = [s[0][ln], s[1][ln]];
+                let st = [stretch[0][ln], stretch[1][ln]];
+                let one = Stencil::<2, 3>::new(held, at, st, nodes, stride, inv_h);
+                let other = Stencil::<2, 3>::new(three, at, st, nodes, stride, inv_h);
+                assert_eq!(one.base, other.base);
+                assert_eq!(
+                    (one.w, one.dw, one.t).map_bits(),
+                    (other.w, other.dw, other.t).map_bits()
+                );
+            }
+        }
+        for _ in 0..200 {
+            let s: [[Real; W]; 2] =
+                core::array::from_fn(|_| core::array::from_fn(|_| 1.0 + 9.0 * lcg(&mut state)));
+            let stretch: [[Real; W]; 2] =
+                core::array::from_fn(|_| core::array::from_fn(|_| 0.2 + 2.0 * lcg(&mut state)));
+            for three in members {
+                let grid = (nodes, stride, inv_h);
+                match three {
+                    ThreeNode::Gimp(g) => check(&g, &three, &s, &stretch, grid),
+                    ThreeNode::CpGimp(g) => check(&g, &three, &s, &stretch, grid),
+                    ThreeNode::QuadraticBspline(g) => check(&g, &three, &s, &stretch, grid),
+                }
+                fn axi<S>(inner: S) -> Axisymmetric<S> {
+                    Axisymmetric::new(inner, -0.5, 0.25, 0.0625)
+                }
+                match three {
+                    ThreeNode::Gimp(g) => check(&axi(g), &axi(three), &s, &stretch, grid),
+                    ThreeNode::CpGimp(g) => check(&axi(g), &axi(three), &s, &stretch, grid),
+                    ThreeNode::QuadraticBspline(g) => {
+                        check(&axi(g), &axi(three), &s, &stretch, grid)
+                    }
+                }
+            }
+        }
+    }
+
+    /// The bits of a stencil's per-axis rows, for exact comparisons.
+    trait MapBits {
+        type Out: PartialEq + core::fmt::Debug;
+        fn map_bits(self) -> Self::Out;
+    }
+
+    impl MapBits for ([Row4; 2], [Row4; 2], Row4) {
+        type Out = [[u64; 4]; 5];
+        fn map_bits(self) -> Self::Out {
+            let b = |r: Row4| r.to_array().map(|x| x.to_bits() as u64);
+            [
+                b(self.0[0]),
+                b(self.0[1]),
+                b(self.1[0]),
+                b(self.1[1]),
+                b(self.2),
+            ]
+        }
     }
 
     #[test]

@@ -1,0 +1,174 @@
+//! The particle update's equations, one function per group, on the lane type [`Wide`]: what
+//! [`super::g2p::particles`] computes for each vector of a chunk's lanes, from the velocity
+//! `v_gp = sum S_ip v_i` and acceleration `a_gp = sum S_ip a_i` it gathered.
+//!
+//! - [`damping`]: the damping acceleration (seeds/000 eqs 47 and 107).
+//! - [`flip`]: FLIP with PIC damping and the second-order position update (eqs 51-52).
+//! - [`apic`]: the APIC update (seeds/001).
+//! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
+//!   with its outward velocity zeroed, or escapes through an open face.
+
+use super::rows::Compare;
+use super::wide::{Wide, WideMask};
+use crate::def::Boundary;
+use crate::grid::Geom;
+use crate::Real;
+
+/// The constants of a substep's particle update, made once per pass.
+#[derive(Clone, Copy)]
+pub(crate) struct Step<I: Compare> {
+    pub dt: Wide<I>,
+    pub half: Wide<I>,
+    /// `dt^2 / 2`.
+    pub half_dt2: Wide<I>,
+    /// The PIC fraction `1 - beta`.
+    pub pic: Wide<I>,
+}
+
+impl<I: Compare> Step<I> {
+    /// The constants of a substep of length `dt` with FLIP fraction `beta`.
+    ///
+    /// # Safety
+    /// The CPU supports the instance `I` ([`Wide::splat`]).
+    #[inline(always)]
+    pub unsafe fn new(dt: Real, beta: Real) -> Self {
+        // SAFETY: as required of the caller.
+        unsafe {
+            Step {
+                dt: Wide::splat(dt),
+                half: Wide::splat(0.5),
+                half_dt2: Wide::splat(0.5 * dt * dt),
+                pic: Wide::splat(1.0 - beta),
+            }
+        }
+    }
+}
+
+/// The damping acceleration `d = alpha_g v_gp + alpha_p v_p` (seeds/000 eq 47; eq 107 with
+/// each rate the substep's global value plus the particle's own).
+#[inline(always)]
+pub(crate) fn damping<I: Compare>(
+    v_gp: Wide<I>,
+    v_p: Wide<I>,
+    alpha_g: Wide<I>,
+    alpha_p: Wide<I>,
+) -> Wide<I> {
+    v_gp * alpha_g + v_p * alpha_p
+}
+
+/// FLIP with PIC damping (seeds/000 eq 52) and the second-order position update (eq 51), less
+/// the damping acceleration `d` when damping is declared (eqs 46-49):
+/// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
+/// - `x(n+1) = x_p + (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`
+///
+/// Returns the new velocity and position.
+#[inline(always)]
+pub(crate) fn flip<I: Compare>(
+    k: &Step<I>,
+    x_p: Wide<I>,
+    v_p: Wide<I>,
+    v_gp: Wide<I>,
+    a_gp: Wide<I>,
+    d: Option<Wide<I>>,
+) -> (Wide<I>, Wide<I>) {
+    let inversion = (v_p - v_gp) * k.pic;
+    let v = v_p + a_gp * k.dt - inversion;
+    let x = x_p + (v_gp + a_gp * k.half * k.dt - inversion * k.half) * k.dt;
+    match d {
+        Some(d) => (v - d * k.dt, x - d * k.half_dt2),
+        None => (v, x),
+    }
+}
+
+/// APIC (seeds/001): the particle takes the grid's velocity, `v(n+1) = v_gp + a_gp dt - d dt`,
+/// and moves with it, `x(n+1) = x_p + v(n+1) dt`. Returns the new velocity and position.
+#[inline(always)]
+pub(crate) fn apic<I: Compare>(
+    k: &Step<I>,
+    x_p: Wide<I>,
+    v_gp: Wide<I>,
+    a_gp: Wide<I>,
+    d: Option<Wide<I>>,
+) -> (Wide<I>, Wide<I>) {
+    let mut v = v_gp + a_gp * k.dt;
+    if let Some(d) = d {
+        v = v - d * k.dt;
+    }
+    (v, x_p + v * k.dt)
+}
+
+/// One axis's two faces, for [`walls`]: the grid's origin and `1 / h`, the admissible range
+/// in cells and its ends in metres, and which faces are open.
+#[derive(Clone, Copy)]
+pub(crate) struct Faces<I: Compare> {
+    zero: Wide<I>,
+    origin: Wide<I>,
+    inv_h: Wide<I>,
+    lo: Wide<I>,
+    hi: Wide<I>,
+    lo_x: Wide<I>,
+    hi_x: Wide<I>,
+    open: [WideMask<I>; 2],
+    none: WideMask<I>,
+}
+
+impl<I: Compare> Faces<I> {
+    /// The faces of `axis` of the grid `geom`.
+    ///
+    /// # Safety
+    /// As for [`Step::new`].
+    #[inline(always)]
+    pub unsafe fn of<const D: usize>(geom: &Geom<D>, axis: usize) -> Self {
+        let open = |side: usize| geom.faces[axis][side] == Boundary::Open;
+        // SAFETY: as required of the caller.
+        unsafe {
+            Faces {
+                zero: Wide::splat(0.0),
+                origin: Wide::splat(geom.origin[axis]),
+                inv_h: Wide::splat(geom.inv_h),
+                lo: Wide::splat(geom.lo[axis]),
+                hi: Wide::splat(geom.hi[axis]),
+                lo_x: Wide::splat(geom.origin[axis] + geom.lo[axis] * geom.h),
+                hi_x: Wide::splat(geom.origin[axis] + geom.hi[axis] * geom.h),
+                open: [WideMask::splat(open(0)), WideMask::splat(open(1))],
+                none: WideMask::splat(false),
+            }
+        }
+    }
+}
+
+impl<I: Compare> Faces<I> {
+    /// A mask of no lanes.
+    #[inline(always)]
+    pub fn none(&self) -> WideMask<I> {
+        self.none
+    }
+}
+
+/// What [`walls`] did to a vector of lanes along one axis.
+pub(crate) struct AtFaces<I: Compare> {
+    /// The position, on a face's plane where the particle left the admissible range.
+    pub x: Wide<I>,
+    /// The velocity, its outward component zeroed at a wall.
+    pub v: Wide<I>,
+    /// The lanes that crossed an open face (they escape).
+    pub open: WideMask<I>,
+    /// The lanes that reached a stick or slip wall (stopped).
+    pub wall: WideMask<I>,
+}
+
+/// The walls and open faces along one axis: a particle at `x` (m) with velocity `v` that left
+/// the admissible range is put on the plane it crossed; at a stick or slip wall its outward
+/// velocity is zeroed, and through an open face it escapes.
+#[inline(always)]
+pub(crate) fn walls<I: Compare>(f: &Faces<I>, x: Wide<I>, v: Wide<I>) -> AtFaces<I> {
+    let zero = f.zero;
+    let s = (x - f.origin) * f.inv_h;
+    let (below, above) = (s.lt(f.lo), s.gt(f.hi));
+    let x = below.select(f.lo_x, above.select(f.hi_x, x));
+    let open = (below & f.open[0]) | (above & f.open[1]);
+    let wall = (below | above).and_not(open);
+    let outward = (below & v.lt(zero)) | (above & v.gt(zero));
+    let v = (wall & outward).select(zero, v);
+    AtFaces { x, v, open, wall }
+}

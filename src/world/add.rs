@@ -1,0 +1,351 @@
+//! Adding to a world: materials, particles, the per-particle setters and tractions, and the
+//! append path every particle goes through.
+
+use super::{GeomAny, ParticleBatch, ParticleDef, ScalarField, World};
+use crate::def::{MaterialDef, WorldDef};
+use crate::layout::{col, Layout, MaterialRecord, TractionRecord};
+use crate::particles::ACTIVE;
+use crate::{Error, Real, Vec3};
+use core::mem::size_of;
+use core::ops::Range;
+
+impl<'a> World<'a> {
+    /// Adds a material; returns its id.
+    pub fn add_material(&mut self, m: &MaterialDef) -> Result<u32, Error> {
+        let record = material_record(m)?;
+        let def = self.def();
+        let id = self.material_count();
+        if id >= def.material_capacity as usize {
+            return Err(Error::MaterialCapacityExceeded);
+        }
+        let layout = Layout::of(&def);
+        let start = layout.materials_offset + id * size_of::<MaterialRecord>();
+        let rec: &mut MaterialRecord =
+            bytemuck::from_bytes_mut(&mut self.buf[start..start + size_of::<MaterialRecord>()]);
+        *rec = record;
+        self.header_mut().material_count += 1;
+        Ok(id as u32)
+    }
+
+    /// Adds one particle; returns its id.
+    pub fn add_particle(&mut self, p: &ParticleDef) -> Result<u32, Error> {
+        fn one(v: &Real) -> &[Real] {
+            core::slice::from_ref(v)
+        }
+        let batch = ParticleBatch {
+            position: [one(&p.position.x), one(&p.position.y), one(&p.position.z)],
+            velocity: [one(&p.velocity.x), one(&p.velocity.y), one(&p.velocity.z)],
+            mass: one(&p.mass),
+            volume: one(&p.volume),
+            material: core::slice::from_ref(&p.material),
+        };
+        self.add_particles(&batch).map(|r| r.start)
+    }
+
+    /// Adds a batch of particles; all or nothing. Returns the range of their ids.
+    pub fn add_particles(&mut self, b: &ParticleBatch<'_>) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let d = def.axes();
+        let n = b.mass.len();
+        let lengths_ok = (0..d).all(|a| b.position[a].len() == n && b.velocity[a].len() == n)
+            && b.volume.len() == n
+            && b.material.len() == n;
+        if !lengths_ok {
+            return Err(Error::LengthMismatch);
+        }
+        self.check_room(&def, n)?;
+        let materials = self.material_count() as u32;
+        let geom = GeomAny::new(&def);
+        for i in 0..n {
+            let x: [Real; 3] = core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 });
+            let v: [Real; 3] = core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 });
+            let (m, vol) = (b.mass[i], b.volume[i]);
+            if !(x.iter().chain(v.iter()).all(|c| c.is_finite())
+                && m.is_finite()
+                && vol.is_finite())
+            {
+                return Err(Error::NonFiniteInput);
+            }
+            if m <= 0.0 || vol <= 0.0 {
+                return Err(Error::NonPositiveMassOrVolume);
+            }
+            if b.material[i] >= materials {
+                return Err(Error::UnknownMaterial);
+            }
+            if !geom.admits(x) {
+                return Err(Error::PositionOutsideDomain);
+            }
+        }
+        // Validated: write.
+        let items = (0..n).map(|i| {
+            (
+                core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 }),
+                core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 }),
+                b.mass[i],
+                b.volume[i],
+                b.material[i],
+            )
+        });
+        Ok(self.append(&def, items))
+    }
+
+    /// Sets the external force `F_p` (N; per unit thickness in plane strain) of particles
+    /// `first..first + n`, `n` the length of the slices (z may be empty in 2D). Needs
+    /// [`crate::Effects::particle_forces`]. The force stays until set again.
+    pub fn set_particle_forces(&mut self, first: u32, force: [&[Real]; 3]) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
+        let group = (layout.force.count > 0).then_some(layout.force.first);
+        let columns = &force[..layout.d];
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            columns,
+            Error::NonFiniteInput,
+            |_| true,
+        )
+    }
+
+    /// Sets the value of a transported scalar (temperature, K, or concentration potential) of
+    /// particles `first..first + n`, `n = values.len()`. Needs the field declared
+    /// ([`crate::Effects::heat`], [`crate::Effects::diffusion`]). Values start at 0.
+    pub fn set_particle_scalar(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 0, first, values)
+    }
+
+    /// Sets the source of a transported scalar (heat: W/m^3; diffusion: 1/s) of particles
+    /// `first..first + n`. Needs the field declared with [`crate::Transport::sources`].
+    pub fn set_particle_sources(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 2, first, values)
+    }
+
+    fn set_scalar_column(
+        &mut self,
+        field: ScalarField,
+        k: usize,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
+        let g = layout.scalar[field as usize];
+        let group = (k < g.count).then_some(g.first + k);
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            &[values],
+            Error::NonFiniteInput,
+            |_| true,
+        )
+    }
+
+    /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
+    /// particles `first..first + n`, added to the global damping for those particles (eq 107).
+    /// Needs [`crate::Damping::per_particle`].
+    pub fn set_particle_damping(
+        &mut self,
+        first: u32,
+        alpha_g: &[Real],
+        alpha_p: &[Real],
+    ) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
+        let group = (layout.damping.count > 0).then_some(layout.damping.first);
+        let columns = &[alpha_g, alpha_p];
+        self.write_particle_columns(&layout, group, first, columns, Error::InvalidEffect, |v| {
+            v >= 0.0
+        })
+    }
+
+    /// The per-particle setters' one path: writes `columns` (one slice per column, all of one
+    /// length n) into the consecutive particle Real columns from `group` for particles
+    /// `first..first + n`, after checking, in this order, that the group is reserved
+    /// (`EffectNotDeclared`), that the lengths agree (`LengthMismatch`), that the particles
+    /// exist (`UnknownParticle`) and that every value is finite and passes `valid` (else
+    /// `invalid`). Nothing is written unless every check passes.
+    fn write_particle_columns(
+        &mut self,
+        layout: &Layout,
+        group: Option<usize>,
+        first: u32,
+        columns: &[&[Real]],
+        invalid: Error,
+        valid: fn(Real) -> bool,
+    ) -> Result<(), Error> {
+        let group = group.ok_or(Error::EffectNotDeclared)?;
+        let n = columns.first().map_or(0, |c| c.len());
+        if columns.iter().any(|c| c.len() != n) {
+            return Err(Error::LengthMismatch);
+        }
+        let range = self.particle_range(first, n)?;
+        if columns
+            .iter()
+            .any(|c| c.iter().any(|&v| !v.is_finite() || !valid(v)))
+        {
+            return Err(invalid);
+        }
+        for (k, values) in columns.iter().enumerate() {
+            let col = self.real_col_mut(layout, group + k, range.end);
+            col[range.clone()].copy_from_slice(values);
+        }
+        Ok(())
+    }
+
+    /// Adds one traction per particle of `particles`, each loading the `face` of that
+    /// particle's domain with the traction `traction` (Pa: force per area of the face, whose
+    /// area is per unit thickness in plane strain); returns the range of their traction ids.
+    /// All or nothing. Needs [`crate::Effects::traction_capacity`]. The tractions are
+    /// integrated each substep into `f_iT` (eq 21) while their particle is active.
+    pub fn add_tractions(
+        &mut self,
+        particles: Range<u32>,
+        face: crate::Face,
+        traction: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        if layout.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let d = layout.d;
+        if face as usize / 2 >= d || (0..d).any(|a| !traction[a].is_finite()) {
+            return Err(Error::InvalidEffect);
+        }
+        if particles.start > particles.end {
+            return Err(Error::UnknownParticle);
+        }
+        let n = (particles.end - particles.start) as usize;
+        self.particle_range(particles.start, n)?;
+        let used = self.header().traction_count as usize;
+        if n > layout.traction_capacity - used {
+            return Err(Error::TractionCapacityExceeded);
+        }
+        let start = layout.tractions_offset + used * size_of::<TractionRecord>();
+        let table: &mut [TractionRecord] =
+            bytemuck::cast_slice_mut(&mut self.buf[start..start + n * size_of::<TractionRecord>()]);
+        for (rec, id) in table.iter_mut().zip(particles) {
+            *rec = TractionRecord {
+                particle: id,
+                face: face as u32,
+                traction: core::array::from_fn(|a| if a < d { traction[a] } else { 0.0 }),
+            };
+        }
+        self.header_mut().traction_count += n as u64;
+        Ok(used as u32..(used + n) as u32)
+    }
+
+    /// Removes every traction (the capacity stays).
+    pub fn clear_tractions(&mut self) {
+        self.header_mut().traction_count = 0;
+    }
+
+    /// `first..first + n` if those particles exist.
+    fn particle_range(&self, first: u32, n: usize) -> Result<Range<usize>, Error> {
+        let first = first as usize;
+        match first.checked_add(n) {
+            Some(end) if end <= self.particle_count() => Ok(first..end),
+            _ => Err(Error::UnknownParticle),
+        }
+    }
+
+    fn check_room(&self, def: &WorldDef, n: usize) -> Result<(), Error> {
+        if n > def.particle_capacity as usize - self.particle_count() {
+            return Err(Error::ParticleCapacityExceeded);
+        }
+        Ok(())
+    }
+
+    /// Appends validated particles `(x, v, mass, volume, material)`; returns their ids.
+    pub(super) fn append(
+        &mut self,
+        def: &WorldDef,
+        items: impl Iterator<Item = NewParticle>,
+    ) -> Range<u32> {
+        let layout = Layout::of(def);
+        let d = layout.d;
+        let start = self.particle_count();
+        let cap = layout.padded_capacity;
+        let mut min_mass = self.header().min_particle_mass;
+        let mut i = start;
+        for (x, v, m, vol, mat) in items {
+            for a in 0..d {
+                self.real_col_mut(&layout, col::x(a), cap)[i] = x[a];
+                self.real_col_mut(&layout, col::v(d, a), cap)[i] = v[a];
+                for b in 0..d {
+                    self.real_col_mut(&layout, col::h(d, a, b), cap)[i] = 0.0;
+                }
+            }
+            self.real_col_mut(&layout, col::mass(d), cap)[i] = m;
+            self.real_col_mut(&layout, col::vol0(d), cap)[i] = vol;
+            for k in 0..crate::layout::stress_components(d) {
+                self.real_col_mut(&layout, col::tau(d, k), cap)[i] = 0.0;
+            }
+            self.u32_col_mut(&layout, col::MATERIAL, cap)[i] = mat;
+            self.u32_col_mut(&layout, col::STATUS, cap)[i] = ACTIVE;
+            min_mass = min_mass.min(m as f64);
+            i += 1;
+        }
+        let h = self.header_mut();
+        h.particle_count = i as u64;
+        h.min_particle_mass = min_mass;
+        start as u32..i as u32
+    }
+}
+
+/// The record of a valid material definition, with what the step derives from it (Lame
+/// parameters, wave speed), or `InvalidMaterial`.
+pub(super) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> {
+    let ok = m.youngs_modulus.is_finite()
+        && m.youngs_modulus > 0.0
+        && m.poisson_ratio > -1.0
+        && m.poisson_ratio < 0.5
+        && m.density.is_finite()
+        && m.density > 0.0
+        && m.heat_capacity.is_finite()
+        && m.heat_capacity > 0.0
+        && m.conductivity.is_finite()
+        && m.conductivity >= 0.0
+        && m.diffusivity.is_finite()
+        && m.diffusivity >= 0.0
+        && m.thermal_expansion.is_finite()
+        && m.reference_temperature.is_finite()
+        && m.swelling.is_finite()
+        && m.reference_concentration.is_finite();
+    if !ok {
+        return Err(Error::InvalidMaterial);
+    }
+    let (lambda, mu) = m.lame();
+    let c = m.wave_speed();
+    if !(lambda.is_finite() && mu.is_finite() && c.is_finite()) {
+        return Err(Error::InvalidMaterial);
+    }
+    Ok(MaterialRecord {
+        model: m.model as u32 as Real,
+        youngs_modulus: m.youngs_modulus,
+        poisson_ratio: m.poisson_ratio,
+        density: m.density,
+        lambda,
+        mu,
+        wave_speed: c,
+        heat_capacity: m.heat_capacity,
+        conductivity: m.conductivity,
+        diffusivity: m.diffusivity,
+        thermal_expansion: m.thermal_expansion,
+        reference_temperature: m.reference_temperature,
+        swelling: m.swelling,
+        reference_concentration: m.reference_concentration,
+        reserved: [0.0; 2],
+    })
+}
+
+/// A particle to append: position, velocity, mass, volume, material id.
+type NewParticle = ([Real; 3], [Real; 3], Real, Real, u32);

@@ -1,0 +1,612 @@
+//! Reading a world in place: [`WorldRef`] and its queries (the state check, the stable time
+//! step, the particle view, the diagnostics), on a shared borrow of the bytes.
+
+use super::add::material_record;
+use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
+use crate::def::{MaterialDef, ShapeFunction, Transfer, WorldDef};
+use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
+use crate::material::{eigenstrain_part, elastic_part, energy_density, model_of, Params};
+use crate::particles::{ParticleStatus, ACTIVE};
+use crate::simd::Simd;
+use crate::{Error, Real};
+use core::cmp::Ordering;
+use core::mem::size_of;
+
+/// A world read in place: every query of [`World`] that changes nothing, on a shared borrow
+/// of its bytes (from [`World::read`], or [`WorldRef::open`] on memory only lent for reading,
+/// such as a snapshot or a world other threads read at the same time).
+#[derive(Clone, Copy)]
+pub struct WorldRef<'a> {
+    pub(super) buf: &'a [u8],
+}
+
+impl<'a> WorldRef<'a> {
+    /// Reads the world that `buf` holds, with the checks of [`World::open`] (the state
+    /// included).
+    pub fn open(buf: &'a [u8]) -> Result<WorldRef<'a>, Error> {
+        let w = WorldRef::reopen(buf)?;
+        w.check_state()?;
+        Ok(w)
+    }
+
+    /// Reads the world that `buf` holds, with the constant-time checks of [`World::reopen`].
+    pub fn reopen(buf: &'a [u8]) -> Result<WorldRef<'a>, Error> {
+        let total = World::stored_bytes(buf)?;
+        check_buffer(buf, total)?;
+        Ok(WorldRef { buf })
+    }
+
+    /// Checks the state of a world whose header is sound, as [`World::open`] does; the first
+    /// problem found is [`Error::InvalidState`]. What holds in every world this API produced:
+    /// - the time is finite and >= 0; the thermostat's alpha finite, in `[0, max_alpha]`
+    ///   (0 without one); the smallest particle mass is the smallest of the particles' masses
+    ///   (infinite before the first particle);
+    /// - each material record is what [`World::add_material`] makes of a valid definition;
+    ///   each traction names an existing particle and a face of the dimension, with a finite
+    ///   traction;
+    /// - every particle has a known status and material, a finite mass and volume > 0, a
+    ///   position in the admissible region (the grid less the shape function's margin; on
+    ///   its wall planes, where the step puts a particle that reaches them), and every value
+    ///   it carries is finite (velocity, `H` with `J > 0`, stress, and the columns of its
+    ///   declared effects: forces, damping >= 0, moment matrix, transported values and
+    ///   sources, hoop stretch > -1): a particle frozen or escaped in a step keeps its last
+    ///   finite state.
+    pub fn check_state(&self) -> Result<(), Error> {
+        let invalid = Err(Error::InvalidState);
+        let h = self.header();
+        let def = self.def();
+        let layout = self.layout();
+        let d = layout.d;
+        let n = self.particle_count();
+        let max_alpha = def
+            .effects
+            .damping
+            .and_then(|dm| dm.feedback)
+            .map_or(0.0, |f| f.max_alpha as f64);
+        let alpha_ok = (0.0..=max_alpha).contains(&h.feedback_alpha);
+        if !(h.time.is_finite() && h.time >= 0.0 && alpha_ok) {
+            return invalid;
+        }
+        for (id, rec) in self.materials(&layout).iter().enumerate() {
+            let again = self.material(id as u32).map(|m| material_record(&m));
+            if !matches!(again, Some(Ok(r)) if bytemuck::bytes_of(&r) == bytemuck::bytes_of(rec)) {
+                return invalid;
+            }
+        }
+        let trac_start = layout.tractions_offset;
+        let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
+        let tractions: &[TractionRecord] =
+            bytemuck::cast_slice(&self.buf[trac_start..trac_start + trac_bytes]);
+        for t in tractions {
+            let finite = t.traction.iter().all(|c| c.is_finite());
+            if t.particle as usize >= n || t.face as usize >= 2 * d || !finite {
+                return invalid;
+            }
+        }
+        let v = self.particles();
+        let materials = self.material_count();
+        let geom = GeomAny::new(&def);
+        // Every particle Real column a particle's state lives in: those of `H`, the stress,
+        // the declared effects (the MUSL start positions and the cpGIMP stretches are scratch).
+        let real = |j: usize| self.real_col(&layout, j, n);
+        let groups = [
+            layout.force,
+            layout.damping,
+            layout.affine,
+            layout.scalar[0],
+            layout.scalar[1],
+            layout.hoop,
+        ];
+        let columns = (0..d * d)
+            .map(|k| col::h(d, k / d, k % d))
+            .chain((0..crate::layout::stress_components(d)).map(|k| col::tau(d, k)))
+            .chain(groups.iter().flat_map(|g| g.first..g.first + g.count))
+            .map(real);
+        let mut min_mass = f64::INFINITY;
+        for i in 0..n {
+            let (m, vol) = (v.mass[i], v.volume0[i]);
+            min_mass = min_mass.min(m as f64);
+            let x: [Real; 3] = core::array::from_fn(|a| if a < d { v.position[a][i] } else { 0.0 });
+            let sound = ParticleStatus::from_code(v.status[i]).is_some()
+                && (v.material[i] as usize) < materials
+                && m.is_finite()
+                && m > 0.0
+                && vol.is_finite()
+                && vol > 0.0
+                && (0..d).all(|a| v.velocity[a][i].is_finite())
+                && columns.clone().all(|c| c[i].is_finite())
+                && v.damping.iter().all(|c| c.get(i).is_none_or(|&x| x >= 0.0))
+                && v.hoop.get(i).is_none_or(|&x| x > -1.0)
+                && v.jacobian_minus_one(i).partial_cmp(&-1.0) == Some(Ordering::Greater)
+                && geom.holds(x);
+            if !sound {
+                return invalid;
+            }
+        }
+        if h.min_particle_mass != min_mass {
+            return invalid;
+        }
+        Ok(())
+    }
+
+    pub(super) fn header(&self) -> &'a Header {
+        bytemuck::from_bytes(&self.buf[..size_of::<Header>()])
+    }
+
+    /// The world's definition.
+    pub fn def(&self) -> WorldDef {
+        // The header was written by init or checked by open, so it always decodes.
+        self.header().def().unwrap_or(WorldDef::DEFAULT)
+    }
+
+    fn layout(&self) -> Layout {
+        Layout::of(&self.def())
+    }
+
+    /// Number of particles added.
+    pub fn particle_count(&self) -> usize {
+        self.header().particle_count as usize
+    }
+
+    /// Number of materials added.
+    pub fn material_count(&self) -> usize {
+        self.header().material_count as usize
+    }
+
+    /// Simulated time, s (sum of the `dt` of every step).
+    pub fn time(&self) -> f64 {
+        self.header().time
+    }
+
+    /// Number of `step` calls that succeeded.
+    pub fn step_count(&self) -> u64 {
+        self.header().step_count
+    }
+
+    /// The bytes the world occupies (a prefix of the buffer). A copy is a snapshot.
+    pub fn as_bytes(&self) -> &'a [u8] {
+        let total = self.header().total_bytes as usize;
+        &self.buf[..total]
+    }
+
+    /// The world's state: [`as_bytes`](Self::as_bytes) without the grid columns at its end.
+    /// The grid is scratch: every substep resets each node value before it reads it, so
+    /// whatever those bytes hold cannot change a step (tested). A snapshot therefore needs
+    /// only these bytes: copied to the start of a buffer of
+    /// [`memory_requirements`](crate::memory_requirements) bytes, they open
+    /// ([`World::open`]) as a world that steps as this one does.
+    pub fn state_bytes(&self) -> &'a [u8] {
+        &self.buf[..self.layout().grid_offset]
+    }
+
+    fn materials(&self, layout: &Layout) -> &'a [MaterialRecord] {
+        let n = self.material_count();
+        let start = layout.materials_offset;
+        bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
+    }
+
+    fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [Real] {
+        bytemuck::cast_slice(&self.buf[layout.real_col(j, count)])
+    }
+
+    fn u32_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [u32] {
+        bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
+    }
+
+    /// The definition of material `id`.
+    pub fn material(&self, id: u32) -> Option<MaterialDef> {
+        let layout = self.layout();
+        self.materials(&layout)
+            .get(id as usize)
+            .map(|r| MaterialDef {
+                model: model_of(r),
+                youngs_modulus: r.youngs_modulus,
+                poisson_ratio: r.poisson_ratio,
+                density: r.density,
+                heat_capacity: r.heat_capacity,
+                conductivity: r.conductivity,
+                diffusivity: r.diffusivity,
+                thermal_expansion: r.thermal_expansion,
+                reference_temperature: r.reference_temperature,
+                swelling: r.swelling,
+                reference_concentration: r.reference_concentration,
+            })
+    }
+
+    /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
+    /// dilatational wave speed of the materials, `|v|_max` the fastest active particle; shorter
+    /// where damping (`alpha dt <= cfl`, the thermostat's alpha excepted: it is clamped to what
+    /// the substep allows), conduction or diffusion (`dt <= h^2 / (2 d kappa)`) need it.
+    /// Infinite when nothing moves and there is no material.
+    pub fn stable_dt(&self) -> Real {
+        self.stable_dt_with_simd(Simd::Detect)
+    }
+
+    /// [`WorldRef::stable_dt`], its scan of the particles run in the instruction set `simd`.
+    pub(crate) fn stable_dt_with_simd(&self, simd: Simd) -> Real {
+        self.time_step_limits(simd).stable_dt
+    }
+
+    /// The stable time step and the damping besides the thermostat that it allows for.
+    pub(super) fn time_step_limits(&self, simd: Simd) -> TimeStepLimits {
+        let layout = self.layout();
+        let def = self.def();
+        let c_max = self
+            .materials(&layout)
+            .iter()
+            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
+        let n = self.particle_count();
+        let d = layout.d;
+        let status = self.u32_col(&layout, col::STATUS, n);
+        let v: [&[Real]; 3] = core::array::from_fn(|a| {
+            if a < d {
+                self.real_col(&layout, col::v(d, a), n)
+            } else {
+                &[]
+            }
+        });
+        let v2_max = crate::phases::fastest_squared(simd, &v, &status[..n], d);
+        let speed = c_max as f64 + libm::sqrt(v2_max);
+        // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
+        // most the Courant number, with alpha the largest damping any particle can see (the
+        // schedules' maxima, the largest local values). The thermostat's alpha is not among
+        // them: the step clamps it to the room this leaves (`World::update_feedback`).
+        let other_damping = def.effects.damping.map_or(0.0, |dm| {
+            let local = |k: usize| view_max(self.particles().damping[k], status);
+            dm.grid.max_value() as f64 + dm.particle.max_value() as f64 + local(0) + local(1)
+        });
+        // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
+        // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.
+        let fx = &def.effects;
+        let kappa = self.materials(&layout).iter().fold(0.0f64, |m, r| {
+            let thermal = if fx.heat.is_some() {
+                r.conductivity as f64 / (r.density as f64 * r.heat_capacity as f64)
+            } else {
+                0.0
+            };
+            let solvent = if fx.diffusion.is_some() {
+                r.diffusivity as f64
+            } else {
+                0.0
+            };
+            m.max(thermal).max(solvent)
+        });
+        let h = def.cell_size as f64;
+        let conduction = h * h / (2.0 * d as f64 * kappa);
+        // Never 0: a step below the smallest positive Real is not a step.
+        let dt = def.cfl as f64 * (h / speed).min(1.0 / other_damping).min(conduction);
+        let stable_dt = if dt.is_finite() {
+            (dt as Real).max(Real::MIN_POSITIVE)
+        } else {
+            Real::INFINITY
+        };
+        TimeStepLimits {
+            stable_dt,
+            other_damping,
+        }
+    }
+
+    /// Borrowed view of every particle column.
+    pub fn particles(&self) -> ParticlesView<'a> {
+        let layout = self.layout();
+        let d = layout.d;
+        let n = self.particle_count();
+        let empty: &[Real] = &[];
+        let r = |j: usize| self.real_col(&layout, j, n);
+        let ns = crate::layout::stress_components(d);
+        // Column k of an optional group, or empty when the group is not reserved.
+        let group = |g: crate::layout::ColumnGroup, k: usize| {
+            if k < g.count {
+                r(g.first + k)
+            } else {
+                empty
+            }
+        };
+        ParticlesView {
+            count: n,
+            dimension: self.def().dimension,
+            position: core::array::from_fn(|a| if a < d { r(col::x(a)) } else { empty }),
+            velocity: core::array::from_fn(|a| if a < d { r(col::v(d, a)) } else { empty }),
+            mass: r(col::mass(d)),
+            volume0: r(col::vol0(d)),
+            displacement_gradient: core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    if a < d && b < d {
+                        r(col::h(d, a, b))
+                    } else {
+                        empty
+                    }
+                })
+            }),
+            stress: core::array::from_fn(|k| if k < ns { r(col::tau(d, k)) } else { empty }),
+            material: self.u32_col(&layout, col::MATERIAL, n),
+            status: self.u32_col(&layout, col::STATUS, n),
+            force: core::array::from_fn(|a| group(layout.force, a)),
+            temperature: group(layout.scalar[0], 0),
+            concentration: group(layout.scalar[1], 0),
+            grid_temperature: group(layout.scalar[0], 1),
+            grid_concentration: group(layout.scalar[1], 1),
+            hoop: group(layout.hoop, 0),
+            damping: core::array::from_fn(|k| group(layout.damping, k)),
+            affine: core::array::from_fn(|a| {
+                core::array::from_fn(|b| {
+                    if a < d && b < d {
+                        group(layout.affine, a * d + b)
+                    } else {
+                        empty
+                    }
+                })
+            }),
+        }
+    }
+
+    /// Kinetic energy (J) and mass (kg) of the active particles, in f64.
+    pub(super) fn kinetic_energy_and_mass(&self) -> (f64, f64) {
+        let view = self.particles();
+        let d = self.layout().d;
+        let (mut kinetic, mut mass) = (0.0f64, 0.0f64);
+        for i in 0..view.count {
+            if view.status[i] == ACTIVE {
+                let m = view.mass[i] as f64;
+                let v2: f64 = (0..d)
+                    .map(|a| view.velocity[a][i] as f64 * view.velocity[a][i] as f64)
+                    .sum();
+                kinetic += 0.5 * m * v2;
+                mass += m;
+            }
+        }
+        (kinetic, mass)
+    }
+
+    /// The thermostat's current alpha, 1/s (0 without one).
+    pub fn feedback_alpha(&self) -> f64 {
+        self.header().feedback_alpha
+    }
+
+    /// Number of tractions added.
+    pub fn traction_count(&self) -> usize {
+        self.header().traction_count as usize
+    }
+
+    /// Mass, momentum, centre of mass and energies of the active particles.
+    pub fn diagnostics(&self) -> Diagnostics {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let materials = self.materials(&layout);
+        let view = self.particles();
+        let d = layout.d;
+        let mut out = Diagnostics::default();
+        let mut first_moment = [0.0f64; 3];
+        for i in 0..view.count {
+            if view.status[i] != ACTIVE {
+                continue;
+            }
+            let m = view.mass[i] as f64;
+            out.mass += m;
+            let mut x = [0.0f64; 3];
+            let mut v = [0.0f64; 3];
+            for a in 0..d {
+                v[a] = view.velocity[a][i] as f64;
+                x[a] = view.position[a][i] as f64;
+                out.momentum[a] += m * v[a];
+                out.kinetic += 0.5 * m * v[a] * v[a];
+                first_moment[a] += m * x[a];
+                out.potential -= m * def.gravity[a] as f64 * x[a];
+            }
+            // L = x x m v, plus m eps_abc B_cb with APIC.
+            let mut l = [
+                m * (x[1] * v[2] - x[2] * v[1]),
+                m * (x[2] * v[0] - x[0] * v[2]),
+                m * (x[0] * v[1] - x[1] * v[0]),
+            ];
+            if def.transfer == Transfer::Apic {
+                // B_p itself, or C_p D_p for linear weights, whose column holds C_p (the
+                // gradient form; D_p = f (1 - f) h^2 per axis, f the offset in the cell).
+                let linear = def.shape == ShapeFunction::Linear;
+                let dm: [f64; 3] = core::array::from_fn(|a| {
+                    if linear && a < d {
+                        let h = def.cell_size as f64;
+                        let s = (x[a] - def.origin[a] as f64) / h;
+                        let f = s - libm::floor(s);
+                        f * (1.0 - f) * h * h
+                    } else {
+                        1.0
+                    }
+                });
+                let b = |a: usize, c: usize| {
+                    if a < d && c < d {
+                        view.affine[a][c][i] as f64 * dm[c]
+                    } else {
+                        0.0
+                    }
+                };
+                l[0] += m * (b(2, 1) - b(1, 2));
+                l[1] += m * (b(0, 2) - b(2, 0));
+                l[2] += m * (b(1, 0) - b(0, 1));
+            }
+            let axes = if d == 3 { 0..3 } else { 2..3 };
+            for a in axes {
+                out.angular_momentum[a] += l[a];
+            }
+            if let Some(rec) = materials.get(view.material[i] as usize) {
+                // The elastic part's energy, per volume of the eigenstrained (stress-free)
+                // configuration, (1 + d)^3 V0.
+                let (model, params) = (model_of(rec), Params::of(rec));
+                let eig = eigenstrain_of(rec, &view, i);
+                let (w, scale) = if d == 3 {
+                    let (f, k) = elastic_part(&view.deformation::<3>(i), eig);
+                    (energy_density(model, &params, &f), k)
+                } else {
+                    let (f, k) = elastic_part(&view.deformation::<2>(i), eig);
+                    (energy_density(model, &params, &f), k)
+                };
+                out.strain += view.volume0[i] as f64 * (scale * w) as f64;
+            }
+        }
+        if out.mass > 0.0 {
+            for a in 0..3 {
+                out.center_of_mass[a] = first_moment[a] / out.mass;
+            }
+        }
+        out
+    }
+}
+
+/// The isotropic eigenstrain `d` of particle `i` of material `rec` (thermal expansion and
+/// swelling, from the grid values at the particle; 0 for a field not declared), as the stress
+/// update takes it out.
+fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> Real {
+    [view.grid_temperature, view.grid_concentration]
+        .iter()
+        .enumerate()
+        .filter_map(|(f, col)| col.get(i).map(|&v| eigenstrain_part(rec, f, v)))
+        .sum()
+}
+
+/// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the
+/// thermostat's that any particle can see (1/s), whose room the thermostat's alpha must stay
+/// within.
+pub(super) struct TimeStepLimits {
+    pub(super) stable_dt: Real,
+    pub(super) other_damping: f64,
+}
+
+/// Largest value of `col` over active particles (0 for an empty column).
+fn view_max(col: &[Real], status: &[u32]) -> f64 {
+    col.iter()
+        .zip(status)
+        .filter(|(_, &s)| s == ACTIVE)
+        .fold(0.0f64, |m, (&v, _)| m.max(v as f64))
+}
+
+/// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
+/// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
+/// make the stable step 0, which no step could take, although the true step is representable.
+/// Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then the tail:
+/// the same maximum as a particle-by-particle scan. Run in the step's instruction set
+/// (`phases::isa`).
+#[inline(always)]
+pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
+    let n = status.len();
+    const L: usize = 8;
+    let mut lanes = [0.0f64; L];
+    let full = n - n % L;
+    for from in (0..full).step_by(L) {
+        let mut v2 = [0.0f64; L];
+        for va in v.iter().take(d) {
+            let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
+            for l in 0..L {
+                v2[l] += va[l] as f64 * va[l] as f64;
+            }
+        }
+        let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
+        for l in 0..L {
+            lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
+                v2[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
+    for i in full..n {
+        let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
+        if status[i] == ACTIVE && v2 > v2_max {
+            v2_max = v2;
+        }
+    }
+    v2_max
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+    use crate::{HeapBuffer, MaterialDef, Vec3};
+
+    /// `open` checks the header's state and the tables as well as the particles: each edit
+    /// of a snapshot that no call produces is `InvalidState` (a particle count raised over
+    /// empty slots, a time, minimum mass or thermostat alpha out of range, a material record
+    /// that is not what `add_material` makes of its definition, a traction naming no particle
+    /// or face, or not finite), and the bytes stay as they were; the intact snapshot opens.
+    #[cfg(feature = "effects")]
+    #[test]
+    fn open_refuses_damaged_header_state_and_tables() {
+        use crate::{Damping, Effects, Face, Feedback, Schedule};
+        let def = WorldDef {
+            cells: [16, 16, 1],
+            cell_size: 0.1,
+            particle_capacity: 512,
+            effects: Effects {
+                damping: Some(Damping {
+                    feedback: Some(Feedback {
+                        gain: 1.0,
+                        target: Schedule::ZERO,
+                        max_alpha: 10.0,
+                    }),
+                    ..Damping::NONE
+                }),
+                traction_capacity: 8,
+                ..Effects::NONE
+            },
+            ..WorldDef::DEFAULT
+        };
+        let layout = Layout::of(&def);
+        let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
+        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
+        w.fill_box(
+            Vec3::new(0.4, 0.4, 0.0),
+            Vec3::new(0.8, 0.8, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .unwrap();
+        w.add_tractions(0..2, Face::XMax, Vec3::new(1.0, 0.0, 0.0))
+            .unwrap();
+        let snapshot = w.as_bytes().to_vec();
+        type Edit = fn(&mut Header, &mut MaterialRecord, &mut TractionRecord);
+        let edits: [(&str, Edit); 15] = [
+            ("count over empty slots", |h, _, _| h.particle_count += 30),
+            ("time NaN", |h, _, _| h.time = f64::NAN),
+            ("time negative", |h, _, _| h.time = -1.0),
+            ("min mass NaN", |h, _, _| h.min_particle_mass = f64::NAN),
+            ("min mass negative", |h, _, _| h.min_particle_mass = -1.0),
+            ("min mass not the least", |h, _, _| {
+                h.min_particle_mass *= 0.5
+            }),
+            ("alpha NaN", |h, _, _| h.feedback_alpha = f64::NAN),
+            ("alpha negative", |h, _, _| h.feedback_alpha = -1.0),
+            ("alpha over its bound", |h, _, _| h.feedback_alpha = 11.0),
+            ("modulus NaN", |_, r, _| r.youngs_modulus = Real::NAN),
+            ("Lame parameter edited", |_, r, _| r.lambda *= 2.0),
+            ("unknown model", |_, r, _| r.model = 7.0),
+            ("traction of no particle", |_, _, t| t.particle = 999),
+            ("traction on a 3D face", |_, _, t| {
+                t.face = Face::ZMax as u32
+            }),
+            ("traction NaN", |_, _, t| t.traction[1] = Real::NAN),
+        ];
+        let mut copy = HeapBuffer::new(snapshot.len());
+        for (what, edit) in edits {
+            let mem = copy.as_mut_bytes();
+            mem.copy_from_slice(&snapshot);
+            let (head, rest) = mem.split_at_mut(layout.materials_offset);
+            let h: &mut Header = bytemuck::from_bytes_mut(&mut head[..size_of::<Header>()]);
+            let (mat, rest) = rest.split_at_mut(size_of::<MaterialRecord>());
+            let r: &mut MaterialRecord = bytemuck::from_bytes_mut(mat);
+            let at =
+                layout.tractions_offset - layout.materials_offset - size_of::<MaterialRecord>();
+            let t: &mut TractionRecord =
+                bytemuck::from_bytes_mut(&mut rest[at..at + size_of::<TractionRecord>()]);
+            edit(h, r, t);
+            let before = mem.to_vec();
+            assert_eq!(World::open(mem).err(), Some(Error::InvalidState), "{what}");
+            assert!(
+                *mem == before[..],
+                "{what}: the refused open changed the bytes"
+            );
+        }
+        copy.as_mut_bytes().copy_from_slice(&snapshot);
+        assert!(World::open(copy.as_mut_bytes()).is_ok());
+    }
+}

@@ -1,0 +1,385 @@
+//! Stepping: [`World::step`], the dispatch to the compiled instance of the dimension and
+//! shape function, and `Substep`, the only place the phase order of a substep is written.
+
+use super::{StepReport, World};
+#[cfg(feature = "effects")]
+use crate::def::Dimension;
+use crate::def::{ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::effects::Feedback;
+use crate::grid::{Geom, GridCols};
+use crate::layout::{Layout, MaterialRecord, TractionRecord};
+use crate::math::ceil;
+use crate::particles::ParticleCols;
+use crate::phases::lanes::width;
+use crate::phases::p2g::{Adds, Mode};
+use crate::phases::{grid_update, p2g, Ctx, Isa};
+use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D, ThreeNode};
+use crate::simd::Simd;
+use crate::{Error, Real};
+use core::mem::size_of;
+
+/// The largest [`WorldDef::max_substeps`] a definition may set.
+pub const MAX_SUBSTEPS: u32 = 1 << 20;
+
+/// Nodes lighter than this fraction of the lightest particle are treated as empty: epsilon^2,
+/// which only keeps the division `p_i / m_i` away from denormals. A larger cutoff does harm: a
+/// node that carries a sliver of a particle still has a well-defined velocity (its `p_i / m_i`
+/// is the particle's velocity), and zeroing it puts a spurious jump next to its neighbours
+/// (seen as stress in a rigidly translating block with linear shapes in f64).
+const NODAL_MASS_CUTOFF: Real = Real::EPSILON * Real::EPSILON;
+
+impl<'a> World<'a> {
+    /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
+    /// the start of the call) is taken in equal substeps that are each stable.
+    pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
+        self.step_with_simd(dt, Simd::Detect)
+    }
+
+    /// [`World::step`] with a chosen instruction set (see [`crate::simd`]). Not part of the
+    /// stable API: tests use it to show that both paths give bit-identical state.
+    #[doc(hidden)]
+    pub fn step_with_simd(&mut self, dt: Real, simd: Simd) -> Result<StepReport, Error> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::InvalidTimeStep);
+        }
+        let def = self.def();
+        let limits = self.read().time_step_limits(simd);
+        let ratio = dt / limits.stable_dt;
+        let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
+        // NaN-safe: a NaN ratio fails `<=`.
+        let within = substeps <= def.max_substeps as Real;
+        if !within {
+            return Err(Error::SubstepLimit);
+        }
+        let substeps = substeps as u32;
+        let sub_dt = dt / substeps as Real;
+        // The thermostat's alpha is kept to what a substep of this length integrates stably
+        // besides the other damping (`alpha dt <= cfl`, as `stable_dt` keeps the other
+        // damping): it adapts to the substep and never sets its length, whatever its gain.
+        let feedback_room = (def.cfl as f64 / sub_dt as f64 - limits.other_damping).max(0.0);
+        let mut report = StepReport {
+            substeps,
+            substep_dt: sub_dt,
+            ..StepReport::default()
+        };
+        let fx = def.effects;
+        let time0 = self.time();
+        for k in 0..substeps {
+            let time = time0 + k as f64 * sub_dt as f64;
+            if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
+                self.update_feedback(&feedback, time, sub_dt, feedback_room);
+            }
+            let mut substep = Substep {
+                report: &mut report,
+            };
+            self.dispatch(sub_dt, time, &mut substep, simd);
+        }
+        let h = self.header_mut();
+        h.time += dt as f64;
+        h.step_count += 1;
+        Ok(report)
+    }
+
+    /// The thermostat (NairnMPM's feedback damping): `alpha += 2 gain (KE - target) dt / M`,
+    /// clamped to `[0, min(max_alpha, room)]`, from the active particles' kinetic energy and
+    /// mass; `room` is the largest alpha the substep integrates stably. The stored alpha stays
+    /// finite: a rate that is not a number (no finite energy to compare) leaves it as it was.
+    fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real, room: f64) {
+        let (kinetic, mass) = self.read().kinetic_energy_and_mass();
+        let h = self.header_mut();
+        if mass > 0.0 {
+            let target = f.target.at(time) as f64;
+            let rate = 2.0 * f.gain as f64 * (kinetic - target) / mass;
+            let alpha = h.feedback_alpha + rate * dt as f64;
+            if !alpha.is_nan() {
+                h.feedback_alpha = alpha.clamp(0.0, (f.max_alpha as f64).min(room));
+            }
+        }
+    }
+
+    /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
+    /// function) to the monomorphised instance, with the instruction set `simd` picks.
+    fn dispatch(&mut self, dt: Real, time: f64, kernel: &mut impl Kernel, simd: Simd) {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let ppc = def.particles_per_cell;
+        let run = (dt, time);
+        // One run of the family `$family` in dimension `$d`, its stencil width `$k` fixed with
+        // it and the chunk width with the dimension; `$wrap` turns the family into the shape
+        // the step uses.
+        macro_rules! run_family {
+            ($d:literal, $k:literal, $family:expr, $wrap:expr) => {
+                self.run::<$d, $k, _, { width($d) }>(
+                    $wrap($family, &def),
+                    run,
+                    &def,
+                    &layout,
+                    kernel,
+                    simd,
+                )
+            };
+        }
+        macro_rules! by_shape {
+            ($d:literal, $wrap:expr) => {
+                match def.shape {
+                    ShapeFunction::Linear => run_family!($d, 2, Linear, $wrap),
+                    ShapeFunction::Gimp => {
+                        run_family!($d, 3, ThreeNode::Gimp(Gimp::new(ppc)), $wrap)
+                    }
+                    ShapeFunction::QuadraticBspline => {
+                        run_family!($d, 3, ThreeNode::QuadraticBspline(QuadraticBspline), $wrap)
+                    }
+                    ShapeFunction::CubicBspline => run_family!($d, 4, CubicBspline, $wrap),
+                    ShapeFunction::CpGimp => {
+                        run_family!($d, 3, ThreeNode::CpGimp(CpGimp::new(ppc)), $wrap)
+                    }
+                }
+            };
+        }
+        // The family as it is, or wrapped in the axisymmetric form.
+        fn plain<S>(shape: S, _: &WorldDef) -> S {
+            shape
+        }
+        #[cfg(feature = "effects")]
+        if def.dimension == Dimension::Axisymmetric2D {
+            fn axi<S>(inner: S, def: &WorldDef) -> crate::shape::Axisymmetric<S> {
+                let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
+                crate::shape::Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
+            }
+            return by_shape!(2, axi);
+        }
+        if def.axes() == 2 {
+            by_shape!(2, plain)
+        } else {
+            by_shape!(3, plain)
+        }
+    }
+
+    /// Carves the columns and the step context of a substep of length `dt` starting at `time`,
+    /// then runs `kernel` on them.
+    fn run<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        shape: S,
+        (dt, time): (Real, f64),
+        def: &WorldDef,
+        layout: &Layout,
+        kernel: &mut impl Kernel,
+        simd: Simd,
+    ) {
+        let count = self.particle_count();
+        let min_mass = self.header().min_particle_mass;
+        let n_materials = self.material_count();
+        let n_tractions = self.header().traction_count as usize;
+        let feedback_alpha = self.header().feedback_alpha as Real;
+        let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
+        let (pbytes, gbytes) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
+        let mat_start = layout.materials_offset;
+        let materials: &[MaterialRecord] = bytemuck::cast_slice(
+            &head[mat_start..mat_start + n_materials * size_of::<MaterialRecord>()],
+        );
+        let trac_start = layout.tractions_offset;
+        let tractions: &[TractionRecord] = bytemuck::cast_slice(
+            &head[trac_start..trac_start + n_tractions * size_of::<TractionRecord>()],
+        );
+        let mut p = ParticleCols::<D>::carve(pbytes, layout);
+        let mut g = GridCols::<D>::carve(gbytes, layout);
+        let fx = &def.effects;
+        let body = fx.body_force * fx.body_force_scale.at(time);
+        let (alpha_g, alpha_p) = match fx.damping {
+            Some(d) => (d.grid.at(time) + feedback_alpha, d.particle.at(time)),
+            None => (0.0, 0.0),
+        };
+        let geom = Geom::<D>::new(def);
+        let active = crate::phases::node_box::<D, K, S>(
+            simd,
+            &geom,
+            &p.x.each_ref().map(|c| &**c),
+            p.status,
+            count,
+        );
+        let ctx = Ctx {
+            geom,
+            active,
+            dt,
+            order: def.update_order,
+            apic: def.transfer == Transfer::Apic,
+            forces: fx.particle_forces,
+            damp: fx.damping.is_some(),
+            gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
+            beta: def.flip_beta,
+            alpha_g,
+            alpha_p,
+            half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
+            exp_terms: def.exp_terms,
+            jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
+            mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
+            materials,
+            tractions,
+            transport: [fx.heat, fx.diffusion],
+            eigenstrain: [
+                fx.heat.is_some() && materials.iter().any(|m| m.thermal_expansion != 0.0),
+                fx.diffusion.is_some() && materials.iter().any(|m| m.swelling != 0.0),
+            ],
+        };
+        run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
+    }
+
+    /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
+    /// one at a time. Not part of the stable API.
+    #[doc(hidden)]
+    pub fn run_phase(&mut self, phase: Phase, dt: Real) -> Result<StepReport, Error> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::InvalidTimeStep);
+        }
+        let mut run = PhaseRun {
+            phase,
+            report: StepReport::default(),
+        };
+        let time = self.time();
+        self.dispatch(dt, time, &mut run, Simd::Detect);
+        Ok(run.report)
+    }
+}
+
+/// A computation on the world's columns with the dimension and shape function fixed at compile
+/// time; [`World::dispatch`] picks the instance once per call. `I` is the instruction set each
+/// pass runs in: a body calls every pass as `I::run(|| pass(..))`.
+trait Kernel {
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    );
+}
+
+/// Runs `kernel` with its passes in the instance `simd` picks on this CPU (see
+/// [`crate::simd`]).
+fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    kernel: &mut impl Kernel,
+    simd: Simd,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+) {
+    crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
+}
+
+/// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
+/// the only place the order of the phases is written down. The update order, the transfer and
+/// the declared effects are values of the context ([`Ctx`]): one compiled substep serves them
+/// all, and the passes skip an undeclared effect's work once per chunk of lanes.
+struct Substep<'r> {
+    report: &'r mut StepReport,
+}
+
+impl Kernel for Substep<'_> {
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        s: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    ) {
+        let report = &mut *self.report;
+        p.freeze_domain_stretch(count);
+        // Heat and diffusion first, with the particles where the substep starts.
+        for (f, t) in ctx.transport.iter().enumerate() {
+            if let Some(t) = t {
+                I::transport::<D, K, S, W>(s, ctx, p, count, g, f, t);
+            }
+        }
+        grid_update::reset(ctx, g);
+        let adds = |mode| Adds::of(mode, ctx);
+        match ctx.order {
+            UpdateOrder::Usf => {
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
+                grid_update::velocity(ctx, g);
+                grid_update::constrained_velocity(ctx, g);
+                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
+                p2g::tractions(s, ctx, p, count, g);
+                grid_update::acceleration(ctx, g);
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+            }
+            UpdateOrder::Usl => {
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
+                p2g::tractions(s, ctx, p, count, g);
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+                // Also updates the stress (see g2p::particles).
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+            }
+            UpdateOrder::Musl => {
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
+                p2g::tractions(s, ctx, p, count, g);
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+                // Also scatters the new momenta to the remap columns (see g2p::particles).
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+                grid_update::remap_velocity(ctx, g);
+                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+            }
+        }
+    }
+}
+
+/// The phases of a USL step, for [`World::run_phase`] (benchmarks).
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// Zero the grid columns on the nodes the particles reach.
+    ResetGrid,
+    /// Reset, then scatter mass, momentum and force to the grid.
+    ParticleToGrid,
+    /// Nodal velocity and acceleration, with the walls.
+    GridUpdate,
+    /// Particle update with the fused stress update.
+    GridToParticle,
+}
+
+struct PhaseRun {
+    phase: Phase,
+    report: StepReport,
+}
+
+impl Kernel for PhaseRun {
+    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        s: &S,
+        ctx: &Ctx<'_, D>,
+        p: &mut ParticleCols<'_, D>,
+        count: usize,
+        g: &mut GridCols<'_, D>,
+    ) {
+        // A plain USL substep: FLIP, no damping, no particle forces.
+        let ctx = &Ctx {
+            order: UpdateOrder::Usl,
+            apic: false,
+            forces: false,
+            damp: false,
+            ..*ctx
+        };
+        match self.phase {
+            Phase::ResetGrid => grid_update::reset(ctx, g),
+            Phase::ParticleToGrid => {
+                p.freeze_domain_stretch(count);
+                grid_update::reset(ctx, g);
+                I::scatter::<D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
+            }
+            Phase::GridUpdate => {
+                grid_update::velocity(ctx, g);
+                grid_update::acceleration(ctx, g);
+            }
+            Phase::GridToParticle => {
+                let report = &mut self.report;
+                I::particles::<D, K, S, W>(s, ctx, p, count, g, report)
+            }
+        }
+    }
+}

@@ -1,0 +1,199 @@
+//! The world's public value types: the step report, the transported fields, particle
+//! definitions and batches, the diagnostics and the borrowed particle view.
+
+#[cfg(doc)]
+use super::World;
+use crate::def::Dimension;
+#[cfg(doc)]
+use crate::def::WorldDef;
+use crate::material::Deformation;
+use crate::math::Mat;
+use crate::{Real, Vec3};
+
+/// What one call of [`World::step`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Substeps taken (>= 1).
+    pub substeps: u32,
+    /// Length of each substep, s.
+    pub substep_dt: Real,
+    /// Particle-substeps in which a particle reached a stick or slip wall and was stopped there.
+    pub stopped: u32,
+    /// Particles that crossed an open face and left the simulation.
+    pub escaped: u32,
+    /// Particles frozen in this call: their state turned non-finite, their F inverted, or
+    /// their volume ran away. Nonzero means the step went bad somewhere
+    /// ([`StepReport::went_bad`]).
+    pub frozen: u32,
+    /// Of the frozen, those frozen because their volume ratio `J` left
+    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`WorldDef::max_volume_ratio`]): the sign
+    /// of an unstable scheme or a time step too long for the scene.
+    pub runaway: u32,
+    /// The ids of the first frozen particles (up to 8), for diagnosis.
+    pub first_frozen: heapless::Vec<u32, 8>,
+}
+
+impl StepReport {
+    pub(crate) fn note_frozen(&mut self, id: u32, runaway: bool) {
+        self.frozen += 1;
+        self.runaway += runaway as u32;
+        // A full list only means more than 8 froze; the count says how many.
+        let _ = self.first_frozen.push(id);
+    }
+
+    /// Whether a particle froze in this call (non-finite state, inverted F or runaway volume):
+    /// the flag a host checks after each step. Frozen particles leave the simulation; the
+    /// rest of the world goes on.
+    pub fn went_bad(&self) -> bool {
+        self.frozen > 0
+    }
+}
+
+/// A transported scalar field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ScalarField {
+    /// Temperature, K (heat conduction).
+    Temperature = 0,
+    /// Concentration potential `c / c_sat` (diffusion).
+    Concentration = 1,
+}
+
+/// One particle for [`World::add_particle`]. In 2D the z components are ignored.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParticleDef {
+    /// Position, m.
+    pub position: Vec3,
+    /// Velocity, m/s.
+    pub velocity: Vec3,
+    /// Mass, kg (per unit thickness in plane strain), > 0.
+    pub mass: Real,
+    /// Initial volume V0, m^3 (m^2 per unit thickness in plane strain), > 0.
+    pub volume: Real,
+    /// Material id returned by [`World::add_material`].
+    pub material: u32,
+}
+
+/// Particles as structure-of-arrays slices, all of one length, for [`World::add_particles`].
+/// In 2D the z slices may be empty.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleBatch<'b> {
+    /// Positions x, y, z, m.
+    pub position: [&'b [Real]; 3],
+    /// Velocities x, y, z, m/s.
+    pub velocity: [&'b [Real]; 3],
+    /// Masses, kg, > 0.
+    pub mass: &'b [Real],
+    /// Initial volumes, m^3, > 0.
+    pub volume: &'b [Real],
+    /// Material ids.
+    pub material: &'b [u32],
+}
+
+/// Sums over the active particles, in f64.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Total mass of the active particles, kg.
+    pub mass: f64,
+    /// Linear momentum, kg m/s.
+    pub momentum: [f64; 3],
+    /// Angular momentum about the coordinate origin, kg m^2/s (2D: the z component only).
+    /// With APIC it includes each particle's affine part `m_p eps : B_p^T` (see
+    /// [`ParticlesView::affine`]), which the transfer conserves together with `x_p x m_p v_p`
+    /// (seeds/001).
+    pub angular_momentum: [f64; 3],
+    /// Centre of mass, m.
+    pub center_of_mass: [f64; 3],
+    /// Kinetic energy `sum m v^2 / 2`, J.
+    pub kinetic: f64,
+    /// Strain energy `sum V0 W(F)`, J.
+    pub strain: f64,
+    /// Gravitational potential energy `-sum m g . x`, J (zero at the origin).
+    pub potential: f64,
+}
+
+impl Diagnostics {
+    /// Kinetic + strain + gravitational potential energy, J.
+    pub fn total_energy(&self) -> f64 {
+        self.kinetic + self.strain + self.potential
+    }
+}
+
+/// Borrowed view of the particle columns, valid while the world is not mutated.
+/// Columns of axes the dimension lacks (z in 2D) are empty slices.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticlesView<'w> {
+    /// Number of particles (every column has this length).
+    pub count: usize,
+    /// The world's dimension.
+    pub dimension: Dimension,
+    /// Positions per axis, m.
+    pub position: [&'w [Real]; 3],
+    /// Velocities per axis, m/s.
+    pub velocity: [&'w [Real]; 3],
+    /// Masses, kg.
+    pub mass: &'w [Real],
+    /// Initial volumes, m^3.
+    pub volume0: &'w [Real],
+    /// Displacement gradient `H = F - I`, entry `[a][b]` (row a, column b) with F the
+    /// deformation gradient; 2D uses a, b < 2 (F_zz = 1). Stored as `F - I` so that small
+    /// strains keep full precision in f32.
+    pub displacement_gradient: [[&'w [Real]; 3]; 3],
+    /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
+    /// xz, yz. Cauchy stress is `rho0 / J` times it.
+    pub stress: [&'w [Real]; 6],
+    /// Material ids.
+    pub material: &'w [u32],
+    /// Status codes ([`crate::ParticleStatus`]).
+    pub status: &'w [u32],
+    /// External forces per axis, N (empty unless particle forces are declared).
+    pub force: [&'w [Real]; 3],
+    /// Local grid and particle damping, 1/s (empty unless per-particle damping is declared).
+    pub damping: [&'w [Real]; 2],
+    /// Temperature, K (empty unless heat conduction is declared).
+    pub temperature: &'w [Real],
+    /// Concentration potential (empty unless diffusion is declared).
+    pub concentration: &'w [Real],
+    /// The grid's temperature at each particle after the last step, `T_g->p = sum S_ip T_i`,
+    /// K: what a feature that depends on temperature should read (seeds/000 section 8.2), since
+    /// the particles' own values keep any variation within a cell (the FLIP update never
+    /// smooths them). Empty unless heat conduction is declared.
+    pub grid_temperature: &'w [Real],
+    /// The grid's concentration potential at each particle after the last step, as
+    /// [`ParticlesView::grid_temperature`]. Empty unless diffusion is declared.
+    pub grid_concentration: &'w [Real],
+    /// Axisymmetric only (else empty): the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`, the
+    /// out-of-plane part of the deformation gradient.
+    pub hoop: &'w [Real],
+    /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
+    /// unless the transfer is APIC); with linear shape functions, the affine velocity matrix
+    /// `C_p` itself, 1/s, in its gradient form (see [`crate::shape::Shape1D::GRADIENT_AFFINE`]). The affine velocity field is `C_p = B_p D_p^-1`, with
+    /// `D_p` the particle's second moment of the weights, evaluated where the particle is when
+    /// it next scatters (storing `B_p` rather than `C_p` is what makes the transfer conserve
+    /// angular momentum when `D_p` depends on position, as with uGIMP).
+    pub affine: [[&'w [Real]; 3]; 3],
+}
+
+impl ParticlesView<'_> {
+    /// `J - 1 = det F - 1` of particle `i` (with `F_thetatheta` when axisymmetric), computed
+    /// from H without cancellation.
+    pub fn jacobian_minus_one(&self, i: usize) -> Real {
+        if self.dimension == Dimension::ThreeD {
+            self.deformation::<3>(i).jm1
+        } else {
+            self.deformation::<2>(i).jm1
+        }
+    }
+
+    /// The deformation of particle `i` as the materials see it (`D` the world's axes).
+    pub(crate) fn deformation<const D: usize>(&self, i: usize) -> Deformation<D> {
+        let h = &self.displacement_gradient;
+        let m: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
+        Deformation::new(m, self.hoop.get(i).copied().unwrap_or(0.0))
+    }
+
+    /// `J = det F` of particle `i` (current volume over initial volume).
+    pub fn jacobian(&self, i: usize) -> Real {
+        1.0 + self.jacobian_minus_one(i)
+    }
+}
