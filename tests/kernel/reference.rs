@@ -5,18 +5,20 @@
 //! instruction-set instance this CPU has) and by the reference, and every particle column must
 //! agree to round-off.
 //!
-//! What it covers: plane strain 2D and 3D; linear, uGIMP, quadratic and cubic B-spline shape
-//! functions; USF, USL and MUSL; FLIP (with its PIC fraction) and APIC; the neo-Hookean
-//! material; gravity. Scenes stay clear of the walls (their nodes carry no mass), so the wall
-//! treatment is not part of it; cpGIMP, the axisymmetric form, corotated linear elasticity and
-//! the declared effects are not in it yet.
+//! What it covers: plane strain 2D and 3D; linear, uGIMP, cpGIMP, quadratic and cubic B-spline
+//! shape functions; USF, USL and MUSL; FLIP (with its PIC fraction) and APIC; the neo-Hookean
+//! and corotated linear elastic materials; gravity. Scenes stay clear of the walls (their nodes
+//! carry no mass), so the wall treatment is not part of it; the axisymmetric form, APIC with
+//! linear weights and the declared effects are not in it yet.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
 //! `64 eps (max |before| + max |change| + terms)` over the particles, `eps` the kernel's
 //! machine epsilon, `terms` the size of the terms of the stencil sums that cancel (see
-//! `check`). The bound is of the size of the step's change times `64 eps`, so a wrong term of
-//! the update (a factor, a sign, a missing contribution) fails it by orders of magnitude.
+//! `check`; for corotated linear elasticity also the reference's own f64 round-off in the
+//! stress, `64 eps_f64 c^2 |F|`, and what it moves). The bound is of the size of the step's change times
+//! `64 eps`, so a wrong term of the update (a factor, a sign, a missing contribution) fails it
+//! by orders of magnitude.
 
 // Index loops over axes read as the equations' sums do.
 #![allow(clippy::needless_range_loop)]
@@ -24,7 +26,8 @@
 use crate::common::{buffer_for, free_space, moving_block, soft_neo_hookean};
 use mpm_gimp::simd::Simd;
 use mpm_gimp::{
-    Dimension, MaterialDef, Real, ShapeFunction, Transfer, UpdateOrder, World, WorldDef,
+    Dimension, MaterialDef, MaterialModel, Real, ShapeFunction, Transfer, UpdateOrder, World,
+    WorldDef,
 };
 
 type Mat = [[f64; 3]; 3];
@@ -41,6 +44,9 @@ struct Particle {
     tau: Mat,
     /// APIC's `B_p`.
     b: Mat,
+    /// The particle domain's half-width per axis for uGIMP and cpGIMP, m (cpGIMP: frozen for
+    /// the substep from the deformation at its start).
+    lp: [f64; 3],
 }
 
 /// A grid node's accumulators and values.
@@ -70,6 +76,8 @@ struct Method {
     exp_terms: usize,
     /// uGIMP's particle half-width `h / (2 n)`.
     lp: f64,
+    /// Corotated linear elasticity (else neo-Hookean).
+    linear_elastic: bool,
     mu: f64,
     lambda: f64,
     rho0: f64,
@@ -77,13 +85,13 @@ struct Method {
 }
 
 /// The 1D weight and its derivative of the node at signed distance `xi = x_p - x_i`.
-fn weight_1d(m: &Method, xi: f64) -> (f64, f64) {
+/// `l` is the particle domain's half-width along the axis (uGIMP and cpGIMP).
+fn weight_1d(m: &Method, xi: f64, l: f64) -> (f64, f64) {
     let (h, a, sign) = (m.h, xi.abs(), xi.signum());
     let s = a / h;
     match m.shape {
         ShapeFunction::Linear if s < 1.0 => (1.0 - s, -sign / h),
-        ShapeFunction::Gimp => {
-            let l = m.lp;
+        ShapeFunction::Gimp | ShapeFunction::CpGimp => {
             if a < l {
                 (1.0 - (xi * xi + l * l) / (2.0 * h * l), -xi / (h * l))
             } else if a <= h - l {
@@ -117,7 +125,7 @@ struct Stencil {
     inv_d: [f64; 3],
 }
 
-fn stencil(m: &Method, x: &[f64; 3]) -> Stencil {
+fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
     let d = m.d;
     // Per axis: the nodes within reach (two cells each side covers every family).
     let mut axis: Vec<Vec<(usize, f64, f64, f64)>> = Vec::new();
@@ -130,7 +138,7 @@ fn stencil(m: &Method, x: &[f64; 3]) -> Stencil {
         let mut d2 = 0.0;
         for i in first..=last {
             let dx = m.origin[a] + i as f64 * m.h - x[a];
-            let (w, dw) = weight_1d(m, -dx);
+            let (w, dw) = weight_1d(m, -dx, lp[a]);
             if w != 0.0 {
                 list.push((i, w, dw, dx));
                 d2 += w * dx * dx;
@@ -177,7 +185,7 @@ fn affine(m: &Method, p: &Particle, st: &Stencil, dx: &[f64; 3]) -> [f64; 3] {
 /// Particle to grid (eqs 22, 23, 25): mass and momentum (`momentum`), internal force (`force`).
 fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force: bool) {
     for p in ps {
-        let st = stencil(m, &p.x);
+        let st = stencil(m, &p.x, &p.lp);
         for &(i, s, g, dx) in &st.nodes {
             let c = affine(m, p, &st, &dx);
             let n = &mut grid[i];
@@ -258,6 +266,10 @@ fn update_stress(
             p.h[r][c] += q[r][c] + qh[r][c];
         }
     }
+    if m.linear_elastic {
+        p.tau = corotated_linear_elastic(m, &p.h);
+        return;
+    }
     let ln_j = jacobian_minus_one(d, &p.h).ln_1p();
     let mut tau = [[0.0; 3]; 3];
     for a in 0..d {
@@ -271,6 +283,95 @@ fn update_stress(
         tau[2][2] = m.lambda * ln_j / m.rho0; // plane strain: F_zz = 1
     }
     p.tau = tau;
+}
+
+/// Corotated linear elasticity: `F = R U` (polar decomposition), `e = U - I`,
+/// `tau / rho0 = J R (lambda tr(e) I + 2 mu e) R^T / rho0`; in plane strain `e_zz = 0` and
+/// `tau_zz = J lambda tr(e)` (R turns in the plane).
+fn corotated_linear_elastic(m: &Method, h: &Mat) -> Mat {
+    let d = m.d;
+    let mut f = *h;
+    for a in 0..d {
+        f[a][a] += 1.0;
+    }
+    // R by Newton's iteration R <- (R + R^-T) / 2 from F, to convergence in f64.
+    let mut r = f;
+    for _ in 0..100 {
+        let inv_t = inverse_transpose(d, &r);
+        let mut change = 0.0f64;
+        for a in 0..d {
+            for b in 0..d {
+                let next = 0.5 * (r[a][b] + inv_t[a][b]);
+                change = change.max((next - r[a][b]).abs());
+                r[a][b] = next;
+            }
+        }
+        if change < 1e-15 {
+            break;
+        }
+    }
+    let mut rt = [[0.0; 3]; 3];
+    for a in 0..d {
+        for b in 0..d {
+            rt[a][b] = r[b][a];
+        }
+    }
+    let u = matmul(d, &rt, &f);
+    let mut e = [[0.0; 3]; 3];
+    let mut tr = 0.0;
+    for a in 0..d {
+        for b in 0..d {
+            e[a][b] = 0.5 * (u[a][b] + u[b][a]) - if a == b { 1.0 } else { 0.0 };
+        }
+        tr += e[a][a];
+    }
+    let mut sigma = [[0.0; 3]; 3];
+    for a in 0..d {
+        for b in 0..d {
+            sigma[a][b] = 2.0 * m.mu * e[a][b];
+        }
+        sigma[a][a] += m.lambda * tr;
+    }
+    let j = 1.0 + jacobian_minus_one(d, h);
+    let rotated = matmul(d, &matmul(d, &r, &sigma), &rt);
+    let mut tau = [[0.0; 3]; 3];
+    for a in 0..d {
+        for b in 0..d {
+            tau[a][b] = j * rotated[a][b] / m.rho0;
+        }
+    }
+    if d == 2 {
+        tau[2][2] = j * m.lambda * tr / m.rho0;
+    }
+    tau
+}
+
+/// `(A^-1)^T` of the leading `d x d` block of `a`, by cofactors.
+fn inverse_transpose(d: usize, a: &Mat) -> Mat {
+    let mut out = [[0.0; 3]; 3];
+    if d == 2 {
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        out[0][0] = a[1][1] / det;
+        out[0][1] = -a[1][0] / det;
+        out[1][0] = -a[0][1] / det;
+        out[1][1] = a[0][0] / det;
+        return out;
+    }
+    // (A^-1)^T = cof(A) / det A.
+    for r in 0..3 {
+        for c in 0..3 {
+            let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+            let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+            out[r][c] = a[r1][c1] * a[r2][c2] - a[r1][c2] * a[r2][c1];
+        }
+    }
+    let det: f64 = (0..3).map(|c| a[0][c] * out[0][c]).sum();
+    for row in out.iter_mut() {
+        for v in row.iter_mut() {
+            *v /= det;
+        }
+    }
+    out
 }
 
 fn matmul(d: usize, x: &Mat, y: &Mat) -> Mat {
@@ -302,7 +403,7 @@ fn jacobian_minus_one(d: usize, h: &Mat) -> f64 {
 /// `v_i + a_i dt`); with `fused_stress` (USL) also the stress from `v_i + a_i dt`.
 fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stress: bool) {
     for p in ps.iter_mut() {
-        let st = stencil(m, &p.x);
+        let st = stencil(m, &p.x, &p.lp);
         let (mut v_gp, mut a_gp, mut b) = ([0.0; 3], [0.0; 3], [[0.0; 3]; 3]);
         for &(i, s, _, dx) in &st.nodes {
             for a in 0..m.d {
@@ -335,6 +436,20 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
 
 /// One substep of length `dt` in the method's update order.
 fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
+    // cpGIMP: each domain's half-width per axis, `l_0` times the deformed domain's extent
+    // `sum_b |F_ab|`, kept within `[l_0 / 10, h / 2]`, frozen for the substep.
+    for p in ps.iter_mut() {
+        for a in 0..m.d {
+            p.lp[a] = if m.shape == ShapeFunction::CpGimp {
+                let extent: f64 = (0..m.d)
+                    .map(|b| (p.h[a][b] + if a == b { 1.0 } else { 0.0 }).abs())
+                    .sum();
+                (m.lp * extent).max(0.1 * m.lp).min(0.5 * m.h)
+            } else {
+                m.lp
+            };
+        }
+    }
     let mut grid = vec![Node::default(); m.nodes[0] * m.nodes[1] * m.nodes[2]];
     match m.order {
         UpdateOrder::Usl => {
@@ -347,7 +462,7 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
             scatter(m, ps, &mut grid, true, false);
             grid_velocity(m, &mut grid);
             for p in ps.iter_mut() {
-                let st = stencil(m, &p.x);
+                let st = stencil(m, &p.x, &p.lp);
                 update_stress(m, p, &st, |i| grid[i].v, dt);
             }
             scatter(m, ps, &mut grid, false, true);
@@ -363,7 +478,7 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
             // Re-map the new momenta with the stencils of the start of the step, then the
             // stress from the re-mapped velocities.
             for (p, x0) in ps.iter().zip(&start) {
-                let st = stencil(m, x0);
+                let st = stencil(m, x0, &p.lp);
                 for &(i, s, _, dx) in &st.nodes {
                     let c = affine(m, p, &st, &dx);
                     for a in 0..m.d {
@@ -381,7 +496,7 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
                 }
             }
             for (p, x0) in ps.iter_mut().zip(&start) {
-                let st = stencil(m, x0);
+                let st = stencil(m, x0, &p.lp);
                 update_stress(m, p, &st, |i| grid[i].remap, dt);
             }
         }
@@ -425,6 +540,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         ],
         exp_terms: def.exp_terms as usize,
         lp: def.cell_size as f64 / (2.0 * def.particles_per_cell as f64),
+        linear_elastic: material.model == MaterialModel::LinearElastic,
         mu: e / (2.0 * (1.0 + nu)),
         lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
         rho0: material.density as f64,
@@ -483,7 +599,14 @@ fn columns(d: usize, apic: bool, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
 
 /// Steps a deforming, rotating block (after a few kernel steps, so it carries stress) once
 /// with the kernel in instance `simd` and once with the reference, and checks every column.
-fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Transfer, simd: Simd) {
+fn check(
+    dim: Dimension,
+    shape: ShapeFunction,
+    order: UpdateOrder,
+    transfer: Transfer,
+    material: &MaterialDef,
+    simd: Simd,
+) {
     let def = WorldDef {
         shape,
         update_order: order,
@@ -492,11 +615,10 @@ fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Tra
         gravity: mpm_gimp::Vec3::new(0.3, -9.81, 0.2),
         ..free_space(dim, 16, 1.0 / 16.0)
     };
-    let material = soft_neo_hookean();
     let mut buf = buffer_for(&def);
     let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
     // Shear, stretch and spin, so every term of the update is exercised.
-    moving_block(&def, &mut world, &material, |x| {
+    moving_block(&def, &mut world, material, |x| {
         let (dx, dy, dz) = (x[0] - 0.5, x[1] - 0.5, x[2] - 0.5);
         [
             0.4 * dy + 0.2 * dx,
@@ -509,7 +631,7 @@ fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Tra
         world.step_with_simd(dt, simd).unwrap();
     }
     let dt = world.stable_dt();
-    let (method, mut ps) = read(&world, &material);
+    let (method, mut ps) = read(&world, material);
     let d = method.d;
     let before = columns(d, method.apic, &ps);
     let report = world.step_with_simd(dt, simd).unwrap();
@@ -517,7 +639,7 @@ fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Tra
     assert_eq!(report.frozen, 0);
     substep(&method, &mut ps, dt as f64);
     let reference = columns(d, method.apic, &ps);
-    let (_, kernel) = read(&world, &material);
+    let (_, kernel) = read(&world, material);
     let kernel = columns(d, method.apic, &kernel);
     let eps = Real::EPSILON as f64;
     let max = |c: &mut dyn Iterator<Item = f64>| c.fold(0.0f64, |m, x| m.max(x.abs()));
@@ -543,11 +665,28 @@ fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Tra
             b'B' => v_max * h,
             _ => 0.0,
         };
-        let bound = 64.0 * eps * (size + change + terms);
+        // The reference's own round-off where it exceeds the kernel's: its corotated strain is
+        // `U - I` with U's entries near 1 (the kernel works in `R - I` and `H`), so the stress
+        // it gives carries about `eps_f64 c^2 |F|` (which matters in f64 alone), and the
+        // velocity and position that force moves carry it times `dt / h` and `dt^2 / h`.
+        let own_tau = if method.linear_elastic {
+            64.0 * f64::EPSILON * c2 * (1.0 + largest('H'))
+        } else {
+            0.0
+        };
+        let own = match name.as_bytes()[0] {
+            b't' => own_tau,
+            b'v' => own_tau * dt / h,
+            b'x' => own_tau * dt * dt / h,
+            _ => 0.0,
+        };
+        let bound = 64.0 * eps * (size + change + terms) + own;
         assert!(
             worst <= bound,
-            "{dim:?} {shape:?} {order:?} {transfer:?} {simd:?}: column {name} differs from the \
-             reference by {worst:e} (bound {bound:e}, column size {size:e}, change {change:e})"
+            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?}: column {name} differs \
+             from the reference by {worst:e} (bound {bound:e}, column size {size:e}, change \
+             {change:e})",
+            material.model
         );
         assert!(
             change > 0.0 || name.starts_with('B'),
@@ -556,15 +695,24 @@ fn check(dim: Dimension, shape: ShapeFunction, order: UpdateOrder, transfer: Tra
     }
 }
 
-/// Every shape the reference has, every order and both transfers, in 2D and 3D, in every
-/// instance of the passes this CPU runs, agree with the reference step to round-off.
+/// Every shape the reference has, every order, both transfers and both materials, in 2D and
+/// 3D, in every instance of the passes this CPU runs, agree with the reference step to
+/// round-off.
 #[test]
 fn every_instance_steps_as_the_reference_does() {
     let shapes = [
         ShapeFunction::Linear,
         ShapeFunction::Gimp,
+        ShapeFunction::CpGimp,
         ShapeFunction::QuadraticBspline,
         ShapeFunction::CubicBspline,
+    ];
+    let materials = [
+        soft_neo_hookean(),
+        MaterialDef {
+            model: MaterialModel::LinearElastic,
+            ..soft_neo_hookean()
+        },
     ];
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
         for shape in shapes {
@@ -576,8 +724,10 @@ fn every_instance_steps_as_the_reference_does() {
                     if apic && (shape == ShapeFunction::Linear || !cfg!(feature = "effects")) {
                         continue;
                     }
-                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
-                        check(dim, shape, order, transfer, simd);
+                    for material in &materials {
+                        for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                            check(dim, shape, order, transfer, material, simd);
+                        }
                     }
                 }
             }
