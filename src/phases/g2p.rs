@@ -86,12 +86,29 @@ impl<const D: usize, const W: usize> Gathered<D, W> {
 /// The sum along x of a stencil row's nodes `n` weighted by `w` (weights, derivatives, moments
 /// or hoop factors), in node order.
 #[inline(always)]
-fn sum_x<I: Rows, const K: usize>(w: &[I::V; K], n: &[I::V; ROW]) -> I::V {
-    let mut s = I::mul(w[0], n[0]);
+fn sum_x<I: Rows, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<I> {
+    let mut s = w[0] * n[0];
     for i in 1..K {
-        s = I::add(s, I::mul(w[i], n[i]));
+        s = s + w[i] * n[i];
     }
     s
+}
+
+/// [`rows::read`] as [`Wide`]s.
+///
+/// # Safety
+/// As for [`rows::read`].
+#[inline(always)]
+unsafe fn read_row<I: Rows, const W: usize>(
+    col: &[Real],
+    base: &[u32; W],
+    at: usize,
+    off: usize,
+    shared: bool,
+) -> [Wide<I>; ROW] {
+    // SAFETY: as required of the caller.
+    let r = unsafe { rows::read::<I, W>(col, base, at, off, shared) };
+    [Wide(r[0]), Wide(r[1]), Wide(r[2]), Wide(r[3])]
 }
 
 /// Gathers, for every lane of a chunk, `v_gp` and `a_gp` (when `VEL`), the velocity gradient
@@ -135,24 +152,23 @@ fn gather_chunk<
     }
     // Lanes sharing their first node four by four (a stencil-bin fill) read one row per four.
     let shared = rows::blocks_share(base);
-    let (add, mul) = (I::add, I::mul);
     // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it;
     // `fit` checked every lane's rows above, and every column read has g.len() entries.
-    let (zero, dt) = unsafe { (I::splat(0.0), I::splat(ctx.dt)) };
+    let (zero, dt) = unsafe { (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt)) };
     for at in (0..W).step_by(I::N) {
         // The x factors of each node: weights, derivatives, moments (APIC), hoop factors.
         let (mut wx, mut dwx, mut ex, mut tx) = ([zero; K], [zero; K], [zero; K], [zero; K]);
         for i in 0..K {
             unsafe {
-                wx[i] = I::load(&st.weights(0)[i], at);
+                wx[i] = Wide::load(&st.weights(0)[i], at);
                 if gradient {
-                    dwx[i] = I::load(&st.derivatives(0)[i], at);
+                    dwx[i] = Wide::load(&st.derivatives(0)[i], at);
                 }
                 if moments {
-                    ex[i] = I::load(&st.moments(0)[i], at);
+                    ex[i] = Wide::load(&st.moments(0)[i], at);
                 }
                 if S::AXISYMMETRIC && gradient {
-                    tx[i] = I::load(&st.hoop_factors()[i], at);
+                    tx[i] = Wide::load(&st.hoop_factors()[i], at);
                 }
             }
         }
@@ -167,22 +183,22 @@ fn gather_chunk<
                 let (mut r, mut re) = ([zero; D], [zero; D]);
                 unsafe {
                     let (wy, dwy) = (
-                        I::load(&st.weights(1)[j], at),
-                        I::load(&st.derivatives(1)[j], at),
+                        Wide::load(&st.weights(1)[j], at),
+                        Wide::load(&st.derivatives(1)[j], at),
                     );
                     let ey = if moments {
-                        I::load(&st.moments(1)[j], at)
+                        Wide::load(&st.moments(1)[j], at)
                     } else {
                         zero
                     };
                     if D == 3 {
-                        let wz = I::load(&st.weights(D - 1)[k], at);
-                        r[0] = mul(wy, wz);
-                        r[1] = mul(dwy, wz);
-                        r[D - 1] = mul(wy, I::load(&st.derivatives(D - 1)[k], at));
+                        let wz = Wide::load(&st.weights(D - 1)[k], at);
+                        r[0] = wy * wz;
+                        r[1] = dwy * wz;
+                        r[D - 1] = wy * Wide::load(&st.derivatives(D - 1)[k], at);
                         if moments {
-                            re[1] = mul(ey, wz);
-                            re[D - 1] = mul(wy, I::load(&st.moments(D - 1)[k], at));
+                            re[1] = ey * wz;
+                            re[D - 1] = wy * Wide::load(&st.moments(D - 1)[k], at);
                         }
                     } else {
                         (r[0], r[1], re[1]) = (wy, dwy, ey);
@@ -192,42 +208,45 @@ fn gather_chunk<
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
                     if vel || updated {
                         unsafe {
-                            nv = rows::read::<I, W>(g.vel[a], base, at, off, shared);
-                            na = rows::read::<I, W>(g.acc[a], base, at, off, shared);
+                            nv = read_row::<I, W>(g.vel[a], base, at, off, shared);
+                            na = read_row::<I, W>(g.acc[a], base, at, off, shared);
                         }
                     }
                     // The differentiated velocity: v + a dt (USL's gradient, APIC's moments)
                     // or the re-mapped one (USF, MUSL).
                     if grad == Grad::Remap as u8 {
-                        nu = unsafe { rows::read::<I, W>(g.remap[a], base, at, off, shared) };
+                        nu = unsafe { read_row::<I, W>(g.remap[a], base, at, off, shared) };
                     } else if updated || moments {
                         for i in 0..K {
-                            nu[i] = add(nv[i], mul(na[i], dt));
+                            nu[i] = nv[i] + na[i] * dt;
                         }
                     }
+                    // v_gp = sum S_ip v_i, a_gp = sum S_ip a_i, S_ip = wx_i r_0.
                     if vel {
-                        v_gp[a] = add(v_gp[a], mul(r[0], sum_x::<I, K>(&wx, &nv)));
-                        a_gp[a] = add(a_gp[a], mul(r[0], sum_x::<I, K>(&wx, &na)));
+                        v_gp[a] = v_gp[a] + r[0] * sum_x::<I, K>(&wx, &nv);
+                        a_gp[a] = a_gp[a] + r[0] * sum_x::<I, K>(&wx, &na);
                     }
                     let su = if gradient || moments {
                         sum_x::<I, K>(&wx, &nu)
                     } else {
                         zero
                     };
+                    // grad v = sum u_i (x) G_ip (eq 27), G_ip = (dwx_i r_0, wx_i r_1, ...).
                     if gradient {
-                        l[a][0] = add(l[a][0], mul(r[0], sum_x::<I, K>(&dwx, &nu)));
+                        l[a][0] = l[a][0] + r[0] * sum_x::<I, K>(&dwx, &nu);
                         for b in 1..D {
-                            l[a][b] = add(l[a][b], mul(r[b], su));
+                            l[a][b] = l[a][b] + r[b] * su;
                         }
                         if S::AXISYMMETRIC && a == 0 {
                             // v_r / r = sum_i u_r,i T_ip, T_ip = t_i wy_j.
-                            hoop = add(hoop, mul(r[0], sum_x::<I, K>(&tx, &nu)));
+                            hoop = hoop + r[0] * sum_x::<I, K>(&tx, &nu);
                         }
                     }
+                    // B_p = sum u_i (x) S_ip (x_i - x_p) (seeds/001).
                     if moments {
-                        b_p[a][0] = add(b_p[a][0], mul(r[0], sum_x::<I, K>(&ex, &nu)));
+                        b_p[a][0] = b_p[a][0] + r[0] * sum_x::<I, K>(&ex, &nu);
                         for b in 1..D {
-                            b_p[a][b] = add(b_p[a][b], mul(re[b], su));
+                            b_p[a][b] = b_p[a][b] + re[b] * su;
                         }
                     }
                 }
@@ -235,20 +254,20 @@ fn gather_chunk<
         }
         for a in 0..D {
             if vel {
-                I::store(v_gp[a], &mut out.v_gp[a], at);
-                I::store(a_gp[a], &mut out.a_gp[a], at);
+                v_gp[a].store(&mut out.v_gp[a], at);
+                a_gp[a].store(&mut out.a_gp[a], at);
             }
             for b in 0..D {
                 if gradient {
-                    I::store(l[a][b], &mut out.l[a][b], at);
+                    l[a][b].store(&mut out.l[a][b], at);
                 }
                 if moments {
-                    I::store(b_p[a][b], &mut affine[a][b], at);
+                    b_p[a][b].store(&mut affine[a][b], at);
                 }
             }
         }
         if gradient && S::AXISYMMETRIC {
-            I::store(hoop, &mut out.hoop, at);
+            hoop.store(&mut out.hoop, at);
         }
     }
 }

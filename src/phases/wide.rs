@@ -12,6 +12,7 @@ use crate::Real;
 use core::ops::{Add, BitAnd, BitOr, Mul, Sub};
 
 /// [`Rows::N`] reals, one per lane, of the instance `I`.
+#[repr(transparent)]
 pub(crate) struct Wide<I: Rows>(pub I::V);
 
 impl<I: Rows> Clone for Wide<I> {
