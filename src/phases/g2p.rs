@@ -28,7 +28,7 @@ use super::lanes::{commit, live_lanes, load, load_into, stencils, Block, Lane, L
 use super::p2g::{rows, scatter_chunk, Adds, Mode, Products};
 use super::rows::{self, Compare, Rows};
 use super::update;
-use super::wide::Wide;
+use super::wide::{Wide, WideMask};
 use super::Ctx;
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
@@ -630,11 +630,12 @@ pub(crate) fn particles<
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
-    let (step, faces, zero) = unsafe {
+    let (step, faces, zero, none) = unsafe {
         (
             update::Step::<I>::new(dt, ctx.beta),
             core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
             Wide::<I>::splat(0.0),
+            WideMask::<I>::splat(false),
         )
     };
     for start in (0..count).step_by(W) {
@@ -673,8 +674,7 @@ pub(crate) fn particles<
             // SAFETY: this instance runs only on a CPU that supports it.
             let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, q) };
             let mut sum = zero;
-            let mut open = faces[0].none();
-            let mut wall = open;
+            let (mut open, mut wall) = (none, none);
             for a in 0..D {
                 let (x_p, v_p, v_gp, a_gp) = (ld(&x[a]), ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
                 let d = if damp {

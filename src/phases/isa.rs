@@ -59,9 +59,9 @@ macro_rules! wide {
 }
 
 /// Declares the [`Isa`] trait with one method per pass, and its implementations: the baseline
-/// one (each pass its own function), the AVX2 one and the AVX-512 one (each pass compiled in a
-/// `#[target_feature]` function, [`wide!`]). Each pass is written once, here, by its
-/// signature; a pass that reads stencil rows lane-major says `[I]` and takes the instance as
+/// one (each pass its own function), the AVX2 one and, with the `avx512` feature, the AVX-512
+/// one (each pass compiled in a `#[target_feature]` function, [`wide!`]). Each pass is written
+/// once, here, by its signature; a pass that reads stencil rows lane-major says `[I]` and takes the instance as
 /// its first type argument (its [`super::rows::Rows`]).
 macro_rules! passes {
     ($(

@@ -109,7 +109,6 @@ pub(crate) struct Faces<I: Compare> {
     lo_x: Wide<I>,
     hi_x: Wide<I>,
     open: [WideMask<I>; 2],
-    none: WideMask<I>,
 }
 
 impl<I: Compare> Faces<I> {
@@ -131,17 +130,8 @@ impl<I: Compare> Faces<I> {
                 lo_x: Wide::splat(geom.origin[axis] + geom.lo[axis] * geom.h),
                 hi_x: Wide::splat(geom.origin[axis] + geom.hi[axis] * geom.h),
                 open: [WideMask::splat(open(0)), WideMask::splat(open(1))],
-                none: WideMask::splat(false),
             }
         }
-    }
-}
-
-impl<I: Compare> Faces<I> {
-    /// A mask of no lanes.
-    #[inline(always)]
-    pub fn none(&self) -> WideMask<I> {
-        self.none
     }
 }
 
