@@ -247,6 +247,7 @@ impl<const D: usize> NodeBox<D> {
 
     /// Calls `f` with each line of the box along x as a range of flat indices, `tail` entries
     /// past its end included (within `len`, the columns' length), every entry once.
+    #[inline(always)]
     pub fn for_each_line(
         &self,
         stride: [usize; D],

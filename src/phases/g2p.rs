@@ -24,12 +24,12 @@
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, live_lanes, load, load_into, stencils, Block, Lane, Lanes};
-use super::p2g::{rows, scatter_chunk, Adds, Mode, Products};
+use super::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
+use super::p2g::{rows, Adds, Mode, Products};
 use super::rows::{self, Compare, Rows};
 use super::update;
 use super::wide::{Wide, WideMask};
-use super::Ctx;
+use super::{Ctx, Isa};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
@@ -63,7 +63,7 @@ enum Grad {
 /// axisymmetric, the hoop rate `v_r / r` of every lane. What a pass does not gather stays
 /// zero; lanes that hold no active particle carry values that are never committed.
 #[repr(C, align(64))]
-struct Gathered<const D: usize, const W: usize> {
+pub(crate) struct Gathered<const D: usize, const W: usize> {
     v_gp: [Lane<W>; D],
     a_gp: [Lane<W>; D],
     l: LaneMat<D, W>,
@@ -124,7 +124,7 @@ unsafe fn read_row<I: Rows, const W: usize>(
 /// registers (seeds/000 eqs 16-17, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and
 /// `G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k)`).
 #[inline(always)]
-fn gather_chunk<
+pub(crate) fn gather_chunk<
     I: Rows,
     const D: usize,
     const K: usize,
@@ -137,7 +137,8 @@ fn gather_chunk<
     ctx: &Ctx<'_, D>,
     g: &GridCols<'_, D>,
     st: &Stencils<D, K, W>,
-    (affine, out): (&mut [[Lane<W>; D]; D], &mut Gathered<D, W>),
+    affine: &mut [[Lane<W>; D]; D],
+    out: &mut Gathered<D, W>,
 ) {
     // The moments take v + a dt, which only a gather of the velocities reads.
     const { assert!(!MOMENTS || (VEL && GRAD != Grad::Remap as u8)) };
@@ -299,11 +300,6 @@ fn commit_gradient_affine<const D: usize, const W: usize>(
 /// them (store forwarding fails for such loads).
 #[repr(C, align(64))]
 struct StressScratch<const D: usize, const W: usize> {
-    /// `A = L dt`.
-    a: LaneMat<D, W>,
-    /// The Horner term of `exp(A) - I`, and the next one.
-    q: LaneMat<D, W>,
-    next: LaneMat<D, W>,
     h_old: LaneMat<D, W>,
     h: LaneMat<D, W>,
     tau: [Lane<W>; 6],
@@ -312,14 +308,47 @@ struct StressScratch<const D: usize, const W: usize> {
 impl<const D: usize, const W: usize> StressScratch<D, W> {
     fn new() -> Self {
         StressScratch {
-            a: [[[0.0; W]; D]; D],
-            q: [[[0.0; W]; D]; D],
-            next: [[[0.0; W]; D]; D],
             h_old: [[[0.0; W]; D]; D],
             h: [[[0.0; W]; D]; D],
             tau: [[0.0; W]; 6],
         }
     }
+}
+
+/// `exp(A) - I` to `n` terms (seeds/000 eq 26, `dF = exp(L dt)` with `A = L dt`), by Horner:
+/// `Q = A / n`, then `Q <- (A + A Q) / k` for `k = n - 1` down to 1 (the division by 1
+/// skipped). The identity is left out so that a small increment keeps its precision.
+///
+/// # Safety
+/// The CPU supports the instance `I` (as for [`Wide::splat`]).
+#[inline(always)]
+unsafe fn exp_minus_identity<I: Rows, const D: usize>(
+    a: &[[Wide<I>; D]; D],
+    n: usize,
+) -> [[Wide<I>; D]; D] {
+    // SAFETY: as required of the caller.
+    let inv = |k: usize| unsafe { Wide::<I>::splat(INV[k]) };
+    let mut q = *a;
+    for r in 0..D {
+        for c in 0..D {
+            q[r][c] = a[r][c] * inv(n);
+        }
+    }
+    for k in (1..n).rev() {
+        let mut next = *a;
+        for r in 0..D {
+            for c in 0..D {
+                for m in 0..D {
+                    next[r][c] = next[r][c] + a[r][m] * q[m][c];
+                }
+                if k > 1 {
+                    next[r][c] = next[r][c] * inv(k);
+                }
+            }
+        }
+        q = next;
+    }
+    q
 }
 
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
@@ -336,59 +365,33 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
     scratch: &mut StressScratch<D, W>,
 ) -> (Lanes<W>, Lanes<W>) {
     let l = &gathered.l;
-    let StressScratch {
-        a,
-        q,
-        next,
-        h_old,
-        h,
-        tau,
-    } = scratch;
-    // Plain loops over lanes here, not `core::array::from_fn`: a closure that indexes is not
-    // always inlined, and a helper that is not inlined runs baseline code in the AVX2 instance.
-    // A = L dt; Q = exp(A) - I by Horner (`math::exp_series_minus_identity`, lane by lane):
-    // Q = A / n, then Q <- (A + A Q) / k for k = n - 1 down to 1 (the division by 1 skipped).
+    let StressScratch { h_old, h, tau } = scratch;
+    // dF = exp(L dt) (eq 26), kept as Q = dF - I, and H <- H + Q + Q H (F <- dF F), on as
+    // many lanes at once as the instance's vectors hold.
     let n = ctx.exp_terms.clamp(1, 8) as usize;
-    for r in 0..D {
-        for c in 0..D {
-            for ln in 0..W {
-                a[r][c][ln] = l[r][c][ln] * ctx.dt;
-                q[r][c][ln] = a[r][c][ln] * INV[n];
-            }
-        }
-    }
-    for k in (1..n).rev() {
-        for r in 0..D {
-            for c in 0..D {
-                for ln in 0..W {
-                    let mut v = a[r][c][ln];
-                    for m in 0..D {
-                        v += a[r][m][ln] * q[m][c][ln];
-                    }
-                    next[r][c][ln] = if k > 1 { v * INV[k] } else { v };
-                }
-            }
-        }
-        for r in 0..D {
-            for c in 0..D {
-                q[r][c] = next[r][c];
-            }
-        }
-    }
-    // H <- H + Q + Q H, in one loop per entry: (H + sum_m Q_rm H_mc) + Q_rc.
     for r in 0..D {
         for c in 0..D {
             load_into(&mut h_old[r][c], p.h[r][c], start);
         }
     }
-    for r in 0..D {
-        for c in 0..D {
-            for ln in 0..W {
-                let mut v = h_old[r][c][ln];
+    // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it.
+    let (zero, dt) = unsafe { (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt)) };
+    for at in (0..W).step_by(I::N) {
+        let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
+        let mut a = [[zero; D]; D];
+        for r in 0..D {
+            for c in 0..D {
+                a[r][c] = ld(&l[r][c]) * dt;
+            }
+        }
+        let q = unsafe { exp_minus_identity::<I, D>(&a, n) };
+        for r in 0..D {
+            for c in 0..D {
+                let mut v = ld(&h_old[r][c]);
                 for m in 0..D {
-                    v += q[r][m][ln] * h_old[m][c][ln];
+                    v = v + q[r][m] * ld(&h_old[m][c]);
                 }
-                h[r][c][ln] = v + q[r][c][ln];
+                (v + q[r][c]).store(&mut h[r][c], at);
             }
         }
     }
@@ -397,21 +400,12 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
     let mut hzz = [0.0; W];
     if S::AXISYMMETRIC {
         let old: Lane<W> = load(p.hoop, start);
-        let mut a = gathered.hoop;
-        for v in a.iter_mut() {
-            *v *= ctx.dt;
-        }
-        let mut qh = [0.0; W];
-        for ln in 0..W {
-            qh[ln] = a[ln] * INV[n];
-        }
-        for k in (1..n).rev() {
-            for ln in 0..W {
-                qh[ln] = (a[ln] + a[ln] * qh[ln]) * INV[k];
-            }
-        }
-        for ln in 0..W {
-            hzz[ln] = old[ln] + qh[ln] + qh[ln] * old[ln];
+        for at in (0..W).step_by(I::N) {
+            // SAFETY: as above.
+            let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
+            let q = unsafe { exp_minus_identity::<I, 1>(&[[ld(&gathered.hoop) * dt]], n) }[0][0];
+            let old = ld(&old);
+            (old + q + q * old).store(&mut hzz, at);
         }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
@@ -587,13 +581,7 @@ fn eigenstrain<const D: usize, const W: usize>(
 /// [`scatter_chunk`]). Declared damping adds the damping of the module docs; APIC replaces
 /// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
-pub(crate) fn particles<
-    I: Compare,
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
->(
+pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -644,7 +632,7 @@ pub(crate) fn particles<
             load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
         // Damping rates of each lane: the substep's global values plus the particle's own
         // (empty columns, when per-particle damping is not declared, load as zeros).
         if damp {
@@ -660,10 +648,12 @@ pub(crate) fn particles<
         const UPDATED: u8 = Grad::Updated as u8;
         let out = (&mut *affine, &mut gathered);
         match (fused_stress, moments) {
-            (false, false) => gather_chunk::<I, D, K, S, W, true, NONE, false>(ctx, g, &st, out),
-            (false, true) => gather_chunk::<I, D, K, S, W, true, NONE, true>(ctx, g, &st, out),
-            (true, false) => gather_chunk::<I, D, K, S, W, true, UPDATED, false>(ctx, g, &st, out),
-            (true, true) => gather_chunk::<I, D, K, S, W, true, UPDATED, true>(ctx, g, &st, out),
+            (false, false) => I::gather::<D, K, S, W, true, NONE, false>(ctx, g, &st, out.0, out.1),
+            (false, true) => I::gather::<D, K, S, W, true, NONE, true>(ctx, g, &st, out.0, out.1),
+            (true, false) => {
+                I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, out.0, out.1)
+            }
+            (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, out.0, out.1),
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open
@@ -758,10 +748,10 @@ pub(crate) fn particles<
             let (stride, pr) = (geom.stride, &products);
             if apic {
                 const REMAP: u8 = rows(Mode::Remap, true);
-                scatter_chunk::<I, D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
             } else {
                 const REMAP: u8 = rows(Mode::Remap, false);
-                scatter_chunk::<I, D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
             }
         }
     }
@@ -772,7 +762,7 @@ pub(crate) fn particles<
 /// pass has moved the particles) it takes the stencils at the positions of the start of the
 /// step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
-pub(crate) fn stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -801,9 +791,15 @@ pub(crate) fn stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, 
                 start,
             );
         }
-        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false);
-        let out = (&mut unused_affine, &mut gathered);
-        gather_chunk::<I, D, K, S, W, false, { Grad::Remap as u8 }, false>(ctx, g, &st, out);
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false);
+        const REMAP: u8 = Grad::Remap as u8;
+        I::gather::<D, K, S, W, false, REMAP, false>(
+            ctx,
+            g,
+            &st,
+            &mut unused_affine,
+            &mut gathered,
+        );
         let (ok, runaway) =
             update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {

@@ -6,12 +6,24 @@
 //! too. The two scans of the particles before a substep (the node box, the fastest particle
 //! for `stable_dt`) are instanced the same way; the node passes (grid update) are short loops
 //! and run in the baseline instance.
+//!
+//! Functions are kept to a size the optimiser handles in proportion: its time grows faster
+//! than a function's size (loop rotation, full unrolling and value numbering over one large
+//! body). So the scatter is one function per row configuration ([`p2g::rows`]), and a chunk's
+//! gather and the particle pass's re-map scatter are functions of their own, called once per
+//! chunk: the same code as one function per pass took 1.5 times as long to build
+//! (benches/PERFORMANCE.md).
 
-use super::{g2p, p2g, transport, Ctx};
+// A pass takes the substep's columns and context, a chunk kernel the chunk's arrays: eight
+// arguments for the stencils, which every pass already holds apart.
+#![allow(clippy::too_many_arguments)]
+
+use super::lanes::{self, Lane, Lanes};
+use super::{g2p, p2g, rows::Compare, transport, Ctx};
 use crate::effects::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
 use crate::particles::ParticleCols;
-use crate::shape::Shape1D;
+use crate::shape::{Shape1D, Stencils};
 use crate::{Real, StepReport};
 
 /// One instance of the passes compiled with more instruction-set features: the type that
@@ -46,6 +58,9 @@ macro_rules! wide {
         mod $module {
             use super::*;
             $(
+                // Never inlined into the pass that calls it (a chunk kernel is called per
+                // chunk): LLVM's time grows faster than a function's size.
+                #[inline(never)]
                 #[target_feature(enable = $features)]
                 pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
                     // The instance, for the passes that take it ([`super::super::rows::Rows`]).
@@ -70,7 +85,7 @@ macro_rules! passes {
             ($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)? => $($target:ident)::+;
     )*) => {
         /// One set of particle passes; [`crate::world`] calls a substep's passes through it.
-        pub(crate) trait Isa {
+        pub(crate) trait Isa: Compare {
             $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)?;)*
         }
 
@@ -107,15 +122,17 @@ macro_rules! passes {
 }
 
 passes! {
-    /// [`p2g::scatter`].
-    fn scatter [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
+    /// [`p2g::scatter_rows`]: the scatter pass with the row configuration `MODE`
+    /// ([`p2g::rows`]); [`p2g::scatter`] picks it.
+    fn scatter [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8]
+        [I] [D, K, S, W, MODE] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &ParticleCols<'_, D>,
         count: usize,
         g: &mut GridCols<'_, D>,
         adds: p2g::Adds,
-    ) => p2g::scatter;
+    ) => p2g::scatter_rows;
 
     /// [`g2p::particles`].
     fn particles [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
@@ -138,7 +155,7 @@ passes! {
     ) => g2p::stress;
 
     /// [`transport::substep`] (heat conduction or diffusion, one field).
-    fn transport [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
+    fn transport [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
@@ -155,6 +172,44 @@ passes! {
         status: &[u32],
         count: usize,
     ) -> NodeBox<D> => crate::grid::node_box;
+
+    /// [`g2p::gather_chunk`]: one chunk's gather, a function of its own (inlined into the
+    /// passes, their four forms made each pass several times as slow to compile).
+    fn gather [
+        const D: usize, const K: usize, S: Shape1D<K>, const W: usize,
+        const VEL: bool, const GRAD: u8, const MOMENTS: bool
+    ] [I] [D, K, S, W, VEL, GRAD, MOMENTS] (
+        ctx: &Ctx<'_, D>,
+        g: &GridCols<'_, D>,
+        st: &Stencils<D, K, W>,
+        affine: &mut [[Lane<W>; D]; D],
+        out: &mut g2p::Gathered<D, W>,
+    ) => g2p::gather_chunk;
+
+    /// [`lanes::stencils`]: one chunk's stencils (every pass computes them; one function
+    /// rather than a copy of the three families' code in each pass).
+    fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
+        st: &mut Stencils<D, K, W>,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &ParticleCols<'_, D>,
+        start: usize,
+        x: &[Lane<W>; D],
+        affine: bool,
+        lanes: bool,
+    ) => lanes::stencils;
+
+    /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
+    /// particle pass's re-map).
+    fn scatter_chunk [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8]
+        [I] [D, K, S, W, MODE] (
+        st: &mut Stencils<D, K, W>,
+        pr: &p2g::Products<D, W>,
+        live: Lanes<W>,
+        stride: [usize; D],
+        g: &mut GridCols<'_, D>,
+        adds: p2g::Adds,
+    ) => p2g::scatter_chunk;
 
     /// [`crate::world::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64

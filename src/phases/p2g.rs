@@ -12,9 +12,9 @@
 //! the chunk shares one, the groups of all the blocks of a vector at once
 //! ([`scatter_blocks`]). Both run the one row code ([`for_each_row`]).
 
-use super::lanes::{load_into, stencils, Block, Lane, Lanes};
+use super::lanes::{load_into, Block, Lane, Lanes};
 use super::rows::{self, Rows};
-use super::{sym_pairs, Ctx};
+use super::{sym_pairs, Ctx, Isa};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
@@ -108,9 +108,9 @@ impl Adds {
     }
 }
 
-/// Scatters the active particles `0..count` to the grid, accumulating what `adds` says.
-#[inline(always)]
-pub(crate) fn scatter<I: Rows, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+/// Scatters the active particles `0..count` to the grid, accumulating what `adds` says, in
+/// the instance `I`: picks the pass compiled for the row configuration ([`rows`]).
+pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,
@@ -119,35 +119,44 @@ pub(crate) fn scatter<I: Rows, const D: usize, const K: usize, S: Shape1D<K>, co
     adds: Adds,
 ) {
     // The one dispatch on the row configuration. The re-map scatter (MUSL) is part of the
-    // particle pass (`g2p::particles`), which calls `scatter_chunk` itself.
+    // particle pass (`g2p::particles`), which scatters chunk by chunk. Running USF's scatters
+    // on a full scatter's row code (the products they do not add left zero) would have saved
+    // a fifth of the build, but made the USF step 1.2 to 1.5 times as long in 3D
+    // (benches/PERFORMANCE.md).
     use Mode::*;
-    let run = (shape, ctx, p, count);
     match (adds.mode, adds.apic) {
-        (All, false) => scatter_in::<I, D, K, S, W, { rows(All, false) }>(run, g, adds),
-        (All, true) => scatter_in::<I, D, K, S, W, { rows(All, true) }>(run, g, adds),
+        (All, false) => {
+            I::scatter::<D, K, S, W, { rows(All, false) }>(shape, ctx, p, count, g, adds)
+        }
+        (All, true) => I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds),
         (MassMomentum, false) => {
-            scatter_in::<I, D, K, S, W, { rows(MassMomentum, false) }>(run, g, adds)
+            I::scatter::<D, K, S, W, { rows(MassMomentum, false) }>(shape, ctx, p, count, g, adds)
         }
         (MassMomentum, true) => {
-            scatter_in::<I, D, K, S, W, { rows(MassMomentum, true) }>(run, g, adds)
+            I::scatter::<D, K, S, W, { rows(MassMomentum, true) }>(shape, ctx, p, count, g, adds)
         }
         // A force scatter carries no momentum (`Adds::of`).
-        (Force, _) => scatter_in::<I, D, K, S, W, { rows(Force, false) }>(run, g, adds),
+        (Force, _) => {
+            I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
+        }
         (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
     }
 }
 
-/// [`scatter`] with the row configuration `MODE` ([`rows`]).
+/// The scatter pass with the row configuration `MODE` ([`rows`]).
 #[inline(always)]
-fn scatter_in<
-    I: Rows,
+pub(crate) fn scatter_rows<
+    I: Isa,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
     const W: usize,
     const MODE: u8,
 >(
-    (shape, ctx, p, count): (&S, &Ctx<'_, D>, &ParticleCols<'_, D>, usize),
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
     g: &mut GridCols<'_, D>,
     adds: Adds,
 ) {
@@ -187,7 +196,7 @@ fn scatter_in<
                 }
             }
         }
-        stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false);
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false);
         let live = super::lanes::live_lanes(p, start, count);
         products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);

@@ -28,8 +28,8 @@
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
 //! field.
 
-use super::lanes::{live_lanes, load, stencils, Lane, Lanes};
-use super::Ctx;
+use super::lanes::{live_lanes, load, Lane, Lanes};
+use super::{Ctx, Isa};
 use crate::effects::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::material::Deformation;
@@ -61,7 +61,7 @@ const HEAT: usize = crate::ScalarField::Temperature as usize;
 /// One substep of field `f` (HEAT or DIFFUSION) with its definition `t` (inlined into each
 /// instruction set's instance, [`super::isa`]).
 #[inline(always)]
-pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -88,7 +88,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: us
     let mut st = Stencils::<D, K, W>::default();
     // 1. Capacity and momentum.
     for start in (0..count).step_by(W) {
-        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
+        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
         let [c_col, m_col, _, _] = &mut g.scalar[f];
         for ln in const { scatter_order::<W>() } {
             if live.has(ln) {
@@ -135,7 +135,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: us
     // 2. Flow: the gradient of the nodal values at the particle, then
     // `V_p (q_p . G_ip + s_p S_ip)` on its nodes.
     for start in (0..count).step_by(W) {
-        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
+        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
         let [_, _, v_col, q_col] = &mut g.scalar[f];
         for ln in const { scatter_order::<W>() } {
             if !live.has(ln) {
@@ -191,7 +191,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: us
     }
     // 3. FLIP update of the particles' values, and the grid's value at each particle.
     for start in (0..count).step_by(W) {
-        let live = chunk_stencils(&mut st, shape, ctx, p, start, count, n);
+        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
         let [_, _, value, rate] = &g.scalar[f];
         for ln in live.iter() {
             let i = start + ln;
@@ -220,7 +220,7 @@ pub(crate) fn substep<const D: usize, const K: usize, S: Shape1D<K>, const W: us
 /// particles below `count` whose every stencil row fits in node columns of length `len`
 /// (always, by construction; the unchecked row accesses rely on it).
 #[inline(always)]
-fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+fn chunk_stencils<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -230,7 +230,7 @@ fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>
     len: usize,
 ) -> Lanes<W> {
     let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
-    stencils::<D, K, S, W>(st, shape, ctx, p, start, &x, false, true);
+    I::stencils::<D, K, S, W>(st, shape, ctx, p, start, &x, false, true);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }

@@ -298,17 +298,17 @@ impl Kernel for Substep<'_> {
         let adds = |mode| Adds::of(mode, ctx);
         match ctx.order {
             UpdateOrder::Usf => {
-                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
+                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
                 grid_update::velocity(ctx, g);
                 grid_update::constrained_velocity(ctx, g);
                 I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
-                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
+                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
                 I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
-                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
+                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
@@ -316,7 +316,7 @@ impl Kernel for Substep<'_> {
                 I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Musl => {
-                I::scatter::<D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
+                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
                 p2g::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
@@ -370,7 +370,7 @@ impl Kernel for PhaseRun {
             Phase::ParticleToGrid => {
                 p.freeze_domain_stretch(count);
                 grid_update::reset(ctx, g);
-                I::scatter::<D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
+                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);
