@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# The number of compiled forms of each particle pass, per instruction set: the functions the
-# release kernel library defines for them (`nm`). A form is one (dimension form, shape family)
-# of a pass in one instruction set; everything else a step is configured with is a value.
+# The functions the release kernel library defines for each particle pass and chunk kernel,
+# per instruction set (`nm`). A form is one (dimension form, stencil width) in one
+# instruction set, 9 per instruction set; everything else a step is configured with is a
+# value, except the scatter's row configuration (5 functions per form: USL/MUSL and USF's two
+# scatters, FLIP or APIC), the gather's kind (5 per form) and the re-map scatter's transfer (2
+# per form): see ARCHITECTURE.md, "Decisions".
 #   bash benches/compiled_forms.sh            # builds the release library first
 #   bash benches/compiled_forms.sh LIB.rlib   # counts in an existing library
 set -euo pipefail
@@ -12,7 +15,7 @@ if [ -z "$lib" ]; then
     lib=$(ls -t target/release/deps/libmpm_gimp-*.rlib | head -1)
 fi
 nm -C --defined-only "$lib" 2>/dev/null |
-    sed -nE 's/.* <mpm_gimp::phases::isa::Baseline as [^>]*>::(scatter|particles|stress|transport)$/baseline \1/p;
-        s/.* mpm_gimp::phases::isa::(avx2|avx512)::(scatter|particles|stress|transport)$/\1 \2/p' |
+    sed -nE 's/.* <mpm_gimp::phases::isa::Baseline as [^>]*>::(scatter|particles|stress|transport|stencils|gather|scatter_chunk)$/baseline \1/p;
+        s/.* mpm_gimp::phases::isa::(avx2|avx512)::(scatter|particles|stress|transport|stencils|gather|scatter_chunk)$/\1 \2/p' |
     sort | uniq -c | awk '{ n[$2] = n[$2] sprintf("  %s %d", $3, $1); t[$2] += $1 }
         END { for (i in n) printf "%-9s%s  (%d in all)\n", i, n[i], t[i] }' | sort
