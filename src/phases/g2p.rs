@@ -646,14 +646,12 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         // One gather per (order, transfer), chosen per chunk.
         const NONE: u8 = Grad::None as u8;
         const UPDATED: u8 = Grad::Updated as u8;
-        let out = (&mut *affine, &mut gathered);
+        let (aff, out) = (&mut *affine, &mut gathered);
         match (fused_stress, moments) {
-            (false, false) => I::gather::<D, K, S, W, true, NONE, false>(ctx, g, &st, out.0, out.1),
-            (false, true) => I::gather::<D, K, S, W, true, NONE, true>(ctx, g, &st, out.0, out.1),
-            (true, false) => {
-                I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, out.0, out.1)
-            }
-            (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, out.0, out.1),
+            (false, false) => I::gather::<D, K, S, W, true, NONE, false>(ctx, g, &st, aff, out),
+            (false, true) => I::gather::<D, K, S, W, true, NONE, true>(ctx, g, &st, aff, out),
+            (true, false) => I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, aff, out),
+            (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, aff, out),
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping and the second-order position update, then the walls and open

@@ -11,8 +11,8 @@
 //! than a function's size (loop rotation, full unrolling and value numbering over one large
 //! body). So the scatter is one function per row configuration ([`p2g::rows`]), and a chunk's
 //! gather and the particle pass's re-map scatter are functions of their own, called once per
-//! chunk: the same code as one function per pass took 1.5 times as long to build
-//! (benches/PERFORMANCE.md).
+//! chunk: the same code as one function per pass took 3 min 11 s to build with one codegen
+//! unit, against 2 min 30 s split (benches/PERFORMANCE.md).
 
 // A pass takes the substep's columns and context, a chunk kernel the chunk's arrays: eight
 // arguments for the stencils, which every pass already holds apart.
@@ -173,8 +173,8 @@ passes! {
         count: usize,
     ) -> NodeBox<D> => crate::grid::node_box;
 
-    /// [`g2p::gather_chunk`]: one chunk's gather, a function of its own (inlined into the
-    /// passes, their four forms made each pass several times as slow to compile).
+    /// [`g2p::gather_chunk`]: one chunk's gather, a function of its own, so that a pass does
+    /// not hold a copy of each of the gather's kinds it may run.
     fn gather [
         const D: usize, const K: usize, S: Shape1D<K>, const W: usize,
         const VEL: bool, const GRAD: u8, const MOMENTS: bool
