@@ -3,8 +3,8 @@
 # per instruction set (`nm`). A form is one (dimension form, stencil width) in one
 # instruction set, 9 per instruction set; everything else a step is configured with is a
 # value, except the scatter's row configuration (5 functions per form: USL/MUSL and USF's two
-# scatters, FLIP or APIC), the gather's kind (5 per form) and the re-map scatter's transfer (2
-# per form): see ARCHITECTURE.md, "Decisions".
+# scatters, FLIP or APIC; 2 in the baseline instance, compiled for size), the gather's kind (5
+# per form) and the re-map scatter's transfer (2 per form): see ARCHITECTURE.md, "Decisions".
 #   bash benches/compiled_forms.sh            # builds the release library first
 #   bash benches/compiled_forms.sh LIB.rlib   # counts in an existing library
 set -euo pipefail

@@ -87,12 +87,42 @@ macro_rules! passes {
         /// One set of particle passes; [`crate::world`] calls a substep's passes through it.
         pub(crate) trait Isa: Compare {
             $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)?;)*
+
+            /// [`p2g::scatter`]: picks the scatter function for `adds`
+            /// ([`p2g::scatter_own_rows`]; the baseline: [`p2g::scatter_full_rows`]).
+            #[inline(always)]
+            fn scatter_any<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+                shape: &S,
+                ctx: &Ctx<'_, D>,
+                p: &ParticleCols<'_, D>,
+                count: usize,
+                g: &mut GridCols<'_, D>,
+                adds: p2g::Adds,
+            ) where
+                Self: Sized,
+            {
+                p2g::scatter_own_rows::<Self, D, K, S, W>(shape, ctx, p, count, g, adds)
+            }
         }
 
         /// The target's baseline instruction set.
         pub(crate) struct Baseline;
 
         impl Isa for Baseline {
+            // The fallback for CPUs without AVX2 (and the instance valgrind and the fuzzer
+            // run) is compiled for size: two scatter functions per form instead of five.
+            #[inline(always)]
+            fn scatter_any<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+                shape: &S,
+                ctx: &Ctx<'_, D>,
+                p: &ParticleCols<'_, D>,
+                count: usize,
+                g: &mut GridCols<'_, D>,
+                adds: p2g::Adds,
+            ) {
+                p2g::scatter_full_rows::<Self, D, K, S, W>(shape, ctx, p, count, g, adds)
+            }
+
             $(
                 #[inline(never)]
                 fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {

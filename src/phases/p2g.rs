@@ -20,6 +20,7 @@ use crate::particles::{ParticleCols, ACTIVE};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::Real;
 use core::mem::MaybeUninit;
+use core::ops::{Add, Mul};
 
 /// What a particle-to-grid pass accumulates.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -109,7 +110,9 @@ impl Adds {
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `adds` says, in
-/// the instance `I`: picks the pass compiled for the row configuration ([`rows`]).
+/// the instance `I`: the pass compiled for the row configuration ([`rows`]) that the instance
+/// picks ([`Isa::scatter_any`]: [`scatter_own_rows`], or [`scatter_full_rows`] for the
+/// baseline instance).
 pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -118,11 +121,29 @@ pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
     g: &mut GridCols<'_, D>,
     adds: Adds,
 ) {
-    // The one dispatch on the row configuration. The re-map scatter (MUSL) is part of the
-    // particle pass (`g2p::particles`), which scatters chunk by chunk. Running USF's scatters
-    // on a full scatter's row code (the products they do not add left zero) would have saved
-    // a fifth of the build, but made the USF step 1.2 to 1.5 times as long in 3D
-    // (benches/PERFORMANCE.md).
+    I::scatter_any::<D, K, S, W>(shape, ctx, p, count, g, adds)
+}
+
+/// [`scatter`] on the row configuration of `adds`: five scatter functions per form. The re-map
+/// scatter (MUSL) is part of the particle pass (`g2p::particles`), which scatters chunk by
+/// chunk. Running USF's scatters on a full scatter's row code ([`scatter_full_rows`]) would
+/// have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long in 3D
+/// (benches/PERFORMANCE.md).
+#[inline(always)]
+pub(crate) fn scatter_own_rows<
+    I: Isa,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+    adds: Adds,
+) {
     use Mode::*;
     match (adds.mode, adds.apic) {
         (All, false) => {
@@ -140,6 +161,36 @@ pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
         }
         (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
+    }
+}
+
+/// [`scatter`] in two scatter functions per form, for the instance compiled for size (the
+/// baseline): every scatter but USF's force scatter runs the full row configuration (mass,
+/// momentum with APIC's affine part, force), what it does not add entering as products left
+/// zero ([`Products::set`]): finite factors times zero. Those zeros change no bit of the
+/// grid: x + 0 is x for every x but -0, and a column they reach holds its reset +0 plus sums,
+/// which are -0 only if every term is, so it ends the same either way. USF's force scatter
+/// keeps its own rows: it runs after the grid velocities are formed, and a zero added to a
+/// velocity of -0 would make it +0.
+#[inline(always)]
+pub(crate) fn scatter_full_rows<
+    I: Isa,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+    adds: Adds,
+) {
+    if adds.mode == Mode::Force {
+        I::scatter::<D, K, S, W, { rows(Mode::Force, false) }>(shape, ctx, p, count, g, adds)
+    } else {
+        I::scatter::<D, K, S, W, { rows(Mode::All, true) }>(shape, ctx, p, count, g, adds)
     }
 }
 
@@ -320,7 +371,10 @@ impl<const D: usize, const W: usize> Products<D, W> {
         affine: &[[Lane<W>; D]; D],
         adds: Adds,
     ) {
-        self.m = *mass;
+        // Zero where the mode adds no mass, for a compact instance's full rows.
+        if adds.mode.mass() {
+            self.m = *mass;
+        }
         if adds.mode.momentum() {
             for a in 0..D {
                 for ln in 0..W {
@@ -457,9 +511,11 @@ pub(crate) fn affine_velocity<const K: usize, S: Shape1D<K>>(stored: Real, inv_d
 /// block of a vector of lanes, [`BlockRow`], scaled by each block's particle's reals
 /// ([`scatter_blocks`]). The row code is written once, on this trait, so both compute every
 /// value alike.
-pub(crate) trait RowMath: Copy {
-    /// What scales a row: a particle's real, or each block's particle's real spread over the
-    /// block.
+pub(crate) trait RowMath:
+    Copy + Add<Output = Self> + Mul<<Self as RowMath>::S, Output = Self>
+{
+    /// What scales a row (`row * s`, every node times `s`): a particle's real, or each
+    /// block's particle's real spread over the block.
     type S: Copy;
 
     /// All zero.
@@ -467,11 +523,6 @@ pub(crate) trait RowMath: Copy {
     /// # Safety
     /// The CPU supports the instance whose vectors `Self` holds.
     unsafe fn zero() -> Self;
-
-    fn add(self, o: Self) -> Self;
-
-    /// Every node times `s`.
-    fn scale(self, s: Self::S) -> Self;
 }
 
 impl RowMath for Row4 {
@@ -480,16 +531,6 @@ impl RowMath for Row4 {
     #[inline(always)]
     unsafe fn zero() -> Self {
         Row4::ZERO
-    }
-
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        self + o
-    }
-
-    #[inline(always)]
-    fn scale(self, s: Real) -> Self {
-        self * s
     }
 }
 
@@ -513,14 +554,22 @@ impl<I: Rows> RowMath for BlockRow<I> {
         // SAFETY: as required of the caller.
         BlockRow(unsafe { I::splat(0.0) })
     }
+}
+
+impl<I: Rows> Add for BlockRow<I> {
+    type Output = Self;
 
     #[inline(always)]
     fn add(self, o: Self) -> Self {
         BlockRow(I::add(self.0, o.0))
     }
+}
+
+impl<I: Rows> Mul<I::V> for BlockRow<I> {
+    type Output = Self;
 
     #[inline(always)]
-    fn scale(self, s: I::V) -> Self {
+    fn mul(self, s: I::V) -> Self {
         BlockRow(I::mul(self.0, s))
     }
 }
@@ -570,28 +619,24 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
         // Loops, not `core::array::from_fn`, whose closures are not always inlined: one left
         // out of line runs the target's baseline code (benches/PERFORMANCE.md).
         let mut f = XFactors {
-            mass: x.w.scale(at(&pr.m)),
+            mass: x.w * at(&pr.m),
             mom: [[zero; D]; D],
             force: [[zero; D]; D],
         };
         for a in 0..D {
             for b in 0..D {
-                let plain = if b == 0 {
-                    x.w.scale(at(&pr.mv[a]))
-                } else {
-                    zero
-                };
+                let plain = if b == 0 { x.w * at(&pr.mv[a]) } else { zero };
                 f.mom[a][b] = if apic_rows(MODE) {
-                    plain.add((if b == 0 { x.e } else { x.w }).scale(at(&pr.mc[a][b])))
+                    plain + (if b == 0 { x.e } else { x.w }) * at(&pr.mc[a][b])
                 } else {
                     plain
                 };
-                let mut t = (if b == 0 { x.dw } else { x.w }).scale(at(&pr.mt[a][b]));
+                let mut t = (if b == 0 { x.dw } else { x.w }) * at(&pr.mt[a][b]);
                 if adds.forces && b == 0 {
-                    t = t.add(x.w.scale(at(&pr.f[a])));
+                    t = t + x.w * at(&pr.f[a]);
                 }
                 if S::AXISYMMETRIC && a == 0 && b == 0 {
-                    t = t.add(x.t.scale(at(&pr.mh)));
+                    t = t + x.t * at(&pr.mh);
                 }
                 f.force[a][b] = t;
             }
@@ -626,7 +671,7 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
         // SAFETY: as required of the caller.
         let zero = unsafe { T::zero() };
         let mut y = YFactors {
-            mass: x.mass.scale(wy),
+            mass: x.mass * wy,
             mom_wz: [zero; D],
             mom_dz: [zero; D],
             f_wz: [zero; D],
@@ -634,16 +679,16 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
         };
         for a in 0..D {
             y.mom_wz[a] = if apic {
-                x.mom[a][0].scale(wy).add(x.mom[a][1].scale(ey))
+                x.mom[a][0] * wy + x.mom[a][1] * ey
             } else {
-                x.mom[a][0].scale(wy)
+                x.mom[a][0] * wy
             };
             if apic && D == 3 {
-                y.mom_dz[a] = x.mom[a][D - 1].scale(wy);
+                y.mom_dz[a] = x.mom[a][D - 1] * wy;
             }
-            y.f_wz[a] = x.force[a][0].scale(wy).add(x.force[a][1].scale(dwy));
+            y.f_wz[a] = x.force[a][0] * wy + x.force[a][1] * dwy;
             if D == 3 {
-                y.f_dwz[a] = x.force[a][D - 1].scale(wy);
+                y.f_dwz[a] = x.force[a][D - 1] * wy;
             }
         }
         y
@@ -661,18 +706,14 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
     ) {
         let mode = Mode::of(MODE);
         if mode.mass() {
-            let m = if D == 3 {
-                self.mass.scale(wz)
-            } else {
-                self.mass
-            };
+            let m = if D == 3 { self.mass * wz } else { self.mass };
             put::<T, FIRST>(acc, slot::MASS, m);
         }
         for a in 0..D {
             let mom = if apic_rows(MODE) && D == 3 {
-                self.mom_wz[a].scale(wz).add(self.mom_dz[a].scale(ez))
+                self.mom_wz[a] * wz + self.mom_dz[a] * ez
             } else if D == 3 {
-                self.mom_wz[a].scale(wz)
+                self.mom_wz[a] * wz
             } else {
                 self.mom_wz[a]
             };
@@ -686,7 +727,7 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
         if mode.force() {
             for a in 0..D {
                 let f = if D == 3 {
-                    self.f_wz[a].scale(wz).add(self.f_dwz[a].scale(dwz))
+                    self.f_wz[a] * wz + self.f_dwz[a] * dwz
                 } else {
                     self.f_wz[a]
                 };
@@ -699,7 +740,7 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
 /// Writes (`FIRST`) or adds `v` to slot `c` of `acc`.
 #[inline(always)]
 fn put<T: RowMath, const FIRST: bool>(acc: &mut [T; slot::COUNT], c: usize, v: T) {
-    acc[c] = if FIRST { v } else { acc[c].add(v) };
+    acc[c] = if FIRST { v } else { acc[c] + v };
 }
 
 /// Where the row code reads the particles' values ([`Products`]) and stencil factors from
