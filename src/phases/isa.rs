@@ -44,6 +44,8 @@ macro_rules! wide {
 
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         impl Isa for $isa {
+            const FULL_ROWS: bool = false;
+
             $(
                 #[inline(always)]
                 fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
@@ -88,21 +90,9 @@ macro_rules! passes {
         pub(crate) trait Isa: Compare {
             $($(#[$doc])* fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)?;)*
 
-            /// [`p2g::scatter`]: picks the scatter function for `adds`
-            /// ([`p2g::scatter_own_rows`]; the baseline: [`p2g::scatter_full_rows`]).
-            #[inline(always)]
-            fn scatter_any<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-                shape: &S,
-                ctx: &Ctx<'_, D>,
-                p: &ParticleCols<'_, D>,
-                count: usize,
-                g: &mut GridCols<'_, D>,
-                adds: p2g::Adds,
-            ) where
-                Self: Sized,
-            {
-                p2g::scatter_own_rows::<Self, D, K, S, W>(shape, ctx, p, count, g, adds)
-            }
+            /// Whether the instance scatters on the full row configuration
+            /// ([`p2g::scatter`]: two scatter functions per form rather than five).
+            const FULL_ROWS: bool;
         }
 
         /// The target's baseline instruction set.
@@ -110,18 +100,8 @@ macro_rules! passes {
 
         impl Isa for Baseline {
             // The fallback for CPUs without AVX2 (and the instance valgrind and the fuzzer
-            // run) is compiled for size: two scatter functions per form instead of five.
-            #[inline(always)]
-            fn scatter_any<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-                shape: &S,
-                ctx: &Ctx<'_, D>,
-                p: &ParticleCols<'_, D>,
-                count: usize,
-                g: &mut GridCols<'_, D>,
-                adds: p2g::Adds,
-            ) {
-                p2g::scatter_full_rows::<Self, D, K, S, W>(shape, ctx, p, count, g, adds)
-            }
+            // run) is compiled for size.
+            const FULL_ROWS: bool = true;
 
             $(
                 #[inline(never)]

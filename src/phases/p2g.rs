@@ -110,9 +110,21 @@ impl Adds {
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `adds` says, in
-/// the instance `I`: the pass compiled for the row configuration ([`rows`]) that the instance
-/// picks ([`Isa::scatter_any`]: [`scatter_own_rows`], or [`scatter_full_rows`] for the
-/// baseline instance).
+/// the instance `I`: picks the scatter function compiled for the row configuration ([`rows`]).
+///
+/// An instance has five per form, one per configuration, except one compiled for size
+/// ([`Isa::FULL_ROWS`], the baseline), which has two: every scatter but USF's force scatter
+/// runs the full row configuration (mass, momentum with APIC's affine part, force), what it
+/// does not add entering as products left zero ([`Products::set`]): finite factors times
+/// zero. Those zeros change no bit of the grid: x + 0 is x for every x but -0, and a column
+/// they reach holds its reset +0 plus sums, which are -0 only if every term is, so it ends the
+/// same either way. USF's force scatter keeps its own rows: it runs after the grid velocities
+/// are formed, and a zero added to a velocity of -0 would make it +0. Every instance on full
+/// rows would have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long
+/// in 3D (benches/PERFORMANCE.md).
+///
+/// The re-map scatter (MUSL) is part of the particle pass (`g2p::particles`), which scatters
+/// chunk by chunk.
 pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -121,30 +133,17 @@ pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
     g: &mut GridCols<'_, D>,
     adds: Adds,
 ) {
-    I::scatter_any::<D, K, S, W>(shape, ctx, p, count, g, adds)
-}
-
-/// [`scatter`] on the row configuration of `adds`: five scatter functions per form. The re-map
-/// scatter (MUSL) is part of the particle pass (`g2p::particles`), which scatters chunk by
-/// chunk. Running USF's scatters on a full scatter's row code ([`scatter_full_rows`]) would
-/// have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long in 3D
-/// (benches/PERFORMANCE.md).
-#[inline(always)]
-pub(crate) fn scatter_own_rows<
-    I: Isa,
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
->(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-    adds: Adds,
-) {
     use Mode::*;
+    // Branches on the constant alone, so that an instance compiles only the functions it
+    // calls.
+    if I::FULL_ROWS {
+        if adds.mode == Force {
+            I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
+        } else {
+            I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds)
+        }
+        return;
+    }
     match (adds.mode, adds.apic) {
         (All, false) => {
             I::scatter::<D, K, S, W, { rows(All, false) }>(shape, ctx, p, count, g, adds)
@@ -161,36 +160,6 @@ pub(crate) fn scatter_own_rows<
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
         }
         (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
-    }
-}
-
-/// [`scatter`] in two scatter functions per form, for the instance compiled for size (the
-/// baseline): every scatter but USF's force scatter runs the full row configuration (mass,
-/// momentum with APIC's affine part, force), what it does not add entering as products left
-/// zero ([`Products::set`]): finite factors times zero. Those zeros change no bit of the
-/// grid: x + 0 is x for every x but -0, and a column they reach holds its reset +0 plus sums,
-/// which are -0 only if every term is, so it ends the same either way. USF's force scatter
-/// keeps its own rows: it runs after the grid velocities are formed, and a zero added to a
-/// velocity of -0 would make it +0.
-#[inline(always)]
-pub(crate) fn scatter_full_rows<
-    I: Isa,
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
->(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-    adds: Adds,
-) {
-    if adds.mode == Mode::Force {
-        I::scatter::<D, K, S, W, { rows(Mode::Force, false) }>(shape, ctx, p, count, g, adds)
-    } else {
-        I::scatter::<D, K, S, W, { rows(Mode::All, true) }>(shape, ctx, p, count, g, adds)
     }
 }
 
