@@ -7,9 +7,12 @@
 //!
 //! What it covers: plane strain 2D and 3D; linear, uGIMP, cpGIMP, quadratic and cubic B-spline
 //! shape functions; USF, USL and MUSL; FLIP (with its PIC fraction) and APIC; the neo-Hookean
-//! and corotated linear elastic materials; gravity. Scenes stay clear of the walls (their nodes
-//! carry no mass), so the wall treatment is not part of it; the axisymmetric form, APIC with
-//! linear weights and the declared effects are not in it yet.
+//! and corotated linear elastic materials; gravity; and of the declared effects the particle
+//! forces (eq 20), a body force and damping (eqs 46-52 and 107: grid and particle rates, each
+//! a global value plus the particle's own). Scenes stay clear of the walls (their nodes carry
+//! no mass), so the wall treatment is not part of it; the axisymmetric form, APIC with linear
+//! weights, the damping thermostat, tractions, heat conduction and diffusion are not in it
+//! yet.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -25,6 +28,8 @@
 
 use crate::common::{buffer_for, free_space, moving_block, soft_neo_hookean};
 use mpm_gimp::simd::Simd;
+#[cfg(feature = "effects")]
+use mpm_gimp::{Damping, Effects, Schedule};
 use mpm_gimp::{
     Dimension, MaterialDef, MaterialModel, Real, ShapeFunction, Transfer, UpdateOrder, World,
     WorldDef,
@@ -44,6 +49,10 @@ struct Particle {
     tau: Mat,
     /// APIC's `B_p`.
     b: Mat,
+    /// The particle force `F_p`, N (declared particle forces).
+    f: [f64; 3],
+    /// The particle's own damping rates `alpha_g(x_p)`, `alpha_p(x_p)`, 1/s.
+    alpha: [f64; 2],
     /// The particle domain's half-width per axis for uGIMP and cpGIMP, m (cpGIMP: frozen for
     /// the substep from the deformation at its start).
     lp: [f64; 3],
@@ -72,7 +81,12 @@ struct Method {
     origin: [f64; 3],
     /// Nodes per axis.
     nodes: [usize; 3],
+    /// Gravity plus the declared body force.
     gravity: [f64; 3],
+    /// The particles carry forces `F_p` (eq 20).
+    forces: bool,
+    /// Damping (eq 47): the substep's global grid and particle rates, 1/s.
+    damping: Option<[f64; 2]>,
     exp_terms: usize,
     /// uGIMP's particle half-width `h / (2 n)`.
     lp: f64,
@@ -182,7 +196,8 @@ fn affine(m: &Method, p: &Particle, st: &Stencil, dx: &[f64; 3]) -> [f64; 3] {
     c
 }
 
-/// Particle to grid (eqs 22, 23, 25): mass and momentum (`momentum`), internal force (`force`).
+/// Particle to grid (eqs 20, 22, 23, 25): mass and momentum (`momentum`), internal and particle
+/// forces (`force`).
 fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force: bool) {
     for p in ps {
         let st = stencil(m, &p.x, &p.lp);
@@ -196,6 +211,9 @@ fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force
                 if force {
                     for b in 0..m.d {
                         n.f[a] -= p.m * p.tau[a][b] * g[b];
+                    }
+                    if m.forces {
+                        n.f[a] += s * p.f[a];
                     }
                 }
             }
@@ -400,7 +418,9 @@ fn jacobian_minus_one(d: usize, h: &Mat) -> f64 {
 
 /// Grid to particle (eqs 44-45, 51-52; seeds/001): FLIP with PIC fraction `1 - beta` and the
 /// second-order position update, or APIC (`v = v_gp + a_gp dt`, `x += v dt`, `B_p` from
-/// `v_i + a_i dt`); with `fused_stress` (USL) also the stress from `v_i + a_i dt`.
+/// `v_i + a_i dt`), less the damping acceleration `d = alpha_g v_gp + alpha_p v_p` (eq 47)
+/// times `dt` in the velocity (and `dt^2 / 2` in FLIP's position); with `fused_stress` (USL)
+/// also the stress from `v_i + a_i dt`.
 fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stress: bool) {
     for p in ps.iter_mut() {
         let st = stencil(m, &p.x, &p.lp);
@@ -419,13 +439,18 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
             update_stress(m, p, &st, updated, dt);
         }
         for a in 0..m.d {
+            let damp = match m.damping {
+                Some([g, q]) => (g + p.alpha[0]) * v_gp[a] + (q + p.alpha[1]) * p.v[a],
+                None => 0.0,
+            };
             if m.apic {
-                p.v[a] = v_gp[a] + a_gp[a] * dt;
+                p.v[a] = v_gp[a] + a_gp[a] * dt - damp * dt;
                 p.x[a] += p.v[a] * dt;
             } else {
                 let inversion = (1.0 - m.beta) * (p.v[a] - v_gp[a]);
-                p.x[a] += (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt;
-                p.v[a] += a_gp[a] * dt - inversion;
+                p.x[a] +=
+                    (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt;
+                p.v[a] += a_gp[a] * dt - inversion - damp * dt;
             }
         }
         if m.apic {
@@ -520,6 +545,18 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
     let e = material.youngs_modulus as f64;
     let nu = material.poisson_ratio as f64;
     let min_mass = v.mass.iter().fold(f64::INFINITY, |a, &m| a.min(m as f64));
+    let fx = &def.effects;
+    let body = fx.body_force * fx.body_force_scale.at(world.time());
+    let damping = fx.damping.map(|d| {
+        assert!(
+            d.feedback.is_none(),
+            "the thermostat is not in the reference"
+        );
+        [
+            d.grid.at(world.time()) as f64,
+            d.particle.at(world.time()) as f64,
+        ]
+    });
     let method = Method {
         d,
         shape: def.shape,
@@ -534,10 +571,12 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         ],
         nodes: core::array::from_fn(|a| if a < d { def.cells[a] as usize + 1 } else { 1 }),
         gravity: [
-            def.gravity.x as f64,
-            def.gravity.y as f64,
-            def.gravity.z as f64,
+            (def.gravity.x + body.x) as f64,
+            (def.gravity.y + body.y) as f64,
+            (def.gravity.z + body.z) as f64,
         ],
+        forces: fx.particle_forces,
+        damping,
         exp_terms: def.exp_terms as usize,
         lp: def.cell_size as f64 / (2.0 * def.particles_per_cell as f64),
         linear_elastic: material.model == MaterialModel::LinearElastic,
@@ -556,6 +595,9 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             for a in 0..d {
                 p.x[a] = v.position[a][i] as f64;
                 p.v[a] = v.velocity[a][i] as f64;
+                if !v.force[a].is_empty() {
+                    p.f[a] = v.force[a][i] as f64;
+                }
                 for b in 0..d {
                     p.h[a][b] = v.displacement_gradient[a][b][i] as f64;
                     if !v.affine[a][b].is_empty() {
@@ -567,6 +609,11 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
                 let (r, c) = stress_pair(d, k);
                 p.tau[r][c] = v.stress[k][i] as f64;
                 p.tau[c][r] = p.tau[r][c];
+            }
+            for (k, column) in v.damping.iter().enumerate() {
+                if !column.is_empty() {
+                    p.alpha[k] = column[i] as f64;
+                }
             }
             p
         })
@@ -597,8 +644,28 @@ fn columns(d: usize, apic: bool, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
     out
 }
 
+/// The effects [`check`] declares with `effects`: grid and particle damping, each a global
+/// rate plus every particle's own, particle forces and a body force.
+#[cfg(feature = "effects")]
+fn declared_effects() -> Effects {
+    Effects {
+        damping: Some(Damping {
+            grid: Schedule::constant(0.8),
+            particle: Schedule::constant(0.5),
+            per_particle: true,
+            ..Damping::NONE
+        }),
+        particle_forces: true,
+        body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
+        body_force_scale: Schedule::constant(1.0),
+        ..Effects::NONE
+    }
+}
+
 /// Steps a deforming, rotating block (after a few kernel steps, so it carries stress) once
-/// with the kernel in instance `simd` and once with the reference, and checks every column.
+/// with the kernel in instance `simd` and once with the reference, and checks every column;
+/// with `effects`, with the effects of [`declared_effects`] declared, and forces and damping
+/// rates that differ from particle to particle.
 fn check(
     dim: Dimension,
     shape: ShapeFunction,
@@ -606,8 +673,10 @@ fn check(
     transfer: Transfer,
     material: &MaterialDef,
     simd: Simd,
+    effects: bool,
 ) {
-    let def = WorldDef {
+    #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
+    let mut def = WorldDef {
         shape,
         update_order: order,
         transfer,
@@ -615,10 +684,14 @@ fn check(
         gravity: mpm_gimp::Vec3::new(0.3, -9.81, 0.2),
         ..free_space(dim, 16, 1.0 / 16.0)
     };
+    #[cfg(feature = "effects")]
+    if effects {
+        def.effects = declared_effects();
+    }
     let mut buf = buffer_for(&def);
     let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
     // Shear, stretch and spin, so every term of the update is exercised.
-    moving_block(&def, &mut world, material, |x| {
+    let n = moving_block(&def, &mut world, material, |x| {
         let (dx, dy, dz) = (x[0] - 0.5, x[1] - 0.5, x[2] - 0.5);
         [
             0.4 * dy + 0.2 * dx,
@@ -626,6 +699,23 @@ fn check(
             0.2 * dz - 0.1 * dx,
         ]
     });
+    if effects {
+        // Forces of the size of the particles' weights, and rates of 0 to 0.8 /s, varying
+        // from particle to particle.
+        let mass = world.particles().mass.to_vec();
+        let wave = |i: usize, k: usize| ((i * (2 * k + 3)) % 7) as Real / 7.0 - 0.5;
+        let force: [Vec<Real>; 3] =
+            core::array::from_fn(|k| (0..n).map(|i| 20.0 * mass[i] * wave(i, k)).collect());
+        world
+            .set_particle_forces(0, [&force[0], &force[1], &force[2]])
+            .unwrap();
+        let rate = |k: usize| {
+            (0..n)
+                .map(|i| 0.8 * (wave(i, k + 3) + 0.5))
+                .collect::<Vec<_>>()
+        };
+        world.set_particle_damping(0, &rate(0), &rate(1)).unwrap();
+    }
     let dt = world.stable_dt();
     for _ in 0..4 {
         world.step_with_simd(dt, simd).unwrap();
@@ -683,9 +773,9 @@ fn check(
         let bound = 64.0 * eps * (size + change + terms) + own;
         assert!(
             worst <= bound,
-            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?}: column {name} differs \
-             from the reference by {worst:e} (bound {bound:e}, column size {size:e}, change \
-             {change:e})",
+            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?} (effects: {effects}): \
+             column {name} differs from the reference by {worst:e} (bound {bound:e}, column \
+             size {size:e}, change {change:e})",
             material.model
         );
         assert!(
@@ -726,8 +816,27 @@ fn every_instance_steps_as_the_reference_does() {
                     }
                     for material in &materials {
                         for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
-                            check(dim, shape, order, transfer, material, simd);
+                            check(dim, shape, order, transfer, material, simd, false);
                         }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The declared particle forces, body force and damping (global and per-particle rates), with
+/// every order and transfer, two shape families, in 2D and 3D, in every instance of the passes
+/// this CPU runs, agree with the reference step to round-off.
+#[cfg(feature = "effects")]
+#[test]
+fn declared_effects_step_as_the_reference_does() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in [ShapeFunction::Gimp, ShapeFunction::CubicBspline] {
+            for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+                for transfer in [Transfer::Flip, Transfer::Apic] {
+                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                        check(dim, shape, order, transfer, &soft_neo_hookean(), simd, true);
                     }
                 }
             }
