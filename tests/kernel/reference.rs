@@ -10,9 +10,8 @@
 //! and corotated linear elastic materials; gravity; and of the declared effects the particle
 //! forces (eq 20), a body force and damping (eqs 46-52 and 107: grid and particle rates, each
 //! a global value plus the particle's own). Scenes stay clear of the walls (their nodes carry
-//! no mass), so the wall treatment is not part of it; the axisymmetric form, APIC with linear
-//! weights, the damping thermostat, tractions, heat conduction and diffusion are not in it
-//! yet.
+//! no mass), so the wall treatment is not part of it; the axisymmetric form, the damping
+//! thermostat, tractions, heat conduction and diffusion are not in it yet.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -183,13 +182,20 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
     Stencil { nodes, inv_d }
 }
 
-/// `C_p (x_i - x_p)` with `C_p = B_p D_p^-1` (APIC), else zero.
+/// Whether APIC keeps `C_p` itself, the velocity gradient of the stress update, rather than
+/// `B_p`: linear weights, whose `D_p` is singular where a particle sits on a node.
+fn gradient_affine(m: &Method) -> bool {
+    m.apic && m.shape == ShapeFunction::Linear
+}
+
+/// `C_p (x_i - x_p)` with `C_p = B_p D_p^-1` (APIC; linear weights: `C_p` stored), else zero.
 fn affine(m: &Method, p: &Particle, st: &Stencil, dx: &[f64; 3]) -> [f64; 3] {
     let mut c = [0.0; 3];
     if m.apic {
         for a in 0..m.d {
             for b in 0..m.d {
-                c[a] += p.b[a][b] * st.inv_d[b] * dx[b];
+                let inv_d = if gradient_affine(m) { 1.0 } else { st.inv_d[b] };
+                c[a] += p.b[a][b] * inv_d * dx[b];
             }
         }
     }
@@ -252,7 +258,8 @@ fn grid_acceleration(m: &Method, grid: &mut [Node]) {
 
 /// Stress update (eqs 26-27) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
 /// `dF = exp(L dt)` to `exp_terms` terms, `H <- H + Q + Q H` with `Q = dF - I`, and the
-/// neo-Hookean `tau / rho0 = (mu (B - I) + lambda ln J I) / rho0`.
+/// neo-Hookean `tau / rho0 = (mu (B - I) + lambda ln J I) / rho0`. APIC with linear weights
+/// keeps `L` as the particle's `C_p`.
 fn update_stress(
     m: &Method,
     p: &mut Particle,
@@ -269,6 +276,9 @@ fn update_stress(
                 l[a][b] += v[a] * g[b];
             }
         }
+    }
+    if gradient_affine(m) {
+        p.b = l;
     }
     // Q = exp(A) - I by Horner: Q = A / n, then Q <- (A + A Q) / k for k = n - 1 .. 1.
     let n = m.exp_terms.clamp(1, 8);
@@ -453,7 +463,7 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
                 p.v[a] += a_gp[a] * dt - inversion - damp * dt;
             }
         }
-        if m.apic {
+        if m.apic && !gradient_affine(m) {
             p.b = b;
         }
     }
@@ -501,11 +511,16 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
             let start: Vec<[f64; 3]> = ps.iter().map(|p| p.x).collect();
             particles(m, ps, &grid, dt, false);
             // Re-map the new momenta with the stencils of the start of the step, then the
-            // stress from the re-mapped velocities.
+            // stress from the re-mapped velocities. APIC with linear weights re-maps no affine
+            // momentum: its new C_p is the gradient of the re-mapped velocities.
             for (p, x0) in ps.iter().zip(&start) {
                 let st = stencil(m, x0, &p.lp);
                 for &(i, s, _, dx) in &st.nodes {
-                    let c = affine(m, p, &st, &dx);
+                    let c = if gradient_affine(m) {
+                        [0.0; 3]
+                    } else {
+                        affine(m, p, &st, &dx)
+                    };
                     for a in 0..m.d {
                         grid[i].remap[a] += s * p.m * (p.v[a] + c[a]);
                     }
@@ -752,6 +767,8 @@ fn check(
             b'v' => tau_max * dt / h,
             b'H' => v_max * dt / h,
             b't' => c2 * v_max * dt / h,
+            // B_p sums v_i (x_i - x_p); C_p in its gradient form sums v_i G_ip.
+            b'B' if gradient_affine(&method) => v_max / h,
             b'B' => v_max * h,
             _ => 0.0,
         };
@@ -808,10 +825,8 @@ fn every_instance_steps_as_the_reference_does() {
         for shape in shapes {
             for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
                 for transfer in [Transfer::Flip, Transfer::Apic] {
-                    // APIC comes with the `effects` feature; linear APIC keeps the gradient
-                    // form, not in the reference yet.
-                    let apic = transfer == Transfer::Apic;
-                    if apic && (shape == ShapeFunction::Linear || !cfg!(feature = "effects")) {
+                    // APIC comes with the `effects` feature.
+                    if transfer == Transfer::Apic && !cfg!(feature = "effects") {
                         continue;
                     }
                     for material in &materials {
