@@ -8,7 +8,7 @@
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
 use super::{Deformation, Model, Params, Stress};
-use crate::math::{mul, polar_rotation_minus_identity, Mat};
+use crate::math::{mul, polar_rotation_minus_identity, polar_rotation_minus_identity_lanes, Mat};
 use crate::Real;
 
 /// Small strain `e` of the corotated frame, and `Q = R - I`.
@@ -37,10 +37,98 @@ fn corotated_strain<const D: usize>(h: &Mat<D>) -> (Mat<D>, Mat<D>) {
     (e, q)
 }
 
-/// Corotated linear elasticity. Its chunk path is the default, the formula lane by lane.
+/// Corotated linear elasticity.
 pub(crate) struct LinearElastic;
 
 impl Model for LinearElastic {
+    /// [`Model::kirchhoff`]'s operations, in its order, as loops over lanes that vectorise
+    /// (the formula lane by lane took 1.8 times the neo-Hookean step).
+    #[inline(always)]
+    fn kirchhoff_lanes<const D: usize, const W: usize>(
+        p: &Params,
+        h: &[[[Real; W]; D]; D],
+        hzz: &[Real; W],
+        jm1: &[Real; W],
+        tau: &mut [[Real; W]; 6],
+    ) {
+        let q = polar_rotation_minus_identity_lanes(h);
+        // e = sym(R^T F - I) (see `corotated_strain`), its trace with the out-of-plane e_zz,
+        // and s = lambda tr(e) I + 2 mu e.
+        let mut e = [[[0.0; W]; D]; D];
+        for a in 0..D {
+            for b in 0..D {
+                for ln in 0..W {
+                    let mut qh = 0.0;
+                    for k in 0..D {
+                        qh += q[k][a][ln] * h[k][b][ln];
+                    }
+                    e[a][b][ln] = q[b][a][ln] + h[a][b][ln] + qh;
+                }
+            }
+        }
+        for a in 0..D {
+            for b in a + 1..D {
+                for ln in 0..W {
+                    let s = 0.5 * (e[a][b][ln] + e[b][a][ln]);
+                    e[a][b][ln] = s;
+                    e[b][a][ln] = s;
+                }
+            }
+        }
+        let mut tr = [0.0; W];
+        for ln in 0..W {
+            tr[ln] = if D == 2 { hzz[ln] } else { 0.0 };
+            for a in 0..D {
+                tr[ln] += e[a][a][ln];
+            }
+        }
+        let mut s = [[[0.0; W]; D]; D];
+        for a in 0..D {
+            for b in 0..D {
+                for ln in 0..W {
+                    s[a][b][ln] = 2.0 * p.mu * e[a][b][ln];
+                }
+            }
+            for ln in 0..W {
+                s[a][a][ln] += p.lambda * tr[ln];
+            }
+        }
+        // J R s R^T with R = I + Q: (R s)[i][k], then (R s R^T)[i][j] = sum_k (R s)[i][k] R[j][k].
+        let mut r = q;
+        for a in 0..D {
+            for ln in 0..W {
+                r[a][a][ln] += 1.0;
+            }
+        }
+        let mut rs = [[[0.0; W]; D]; D];
+        for i in 0..D {
+            for j in 0..D {
+                for ln in 0..W {
+                    let mut sum = 0.0;
+                    for k in 0..D {
+                        sum += r[i][k][ln] * s[k][j][ln];
+                    }
+                    rs[i][j][ln] = sum;
+                }
+            }
+        }
+        for (k, &(i, j)) in crate::phases::sym_pairs(D).iter().enumerate() {
+            for ln in 0..W {
+                let mut sum = 0.0;
+                for m in 0..D {
+                    sum += rs[i][m][ln] * r[j][m][ln];
+                }
+                tau[k][ln] = sum * (1.0 + jm1[ln]) * p.inv_rho0;
+            }
+        }
+        if D == 2 {
+            for ln in 0..W {
+                let j = 1.0 + jm1[ln];
+                tau[3][ln] = j * (p.lambda * tr[ln] + 2.0 * p.mu * hzz[ln]) * p.inv_rho0;
+            }
+        }
+    }
+
     #[inline(always)]
     fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
         let (e, q) = corotated_strain(&f.h);

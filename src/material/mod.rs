@@ -392,12 +392,40 @@ mod tests {
             model: MaterialModel,
             next: &mut impl FnMut(Real) -> Real,
         ) {
-            for scale in [1.0e-5, 1.0e-2, 0.6] {
+            // Random deformations, and lanes that take each branch of the corotated model's
+            // polar decomposition: no deformation, a half turn (F = -I in 2D), turns past a
+            // quarter, an inverted F (3D: the iteration stops at once).
+            let (c, s) = (libm::cos(3.0) as Real, libm::sin(3.0) as Real);
+            let special: [Mat<D>; 4] = [
+                [[0.0; D]; D],
+                core::array::from_fn(|r| core::array::from_fn(|c| if r == c { -2.0 } else { 0.0 })),
+                core::array::from_fn(|r| {
+                    core::array::from_fn(|k| match (r, k) {
+                        (0, 0) | (1, 1) => c - 1.0,
+                        (0, 1) => -s,
+                        (1, 0) => s,
+                        _ => 0.0,
+                    })
+                }),
+                core::array::from_fn(|r| {
+                    core::array::from_fn(|k| match (r, k) {
+                        (0, 0) => -1.5,
+                        (0, 1) => 0.3,
+                        (1, 0) => 2.0,
+                        _ => 0.0,
+                    })
+                }),
+            ];
+            for scale in [1.0e-5, 1.0e-2, 0.6, 0.0] {
                 let mut h = [[[0.0; W]; D]; D];
                 let (mut hzz, mut jm1) = ([0.0; W], [0.0; W]);
                 let mut each = [Deformation::<D>::new([[0.0; D]; D], 0.0); W];
                 for ln in 0..W {
-                    let m: Mat<D> = core::array::from_fn(|_| core::array::from_fn(|_| next(scale)));
+                    let m: Mat<D> = if scale == 0.0 {
+                        special[ln % special.len()]
+                    } else {
+                        core::array::from_fn(|_| core::array::from_fn(|_| next(scale)))
+                    };
                     let zz = if D == 2 { next(scale) } else { 0.0 };
                     each[ln] = Deformation::new(m, zz);
                     for r in 0..D {
