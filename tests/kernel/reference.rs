@@ -5,13 +5,16 @@
 //! instruction-set instance this CPU has) and by the reference, and every particle column must
 //! agree to round-off.
 //!
-//! What it covers: plane strain 2D and 3D; linear, uGIMP, cpGIMP, quadratic and cubic B-spline
-//! shape functions; USF, USL and MUSL; FLIP (with its PIC fraction) and APIC; the neo-Hookean
-//! and corotated linear elastic materials; gravity; and of the declared effects the particle
-//! forces (eq 20), a body force and damping (eqs 46-52 and 107: grid and particle rates, each
-//! a global value plus the particle's own). Scenes stay clear of the walls (their nodes carry
-//! no mass), so the wall treatment is not part of it; the axisymmetric form, the damping
-//! thermostat, tractions, heat conduction and diffusion are not in it yet.
+//! What it covers: plane strain 2D, the axisymmetric form (section 7: r-weighted weights
+//! integrated numerically from eqs 112 and 115, the hoop factors of eq 116, the hoop stretch
+//! and the hoop term of the radial force, eq 120) and 3D; linear, uGIMP, cpGIMP, quadratic
+//! and cubic B-spline shape functions; USF, USL and MUSL; FLIP (with its PIC fraction) and
+//! APIC (with linear weights in its gradient form); the neo-Hookean and corotated linear
+//! elastic materials; gravity; and of the declared effects the particle forces (eq 20), a
+//! body force and damping (eqs 46-52 and 107: grid and particle rates, each a global value
+//! plus the particle's own). Scenes stay clear of the walls and the axis (their nodes carry no
+//! mass), so the wall treatment and particles nearer the axis than their half-width are not
+//! part of it; nor are the damping thermostat, tractions, heat conduction and diffusion yet.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -27,12 +30,12 @@
 
 use crate::common::{buffer_for, free_space, moving_block, soft_neo_hookean};
 use mpm_gimp::simd::Simd;
+use mpm_gimp::{
+    Boundary, Dimension, Face, MaterialDef, MaterialModel, Real, ShapeFunction, Transfer,
+    UpdateOrder, World, WorldDef,
+};
 #[cfg(feature = "effects")]
 use mpm_gimp::{Damping, Effects, Schedule};
-use mpm_gimp::{
-    Dimension, MaterialDef, MaterialModel, Real, ShapeFunction, Transfer, UpdateOrder, World,
-    WorldDef,
-};
 
 type Mat = [[f64; 3]; 3];
 
@@ -44,6 +47,8 @@ struct Particle {
     m: f64,
     /// `H = F - I`.
     h: Mat,
+    /// Axisymmetric: the hoop stretch `F_thetatheta - 1` (0 in plane strain: `F_zz = 1`).
+    hzz: f64,
     /// Kirchhoff stress over the initial density, symmetric; `tau[2][2]` is `zz` in 2D.
     tau: Mat,
     /// APIC's `B_p`.
@@ -72,6 +77,8 @@ struct Node {
 /// The method's settings and the grid.
 struct Method {
     d: usize,
+    /// The 2D form is axisymmetric (x is the radius r): r-weighted weights, hoop terms.
+    axisymmetric: bool,
     shape: ShapeFunction,
     order: UpdateOrder,
     apic: bool,
@@ -132,10 +139,46 @@ fn weight_1d(m: &Method, xi: f64, l: f64) -> (f64, f64) {
 }
 
 /// A particle's stencil: each node it reaches with its flat index, `S_ip`, `G_ip` and
-/// `x_i - x_p`, and the APIC moment `D_p^-1` (diagonal for these tensor-product weights).
+/// `x_i - x_p`, the APIC moment `D_p^-1` (diagonal for these tensor-product weights) and, in
+/// the axisymmetric form, each node's hoop factor `T_ip` (eq 116).
 struct Stencil {
     nodes: Vec<(usize, f64, [f64; 3], [f64; 3])>,
     inv_d: [f64; 3],
+    hoop: Vec<f64>,
+}
+
+/// The axisymmetric form's radial weight and derivative of the node at `x_i` for a particle
+/// at radius `r` whose domain has half-width `l` (uGIMP, cpGIMP): eqs 112 and 115 along r,
+/// `1 / (2 l r) int_{r-l}^{r+l} N_i(u) u du` and the same of `N_i'`, with `N_i` the linear hat
+/// of the node. Integrated numerically (two-point Gauss-Legendre between the hat's kinks,
+/// exact for these quadratics), not from a closed form.
+fn radial_weight(h: f64, x_i: f64, r: f64, l: f64) -> (f64, f64) {
+    let hat = |u: f64| {
+        (
+            (1.0 - (u - x_i).abs() / h).max(0.0),
+            -(u - x_i).signum() / h,
+        )
+    };
+    let mut cuts = vec![r - l, r + l];
+    for k in [x_i - h, x_i, x_i + h] {
+        if k > r - l && k < r + l {
+            cuts.push(k);
+        }
+    }
+    cuts.sort_by(f64::total_cmp);
+    let g = 0.5 / 3f64.sqrt();
+    let (mut w, mut dw) = (0.0, 0.0);
+    for piece in cuts.windows(2) {
+        let (a, b) = (piece[0], piece[1]);
+        for u in [0.5 * (a + b) - g * (b - a), 0.5 * (a + b) + g * (b - a)] {
+            let (n, dn) = hat(u);
+            w += 0.5 * (b - a) * n * u;
+            if n > 0.0 {
+                dw += 0.5 * (b - a) * dn * u;
+            }
+        }
+    }
+    (w / (2.0 * l * r), dw / (2.0 * l * r))
 }
 
 fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
@@ -143,6 +186,8 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
     // Per axis: the nodes within reach (two cells each side covers every family).
     let mut axis: Vec<Vec<(usize, f64, f64, f64)>> = Vec::new();
     let mut inv_d = [0.0; 3];
+    // Axisymmetric: the radial axis's hoop factors `T = S_cart / r_p` per node of `axis[0]`.
+    let mut hoop_r = Vec::new();
     for a in 0..d {
         let s = (x[a] - m.origin[a]) / m.h;
         let first = (s.floor() as i64 - 2).max(0) as usize;
@@ -151,10 +196,41 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
         let mut d2 = 0.0;
         for i in first..=last {
             let dx = m.origin[a] + i as f64 * m.h - x[a];
-            let (w, dw) = weight_1d(m, -dx, lp[a]);
-            if w != 0.0 {
+            let (mut w, mut dw) = weight_1d(m, -dx, lp[a]);
+            // Axisymmetric, along r: the r-weighted weights of a finite domain (a point's are
+            // the Cartesian ones), and the hoop factor T = S_cart / r_p (eq 116).
+            let mut t = 0.0;
+            if m.axisymmetric && a == 0 {
+                let r = x[0];
+                assert!(
+                    r > m.lp,
+                    "the reference has no particle nearer the axis than l_p"
+                );
+                t = w / r;
+                if matches!(m.shape, ShapeFunction::Gimp | ShapeFunction::CpGimp) {
+                    (w, dw) = radial_weight(m.h, m.origin[0] + i as f64 * m.h, r, lp[0]);
+                }
+            }
+            if w != 0.0 || t != 0.0 {
                 list.push((i, w, dw, dx));
+                if a == 0 {
+                    hoop_r.push(t);
+                }
                 d2 += w * dx * dx;
+            }
+        }
+        if m.axisymmetric
+            && a == 0
+            && matches!(m.shape, ShapeFunction::Gimp | ShapeFunction::CpGimp)
+        {
+            // The r-weighted weights of a finite domain centre off the particle: APIC's
+            // offsets are taken from their centroid `sum_i S_ip x_i`, about which they still
+            // sum to zero (the affine transfer adds no momentum).
+            let shift: f64 = list.iter().map(|&(_, w, _, dx)| w * dx).sum();
+            d2 = 0.0;
+            for (_, w, _, dx) in list.iter_mut() {
+                *dx -= shift;
+                d2 += *w * *dx * *dx;
             }
         }
         inv_d[a] = if d2 > m.h * m.h * f64::EPSILON {
@@ -165,6 +241,7 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
         axis.push(list);
     }
     let mut nodes = Vec::new();
+    let mut hoop = Vec::new();
     let layers = if d == 3 {
         axis[2].clone()
     } else {
@@ -172,14 +249,15 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
     };
     for &(k, wz, dwz, dz) in &layers {
         for &(j, wy, dwy, dy) in &axis[1] {
-            for &(i, wx, dwx, dx) in &axis[0] {
+            for (&(i, wx, dwx, dx), &tx) in axis[0].iter().zip(&hoop_r) {
                 let flat = i + m.nodes[0] * (j + m.nodes[1] * k);
                 let g = [dwx * wy * wz, wx * dwy * wz, wx * wy * dwz];
                 nodes.push((flat, wx * wy * wz, g, [dx, dy, dz]));
+                hoop.push(tx * wy * wz);
             }
         }
     }
-    Stencil { nodes, inv_d }
+    Stencil { nodes, inv_d, hoop }
 }
 
 /// Whether APIC keeps `C_p` itself, the velocity gradient of the stress update, rather than
@@ -207,9 +285,13 @@ fn affine(m: &Method, p: &Particle, st: &Stencil, dx: &[f64; 3]) -> [f64; 3] {
 fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force: bool) {
     for p in ps {
         let st = stencil(m, &p.x, &p.lp);
-        for &(i, s, g, dx) in &st.nodes {
+        for (&(i, s, g, dx), &t) in st.nodes.iter().zip(&st.hoop) {
             let c = affine(m, p, &st, &dx);
             let n = &mut grid[i];
+            if force && m.axisymmetric {
+                // The hoop term of the radial force (eq 120).
+                n.f[0] -= p.m * p.tau[2][2] * t;
+            }
             for a in 0..m.d {
                 if momentum {
                     n.p[a] += s * p.m * (p.v[a] + c[a]);
@@ -294,11 +376,30 @@ fn update_stress(
             p.h[r][c] += q[r][c] + qh[r][c];
         }
     }
+    if m.axisymmetric {
+        // The hoop stretch: F_thetatheta <- exp(v_r / r dt) F_thetatheta, the rate
+        // v_r / r = sum_i v_r,i T_ip (eqs 113, 116), its exponential by the same series.
+        let rate: f64 = st
+            .nodes
+            .iter()
+            .zip(&st.hoop)
+            .map(|(&(i, ..), &t)| vel(i)[0] * t)
+            .sum();
+        let a = rate * dt;
+        let mut q = a / n as f64;
+        for k in (1..n).rev() {
+            q = (a + a * q) / k as f64;
+        }
+        p.hzz += q + q * p.hzz;
+    }
     if m.linear_elastic {
-        p.tau = corotated_linear_elastic(m, &p.h);
+        p.tau = corotated_linear_elastic(m, &p.h, p.hzz);
         return;
     }
-    let ln_j = jacobian_minus_one(d, &p.h).ln_1p();
+    // J - 1 with the out-of-plane stretch (1 in plane strain).
+    let j2 = jacobian_minus_one(d, &p.h);
+    let jm1 = if d == 2 { j2 + p.hzz + j2 * p.hzz } else { j2 };
+    let ln_j = jm1.ln_1p();
     let mut tau = [[0.0; 3]; 3];
     for a in 0..d {
         for b in 0..d {
@@ -308,15 +409,17 @@ fn update_stress(
         tau[a][a] += m.lambda * ln_j / m.rho0;
     }
     if d == 2 {
-        tau[2][2] = m.lambda * ln_j / m.rho0; // plane strain: F_zz = 1
+        // B_zz - 1 = F_zz^2 - 1: 0 in plane strain, the hoop's when axisymmetric.
+        tau[2][2] = (m.mu * p.hzz * (2.0 + p.hzz) + m.lambda * ln_j) / m.rho0;
     }
     p.tau = tau;
 }
 
 /// Corotated linear elasticity: `F = R U` (polar decomposition), `e = U - I`,
-/// `tau / rho0 = J R (lambda tr(e) I + 2 mu e) R^T / rho0`; in plane strain `e_zz = 0` and
-/// `tau_zz = J lambda tr(e)` (R turns in the plane).
-fn corotated_linear_elastic(m: &Method, h: &Mat) -> Mat {
+/// `tau / rho0 = J R (lambda tr(e) I + 2 mu e) R^T / rho0`; in 2D R turns in the plane and
+/// the out-of-plane strain is `e_zz = hzz` (0 in plane strain, the hoop strain when
+/// axisymmetric), `tau_zz = J (lambda tr(e) + 2 mu e_zz)`.
+fn corotated_linear_elastic(m: &Method, h: &Mat, hzz: f64) -> Mat {
     let d = m.d;
     let mut f = *h;
     for a in 0..d {
@@ -346,7 +449,7 @@ fn corotated_linear_elastic(m: &Method, h: &Mat) -> Mat {
     }
     let u = matmul(d, &rt, &f);
     let mut e = [[0.0; 3]; 3];
-    let mut tr = 0.0;
+    let mut tr = if d == 2 { hzz } else { 0.0 };
     for a in 0..d {
         for b in 0..d {
             e[a][b] = 0.5 * (u[a][b] + u[b][a]) - if a == b { 1.0 } else { 0.0 };
@@ -360,7 +463,8 @@ fn corotated_linear_elastic(m: &Method, h: &Mat) -> Mat {
         }
         sigma[a][a] += m.lambda * tr;
     }
-    let j = 1.0 + jacobian_minus_one(d, h);
+    let j2 = jacobian_minus_one(d, h);
+    let j = 1.0 + if d == 2 { j2 + hzz + j2 * hzz } else { j2 };
     let rotated = matmul(d, &matmul(d, &r, &sigma), &rt);
     let mut tau = [[0.0; 3]; 3];
     for a in 0..d {
@@ -369,7 +473,7 @@ fn corotated_linear_elastic(m: &Method, h: &Mat) -> Mat {
         }
     }
     if d == 2 {
-        tau[2][2] = j * m.lambda * tr / m.rho0;
+        tau[2][2] = j * (m.lambda * tr + 2.0 * m.mu * hzz) / m.rho0;
     }
     tau
 }
@@ -574,6 +678,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
     });
     let method = Method {
         d,
+        axisymmetric: def.dimension == Dimension::Axisymmetric2D,
         shape: def.shape,
         order: def.update_order,
         apic: def.transfer == Transfer::Apic,
@@ -625,6 +730,9 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
                 p.tau[r][c] = v.stress[k][i] as f64;
                 p.tau[c][r] = p.tau[r][c];
             }
+            if !v.hoop.is_empty() {
+                p.hzz = v.hoop[i] as f64;
+            }
             for (k, column) in v.damping.iter().enumerate() {
                 if !column.is_empty() {
                     p.alpha[k] = column[i] as f64;
@@ -637,7 +745,8 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
 }
 
 /// Each particle column as numbers, named: positions, velocities, `H`, stress, `B_p`.
-fn columns(d: usize, apic: bool, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
+fn columns(m: &Method, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
+    let (d, apic) = (m.d, m.apic);
     let mut out = Vec::new();
     for a in 0..d {
         out.push((format!("x{a}"), ps.iter().map(|p| p.x[a]).collect()));
@@ -655,6 +764,9 @@ fn columns(d: usize, apic: bool, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
             format!("tau{r}{c}"),
             ps.iter().map(|p| p.tau[r][c]).collect(),
         ));
+    }
+    if m.axisymmetric {
+        out.push(("hoop".to_string(), ps.iter().map(|p| p.hzz).collect()));
     }
     out
 }
@@ -690,7 +802,6 @@ fn check(
     simd: Simd,
     effects: bool,
 ) {
-    #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
     let mut def = WorldDef {
         shape,
         update_order: order,
@@ -702,6 +813,11 @@ fn check(
     #[cfg(feature = "effects")]
     if effects {
         def.effects = declared_effects();
+    }
+    if dim == Dimension::Axisymmetric2D {
+        // The axis r = 0 on the lower x face's wall plane (the block stays clear of it).
+        def.origin.x = -(shape.margin_cells() as Real) * def.cell_size;
+        def.faces[Face::XMin as usize] = Boundary::Slip;
     }
     let mut buf = buffer_for(&def);
     let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
@@ -737,15 +853,14 @@ fn check(
     }
     let dt = world.stable_dt();
     let (method, mut ps) = read(&world, material);
-    let d = method.d;
-    let before = columns(d, method.apic, &ps);
+    let before = columns(&method, &ps);
     let report = world.step_with_simd(dt, simd).unwrap();
     assert_eq!(report.substeps, 1);
     assert_eq!(report.frozen, 0);
     substep(&method, &mut ps, dt as f64);
-    let reference = columns(d, method.apic, &ps);
+    let reference = columns(&method, &ps);
     let (_, kernel) = read(&world, material);
-    let kernel = columns(d, method.apic, &kernel);
+    let kernel = columns(&method, &kernel);
     let eps = Real::EPSILON as f64;
     let max = |c: &mut dyn Iterator<Item = f64>| c.fold(0.0f64, |m, x| m.max(x.abs()));
     let largest = |prefix: char| {
@@ -757,6 +872,7 @@ fn check(
     // the velocity change, `|v_i| h` for `B_p`; the stress carries the material's `c^2 = (lambda
     // + 2 mu) / rho0` times the increment's.
     let (v_max, tau_max, h) = (largest('v'), largest('t'), method.h);
+    let r_min = ps.iter().fold(f64::INFINITY, |r, p| r.min(p.x[0]));
     let c2 = (method.lambda + 2.0 * method.mu) / method.rho0;
     let dt = dt as f64;
     for ((name, old), ((_, r), (_, k))) in before.iter().zip(reference.iter().zip(&kernel)) {
@@ -770,6 +886,8 @@ fn check(
             // B_p sums v_i (x_i - x_p); C_p in its gradient form sums v_i G_ip.
             b'B' if gradient_affine(&method) => v_max / h,
             b'B' => v_max * h,
+            // The hoop rate sums v_r,i T_ip, T_ip up to 1 / r_p.
+            b'h' => v_max * dt / r_min,
             _ => 0.0,
         };
         // The reference's own round-off where it exceeds the kernel's: its corotated strain is
@@ -852,6 +970,40 @@ fn declared_effects_step_as_the_reference_does() {
                 for transfer in [Transfer::Flip, Transfer::Apic] {
                     for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
                         check(dim, shape, order, transfer, &soft_neo_hookean(), simd, true);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The axisymmetric form (seeds/000 section 7: r-weighted weights, the hoop stretch and the
+/// hoop term of the radial force) with every shape, order and both materials, FLIP and APIC,
+/// in every instance of the passes this CPU runs, agrees with the reference step to
+/// round-off.
+#[cfg(feature = "effects")]
+#[test]
+fn axisymmetric_form_steps_as_the_reference_does() {
+    let materials = [
+        soft_neo_hookean(),
+        MaterialDef {
+            model: MaterialModel::LinearElastic,
+            ..soft_neo_hookean()
+        },
+    ];
+    for shape in [
+        ShapeFunction::Linear,
+        ShapeFunction::Gimp,
+        ShapeFunction::CpGimp,
+        ShapeFunction::QuadraticBspline,
+        ShapeFunction::CubicBspline,
+    ] {
+        for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+            for transfer in [Transfer::Flip, Transfer::Apic] {
+                for material in &materials {
+                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                        let dim = Dimension::Axisymmetric2D;
+                        check(dim, shape, order, transfer, material, simd, false);
                     }
                 }
             }
