@@ -10,11 +10,12 @@
 //! and the hoop term of the radial force, eq 120) and 3D; linear, uGIMP, cpGIMP, quadratic
 //! and cubic B-spline shape functions; USF, USL and MUSL; FLIP (with its PIC fraction) and
 //! APIC (with linear weights in its gradient form); the neo-Hookean and corotated linear
-//! elastic materials; gravity; and of the declared effects the particle forces (eq 20), a
-//! body force and damping (eqs 46-52 and 107: grid and particle rates, each a global value
-//! plus the particle's own). Scenes stay clear of the walls and the axis (their nodes carry no
-//! mass), so the wall treatment and particles nearer the axis than their half-width are not
-//! part of it; nor are the damping thermostat, tractions, heat conduction and diffusion yet.
+//! elastic materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
+//! wall's plane mirroring those inside it, particles stopped at the plane); and of the
+//! declared effects the particle forces (eq 20), a body force and damping (eqs 46-52 and 107:
+//! grid and particle rates, each a global value plus the particle's own). Not in it yet:
+//! particles nearer the axis than their half-width, the damping thermostat, tractions, heat
+//! conduction and diffusion.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -87,6 +88,11 @@ struct Method {
     origin: [f64; 3],
     /// Nodes per axis.
     nodes: [usize; 3],
+    /// The boundary of each axis's lower and upper face.
+    faces: [[Boundary; 2]; 3],
+    /// The layer of cells at each face that particles may not enter; a wall acts at its inner
+    /// plane.
+    margin: usize,
     /// Gravity plus the declared body force.
     gravity: [f64; 3],
     /// The particles carry forces `F_p` (eq 20).
@@ -312,13 +318,122 @@ fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force
     }
 }
 
-/// Grid update (eqs 24, 28): `v_i = p_i / m_i`, `a_i = f_i / m_i + g` on nodes above the
-/// mass cutoff, zero on the others.
-fn grid_velocity(m: &Method, grid: &mut [Node]) {
-    for n in grid.iter_mut() {
+/// Calls `f` with the flat index of every node whose index along `axis` is `layer`.
+fn for_each_node_in_plane(m: &Method, axis: usize, layer: usize, mut f: impl FnMut(usize)) {
+    for k in 0..m.nodes[2] {
+        for j in 0..m.nodes[1] {
+            for i in 0..m.nodes[0] {
+                if [i, j, k][axis] == layer {
+                    f(i + m.nodes[0] * (j + m.nodes[1] * k));
+                }
+            }
+        }
+    }
+}
+
+/// The walls. A stick or slip face acts at the plane `margin` cells inside the grid face: the
+/// nodes from the grid face to that plane are its wall nodes, and the wall is a plane of
+/// symmetry for the material near it. Calls `f(ghost, image, signs)` for each node past the
+/// plane and its mirror image inside it, faces in the order x low, x high, y low, ... (or the
+/// reverse): a vector's component `a` at the ghost is `signs[a]` times the image's. A slip wall
+/// flips the normal component (the image slides with the material), a stick wall every
+/// component (zero velocity on the plane); the axisymmetric axis mirrors as a slip wall.
+fn for_each_wall_image(m: &Method, reversed: bool, mut f: impl FnMut(usize, usize, [f64; 3])) {
+    let faces: Vec<usize> = if reversed {
+        (0..2 * m.d).rev().collect()
+    } else {
+        (0..2 * m.d).collect()
+    };
+    let stride = [1, m.nodes[0], m.nodes[0] * m.nodes[1]];
+    for face in faces {
+        let (axis, side) = (face / 2, face % 2);
+        let stick = match m.faces[axis][side] {
+            Boundary::Open => continue,
+            Boundary::Stick => !(m.axisymmetric && axis == 0 && side == 0),
+            Boundary::Slip => false,
+        };
+        let signs = core::array::from_fn(|a| if stick || a == axis { -1.0 } else { 1.0 });
+        let (n, margin) = (m.nodes[axis], m.margin);
+        for k in 1..=margin {
+            let (ghost, image) = if side == 0 {
+                (margin - k, margin + k)
+            } else {
+                (n - 1 - margin + k, n - 1 - margin - k)
+            };
+            if image >= n {
+                continue;
+            }
+            for_each_node_in_plane(m, axis, ghost, |i| {
+                let j = if side == 0 {
+                    i + 2 * k * stride[axis]
+                } else {
+                    i - 2 * k * stride[axis]
+                };
+                f(i, j, signs)
+            });
+        }
+    }
+}
+
+/// Calls `f(node, fixed)` for every wall node of each stick or slip face, `fixed[a]` saying
+/// which velocity components the wall holds at zero: all at a stick wall, the normal one at a
+/// slip wall.
+fn for_each_wall_node(m: &Method, mut f: impl FnMut(usize, [bool; 3])) {
+    for axis in 0..m.d {
+        for side in 0..2 {
+            let fixed: [bool; 3] = match m.faces[axis][side] {
+                Boundary::Open => continue,
+                Boundary::Stick => [true; 3],
+                Boundary::Slip => core::array::from_fn(|a| a == axis),
+            };
+            let n = m.nodes[axis];
+            let layers = if side == 0 {
+                0..m.margin + 1
+            } else {
+                n - 1 - m.margin..n
+            };
+            for layer in layers {
+                for_each_node_in_plane(m, axis, layer, |i| f(i, fixed));
+            }
+        }
+    }
+}
+
+/// Moves what the particles put on each node past a wall plane to its image (a vector's
+/// components times the face's signs, the mass as it is).
+fn fold_wall_images(m: &Method, grid: &mut [Node], field: fn(&mut Node) -> &mut [f64; 3]) {
+    for_each_wall_image(m, false, |ghost, image, signs| {
+        let v = *field(&mut grid[ghost]);
+        *field(&mut grid[ghost]) = [0.0; 3];
         for a in 0..m.d {
-            n.v[a] = if n.m > m.mass_cutoff {
-                n.p[a] / n.m
+            field(&mut grid[image])[a] += signs[a] * v[a];
+        }
+    });
+}
+
+/// Each node past a wall plane takes its image's value of a vector, times the face's signs.
+fn read_wall_images(m: &Method, grid: &mut [Node], field: fn(&mut Node) -> &mut [f64; 3]) {
+    for_each_wall_image(m, true, |ghost, image, signs| {
+        let v = *field(&mut grid[image]);
+        for a in 0..m.d {
+            field(&mut grid[ghost])[a] = signs[a] * v[a];
+        }
+    });
+}
+
+/// `field / m_i` on nodes above the mass cutoff plus `add`, zero on the others.
+fn divide_by_mass(
+    m: &Method,
+    grid: &mut [Node],
+    field: fn(&mut Node) -> &mut [f64; 3],
+    add: [f64; 3],
+) {
+    for n in grid.iter_mut() {
+        let mass = n.m;
+        let v = field(n);
+        for a in 0..m.d {
+            v[a] = if mass > m.mass_cutoff {
+                v[a] / mass + add[a]
             } else {
                 0.0
             };
@@ -326,16 +441,51 @@ fn grid_velocity(m: &Method, grid: &mut [Node]) {
     }
 }
 
-fn grid_acceleration(m: &Method, grid: &mut [Node]) {
+/// Grid update (eq 28): `v_i = p_i / m_i` on nodes above the mass cutoff, zero on the others,
+/// with the nodes past a wall plane folded onto their images first and reading them after.
+fn grid_velocity(m: &Method, grid: &mut [Node]) {
+    for_each_wall_image(m, false, |ghost, image, _| {
+        let mass = grid[ghost].m;
+        grid[ghost].m = 0.0;
+        grid[image].m += mass;
+    });
+    fold_wall_images(m, grid, |n| &mut n.p);
     for n in grid.iter_mut() {
-        for a in 0..m.d {
-            n.a[a] = if n.m > m.mass_cutoff {
-                n.f[a] / n.m + m.gravity[a]
-            } else {
-                0.0
-            };
-        }
+        n.v = n.p;
     }
+    divide_by_mass(m, grid, |n| &mut n.v, [0.0; 3]);
+    read_wall_images(m, grid, |n| &mut n.v);
+}
+
+/// Grid update (eqs 22, 24): `a_i = f_i / m_i + g`, and at the walls the reaction that holds
+/// the updated velocity's fixed components at zero, `a_i = -v_i / dt`.
+fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
+    fold_wall_images(m, grid, |n| &mut n.f);
+    for n in grid.iter_mut() {
+        n.a = n.f;
+    }
+    divide_by_mass(m, grid, |n| &mut n.a, m.gravity);
+    for_each_wall_node(m, |i, fixed| {
+        for a in 0..m.d {
+            if fixed[a] {
+                grid[i].a[a] = -grid[i].v[a] / dt;
+            }
+        }
+    });
+    read_wall_images(m, grid, |n| &mut n.a);
+}
+
+/// A velocity field with the walls applied (USF's lagged velocity, MUSL's re-mapped one): the
+/// fixed components zero on the wall nodes, then the images read past the planes.
+fn constrain(m: &Method, grid: &mut [Node], field: fn(&mut Node) -> &mut [f64; 3]) {
+    for_each_wall_node(m, |i, fixed| {
+        for a in 0..m.d {
+            if fixed[a] {
+                field(&mut grid[i])[a] = 0.0;
+            }
+        }
+    });
+    read_wall_images(m, grid, field);
 }
 
 /// Stress update (eqs 26-27) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
@@ -566,6 +716,21 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
                     (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt;
                 p.v[a] += a_gp[a] * dt - inversion - damp * dt;
             }
+            // A particle that left the admissible region is put on the plane it crossed; a
+            // wall also stops its outward velocity (through an open face it escapes).
+            let s = (p.x[a] - m.origin[a]) / m.h;
+            let (lo, hi) = (m.margin as f64, (m.nodes[a] - 1 - m.margin) as f64);
+            let (out, plane, outward) = if s < lo {
+                (0, lo, p.v[a] < 0.0)
+            } else if s > hi {
+                (1, hi, p.v[a] > 0.0)
+            } else {
+                continue;
+            };
+            p.x[a] = m.origin[a] + plane * m.h;
+            if m.faces[a][out] != Boundary::Open && outward {
+                p.v[a] = 0.0;
+            }
         }
         if m.apic && !gradient_affine(m) {
             p.b = b;
@@ -594,24 +759,29 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
         UpdateOrder::Usl => {
             scatter(m, ps, &mut grid, true, true);
             grid_velocity(m, &mut grid);
-            grid_acceleration(m, &mut grid);
+            grid_acceleration(m, &mut grid, dt);
             particles(m, ps, &grid, dt, true);
         }
         UpdateOrder::Usf => {
             scatter(m, ps, &mut grid, true, false);
             grid_velocity(m, &mut grid);
+            // The stress from the lagged velocity with the walls applied.
+            for n in grid.iter_mut() {
+                n.remap = n.v;
+            }
+            constrain(m, &mut grid, |n| &mut n.remap);
             for p in ps.iter_mut() {
                 let st = stencil(m, &p.x, &p.lp);
-                update_stress(m, p, &st, |i| grid[i].v, dt);
+                update_stress(m, p, &st, |i| grid[i].remap, dt);
             }
             scatter(m, ps, &mut grid, false, true);
-            grid_acceleration(m, &mut grid);
+            grid_acceleration(m, &mut grid, dt);
             particles(m, ps, &grid, dt, false);
         }
         UpdateOrder::Musl => {
             scatter(m, ps, &mut grid, true, true);
             grid_velocity(m, &mut grid);
-            grid_acceleration(m, &mut grid);
+            grid_acceleration(m, &mut grid, dt);
             let start: Vec<[f64; 3]> = ps.iter().map(|p| p.x).collect();
             particles(m, ps, &grid, dt, false);
             // Re-map the new momenta with the stencils of the start of the step, then the
@@ -630,15 +800,9 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
                     }
                 }
             }
-            for n in grid.iter_mut() {
-                for a in 0..m.d {
-                    n.remap[a] = if n.m > m.mass_cutoff {
-                        n.remap[a] / n.m
-                    } else {
-                        0.0
-                    };
-                }
-            }
+            fold_wall_images(m, &mut grid, |n| &mut n.remap);
+            divide_by_mass(m, &mut grid, |n| &mut n.remap, [0.0; 3]);
+            constrain(m, &mut grid, |n| &mut n.remap);
             for (p, x0) in ps.iter_mut().zip(&start) {
                 let st = stencil(m, x0, &p.lp);
                 update_stress(m, p, &st, |i| grid[i].remap, dt);
@@ -690,6 +854,8 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             def.origin.z as f64,
         ],
         nodes: core::array::from_fn(|a| if a < d { def.cells[a] as usize + 1 } else { 1 }),
+        faces: core::array::from_fn(|a| [def.faces[2 * a], def.faces[2 * a + 1]]),
+        margin: def.shape.margin_cells() as usize,
         gravity: [
             (def.gravity.x + body.x) as f64,
             (def.gravity.y + body.y) as f64,
@@ -789,10 +955,22 @@ fn declared_effects() -> Effects {
     }
 }
 
+/// What [`check`]'s block meets besides gravity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scene {
+    /// Free space.
+    Free,
+    /// The effects of [`declared_effects`], with forces and damping rates that differ from
+    /// particle to particle.
+    #[cfg_attr(not(feature = "effects"), allow(dead_code))]
+    Effects,
+    /// A stick floor and a slip wall (x high) 0.3 cells from the block, so that its
+    /// particles' stencils reach the wall nodes and the nodes past the walls' planes.
+    Walls,
+}
+
 /// Steps a deforming, rotating block (after a few kernel steps, so it carries stress) once
-/// with the kernel in instance `simd` and once with the reference, and checks every column;
-/// with `effects`, with the effects of [`declared_effects`] declared, and forces and damping
-/// rates that differ from particle to particle.
+/// with the kernel in instance `simd` and once with the reference, and checks every column.
 fn check(
     dim: Dimension,
     shape: ShapeFunction,
@@ -800,7 +978,7 @@ fn check(
     transfer: Transfer,
     material: &MaterialDef,
     simd: Simd,
-    effects: bool,
+    scene: Scene,
 ) {
     let mut def = WorldDef {
         shape,
@@ -811,8 +989,17 @@ fn check(
         ..free_space(dim, 16, 1.0 / 16.0)
     };
     #[cfg(feature = "effects")]
-    if effects {
+    if scene == Scene::Effects {
         def.effects = declared_effects();
+    }
+    if scene == Scene::Walls {
+        // The block spans 0.35..0.65 m on each axis: the floor's plane 0.3 cells below it, the
+        // slip wall's 0.3 cells beyond it.
+        let (h, margin) = (def.cell_size, shape.margin_cells() as Real);
+        def.origin.y = 0.35 - 0.3 * h - margin * h;
+        def.origin.x = 0.65 + 0.3 * h - (def.cells[0] as Real - margin) * h;
+        def.faces[Face::YMin as usize] = Boundary::Stick;
+        def.faces[Face::XMax as usize] = Boundary::Slip;
     }
     if dim == Dimension::Axisymmetric2D {
         // The axis r = 0 on the lower x face's wall plane (the block stays clear of it).
@@ -830,7 +1017,7 @@ fn check(
             0.2 * dz - 0.1 * dx,
         ]
     });
-    if effects {
+    if scene == Scene::Effects {
         // Forces of the size of the particles' weights, and rates of 0 to 0.8 /s, varying
         // from particle to particle.
         let mass = world.particles().mass.to_vec();
@@ -908,7 +1095,7 @@ fn check(
         let bound = 64.0 * eps * (size + change + terms) + own;
         assert!(
             worst <= bound,
-            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?} (effects: {effects}): \
+            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?} ({scene:?}): \
              column {name} differs from the reference by {worst:e} (bound {bound:e}, column \
              size {size:e}, change {change:e})",
             material.model
@@ -949,7 +1136,7 @@ fn every_instance_steps_as_the_reference_does() {
                     }
                     for material in &materials {
                         for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
-                            check(dim, shape, order, transfer, material, simd, false);
+                            check(dim, shape, order, transfer, material, simd, Scene::Free);
                         }
                     }
                 }
@@ -969,7 +1156,15 @@ fn declared_effects_step_as_the_reference_does() {
             for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
                 for transfer in [Transfer::Flip, Transfer::Apic] {
                     for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
-                        check(dim, shape, order, transfer, &soft_neo_hookean(), simd, true);
+                        check(
+                            dim,
+                            shape,
+                            order,
+                            transfer,
+                            &soft_neo_hookean(),
+                            simd,
+                            Scene::Effects,
+                        );
                     }
                 }
             }
@@ -1003,7 +1198,37 @@ fn axisymmetric_form_steps_as_the_reference_does() {
                 for material in &materials {
                     for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
                         let dim = Dimension::Axisymmetric2D;
-                        check(dim, shape, order, transfer, material, simd, false);
+                        check(dim, shape, order, transfer, material, simd, Scene::Free);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The walls (a stick floor and a slip wall, the block's stencils reaching their wall nodes
+/// and the nodes past their planes) with every shape, order and transfer, in 2D and 3D, in
+/// every instance of the passes this CPU runs, agree with the reference step to round-off.
+#[test]
+fn walls_act_as_the_reference_does() {
+    let transfers: &[Transfer] = if cfg!(feature = "effects") {
+        &[Transfer::Flip, Transfer::Apic]
+    } else {
+        &[Transfer::Flip]
+    };
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in [
+            ShapeFunction::Linear,
+            ShapeFunction::Gimp,
+            ShapeFunction::CpGimp,
+            ShapeFunction::QuadraticBspline,
+            ShapeFunction::CubicBspline,
+        ] {
+            for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+                for &transfer in transfers {
+                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                        let material = soft_neo_hookean();
+                        check(dim, shape, order, transfer, &material, simd, Scene::Walls);
                     }
                 }
             }
