@@ -12,10 +12,10 @@
 //! APIC (with linear weights in its gradient form); the neo-Hookean and corotated linear
 //! elastic materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
-//! declared effects the particle forces (eq 20), a body force and damping (eqs 46-52 and 107:
-//! grid and particle rates, each a global value plus the particle's own). Not in it yet:
-//! particles nearer the axis than their half-width, the damping thermostat, tractions, heat
-//! conduction and diffusion.
+//! declared effects the particle forces (eq 20), tractions (eq 21), a body force and damping
+//! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own).
+//! Not in it yet: particles nearer the axis than their half-width, the damping thermostat,
+//! heat conduction and diffusion.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -99,6 +99,10 @@ struct Method {
     forces: bool,
     /// Damping (eq 47): the substep's global grid and particle rates, 1/s.
     damping: Option<[f64; 2]>,
+    /// Tractions (eq 21): the particle, the face of its domain (x low, x high, y low, ...) and
+    /// the traction, Pa. The world's table is not readable through the API: the test that
+    /// adds them sets them here.
+    tractions: Vec<(usize, usize, [f64; 3])>,
     exp_terms: usize,
     /// uGIMP's particle half-width `h / (2 n)`.
     lp: f64,
@@ -488,6 +492,32 @@ fn constrain(m: &Method, grid: &mut [Node], field: fn(&mut Node) -> &mut [f64; 3
     read_wall_images(m, grid, field);
 }
 
+/// Adds the tractions to the nodal force (eq 21): each loads one face of its particle's
+/// undeformed domain, of side `2 l_p`, so its resultant is `T A` with `A = (2 l_p)^(D-1)` (per
+/// radian when axisymmetric: `2 l_p (r_p -+ l_p)` on the faces of constant r, `2 l_p r_p` on
+/// the others), spread over the nodes with the particle's weights, `f_iT = S_ip T A`.
+fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
+    let area = (1..m.d).fold(1.0, |a, _| a * 2.0 * m.lp);
+    for &(i, face, t) in &m.tractions {
+        let p = &ps[i];
+        let area = if m.axisymmetric {
+            let (r, l) = (p.x[0], m.lp);
+            area * match face {
+                0 => (r - l).max(0.0),
+                1 => r + l,
+                _ => r,
+            }
+        } else {
+            area
+        };
+        for &(node, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
+            for a in 0..m.d {
+                grid[node].f[a] += s * t[a] * area;
+            }
+        }
+    }
+}
+
 /// Stress update (eqs 26-27) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
 /// `dF = exp(L dt)` to `exp_terms` terms, `H <- H + Q + Q H` with `Q = dF - I`, and the
 /// neo-Hookean `tau / rho0 = (mu (B - I) + lambda ln J I) / rho0`. APIC with linear weights
@@ -758,6 +788,7 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
     match m.order {
         UpdateOrder::Usl => {
             scatter(m, ps, &mut grid, true, true);
+            tractions(m, ps, &mut grid);
             grid_velocity(m, &mut grid);
             grid_acceleration(m, &mut grid, dt);
             particles(m, ps, &grid, dt, true);
@@ -775,11 +806,13 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
                 update_stress(m, p, &st, |i| grid[i].remap, dt);
             }
             scatter(m, ps, &mut grid, false, true);
+            tractions(m, ps, &mut grid);
             grid_acceleration(m, &mut grid, dt);
             particles(m, ps, &grid, dt, false);
         }
         UpdateOrder::Musl => {
             scatter(m, ps, &mut grid, true, true);
+            tractions(m, ps, &mut grid);
             grid_velocity(m, &mut grid);
             grid_acceleration(m, &mut grid, dt);
             let start: Vec<[f64; 3]> = ps.iter().map(|p| p.x).collect();
@@ -863,6 +896,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         ],
         forces: fx.particle_forces,
         damping,
+        tractions: Vec::new(),
         exp_terms: def.exp_terms as usize,
         lp: def.cell_size as f64 / (2.0 * def.particles_per_cell as f64),
         linear_elastic: material.model == MaterialModel::LinearElastic,
@@ -951,6 +985,7 @@ fn declared_effects() -> Effects {
         particle_forces: true,
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
         body_force_scale: Schedule::constant(1.0),
+        traction_capacity: 64,
         ..Effects::NONE
     }
 }
@@ -1034,12 +1069,30 @@ fn check(
         };
         world.set_particle_damping(0, &rate(0), &rate(1)).unwrap();
     }
+    // Tractions on two faces of two groups of particles (of the size of their weights).
+    #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
+    let mut traction_list = Vec::new();
+    #[cfg(feature = "effects")]
+    if scene == Scene::Effects {
+        let loads = [
+            (0..12, mpm_gimp::Face::XMax, [900.0, -400.0, 250.0]),
+            (20..30, mpm_gimp::Face::YMin, [-300.0, 1200.0, -500.0]),
+        ];
+        for (range, face, t) in loads {
+            let v = mpm_gimp::Vec3::new(t[0], t[1], t[2]);
+            world.add_tractions(range.clone(), face, v).unwrap();
+            for i in range {
+                traction_list.push((i as usize, face as usize, t.map(|x| x as f64)));
+            }
+        }
+    }
     let dt = world.stable_dt();
     for _ in 0..4 {
         world.step_with_simd(dt, simd).unwrap();
     }
     let dt = world.stable_dt();
-    let (method, mut ps) = read(&world, material);
+    let (mut method, mut ps) = read(&world, material);
+    method.tractions = traction_list;
     let before = columns(&method, &ps);
     let report = world.step_with_simd(dt, simd).unwrap();
     assert_eq!(report.substeps, 1);
