@@ -12,10 +12,11 @@
 //! APIC (with linear weights in its gradient form); the neo-Hookean and corotated linear
 //! elastic materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
-//! declared effects the particle forces (eq 20), tractions (eq 21), a body force and damping
-//! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own).
-//! Not in it yet: particles nearer the axis than their half-width, the damping thermostat,
-//! heat conduction and diffusion.
+//! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
+//! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
+//! and heat conduction and diffusion (sections 8 and 9, with sources and fixed faces). Not in
+//! it yet: particles nearer the axis than their half-width, the damping thermostat and flux
+//! faces.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -32,11 +33,11 @@
 use crate::common::{buffer_for, free_space, moving_block, soft_neo_hookean};
 use mpm_gimp::simd::Simd;
 use mpm_gimp::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, Real, ShapeFunction, Transfer,
-    UpdateOrder, World, WorldDef,
+    Boundary, Dimension, Face, MaterialDef, MaterialModel, Real, ScalarBoundary, ShapeFunction,
+    Transfer, UpdateOrder, World, WorldDef,
 };
 #[cfg(feature = "effects")]
-use mpm_gimp::{Damping, Effects, Schedule};
+use mpm_gimp::{Damping, Effects, ScalarField, Schedule, Transport};
 
 type Mat = [[f64; 3]; 3];
 
@@ -58,6 +59,13 @@ struct Particle {
     f: [f64; 3],
     /// The particle's own damping rates `alpha_g(x_p)`, `alpha_p(x_p)`, 1/s.
     alpha: [f64; 2],
+    /// The initial volume `V0`, m^3.
+    vol0: f64,
+    /// The transported scalars (temperature, concentration potential), the grid's value of
+    /// each at the particle (eq 144) and their sources (W/m^3, 1/s).
+    phi: [f64; 2],
+    phi_grid: [f64; 2],
+    source: [f64; 2],
     /// The particle domain's half-width per axis for uGIMP and cpGIMP, m (cpGIMP: frozen for
     /// the substep from the deformation at its start).
     lp: [f64; 3],
@@ -103,6 +111,13 @@ struct Method {
     /// the traction, Pa. The world's table is not readable through the API: the test that
     /// adds them sets them here.
     tractions: Vec<(usize, usize, [f64; 3])>,
+    /// The declared transported scalars (heat, diffusion): each face's fixed value, or `None`
+    /// where it is insulated (flux faces are not in the reference).
+    transport: [Option<[Option<f64>; 6]>; 2],
+    /// The material's heat capacity (J/(kg K)), conductivity (W/(m K)) and diffusivity (m^2/s).
+    heat_capacity: f64,
+    conductivity: f64,
+    diffusivity: f64,
     exp_terms: usize,
     /// uGIMP's particle half-width `h / (2 n)`.
     lp: f64,
@@ -492,6 +507,111 @@ fn constrain(m: &Method, grid: &mut [Node], field: fn(&mut Node) -> &mut [f64; 3
     read_wall_images(m, grid, field);
 }
 
+/// Calls `f` for every node of a scalar field's face `face` (x low, x high, y low, ...): from
+/// the grid face to the wall plane, as the walls' nodes.
+fn for_each_face_node(m: &Method, face: usize, mut f: impl FnMut(usize)) {
+    let (axis, side, n) = (face / 2, face % 2, m.nodes[face / 2]);
+    let layers = if side == 0 {
+        0..m.margin + 1
+    } else {
+        n - 1 - m.margin..n
+    };
+    for layer in layers {
+        for_each_node_in_plane(m, axis, layer, &mut f);
+    }
+}
+
+/// One substep of a transported scalar `f` (0 heat, section 8; 1 diffusion, section 9), with
+/// the particles where the substep starts. The capacity is the thermal mass `m_p C_p` (eq 133)
+/// or the current volume `J V0` (eq 146), the conductance the conductivity or the diffusivity:
+/// 1. `c_i = sum S_ip c_p`, `phi_i = sum S_ip c_p phi_p / c_i`, fixed faces' nodes their value;
+/// 2. `Q_i = sum V_p (q_p . G_ip + s_p S_ip)`, `q_p = -kappa sum phi_i G_ip` (eqs 135, 137,
+///    148, 150), the rate `a_i = Q_i / c_i` (eqs 140, 152), 0 on fixed faces' nodes;
+/// 3. FLIP: `phi_p += dt sum S_ip a_i`, and the grid's value `sum S_ip (phi_i + a_i dt)` (eqs
+///    141, 144, 153).
+fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
+    let Some(faces) = m.transport[f] else {
+        return;
+    };
+    let n = m.nodes[0] * m.nodes[1] * m.nodes[2];
+    let volume = |p: &Particle| {
+        let j2 = jacobian_minus_one(m.d, &p.h);
+        let jm1 = if m.d == 2 {
+            j2 + p.hzz + j2 * p.hzz
+        } else {
+            j2
+        };
+        (1.0 + jm1) * p.vol0
+    };
+    let capacity = |p: &Particle| {
+        if f == 0 {
+            p.m * m.heat_capacity
+        } else {
+            volume(p)
+        }
+    };
+    let kappa = if f == 0 {
+        m.conductivity
+    } else {
+        m.diffusivity
+    };
+    let fixed = |value: &mut [f64], set: &dyn Fn(f64) -> f64| {
+        for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
+            if let Some(v) = bc {
+                for_each_face_node(m, face, |i| value[i] = set(*v));
+            }
+        }
+    };
+    let (mut c, mut value, mut q) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for p in ps.iter() {
+        for &(i, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
+            c[i] += s * capacity(p);
+            value[i] += s * capacity(p) * p.phi[f];
+        }
+    }
+    for i in 0..n {
+        value[i] = if c[i] > m.mass_cutoff {
+            value[i] / c[i]
+        } else {
+            0.0
+        };
+    }
+    fixed(&mut value, &|v| v);
+    for p in ps.iter() {
+        let st = stencil(m, &p.x, &p.lp);
+        let mut grad = [0.0; 3];
+        for &(i, _, g, _) in &st.nodes {
+            for a in 0..m.d {
+                grad[a] += value[i] * g[a];
+            }
+        }
+        let v = volume(p);
+        for &(i, s, g, _) in &st.nodes {
+            q[i] += v * p.source[f] * s;
+            for a in 0..m.d {
+                q[i] += v * (-kappa * grad[a]) * g[a];
+            }
+        }
+    }
+    for i in 0..n {
+        q[i] = if c[i] > m.mass_cutoff {
+            q[i] / c[i]
+        } else {
+            0.0
+        };
+    }
+    fixed(&mut q, &|_| 0.0);
+    for p in ps.iter_mut() {
+        let (mut a, mut v) = (0.0, 0.0);
+        for &(i, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
+            a += s * q[i];
+            v += s * value[i];
+        }
+        p.phi[f] += a * dt;
+        p.phi_grid[f] = v + a * dt;
+    }
+}
+
 /// Adds the tractions to the nodal force (eq 21): each loads one face of its particle's
 /// undeformed domain, of side `2 l_p`, so its resultant is `T A` with `A = (2 l_p)^(D-1)` (per
 /// radian when axisymmetric: `2 l_p (r_p -+ l_p)` on the faces of constant r, `2 l_p r_p` on
@@ -784,6 +904,10 @@ fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
             };
         }
     }
+    // Heat and diffusion first, with the particles where the substep starts.
+    for f in 0..2 {
+        transport(m, ps, f, dt);
+    }
     let mut grid = vec![Node::default(); m.nodes[0] * m.nodes[1] * m.nodes[2]];
     match m.order {
         UpdateOrder::Usl => {
@@ -897,6 +1021,18 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         forces: fx.particle_forces,
         damping,
         tractions: Vec::new(),
+        transport: [fx.heat, fx.diffusion].map(|t| {
+            t.map(|t| {
+                t.faces.map(|f| match f {
+                    ScalarBoundary::Insulated => None,
+                    ScalarBoundary::Fixed(v) => Some(v as f64),
+                    ScalarBoundary::Flux(_) => panic!("flux faces are not in the reference"),
+                })
+            })
+        }),
+        heat_capacity: material.heat_capacity as f64,
+        conductivity: material.conductivity as f64,
+        diffusivity: material.diffusivity as f64,
         exp_terms: def.exp_terms as usize,
         lp: def.cell_size as f64 / (2.0 * def.particles_per_cell as f64),
         linear_elastic: material.model == MaterialModel::LinearElastic,
@@ -933,6 +1069,19 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             if !v.hoop.is_empty() {
                 p.hzz = v.hoop[i] as f64;
             }
+            p.vol0 = v.volume0[i] as f64;
+            for (f, (value, grid)) in [
+                (v.temperature, v.grid_temperature),
+                (v.concentration, v.grid_concentration),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                if !value.is_empty() {
+                    p.phi[f] = value[i] as f64;
+                    p.phi_grid[f] = grid[i] as f64;
+                }
+            }
             for (k, column) in v.damping.iter().enumerate() {
                 if !column.is_empty() {
                     p.alpha[k] = column[i] as f64;
@@ -968,6 +1117,12 @@ fn columns(m: &Method, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
     if m.axisymmetric {
         out.push(("hoop".to_string(), ps.iter().map(|p| p.hzz).collect()));
     }
+    for f in 0..2 {
+        if m.transport[f].is_some() {
+            out.push((format!("T{f}"), ps.iter().map(|p| p.phi[f]).collect()));
+            out.push((format!("G{f}"), ps.iter().map(|p| p.phi_grid[f]).collect()));
+        }
+    }
     out
 }
 
@@ -986,7 +1141,11 @@ fn declared_effects() -> Effects {
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
         body_force_scale: Schedule::constant(1.0),
         traction_capacity: 64,
-        ..Effects::NONE
+        heat: Some(Transport {
+            sources: true,
+            ..Transport::INSULATED
+        }),
+        diffusion: Some(Transport::INSULATED),
     }
 }
 
@@ -1015,6 +1174,14 @@ fn check(
     simd: Simd,
     scene: Scene,
 ) {
+    // A conductor where heat and diffusion are declared: thermal diffusivity k / (rho C) of
+    // 0.4 m^2/s and diffusivity 0.3 m^2/s, which change the fields by some percent a step.
+    let material = &MaterialDef {
+        heat_capacity: 1000.0,
+        conductivity: 0.4 * 1000.0 * material.density,
+        diffusivity: 0.3,
+        ..*material
+    };
     let mut def = WorldDef {
         shape,
         update_order: order,
@@ -1035,6 +1202,17 @@ fn check(
         def.origin.x = 0.65 + 0.3 * h - (def.cells[0] as Real - margin) * h;
         def.faces[Face::YMin as usize] = Boundary::Stick;
         def.faces[Face::XMax as usize] = Boundary::Slip;
+        // Heat and diffusion with fixed faces at the walls.
+        #[cfg(feature = "effects")]
+        {
+            let fixed = |face: Face, v: Real| {
+                let mut t = Transport::INSULATED;
+                t.faces[face as usize] = ScalarBoundary::Fixed(v);
+                Some(t)
+            };
+            def.effects.heat = fixed(Face::YMin, 250.0);
+            def.effects.diffusion = fixed(Face::XMax, 0.9);
+        }
     }
     if dim == Dimension::Axisymmetric2D {
         // The axis r = 0 on the lower x face's wall plane (the block stays clear of it).
@@ -1069,6 +1247,27 @@ fn check(
         };
         world.set_particle_damping(0, &rate(0), &rate(1)).unwrap();
     }
+    // Temperatures and concentrations that vary from particle to particle, and heat sources.
+    #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
+    let mut heat_sources = vec![0.0; n];
+    #[cfg(feature = "effects")]
+    if scene != Scene::Free {
+        let wave = |i: usize, k: usize| ((i * (2 * k + 5)) % 11) as Real / 11.0 - 0.5;
+        let temperature: Vec<Real> = (0..n).map(|i| 300.0 + 50.0 * wave(i, 0)).collect();
+        let concentration: Vec<Real> = (0..n).map(|i| 0.4 + 0.3 * wave(i, 1)).collect();
+        world
+            .set_particle_scalar(ScalarField::Temperature, 0, &temperature)
+            .unwrap();
+        world
+            .set_particle_scalar(ScalarField::Concentration, 0, &concentration)
+            .unwrap();
+        if scene == Scene::Effects {
+            heat_sources = (0..n).map(|i| 2.0e5 * wave(i, 2)).collect();
+            world
+                .set_particle_sources(ScalarField::Temperature, 0, &heat_sources)
+                .unwrap();
+        }
+    }
     // Tractions on two faces of two groups of particles (of the size of their weights).
     #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
     let mut traction_list = Vec::new();
@@ -1093,6 +1292,9 @@ fn check(
     let dt = world.stable_dt();
     let (mut method, mut ps) = read(&world, material);
     method.tractions = traction_list;
+    for (p, &s) in ps.iter_mut().zip(&heat_sources) {
+        p.source[0] = s as f64;
+    }
     let before = columns(&method, &ps);
     let report = world.step_with_simd(dt, simd).unwrap();
     assert_eq!(report.substeps, 1);
