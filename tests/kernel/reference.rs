@@ -14,9 +14,8 @@
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
 //! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
 //! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
-//! and heat conduction and diffusion (sections 8 and 9, with sources and fixed faces). Not in
-//! it yet: particles nearer the axis than their half-width, the damping thermostat and flux
-//! faces.
+//! and heat conduction and diffusion (sections 8 and 9, with sources, fixed and flux faces).
+//! Not in it yet: particles nearer the axis than their half-width and the damping thermostat.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -111,9 +110,8 @@ struct Method {
     /// the traction, Pa. The world's table is not readable through the API: the test that
     /// adds them sets them here.
     tractions: Vec<(usize, usize, [f64; 3])>,
-    /// The declared transported scalars (heat, diffusion): each face's fixed value, or `None`
-    /// where it is insulated (flux faces are not in the reference).
-    transport: [Option<[Option<f64>; 6]>; 2],
+    /// The declared transported scalars (heat, diffusion): each face's condition.
+    transport: [Option<[ScalarBoundary; 6]>; 2],
     /// The material's heat capacity (J/(kg K)), conductivity (W/(m K)) and diffusivity (m^2/s).
     heat_capacity: f64,
     conductivity: f64,
@@ -521,6 +519,37 @@ fn for_each_face_node(m: &Method, face: usize, mut f: impl FnMut(usize)) {
     }
 }
 
+/// The area of a flux face's plane that node `node` stands for: `h` per other axis (per unit
+/// thickness in 2D), halved on the edges of the admissible region and zero outside it;
+/// axisymmetric, per radian: `int r dr` over the patch's radial extent, or the plane's radius
+/// times the patch for a plane of constant r.
+fn face_area(m: &Method, axis: usize, node: usize) -> f64 {
+    let stride = [1, m.nodes[0], m.nodes[0] * m.nodes[1]];
+    let coord = |b: usize| (node / stride[b]) % m.nodes[b];
+    let radius = |idx: usize| m.origin[0] + idx as f64 * m.h;
+    let mut area = if m.axisymmetric && axis == 0 {
+        radius(coord(0))
+    } else {
+        1.0
+    };
+    for b in (0..m.d).filter(|&b| b != axis) {
+        let idx = coord(b);
+        let (lo, hi) = (m.margin, m.nodes[b] - 1 - m.margin);
+        if idx < lo || idx > hi {
+            return 0.0;
+        }
+        let from = if idx == lo { 0.0 } else { -0.5 * m.h };
+        let to = if idx == hi { 0.0 } else { 0.5 * m.h };
+        area *= if m.axisymmetric && b == 0 {
+            let (r0, r1) = (radius(idx) + from, radius(idx) + to);
+            0.5 * (r1 * r1 - r0 * r0)
+        } else {
+            to - from
+        };
+    }
+    area
+}
+
 /// One substep of a transported scalar `f` (0 heat, section 8; 1 diffusion, section 9), with
 /// the particles where the substep starts. The capacity is the thermal mass `m_p C_p` (eq 133)
 /// or the current volume `J V0` (eq 146), the conductance the conductivity or the diffusivity:
@@ -557,8 +586,8 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
     };
     let fixed = |value: &mut [f64], set: &dyn Fn(f64) -> f64| {
         for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
-            if let Some(v) = bc {
-                for_each_face_node(m, face, |i| value[i] = set(*v));
+            if let ScalarBoundary::Fixed(v) = *bc {
+                for_each_face_node(m, face, |i| value[i] = set(v as f64));
             }
         }
     };
@@ -591,6 +620,21 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
             for a in 0..m.d {
                 q[i] += v * (-kappa * grad[a]) * g[a];
             }
+        }
+    }
+    // A flux face's inflow on its wall plane's nodes (eqs 136, 149), each node standing for
+    // its patch of the admissible region's face.
+    for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
+        if let ScalarBoundary::Flux(flux) = *bc {
+            let (axis, n_axis) = (face / 2, m.nodes[face / 2]);
+            let plane = if face % 2 == 0 {
+                m.margin
+            } else {
+                n_axis - 1 - m.margin
+            };
+            for_each_node_in_plane(m, axis, plane, |i| {
+                q[i] += flux as f64 * face_area(m, axis, i)
+            });
         }
     }
     for i in 0..n {
@@ -1021,15 +1065,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         forces: fx.particle_forces,
         damping,
         tractions: Vec::new(),
-        transport: [fx.heat, fx.diffusion].map(|t| {
-            t.map(|t| {
-                t.faces.map(|f| match f {
-                    ScalarBoundary::Insulated => None,
-                    ScalarBoundary::Fixed(v) => Some(v as f64),
-                    ScalarBoundary::Flux(_) => panic!("flux faces are not in the reference"),
-                })
-            })
-        }),
+        transport: [fx.heat, fx.diffusion].map(|t| t.map(|t| t.faces)),
         heat_capacity: material.heat_capacity as f64,
         conductivity: material.conductivity as f64,
         diffusivity: material.diffusivity as f64,
@@ -1202,16 +1238,15 @@ fn check(
         def.origin.x = 0.65 + 0.3 * h - (def.cells[0] as Real - margin) * h;
         def.faces[Face::YMin as usize] = Boundary::Stick;
         def.faces[Face::XMax as usize] = Boundary::Slip;
-        // Heat and diffusion with fixed faces at the walls.
+        // Heat with a fixed face and diffusion with a flux face at the walls.
         #[cfg(feature = "effects")]
         {
-            let fixed = |face: Face, v: Real| {
-                let mut t = Transport::INSULATED;
-                t.faces[face as usize] = ScalarBoundary::Fixed(v);
-                Some(t)
-            };
-            def.effects.heat = fixed(Face::YMin, 250.0);
-            def.effects.diffusion = fixed(Face::XMax, 0.9);
+            let mut fixed = Transport::INSULATED;
+            fixed.faces[Face::YMin as usize] = ScalarBoundary::Fixed(250.0);
+            def.effects.heat = Some(fixed);
+            let mut flux = Transport::INSULATED;
+            flux.faces[Face::XMax as usize] = ScalarBoundary::Flux(0.05);
+            def.effects.diffusion = Some(flux);
         }
     }
     if dim == Dimension::Axisymmetric2D {
