@@ -1185,6 +1185,28 @@ fn declared_effects() -> Effects {
     }
 }
 
+/// Every shape function, update order and instruction-set instance the tests step.
+const SHAPES: [ShapeFunction; 5] = [
+    ShapeFunction::Linear,
+    ShapeFunction::Gimp,
+    ShapeFunction::CpGimp,
+    ShapeFunction::QuadraticBspline,
+    ShapeFunction::CubicBspline,
+];
+const ORDERS: [UpdateOrder; 3] = [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl];
+const INSTANCES: [Simd; 3] = [Simd::Detect, Simd::Avx2, Simd::Baseline];
+
+/// The soft neo-Hookean material and its corotated linear elastic twin.
+fn both_materials() -> [MaterialDef; 2] {
+    [
+        soft_neo_hookean(),
+        MaterialDef {
+            model: MaterialModel::LinearElastic,
+            ..soft_neo_hookean()
+        },
+    ]
+}
+
 /// What [`check`]'s block meets besides gravity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Scene {
@@ -1402,30 +1424,17 @@ fn check(
 /// round-off.
 #[test]
 fn every_instance_steps_as_the_reference_does() {
-    let shapes = [
-        ShapeFunction::Linear,
-        ShapeFunction::Gimp,
-        ShapeFunction::CpGimp,
-        ShapeFunction::QuadraticBspline,
-        ShapeFunction::CubicBspline,
-    ];
-    let materials = [
-        soft_neo_hookean(),
-        MaterialDef {
-            model: MaterialModel::LinearElastic,
-            ..soft_neo_hookean()
-        },
-    ];
+    let materials = both_materials();
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in shapes {
-            for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+        for shape in SHAPES {
+            for order in ORDERS {
                 for transfer in [Transfer::Flip, Transfer::Apic] {
                     // APIC comes with the `effects` feature.
                     if transfer == Transfer::Apic && !cfg!(feature = "effects") {
                         continue;
                     }
                     for material in &materials {
-                        for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                        for simd in INSTANCES {
                             check(dim, shape, order, transfer, material, simd, Scene::Free);
                         }
                     }
@@ -1443,9 +1452,9 @@ fn every_instance_steps_as_the_reference_does() {
 fn declared_effects_step_as_the_reference_does() {
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
         for shape in [ShapeFunction::Gimp, ShapeFunction::CubicBspline] {
-            for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+            for order in ORDERS {
                 for transfer in [Transfer::Flip, Transfer::Apic] {
-                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                    for simd in INSTANCES {
                         check(
                             dim,
                             shape,
@@ -1469,24 +1478,12 @@ fn declared_effects_step_as_the_reference_does() {
 #[cfg(feature = "effects")]
 #[test]
 fn axisymmetric_form_steps_as_the_reference_does() {
-    let materials = [
-        soft_neo_hookean(),
-        MaterialDef {
-            model: MaterialModel::LinearElastic,
-            ..soft_neo_hookean()
-        },
-    ];
-    for shape in [
-        ShapeFunction::Linear,
-        ShapeFunction::Gimp,
-        ShapeFunction::CpGimp,
-        ShapeFunction::QuadraticBspline,
-        ShapeFunction::CubicBspline,
-    ] {
-        for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+    let materials = both_materials();
+    for shape in SHAPES {
+        for order in ORDERS {
             for transfer in [Transfer::Flip, Transfer::Apic] {
                 for material in &materials {
-                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                    for simd in INSTANCES {
                         let dim = Dimension::Axisymmetric2D;
                         check(dim, shape, order, transfer, material, simd, Scene::Free);
                     }
@@ -1507,16 +1504,10 @@ fn walls_act_as_the_reference_does() {
         &[Transfer::Flip]
     };
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
-        for shape in [
-            ShapeFunction::Linear,
-            ShapeFunction::Gimp,
-            ShapeFunction::CpGimp,
-            ShapeFunction::QuadraticBspline,
-            ShapeFunction::CubicBspline,
-        ] {
-            for order in [UpdateOrder::Usf, UpdateOrder::Usl, UpdateOrder::Musl] {
+        for shape in SHAPES {
+            for order in ORDERS {
                 for &transfer in transfers {
-                    for simd in [Simd::Detect, Simd::Avx2, Simd::Baseline] {
+                    for simd in INSTANCES {
                         let material = soft_neo_hookean();
                         check(dim, shape, order, transfer, &material, simd, Scene::Walls);
                     }
