@@ -14,8 +14,8 @@
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
 //! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
 //! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
-//! and heat conduction and diffusion (sections 8 and 9, with sources, fixed and flux faces).
-//! Not in it yet: particles nearer the axis than their half-width and the damping thermostat.
+//! the damping thermostat, and heat conduction and diffusion (sections 8 and 9, with sources,
+//! fixed and flux faces). Not in it: particles nearer the axis than their half-width.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -36,7 +36,7 @@ use mpm_gimp::{
     Transfer, UpdateOrder, World, WorldDef,
 };
 #[cfg(feature = "effects")]
-use mpm_gimp::{Damping, Effects, ScalarField, Schedule, Transport};
+use mpm_gimp::{Damping, Effects, Feedback, ScalarField, Schedule, Transport};
 
 type Mat = [[f64; 3]; 3];
 
@@ -106,6 +106,8 @@ struct Method {
     forces: bool,
     /// Damping (eq 47): the substep's global grid and particle rates, 1/s.
     damping: Option<[f64; 2]>,
+    /// The thermostat that adds to the grid rate, with its alpha before the substep.
+    thermostat: Option<Thermostat>,
     /// Tractions (eq 21): the particle, the face of its domain (x low, x high, y low, ...) and
     /// the traction, Pa. The world's table is not readable through the API: the test that
     /// adds them sets them here.
@@ -125,6 +127,17 @@ struct Method {
     lambda: f64,
     rho0: f64,
     mass_cutoff: f64,
+}
+
+/// The damping thermostat (NairnMPM's feedback damping): before each substep its alpha
+/// moves by `2 gain (KE - target) dt / M` (KE and M the particles' kinetic energy and mass),
+/// kept within `[0, max_alpha]`, and adds to the grid damping rate.
+#[derive(Clone, Copy)]
+struct Thermostat {
+    gain: f64,
+    target: f64,
+    max_alpha: f64,
+    alpha: f64,
 }
 
 /// The 1D weight and its derivative of the node at signed distance `xi = x_p - x_i`.
@@ -933,7 +946,21 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
 }
 
 /// One substep of length `dt` in the method's update order.
-fn substep(m: &Method, ps: &mut [Particle], dt: f64) {
+fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
+    if let (Some(t), Some(rates)) = (m.thermostat.as_mut(), m.damping.as_mut()) {
+        let mass: f64 = ps.iter().map(|p| p.m).sum();
+        let kinetic: f64 = ps
+            .iter()
+            .map(|p| 0.5 * p.m * (0..m.d).map(|a| p.v[a] * p.v[a]).sum::<f64>())
+            .sum();
+        let alpha = t.alpha + 2.0 * t.gain * (kinetic - t.target) * dt / mass;
+        assert!(
+            alpha > 0.0 && alpha < t.max_alpha,
+            "the thermostat's clamp is not in the reference"
+        );
+        t.alpha = alpha;
+        rates[0] += alpha;
+    }
     // cpGIMP: each domain's half-width per axis, `l_0` times the deformed domain's extent
     // `sum_b |F_ab|`, kept within `[l_0 / 10, h / 2]`, frozen for the substep.
     for p in ps.iter_mut() {
@@ -1032,14 +1059,16 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
     let fx = &def.effects;
     let body = fx.body_force * fx.body_force_scale.at(world.time());
     let damping = fx.damping.map(|d| {
-        assert!(
-            d.feedback.is_none(),
-            "the thermostat is not in the reference"
-        );
         [
             d.grid.at(world.time()) as f64,
             d.particle.at(world.time()) as f64,
         ]
+    });
+    let thermostat = fx.damping.and_then(|d| d.feedback).map(|f| Thermostat {
+        gain: f.gain as f64,
+        target: f.target.at(world.time()) as f64,
+        max_alpha: f.max_alpha as f64,
+        alpha: world.feedback_alpha(),
     });
     let method = Method {
         d,
@@ -1064,6 +1093,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         ],
         forces: fx.particle_forces,
         damping,
+        thermostat,
         tractions: Vec::new(),
         transport: [fx.heat, fx.diffusion].map(|t| t.map(|t| t.faces)),
         heat_capacity: material.heat_capacity as f64,
@@ -1171,7 +1201,11 @@ fn declared_effects() -> Effects {
             grid: Schedule::constant(0.8),
             particle: Schedule::constant(0.5),
             per_particle: true,
-            ..Damping::NONE
+            feedback: Some(Feedback {
+                gain: 1.0e6,
+                target: Schedule::constant(1.0e-3),
+                max_alpha: 1.0e3,
+            }),
         }),
         particle_forces: true,
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
@@ -1356,7 +1390,7 @@ fn check(
     let report = world.step_with_simd(dt, simd).unwrap();
     assert_eq!(report.substeps, 1);
     assert_eq!(report.frozen, 0);
-    substep(&method, &mut ps, dt as f64);
+    substep(&mut method, &mut ps, dt as f64);
     let reference = columns(&method, &ps);
     let (_, kernel) = read(&world, material);
     let kernel = columns(&method, &kernel);
