@@ -31,6 +31,7 @@ use super::update;
 use super::wide::{Wide, WideMask};
 use super::{Ctx, Isa};
 use crate::def::UpdateOrder;
+use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::material::{
     eigenstrain_part, elastic_part, kirchhoff_lanes, kirchhoff_over_rho0, model_of, Deformation,
@@ -633,15 +634,8 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             load_into(&mut v[a], p.v[a], start);
         }
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
-        // Damping rates of each lane: the substep's global values plus the particle's own
-        // (empty columns, when per-particle damping is not declared, load as zeros).
         if damp {
-            let (lg, lp): (Lane<W>, Lane<W>) =
-                (load(p.damping[0], start), load(p.damping[1], start));
-            for ln in 0..W {
-                alpha_g[ln] = ctx.alpha_g + lg[ln];
-                alpha_p[ln] = ctx.alpha_p + lp[ln];
-            }
+            damping::lane_rates(ctx, p, start, &mut alpha_g, &mut alpha_p);
         }
         // One gather per (order, transfer), chosen per chunk.
         const NONE: u8 = Grad::None as u8;
@@ -666,7 +660,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             for a in 0..D {
                 let (x_p, v_p, v_gp, a_gp) = (ld(&x[a]), ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
                 let d = if damp {
-                    Some(update::damping(v_gp, v_p, ld(&alpha_g), ld(&alpha_p)))
+                    Some(damping::acceleration(v_gp, v_p, ld(&alpha_g), ld(&alpha_p)))
                 } else {
                     None
                 };

@@ -16,7 +16,7 @@ use super::lanes::{load_into, Block, Lane, Lanes};
 use super::rows::{self, Rows};
 use super::{sym_pairs, Ctx, Isa};
 use crate::grid::{add_row, rows_fit, GridCols};
-use crate::particles::{ParticleCols, ACTIVE};
+use crate::particles::ParticleCols;
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::Real;
 use core::mem::MaybeUninit;
@@ -1020,63 +1020,6 @@ unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, con
                 }
             }
         }
-    }
-}
-
-/// Adds the tractions of the table to the nodal force (eq 21): each loads one face of one
-/// active particle's domain, a square (segment in 2D) of side `2 l_p`, `l_p = h / (2 n)` for
-/// `n` particles per cell per axis (the undeformed domain uGIMP uses), so its resultant is
-/// `T A` with `A = (2 l_p)^(D-1)` (per unit thickness in 2D). The resultant is spread over the
-/// nodes with the particle's own weights, `f_iT = S_ip T A`.
-///
-/// Why not the face integral `sum_q N_i(x_q) T A / q` at Gauss points `x_q` on the face: it
-/// gives the nodes just past the material's surface a force out of proportion to the sliver of
-/// mass they carry (`N_i` at the face against `S_ip` at the particle), an acceleration that
-/// grows without bound as that mass vanishes; USL differentiates it into the velocity
-/// gradient, and a 3D quadratic B-spline block under USL froze (f64 hard case). With `S_ip`
-/// the acceleration a traction gives any node is at most `T A / m_p`. The cost is the point of
-/// application, moved by `l_p` from the face to the particle: the resultant is exact, its
-/// moment is off by `T A l_p` per particle.
-///
-/// Axisymmetric, the force is per radian: `A = 2 l_p (r_p -+ l_p)` for the faces of constant
-/// r at `r_p -+ l_p`, `2 l_p r_p` for those of constant z. There the point of application
-/// matters more: a radial load `F` applied at radius `r` balances a uniform stress `F / r`,
-/// so a load on the outer face of a pressurised solid cylinder of radius `R` stresses its
-/// interior `~l_p / R` too much (measured: 1.3 % for `l_p / R = 1/40`).
-pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-) {
-    let geom = &ctx.geom;
-    let area = (1..D).fold(1.0 as Real, |a, _| a * 2.0 * ctx.half_width);
-    for rec in ctx.tractions {
-        let i = rec.particle as usize;
-        if i >= count || (rec.face / 2) as usize >= D || p.status.get(i) != Some(&ACTIVE) {
-            continue;
-        }
-        let s: [Real; D] = core::array::from_fn(|a| (p.x[a][i] - geom.origin[a]) * geom.inv_h);
-        let stretch = p.domain_stretch(i);
-        let st = Stencil::<D, K>::new(shape, s, stretch, geom.nodes, geom.stride, geom.inv_h);
-        let area = if S::AXISYMMETRIC {
-            let (r, l) = (p.x[0][i], ctx.half_width);
-            area * match rec.face {
-                0 => (r - l).max(0.0),
-                1 => r + l,
-                _ => r,
-            }
-        } else {
-            area
-        };
-        st.for_each_node(geom.stride, |node, w, _| {
-            for a in 0..D {
-                if let Some(f) = g.acc[a].get_mut(node) {
-                    *f += w * rec.traction[a] * area;
-                }
-            }
-        });
     }
 }
 

@@ -44,18 +44,6 @@ impl<I: Compare> Step<I> {
     }
 }
 
-/// The damping acceleration `d = alpha_g v_gp + alpha_p v_p` (seeds/000 eq 47; eq 107 with
-/// each rate the substep's global value plus the particle's own).
-#[inline(always)]
-pub(crate) fn damping<I: Compare>(
-    v_gp: Wide<I>,
-    v_p: Wide<I>,
-    alpha_g: Wide<I>,
-    alpha_p: Wide<I>,
-) -> Wide<I> {
-    v_gp * alpha_g + v_p * alpha_p
-}
-
 /// FLIP with PIC damping (seeds/000 eq 52) and the second-order position update (eq 51), less
 /// the damping acceleration `d` when damping is declared (eqs 46-49):
 /// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`

@@ -1,11 +1,12 @@
-//! Adding to a world: materials, particles, the per-particle setters and tractions, and the
-//! append path every particle goes through.
+//! Adding to a world: materials and particles, and the append path every particle goes
+//! through. The setters of the effects' per-particle data live with their effect
+//! ([`crate::effects`]).
 
-use super::{GeomAny, ParticleBatch, ParticleDef, ScalarField, World};
+use super::{GeomAny, ParticleBatch, ParticleDef, World};
 use crate::def::{MaterialDef, WorldDef};
-use crate::layout::{col, Layout, MaterialRecord, TractionRecord};
+use crate::layout::{col, Layout, MaterialRecord};
 use crate::particles::ACTIVE;
-use crate::{Error, Real, Vec3};
+use crate::{Error, Real};
 use core::mem::size_of;
 use core::ops::Range;
 
@@ -89,90 +90,13 @@ impl<'a> World<'a> {
         Ok(self.append(&def, items))
     }
 
-    /// Sets the external force `F_p` (N; per unit thickness in plane strain) of particles
-    /// `first..first + n`, `n` the length of the slices (z may be empty in 2D). Needs
-    /// [`crate::Effects::particle_forces`]. The force stays until set again.
-    pub fn set_particle_forces(&mut self, first: u32, force: [&[Real]; 3]) -> Result<(), Error> {
-        let layout = Layout::of(&self.def());
-        let group = (layout.force.count > 0).then_some(layout.force.first);
-        let columns = &force[..layout.d];
-        self.write_particle_columns(
-            &layout,
-            group,
-            first,
-            columns,
-            Error::NonFiniteInput,
-            |_| true,
-        )
-    }
-
-    /// Sets the value of a transported scalar (temperature, K, or concentration potential) of
-    /// particles `first..first + n`, `n = values.len()`. Needs the field declared
-    /// ([`crate::Effects::heat`], [`crate::Effects::diffusion`]). Values start at 0.
-    pub fn set_particle_scalar(
-        &mut self,
-        field: ScalarField,
-        first: u32,
-        values: &[Real],
-    ) -> Result<(), Error> {
-        self.set_scalar_column(field, 0, first, values)
-    }
-
-    /// Sets the source of a transported scalar (heat: W/m^3; diffusion: 1/s) of particles
-    /// `first..first + n`. Needs the field declared with [`crate::Transport::sources`].
-    pub fn set_particle_sources(
-        &mut self,
-        field: ScalarField,
-        first: u32,
-        values: &[Real],
-    ) -> Result<(), Error> {
-        self.set_scalar_column(field, 2, first, values)
-    }
-
-    fn set_scalar_column(
-        &mut self,
-        field: ScalarField,
-        k: usize,
-        first: u32,
-        values: &[Real],
-    ) -> Result<(), Error> {
-        let layout = Layout::of(&self.def());
-        let g = layout.scalar[field as usize];
-        let group = (k < g.count).then_some(g.first + k);
-        self.write_particle_columns(
-            &layout,
-            group,
-            first,
-            &[values],
-            Error::NonFiniteInput,
-            |_| true,
-        )
-    }
-
-    /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
-    /// particles `first..first + n`, added to the global damping for those particles (eq 107).
-    /// Needs [`crate::Damping::per_particle`].
-    pub fn set_particle_damping(
-        &mut self,
-        first: u32,
-        alpha_g: &[Real],
-        alpha_p: &[Real],
-    ) -> Result<(), Error> {
-        let layout = Layout::of(&self.def());
-        let group = (layout.damping.count > 0).then_some(layout.damping.first);
-        let columns = &[alpha_g, alpha_p];
-        self.write_particle_columns(&layout, group, first, columns, Error::InvalidEffect, |v| {
-            v >= 0.0
-        })
-    }
-
     /// The per-particle setters' one path: writes `columns` (one slice per column, all of one
     /// length n) into the consecutive particle Real columns from `group` for particles
     /// `first..first + n`, after checking, in this order, that the group is reserved
     /// (`EffectNotDeclared`), that the lengths agree (`LengthMismatch`), that the particles
     /// exist (`UnknownParticle`) and that every value is finite and passes `valid` (else
     /// `invalid`). Nothing is written unless every check passes.
-    fn write_particle_columns(
+    pub(crate) fn write_particle_columns(
         &mut self,
         layout: &Layout,
         group: Option<usize>,
@@ -200,56 +124,8 @@ impl<'a> World<'a> {
         Ok(())
     }
 
-    /// Adds one traction per particle of `particles`, each loading the `face` of that
-    /// particle's domain with the traction `traction` (Pa: force per area of the face, whose
-    /// area is per unit thickness in plane strain); returns the range of their traction ids.
-    /// All or nothing. Needs [`crate::Effects::traction_capacity`]. The tractions are
-    /// integrated each substep into `f_iT` (eq 21) while their particle is active.
-    pub fn add_tractions(
-        &mut self,
-        particles: Range<u32>,
-        face: crate::Face,
-        traction: Vec3,
-    ) -> Result<Range<u32>, Error> {
-        let def = self.def();
-        let layout = Layout::of(&def);
-        if layout.traction_capacity == 0 {
-            return Err(Error::EffectNotDeclared);
-        }
-        let d = layout.d;
-        if face as usize / 2 >= d || (0..d).any(|a| !traction[a].is_finite()) {
-            return Err(Error::InvalidEffect);
-        }
-        if particles.start > particles.end {
-            return Err(Error::UnknownParticle);
-        }
-        let n = (particles.end - particles.start) as usize;
-        self.particle_range(particles.start, n)?;
-        let used = self.header().traction_count as usize;
-        if n > layout.traction_capacity - used {
-            return Err(Error::TractionCapacityExceeded);
-        }
-        let start = layout.tractions_offset + used * size_of::<TractionRecord>();
-        let table: &mut [TractionRecord] =
-            bytemuck::cast_slice_mut(&mut self.buf[start..start + n * size_of::<TractionRecord>()]);
-        for (rec, id) in table.iter_mut().zip(particles) {
-            *rec = TractionRecord {
-                particle: id,
-                face: face as u32,
-                traction: core::array::from_fn(|a| if a < d { traction[a] } else { 0.0 }),
-            };
-        }
-        self.header_mut().traction_count += n as u64;
-        Ok(used as u32..(used + n) as u32)
-    }
-
-    /// Removes every traction (the capacity stays).
-    pub fn clear_tractions(&mut self) {
-        self.header_mut().traction_count = 0;
-    }
-
     /// `first..first + n` if those particles exist.
-    fn particle_range(&self, first: u32, n: usize) -> Result<Range<usize>, Error> {
+    pub(crate) fn particle_range(&self, first: u32, n: usize) -> Result<Range<usize>, Error> {
         let first = first as usize;
         match first.checked_add(n) {
             Some(end) if end <= self.particle_count() => Ok(first..end),

@@ -14,7 +14,7 @@ pub use step::{Phase, MAX_SUBSTEPS};
 pub use types::{Diagnostics, ParticleBatch, ParticleDef, ParticlesView, ScalarField, StepReport};
 
 use crate::def::{MaterialDef, WorldDef};
-use crate::layout::{validate, Header, Layout, ALIGN};
+use crate::layout::{validate, Header, Layout, TractionRecord, ALIGN};
 use crate::{Error, Real};
 use core::mem::size_of;
 
@@ -114,8 +114,20 @@ impl<'a> World<'a> {
         self.read().def()
     }
 
-    fn header(&self) -> &Header {
+    pub(crate) fn header(&self) -> &Header {
         self.read().header()
+    }
+
+    /// The `n` records of the traction table from `first` on (the caller checked them against
+    /// the capacity).
+    pub(crate) fn traction_records_mut(
+        &mut self,
+        layout: &Layout,
+        first: usize,
+        n: usize,
+    ) -> &mut [TractionRecord] {
+        let start = layout.tractions_offset + first * size_of::<TractionRecord>();
+        bytemuck::cast_slice_mut(&mut self.buf[start..start + n * size_of::<TractionRecord>()])
     }
 
     /// Number of particles added.
@@ -179,7 +191,7 @@ impl<'a> World<'a> {
         self.read().traction_count()
     }
 
-    fn header_mut(&mut self) -> &mut Header {
+    pub(crate) fn header_mut(&mut self) -> &mut Header {
         bytemuck::from_bytes_mut(&mut self.buf[..size_of::<Header>()])
     }
 

@@ -341,7 +341,7 @@ impl<'a> WorldRef<'a> {
     }
 
     /// Kinetic energy (J) and mass (kg) of the active particles, in f64.
-    pub(super) fn kinetic_energy_and_mass(&self) -> (f64, f64) {
+    pub(crate) fn kinetic_energy_and_mass(&self) -> (f64, f64) {
         let view = self.particles();
         let d = self.layout().d;
         let (mut kinetic, mut mass) = (0.0f64, 0.0f64);

@@ -5,7 +5,6 @@ use super::{StepReport, World};
 #[cfg(feature = "effects")]
 use crate::def::Dimension;
 use crate::def::{ShapeFunction, Transfer, UpdateOrder, WorldDef};
-use crate::effects::Feedback;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
@@ -78,23 +77,6 @@ impl<'a> World<'a> {
         h.time += dt as f64;
         h.step_count += 1;
         Ok(report)
-    }
-
-    /// The thermostat (NairnMPM's feedback damping): `alpha += 2 gain (KE - target) dt / M`,
-    /// clamped to `[0, min(max_alpha, room)]`, from the active particles' kinetic energy and
-    /// mass; `room` is the largest alpha the substep integrates stably. The stored alpha stays
-    /// finite: a rate that is not a number (no finite energy to compare) leaves it as it was.
-    fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real, room: f64) {
-        let (kinetic, mass) = self.read().kinetic_energy_and_mass();
-        let h = self.header_mut();
-        if mass > 0.0 {
-            let target = f.target.at(time) as f64;
-            let rate = 2.0 * f.gain as f64 * (kinetic - target) / mass;
-            let alpha = h.feedback_alpha + rate * dt as f64;
-            if !alpha.is_nan() {
-                h.feedback_alpha = alpha.clamp(0.0, (f.max_alpha as f64).min(room));
-            }
-        }
     }
 
     /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
@@ -303,13 +285,13 @@ impl Kernel for Substep<'_> {
                 grid_update::constrained_velocity(ctx, g);
                 I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
                 p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
-                p2g::tractions(s, ctx, p, count, g);
+                crate::effects::forces::tractions(s, ctx, p, count, g);
                 grid_update::acceleration(ctx, g);
                 I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
             }
             UpdateOrder::Usl => {
                 p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
-                p2g::tractions(s, ctx, p, count, g);
+                crate::effects::forces::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also updates the stress (see g2p::particles).
@@ -317,7 +299,7 @@ impl Kernel for Substep<'_> {
             }
             UpdateOrder::Musl => {
                 p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
-                p2g::tractions(s, ctx, p, count, g);
+                crate::effects::forces::tractions(s, ctx, p, count, g);
                 grid_update::velocity(ctx, g);
                 grid_update::acceleration(ctx, g);
                 // Also scatters the new momenta to the remap columns (see g2p::particles).

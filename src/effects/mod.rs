@@ -1,10 +1,21 @@
-//! The optional effects of seeds/000 a scene declares in [`crate::WorldDef::effects`]: damping
-//! (sections 5.1.2 and 5.3), particle forces and tractions (eqs 13, 20-21), a body force
-//! besides gravity, heat conduction (section 8) and diffusion (section 9). An effect that is not declared reserves no column and runs no loop: the
-//! step dispatches once on what is declared to a monomorphised instance of its passes.
+//! The optional effects of seeds/000 a scene declares in [`crate::WorldDef::effects`]
+//! ([`Effects`]). An effect that is not declared reserves no column and runs no loop. Each
+//! effect is one module: its declaration, its per-particle data, and its terms in the step.
+//! - [`damping`]: grid and particle damping, per-particle rates and the thermostat (sections
+//!   5.1.2 and 5.3, eqs 46-52 and 107).
+//! - [`forces`]: particle forces, tractions and a body force (eqs 13, 20-22).
+//! - [`transport`]: heat conduction (section 8) and diffusion (section 9); their pass, a
+//!   phase of the substep of its own, is [`crate::phases::transport`].
 //!
 //! (The APIC transfer of seeds/001 is a method choice, [`crate::Transfer`], with the other
 //! method switches in [`crate::def`].)
+
+pub mod damping;
+pub mod forces;
+pub mod transport;
+
+pub use damping::{Damping, Feedback};
+pub use transport::{ScalarBoundary, Transport};
 
 use crate::{Error, Real, Vec3};
 
@@ -104,91 +115,6 @@ impl Default for Schedule {
     }
 }
 
-/// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
-/// Nosé-Hoover-style controller): once per substep,
-/// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`, where KE and M are
-/// the kinetic energy and mass of the active particles. The evolving alpha adds to the grid
-/// damping `alpha_g` and is kept in the world (a snapshot carries it).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Feedback {
-    /// Gain `1/Q`, 1/m^2, > 0. Sets how fast alpha reacts: an excess kinetic energy per unit
-    /// mass `e` (m^2/s^2) raises alpha by `2 gain e` per second.
-    pub gain: Real,
-    /// Target kinetic energy, J, a function of time (>= 0). 0 drives the scene to rest.
-    pub target: Schedule,
-    /// Largest alpha, 1/s, > 0 (infinity: unbounded).
-    pub max_alpha: Real,
-}
-
-/// Damping of seeds/000 sections 5.1.2 and 5.3, on top of the PIC damping that
-/// [`crate::WorldDef::flip_beta`] sets (eqs 41-52).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Damping {
-    /// Grid damping `alpha_g'(t)`, 1/s, >= 0: damps the velocity extrapolated from the grid.
-    pub grid: Schedule,
-    /// Particle damping `alpha_p'(t)`, 1/s, >= 0: damps the particle velocity.
-    pub particle: Schedule,
-    /// A thermostat that adds to the grid damping, if any.
-    pub feedback: Option<Feedback>,
-    /// Reserve two per-particle columns, `alpha_g(x_p)` and `alpha_p(x_p)` in 1/s, added to the
-    /// global values for that particle: position-dependent damping as eq 107 writes it (the
-    /// host sets them with [`crate::World::set_particle_damping`], for example from each
-    /// particle's position).
-    pub per_particle: bool,
-}
-
-impl Damping {
-    /// No damping: a starting point for struct-update syntax.
-    pub const NONE: Damping = Damping {
-        grid: Schedule::ZERO,
-        particle: Schedule::ZERO,
-        feedback: None,
-        per_particle: false,
-    };
-}
-
-/// Boundary condition of a transported scalar (temperature or concentration potential) on one
-/// face of the grid.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ScalarBoundary {
-    /// No flow across the face (the natural condition of eq 125).
-    Insulated,
-    /// The value held fixed on the face: the nodes from the grid face to the wall plane (as the
-    /// walls of [`crate::Boundary`]) take it.
-    Fixed(Real),
-    /// A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
-    /// concentration potential), applied on the wall plane's nodes (eqs 136, 149).
-    Flux(Real),
-}
-
-/// A transported scalar field (heat conduction, seeds/000 section 8, or diffusion, section 9):
-/// its boundary conditions and whether particles carry a source.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Transport {
-    /// Condition of each face, indexed by [`crate::Face`].
-    pub faces: [ScalarBoundary; 6],
-    /// Reserve a per-particle source column (W/m^3 for heat, 1/s for the concentration
-    /// potential), set with [`crate::World::set_particle_sources`].
-    pub sources: bool,
-}
-
-impl Transport {
-    /// Every face insulated, no sources.
-    pub const INSULATED: Transport = Transport {
-        faces: [ScalarBoundary::Insulated; 6],
-        sources: false,
-    };
-
-    /// Whether the faces of the `axes` used have finite values (the z faces of a 2D world are
-    /// not read, like every other z component there).
-    fn is_valid(&self, axes: usize) -> bool {
-        self.faces[..2 * axes].iter().all(|f| match f {
-            ScalarBoundary::Insulated => true,
-            ScalarBoundary::Fixed(v) | ScalarBoundary::Flux(v) => v.is_finite(),
-        })
-    }
-}
-
 /// What a scene declares beyond the momentum equation. [`Effects::NONE`] is the default.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Effects {
@@ -233,17 +159,7 @@ impl Effects {
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
     pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
-        let ok_damping = self.damping.is_none_or(|d| {
-            d.grid.is_valid(true)
-                && d.particle.is_valid(true)
-                && d.feedback.is_none_or(|f| {
-                    f.gain.is_finite()
-                        && f.gain > 0.0
-                        && f.target.is_valid(true)
-                        && f.max_alpha > 0.0
-                        && !f.max_alpha.is_nan()
-                })
-        });
+        let ok_damping = self.damping.is_none_or(|d| d.is_valid());
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
             && self.body_force_scale.is_valid(false);
         let ok_transport = [self.heat, self.diffusion]
