@@ -26,7 +26,7 @@
 
 use super::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
 use super::p2g::{rows, Adds, Mode, Products};
-use super::rows::{self, Compare, Rows};
+use super::rows::{self, Rows};
 use super::update;
 use super::wide::{Wide, WideMask};
 use super::{Ctx, Isa};
@@ -34,8 +34,7 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::material::{
-    eigenstrain_part, elastic_part, kirchhoff_lanes, kirchhoff_over_rho0, model_of, Deformation,
-    Params,
+    eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, Deformation, Params,
 };
 use crate::math::INV;
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
@@ -357,7 +356,7 @@ unsafe fn exp_minus_identity<I: Rows, const D: usize>(
 /// away (`J - 1` outside [`Ctx::jm1_band`], F not inverted); a lane that fails (non-finite
 /// result, inverted F or runaway) keeps its H and stress.
 #[inline(always)]
-fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     start: usize,
@@ -447,7 +446,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
         let (model, params) = (model_of(rec), Params::of(rec));
         let mut admissible = Lanes::ALL;
         match &eigen {
-            None => kirchhoff_lanes(model, &params, h, &hzz, &jm1, tau),
+            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, tau),
             Some(d) => {
                 let (mut he, mut hzze, mut jm1e, mut cube) = (*h, hzz, jm1, [1.0; W]);
                 for ln in 0..W {
@@ -468,7 +467,7 @@ fn update_stress<I: Compare, const D: usize, const K: usize, S: Shape1D<K>, cons
                 }
                 // The eigenstrain must not invert the material either.
                 admissible = rows::above::<I, W>(d, -1.0);
-                kirchhoff_lanes(model, &params, &he, &hzze, &jm1e, tau);
+                I::kirchhoff::<D, W>(model, &params, &he, &hzze, &jm1e, tau);
                 for row in tau.iter_mut() {
                     for ln in 0..W {
                         row[ln] *= cube[ln];
