@@ -276,68 +276,22 @@ pub(crate) const INV: [Real; 9] = [
 ];
 
 /// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of
-/// `F = I + h` (det F > 0). Working with `R - I` keeps small rotations at full precision.
-///
-/// 2D: closed form from the angle. 3D: Newton's iteration `R <- (R + R^-T) / 2` written for
-/// `Q`: `Q <- (Q - (I + Q)^-T Q^T) / 2`, which converges quadratically near a rotation; it stops
-/// at round-off or after a fixed number of iterations, so its cost is bounded.
+/// `F = I + h` (det F > 0). Working with `R - I` keeps small rotations at full precision. The
+/// one-matrix form of [`polar_rotation_minus_identity_lanes`].
 pub fn polar_rotation_minus_identity<const D: usize>(h: &Mat<D>) -> Mat<D> {
-    if D == 2 {
-        // R = [[c, -s], [s, c]] / n with c = 2 + tr h, s = h10 - h01.
-        let c = 2.0 + h[0][0] + h[1][1];
-        let s = h[1][0] - h[0][1];
-        let n = sqrt(c * c + s * s);
-        let mut q = [[0.0; D]; D];
-        if n > 0.0 {
-            // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation
-            // where it matters (small angles, c > 0); the first is exact enough elsewhere.
-            let cos_m1 = if c >= 0.0 {
-                -s * s / (n * (c + n))
-            } else {
-                c / n - 1.0
-            };
-            q[0][0] = cos_m1;
-            q[1][1] = cos_m1;
-            q[0][1] = -s / n;
-            q[1][0] = s / n;
-        }
-        return q;
-    }
-    let mut q = *h;
-    let tol = Real::EPSILON * 4.0;
-    for _ in 0..32 {
-        let mut r = q;
-        for (a, row) in r.iter_mut().enumerate() {
-            row[a] += 1.0;
-        }
-        let d = det(&r);
-        if !(d.is_finite() && d > 0.0) {
-            break;
-        }
-        let inv_t = inverse_transpose(&r);
-        let corr = mul(&inv_t, &transpose(&q));
-        let mut change: Real = 0.0;
-        let mut size: Real = 0.0;
-        for i in 0..D {
-            for j in 0..D {
-                let next = 0.5 * (q[i][j] - corr[i][j]);
-                let diff = next - q[i][j];
-                change += diff * diff;
-                size += next * next;
-                q[i][j] = next;
-            }
-        }
-        if change <= tol * tol * (1.0 + size) {
-            break;
-        }
-    }
-    q
+    let lanes: [[[Real; 1]; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| [h[a][b]]));
+    let q = polar_rotation_minus_identity_lanes(&lanes);
+    core::array::from_fn(|a| core::array::from_fn(|b| q[a][b][0]))
 }
 
-/// [`polar_rotation_minus_identity`] of `W` matrices at once, `h[a][b][lane]`: the same
-/// operations in the same order for each lane, as loops over lanes that vectorise (each lane
-/// gets the bits the one-matrix function gives it). The 3D iteration runs until every lane
-/// has stopped, each lane stopping where the one-matrix function would.
+/// [`polar_rotation_minus_identity`] of `W` matrices at once, `h[a][b][lane]`, as loops over
+/// lanes that vectorise; each lane's operations are those of one matrix, in the same order, so
+/// a lane gets the bits it would get alone.
+///
+/// 2D: closed form from the angle. 3D: Newton's iteration `R <- (R + R^-T) / 2` written for
+/// `Q`: `Q <- (Q - (I + Q)^-T Q^T) / 2`, which converges quadratically near a rotation; a lane
+/// stops at round-off, at a non-positive determinant or after a fixed number of iterations (so
+/// the cost is bounded), and the loop runs until every lane has stopped.
 #[inline(always)]
 pub fn polar_rotation_minus_identity_lanes<const D: usize, const W: usize>(
     h: &[[[Real; W]; D]; D],
@@ -345,9 +299,12 @@ pub fn polar_rotation_minus_identity_lanes<const D: usize, const W: usize>(
     let mut q = [[[0.0; W]; D]; D];
     if D == 2 {
         for ln in 0..W {
+            // R = [[c, -s], [s, c]] / n with c = 2 + tr h, s = h10 - h01.
             let c = 2.0 + h[0][0][ln] + h[1][1][ln];
             let s = h[1][0][ln] - h[0][1][ln];
             let n = sqrt(c * c + s * s);
+            // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation
+            // where it matters (small angles, c > 0); the first is exact enough elsewhere.
             let cos_m1 = if c >= 0.0 {
                 -s * s / (n * (c + n))
             } else {
@@ -395,7 +352,7 @@ pub fn polar_rotation_minus_identity_lanes<const D: usize, const W: usize>(
                     q[i][j][ln] = if step { next[i][j] } else { q[i][j][ln] };
                 }
             }
-            // The one-matrix function's test (a NaN change goes on).
+            // Not `change > ...`: a NaN change goes on.
             let converged = change <= tol * tol * (1.0 + size);
             going[ln] = step && !converged;
         }

@@ -8,41 +8,52 @@
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
 use super::{Deformation, Model, Params, Stress};
-use crate::math::{mul, polar_rotation_minus_identity, polar_rotation_minus_identity_lanes, Mat};
+use crate::math::{polar_rotation_minus_identity_lanes, Mat};
 use crate::Real;
 
-/// Small strain `e` of the corotated frame, and `Q = R - I`.
+/// Lanes of `D x D` matrices, `m[a][b][lane]`.
+type Lanes<const D: usize, const W: usize> = [[[Real; W]; D]; D];
+
+/// Small strain `e = sym(R^T F) - I` of the corotated frame, and `Q = R - I`, of each lane.
 #[inline(always)]
-fn corotated_strain<const D: usize>(h: &Mat<D>) -> (Mat<D>, Mat<D>) {
-    let q = polar_rotation_minus_identity(h);
-    let mut e = [[0.0; D]; D];
+fn corotated_strain<const D: usize, const W: usize>(h: &Lanes<D, W>) -> (Lanes<D, W>, Lanes<D, W>) {
+    let q = polar_rotation_minus_identity_lanes(h);
+    let mut e = [[[0.0; W]; D]; D];
     for a in 0..D {
         for b in 0..D {
-            // (R^T F - I)[a][b] = Q[b][a] + H[a][b] + sum_k Q[k][a] H[k][b]
-            let mut qh = 0.0;
-            for k in 0..D {
-                qh += q[k][a] * h[k][b];
+            for ln in 0..W {
+                // (R^T F - I)[a][b] = Q[b][a] + H[a][b] + sum_k Q[k][a] H[k][b]
+                let mut qh = 0.0;
+                for k in 0..D {
+                    qh += q[k][a][ln] * h[k][b][ln];
+                }
+                e[a][b][ln] = q[b][a][ln] + h[a][b][ln] + qh;
             }
-            e[a][b] = q[b][a] + h[a][b] + qh;
         }
     }
     // U is symmetric in exact arithmetic; symmetrise the round-off away.
     for a in 0..D {
         for b in a + 1..D {
-            let s = 0.5 * (e[a][b] + e[b][a]);
-            e[a][b] = s;
-            e[b][a] = s;
+            for ln in 0..W {
+                let s = 0.5 * (e[a][b][ln] + e[b][a][ln]);
+                e[a][b][ln] = s;
+                e[b][a][ln] = s;
+            }
         }
     }
     (e, q)
 }
 
-/// Corotated linear elasticity.
+/// One particle's `H` as a single lane.
+fn one_lane<const D: usize>(h: &Mat<D>) -> Lanes<D, 1> {
+    core::array::from_fn(|a| core::array::from_fn(|b| [h[a][b]]))
+}
+
+/// Corotated linear elasticity. The formula is written once, on lanes
+/// ([`Model::kirchhoff_lanes`]: loops over lanes that vectorise); one particle is one lane.
 pub(crate) struct LinearElastic;
 
 impl Model for LinearElastic {
-    /// [`Model::kirchhoff`]'s operations, in its order, as loops over lanes that vectorise
-    /// (the formula lane by lane took 1.8 times the neo-Hookean step).
     #[inline(always)]
     fn kirchhoff_lanes<const D: usize, const W: usize>(
         p: &Params,
@@ -51,30 +62,8 @@ impl Model for LinearElastic {
         jm1: &[Real; W],
         tau: &mut [[Real; W]; 6],
     ) {
-        let q = polar_rotation_minus_identity_lanes(h);
-        // e = sym(R^T F - I) (see `corotated_strain`), its trace with the out-of-plane e_zz,
-        // and s = lambda tr(e) I + 2 mu e.
-        let mut e = [[[0.0; W]; D]; D];
-        for a in 0..D {
-            for b in 0..D {
-                for ln in 0..W {
-                    let mut qh = 0.0;
-                    for k in 0..D {
-                        qh += q[k][a][ln] * h[k][b][ln];
-                    }
-                    e[a][b][ln] = q[b][a][ln] + h[a][b][ln] + qh;
-                }
-            }
-        }
-        for a in 0..D {
-            for b in a + 1..D {
-                for ln in 0..W {
-                    let s = 0.5 * (e[a][b][ln] + e[b][a][ln]);
-                    e[a][b][ln] = s;
-                    e[b][a][ln] = s;
-                }
-            }
-        }
+        let (e, q) = corotated_strain(h);
+        // tr(e) with the out-of-plane e_zz, and s = lambda tr(e) I + 2 mu e.
         let mut tr = [0.0; W];
         for ln in 0..W {
             tr[ln] = if D == 2 { hzz[ln] } else { 0.0 };
@@ -129,56 +118,34 @@ impl Model for LinearElastic {
         }
     }
 
+    /// The chunk path on one lane (with `1 / rho0 = 1`: `x * 1` is `x`, so
+    /// [`super::kirchhoff_over_rho0`] gives the chunk path's bits); the stress is symmetric.
     #[inline(always)]
     fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
-        let (e, q) = corotated_strain(&f.h);
-        let ezz = if D == 2 { f.hzz } else { 0.0 };
-        let mut tr = ezz;
-        for (a, row) in e.iter().enumerate() {
-            tr += row[a];
-        }
-        let mut s = [[0.0; D]; D];
-        for a in 0..D {
-            for b in 0..D {
-                s[a][b] = 2.0 * p.mu * e[a][b];
-            }
-            s[a][a] += p.lambda * tr;
-        }
-        // R s R^T with R = I + Q.
-        let mut r = q;
-        for (a, row) in r.iter_mut().enumerate() {
-            row[a] += 1.0;
-        }
-        let mut rt = [[0.0; D]; D];
-        for a in 0..D {
-            for b in 0..D {
-                rt[a][b] = r[b][a];
-            }
-        }
-        let j = 1.0 + f.jm1;
-        let mut m = mul(&mul(&r, &s), &rt);
-        for row in m.iter_mut() {
-            for v in row.iter_mut() {
-                *v *= j;
-            }
-        }
-        let zz = if D == 2 {
-            j * (p.lambda * tr + 2.0 * p.mu * ezz)
-        } else {
-            0.0
+        let unscaled = Params {
+            inv_rho0: 1.0,
+            ..*p
         };
+        let mut tau = [[0.0; 1]; 6];
+        Self::kirchhoff_lanes(&unscaled, &one_lane(&f.h), &[f.hzz], &[f.jm1], &mut tau);
+        let mut m = [[0.0; D]; D];
+        for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+            m[r][c] = tau[k][0];
+            m[c][r] = tau[k][0];
+        }
+        let zz = if D == 2 { tau[3][0] } else { 0.0 };
         Stress { m, zz }
     }
 
     fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
-        let (e, _) = corotated_strain(&f.h);
+        let (e, _) = corotated_strain(&one_lane(&f.h));
         let ezz = if D == 2 { f.hzz } else { 0.0 };
         let mut tr = ezz;
         let mut ee = ezz * ezz;
         for a in 0..D {
-            tr += e[a][a];
+            tr += e[a][a][0];
             for b in 0..D {
-                ee += e[a][b] * e[a][b];
+                ee += e[a][b][0] * e[a][b][0];
             }
         }
         p.mu * ee + 0.5 * p.lambda * tr * tr
