@@ -47,6 +47,7 @@ mod grid;
 mod layout;
 mod material;
 pub mod math;
+mod pack;
 mod particles;
 mod phases;
 pub mod shape;

@@ -1,6 +1,7 @@
 //! Scalar functions (libm-backed, so the kernel stays `no_std`) and small dense matrices
 //! generic over the dimension `D` (2 or 3), stored row-major as `[[Real; D]; D]`.
 
+use crate::pack::{matrix, MatOf, Num};
 use crate::Real;
 
 /// A `D x D` matrix, row-major: `m[a][b]` is row a, column b.
@@ -140,18 +141,14 @@ pub fn identity<const D: usize>() -> Mat<D> {
 
 /// Matrix product `a b`.
 #[inline(always)]
-pub fn mul<const D: usize>(a: &Mat<D>, b: &Mat<D>) -> Mat<D> {
-    let mut c = [[0.0; D]; D];
-    for i in 0..D {
-        for j in 0..D {
-            let mut s = 0.0;
-            for k in 0..D {
-                s += a[i][k] * b[k][j];
-            }
-            c[i][j] = s;
+pub fn mul<T: Num, const D: usize>(a: &MatOf<T, D>, b: &MatOf<T, D>) -> MatOf<T, D> {
+    matrix(|i, j| {
+        let mut s = T::splat(0.0);
+        for k in 0..D {
+            s += a[i][k] * b[k][j];
         }
-    }
-    c
+        s
+    })
 }
 
 /// Transpose.
@@ -168,7 +165,7 @@ pub fn transpose<const D: usize>(a: &Mat<D>) -> Mat<D> {
 
 /// Determinant (D = 2 or 3).
 #[inline(always)]
-pub fn det<const D: usize>(m: &Mat<D>) -> Real {
+pub fn det<T: Num, const D: usize>(m: &MatOf<T, D>) -> T {
     if D == 2 {
         m[0][0] * m[1][1] - m[0][1] * m[1][0]
     } else {
@@ -182,7 +179,7 @@ pub fn det<const D: usize>(m: &Mat<D>) -> Real {
 /// that small strains keep their precision (`rest` is the sum of the principal minors of
 /// order >= 2: `det h` in 2D; the 2 x 2 minors plus `det h` in 3D).
 #[inline(always)]
-pub fn det_identity_plus_parts<const D: usize>(h: &Mat<D>) -> (Real, Real) {
+pub fn det_identity_plus_parts<T: Num, const D: usize>(h: &MatOf<T, D>) -> (T, T) {
     if D == 2 {
         (h[0][0] + h[1][1], det(h))
     } else {
@@ -196,7 +193,7 @@ pub fn det_identity_plus_parts<const D: usize>(h: &Mat<D>) -> (Real, Real) {
 
 /// `det(I + h) - 1`.
 #[inline(always)]
-pub fn det_identity_plus_minus_one<const D: usize>(h: &Mat<D>) -> Real {
+pub fn det_identity_plus_minus_one<T: Num, const D: usize>(h: &MatOf<T, D>) -> T {
     let (tr, rest) = det_identity_plus_parts(h);
     tr + rest
 }
@@ -214,24 +211,19 @@ pub fn x_minus_ln_1p(x: Real) -> Real {
 
 /// Inverse transpose `m^-T` from cofactors (D = 2 or 3); the caller guarantees `det != 0`.
 #[inline(always)]
-fn inverse_transpose<const D: usize>(m: &Mat<D>) -> Mat<D> {
-    let inv_det = 1.0 / det(m);
-    let mut c = [[0.0; D]; D];
-    if D == 2 {
-        c[0][0] = m[1][1] * inv_det;
-        c[0][1] = -m[1][0] * inv_det;
-        c[1][0] = -m[0][1] * inv_det;
-        c[1][1] = m[0][0] * inv_det;
-    } else {
-        for i in 0..3 {
-            for j in 0..3 {
-                let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-                let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-                c[i][j] = (m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]) * inv_det;
-            }
+fn inverse_transpose<T: Num, const D: usize>(m: &MatOf<T, D>) -> MatOf<T, D> {
+    let inv_det = T::splat(1.0) / det(m);
+    matrix(|i, j| {
+        if D == 2 {
+            // The cofactor of (i, j): the opposite corner, negated off the diagonal.
+            let c = m[1 - i][1 - j];
+            (if i == j { c } else { -c }) * inv_det
+        } else {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+            (m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]) * inv_det
         }
-    }
-    c
+    })
 }
 
 /// `exp(a) - I` by the Taylor series of exp up to and including the power `terms`
@@ -275,50 +267,47 @@ pub(crate) const INV: [Real; 9] = [
     1.0 / 8.0,
 ];
 
-/// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of
-/// `F = I + h` (det F > 0). Working with `R - I` keeps small rotations at full precision. The
-/// one-matrix form of [`polar_rotation_minus_identity_lanes`].
-pub fn polar_rotation_minus_identity<const D: usize>(h: &Mat<D>) -> Mat<D> {
-    let lanes: [[[Real; 1]; D]; D] = core::array::from_fn(|a| core::array::from_fn(|b| [h[a][b]]));
-    let q = polar_rotation_minus_identity_lanes(&lanes);
-    core::array::from_fn(|a| core::array::from_fn(|b| q[a][b][0]))
-}
-
-/// [`polar_rotation_minus_identity`] of `W` matrices at once, `h[a][b][lane]`, as loops over
-/// lanes that vectorise; each lane's operations are those of one matrix, in the same order, so
-/// a lane gets the bits it would get alone.
+/// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of `F = I + h`
+/// (det F > 0), for one matrix (`T = Real`) or a pack of them (each lane gets the bits it
+/// would get alone). Working with `R - I` keeps small rotations at full precision.
 ///
 /// 2D: closed form from the angle. 3D: Newton's iteration `R <- (R + R^-T) / 2` written for
 /// `Q`: `Q <- (Q - (I + Q)^-T Q^T) / 2`, which converges quadratically near a rotation; a lane
 /// stops at round-off, at a non-positive determinant or after a fixed number of iterations (so
 /// the cost is bounded), and the loop runs until every lane has stopped.
 #[inline(always)]
-pub fn polar_rotation_minus_identity_lanes<const D: usize, const W: usize>(
+pub fn polar_rotation_minus_identity<T: Num, const D: usize>(h: &MatOf<T, D>) -> MatOf<T, D> {
+    let zero = T::splat(0.0);
+    if D == 2 {
+        // R = [[c, -s], [s, c]] / n with c = 2 + tr h, s = h10 - h01.
+        let c = h[0][0] + h[1][1] + 2.0;
+        let s = h[1][0] - h[0][1];
+        let n = (c * c + s * s).sqrt();
+        // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation where it
+        // matters (small angles, c > 0); the first is exact enough elsewhere.
+        let cos_m1 = T::select(c.ge(zero), -s * s / (n * (c + n)), c / n - 1.0);
+        let turns = n.gt(zero);
+        let sin = T::select(turns, s / n, zero);
+        let cos_m1 = T::select(turns, cos_m1, zero);
+        return matrix(|a, b| match (a, b) {
+            (0, 1) => -sin,
+            (1, 0) => sin,
+            _ => cos_m1,
+        });
+    }
+    T::polar_newton(h)
+}
+
+/// The 3D iteration of [`polar_rotation_minus_identity`] for `W` matrices at once,
+/// `h[a][b][lane]`: rounds of a loop over lanes (which the compiler vectorises, the whole
+/// Newton step in its body); a lane stops at round-off, at a non-positive determinant or after
+/// a fixed number of rounds (so the cost is bounded), and the rounds go on until every lane
+/// has stopped. Each lane's operations are those of one matrix alone, in the same order.
+#[inline(always)]
+pub(crate) fn polar_newton_lanes<const D: usize, const W: usize>(
     h: &[[[Real; W]; D]; D],
 ) -> [[[Real; W]; D]; D] {
-    let mut q = [[[0.0; W]; D]; D];
-    if D == 2 {
-        for ln in 0..W {
-            // R = [[c, -s], [s, c]] / n with c = 2 + tr h, s = h10 - h01.
-            let c = 2.0 + h[0][0][ln] + h[1][1][ln];
-            let s = h[1][0][ln] - h[0][1][ln];
-            let n = sqrt(c * c + s * s);
-            // cos - 1 = c/n - 1 = -s^2 / (n (c + n)): the second form has no cancellation
-            // where it matters (small angles, c > 0); the first is exact enough elsewhere.
-            let cos_m1 = if c >= 0.0 {
-                -s * s / (n * (c + n))
-            } else {
-                c / n - 1.0
-            };
-            let turns = n > 0.0;
-            q[0][0][ln] = if turns { cos_m1 } else { 0.0 };
-            q[1][1][ln] = if turns { cos_m1 } else { 0.0 };
-            q[0][1][ln] = if turns { -s / n } else { 0.0 };
-            q[1][0][ln] = if turns { s / n } else { 0.0 };
-        }
-        return q;
-    }
-    q = *h;
+    let mut q = *h;
     let tol = Real::EPSILON * 4.0;
     let mut going = [true; W];
     for _ in 0..32 {

@@ -13,29 +13,31 @@ mod linear_elastic;
 mod neo_hookean;
 
 use crate::layout::MaterialRecord;
-use crate::math::Mat;
+use crate::pack::{matrix, packs, MatOf, Num, Pack};
 use crate::{MaterialModel, Real};
 
-/// Stress as a D x D matrix plus the plane-strain `zz` component (0 in 3D).
+/// Stress as a D x D matrix plus the plane-strain `zz` component (0 in 3D), of one particle
+/// (`T = Real`) or of a pack of them.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Stress<const D: usize> {
-    pub m: Mat<D>,
-    pub zz: Real,
+pub(crate) struct Stress<const D: usize, T = Real> {
+    pub m: MatOf<T, D>,
+    pub zz: T,
 }
 
 /// The deformation a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
-/// `F_zz - 1` (2D only; ignored in 3D) and `J - 1 = det F - 1` of the whole 3 x 3 `F`.
+/// `F_zz - 1` (2D only; ignored in 3D) and `J - 1 = det F - 1` of the whole 3 x 3 `F`, of one
+/// particle (`T = Real`) or of a pack of them.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Deformation<const D: usize> {
-    pub h: Mat<D>,
-    pub hzz: Real,
-    pub jm1: Real,
+pub(crate) struct Deformation<const D: usize, T = Real> {
+    pub h: MatOf<T, D>,
+    pub hzz: T,
+    pub jm1: T,
 }
 
-impl<const D: usize> Deformation<D> {
+impl<const D: usize, T: Num> Deformation<D, T> {
     /// From `H` and the out-of-plane `F_zz - 1` (0 in plane strain and in 3D).
     #[inline(always)]
-    pub fn new(h: Mat<D>, hzz: Real) -> Self {
+    pub fn new(h: MatOf<T, D>, hzz: T) -> Self {
         let j2 = crate::math::det_identity_plus_minus_one(&h);
         let jm1 = if D == 2 { j2 + hzz + j2 * hzz } else { j2 };
         Deformation { h, hzz, jm1 }
@@ -49,8 +51,11 @@ impl<const D: usize> Deformation<D> {
 /// `H_e = (H - d I) / (1 + d)`. In 2D the out-of-plane axis carries the eigenstrain too (a
 /// clamped plane-strain block heated is stressed along z).
 #[inline(always)]
-pub(crate) fn elastic_part<const D: usize>(f: &Deformation<D>, d: Real) -> (Deformation<D>, Real) {
-    let inv = 1.0 / (1.0 + d);
+pub(crate) fn elastic_part<const D: usize, T: Num>(
+    f: &Deformation<D, T>,
+    d: T,
+) -> (Deformation<D, T>, T) {
+    let inv = T::splat(1.0) / (d + 1.0);
     let mut h = f.h;
     for (a, row) in h.iter_mut().enumerate() {
         row[a] -= d;
@@ -59,8 +64,8 @@ pub(crate) fn elastic_part<const D: usize>(f: &Deformation<D>, d: Real) -> (Defo
         }
     }
     // (1 + d)^3 - 1 without cancellation.
-    let cube_m1 = d * (3.0 + d * (3.0 + d));
-    let cube = 1.0 + cube_m1;
+    let cube_m1 = d * ((d + 3.0) * d + 3.0);
+    let cube = cube_m1 + 1.0;
     let e = Deformation {
         h,
         hzz: (f.hzz - d) * inv,
@@ -112,45 +117,19 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
 /// model is one file implementing this trait, one arm of [`MaterialModel`] (and of the C enum)
 /// and of [`by_model!`], and its tests.
 pub(crate) trait Model {
-    /// The Kirchhoff stress `tau` of one particle (not yet divided by `rho0`), for
-    /// `jm1 = det F - 1 > -1`.
-    fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D>;
+    /// The Kirchhoff stress `tau` (not yet divided by `rho0`) for `jm1 = det F - 1 > -1`,
+    /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of a pack
+    /// of particles sharing this material (`T = Pack<W>`, a chunk's stress update). Lanes of
+    /// a pack that are not updated may hold any value; their results are not used.
+    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T>;
 
-    /// `tau / rho0` of `W` particles of this material at once, the stress update's path for a
-    /// chunk whose lanes share one material: `h[a][b][lane]`, the out-of-plane `hzz[lane]`
-    /// (2D) and `jm1[lane]` in, `tau[k][lane]` out in the stored component order
-    /// ([`crate::phases::sym_pairs`], then `zz` in 2D). Lanes that are not updated may hold any
-    /// value; their results are not used. By default [`Model::kirchhoff`] lane by lane (loops
-    /// the compiler vectorises where the formula allows); a model may write its own loops, as
-    /// long as each lane gets the bits [`kirchhoff_over_rho0`] gives it.
+    /// Whether a chunk's stress update runs [`Model::kirchhoff`] on one pack of the chunk's
+    /// particles in `D` dimensions, rather than lane by lane in a loop the compiler
+    /// vectorises. Lane by lane is the faster form for a formula without loops; an iteration
+    /// whose count differs by particle (a polar decomposition) vectorises only as a pack.
     #[inline(always)]
-    fn kirchhoff_lanes<const D: usize, const W: usize>(
-        p: &Params,
-        h: &[[[Real; W]; D]; D],
-        hzz: &[Real; W],
-        jm1: &[Real; W],
-        tau: &mut [[Real; W]; 6],
-    ) {
-        for ln in 0..W {
-            let mut m = [[0.0; D]; D];
-            for r in 0..D {
-                for c in 0..D {
-                    m[r][c] = h[r][c][ln];
-                }
-            }
-            let f = Deformation::<D> {
-                h: m,
-                hzz: hzz[ln],
-                jm1: jm1[ln],
-            };
-            let s = Self::kirchhoff(p, &f);
-            for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
-                tau[k][ln] = s.m[r][c] * p.inv_rho0;
-            }
-            if D == 2 {
-                tau[3][ln] = s.zz * p.inv_rho0;
-            }
-        }
+    fn packed(_d: usize) -> bool {
+        false
     }
 
     /// Strain energy per unit initial volume, J/m^3 (energy checks and diagnostics).
@@ -174,24 +153,25 @@ macro_rules! by_model {
     };
 }
 
-/// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`.
+/// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`: one particle, or a pack.
 #[inline(always)]
-pub(crate) fn kirchhoff_over_rho0<const D: usize>(
+pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
     model: MaterialModel,
     p: &Params,
-    f: &Deformation<D>,
-) -> Stress<D> {
+    f: &Deformation<D, T>,
+) -> Stress<D, T> {
     let mut s = by_model!(model, M => M::kirchhoff(p, f));
-    for row in s.m.iter_mut() {
-        for v in row.iter_mut() {
-            *v *= p.inv_rho0;
-        }
+    for v in s.m.iter_mut().flatten() {
+        *v *= T::splat(p.inv_rho0);
     }
-    s.zz *= p.inv_rho0;
+    s.zz *= T::splat(p.inv_rho0);
     s
 }
 
-/// `tau / rho0` of `W` particles sharing the material `model` ([`Model::kirchhoff_lanes`]).
+/// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
+/// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D) and `jm1[lane]` in,
+/// `tau[k][lane]` out in the stored component order ([`crate::phases::sym_pairs`], then `zz`
+/// in 2D). Lane by lane, or as one pack where the model asks for it ([`Model::packed`]).
 #[inline(always)]
 pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
     model: MaterialModel,
@@ -201,7 +181,39 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
     jm1: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
-    by_model!(model, M => M::kirchhoff_lanes(p, h, hzz, jm1, tau))
+    // The whole model inside its arm: a stress matrix of packs carried out of the `match` was
+    // copied through `memcpy`.
+    by_model!(model, M => {
+        if M::packed(D) {
+            let f = Deformation::<D, Pack<W>> {
+                h: *packs(h),
+                hzz: Pack(*hzz),
+                jm1: Pack(*jm1),
+            };
+            let s = M::kirchhoff(p, &f);
+            for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                tau[k] = (s.m[r][c] * p.inv_rho0).0;
+            }
+            if D == 2 {
+                tau[3] = (s.zz * p.inv_rho0).0;
+            }
+        } else {
+            for ln in 0..W {
+                let f = Deformation::<D> {
+                    h: matrix(|a, b| h[a][b][ln]),
+                    hzz: hzz[ln],
+                    jm1: jm1[ln],
+                };
+                let s = M::kirchhoff(p, &f);
+                for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                    tau[k][ln] = s.m[r][c] * p.inv_rho0;
+                }
+                if D == 2 {
+                    tau[3][ln] = s.zz * p.inv_rho0;
+                }
+            }
+        }
+    })
 }
 
 /// Strain energy per unit initial volume, J/m^3, of a deformation.
@@ -216,6 +228,7 @@ pub(crate) fn energy_density<const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Mat;
 
     fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
         let (s, c) = (
@@ -368,10 +381,11 @@ mod tests {
         }
     }
 
-    /// Every model's chunk path gives each lane the bits of the one-particle path
-    /// ([`Model::kirchhoff_lanes`] against [`kirchhoff_over_rho0`]), over random deformations
-    /// from small strain to large stretch and rotation, in 2D (with an out-of-plane stretch)
-    /// and 3D.
+    /// Every model's chunk path, and its formula on a pack whichever path the chunk takes,
+    /// gives each lane the bits of the one-particle path ([`kirchhoff_lanes`] and
+    /// [`kirchhoff_over_rho0`] on a [`Pack`] against it on a [`Real`]), over random
+    /// deformations from small strain to large stretch and rotation, in 2D (with an
+    /// out-of-plane stretch) and 3D.
     #[test]
     fn every_model_gives_a_chunk_the_bits_of_one_particle() {
         const W: usize = 16;
@@ -437,13 +451,22 @@ mod tests {
                 }
                 let mut tau = [[0.0; W]; 6];
                 kirchhoff_lanes(model, p, &h, &hzz, &jm1, &mut tau);
+                let f = Deformation {
+                    h: *packs(&h),
+                    hzz: Pack(hzz),
+                    jm1: Pack(jm1),
+                };
+                let packed = kirchhoff_over_rho0(model, p, &f);
                 for (ln, f) in each.iter().enumerate() {
                     let s = kirchhoff_over_rho0(model, p, f);
                     for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
-                        assert_eq!(tau[k][ln].to_bits(), s.m[r][c].to_bits(), "{model:?} {D}D");
+                        let bits = s.m[r][c].to_bits();
+                        assert_eq!(tau[k][ln].to_bits(), bits, "{model:?} {D}D");
+                        assert_eq!(packed.m[r][c].0[ln].to_bits(), bits, "{model:?} {D}D pack");
                     }
                     if D == 2 {
                         assert_eq!(tau[3][ln].to_bits(), s.zz.to_bits(), "{model:?} zz");
+                        assert_eq!(packed.zz.0[ln].to_bits(), s.zz.to_bits(), "{model:?} zz");
                     }
                 }
             }

@@ -8,10 +8,11 @@
 
 use super::{Deformation, Model, Params, Stress};
 use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p};
+use crate::pack::{matrix, Num};
 use crate::Real;
 
-/// `ln J` from `J - 1` for the stress: the branch-free log, so that [`Model::kirchhoff`] and
-/// [`Model::kirchhoff_lanes`] give a particle bit-identical stress.
+/// `ln J` from `J - 1` for the stress: the branch-free log, so that a pack of particles
+/// vectorises.
 #[inline(always)]
 fn ln_j(jm1: Real) -> Real {
     ln_1p_fast(jm1.max(-1.0 + Real::EPSILON))
@@ -22,58 +23,29 @@ pub(crate) struct NeoHookean;
 
 impl Model for NeoHookean {
     #[inline(always)]
-    fn kirchhoff<const D: usize>(p: &Params, f: &Deformation<D>) -> Stress<D> {
+    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
         let (h, hzz) = (&f.h, f.hzz);
-        let lnj = ln_j(f.jm1);
-        let mut m = [[0.0; D]; D];
-        for a in 0..D {
-            for b in 0..D {
-                let mut hh = 0.0;
-                for k in 0..D {
-                    hh += h[a][k] * h[b][k];
-                }
-                m[a][b] = p.mu * (h[a][b] + h[b][a] + hh);
+        let lnj = f.jm1.map(ln_j);
+        // tau = mu (H + H^T + H H^T) + lambda ln J I
+        let m = matrix(|a, b| {
+            let mut hh = T::splat(0.0);
+            for k in 0..D {
+                hh += h[a][k] * h[b][k];
             }
-            m[a][a] += p.lambda * lnj;
-        }
+            let shear = (h[a][b] + h[b][a] + hh) * p.mu;
+            if a == b {
+                shear + lnj * p.lambda
+            } else {
+                shear
+            }
+        });
+        // tau_zz = mu (F_zz^2 - 1) + lambda ln J
         let zz = if D == 2 {
-            p.mu * hzz * (2.0 + hzz) + p.lambda * lnj
+            hzz * p.mu * (hzz + 2.0) + lnj * p.lambda
         } else {
-            0.0
+            T::splat(0.0)
         };
         Stress { m, zz }
-    }
-
-    /// `tau / rho0` for `W` particles at once, `h[a][b][lane]`, `hzz[lane]` and `jm1[lane]`, into
-    /// `tau[k][lane]` in the stored component order (`crate::phases::sym_pairs`, then `zz` in 2D).
-    /// The same formula as [`Model::kirchhoff`], written as loops over lanes that vectorise.
-    #[inline(always)]
-    fn kirchhoff_lanes<const D: usize, const W: usize>(
-        p: &Params,
-        h: &[[[Real; W]; D]; D],
-        hzz: &[Real; W],
-        jm1: &[Real; W],
-        tau: &mut [[Real; W]; 6],
-    ) {
-        let mut lnj = [0.0; W];
-        for ln in 0..W {
-            lnj[ln] = ln_j(jm1[ln]);
-        }
-        for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
-            for ln in 0..W {
-                let mut hh = 0.0;
-                for m in 0..D {
-                    hh += h[r][m][ln] * h[c][m][ln];
-                }
-                let diag = if r == c { p.lambda * lnj[ln] } else { 0.0 };
-                tau[k][ln] = (p.mu * (h[r][c][ln] + h[c][r][ln] + hh) + diag) * p.inv_rho0;
-            }
-        }
-        if D == 2 {
-            for ln in 0..W {
-                tau[3][ln] = (p.mu * hzz[ln] * (2.0 + hzz[ln]) + p.lambda * lnj[ln]) * p.inv_rho0;
-            }
-        }
     }
 
     /// `W = mu (tr H - ln J) + mu/2 |H|^2 + lambda/2 (ln J)^2`, the same energy arranged so that no

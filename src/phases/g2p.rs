@@ -37,6 +37,7 @@ use crate::material::{
     eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, Deformation, Params,
 };
 use crate::math::INV;
+use crate::pack::{packs, unpacked, Pack};
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
@@ -409,16 +410,14 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
-    let mut jm1 = [0.0; W];
-    for ln in 0..W {
-        let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
-        let j2 = crate::math::det_identity_plus_minus_one(&m);
-        jm1[ln] = if S::AXISYMMETRIC {
-            j2 + hzz[ln] + j2 * hzz[ln]
-        } else {
-            j2
-        };
+    let j2 = crate::math::det_identity_plus_minus_one(packs(h));
+    let hz = Pack(hzz);
+    let jm1 = if S::AXISYMMETRIC {
+        j2 + hz + j2 * hz
+    } else {
+        j2
     }
+    .0;
     // Material: the model's chunk path when every lane shares one material (the common case,
     // vectorised); otherwise lane by lane.
     // Without `Option` combinators: their closures were left out of line (a profile showed
@@ -448,30 +447,18 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         match &eigen {
             None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, tau),
             Some(d) => {
-                let (mut he, mut hzze, mut jm1e, mut cube) = (*h, hzz, jm1, [1.0; W]);
-                for ln in 0..W {
-                    let m: [[Real; D]; D] =
-                        core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
-                    let f = Deformation {
-                        h: m,
-                        hzz: hzz[ln],
-                        jm1: jm1[ln],
-                    };
-                    let (e, k) = elastic_part(&f, d[ln]);
-                    for r in 0..D {
-                        for c in 0..D {
-                            he[r][c][ln] = e.h[r][c];
-                        }
-                    }
-                    (hzze[ln], jm1e[ln], cube[ln]) = (e.hzz, e.jm1, k);
-                }
+                let f = Deformation {
+                    h: *packs(h),
+                    hzz: Pack(hzz),
+                    jm1: Pack(jm1),
+                };
+                let (e, cube) = elastic_part(&f, Pack(*d));
+                let he = *unpacked(&e.h);
                 // The eigenstrain must not invert the material either.
                 admissible = rows::above::<I, W>(d, -1.0);
-                I::kirchhoff::<D, W>(model, &params, &he, &hzze, &jm1e, tau);
+                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, tau);
                 for row in tau.iter_mut() {
-                    for ln in 0..W {
-                        row[ln] *= cube[ln];
-                    }
+                    *row = (Pack(*row) * cube).0;
                 }
             }
         }
