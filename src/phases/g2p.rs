@@ -316,9 +316,7 @@ impl<const D: usize, const W: usize> StressScratch<D, W> {
     }
 }
 
-/// `exp(A) - I` to `n` terms (seeds/000 eq 26, `dF = exp(L dt)` with `A = L dt`), by Horner:
-/// `Q = A / n`, then `Q <- (A + A Q) / k` for `k = n - 1` down to 1 (the division by 1
-/// skipped). The identity is left out so that a small increment keeps its precision.
+/// [`crate::math::exp_series_minus_identity`] on the instance's vectors.
 ///
 /// # Safety
 /// The CPU supports the instance `I` (as for [`Wide::splat`]).
@@ -328,28 +326,7 @@ unsafe fn exp_minus_identity<I: Rows, const D: usize>(
     n: usize,
 ) -> [[Wide<I>; D]; D] {
     // SAFETY: as required of the caller.
-    let inv = |k: usize| unsafe { Wide::<I>::splat(INV[k]) };
-    let mut q = *a;
-    for r in 0..D {
-        for c in 0..D {
-            q[r][c] = a[r][c] * inv(n);
-        }
-    }
-    for k in (1..n).rev() {
-        let mut next = *a;
-        for r in 0..D {
-            for c in 0..D {
-                for m in 0..D {
-                    next[r][c] = next[r][c] + a[r][m] * q[m][c];
-                }
-                if k > 1 {
-                    next[r][c] = next[r][c] * inv(k);
-                }
-            }
-        }
-        q = next;
-    }
-    q
+    crate::math::exp_series_minus_identity(a, n, |k| unsafe { Wide::<I>::splat(INV[k]) })
 }
 
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
