@@ -84,6 +84,11 @@ pub enum Error {
     /// outside `1..=MAX_SUBSTEPS`, or [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
     /// not > 1.
     InvalidLimit = 30,
+    /// A displacement gradient ([`crate::World::set_displacement_gradient`]) not finite,
+    /// inverted (`det F <= 0`), with `det F` outside the definition's
+    /// [`max_volume_ratio`](crate::WorldDef::max_volume_ratio) band, or whose stress is not
+    /// finite.
+    InvalidDeformation = 31,
 }
 
 impl Error {
@@ -144,11 +149,14 @@ impl Error {
             Error::InvalidLimit => {
                 c"max_substeps must be in 1..=2^20 and max_volume_ratio > 1"
             }
+            Error::InvalidDeformation => {
+                c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 30] = [
+    pub const ALL: [Error; 31] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -179,6 +187,7 @@ impl Error {
         Error::SubstepLimit,
         Error::InvalidState,
         Error::InvalidLimit,
+        Error::InvalidDeformation,
     ];
 }
 

@@ -37,9 +37,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.1.0"
+#define MPM_GIMP_VERSION "0.1.1"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 100
+#define MPM_GIMP_ABI_VERSION 101
 
 
 // Most points an `MpmSchedule` holds.
@@ -142,6 +142,10 @@ enum MpmStatus
   // A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
   // `max_volume_ratio` not > 1.
   MPM_STATUS_INVALID_LIMIT = 30,
+  // `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
+  // (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
+  // stress is not finite (nothing was set).
+  MPM_STATUS_INVALID_DEFORMATION = 31,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -945,6 +949,25 @@ MpmStatus mpm_world_add_particles(struct MpmWorld *world,
                                   const struct MpmParticleArrays *arrays,
                                   size_t count,
                                   struct MpmIdRange *ids_out);
+
+// Gives particles `first .. first + count` the displacement gradient `H = F - I` and the
+// stress their material gives it (`World::set_displacement_gradient`): a scene that starts
+// deformed or prestressed. `h` points to 9 pointers, row-major: `h[3 * a + b]` holds `count`
+// values of `H_ab`. In 2D only `h[0]`, `h[1]`, `h[3]`, `h[4]` are read, and `h[8]` (the hoop
+// stretch `F_thetatheta - 1`) in the axisymmetric form; the others may be NULL. The volume
+// the particles were added with is their reference volume; positions and velocities are not
+// changed. All or nothing: `MPM_STATUS_UNKNOWN_PARTICLE` if the particles do not exist
+// (checked before any array is read), `MPM_STATUS_INVALID_DEFORMATION` if any `H` is not
+// finite, inverts, has `det F` outside the definition's `max_volume_ratio` band or gives a
+// stress that is not finite.
+//
+// # Safety
+// `world` is NULL or a world; `h` is NULL or valid for reads of 9 pointers, each of which
+// the dimension reads is NULL or valid for reads of `count` values.
+MpmStatus mpm_world_set_displacement_gradient(struct MpmWorld *world,
+                                              uint32_t first,
+                                              const mpm_real *const *h,
+                                              size_t count);
 
 // Fills the box `[min, max]` with particles of `material` moving at `velocity`, on the lattice
 // of `particles_per_cell` sites per cell per axis, each with its sub-cell's volume and the

@@ -91,6 +91,10 @@ pub enum MpmStatus {
     /// A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
     /// `max_volume_ratio` not > 1.
     InvalidLimit = 30,
+    /// `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
+    /// (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
+    /// stress is not finite (nothing was set).
+    InvalidDeformation = 31,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -148,13 +152,14 @@ impl From<Error> for MpmStatus {
             Error::SubstepLimit => MpmStatus::SubstepLimit,
             Error::InvalidState => MpmStatus::InvalidState,
             Error::InvalidLimit => MpmStatus::InvalidLimit,
+            Error::InvalidDeformation => MpmStatus::InvalidDeformation,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 37] = [
+    pub const ALL: [MpmStatus; 38] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -186,6 +191,7 @@ impl MpmStatus {
         MpmStatus::SubstepLimit,
         MpmStatus::InvalidState,
         MpmStatus::InvalidLimit,
+        MpmStatus::InvalidDeformation,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

@@ -363,6 +363,67 @@ pub unsafe extern "C" fn mpm_world_add_particles(
     })
 }
 
+/// Gives particles `first .. first + count` the displacement gradient `H = F - I` and the
+/// stress their material gives it (`World::set_displacement_gradient`): a scene that starts
+/// deformed or prestressed. `h` points to 9 pointers, row-major: `h[3 * a + b]` holds `count`
+/// values of `H_ab`. In 2D only `h[0]`, `h[1]`, `h[3]`, `h[4]` are read, and `h[8]` (the hoop
+/// stretch `F_thetatheta - 1`) in the axisymmetric form; the others may be NULL. The volume
+/// the particles were added with is their reference volume; positions and velocities are not
+/// changed. All or nothing: `MPM_STATUS_UNKNOWN_PARTICLE` if the particles do not exist
+/// (checked before any array is read), `MPM_STATUS_INVALID_DEFORMATION` if any `H` is not
+/// finite, inverts, has `det F` outside the definition's `max_volume_ratio` band or gives a
+/// stress that is not finite.
+///
+/// # Safety
+/// `world` is NULL or a world; `h` is NULL or valid for reads of 9 pointers, each of which
+/// the dimension reads is NULL or valid for reads of `count` values.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_displacement_gradient(
+    world: *mut MpmWorld,
+    first: u32,
+    h: *const *const mpm_real,
+    count: usize,
+) -> MpmStatus {
+    guard(|| {
+        non_null(h)?;
+        // SAFETY: checked non-NULL; the caller promises 9 pointers, copied before the world is
+        // opened for writing.
+        let p: [*const mpm_real; 9] = unsafe { core::array::from_fn(|k| *h.add(k)) };
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let def = w.def();
+        let d = def.axes();
+        let axisymmetric = def.dimension == kernel::Dimension::Axisymmetric2D;
+        let read = |a: usize, b: usize| (a < d && b < d) || (axisymmetric && a == 2 && b == 2);
+        match (first as usize).checked_add(count) {
+            Some(end) if end <= w.particle_count() => {}
+            _ => return Err(MpmStatus::UnknownParticle),
+        }
+        for a in 0..3 {
+            for b in 0..3 {
+                if read(a, b) {
+                    non_null(p[3 * a + b])?;
+                    apart(w.as_bytes(), p[3 * a + b], count)?;
+                }
+            }
+        }
+        let empty: &[mpm_real] = &[];
+        let cols: [[&[mpm_real]; 3]; 3] = core::array::from_fn(|a| {
+            core::array::from_fn(|b| {
+                if read(a, b) {
+                    // SAFETY: non-NULL, and the caller promises `count` values; `count` is at
+                    // most the particle count, so the byte length fits in isize.
+                    unsafe { core::slice::from_raw_parts(p[3 * a + b], count) }
+                } else {
+                    empty
+                }
+            })
+        });
+        w.set_displacement_gradient(first, cols)?;
+        Ok(())
+    })
+}
+
 pub(crate) fn id_range(r: core::ops::Range<u32>) -> MpmIdRange {
     MpmIdRange {
         first: r.start,

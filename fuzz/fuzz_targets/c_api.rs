@@ -353,7 +353,7 @@ fuzz_target!(|data: &[u8]| {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 14;
+        let op = inp.byte() % 15;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -497,6 +497,41 @@ fuzz_target!(|data: &[u8]| {
                         fz
                     };
                     mpm_world_set_particle_forces(world, first, fx, fy, fz, count)
+                }
+                14 => {
+                    // An initial displacement gradient: small, large, inverting or not finite
+                    // entries; sometimes a NULL pointer or a count past the particles (refused
+                    // before any array is read).
+                    let (first, count) = particle_range(&mut inp, world);
+                    let count = count as usize;
+                    let cols: Vec<Vec<mpm_real>> = (0..9)
+                        .map(|_| {
+                            (0..count.min(512))
+                                .map(|_| match inp.byte() % 32 {
+                                    0 => mpm_real::NAN,
+                                    1 => inp.real_in(-3.0, 3.0),
+                                    _ => inp.real_in(-0.05, 0.05),
+                                })
+                                .collect()
+                        })
+                        .collect();
+                    let dangling = core::ptr::NonNull::<mpm_real>::dangling().as_ptr();
+                    let mut h: [*const mpm_real; 9] = core::array::from_fn(|k| {
+                        if count <= 512 {
+                            cols[k].as_ptr()
+                        } else {
+                            dangling.cast_const()
+                        }
+                    });
+                    if inp.byte() % 8 == 0 {
+                        h[inp.u32_below(9) as usize] = core::ptr::null();
+                    }
+                    let hp = if inp.byte() % 16 == 0 {
+                        core::ptr::null()
+                    } else {
+                        h.as_ptr()
+                    };
+                    mpm_world_set_displacement_gradient(world, first, hp, count)
                 }
                 12 => {
                     // Temperatures, concentrations or their sources; sometimes a field out of

@@ -168,6 +168,32 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
     s
 }
 
+/// `tau / rho0` of one particle of material `r` at deformation `f` with the isotropic
+/// eigenstrain `d` ([`elastic_part`]; 0 for none, which changes no bit), in the stored component
+/// order ([`crate::phases::sym_pairs`], then `zz` in 2D); `None` if `f` or the eigenstrain
+/// inverts the material.
+#[inline(always)]
+pub(crate) fn particle_stress<const D: usize>(
+    r: &MaterialRecord,
+    f: &Deformation<D>,
+    d: Real,
+) -> Option<[Real; 6]> {
+    // NaN-safe: a NaN is not > -1.
+    if !(f.jm1 > -1.0 && d > -1.0) {
+        return None;
+    }
+    let (e, scale) = elastic_part(f, d);
+    let s = kirchhoff_over_rho0(model_of(r), &Params::of(r), &e);
+    let mut tau = [0.0; 6];
+    for (k, &(a, b)) in crate::phases::sym_pairs(D).iter().enumerate() {
+        tau[k] = s.m[a][b] * scale;
+    }
+    if D == 2 {
+        tau[3] = s.zz * scale;
+    }
+    Some(tau)
+}
+
 /// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
 /// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D) and `jm1[lane]` in,
 /// `tau[k][lane]` out in the stored component order ([`crate::phases::sym_pairs`], then `zz`

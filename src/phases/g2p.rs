@@ -34,10 +34,10 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::material::{
-    eigenstrain_part, elastic_part, kirchhoff_over_rho0, model_of, Deformation, Params,
+    eigenstrain_part, elastic_part, model_of, particle_stress, Deformation, Params,
 };
 use crate::math::INV;
-use crate::pack::{packs, unpacked, Pack};
+use crate::pack::{matrix, packs, unpacked, Pack};
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::{Real, StepReport};
@@ -442,36 +442,24 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         ok = admissible & update & rows::above::<I, W>(&jm1, -1.0);
     } else {
         for ln in 0..W {
-            // NaN-safe: a NaN jm1 is not > -1.
-            let inverted = !matches!(
-                jm1[ln].partial_cmp(&-1.0),
-                Some(core::cmp::Ordering::Greater)
-            );
-            if !update.has(ln) || inverted {
+            if !update.has(ln) {
                 continue;
             }
             let Some(rec) = ctx.materials.get(ids[ln] as usize) else {
                 continue;
             };
-            let m: [[Real; D]; D] = core::array::from_fn(|r| core::array::from_fn(|c| h[r][c][ln]));
-            let f = Deformation {
-                h: m,
+            let f = Deformation::<D> {
+                h: matrix(|r, c| h[r][c][ln]),
                 hzz: hzz[ln],
                 jm1: jm1[ln],
             };
-            let (f, scale) = match &eigen {
-                None => (f, 1.0),
-                Some(d) if d[ln] > -1.0 => elastic_part(&f, d[ln]),
-                Some(_) => continue,
-            };
-            let s = kirchhoff_over_rho0(model_of(rec), &Params::of(rec), &f);
-            for (k, &(r, c)) in super::sym_pairs(D).iter().enumerate() {
-                tau[k][ln] = s.m[r][c] * scale;
+            let d = eigen.as_ref().map_or(0.0, |d| d[ln]);
+            if let Some(s) = particle_stress(rec, &f, d) {
+                for (k, row) in tau.iter_mut().enumerate().take(ns) {
+                    row[ln] = s[k];
+                }
+                ok = ok | Lanes::one(ln);
             }
-            if D == 2 {
-                tau[3][ln] = s.zz * scale;
-            }
-            ok = ok | Lanes::one(ln);
         }
     }
     // The runaway bound: an updated lane whose volume ratio left the band freezes (the

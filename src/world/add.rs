@@ -5,6 +5,7 @@
 use super::{GeomAny, ParticleBatch, ParticleDef, World};
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{col, Layout, MaterialRecord};
+use crate::material::Deformation;
 use crate::particles::ACTIVE;
 use crate::{Error, Real};
 use core::mem::size_of;
@@ -88,6 +89,99 @@ impl<'a> World<'a> {
             )
         });
         Ok(self.append(&def, items))
+    }
+
+    /// Gives particles `first..first + n` the displacement gradient `H = F - I` (so the
+    /// deformation gradient `F = I + H`), and the Kirchhoff stress their material gives it
+    /// (with the eigenstrain of their current temperature and concentration, when declared):
+    /// a scene that starts deformed or prestressed, or a restart from another code. `h[a][b]`
+    /// holds `n` values of `H_ab`; in 2D only the in-plane entries are read, and `h[2][2]`
+    /// (the hoop stretch `F_thetatheta - 1`) in the axisymmetric form; the others may be
+    /// empty. Written as `H` rather than `F` so that small strains keep their digits in f32.
+    ///
+    /// The particles' volume given when adding them is their reference volume `V0`; their
+    /// current volume is `J V0` with `J = det F`. Positions and velocities are not changed.
+    /// All or nothing: `LengthMismatch` if the read entries differ in length,
+    /// `UnknownParticle` if the particles do not exist, `InvalidDeformation` if any `H` is
+    /// not finite, inverts (`J <= 0`), has `J` outside the definition's
+    /// [`max_volume_ratio`](crate::WorldDef::max_volume_ratio) band, or gives a stress that
+    /// is not finite.
+    pub fn set_displacement_gradient(
+        &mut self,
+        first: u32,
+        h: [[&[Real]; 3]; 3],
+    ) -> Result<(), Error> {
+        if self.def().axes() == 3 {
+            self.set_h::<3>(first, h)
+        } else {
+            self.set_h::<2>(first, h)
+        }
+    }
+
+    fn set_h<const D: usize>(&mut self, first: u32, h: [[&[Real]; 3]; 3]) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let axisymmetric = layout.hoop.count > 0;
+        let n = h[0][0].len();
+        let read = |a: usize, b: usize| (a < D && b < D) || (axisymmetric && a == 2 && b == 2);
+        if (0..3).any(|a| (0..3).any(|b| read(a, b) && h[a][b].len() != n)) {
+            return Err(Error::LengthMismatch);
+        }
+        let range = self.particle_range(first, n)?;
+        let band = [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0];
+        let deformation = |i: usize| {
+            let m = crate::pack::matrix(|a, b| h[a][b][i]);
+            Deformation::<D>::new(m, if axisymmetric { h[2][2][i] } else { 0.0 })
+        };
+        // Checked in blocks, then written in blocks: a block's stresses are computed from
+        // the world read-only and written after (no allocation).
+        const BLOCK: usize = 64;
+        let mut tau = [[0.0; 6]; BLOCK];
+        for pass in [false, true] {
+            for start in (0..n).step_by(BLOCK) {
+                let len = BLOCK.min(n - start);
+                {
+                    let world = self.read();
+                    let view = world.particles();
+                    for (k, tau) in tau.iter_mut().enumerate().take(len) {
+                        let (i, p) = (start + k, range.start + start + k);
+                        let f = deformation(i);
+                        let finite = f.h.iter().flatten().all(|v| v.is_finite())
+                            && f.hzz.is_finite()
+                            && f.jm1 >= band[0]
+                            && f.jm1 <= band[1];
+                        let stress = world.particle_stress(&view, p, &f).filter(|_| finite);
+                        match stress {
+                            Some(s) if s.iter().all(|v| v.is_finite()) => *tau = s,
+                            _ => return Err(Error::InvalidDeformation),
+                        }
+                    }
+                }
+                if !pass {
+                    continue;
+                }
+                let cap = layout.padded_capacity;
+                for (k, tau) in tau.iter().enumerate().take(len) {
+                    let (i, p) = (start + k, range.start + start + k);
+                    for a in 0..D {
+                        for b in 0..D {
+                            self.real_col_mut(&layout, col::h(D, a, b), cap)[p] = h[a][b][i];
+                        }
+                    }
+                    if axisymmetric {
+                        self.real_col_mut(&layout, layout.hoop.first, cap)[p] = h[2][2][i];
+                    }
+                    for (c, &v) in tau
+                        .iter()
+                        .enumerate()
+                        .take(crate::layout::stress_components(D))
+                    {
+                        self.real_col_mut(&layout, col::tau(D, c), cap)[p] = v;
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The per-particle setters' one path: writes `columns` (one slice per column, all of one

@@ -5,7 +5,9 @@ use super::add::material_record;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
 use crate::def::{MaterialDef, ShapeFunction, Transfer, WorldDef};
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
-use crate::material::{eigenstrain_part, elastic_part, energy_density, model_of, Params};
+use crate::material::{
+    eigenstrain_part, elastic_part, energy_density, model_of, particle_stress, Deformation, Params,
+};
 use crate::particles::{ParticleStatus, ACTIVE};
 use crate::simd::Simd;
 use crate::{Error, Real};
@@ -455,6 +457,23 @@ impl<'a> WorldRef<'a> {
 /// The isotropic eigenstrain `d` of particle `i` of material `rec` (thermal expansion and
 /// swelling, from the grid values at the particle; 0 for a field not declared), as the stress
 /// update takes it out.
+impl WorldRef<'_> {
+    /// `tau / rho0` of particle `i` at the deformation `f`, with its material and the
+    /// eigenstrain of its current temperature and concentration ([`particle_stress`]); `None`
+    /// if its material is unknown or it would invert.
+    pub(super) fn particle_stress<const D: usize>(
+        &self,
+        view: &ParticlesView<'_>,
+        i: usize,
+        f: &Deformation<D>,
+    ) -> Option<[Real; 6]> {
+        let rec = self
+            .materials(&self.layout())
+            .get(view.material[i] as usize)?;
+        particle_stress(rec, f, eigenstrain_of(rec, view, i))
+    }
+}
+
 fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> Real {
     [view.grid_temperature, view.grid_concentration]
         .iter()

@@ -20,6 +20,7 @@ mod eigenstrain;
 #[cfg(feature = "effects")]
 mod equilibrium;
 mod hard_cases;
+mod initial_state;
 mod reference;
 mod reliability;
 mod robustness;

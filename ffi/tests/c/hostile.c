@@ -823,6 +823,11 @@ static void not_a_world_at_page_end(void) {
             mpm_world_copy_status(w, OUT(uint32_t), 16, OUT_AT(size_t, WRITTEN_AT)));
         NAW("mpm_world_set_particle_forces",
             mpm_world_set_particle_forces(w, 0, vals, vals, vals, 1));
+        {
+            const mpm_real *h9[9] = {vals, vals, vals, vals, vals, vals, vals, vals, vals};
+            NAW("mpm_world_set_displacement_gradient",
+                mpm_world_set_displacement_gradient(w, 0, h9, 1));
+        }
         NAW("mpm_world_set_particle_damping",
             mpm_world_set_particle_damping(w, 0, vals, vals, 1));
         NAW("mpm_world_set_particle_scalar",

@@ -2210,6 +2210,7 @@ static void status_strings(void) {
         MPM_STATUS_SUBSTEP_LIMIT,
         MPM_STATUS_INVALID_STATE,
         MPM_STATUS_INVALID_LIMIT,
+        MPM_STATUS_INVALID_DEFORMATION,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
@@ -2263,6 +2264,62 @@ static void status_strings(void) {
                 strcmp(mpm_status_string((MpmStatus)0x80000000u), "unknown status") == 0);
     expect_true("status string of 0xFFFFFFFF is \"unknown status\"",
                 strcmp(mpm_status_string((MpmStatus)0xFFFFFFFFu), "unknown status") == 0);
+}
+
+/* Initial deformation: H = F - I from 9 row-major pointers. */
+static void deformation_misuse(void) {
+    size_t n = particle_count(g_w3), n2 = particle_count(g_w2), i, written = 0;
+    mpm_real cols[9][64], jac[64];
+    const mpm_real *h[9];
+    int k;
+    if (n > 64 || n2 > 64) {
+        fail("deformation: setup", "more particles than the test's arrays");
+    }
+    for (k = 0; k < 9; k++) {
+        for (i = 0; i < 64; i++) {
+            cols[k][i] = R(0.0);
+        }
+        h[k] = cols[k];
+    }
+    REFUSED("deformation: h NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_set_displacement_gradient(g_w3, 0, NULL, n));
+    h[7] = NULL;
+    REFUSED("deformation 3D: h[7] NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_set_displacement_gradient(g_w3, 0, h, n));
+    h[7] = cols[7];
+    REFUSED("deformation: particles past the count", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_set_displacement_gradient(g_w3, 1, h, n));
+    REFUSED("deformation: count SIZE_MAX", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_set_displacement_gradient(g_w3, 0, h, (size_t)-1));
+    cols[0][n - 1] = R(-2.0); /* F_xx = -1: inverted */
+    REFUSED("deformation: an inverted F", MPM_STATUS_INVALID_DEFORMATION,
+            mpm_world_set_displacement_gradient(g_w3, 0, h, n));
+    cols[0][n - 1] = R(0.0);
+    cols[5][0] = R(NAN);
+    REFUSED("deformation: a NaN entry", MPM_STATUS_INVALID_DEFORMATION,
+            mpm_world_set_displacement_gradient(g_w3, 0, h, n));
+    cols[5][0] = R(0.0);
+    cols[4][0] = R(999.0); /* J = 1000, past max_volume_ratio */
+    REFUSED("deformation: J past max_volume_ratio", MPM_STATUS_INVALID_DEFORMATION,
+            mpm_world_set_displacement_gradient(g_w3, 0, h, n));
+    cols[4][0] = R(0.0);
+    /* 2D reads only h[0], h[1], h[3], h[4]: the others may be NULL. */
+    for (i = 0; i < n2; i++) {
+        cols[0][i] = R(0.01);
+    }
+    h[2] = h[5] = h[6] = h[7] = h[8] = NULL;
+    ACCEPTED("deformation 2D: a stretch, unread pointers NULL", 1,
+             mpm_world_set_displacement_gradient(g_w2, 0, h, n2));
+    if (mpm_world_copy_jacobians(g_w2, jac, 64, &written) != MPM_STATUS_OK || written != n2) {
+        fail("deformation 2D", "mpm_world_copy_jacobians refused");
+    }
+    {
+        int all = 1;
+        for (i = 0; i < n2; i++) {
+            all = all && fabs((double)jac[i] - 1.01) < 1e-5;
+        }
+        expect_true("deformation 2D: J = det F = 1.01 for every particle", all);
+    }
 }
 
 int main(void) {
@@ -2383,6 +2440,7 @@ int main(void) {
     open_misuse();
     material_misuse();
     particles_misuse();
+    deformation_misuse();
     fill_misuse();
     step_misuse();
     effects_misuse();
