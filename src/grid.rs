@@ -369,6 +369,34 @@ impl<const D: usize> Geom<D> {
         }
     }
 
+    /// Calls `f(ghost, image)` for every node of box `bx` between the grid face `side` (0 low,
+    /// 1 high) of `axis` and its wall plane, the plane excluded, with its mirror image across
+    /// the plane (inside the admissible region).
+    pub fn for_each_face_image(
+        &self,
+        axis: usize,
+        side: usize,
+        bx: &NodeBox<D>,
+        mut f: impl FnMut(usize, usize),
+    ) {
+        let n = self.nodes[axis];
+        for k in 1..=self.margin {
+            let (ghost, image) = if side == 0 {
+                (self.margin - k, self.margin + k)
+            } else {
+                (n - 1 - self.margin + k, n - 1 - self.margin - k)
+            };
+            if image >= n {
+                continue;
+            }
+            let shift = image as isize - ghost as isize;
+            self.for_each_node_in_plane(axis, ghost, bx, |i| {
+                let j = i as isize + shift * self.stride[axis] as isize;
+                f(i, j as usize)
+            });
+        }
+    }
+
     /// Calls `f(ghost, image, signs)` for every node of box `bx` past the wall plane of a stick
     /// or slip face (between the plane and the grid face) and its mirror image across the plane.
     /// A vector's component `a` at the ghost is `signs[a]` times the image's: the wall is a plane

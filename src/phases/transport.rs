@@ -14,14 +14,25 @@
 //! 2. flow: `Q_i = sum V_p (q_p . G_ip + s_p S_ip)` with `q_p = -kappa_p sum phi_i G_ip`
 //!    (eqs 135, 137, 148, 150), plus the flux faces' inflow (eqs 136, 149), then the rate
 //!    `a_i = Q_i / c_i` (eqs 140, 152); on a fixed face the nodes hold the fixed value, so their
-//!    rate is 0 and the flow into them leaves the domain. (Driving the particles' average at a
-//!    fixed node to the fixed value, as a stick wall does with velocity, would pin the
-//!    particles next to the wall to the wall's value: an O(h) error there, measured as
-//!    order 1.5 convergence instead of 2.)
+//!    rate is 0 and the flow into them leaves the domain;
 //! 3. update: `phi_p += dt sum S_ip a_i`, always FLIP (eqs 141, 153: PIC would conduct even
 //!    with zero conductivity), and the grid's value at the particle
 //!    `phi_g->p = sum S_ip (phi_i + a_i dt)` (eq 144), which features that depend on the field
 //!    read (section 8.2).
+//!
+//! A fixed face (the seed leaves its treatment open) acts on the particles as on the grid:
+//! - past the wall plane the field is the material's odd image about the fixed value: the
+//!   particles' contributions to nodes past the plane go to their images with value
+//!   `2 phi_f - phi` (so a node near the face averages both sides), those nodes take
+//!   `2 phi_f - phi` of their image, and their rate the negated rate. A field with a slope at
+//!   the face keeps it there; the B-splines, whose stencils reach past the plane, converge at
+//!   second order on the grid (first order with a constant value there);
+//! - a particle takes the grid's value in the measure `w = sum S_ip` of its weight on the
+//!   face's nodes: `phi_p <- flip + w (phi_g->p - flip)`. The FLIP update alone never gives a
+//!   particle the jump from its value to the face's: after a step change at the face the
+//!   particle next to it stayed most of the step away at every resolution. A particle away
+//!   from the face (`w = 0`) keeps its FLIP value exactly. Measured orders are in
+//!   `tests/kernel/transport.rs`.
 //!
 //! The particle loops work as the momentum passes do: chunk by chunk, with the chunk's stencils
 //! computed lane-fastest ([`chunk_stencils`]) and each particle's nodes added to or read from
@@ -115,6 +126,19 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
         let [c_col, m_col, v_col, _] = &mut g.scalar[f];
         geom.fold_mirror(c_col, 1.0, bx);
         geom.fold_mirror(m_col, 1.0, bx);
+        // Past a fixed face the material's odd image about the fixed value: what the particles
+        // put on a node past the wall plane, their images put on its image (capacity `c`,
+        // value `2 phi_f - phi`), so that a node near the face averages both sides.
+        for_each_fixed_image(ctx, t, |ghost, image, value| {
+            if let (Some(&cg), Some(&mg), true) = (
+                c_col.get(ghost),
+                m_col.get(ghost),
+                image < c_col.len().min(m_col.len()),
+            ) {
+                c_col[image] += cg;
+                m_col[image] += 2.0 * value * cg - mg;
+            }
+        });
         bx.for_each_line(geom.stride, n, |r| {
             let (Some(v), Some(m), Some(c)) =
                 (v_col.get_mut(r.clone()), m_col.get(r.clone()), c_col.get(r))
@@ -128,6 +152,14 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
         for_each_face(ctx, t, |node, bc, _, _| {
             if let (ScalarBoundary::Fixed(value), Some(v)) = (bc, v_col.get_mut(node)) {
                 *v = value;
+            }
+        });
+        // Past a fixed face's wall plane, the odd extension about the fixed value (a field
+        // with a slope at the face keeps it there: the B-splines' wider stencils read these
+        // nodes).
+        for_each_fixed_image(ctx, t, |ghost, image, value| {
+            if let (Some(&vi), true) = (v_col.get(image), ghost < v_col.len()) {
+                v_col[ghost] = 2.0 * value - vi;
             }
         });
         geom.mirror(v_col, 1.0, bx);
@@ -168,6 +200,14 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
         // to its value.
         let [c_col, _, _, q_col] = &mut g.scalar[f];
         geom.fold_mirror(q_col, 1.0, bx);
+        // The odd image's flow: its gradient's normal part is the material's, its other parts
+        // and its source flip, and so does the gradient of the image node's shape function
+        // along the normal: every term changes sign.
+        for_each_fixed_image(ctx, t, |ghost, image, _| {
+            if let (Some(&qg), true) = (q_col.get(ghost), image < q_col.len()) {
+                q_col[image] -= qg;
+            }
+        });
         for_each_face(ctx, t, |node, bc, axis, on_wall| {
             if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
             {
@@ -187,23 +227,60 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
                 *q = 0.0;
             }
         });
+        for_each_fixed_image(ctx, t, |ghost, image, _| {
+            if let (Some(&qi), true) = (q_col.get(image), ghost < q_col.len()) {
+                q_col[ghost] = -qi;
+            }
+        });
         geom.mirror(q_col, 1.0, bx);
+    }
+    // The nodes of the fixed faces, marked with 1 in the capacity-times-value column (free
+    // since the values were formed) for the particle update.
+    let fixed = t
+        .faces
+        .iter()
+        .any(|b| matches!(b, ScalarBoundary::Fixed(_)));
+    if fixed {
+        let [_, m_col, _, _] = &mut g.scalar[f];
+        bx.for_each_line(geom.stride, n, |r| {
+            if let Some(m) = m_col.get_mut(r) {
+                m.fill(0.0);
+            }
+        });
+        for_each_face(ctx, t, |node, bc, _, on_wall| {
+            if let (ScalarBoundary::Fixed(_), true, Some(m)) = (bc, on_wall, m_col.get_mut(node)) {
+                *m = 1.0;
+            }
+        });
     }
     // 3. FLIP update of the particles' values, and the grid's value at each particle.
     for start in (0..count).step_by(W) {
         let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
-        let [_, _, value, rate] = &g.scalar[f];
+        let [_, marker, value, rate] = &g.scalar[f];
         for ln in live.iter() {
             let i = start + ln;
             // SAFETY: as in pass 1.
-            let (a, v) = unsafe {
+            let (a, v, w) = unsafe {
                 let lane = st.lane(ln);
-                let ([a, v], _) =
-                    gather_rows::<D, K, W, false, 2>(lane, geom.stride, [rate, value]);
-                (a, v)
+                if fixed {
+                    let ([a, v, w], _) =
+                        gather_rows::<D, K, W, false, 3>(lane, geom.stride, [rate, value, marker]);
+                    (a, v, w)
+                } else {
+                    let ([a, v], _) =
+                        gather_rows::<D, K, W, false, 2>(lane, geom.stride, [rate, value]);
+                    (a, v, 0.0)
+                }
             };
-            let next = p.scalar[f][0][i] + a * ctx.dt;
             let on_grid = v + a * ctx.dt;
+            let flip = p.scalar[f][0][i] + a * ctx.dt;
+            // Next to a fixed face the particle takes the grid's value in the measure `w` of its
+            // weight on the face's nodes.
+            let next = if fixed {
+                flip + w * (on_grid - flip)
+            } else {
+                flip
+            };
             // A non-finite rate (from a non-finite source or value set by the host) leaves the
             // values as they were rather than spreading NaN.
             if next.is_finite() && on_grid.is_finite() {
@@ -376,6 +453,23 @@ fn current_volume<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Real {
     let h: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]));
     let hoop = p.hoop.get(i).copied().unwrap_or(0.0);
     (1.0 + Deformation::new(h, hoop).jm1) * p.vol0[i]
+}
+
+/// Calls `f(ghost, image, value)` for every node past the wall plane of each fixed face, with
+/// its image across the plane and the face's value.
+fn for_each_fixed_image<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    t: &Transport,
+    mut f: impl FnMut(usize, usize, Real),
+) {
+    for axis in 0..D {
+        for side in 0..2 {
+            if let ScalarBoundary::Fixed(value) = t.faces[2 * axis + side] {
+                ctx.geom
+                    .for_each_face_image(axis, side, &ctx.active, |g, i| f(g, i, value));
+            }
+        }
+    }
 }
 
 /// Calls `f(node, condition, axis, on_wall_plane)` for every node of every face layer (see

@@ -571,6 +571,12 @@ fn face_area(m: &Method, axis: usize, node: usize) -> f64 {
 ///    148, 150), the rate `a_i = Q_i / c_i` (eqs 140, 152), 0 on fixed faces' nodes;
 /// 3. FLIP: `phi_p += dt sum S_ip a_i`, and the grid's value `sum S_ip (phi_i + a_i dt)` (eqs
 ///    141, 144, 153).
+///
+/// Past a fixed face's wall plane the field is the material's odd image about the fixed value
+/// `phi_f`: what the particles put on a node there goes to its image (capacity `c`, momentum
+/// `2 phi_f c - p`; the flow negated), the node takes `2 phi_f - phi` of its image and the
+/// negated rate; and a particle with weight `w = sum S_ip` on the wall planes' nodes takes
+/// `flip + w (grid - flip)`.
 fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
     let Some(faces) = m.transport[f] else {
         return;
@@ -611,6 +617,10 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
             value[i] += s * capacity(p) * p.phi[f];
         }
     }
+    for_each_fixed_image(m, &faces, |g, i, v| {
+        c[i] += c[g];
+        value[i] += 2.0 * v * c[g] - value[g];
+    });
     for i in 0..n {
         value[i] = if c[i] > m.mass_cutoff {
             value[i] / c[i]
@@ -619,6 +629,7 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
         };
     }
     fixed(&mut value, &|v| v);
+    for_each_fixed_image(m, &faces, |g, i, v| value[g] = 2.0 * v - value[i]);
     for p in ps.iter() {
         let st = stencil(m, &p.x, &p.lp);
         let mut grad = [0.0; 3];
@@ -635,6 +646,7 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
             }
         }
     }
+    for_each_fixed_image(m, &faces, |g, i, _| q[i] -= q[g]);
     // A flux face's inflow on its wall plane's nodes (eqs 136, 149), each node standing for
     // its patch of the admissible region's face.
     for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
@@ -658,14 +670,69 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
         };
     }
     fixed(&mut q, &|_| 0.0);
+    for_each_fixed_image(m, &faces, |g, i, _| q[g] = -q[i]);
+    let mut on_wall = vec![0.0; n];
+    for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
+        if let ScalarBoundary::Fixed(_) = *bc {
+            let (axis, n_axis) = (face / 2, m.nodes[face / 2]);
+            let plane = if face % 2 == 0 {
+                m.margin
+            } else {
+                n_axis - 1 - m.margin
+            };
+            for_each_node_in_plane(m, axis, plane, |i| on_wall[i] = 1.0);
+        }
+    }
+    let any_fixed = faces.iter().any(|b| matches!(b, ScalarBoundary::Fixed(_)));
     for p in ps.iter_mut() {
-        let (mut a, mut v) = (0.0, 0.0);
+        let (mut a, mut v, mut w) = (0.0, 0.0, 0.0);
         for &(i, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
             a += s * q[i];
             v += s * value[i];
+            w += s * on_wall[i];
         }
-        p.phi[f] += a * dt;
-        p.phi_grid[f] = v + a * dt;
+        let flip = p.phi[f] + a * dt;
+        let grid = v + a * dt;
+        p.phi[f] = if any_fixed {
+            flip + w * (grid - flip)
+        } else {
+            flip
+        };
+        p.phi_grid[f] = grid;
+    }
+}
+
+/// Calls `f(ghost, image, phi_f)` for each node past the wall plane of each fixed face (faces
+/// in the order x low, x high, y low, ...), with its mirror image across the plane.
+fn for_each_fixed_image(
+    m: &Method,
+    faces: &[ScalarBoundary; 6],
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    let stride = [1, m.nodes[0], m.nodes[0] * m.nodes[1]];
+    for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
+        let ScalarBoundary::Fixed(v) = *bc else {
+            continue;
+        };
+        let (axis, n_axis) = (face / 2, m.nodes[face / 2]);
+        for k in 1..=m.margin {
+            let (ghost, image) = if face % 2 == 0 {
+                (m.margin - k, m.margin + k)
+            } else {
+                (n_axis - 1 - m.margin + k, n_axis - 1 - m.margin - k)
+            };
+            if image >= n_axis {
+                continue;
+            }
+            for_each_node_in_plane(m, axis, ghost, |g| {
+                let i = if image > ghost {
+                    g + (image - ghost) * stride[axis]
+                } else {
+                    g - (ghost - image) * stride[axis]
+                };
+                f(g, i, v as f64)
+            });
+        }
     }
 }
 
