@@ -15,7 +15,7 @@
 //! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
 //! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
 //! the damping thermostat, and heat conduction and diffusion (sections 8 and 9, with sources,
-//! fixed and flux faces). Not in it: particles nearer the axis than their half-width.
+//! fixed and flux faces), particles nearer the axis than their half-width included.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -186,15 +186,14 @@ struct Stencil {
 /// The axisymmetric form's radial weight and derivative of the node at `x_i` for a particle
 /// at radius `r` whose domain has half-width `l` (uGIMP, cpGIMP): eqs 112 and 115 along r,
 /// `1 / (2 l r) int_{r-l}^{r+l} N_i(u) u du` and the same of `N_i'`, with `N_i` the linear hat
-/// of the node. Integrated numerically (two-point Gauss-Legendre between the hat's kinks,
-/// exact for these quadratics), not from a closed form.
-fn radial_weight(h: f64, x_i: f64, r: f64, l: f64) -> (f64, f64) {
-    let hat = |u: f64| {
-        (
-            (1.0 - (u - x_i).abs() / h).max(0.0),
-            -(u - x_i).signum() / h,
-        )
-    };
+/// of the node. Written as the Cartesian weight plus its first moment over `r`,
+/// `(int N du + int N (u - r) du / r) / 2l`, and the derivative by parts,
+/// `(N(r+l) - N(r-l)) / 2l + ((N(r+l) + N(r-l)) / 2 - S_cart) / r`, so that `r` can be the
+/// radius the kernel evaluates a particle nearer the axis than `l` at (`r_eff = l`; its domain
+/// then reaches past the axis). The integrals numerically (two-point Gauss-Legendre between the
+/// hat's kinks, exact for these quadratics), not from a closed form.
+fn radial_weight(h: f64, x_i: f64, r: f64, l: f64, r_eff: f64) -> (f64, f64) {
+    let hat = |u: f64| (1.0 - (u - x_i).abs() / h).max(0.0);
     let mut cuts = vec![r - l, r + l];
     for k in [x_i - h, x_i, x_i + h] {
         if k > r - l && k < r + l {
@@ -203,18 +202,20 @@ fn radial_weight(h: f64, x_i: f64, r: f64, l: f64) -> (f64, f64) {
     }
     cuts.sort_by(f64::total_cmp);
     let g = 0.5 / 3f64.sqrt();
-    let (mut w, mut dw) = (0.0, 0.0);
+    let (mut cart, mut moment) = (0.0, 0.0);
     for piece in cuts.windows(2) {
         let (a, b) = (piece[0], piece[1]);
         for u in [0.5 * (a + b) - g * (b - a), 0.5 * (a + b) + g * (b - a)] {
-            let (n, dn) = hat(u);
-            w += 0.5 * (b - a) * n * u;
-            if n > 0.0 {
-                dw += 0.5 * (b - a) * dn * u;
-            }
+            cart += 0.5 * (b - a) * hat(u);
+            moment += 0.5 * (b - a) * hat(u) * (u - r);
         }
     }
-    (w / (2.0 * l * r), dw / (2.0 * l * r))
+    let s_cart = cart / (2.0 * l);
+    let (n_hi, n_lo) = (hat(r + l), hat(r - l));
+    (
+        s_cart + moment / (2.0 * l * r_eff),
+        (n_hi - n_lo) / (2.0 * l) + (0.5 * (n_hi + n_lo) - s_cart) / r_eff,
+    )
 }
 
 fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
@@ -237,14 +238,11 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
             // the Cartesian ones), and the hoop factor T = S_cart / r_p (eq 116).
             let mut t = 0.0;
             if m.axisymmetric && a == 0 {
-                let r = x[0];
-                assert!(
-                    r > m.lp,
-                    "the reference has no particle nearer the axis than l_p"
-                );
-                t = w / r;
+                // A particle nearer the axis than l_p is evaluated as if at r = l_p.
+                let (r, r_eff) = (x[0], x[0].max(m.lp));
+                t = w / r_eff;
                 if matches!(m.shape, ShapeFunction::Gimp | ShapeFunction::CpGimp) {
-                    (w, dw) = radial_weight(m.h, m.origin[0] + i as f64 * m.h, r, lp[0]);
+                    (w, dw) = radial_weight(m.h, m.origin[0] + i as f64 * m.h, r, lp[0], r_eff);
                 }
             }
             if w != 0.0 || t != 0.0 {
@@ -1388,6 +1386,26 @@ fn check(
             0.2 * dz - 0.1 * dx,
         ]
     });
+    let n = if dim == Dimension::Axisymmetric2D {
+        // A column of particles nearer the axis than their half-width `l_p` (at `0.4 l_p`,
+        // moving outwards): the form evaluates them as if at `l_p`.
+        let lp = def.cell_size / (2 * def.particles_per_cell) as Real;
+        let (mass, volume) = (world.particles().mass[0], world.particles().volume0[0]);
+        let material_id = world.particles().material[0];
+        for k in 0..8 {
+            let p = mpm_gimp::ParticleDef {
+                position: mpm_gimp::Vec3::new(0.4 * lp, 0.4 + 0.025 * k as Real, 0.0),
+                velocity: mpm_gimp::Vec3::new(0.05, 0.1, 0.0),
+                mass: 0.05 * mass,
+                volume: 0.05 * volume,
+                material: material_id,
+            };
+            world.add_particle(&p).unwrap();
+        }
+        n + 8
+    } else {
+        n
+    };
     if scene == Scene::Effects {
         // Forces of the size of the particles' weights, and rates of 0 to 0.8 /s, varying
         // from particle to particle.
