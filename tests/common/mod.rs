@@ -244,6 +244,15 @@ pub fn moving_block(
     count
 }
 
+/// Lamé constants (lambda, mu) in f64 from Young's modulus and Poisson's ratio.
+pub fn lame_of(youngs_modulus: Real, poisson_ratio: Real) -> (f64, f64) {
+    let (e, nu) = (youngs_modulus as f64, poisson_ratio as f64);
+    (
+        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        e / (2.0 * (1.0 + nu)),
+    )
+}
+
 /// A conducting material: thermal diffusivity `k / (rho C_p)` = `kappa`, stiff enough that the
 /// mechanics (at rest) takes no part, and diffusivity `kappa` for the concentration too.
 pub fn conductor(kappa: Real) -> MaterialDef {

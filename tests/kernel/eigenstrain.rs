@@ -65,11 +65,7 @@ fn thermal_strain() -> f64 {
 
 /// Lamé constants (lambda, mu) in f64.
 fn lame() -> (f64, f64) {
-    let (e, nu) = (YOUNG as f64, POISSON as f64);
-    (
-        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        e / (2.0 * (1.0 + nu)),
-    )
+    lame_of(YOUNG, POISSON)
 }
 
 /// Bulk modulus `K = E / (3 (1 - 2 nu))`, Pa.

@@ -25,11 +25,7 @@ fn solid(model: MaterialModel) -> MaterialDef {
 
 /// Lamé constants (lambda, mu) in f64.
 fn lame() -> (f64, f64) {
-    let (e, nu) = (YOUNG as f64, POISSON as f64);
-    (
-        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        e / (2.0 * (1.0 + nu)),
-    )
+    lame_of(YOUNG, POISSON)
 }
 
 /// A symmetric positive-definite `F` (so `R = I`, `U = F` in the polar decomposition), in 3D;

@@ -45,15 +45,22 @@ fn fill(world: &mut World, def: &WorldDef, length: Real, material: &MaterialDef)
         .collect()
 }
 
-/// The sin(pi x / L) temperature mode between two faces held at 0 decays as
-/// `exp(-pi^2 kappa t / L^2)`; returns the RMS error of the particle temperatures over the
-/// mode's amplitude at the time the amplitude has fallen to 1/e.
-fn sin_mode_error(shape: ShapeFunction, cells: u32) -> f64 {
+/// A conducting strip (`kappa = 0.1`) of length 1 with `cells` cells, its x faces held at
+/// `faces` and the others insulated, its particles' temperatures from `t0` of their x relative
+/// to the left wall plane, stepped with stable steps of equal length to `t_end`. Returns the
+/// world's view through `f`, with the particles' x.
+fn run_strip<R>(
+    shape: ShapeFunction,
+    cells: u32,
+    faces: [Real; 2],
+    t0: impl Fn(f64) -> f64,
+    t_end: f64,
+    f: impl FnOnce(&World, &[Real]) -> R,
+) -> R {
     let length: Real = 1.0;
-    let kappa: Real = 0.1;
     let mut heat = Transport::INSULATED;
-    heat.faces[Face::XMin as usize] = ScalarBoundary::Fixed(0.0);
-    heat.faces[Face::XMax as usize] = ScalarBoundary::Fixed(0.0);
+    heat.faces[Face::XMin as usize] = ScalarBoundary::Fixed(faces[0]);
+    heat.faces[Face::XMax as usize] = ScalarBoundary::Fixed(faces[1]);
     let def = strip(
         shape,
         cells,
@@ -65,30 +72,47 @@ fn sin_mode_error(shape: ShapeFunction, cells: u32) -> f64 {
     );
     let mut buf = buffer_for(&def);
     let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-    let x = fill(&mut w, &def, length, &conductor(kappa));
-    let pi = std::f64::consts::PI;
-    let t0: Vec<Real> = x
-        .iter()
-        .map(|&x| (pi * x as f64 / length as f64).sin() as Real)
-        .collect();
-    w.set_particle_scalar(ScalarField::Temperature, 0, &t0)
+    let x = fill(&mut w, &def, length, &conductor(STRIP_KAPPA));
+    let t: Vec<Real> = x.iter().map(|&x| t0(x as f64) as Real).collect();
+    w.set_particle_scalar(ScalarField::Temperature, 0, &t)
         .unwrap();
-    let t_end = (length * length) as f64 / (pi * pi * kappa as f64);
     let steps = (t_end / w.stable_dt() as f64).ceil() as usize;
     let dt = (t_end / steps as f64) as Real;
     for _ in 0..steps {
         w.step(dt).unwrap();
     }
-    let decay = (-pi * pi * kappa as f64 * w.time() / (length * length) as f64).exp();
-    let v = w.particles();
-    let err2: f64 = (0..v.count)
-        .map(|i| {
-            let exact = (pi * x[i] as f64 / length as f64).sin() * decay;
-            (v.temperature[i] as f64 - exact).powi(2)
-        })
-        .sum::<f64>()
-        / v.count as f64;
-    err2.sqrt() / decay
+    f(&w, &x)
+}
+
+/// The strip's conductivity (diffusivity, with unit density and heat capacity), m^2/s.
+const STRIP_KAPPA: Real = 0.1;
+
+/// The sin(pi x / L) temperature mode between two faces held at 0 decays as
+/// `exp(-pi^2 kappa t / L^2)`; returns the RMS error of the particle temperatures over the
+/// mode's amplitude at the time the amplitude has fallen to 1/e.
+fn sin_mode_error(shape: ShapeFunction, cells: u32) -> f64 {
+    let pi = std::f64::consts::PI;
+    let kappa = STRIP_KAPPA as f64;
+    let t_end = 1.0 / (pi * pi * kappa);
+    run_strip(
+        shape,
+        cells,
+        [0.0, 0.0],
+        |x| (pi * x).sin(),
+        t_end,
+        |w, x| {
+            let decay = (-pi * pi * kappa * w.time()).exp();
+            let v = w.particles();
+            let err2: f64 = (0..v.count)
+                .map(|i| {
+                    let exact = (pi * x[i] as f64).sin() * decay;
+                    (v.temperature[i] as f64 - exact).powi(2)
+                })
+                .sum::<f64>()
+                / v.count as f64;
+            err2.sqrt() / decay
+        },
+    )
 }
 
 /// Heat: the sin mode decays at the exact rate and the error falls at second order in the cell
@@ -123,46 +147,32 @@ fn heat_sin_mode_decays_at_the_exact_rate_with_second_order_convergence() {
 /// Returns the RMS errors of the particles' own temperatures and of the grid's value at the
 /// particles at `kappa t / L^2 = 0.02` (the front a fifth of the slab in).
 fn step_change_errors(shape: ShapeFunction, cells: u32) -> (f64, f64) {
-    let length: Real = 1.0;
-    let kappa: Real = 0.1;
-    let mut heat = Transport::INSULATED;
-    heat.faces[Face::XMin as usize] = ScalarBoundary::Fixed(1.0);
-    heat.faces[Face::XMax as usize] = ScalarBoundary::Fixed(0.0);
-    let def = strip(
+    let pi = std::f64::consts::PI;
+    let kappa = STRIP_KAPPA as f64;
+    run_strip(
         shape,
         cells,
-        length,
-        Effects {
-            heat: Some(heat),
-            ..Effects::NONE
+        [1.0, 0.0],
+        |_| 0.0,
+        0.02 / kappa,
+        |w, x| {
+            let tau = kappa * w.time();
+            let exact = |s: f64| {
+                (1..2000).fold(1.0 - s, |acc, n| {
+                    let n = n as f64;
+                    acc - 2.0 / (n * pi) * (n * pi * s).sin() * (-n * n * pi * pi * tau).exp()
+                })
+            };
+            let v = w.particles();
+            let rms = |col: &[Real]| {
+                let e2: f64 = (0..v.count)
+                    .map(|i| (col[i] as f64 - exact(x[i] as f64)).powi(2))
+                    .sum::<f64>();
+                (e2 / v.count as f64).sqrt()
+            };
+            (rms(v.temperature), rms(v.grid_temperature))
         },
-    );
-    let mut buf = buffer_for(&def);
-    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-    let x = fill(&mut w, &def, length, &conductor(kappa));
-    let t_end = 0.02 * (length * length) as f64 / kappa as f64;
-    let steps = (t_end / w.stable_dt() as f64).ceil() as usize;
-    let dt = (t_end / steps as f64) as Real;
-    for _ in 0..steps {
-        w.step(dt).unwrap();
-    }
-    let pi = std::f64::consts::PI;
-    let tau = kappa as f64 * w.time() / (length * length) as f64;
-    let exact = |x: f64| {
-        let s = x / length as f64;
-        (1..2000).fold(1.0 - s, |acc, n| {
-            let n = n as f64;
-            acc - 2.0 / (n * pi) * (n * pi * s).sin() * (-n * n * pi * pi * tau).exp()
-        })
-    };
-    let v = w.particles();
-    let rms = |col: &[Real]| {
-        let e2: f64 = (0..v.count)
-            .map(|i| (col[i] as f64 - exact(x[i] as f64)).powi(2))
-            .sum::<f64>();
-        (e2 / v.count as f64).sqrt()
-    };
-    (rms(v.temperature), rms(v.grid_temperature))
+    )
 }
 
 /// Heat: a step change at a fixed face. The face imposes its value on the particles' own
