@@ -415,10 +415,9 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         }
     }
     let ns = crate::layout::stress_components(D);
-    let mut ok = Lanes::NONE;
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
-    if let Some(rec) = uniform {
+    let ok = if let Some(rec) = uniform {
         let (model, params) = (model_of(rec), Params::of(rec));
         let mut admissible = Lanes::ALL;
         match &eigen {
@@ -439,29 +438,19 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
                 }
             }
         }
-        ok = admissible & update & rows::above::<I, W>(&jm1, -1.0);
+        admissible & update & rows::above::<I, W>(&jm1, -1.0)
     } else {
-        for ln in 0..W {
-            if !update.has(ln) {
-                continue;
-            }
-            let Some(rec) = ctx.materials.get(ids[ln] as usize) else {
-                continue;
-            };
-            let f = Deformation::<D> {
-                h: matrix(|r, c| h[r][c][ln]),
-                hzz: hzz[ln],
-                jm1: jm1[ln],
-            };
-            let d = eigen.as_ref().map_or(0.0, |d| d[ln]);
-            if let Some(s) = particle_stress(rec, &f, d) {
-                for (k, row) in tau.iter_mut().enumerate().take(ns) {
-                    row[ln] = s[k];
-                }
-                ok = ok | Lanes::one(ln);
-            }
-        }
-    }
+        stress_lane_by_lane(
+            ctx.materials,
+            &ids,
+            h,
+            &hzz,
+            &jm1,
+            eigen.as_ref(),
+            update,
+            tau,
+        )
+    };
     // The runaway bound: an updated lane whose volume ratio left the band freezes (the
     // inverted and NaN lanes failed above).
     let [lo, hi] = ctx.jm1_band;
@@ -523,6 +512,47 @@ fn eigenstrain<const D: usize, const W: usize>(
         }
     }
     Some(d)
+}
+
+/// The stress of the lanes in `update` of a chunk whose lanes do not share one material, one
+/// lane at a time ([`particle_stress`]); returns the lanes it updated (not those inverted or
+/// of an unknown material). A function of its own per dimension, not inlined into every pass
+/// form: chunks that mix materials are few, and each inlined copy cost build time and size.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn stress_lane_by_lane<const D: usize, const W: usize>(
+    materials: &[crate::layout::MaterialRecord],
+    ids: &[u32; W],
+    h: &[[Lane<W>; D]; D],
+    hzz: &Lane<W>,
+    jm1: &Lane<W>,
+    eigen: Option<&Lane<W>>,
+    update: Lanes<W>,
+    tau: &mut [Lane<W>; 6],
+) -> Lanes<W> {
+    let mut ok = Lanes::NONE;
+    for ln in update.iter() {
+        let Some(rec) = materials.get(ids[ln] as usize) else {
+            continue;
+        };
+        let f = Deformation::<D> {
+            h: matrix(|r, c| h[r][c][ln]),
+            hzz: hzz[ln],
+            jm1: jm1[ln],
+        };
+        let d = eigen.map_or(0.0, |d| d[ln]);
+        if let Some(s) = particle_stress(rec, &f, d) {
+            for (row, &v) in tau
+                .iter_mut()
+                .zip(&s)
+                .take(crate::layout::stress_components(D))
+            {
+                row[ln] = v;
+            }
+            ok = ok | Lanes::one(ln);
+        }
+    }
+    ok
 }
 
 /// Particle update: velocity and position from the grid. With USL it also updates the stress
