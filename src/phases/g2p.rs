@@ -387,14 +387,7 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
-    let j2 = crate::math::det_identity_plus_minus_one(packs(h));
-    let hz = Pack(hzz);
-    let jm1 = if S::AXISYMMETRIC {
-        j2 + hz + j2 * hz
-    } else {
-        j2
-    }
-    .0;
+    let jm1 = Deformation::new(*packs(h), Pack(hzz)).jm1.0;
     // Material: the model's chunk path when every lane shares one material (the common case,
     // vectorised); otherwise lane by lane.
     // Without `Option` combinators: their closures were left out of line (a profile showed
