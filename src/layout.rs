@@ -261,8 +261,8 @@ pub(crate) struct Layout {
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
-    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], then x_start[D] (MUSL),
-    /// then the effect columns (see [`EffectColumns`]).
+    /// Particle Real columns: x[D], v[D], mass, vol0, H[D*D], tau[NS], x_low[D], then
+    /// x_start[D] (MUSL), then the effect columns (see [`EffectColumns`]).
     pub particle_real_columns: usize,
     /// First column and count of each optional group of particle Real columns.
     pub x_start: ColumnGroup,
@@ -363,7 +363,7 @@ impl Layout {
         let (
             [x_start, force, damping, affine, heat, diffusion, hoop, stretch],
             particle_real_columns,
-        ) = EffectColumns::of(def, d, 2 * d + 2 + d * d + stress_components(d));
+        ) = EffectColumns::of(def, d, col::x_low(d, d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes =
             column_stride(round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>());
@@ -659,6 +659,11 @@ pub(crate) mod col {
     }
     pub const fn tau(d: usize, k: usize) -> usize {
         2 * d + 2 + d * d + k
+    }
+    /// The low part of the position along axis `a`: what rounding `x` to `Real` left out
+    /// (see [`crate::particles::ParticleCols::x_low`]).
+    pub const fn x_low(d: usize, a: usize) -> usize {
+        tau(d, super::stress_components(d)) + a
     }
     /// u32 columns.
     pub const MATERIAL: usize = 0;

@@ -3,7 +3,8 @@
 //! Always present: position x[D], velocity v[D], mass, initial volume V0, displacement
 //! gradient `H = F - I` [D][D] (row-major, one column per entry; storing `F - I` rather than F
 //! keeps small strains at full precision in f32), stress tau/rho0 (symmetric components, see
-//! [`crate::layout::stress_components`]), material id, status. With MUSL the step also reserves
+//! [`crate::layout::stress_components`]), the low part of the position x_low[D], material id,
+//! status. With MUSL the step also reserves
 //! D scratch columns for the positions of the start of the step.
 //!
 //! Per effect, only when declared: external force `F_p` [D] (particle forces), local damping
@@ -59,6 +60,13 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub h: [[&'a mut [Real]; D]; D],
     /// First `stress_components(D)` used; the rest are empty.
     pub tau: [&'a mut [Real]; 6],
+    /// The low part of the position, m: `x + x_low` is the position to twice `Real`'s
+    /// precision, `|x_low| <= ulp(x) / 2`. The particle update adds each step's displacement
+    /// to the pair without rounding error ([`crate::phases::update::advance`]), so that an
+    /// increment smaller than the last bit of `x` still moves the particle (in f32, a
+    /// coordinate of 10 m has a last bit of 1 um: a slow particle far from the origin would
+    /// otherwise never move).
+    pub x_low: [&'a mut [Real]; D],
     /// MUSL scratch: the positions of the start of the step, kept by the particle update for the
     /// stress update's stencils. Empty slices otherwise.
     pub x_start: [&'a mut [Real]; D],
@@ -161,6 +169,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let vol0 = c.take(rb, n);
         let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });
+        let x_low = core::array::from_fn(|_| c.take(rb, n));
         let x_start = core::array::from_fn(|_| group(&mut c, layout.x_start.count > 0));
         let force = core::array::from_fn(|_| group(&mut c, layout.force.count > 0));
         let damping = core::array::from_fn(|_| group(&mut c, layout.damping.count > 0));
@@ -182,6 +191,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             vol0,
             h,
             tau,
+            x_low,
             x_start,
             force,
             damping,

@@ -55,6 +55,11 @@ pub const LINEAR_MAX_ORDER: f64 = 0.5;
 /// APIC's angular-momentum error is at most this fraction of FLIP's (pure and blended).
 pub const APIC_FRACTION: f64 = 0.01;
 
+/// The vibrating bar 100 m from the origin has at most this multiple of the error of the bar
+/// at the origin, at every level (where a step's displacement is below the last bit of a
+/// coordinate, a position rounded after every step lost it: f32 errors of order 1 there).
+pub const FAR_FACTOR: f64 = 1.5;
+
 /// Evaluates every claim on the errors `series` gives.
 pub fn check(series: Series) -> Vec<Claim> {
     let mut claims = vec![];
@@ -111,6 +116,21 @@ levels {orders:.2?} (each >= {CPGIMP_MIN_STEP_ORDER})",
         detail: format!(
             "|dL|/L: APIC {apic:.2e}, FLIP {flip:.2e}, FLIP 0.99 {blend:.2e} \
 (APIC <= {APIC_FRACTION} x FLIP's)"
+        ),
+    });
+    let (near, far) = (
+        series("bar", 0, "defaults"),
+        series("bar-far", 0, "defaults"),
+    );
+    claims.push(Claim {
+        text: "the vibrating bar 100 m from the origin is as accurate as at the origin",
+        holds: near.len() >= 2
+            && near.len() == far.len()
+            && near.iter().zip(&far).all(|(n, f)| f.1 <= FAR_FACTOR * n.1),
+        detail: format!(
+            "errors at the origin {}; 100 m away {} (each <= {FAR_FACTOR} x)",
+            show(&near),
+            show(&far)
         ),
     });
     claims

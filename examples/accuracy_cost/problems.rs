@@ -198,6 +198,20 @@ error over the amplitude at t = 1.25 periods.",
         run: vibrating_bar,
     },
     Problem {
+        key: "bar-far",
+        title: "Vibrating bar 100 m from the origin",
+        about: "The vibrating bar with the grid's origin at (100 m, 100 m): a step moves a \
+particle by less than the last bit of its f32 coordinate (8 um), which positions rounded to \
+f32 after every step lost. Same exact solution and error as the bar; the f32 rows against the \
+f64 rows show what f32 keeps.",
+        metrics: &["displacement"],
+        targets: &[1e-2],
+        levels: &[16, 32, 64, 128],
+        quick_levels: &[16, 32],
+        declares: Declares::Nothing,
+        run: vibrating_bar_far,
+    },
+    Problem {
         key: "mms",
         title: "Manufactured large deformation (1D, body force)",
         about: "u = A sin(2 pi X) sin(pi c t) on [0, 1] between stick walls, neo-Hookean with \
@@ -353,7 +367,8 @@ fn strip(scheme: &Scheme, cells: u32, length: f64, room: u32, x_max: Boundary) -
 }
 
 /// Fills the strip of [`strip`] with `material` moving along x at `v(X)`, `X` the distance
-/// from the lower x wall plane. Returns the wall plane's x and every particle's `X`.
+/// from the lower x wall plane. Returns the wall plane's x and every particle's `X`. The grid's
+/// origin is on the diagonal (`origin.x = origin.y`).
 fn fill_strip(
     world: &mut World,
     material: &MaterialDef,
@@ -361,7 +376,7 @@ fn fill_strip(
     v: impl Fn(f64) -> f64,
 ) -> (f64, Vec<f64>) {
     let def = world.def();
-    let wall = def.shape.margin_cells() as f64 * def.cell_size as f64;
+    let wall = def.origin.x as f64 + def.shape.margin_cells() as f64 * def.cell_size as f64;
     let bounds = (
         [wall, wall],
         [wall + length, wall + 2.0 * def.cell_size as f64],
@@ -390,13 +405,27 @@ fn one_dimensional(model: MaterialModel) -> MaterialDef {
 
 /// Problem 1: the fixed-free bar's first mode.
 pub fn vibrating_bar(scheme: &Scheme, cells: u32) -> Outcome {
+    vibrating_bar_at(scheme, cells, 0.0)
+}
+
+/// Problem 1 with the grid's origin 100 m from the coordinate origin: a step moves a particle
+/// by less than the last bit of its f32 coordinate there (8 um), which a position kept only
+/// as that coordinate lost.
+pub fn vibrating_bar_far(scheme: &Scheme, cells: u32) -> Outcome {
+    vibrating_bar_at(scheme, cells, 100.0)
+}
+
+/// The fixed-free bar's first mode on a grid whose origin is at `origin` on the diagonal.
+/// Displacements are read from the position and its low part, in f64.
+fn vibrating_bar_at(scheme: &Scheme, cells: u32, origin: Real) -> Outcome {
     let length = 1.0;
     let material = one_dimensional(MaterialModel::LinearElastic);
     let c = (material.youngs_modulus as f64 / material.density as f64).sqrt();
     let omega = PI * c / (2.0 * length);
     let v0 = 1.0e-3 * omega * length;
     let k = PI / (2.0 * length);
-    let def = strip(scheme, cells, length, cells / 4, Boundary::Open);
+    let mut def = strip(scheme, cells, length, cells / 4, Boundary::Open);
+    def.origin = Vec3::new(origin, origin, 0.0);
     let mut run = Run::new(&def);
     let mut w = run.world();
     let (wall, x0) = fill_strip(&mut w, &material, length, |x| v0 * (k * x).sin());
@@ -407,7 +436,8 @@ pub fn vibrating_bar(scheme: &Scheme, cells: u32) -> Outcome {
     let v = w.particles();
     let error = rms(v.count, |i| {
         let exact = amplitude * (k * x0[i]).sin() * (omega * w.time()).sin();
-        (v.position[0][i] as f64 - wall - x0[i]) - exact
+        let x = v.position[0][i] as f64 + v.position_low[0][i] as f64;
+        (x - wall - x0[i]) - exact
     }) / amplitude;
     outcome(vec![error], v.count, steps)
 }

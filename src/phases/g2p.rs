@@ -582,6 +582,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     let (mut x, mut v) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     let (mut alpha_g, mut alpha_p) = (Block([ctx.alpha_g; W]), Block([ctx.alpha_p; W]));
     let (mut v_new, mut x_new) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
+    let (mut x_low, mut x_low_new) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     let mut mass = Block([0.0; W]);
     // APIC: the new moment matrix B_p of each live lane (a family that keeps the gradient
     // form takes the stress update's velocity gradient instead: see
@@ -605,6 +606,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         let live = live_lanes(p, start, count);
         for a in 0..D {
             load_into(&mut x[a], p.x[a], start);
+            load_into(&mut x_low[a], p.x_low[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
@@ -632,21 +634,23 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             let mut sum = zero;
             let (mut open, mut wall) = (none, none);
             for a in 0..D {
-                let (x_p, v_p, v_gp, a_gp) = (ld(&x[a]), ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
+                let (v_p, v_gp, a_gp) = (ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
                 let d = if damp {
                     Some(damping::acceleration(v_gp, v_p, ld(&alpha_g), ld(&alpha_p)))
                 } else {
                     None
                 };
-                let (vn, xn) = if apic {
-                    update::apic(&step, x_p, v_gp, a_gp, d)
+                let (vn, dx) = if apic {
+                    update::apic(&step, v_gp, a_gp, d)
                 } else {
-                    update::flip(&step, x_p, v_p, v_gp, a_gp, d)
+                    update::flip(&step, v_p, v_gp, a_gp, d)
                 };
+                let (xn, xn_low) = update::advance(ld(&x[a]), ld(&x_low[a]), dx);
                 sum = sum + (vn + xn);
-                let at = update::walls(&faces[a], xn, vn);
+                let at = update::walls(&faces[a], xn, xn_low, vn);
                 (open, wall) = (open | at.open, wall | at.wall);
                 at.x.store(&mut x_new[a], q);
+                at.x_low.store(&mut x_low_new[a], q);
                 at.v.store(&mut v_new[a], q);
             }
             if apic {
@@ -676,6 +680,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             commit(p.v[a], start, &v_new[a], ok);
             commit(p.v[a], start, &zero, frozen);
             commit(p.x[a], start, &x_new[a], ok);
+            commit(p.x_low[a], start, &x_low_new[a], ok);
             if keep_start {
                 // Whole chunks (the columns are padded to the chunk width): one store per
                 // vector, not a select.
@@ -777,8 +782,9 @@ pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, cons
                 p.v[a][i] = 0.0;
                 if from_start {
                     // Back to the position of the start of the step, as for any frozen
-                    // particle.
+                    // particle (to the last bit of x: the low part is not kept).
                     p.x[a][i] = p.x_start[a][i];
+                    p.x_low[a][i] = 0.0;
                 }
             }
             p.status[i] = FROZEN;

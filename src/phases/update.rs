@@ -5,6 +5,7 @@
 //! - [`damping`]: the damping acceleration (seeds/000 eqs 47 and 107).
 //! - [`flip`]: FLIP with PIC damping and the second-order position update (eqs 51-52).
 //! - [`apic`]: the APIC update (seeds/001).
+//! - [`advance`]: the position plus the step's displacement, without rounding error.
 //! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
 //!   with its outward velocity zeroed, or escapes through an open face.
 
@@ -47,13 +48,12 @@ impl<I: Compare> Step<I> {
 /// FLIP with PIC damping (seeds/000 eq 52) and the second-order position update (eq 51), less
 /// the damping acceleration `d` when damping is declared (eqs 46-49):
 /// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
-/// - `x(n+1) = x_p + (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`
+/// - `x(n+1) = x_p + dx`, `dx = (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`
 ///
-/// Returns the new velocity and position.
+/// Returns the new velocity and the displacement `dx` (see [`advance`]).
 #[inline(always)]
 pub(crate) fn flip<I: Compare>(
     k: &Step<I>,
-    x_p: Wide<I>,
     v_p: Wide<I>,
     v_gp: Wide<I>,
     a_gp: Wide<I>,
@@ -61,19 +61,19 @@ pub(crate) fn flip<I: Compare>(
 ) -> (Wide<I>, Wide<I>) {
     let inversion = (v_p - v_gp) * k.pic;
     let v = v_p + a_gp * k.dt - inversion;
-    let x = x_p + (v_gp + a_gp * k.half * k.dt - inversion * k.half) * k.dt;
+    let dx = (v_gp + a_gp * k.half * k.dt - inversion * k.half) * k.dt;
     match d {
-        Some(d) => (v - d * k.dt, x - d * k.half_dt2),
-        None => (v, x),
+        Some(d) => (v - d * k.dt, dx - d * k.half_dt2),
+        None => (v, dx),
     }
 }
 
 /// APIC (seeds/001): the particle takes the grid's velocity, `v(n+1) = v_gp + a_gp dt - d dt`,
-/// and moves with it, `x(n+1) = x_p + v(n+1) dt`. Returns the new velocity and position.
+/// and moves with it, `x(n+1) = x_p + dx`, `dx = v(n+1) dt`. Returns the new velocity and the
+/// displacement `dx` (see [`advance`]).
 #[inline(always)]
 pub(crate) fn apic<I: Compare>(
     k: &Step<I>,
-    x_p: Wide<I>,
     v_gp: Wide<I>,
     a_gp: Wide<I>,
     d: Option<Wide<I>>,
@@ -82,7 +82,21 @@ pub(crate) fn apic<I: Compare>(
     if let Some(d) = d {
         v = v - d * k.dt;
     }
-    (v, x_p + v * k.dt)
+    (v, v * k.dt)
+}
+
+/// The position `x + x_low` moved by `dx`, kept as a new pair `(x, x_low)`: `x` the sum rounded
+/// to `Real`, `x_low` what that rounding left out (Dekker's fast two-sum, exact when `|x|` is at
+/// least the step's displacement `|dx + x_low|`, so that `x + x_low` is the exact sum of the old
+/// pair and `dx`, to the rounding of `dx + x_low`; nearer the origin than one step's
+/// displacement, the last bit of `x` is finer than anywhere the particle could come from).
+/// Written as `x += dx`, a displacement below half the last bit of `x` was lost every step: a
+/// slow particle far from the origin never moved.
+#[inline(always)]
+pub(crate) fn advance<I: Compare>(x: Wide<I>, x_low: Wide<I>, dx: Wide<I>) -> (Wide<I>, Wide<I>) {
+    let s = dx + x_low;
+    let sum = x + s;
+    (sum, s - (sum - x))
 }
 
 /// One axis's two faces, for [`walls`]: the grid's origin and `1 / h`, the admissible range
@@ -127,6 +141,8 @@ impl<I: Compare> Faces<I> {
 pub(crate) struct AtFaces<I: Compare> {
     /// The position, on a face's plane where the particle left the admissible range.
     pub x: Wide<I>,
+    /// The low part of the position (zero on a face's plane).
+    pub x_low: Wide<I>,
     /// The velocity, its outward component zeroed at a wall.
     pub v: Wide<I>,
     /// The lanes that crossed an open face (they escape).
@@ -135,18 +151,30 @@ pub(crate) struct AtFaces<I: Compare> {
     pub wall: WideMask<I>,
 }
 
-/// The walls and open faces along one axis: a particle at `x` (m) with velocity `v` that left
-/// the admissible range is put on the plane it crossed; at a stick or slip wall its outward
-/// velocity is zeroed, and through an open face it escapes.
+/// The walls and open faces along one axis: a particle at `x + x_low` (m) with velocity `v`
+/// that left the admissible range is put on the plane it crossed; at a stick or slip wall its
+/// outward velocity is zeroed, and through an open face it escapes.
 #[inline(always)]
-pub(crate) fn walls<I: Compare>(f: &Faces<I>, x: Wide<I>, v: Wide<I>) -> AtFaces<I> {
+pub(crate) fn walls<I: Compare>(
+    f: &Faces<I>,
+    x: Wide<I>,
+    x_low: Wide<I>,
+    v: Wide<I>,
+) -> AtFaces<I> {
     let zero = f.zero;
     let s = (x - f.origin) * f.inv_h;
     let (below, above) = (s.lt(f.lo), s.gt(f.hi));
     let x = below.select(f.lo_x, above.select(f.hi_x, x));
+    let x_low = (below | above).select(zero, x_low);
     let open = (below & f.open[0]) | (above & f.open[1]);
     let wall = (below | above).and_not(open);
     let outward = (below & v.lt(zero)) | (above & v.gt(zero));
     let v = (wall & outward).select(zero, v);
-    AtFaces { x, v, open, wall }
+    AtFaces {
+        x,
+        x_low,
+        v,
+        open,
+        wall,
+    }
 }

@@ -249,6 +249,7 @@ impl<'a> World<'a> {
         for (x, v, m, vol, mat) in items {
             for a in 0..d {
                 self.real_col_mut(&layout, col::x(a), cap)[i] = x[a];
+                self.real_col_mut(&layout, col::x_low(d, a), cap)[i] = 0.0;
                 self.real_col_mut(&layout, col::v(d, a), cap)[i] = v[a];
                 for b in 0..d {
                     self.real_col_mut(&layout, col::h(d, a, b), cap)[i] = 0.0;

@@ -308,6 +308,7 @@ impl<'a> WorldRef<'a> {
             count: n,
             dimension: self.def().dimension,
             position: core::array::from_fn(|a| if a < d { r(col::x(a)) } else { empty }),
+            position_low: core::array::from_fn(|a| if a < d { r(col::x_low(d, a)) } else { empty }),
             velocity: core::array::from_fn(|a| if a < d { r(col::v(d, a)) } else { empty }),
             mass: r(col::mass(d)),
             volume0: r(col::vol0(d)),

@@ -127,8 +127,15 @@ pub struct ParticlesView<'w> {
     pub count: usize,
     /// The world's dimension.
     pub dimension: Dimension,
-    /// Positions per axis, m.
+    /// Positions per axis, m, rounded to `Real`.
     pub position: [&'w [Real]; 3],
+    /// What rounding the positions to `Real` left out, per axis, m (at most half the last bit
+    /// of the position): `position + position_low`, summed in f64, is the position to twice
+    /// `Real`'s precision. The step moves particles by this pair, so that a displacement
+    /// smaller than the last bit of a coordinate is not lost; in f32, a displacement read as
+    /// `position` after minus before is exact to that last bit (1 um at 10 m), and to far
+    /// less with `position_low` added.
+    pub position_low: [&'w [Real]; 3],
     /// Velocities per axis, m/s.
     pub velocity: [&'w [Real]; 3],
     /// Masses, kg.

@@ -21,6 +21,8 @@ mod eigenstrain;
 mod equilibrium;
 mod hard_cases;
 mod initial_state;
+#[cfg(feature = "effects")]
+mod precision;
 mod reference;
 mod reliability;
 mod robustness;
