@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: buffers, scene builders and column hashes.
 #![allow(dead_code)]
 
+use core::ops::Range;
 use mpm_gimp::{
     memory_requirements, Boundary, Dimension, Face, HeapBuffer, MaterialDef, MaterialModel,
     ParticleBatch, ParticleStatus, Real, ShapeFunction, UpdateOrder, Vec3, World, WorldDef,
@@ -110,13 +111,7 @@ impl Bar {
         };
         def.faces[Face::XMin as usize] = Boundary::Stick;
         def.faces[Face::XMax as usize] = Boundary::Open;
-        let material = MaterialDef {
-            model: MaterialModel::LinearElastic,
-            youngs_modulus: 1.0e6,
-            poisson_ratio: 0.0,
-            density: 1000.0,
-            ..MaterialDef::DEFAULT
-        };
+        let material = one_dimensional();
         Bar {
             def,
             l,
@@ -242,6 +237,40 @@ pub fn moving_block(
         })
         .unwrap();
     count
+}
+
+/// Corotated linear elastic, E = 1 MPa, `nu = 0` (uniaxial strain and stress are then one
+/// and plane strain is plane stress), rho = 1000 kg/m^3: c = 31.6 m/s.
+pub fn one_dimensional() -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::LinearElastic,
+        youngs_modulus: 1.0e6,
+        poisson_ratio: 0.0,
+        density: 1000.0,
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// Loads the particles of `ids` on the side of `face` (x-min or x-max: those with the least or
+/// the greatest x) with a traction `traction` on that face each; returns them.
+pub fn load_outer_column(
+    world: &mut World,
+    ids: Range<u32>,
+    face: Face,
+    traction: Vec3,
+) -> Vec<u32> {
+    let v = world.particles();
+    let x = |i: &u32| v.position[0][*i as usize];
+    let edge = match face {
+        Face::XMin => ids.clone().map(|i| x(&i)).fold(Real::MAX, Real::min),
+        Face::XMax => ids.clone().map(|i| x(&i)).fold(Real::MIN, Real::max),
+        _ => panic!("x faces only"),
+    };
+    let column: Vec<u32> = ids.filter(|i| x(i) == edge).collect();
+    for &i in &column {
+        world.add_tractions(i..i + 1, face, traction).unwrap();
+    }
+    column
 }
 
 /// Lamé constants (lambda, mu) in f64 from Young's modulus and Poisson's ratio.

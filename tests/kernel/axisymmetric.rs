@@ -2,7 +2,7 @@
 //! uniform radial expansion, and a solid cylinder under external pressure, whose exact state
 //! (uniform stress, `sigma_rr = sigma_thetatheta`) exists only if the hoop term is right.
 
-use crate::common::{all_finite, buffer_for, conductor, SHAPES};
+use crate::common::{all_finite, buffer_for, conductor, load_outer_column, SHAPES};
 use mpm_gimp::{
     Boundary, Damping, Dimension, Effects, Face, MaterialDef, MaterialModel, ParticleBatch, Real,
     ScalarField, Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
@@ -164,18 +164,7 @@ fn pressurised_cylinder_settles_to_the_uniform_lame_stress() {
             )
             .unwrap();
         let p: Real = 1.0e3;
-        let v = world.particles();
-        let r_out = (ids.start..ids.end)
-            .map(|i| v.position[0][i as usize])
-            .fold(Real::MIN, Real::max);
-        let outer: Vec<u32> = (ids.start..ids.end)
-            .filter(|&i| v.position[0][i as usize] == r_out)
-            .collect();
-        for &i in &outer {
-            world
-                .add_tractions(i..i + 1, Face::XMax, Vec3::new(-p, 0.0, 0.0))
-                .unwrap();
-        }
+        load_outer_column(&mut world, ids, Face::XMax, Vec3::new(-p, 0.0, 0.0));
         let t_end = 30.0 / omega as f64;
         let dt = world.stable_dt();
         while world.time() < t_end {

@@ -5,7 +5,7 @@
 //! with refinement. The particle update now carries what rounding leaves out
 //! (`ParticlesView::position_low`), so where a scene sits must not change its result.
 
-use crate::common::{all_finite, buffer_for, SHAPES};
+use crate::common::{all_finite, buffer_for, load_outer_column, one_dimensional, SHAPES};
 use mpm_gimp::{
     Boundary, Damping, Dimension, Effects, Face, MaterialDef, MaterialModel, ParticleBatch, Real,
     Schedule, ShapeFunction, Vec3, World, WorldDef,
@@ -26,13 +26,7 @@ fn position(world: &World, axis: usize, i: usize) -> f64 {
 fn cantilever(cells_deep: u32, origin: [Real; 2]) -> (f64, f64) {
     let (length, depth): (Real, Real) = (1.0, 0.1);
     let h = depth / cells_deep as Real;
-    let material = MaterialDef {
-        model: MaterialModel::LinearElastic,
-        youngs_modulus: 1.0e6,
-        poisson_ratio: 0.0,
-        density: 1000.0,
-        ..MaterialDef::DEFAULT
-    };
+    let material = one_dimensional();
     let (e, rho) = (material.youngs_modulus as f64, material.density as f64);
     let (l, d) = (length as f64, depth as f64);
     // First bending mode, omega_1 = 1.875^2 sqrt(E I / (rho A L^4)); grid damping at twice
@@ -68,22 +62,14 @@ fn cantilever(cells_deep: u32, origin: [Real; 2]) -> (f64, f64) {
     let ids = world
         .fill_box(root, root + Vec3::new(length, depth, 0.0), m, Vec3::ZERO)
         .unwrap();
-    let v = world.particles();
-    let x_tip = (ids.start..ids.end)
-        .map(|i| v.position[0][i as usize])
-        .fold(Real::MIN, Real::max);
-    let tip: Vec<usize> = (ids.start as usize..ids.end as usize)
-        .filter(|&i| v.position[0][i] == x_tip)
-        .collect();
-    let y0: Vec<f64> = tip.iter().map(|&i| position(&world, 1, i)).collect();
     let force = 1.0e-4 * e * d * d * d / (l * l);
-    let traction = (force / d) as Real;
-    for &i in &tip {
-        let i = i as u32;
-        world
-            .add_tractions(i..i + 1, Face::XMax, Vec3::new(0.0, -traction, 0.0))
-            .unwrap();
-    }
+    let traction = Vec3::new(0.0, -(force / d) as Real, 0.0);
+    let tip = load_outer_column(&mut world, ids, Face::XMax, traction);
+    let x_tip = world.particles().position[0][tip[0] as usize];
+    let y0: Vec<f64> = tip
+        .iter()
+        .map(|&i| position(&world, 1, i as usize))
+        .collect();
     let t_end = 12.0 / omega;
     let dt = world.stable_dt();
     while world.time() < t_end {
@@ -93,7 +79,7 @@ fn cantilever(cells_deep: u32, origin: [Real; 2]) -> (f64, f64) {
     let deflection = tip
         .iter()
         .zip(&y0)
-        .map(|(&i, y0)| y0 - position(&world, 1, i))
+        .map(|(&i, y0)| y0 - position(&world, 1, i as usize))
         .sum::<f64>()
         / tip.len() as f64;
     let x = x_tip as f64 - root.x as f64;
@@ -187,18 +173,7 @@ fn thick_cylinder(shape: ShapeFunction, cells_per_metre: u32) -> Vec<(f64, f64, 
     let r0: Vec<f64> = (0..world.particle_count())
         .map(|i| position(&world, 0, i))
         .collect();
-    let v = world.particles();
-    let r_in = (ids.start..ids.end)
-        .map(|i| v.position[0][i as usize])
-        .fold(Real::MAX, Real::min);
-    let inner: Vec<u32> = (ids.start..ids.end)
-        .filter(|&i| v.position[0][i as usize] == r_in)
-        .collect();
-    for &i in &inner {
-        world
-            .add_tractions(i..i + 1, Face::XMin, Vec3::new(p as Real, 0.0, 0.0))
-            .unwrap();
-    }
+    load_outer_column(&mut world, ids, Face::XMin, Vec3::new(p as Real, 0.0, 0.0));
     let t_end = 30.0 / omega;
     let dt = world.stable_dt();
     while world.time() < t_end {
@@ -261,13 +236,7 @@ fn thick_cylinder_displacement_matches_lame_and_falls_with_the_radius() {
 fn drifting_bar(cells_per_l: u32, origin: Real) -> f64 {
     let l: Real = 1.0;
     let h = l / cells_per_l as Real;
-    let material = MaterialDef {
-        model: MaterialModel::LinearElastic,
-        youngs_modulus: 1.0e6,
-        poisson_ratio: 0.0,
-        density: 1000.0,
-        ..MaterialDef::DEFAULT
-    };
+    let material = one_dimensional();
     let c = material.wave_speed() as f64;
     let omega = core::f64::consts::PI * c / l as f64;
     // 100 cells of the finest grid (64 cells per metre) in two periods.
