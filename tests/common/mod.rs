@@ -111,7 +111,7 @@ impl Bar {
         };
         def.faces[Face::XMin as usize] = Boundary::Stick;
         def.faces[Face::XMax as usize] = Boundary::Open;
-        let material = one_dimensional();
+        let material = linear_elastic(0.0);
         Bar {
             def,
             l,
@@ -239,13 +239,13 @@ pub fn moving_block(
     count
 }
 
-/// Corotated linear elastic, E = 1 MPa, `nu = 0` (uniaxial strain and stress are then one
-/// and plane strain is plane stress), rho = 1000 kg/m^3: c = 31.6 m/s.
-pub fn one_dimensional() -> MaterialDef {
+/// Corotated linear elastic, E = 1 MPa, Poisson's ratio `nu`, rho = 1000 kg/m^3 (with `nu = 0`
+/// uniaxial strain and stress are one, plane strain is plane stress, and c = 31.6 m/s).
+pub fn linear_elastic(nu: Real) -> MaterialDef {
     MaterialDef {
         model: MaterialModel::LinearElastic,
         youngs_modulus: 1.0e6,
-        poisson_ratio: 0.0,
+        poisson_ratio: nu,
         density: 1000.0,
         ..MaterialDef::DEFAULT
     }

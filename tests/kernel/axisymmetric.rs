@@ -2,10 +2,10 @@
 //! uniform radial expansion, and a solid cylinder under external pressure, whose exact state
 //! (uniform stress, `sigma_rr = sigma_thetatheta`) exists only if the hoop term is right.
 
-use crate::common::{all_finite, buffer_for, conductor, load_outer_column, SHAPES};
+use crate::common::{all_finite, buffer_for, conductor, linear_elastic, load_outer_column, SHAPES};
 use mpm_gimp::{
-    Boundary, Damping, Dimension, Effects, Face, MaterialDef, MaterialModel, ParticleBatch, Real,
-    ScalarField, Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
+    Boundary, Damping, Dimension, Effects, Face, MaterialDef, ParticleBatch, Real, ScalarField,
+    Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 
 /// An axisymmetric definition: `cells` cells of size `h` along r and z, the axis r = 0 on the
@@ -130,13 +130,7 @@ fn pressurised_cylinder_settles_to_the_uniform_lame_stress() {
         let cells = [16u32, 4 + 2 * shape.margin_cells()];
         let mut def = axisymmetric(shape, cells, h);
         def.particles_per_cell = 4;
-        let material = MaterialDef {
-            model: MaterialModel::LinearElastic,
-            youngs_modulus: 1.0e6,
-            poisson_ratio: 0.3,
-            density: 1000.0,
-            ..MaterialDef::DEFAULT
-        };
+        let material = linear_elastic(0.3);
         let radius: Real = 10.0 * h;
         let c = material.wave_speed();
         // Critical damping of the slowest radial mode, omega ~ pi c / (2 R).

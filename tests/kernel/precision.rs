@@ -5,10 +5,10 @@
 //! with refinement. The particle update now carries what rounding leaves out
 //! (`ParticlesView::position_low`), so where a scene sits must not change its result.
 
-use crate::common::{all_finite, buffer_for, load_outer_column, one_dimensional, SHAPES};
+use crate::common::{all_finite, buffer_for, linear_elastic, load_outer_column, SHAPES};
 use mpm_gimp::{
-    Boundary, Damping, Dimension, Effects, Face, MaterialDef, MaterialModel, ParticleBatch, Real,
-    Schedule, ShapeFunction, Vec3, World, WorldDef,
+    Boundary, Damping, Dimension, Effects, Face, ParticleBatch, Real, Schedule, ShapeFunction,
+    Vec3, World, WorldDef,
 };
 
 /// A particle's position along `axis` in f64, with the low part the step keeps.
@@ -26,7 +26,7 @@ fn position(world: &World, axis: usize, i: usize) -> f64 {
 fn cantilever(cells_deep: u32, origin: [Real; 2]) -> (f64, f64) {
     let (length, depth): (Real, Real) = (1.0, 0.1);
     let h = depth / cells_deep as Real;
-    let material = one_dimensional();
+    let material = linear_elastic(0.0);
     let (e, rho) = (material.youngs_modulus as f64, material.density as f64);
     let (l, d) = (length as f64, depth as f64);
     // First bending mode, omega_1 = 1.875^2 sqrt(E I / (rho A L^4)); grid damping at twice
@@ -121,13 +121,7 @@ fn cantilever_far_from_the_origin_deflects_as_timoshenko_and_as_at_the_origin() 
 fn thick_cylinder(shape: ShapeFunction, cells_per_metre: u32) -> Vec<(f64, f64, f64)> {
     let (a, b): (Real, Real) = (1.0, 2.0);
     let h = 1.0 / cells_per_metre as Real;
-    let material = MaterialDef {
-        model: MaterialModel::LinearElastic,
-        youngs_modulus: 1.0e6,
-        poisson_ratio: 0.3,
-        density: 1000.0,
-        ..MaterialDef::DEFAULT
-    };
+    let material = linear_elastic(0.3);
     let (e, nu) = (
         material.youngs_modulus as f64,
         material.poisson_ratio as f64,
@@ -236,7 +230,7 @@ fn thick_cylinder_displacement_matches_lame_and_falls_with_the_radius() {
 fn drifting_bar(cells_per_l: u32, origin: Real) -> f64 {
     let l: Real = 1.0;
     let h = l / cells_per_l as Real;
-    let material = one_dimensional();
+    let material = linear_elastic(0.0);
     let c = material.wave_speed() as f64;
     let omega = core::f64::consts::PI * c / l as f64;
     // 100 cells of the finest grid (64 cells per metre) in two periods.
