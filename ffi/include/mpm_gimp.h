@@ -37,9 +37,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.1.1"
+#define MPM_GIMP_VERSION "0.2.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 101
+#define MPM_GIMP_ABI_VERSION 200
 
 
 // Most points an `MpmSchedule` holds.
@@ -576,8 +576,13 @@ typedef struct MpmParticlesView {
   size_t count;
   // The world's dimension.
   MpmDimension dimension;
-  // Positions per axis, m.
+  // Positions per axis, m, rounded to `mpm_real`.
   const mpm_real *position[3];
+  // What rounding the positions left out, per axis, m (at most half the last bit of the
+  // position): `position + position_low`, summed in double, is the position to twice
+  // `mpm_real`'s precision. The step moves a particle by this pair, so that a displacement
+  // below the last bit of a coordinate is not lost (in float, 1 um at 10 m).
+  const mpm_real *position_low[3];
   // Velocities per axis, m/s.
   const mpm_real *velocity[3];
   // Masses, kg (per unit thickness in plane strain, per radian when axisymmetric).

@@ -20,7 +20,9 @@ use crate::{apart, guard, mpm_real, non_null, MpmVec3};
 use kernel::{ScalarField, World};
 
 /// `Err(UnknownParticle)` unless particles `first .. first + count` exist: checked before any
-/// array of `count` values is formed, so a count past the particles reads nothing.
+/// array of `count` values is formed, so a count past the particles reads nothing, and before
+/// the arrays' overlap with the world, which for a count no world holds (`SIZE_MAX`) depends
+/// on where the host's memory lies (the same call was refused as one or the other by address).
 fn existing(w: &World<'_>, first: u32, count: usize) -> Result<(), MpmStatus> {
     match (first as usize).checked_add(count) {
         Some(end) if end <= w.particle_count() => Ok(()),
@@ -65,13 +67,13 @@ pub unsafe extern "C" fn mpm_world_set_particle_forces(
         for &p in &arrays[..d] {
             non_null(p)?;
         }
-        for &p in &arrays[..d] {
-            apart(w.as_bytes(), p, count)?;
-        }
         if !def.effects.particle_forces {
             return Err(MpmStatus::EffectNotDeclared);
         }
         existing(&w, first, count)?;
+        for &p in &arrays[..d] {
+            apart(w.as_bytes(), p, count)?;
+        }
         let force: [&[mpm_real]; 3] = core::array::from_fn(|a| {
             if a < d {
                 // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most
@@ -107,12 +109,12 @@ pub unsafe extern "C" fn mpm_world_set_particle_damping(
         let mut w = unsafe { world_at(world) }?;
         non_null(alpha_g)?;
         non_null(alpha_p)?;
-        apart(w.as_bytes(), alpha_g, count)?;
-        apart(w.as_bytes(), alpha_p, count)?;
         if !w.def().effects.damping.is_some_and(|d| d.per_particle) {
             return Err(MpmStatus::EffectNotDeclared);
         }
         existing(&w, first, count)?;
+        apart(w.as_bytes(), alpha_g, count)?;
+        apart(w.as_bytes(), alpha_p, count)?;
         // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most the
         // particle count.
         let (g, p) = unsafe { (column(alpha_g, count), column(alpha_p, count)) };
@@ -147,7 +149,6 @@ unsafe fn set_scalar(
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
         non_null(values)?;
-        apart(w.as_bytes(), values, count)?;
         let field = scalar_field_from_c(field)?;
         let effects = w.def().effects;
         let transport = match field {
@@ -162,6 +163,7 @@ unsafe fn set_scalar(
             return Err(MpmStatus::EffectNotDeclared);
         }
         existing(&w, first, count)?;
+        apart(w.as_bytes(), values, count)?;
         // SAFETY: non-NULL, and the caller promises `count` values; `count` is at most the
         // particle count.
         let v = unsafe { column(values, count) };

@@ -17,8 +17,13 @@ pub struct MpmParticlesView {
     pub count: usize,
     /// The world's dimension.
     pub dimension: crate::MpmDimensionValue,
-    /// Positions per axis, m.
+    /// Positions per axis, m, rounded to `mpm_real`.
     pub position: [*const mpm_real; 3],
+    /// What rounding the positions left out, per axis, m (at most half the last bit of the
+    /// position): `position + position_low`, summed in double, is the position to twice
+    /// `mpm_real`'s precision. The step moves a particle by this pair, so that a displacement
+    /// below the last bit of a coordinate is not lost (in float, 1 um at 10 m).
+    pub position_low: [*const mpm_real; 3],
     /// Velocities per axis, m/s.
     pub velocity: [*const mpm_real; 3],
     /// Masses, kg (per unit thickness in plane strain, per radian when axisymmetric).
@@ -117,6 +122,7 @@ pub unsafe extern "C" fn mpm_world_particles(
             count: v.count,
             dimension: v.dimension as u32,
             position: core::array::from_fn(|a| axis(v.position[a], a < d)),
+            position_low: core::array::from_fn(|a| axis(v.position_low[a], a < d)),
             velocity: core::array::from_fn(|a| axis(v.velocity[a], a < d)),
             mass: v.mass.as_ptr(),
             volume0: v.volume0.as_ptr(),

@@ -184,6 +184,7 @@ fn rust_layout() -> String {
         count,
         dimension,
         position,
+        position_low,
         velocity,
         mass,
         volume0,

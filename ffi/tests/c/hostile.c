@@ -1030,9 +1030,12 @@ static void seeding_underflow(void) {
     {
         MpmParticlesView view = view_of(ht.w);
         size_t i;
-        int finite = view.position[2] == NULL && view.velocity[2] == NULL;
+        int finite = view.position[2] == NULL && view.velocity[2] == NULL &&
+                     view.position_low[2] == NULL && view.position_low[0] != NULL &&
+                     view.position_low[1] != NULL;
         for (i = 0; finite && i < view.count; i++) {
-            finite &= isfinite(view.position[0][i]) && isfinite(view.position[1][i]) &&
+            finite &= isfinite(view.position_low[0][i]) && isfinite(view.position_low[1][i]) &&
+                      isfinite(view.position[0][i]) && isfinite(view.position[1][i]) &&
                       isfinite(view.velocity[0][i]) && isfinite(view.velocity[1][i]) &&
                       isfinite(view.mass[i]) && view.mass[i] > R(0.0);
         }

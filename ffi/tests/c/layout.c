@@ -164,6 +164,7 @@ int main(void) {
     FIELD(MpmParticlesView, count);
     FIELD(MpmParticlesView, dimension);
     FIELD(MpmParticlesView, position);
+    FIELD(MpmParticlesView, position_low);
     FIELD(MpmParticlesView, velocity);
     FIELD(MpmParticlesView, mass);
     FIELD(MpmParticlesView, volume0);
