@@ -477,7 +477,7 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")
         && (def.effects != crate::Effects::NONE
-            || def.transfer != Transfer::Flip
+            || def.transfer == Transfer::Apic
             || def.dimension == Dimension::Axisymmetric2D)
     {
         return Err(Error::Unsupported);

@@ -48,6 +48,9 @@ impl Scheme {
         let transfer = match self.transfer {
             Transfer::Apic => "APIC".to_string(),
             Transfer::Flip => format!("FLIP beta={}", self.flip_beta),
+            Transfer::FlipParticleVelocity => {
+                format!("FLIP beta={}, x += v(n+1) dt", self.flip_beta)
+            }
         };
         format!(
             "{:?}, {transfer}, {:?}, exp terms {}",
@@ -101,6 +104,11 @@ pub const SCHEMES: &[Scheme] = &[
     Scheme {
         label: "APIC",
         transfer: Transfer::Apic,
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "FLIP x+=v dt",
+        transfer: Transfer::FlipParticleVelocity,
         ..Scheme::DEFAULTS
     },
     // Update orders.

@@ -19,12 +19,13 @@ pub fn write(
     let _ = writeln!(md, "# What accuracy costs in time\n");
     let _ = writeln!(
         md,
-        "Written by `cargo run --release --example accuracy_cost` ({seconds:.0} s for {}, \
+        "Written by `cargo run --release --example accuracy_cost` at {} ({seconds:.0} s for {}, \
 on {}). Errors are against exact solutions; ns per particle-step is the step_cost \
 measurement of each scheme (the 2D step_cost scene, 131072 particles, with the problem's \
 effect: median of 5 runs of 4 steps, one core, the AVX2 instance). The cost to reach an error \
 is one core's time for the whole run, `ns x particles x steps`, interpolated log-log along the \
 refinement series; `<=` when the coarsest run is already below it, `-` when the finest is not.\n",
+        commit(),
         precs.join(" and "),
         cpu()
     );
@@ -107,6 +108,19 @@ error at the finest resolution | Pareto front (cost, then error) |\n|---|---|---
             );
         }
     }
+}
+
+/// The commit the report was made from, as `git describe --always --dirty` names it (a
+/// `-dirty` suffix: with uncommitted changes), if git is there to say.
+fn commit() -> String {
+    std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| format!("commit {}", s.trim()))
+        .unwrap_or_else(|| "an unknown commit".into())
 }
 
 /// The CPU's model name, if the system says.

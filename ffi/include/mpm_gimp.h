@@ -37,9 +37,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.2.0"
+#define MPM_GIMP_VERSION "0.2.1"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 200
+#define MPM_GIMP_ABI_VERSION 201
 
 
 // Most points an `MpmSchedule` holds.
@@ -244,11 +244,16 @@ enum MpmTransfer
   : uint32_t
 #endif // __cplusplus
  {
-  // FLIP blended with PIC by `MpmWorldDef::flip_beta`.
+  // FLIP blended with PIC by `MpmWorldDef::flip_beta`; the particle moves by the grid's
+  // velocity and acceleration at its place.
   MPM_TRANSFER_FLIP = 0,
   // APIC: the grid velocity plus an affine field per particle, which conserves angular
   // momentum; `flip_beta` is not used. Reserves D x D columns (`MpmParticlesView::affine`).
   MPM_TRANSFER_APIC = 1,
+  // FLIP blended as `MPM_TRANSFER_FLIP`, each particle moving with its own new velocity,
+  // `x += v(n+1) dt`: a time error about a hundredth of `MPM_TRANSFER_FLIP`'s, as APIC's.
+  // Same columns and cost as `MPM_TRANSFER_FLIP`.
+  MPM_TRANSFER_FLIP_PARTICLE_VELOCITY = 2,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmTransfer;

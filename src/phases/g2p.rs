@@ -596,7 +596,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     // runs only on a CPU that supports it.
     let (step, faces, zero, none) = unsafe {
         (
-            update::Step::<I>::new(dt, ctx.beta),
+            update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity),
             core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
             Wide::<I>::splat(0.0),
             WideMask::<I>::splat(false),
@@ -624,7 +624,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, aff, out),
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
-        // FLIP with PIC damping and the second-order position update, then the walls and open
+        // FLIP with PIC damping (or APIC) and the position update, then the walls and open
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);

@@ -58,6 +58,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub order: crate::UpdateOrder,
     /// APIC (seeds/001) in place of FLIP.
     pub apic: bool,
+    /// FLIP moves the particles with their own new velocity ([`crate::Transfer::FlipParticleVelocity`]).
+    pub particle_velocity: bool,
     /// Particle forces declared: the scatter adds `S_ip F_p`.
     pub forces: bool,
     /// Damping declared: the particle update subtracts the damping acceleration.

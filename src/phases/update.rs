@@ -3,7 +3,7 @@
 //! `v_gp = sum S_ip v_i` and acceleration `a_gp = sum S_ip a_i` it gathered.
 //!
 //! - [`damping`]: the damping acceleration (seeds/000 eqs 47 and 107).
-//! - [`flip`]: FLIP with PIC damping and the second-order position update (eqs 51-52).
+//! - [`flip`]: FLIP with PIC damping and the position update (eqs 51-52, or seeds/003's).
 //! - [`apic`]: the APIC update (seeds/001).
 //! - [`advance`]: the position plus the step's displacement, without rounding error.
 //! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
@@ -24,15 +24,18 @@ pub(crate) struct Step<I: Compare> {
     pub half_dt2: Wide<I>,
     /// The PIC fraction `1 - beta`.
     pub pic: Wide<I>,
+    /// FLIP moves the particle with its own new velocity (see [`flip`]).
+    pub particle_velocity: bool,
 }
 
 impl<I: Compare> Step<I> {
-    /// The constants of a substep of length `dt` with FLIP fraction `beta`.
+    /// The constants of a substep of length `dt` with FLIP fraction `beta`, FLIP moving the
+    /// particles with their own velocity if `particle_velocity`.
     ///
     /// # Safety
     /// The CPU supports the instance `I` ([`Wide::splat`]).
     #[inline(always)]
-    pub unsafe fn new(dt: Real, beta: Real) -> Self {
+    pub unsafe fn new(dt: Real, beta: Real, particle_velocity: bool) -> Self {
         // SAFETY: as required of the caller.
         unsafe {
             Step {
@@ -40,15 +43,17 @@ impl<I: Compare> Step<I> {
                 half: Wide::splat(0.5),
                 half_dt2: Wide::splat(0.5 * dt * dt),
                 pic: Wide::splat(1.0 - beta),
+                particle_velocity,
             }
         }
     }
 }
 
-/// FLIP with PIC damping (seeds/000 eq 52) and the second-order position update (eq 51), less
-/// the damping acceleration `d` when damping is declared (eqs 46-49):
+/// FLIP with PIC damping (seeds/000 eq 52) and the position update of eq 51, less the damping
+/// acceleration `d` when damping is declared (eqs 46-49):
 /// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
-/// - `x(n+1) = x_p + dx`, `dx = (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`
+/// - `x(n+1) = x_p + dx`, `dx = (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`,
+///   or with `particle_velocity` the particle's own new velocity, `dx = v(n+1) dt` (seeds/003).
 ///
 /// Returns the new velocity and the displacement `dx` (see [`advance`]).
 #[inline(always)]
@@ -61,9 +66,16 @@ pub(crate) fn flip<I: Compare>(
 ) -> (Wide<I>, Wide<I>) {
     let inversion = (v_p - v_gp) * k.pic;
     let v = v_p + a_gp * k.dt - inversion;
+    let v = match d {
+        Some(d) => v - d * k.dt,
+        None => v,
+    };
+    if k.particle_velocity {
+        return (v, v * k.dt);
+    }
     let dx = (v_gp + a_gp * k.half * k.dt - inversion * k.half) * k.dt;
     match d {
-        Some(d) => (v - d * k.dt, dx - d * k.half_dt2),
+        Some(d) => (v, dx - d * k.half_dt2),
         None => (v, dx),
     }
 }

@@ -185,6 +185,7 @@ impl<'a> World<'a> {
             dt,
             order: def.update_order,
             apic: def.transfer == Transfer::Apic,
+            particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
             forces: fx.particle_forces,
             damp: fx.damping.is_some(),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
@@ -343,6 +344,7 @@ impl Kernel for PhaseRun {
         let ctx = &Ctx {
             order: UpdateOrder::Usl,
             apic: false,
+            particle_velocity: false,
             forces: false,
             damp: false,
             ..*ctx

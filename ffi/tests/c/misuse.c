@@ -530,8 +530,8 @@ static void effects_def_misuse(void) {
         char name[96];
         const uint32_t v = bad_flag[k];
         d = g_def2;
-        d.transfer = v;
-        snprintf(name, sizeof name, "init: transfer %u", (unsigned)v);
+        d.transfer = bad_kind[k]; /* 2 is MPM_TRANSFER_FLIP_PARTICLE_VELOCITY */
+        snprintf(name, sizeof name, "init: transfer %u", (unsigned)bad_kind[k]);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         d = g_def2;
         d.effects.damping.declared = v;

@@ -656,7 +656,7 @@ static void cpgimp(MpmDimension dimension) {
     def.material_capacity = 1;
     def.shape = MPM_SHAPE_CP_GIMP;
     def.update_order = three ? MPM_UPDATE_ORDER_USF : MPM_UPDATE_ORDER_USL;
-    def.transfer = three ? MPM_TRANSFER_APIC : MPM_TRANSFER_FLIP;
+    def.transfer = three ? MPM_TRANSFER_APIC : MPM_TRANSFER_FLIP_PARTICLE_VELOCITY;
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
     w = open_scene(&def, &raw);
 
