@@ -152,8 +152,13 @@ pub enum Transfer {
     /// FLIP blended with PIC as [`Transfer::Flip`], the particle moving with its own new
     /// velocity, `x_p += v_p(n+1) dt` (seeds/003's update; symplectic Euler on the particles,
     /// as APIC moves them). On the vibrating bar its time error is a hundredth of
-    /// [`Transfer::Flip`]'s, about APIC's; at a fixed Courant number what remains is the
-    /// spatial error (the accuracy report). Same columns and cost as [`Transfer::Flip`].
+    /// [`Transfer::Flip`]'s, about APIC's. But with `flip_beta` near 1 the particles then
+    /// follow the noise of the FLIP velocity, which eq 51's grid velocity filters out: on the
+    /// accuracy report's manufactured large deformation it does not converge (errors of 0.26
+    /// to 0.87 of the amplitude with the default blend, against 0.01 to 0.03 with
+    /// [`Transfer::Flip`]; with cpGIMP and `flip_beta` 0.5 or 0 it is 0.013 to 0.027, as
+    /// accurate as [`Transfer::Flip`]). For vibration and waves, not for large flows. Same
+    /// columns and cost as [`Transfer::Flip`].
     FlipParticleVelocity = 2,
 }
 

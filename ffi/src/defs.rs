@@ -79,8 +79,10 @@ pub enum MpmTransfer {
     /// momentum; `flip_beta` is not used. Reserves D x D columns (`MpmParticlesView::affine`).
     Apic = 1,
     /// FLIP blended as `MPM_TRANSFER_FLIP`, each particle moving with its own new velocity,
-    /// `x += v(n+1) dt`: a time error about a hundredth of `MPM_TRANSFER_FLIP`'s, as APIC's.
-    /// Same columns and cost as `MPM_TRANSFER_FLIP`.
+    /// `x += v(n+1) dt`: a time error about a hundredth of `MPM_TRANSFER_FLIP`'s, as APIC's,
+    /// but with `flip_beta` near 1 the particles follow the FLIP velocity's noise and large
+    /// deformations do not converge (`mpm_gimp::Transfer::FlipParticleVelocity`). Same
+    /// columns and cost as `MPM_TRANSFER_FLIP`.
     FlipParticleVelocity = 2,
 }
 
