@@ -9,8 +9,9 @@
 //! integrated numerically from eqs 112 and 115, the hoop factors of eq 116, the hoop stretch
 //! and the hoop term of the radial force, eq 120) and 3D; linear, uGIMP, cpGIMP, quadratic
 //! and cubic B-spline shape functions; USF, USL and MUSL; FLIP (with its PIC fraction, moving
-//! the particles by eq 51 or with their own new velocity as seeds/003 does) and APIC (with linear weights in its gradient form); the neo-Hookean and corotated linear
-//! elastic materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
+//! the particles by eq 51 or with their own new velocity as seeds/003 does) and APIC (with
+//! linear weights in its gradient form); the neo-Hookean and corotated linear elastic
+//! materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
 //! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
 //! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
@@ -985,15 +986,15 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
             if m.apic {
                 p.v[a] = v_gp[a] + a_gp[a] * dt - damp * dt;
                 p.x[a] += p.v[a] * dt;
-            } else if m.particle_velocity {
-                let inversion = (1.0 - m.beta) * (p.v[a] - v_gp[a]);
-                p.v[a] += a_gp[a] * dt - inversion - damp * dt;
-                p.x[a] += p.v[a] * dt;
             } else {
                 let inversion = (1.0 - m.beta) * (p.v[a] - v_gp[a]);
-                p.x[a] +=
-                    (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt;
-                p.v[a] += a_gp[a] * dt - inversion - damp * dt;
+                let v = p.v[a] + a_gp[a] * dt - inversion - damp * dt;
+                p.x[a] += if m.particle_velocity {
+                    v * dt
+                } else {
+                    (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt
+                };
+                p.v[a] = v;
             }
             // A particle that left the admissible region is put on the plane it crossed; a
             // wall also stops its outward velocity (through an open face it escapes).
