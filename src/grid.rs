@@ -254,6 +254,13 @@ impl<const D: usize> NodeBox<D> {
         len: usize,
         mut f: impl FnMut(core::ops::Range<usize>),
     ) {
+        self.lines(stride, len, &mut f);
+    }
+
+    /// [`NodeBox::for_each_line`], one copy per dimension: the loop takes its closure by
+    /// reference (called once per line), so that the closures of every form of the step do not
+    /// each bring their own copy of it.
+    fn lines(&self, stride: [usize; D], len: usize, f: &mut dyn FnMut(core::ops::Range<usize>)) {
         if self.is_empty() {
             return;
         }
@@ -335,7 +342,7 @@ impl<const D: usize> Geom<D> {
     /// stick or slip face, where `fixed[a]` says which velocity components the wall fixes to
     /// zero: all of them at a stick wall, the normal one at a slip wall. A node near an edge
     /// is visited once per face it belongs to.
-    pub fn for_each_wall_node(&self, bx: &NodeBox<D>, mut f: impl FnMut(usize, [bool; D])) {
+    pub fn for_each_wall_node(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, [bool; D])) {
         for axis in 0..D {
             for side in 0..2 {
                 let fixed: [bool; D] = match self.faces[axis][side] {
@@ -343,7 +350,7 @@ impl<const D: usize> Geom<D> {
                     Boundary::Stick => [true; D],
                     Boundary::Slip => core::array::from_fn(|a| a == axis),
                 };
-                self.for_each_face_node(axis, side, bx, |i, _| f(i, fixed));
+                self.for_each_face_node(axis, side, bx, &mut |i, _| f(i, fixed));
             }
         }
     }
@@ -356,7 +363,7 @@ impl<const D: usize> Geom<D> {
         axis: usize,
         side: usize,
         bx: &NodeBox<D>,
-        mut f: impl FnMut(usize, bool),
+        f: &mut dyn FnMut(usize, bool),
     ) {
         let n = self.nodes[axis];
         let (layers, wall) = if side == 0 {
@@ -365,7 +372,7 @@ impl<const D: usize> Geom<D> {
             (n - 1 - self.margin..n, n - 1 - self.margin)
         };
         for layer in layers {
-            self.for_each_node_in_plane(axis, layer, bx, |i| f(i, layer == wall));
+            self.for_each_node_in_plane(axis, layer, bx, &mut |i| f(i, layer == wall));
         }
     }
 
@@ -377,7 +384,7 @@ impl<const D: usize> Geom<D> {
         axis: usize,
         side: usize,
         bx: &NodeBox<D>,
-        mut f: impl FnMut(usize, usize),
+        f: &mut dyn FnMut(usize, usize),
     ) {
         let n = self.nodes[axis];
         for k in 1..=self.margin {
@@ -390,7 +397,7 @@ impl<const D: usize> Geom<D> {
                 continue;
             }
             let shift = image as isize - ghost as isize;
-            self.for_each_node_in_plane(axis, ghost, bx, |i| {
+            self.for_each_node_in_plane(axis, ghost, bx, &mut |i| {
                 let j = i as isize + shift * self.stride[axis] as isize;
                 f(i, j as usize)
             });
@@ -417,7 +424,7 @@ impl<const D: usize> Geom<D> {
         &self,
         bx: &NodeBox<D>,
         reversed: bool,
-        mut f: impl FnMut(usize, usize, [Real; D]),
+        f: &mut dyn FnMut(usize, usize, [Real; D]),
     ) {
         for q in 0..2 * D {
             let face = if reversed { 2 * D - 1 - q } else { q };
@@ -440,7 +447,7 @@ impl<const D: usize> Geom<D> {
                 if image >= n {
                     continue;
                 }
-                self.for_each_node_in_plane(axis, ghost, bx, |i| {
+                self.for_each_node_in_plane(axis, ghost, bx, &mut |i| {
                     let j = if side == 0 {
                         i + 2 * k * self.stride[axis]
                     } else {
@@ -462,7 +469,7 @@ impl<const D: usize> Geom<D> {
         cols: &mut [&mut [Real]; N],
         bx: &NodeBox<D>,
     ) {
-        self.for_each_wall_image(bx, false, |ghost, image, signs| {
+        self.for_each_wall_image(bx, false, &mut |ghost, image, signs| {
             for (a, col) in cols.iter_mut().enumerate() {
                 let sign = if SCALAR { 1.0 } else { signs[a] };
                 if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
@@ -476,7 +483,7 @@ impl<const D: usize> Geom<D> {
     /// Each node past a wall plane takes its image's value, component `a` of vector `cols`
     /// times the face's `signs[a]` ([`Geom::for_each_wall_image`], faces in reverse).
     pub fn read_wall_images<const N: usize>(&self, cols: &mut [&mut [Real]; N], bx: &NodeBox<D>) {
-        self.for_each_wall_image(bx, true, |ghost, image, signs| {
+        self.for_each_wall_image(bx, true, &mut |ghost, image, signs| {
             for (a, col) in cols.iter_mut().enumerate() {
                 if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
                     col[ghost] = signs[a] * v;
@@ -490,13 +497,13 @@ impl<const D: usize> Geom<D> {
     /// those nodes with the wider stencils (B-splines); what it puts there belongs to the image
     /// node (the body is symmetric about the axis), and what the image has is read there, with
     /// the radial component's sign flipped.
-    pub fn for_each_mirror(&self, bx: &NodeBox<D>, mut f: impl FnMut(usize, usize)) {
+    pub fn for_each_mirror(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, usize)) {
         if !self.axis_mirror {
             return;
         }
         for layer in 0..self.margin {
             let shift = 2 * (self.margin - layer) * self.stride[0];
-            self.for_each_node_in_plane(0, layer, bx, |i| f(i, i + shift));
+            self.for_each_node_in_plane(0, layer, bx, &mut |i| f(i, i + shift));
         }
     }
 
@@ -505,7 +512,7 @@ impl<const D: usize> Geom<D> {
     /// otherwise. Every index is below the node count, which every column exceeds: the bound
     /// checks never fail.
     pub fn fold_mirror(&self, col: &mut [Real], sign: Real, bx: &NodeBox<D>) {
-        self.for_each_mirror(bx, |ghost, image| {
+        self.for_each_mirror(bx, &mut |ghost, image| {
             if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
                 col[image] += sign * v;
                 col[ghost] = 0.0;
@@ -516,7 +523,7 @@ impl<const D: usize> Geom<D> {
     /// Axisymmetric: each node before the axis takes its image's value times `sign`. Nothing
     /// otherwise.
     pub fn mirror(&self, col: &mut [Real], sign: Real, bx: &NodeBox<D>) {
-        self.for_each_mirror(bx, |ghost, image| {
+        self.for_each_mirror(bx, &mut |ghost, image| {
             if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
                 col[ghost] = sign * v;
             }
@@ -530,7 +537,7 @@ impl<const D: usize> Geom<D> {
         axis: usize,
         layer: usize,
         bx: &NodeBox<D>,
-        mut f: impl FnMut(usize),
+        f: &mut dyn FnMut(usize),
     ) {
         if bx.is_empty() || layer < bx.lo[axis] || layer >= bx.hi[axis] {
             return;

@@ -78,7 +78,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
     mirror_vector(ctx, &mut g.acc, true);
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
     let inv_dt = 1.0 / ctx.dt;
-    ctx.geom.for_each_wall_node(&ctx.active, |i, axes| {
+    ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
             if axes[a] {
                 g.acc[a][i] = -g.vel[a][i] * inv_dt;
@@ -111,7 +111,7 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut Gri
 }
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.geom.for_each_wall_node(&ctx.active, |i, axes| {
+    ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
             if axes[a] {
                 g.remap[a][i] = 0.0;

@@ -88,13 +88,8 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
     let geom = &ctx.geom;
     // The grid passes work on the substep's node box, as the momentum's do: every node a
     // particle's stencil row reads is in it and reset here.
-    let bx = &ctx.active;
     for c in g.scalar[f].iter_mut() {
-        bx.for_each_line(geom.stride, n, |r| {
-            if let Some(c) = c.get_mut(r) {
-                c.fill(0.0);
-            }
-        });
+        zero_lines(ctx, c);
     }
     let mut st = Stencils::<D, K, W>::default();
     // 1. Capacity and momentum.
@@ -121,49 +116,7 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
             }
         }
     }
-    let cutoff = ctx.mass_cutoff;
-    {
-        let [c_col, m_col, v_col, _] = &mut g.scalar[f];
-        geom.fold_mirror(c_col, 1.0, bx);
-        geom.fold_mirror(m_col, 1.0, bx);
-        // Past a fixed face the material's odd image about the fixed value: what the particles
-        // put on a node past the wall plane, their images put on its image (capacity `c`,
-        // value `2 phi_f - phi`), so that a node near the face averages both sides.
-        for_each_fixed_image(ctx, t, |ghost, image, value| {
-            if let (Some(&cg), Some(&mg), true) = (
-                c_col.get(ghost),
-                m_col.get(ghost),
-                image < c_col.len().min(m_col.len()),
-            ) {
-                c_col[image] += cg;
-                m_col[image] += 2.0 * value * cg - mg;
-            }
-        });
-        bx.for_each_line(geom.stride, n, |r| {
-            let (Some(v), Some(m), Some(c)) =
-                (v_col.get_mut(r.clone()), m_col.get(r.clone()), c_col.get(r))
-            else {
-                return; // Unreachable: every line lies within the columns.
-            };
-            for ((v, &m), &c) in v.iter_mut().zip(m).zip(c) {
-                *v = if c > cutoff { m / c } else { 0.0 };
-            }
-        });
-        for_each_face(ctx, t, |node, bc, _, _| {
-            if let (ScalarBoundary::Fixed(value), Some(v)) = (bc, v_col.get_mut(node)) {
-                *v = value;
-            }
-        });
-        // Past a fixed face's wall plane, the odd extension about the fixed value (a field
-        // with a slope at the face keeps it there: the B-splines' wider stencils read these
-        // nodes).
-        for_each_fixed_image(ctx, t, |ghost, image, value| {
-            if let (Some(&vi), true) = (v_col.get(image), ghost < v_col.len()) {
-                v_col[ghost] = 2.0 * value - vi;
-            }
-        });
-        geom.mirror(v_col, 1.0, bx);
-    }
+    nodal_values(ctx, &mut g.scalar[f], t);
     // 2. Flow: the gradient of the nodal values at the particle, then
     // `V_p (q_p . G_ip + s_p S_ip)` on its nodes.
     for start in (0..count).step_by(W) {
@@ -194,65 +147,7 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
             }
         }
     }
-    {
-        // The flux faces' inflow on the wall plane, by the trapezoid rule over the admissible
-        // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
-        // to its value.
-        let [c_col, _, _, q_col] = &mut g.scalar[f];
-        geom.fold_mirror(q_col, 1.0, bx);
-        // The odd image's flow: its gradient's normal part is the material's, its other parts
-        // and its source flip, and so does the gradient of the image node's shape function
-        // along the normal: every term changes sign.
-        for_each_fixed_image(ctx, t, |ghost, image, _| {
-            if let (Some(&qg), true) = (q_col.get(ghost), image < q_col.len()) {
-                q_col[image] -= qg;
-            }
-        });
-        for_each_face(ctx, t, |node, bc, axis, on_wall| {
-            if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
-            {
-                *q += flux * face_area(geom, axis, node, S::AXISYMMETRIC);
-            }
-        });
-        bx.for_each_line(geom.stride, n, |r| {
-            let (Some(q), Some(c)) = (q_col.get_mut(r.clone()), c_col.get(r)) else {
-                return; // Unreachable: every line lies within the columns.
-            };
-            for (q, &c) in q.iter_mut().zip(c) {
-                *q = if c > cutoff { *q / c } else { 0.0 };
-            }
-        });
-        for_each_face(ctx, t, |node, bc, _, _| {
-            if let (ScalarBoundary::Fixed(_), Some(q)) = (bc, q_col.get_mut(node)) {
-                *q = 0.0;
-            }
-        });
-        for_each_fixed_image(ctx, t, |ghost, image, _| {
-            if let (Some(&qi), true) = (q_col.get(image), ghost < q_col.len()) {
-                q_col[ghost] = -qi;
-            }
-        });
-        geom.mirror(q_col, 1.0, bx);
-    }
-    // The nodes of the fixed faces, marked with 1 in the capacity-times-value column (free
-    // since the values were formed) for the particle update.
-    let fixed = t
-        .faces
-        .iter()
-        .any(|b| matches!(b, ScalarBoundary::Fixed(_)));
-    if fixed {
-        let [_, m_col, _, _] = &mut g.scalar[f];
-        bx.for_each_line(geom.stride, n, |r| {
-            if let Some(m) = m_col.get_mut(r) {
-                m.fill(0.0);
-            }
-        });
-        for_each_face(ctx, t, |node, bc, _, on_wall| {
-            if let (ScalarBoundary::Fixed(_), true, Some(m)) = (bc, on_wall, m_col.get_mut(node)) {
-                *m = 1.0;
-            }
-        });
-    }
+    let fixed = nodal_rates(ctx, &mut g.scalar[f], t, S::AXISYMMETRIC);
     // 3. FLIP update of the particles' values, and the grid's value at each particle.
     for start in (0..count).step_by(W) {
         let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
@@ -291,6 +186,134 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
             }
         }
     }
+}
+
+/// The grid's side of a substep, between the particle loops: functions of the dimension
+/// only, one copy each rather than one per shape family and instruction set.
+///
+/// Zeroes `col` on the substep's node box (every node a particle's stencil row reads).
+fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
+    ctx.active.for_each_line(ctx.geom.stride, col.len(), |r| {
+        if let Some(c) = col.get_mut(r) {
+            c.fill(0.0);
+        }
+    });
+}
+
+/// After the scatter of capacity `c_i` and momentum `p_i` (`cols` = [c, p, value, rate]): the
+/// nodal values `phi_i = p_i / c_i` (eqs 139, 151), with the axis mirror, the fixed faces and
+/// their odd images.
+fn nodal_values<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4], t: &Transport) {
+    let (geom, bx, cutoff) = (&ctx.geom, &ctx.active, ctx.mass_cutoff);
+    let n = cols[0].len();
+    let [c_col, m_col, v_col, _] = cols;
+    geom.fold_mirror(c_col, 1.0, bx);
+    geom.fold_mirror(m_col, 1.0, bx);
+    // Past a fixed face the material's odd image about the fixed value: what the particles
+    // put on a node past the wall plane, their images put on its image (capacity `c`,
+    // value `2 phi_f - phi`), so that a node near the face averages both sides.
+    for_each_fixed_image(ctx, t, &mut |ghost, image, value| {
+        if let (Some(&cg), Some(&mg), true) = (
+            c_col.get(ghost),
+            m_col.get(ghost),
+            image < c_col.len().min(m_col.len()),
+        ) {
+            c_col[image] += cg;
+            m_col[image] += 2.0 * value * cg - mg;
+        }
+    });
+    bx.for_each_line(geom.stride, n, |r| {
+        let (Some(v), Some(m), Some(c)) =
+            (v_col.get_mut(r.clone()), m_col.get(r.clone()), c_col.get(r))
+        else {
+            return; // Unreachable: every line lies within the columns.
+        };
+        for ((v, &m), &c) in v.iter_mut().zip(m).zip(c) {
+            *v = if c > cutoff { m / c } else { 0.0 };
+        }
+    });
+    for_each_face(ctx, t, &mut |node, bc, _, _| {
+        if let (ScalarBoundary::Fixed(value), Some(v)) = (bc, v_col.get_mut(node)) {
+            *v = value;
+        }
+    });
+    // Past a fixed face's wall plane, the odd extension about the fixed value (a field
+    // with a slope at the face keeps it there: the B-splines' wider stencils read these
+    // nodes).
+    for_each_fixed_image(ctx, t, &mut |ghost, image, value| {
+        if let (Some(&vi), true) = (v_col.get(image), ghost < v_col.len()) {
+            v_col[ghost] = 2.0 * value - vi;
+        }
+    });
+    geom.mirror(v_col, 1.0, bx);
+}
+
+/// After the scatter of the flow `Q_i` (`cols` = [c, p, value, rate]): the flux faces'
+/// inflow, the rates `a_i = Q_i / c_i` (eqs 140, 152) with the fixed faces and their images,
+/// and, when a face is fixed, its nodes marked with 1 in the momentum column (free since the
+/// values were formed) for the particle update. Returns whether a face is fixed.
+fn nodal_rates<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    cols: &mut [&mut [Real]; 4],
+    t: &Transport,
+    axisymmetric: bool,
+) -> bool {
+    let (geom, bx, cutoff) = (&ctx.geom, &ctx.active, ctx.mass_cutoff);
+    let n = cols[0].len();
+    {
+        // The flux faces' inflow on the wall plane, by the trapezoid rule over the admissible
+        // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
+        // to its value.
+        let [c_col, _, _, q_col] = &mut *cols;
+        geom.fold_mirror(q_col, 1.0, bx);
+        // The odd image's flow: its gradient's normal part is the material's, its other parts
+        // and its source flip, and so does the gradient of the image node's shape function
+        // along the normal: every term changes sign.
+        for_each_fixed_image(ctx, t, &mut |ghost, image, _| {
+            if let (Some(&qg), true) = (q_col.get(ghost), image < q_col.len()) {
+                q_col[image] -= qg;
+            }
+        });
+        for_each_face(ctx, t, &mut |node, bc, axis, on_wall| {
+            if let (ScalarBoundary::Flux(flux), true, Some(q)) = (bc, on_wall, q_col.get_mut(node))
+            {
+                *q += flux * face_area(geom, axis, node, axisymmetric);
+            }
+        });
+        bx.for_each_line(geom.stride, n, |r| {
+            let (Some(q), Some(c)) = (q_col.get_mut(r.clone()), c_col.get(r)) else {
+                return; // Unreachable: every line lies within the columns.
+            };
+            for (q, &c) in q.iter_mut().zip(c) {
+                *q = if c > cutoff { *q / c } else { 0.0 };
+            }
+        });
+        for_each_face(ctx, t, &mut |node, bc, _, _| {
+            if let (ScalarBoundary::Fixed(_), Some(q)) = (bc, q_col.get_mut(node)) {
+                *q = 0.0;
+            }
+        });
+        for_each_fixed_image(ctx, t, &mut |ghost, image, _| {
+            if let (Some(&qi), true) = (q_col.get(image), ghost < q_col.len()) {
+                q_col[ghost] = -qi;
+            }
+        });
+        geom.mirror(q_col, 1.0, bx);
+    }
+    let fixed = t
+        .faces
+        .iter()
+        .any(|b| matches!(b, ScalarBoundary::Fixed(_)));
+    if fixed {
+        let [_, m_col, _, _] = cols;
+        zero_lines(ctx, m_col);
+        for_each_face(ctx, t, &mut |node, bc, _, on_wall| {
+            if let (ScalarBoundary::Fixed(_), true, Some(m)) = (bc, on_wall, m_col.get_mut(node)) {
+                *m = 1.0;
+            }
+        });
+    }
+    fixed
 }
 
 /// Replaces `st` by the stencils of the chunk at `start` and returns its live lanes: active
@@ -460,13 +483,13 @@ fn current_volume<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Real {
 fn for_each_fixed_image<const D: usize>(
     ctx: &Ctx<'_, D>,
     t: &Transport,
-    mut f: impl FnMut(usize, usize, Real),
+    f: &mut dyn FnMut(usize, usize, Real),
 ) {
     for axis in 0..D {
         for side in 0..2 {
             if let ScalarBoundary::Fixed(value) = t.faces[2 * axis + side] {
                 ctx.geom
-                    .for_each_face_image(axis, side, &ctx.active, |g, i| f(g, i, value));
+                    .for_each_face_image(axis, side, &ctx.active, &mut |g, i| f(g, i, value));
             }
         }
     }
@@ -477,14 +500,14 @@ fn for_each_fixed_image<const D: usize>(
 fn for_each_face<const D: usize>(
     ctx: &Ctx<'_, D>,
     t: &Transport,
-    mut f: impl FnMut(usize, ScalarBoundary, usize, bool),
+    f: &mut dyn FnMut(usize, ScalarBoundary, usize, bool),
 ) {
     for axis in 0..D {
         for side in 0..2 {
             let bc = t.faces[2 * axis + side];
             if bc != ScalarBoundary::Insulated {
                 ctx.geom
-                    .for_each_face_node(axis, side, &ctx.active, |node, wall| {
+                    .for_each_face_node(axis, side, &ctx.active, &mut |node, wall| {
                         f(node, bc, axis, wall)
                     });
             }
