@@ -11,7 +11,7 @@ rounds=${1:-5}
 shift || true
 cargo build --release --example step_cost >/dev/null 2>&1
 bin=target/release/examples/step_cost
-effects=(none damping feedback local_damping particle_forces tractions body_force apic heat diffusion
+effects=(none damping feedback local_damping damping_zones particle_forces tractions body_force apic heat diffusion
     thermal_expansion axisymmetric)
 # The scene's dimension, as step_cost reads it (the last --dim wins; 2 by default).
 dim=2

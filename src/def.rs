@@ -223,6 +223,21 @@ pub enum Face {
     ZMax = 5,
 }
 
+impl Face {
+    /// The variant stored as `code` (its `repr(u32)` value), if any.
+    pub const fn from_code(code: u32) -> Option<Face> {
+        match code {
+            0 => Some(Face::XMin),
+            1 => Some(Face::XMax),
+            2 => Some(Face::YMin),
+            3 => Some(Face::YMax),
+            4 => Some(Face::ZMin),
+            5 => Some(Face::ZMax),
+            _ => None,
+        }
+    }
+}
+
 /// Constitutive model of a material.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
@@ -468,6 +483,9 @@ mod tests {
         check(&shapes, |v| v as u32, Sf::from_code);
         use UpdateOrder as Uo;
         check(&[Uo::Usf, Uo::Usl, Uo::Musl], |v| v as u32, Uo::from_code);
+        use Face as F;
+        let faces = [F::XMin, F::XMax, F::YMin, F::YMax, F::ZMin, F::ZMax];
+        check(&faces, |v| v as u32, F::from_code);
         use Boundary as Bd;
         check(
             &[Bd::Stick, Bd::Slip, Bd::Open],

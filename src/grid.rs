@@ -338,6 +338,14 @@ impl<const D: usize> Geom<D> {
         g
     }
 
+    /// The position of node `i` (flat index), m.
+    pub fn node_position(&self, i: usize) -> [Real; D] {
+        core::array::from_fn(|a| {
+            let index = (i / self.stride[a]) % self.nodes[a];
+            self.origin[a] + index as Real * self.h
+        })
+    }
+
     /// Calls `f(node, fixed)` for every node between a grid face and its wall plane, for each
     /// stick or slip face, where `fixed[a]` says which velocity components the wall fixes to
     /// zero: all of them at a stick wall, the normal one at a slip wall. A node near an edge

@@ -14,9 +14,10 @@
 //! Nothing in the buffer is a pointer: every column is found from the definition stored in the
 //! header, so a byte copy of the buffer is a second, independent world.
 
-use crate::def::{Boundary, Dimension, ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::def::{Boundary, Dimension, Face, ShapeFunction, Transfer, UpdateOrder, WorldDef};
 use crate::effects::{
-    Damping, Effects, Feedback, ScalarBoundary, Schedule, Transport, SCHEDULE_POINTS,
+    Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
+    SCHEDULE_POINTS,
 };
 use crate::{Error, Real, Vec3};
 use bytemuck::{Pod, Zeroable};
@@ -29,7 +30,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 7;
+const VERSION: u64 = 8;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -94,6 +95,57 @@ pub(crate) struct Header {
     // The definition's limits (`WorldDef::max_substeps`, `max_volume_ratio`).
     pub max_substeps: u64,
     pub max_volume_ratio: f64,
+    // Nodal damping (`Damping::grid_on_force`, `Damping::zones`).
+    pub damping_on_force: u64,
+    pub damping_zone_count: u64,
+    pub damping_zones: [ZoneRecord; DAMPING_ZONES],
+}
+
+/// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
+/// plus one.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub(crate) struct ZoneRecord {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    pub rate: f64,
+    pub ramp: u64,
+}
+
+// SAFETY: repr(C), only u64 and f64 fields: no padding, every bit pattern valid.
+unsafe impl Zeroable for ZoneRecord {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for ZoneRecord {}
+
+impl ZoneRecord {
+    fn of(z: &DampingZone) -> Self {
+        let w = |v: Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        ZoneRecord {
+            min: w(z.min),
+            max: w(z.max),
+            rate: z.rate as f64,
+            ramp: z.ramp.map_or(0, |f| f as u64 + 1),
+        }
+    }
+
+    fn zone(&self) -> Result<DampingZone, Error> {
+        let v = |a: [f64; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+        let ramp = match self.ramp {
+            0 => None,
+            f => Some(
+                u32::try_from(f - 1)
+                    .ok()
+                    .and_then(Face::from_code)
+                    .ok_or(Error::NotAWorld)?,
+            ),
+        };
+        Ok(DampingZone {
+            min: v(self.min),
+            max: v(self.max),
+            rate: self.rate as Real,
+            ramp,
+        })
+    }
 }
 
 /// An optional [`Transport`] widened to 8-byte fields: declared flag, each face's condition
@@ -192,8 +244,10 @@ unsafe impl Zeroable for Header {}
 // SAFETY: as above; Header is Copy and 'static.
 unsafe impl Pod for Header {}
 
-const _: () =
-    assert!(size_of::<Header>() == 8 * (36 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14));
+const _: () = assert!(
+    size_of::<Header>()
+        == 8 * (36 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14 + 2 + 8 * DAMPING_ZONES)
+);
 
 /// One material in the buffer's table: parameters and what the step derives from them.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -547,6 +601,9 @@ impl Header {
             feedback_alpha: 0.0,
             max_substeps: def.max_substeps as u64,
             max_volume_ratio: def.max_volume_ratio as f64,
+            damping_on_force: damping.grid_on_force as u64,
+            damping_zone_count: damping.zone_count as u64,
+            damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
         }
     }
 
@@ -599,6 +656,15 @@ impl Header {
                 particle: self.damping_particle.schedule()?,
                 feedback,
                 per_particle: flag(self.per_particle_damping)?,
+                grid_on_force: flag(self.damping_on_force)?,
+                zones: {
+                    let mut zones = [DampingZone::NONE; DAMPING_ZONES];
+                    for (z, r) in zones.iter_mut().zip(&self.damping_zones) {
+                        *z = r.zone()?;
+                    }
+                    zones
+                },
+                zone_count: u32::try_from(self.damping_zone_count).map_err(|_| Error::NotAWorld)?,
             })
         } else {
             None

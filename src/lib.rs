@@ -61,7 +61,8 @@ pub use def::{
     WorldDef,
 };
 pub use effects::{
-    Damping, Effects, Feedback, ScalarBoundary, Schedule, Transport, SCHEDULE_POINTS,
+    Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
+    SCHEDULE_POINTS,
 };
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};

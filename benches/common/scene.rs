@@ -4,9 +4,9 @@
 //! gravity, inside a grid with slip walls.
 
 use mpm_gimp::{
-    memory_requirements, Boundary, Damping, Dimension, Face, Feedback, HeapBuffer, MaterialDef,
-    MaterialModel, ParticleBatch, Real, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder,
-    Vec3, World, WorldDef,
+    memory_requirements, Boundary, Damping, DampingZone, Dimension, Face, Feedback, HeapBuffer,
+    MaterialDef, MaterialModel, ParticleBatch, Real, Schedule, ShapeFunction, Transfer, Transport,
+    UpdateOrder, Vec3, World, WorldDef, DAMPING_ZONES,
 };
 
 /// One effect declared in the scene (or none), to price it: what the scene declares and what
@@ -21,6 +21,9 @@ pub enum Effect {
     Feedback,
     /// Per-particle damping columns, set to 1/s on every particle.
     LocalDamping,
+    /// Nodal damping: the grid rate on the nodal force and a zone graded toward the x-min
+    /// face over the grid's lower half in x (an absorbing layer).
+    DampingZones,
     /// A per-particle force column, set to the particle's weight along x.
     ParticleForces,
     /// A traction on the +x face of every particle of the block's last column.
@@ -47,11 +50,12 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 12] = [
+    pub const ALL: [(Effect, &'static str); 13] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
         (Effect::LocalDamping, "local_damping"),
+        (Effect::DampingZones, "damping_zones"),
         (Effect::ParticleForces, "particle_forces"),
         (Effect::Tractions, "tractions"),
         (Effect::BodyForce, "body_force"),
@@ -94,6 +98,32 @@ impl Effect {
             Effect::LocalDamping => {
                 fx.damping = Some(Damping {
                     per_particle: true,
+                    ..Damping::NONE
+                })
+            }
+            Effect::DampingZones => {
+                let (lo, hi) = (
+                    def.origin,
+                    def.origin
+                        + CELL
+                            * Vec3::new(
+                                def.cells[0] as Real,
+                                def.cells[1] as Real,
+                                def.cells[2] as Real,
+                            ),
+                );
+                let mut zones = [DampingZone::NONE; DAMPING_ZONES];
+                zones[0] = DampingZone {
+                    min: lo,
+                    max: Vec3::new(0.5 * (lo.x + hi.x), hi.y, hi.z),
+                    rate: 1.0,
+                    ramp: Some(Face::XMin),
+                };
+                fx.damping = Some(Damping {
+                    grid: Schedule::constant(1.0),
+                    grid_on_force: true,
+                    zones,
+                    zone_count: 1,
                     ..Damping::NONE
                 })
             }

@@ -37,13 +37,16 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.2.1"
+#define MPM_GIMP_VERSION "0.3.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 201
+#define MPM_GIMP_ABI_VERSION 300
 
 
 // Most points an `MpmSchedule` holds.
 #define MPM_SCHEDULE_POINTS 8
+
+// Most zones an `MpmDamping` holds.
+#define MPM_DAMPING_ZONES 4
 
 // `MpmStepReport::flags`: some particle froze in the step.
 #define MPM_STEP_FLAG_FROZE 1
@@ -423,6 +426,21 @@ typedef struct MpmFeedback {
   mpm_real max_alpha;
 } MpmFeedback;
 
+// A box of space where the grid damps (`mpm_gimp::DampingZone`).
+typedef struct MpmDampingZone {
+  // The box's lowest corner, m (z not read in 2D).
+  struct MpmVec3 min;
+  // The box's highest corner, m, above `min` on every axis the world has.
+  struct MpmVec3 max;
+  // Rate, 1/s (finite, >= 0): uniform in the box, or its value on face `ramp_face`.
+  mpm_real rate;
+  // 1: the rate rises as the square of the distance from the box's face opposite
+  // `ramp_face`, from 0 there to `rate` on `ramp_face` (an absorbing layer); 0: uniform.
+  uint32_t ramped;
+  // `MpmFace` the rate rises toward (read when `ramped` is 1; an axis the world has).
+  MpmFace ramp_face;
+} MpmDampingZone;
+
 // Damping on top of the PIC damping that `flip_beta` sets (`mpm_gimp::Damping`).
 typedef struct MpmDamping {
   // 1: damping is declared; 0: none (the other fields are then ignored).
@@ -436,6 +454,14 @@ typedef struct MpmDamping {
   // 1: reserve per-particle alpha_g and alpha_p columns, added to the global values and set
   // with `mpm_world_set_particle_damping`; 0: none.
   uint32_t per_particle;
+  // 1: the grid damping (and the thermostat's alpha) acts on the nodal force (seeds/000 eqs
+  // 58-65), so that the walls act on momenta already damped; 0 (default): in the particle
+  // update (eqs 46-57).
+  uint32_t grid_on_force;
+  // How many of `zones` are used, 0..=`MPM_DAMPING_ZONES`.
+  uint32_t zone_count;
+  // Zones of space where the nodes are damped (eqs 104-106), each adding its rate.
+  struct MpmDampingZone zones[MPM_DAMPING_ZONES];
 } MpmDamping;
 
 // The condition of a transported scalar on one face (`mpm_gimp::ScalarBoundary`).

@@ -13,7 +13,7 @@
 use crate::status::MpmStatus;
 use crate::{mpm_real, MpmVec3};
 use kernel::{
-    Boundary, Damping, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel,
+    Boundary, Damping, DampingZone, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel,
     ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder,
     WorldDef,
 };
@@ -235,6 +235,36 @@ pub struct MpmDamping {
     /// 1: reserve per-particle alpha_g and alpha_p columns, added to the global values and set
     /// with `mpm_world_set_particle_damping`; 0: none.
     pub per_particle: u32,
+    /// 1: the grid damping (and the thermostat's alpha) acts on the nodal force (seeds/000 eqs
+    /// 58-65), so that the walls act on momenta already damped; 0 (default): in the particle
+    /// update (eqs 46-57).
+    pub grid_on_force: u32,
+    /// How many of `zones` are used, 0..=`MPM_DAMPING_ZONES`.
+    pub zone_count: u32,
+    /// Zones of space where the nodes are damped (eqs 104-106), each adding its rate.
+    pub zones: [MpmDampingZone; MPM_DAMPING_ZONES],
+}
+
+/// Most zones an `MpmDamping` holds.
+pub const MPM_DAMPING_ZONES: usize = 4;
+
+const _: () = assert!(MPM_DAMPING_ZONES == kernel::DAMPING_ZONES);
+
+/// A box of space where the grid damps (`mpm_gimp::DampingZone`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct MpmDampingZone {
+    /// The box's lowest corner, m (z not read in 2D).
+    pub min: MpmVec3,
+    /// The box's highest corner, m, above `min` on every axis the world has.
+    pub max: MpmVec3,
+    /// Rate, 1/s (finite, >= 0): uniform in the box, or its value on face `ramp_face`.
+    pub rate: mpm_real,
+    /// 1: the rate rises as the square of the distance from the box's face opposite
+    /// `ramp_face`, from 0 there to `rate` on `ramp_face` (an absorbing layer); 0: uniform.
+    pub ramped: u32,
+    /// `MpmFace` the rate rises toward (read when `ramped` is 1; an axis the world has).
+    pub ramp_face: MpmFaceValue,
 }
 
 /// The condition of a transported scalar on one face (`mpm_gimp::ScalarBoundary`).
@@ -489,6 +519,9 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
             particle: schedule_to_c(&d.particle),
             feedback: feedback(d.feedback),
             per_particle: d.per_particle as u32,
+            grid_on_force: d.grid_on_force as u32,
+            zone_count: d.zone_count,
+            zones: d.zones.map(|z| zone_to_c(&z)),
         },
         None => MpmDamping {
             declared: 0,
@@ -496,6 +529,9 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
             particle: zero,
             feedback: feedback(None),
             per_particle: 0,
+            grid_on_force: 0,
+            zone_count: 0,
+            zones: [zone_to_c(&DampingZone::NONE); MPM_DAMPING_ZONES],
         },
     };
     MpmEffects {
@@ -507,6 +543,32 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
     }
+}
+
+/// The C zone of a Rust one.
+fn zone_to_c(z: &DampingZone) -> MpmDampingZone {
+    MpmDampingZone {
+        min: c_vec3(z.min),
+        max: c_vec3(z.max),
+        rate: z.rate,
+        ramped: z.ramp.is_some() as u32,
+        ramp_face: z.ramp.map_or(0, |f| f as u32),
+    }
+}
+
+/// The Rust zone of a C one: the flag and, when ramped, the face checked.
+fn zone_from_c(z: &MpmDampingZone) -> Result<DampingZone, MpmStatus> {
+    let ramp = if flag(z.ramped)? {
+        Some(face_from_c(z.ramp_face)?)
+    } else {
+        None
+    };
+    Ok(DampingZone {
+        min: vec3(z.min),
+        max: vec3(z.max),
+        rate: z.rate,
+        ramp,
+    })
 }
 
 /// A flag field: 0 or 1, anything else `InvalidEnum`.
@@ -559,6 +621,18 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
             particle: schedule_from_c(&d.particle),
             feedback,
             per_particle: flag(d.per_particle)?,
+            grid_on_force: flag(d.grid_on_force)?,
+            // Only the zones in use are read (and checked); a count past the room is the
+            // kernel's to refuse.
+            zones: {
+                let mut zones = [DampingZone::NONE; MPM_DAMPING_ZONES];
+                let used = (d.zone_count as usize).min(MPM_DAMPING_ZONES);
+                for (z, c) in zones.iter_mut().zip(&d.zones[..used]) {
+                    *z = zone_from_c(c)?;
+                }
+                zones
+            },
+            zone_count: d.zone_count,
         })
     } else {
         None
@@ -585,15 +659,7 @@ pub(crate) fn scalar_field_from_c(v: MpmScalarFieldValue) -> Result<ScalarField,
 
 /// The face numbered `v` (`MpmFace`), or `InvalidEnum`.
 pub(crate) fn face_from_c(v: MpmFaceValue) -> Result<Face, MpmStatus> {
-    Ok(match v {
-        0 => Face::XMin,
-        1 => Face::XMax,
-        2 => Face::YMin,
-        3 => Face::YMax,
-        4 => Face::ZMin,
-        5 => Face::ZMax,
-        _ => return Err(MpmStatus::InvalidEnum),
-    })
+    Face::from_code(v).ok_or(MpmStatus::InvalidEnum)
 }
 
 /// The Rust definition of a C one: the cookie and every enum value checked.

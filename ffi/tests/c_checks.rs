@@ -21,9 +21,9 @@ mod common;
 use common::Lang;
 use core::mem::{align_of, offset_of, size_of};
 use kernel::{
-    memory_requirements, Boundary, Damping, Dimension, Effects, Error, Face, Feedback, MaterialDef,
-    MaterialModel, ParticleBatch, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction,
-    Transfer, Transport, UpdateOrder, Vec3, World, WorldDef,
+    memory_requirements, Boundary, Damping, DampingZone, Dimension, Effects, Error, Face, Feedback,
+    MaterialDef, MaterialModel, ParticleBatch, Real, ScalarBoundary, ScalarField, Schedule,
+    ShapeFunction, Transfer, Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 use mpm_gimp::*;
 use std::collections::BTreeSet;
@@ -129,6 +129,16 @@ fn rust_layout() -> String {
         particle,
         feedback,
         per_particle,
+        grid_on_force,
+        zone_count,
+        zones,
+    }));
+    lines.extend(struct_lines!(MpmDampingZone {
+        min,
+        max,
+        rate,
+        ramped,
+        ramp_face,
     }));
     lines.extend(struct_lines!(MpmScalarBoundary { kind, value }));
     lines.extend(struct_lines!(MpmTransport {
@@ -810,6 +820,7 @@ fn effects2d(t: &mut Text) {
                     max_alpha: 4.0,
                 }),
                 per_particle: true,
+                ..Damping::NONE
             }),
             particle_forces: true,
             traction_capacity: 16,
@@ -896,6 +907,18 @@ fn effects3d(t: &mut Text) {
         effects: Effects {
             damping: Some(Damping {
                 grid: Schedule::constant(1.0),
+                grid_on_force: true,
+                zones: {
+                    let mut zones = [DampingZone::NONE; 4];
+                    zones[0] = DampingZone {
+                        min: Vec3::new(-1.0, 0.0, -1.0),
+                        max: Vec3::new(1.0, 0.25, 1.0),
+                        rate: 3.0,
+                        ramp: Some(Face::YMin),
+                    };
+                    zones
+                },
+                zone_count: 1,
                 ..Damping::NONE
             }),
             particle_forces: true,
@@ -1432,6 +1455,21 @@ fn effects_definition_round_trip() {
     let (part_c, part_k) = schedules(&[(0.125, 0.5)]);
     let (target_c, target_k) = schedules(&[(0.0, 2.0), (1.0, 0.0), (2.0, 0.0)]);
     let (scale_c, scale_k) = schedules(&[(0.0, 0.0), (0.25, -1.0)]);
+    let unread_zone = MpmDampingZone {
+        min: MpmVec3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        },
+        max: MpmVec3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        },
+        rate: -1.0,
+        ramped: 7,
+        ramp_face: 99,
+    };
     c.effects = MpmEffects {
         damping: MpmDamping {
             declared: 1,
@@ -1444,6 +1482,43 @@ fn effects_definition_round_trip() {
                 max_alpha: Real::INFINITY,
             },
             per_particle: 1,
+            grid_on_force: 1,
+            zone_count: 2,
+            zones: [
+                MpmDampingZone {
+                    min: MpmVec3 {
+                        x: 0.0,
+                        y: 0.25,
+                        z: 0.0,
+                    },
+                    max: MpmVec3 {
+                        x: 0.5,
+                        y: 0.75,
+                        z: 0.0,
+                    },
+                    rate: 2.5,
+                    ramped: 1,
+                    ramp_face: MpmFace::XMax as u32,
+                },
+                MpmDampingZone {
+                    min: MpmVec3 {
+                        x: 0.0,
+                        y: 0.0,
+                        z: 0.0,
+                    },
+                    max: MpmVec3 {
+                        x: 1.0,
+                        y: 0.125,
+                        z: 0.0,
+                    },
+                    rate: 4.0,
+                    ramped: 0,
+                    ramp_face: 0,
+                },
+                // Past `zone_count`: not read (an invalid flag would be refused if it were).
+                unread_zone,
+                unread_zone,
+            ],
         },
         particle_forces: 1,
         traction_capacity: 5,
@@ -1514,6 +1589,24 @@ fn effects_definition_round_trip() {
                     max_alpha: Real::INFINITY,
                 }),
                 per_particle: true,
+                grid_on_force: true,
+                zones: [
+                    DampingZone {
+                        min: Vec3::new(0.0, 0.25, 0.0),
+                        max: Vec3::new(0.5, 0.75, 0.0),
+                        rate: 2.5,
+                        ramp: Some(Face::XMax),
+                    },
+                    DampingZone {
+                        min: Vec3::ZERO,
+                        max: Vec3::new(1.0, 0.125, 0.0),
+                        rate: 4.0,
+                        ramp: None,
+                    },
+                    DampingZone::NONE,
+                    DampingZone::NONE,
+                ],
+                zone_count: 2,
             }),
             particle_forces: true,
             traction_capacity: 5,
@@ -1540,7 +1633,17 @@ fn effects_definition_round_trip() {
         MpmStatus::Ok
     );
     let bits = |x: &MpmWorldDef| format!("{x:?}");
-    assert_eq!(bits(&back), bits(&c));
+    // The zones past the count are not stored: they come back zero.
+    let mut want = c;
+    for z in &mut want.effects.damping.zones[2..] {
+        *z = MpmDampingZone {
+            rate: 0.0,
+            ramped: 0,
+            ramp_face: 0,
+            ..*z
+        };
+    }
+    assert_eq!(bits(&back), bits(&want));
 
     // A conducting, diffusing, expanding and swelling material from C is the kernel's
     // material.

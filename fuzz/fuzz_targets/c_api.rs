@@ -269,6 +269,20 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     d.feedback.target = schedule(inp, 0.0, 1.0);
     d.feedback.max_alpha = inp.real_in(0.0, 50.0);
     d.per_particle = flag(inp);
+    d.grid_on_force = flag(inp);
+    // Zones: mostly 0 to 2 in use, sometimes more than there is room for; boxes within and
+    // across the grid (sometimes empty or inverted), graded toward any face or none.
+    d.zone_count = match inp.byte() % 16 {
+        0 => inp.u32_below(u32::MAX),
+        b => (b % 3) as u32,
+    };
+    for z in d.zones.iter_mut() {
+        z.min = inp.vec3_in(-0.5, 1.0);
+        z.max = inp.vec3_in(0.0, 1.5);
+        z.rate = inp.real_in(-1.0, 50.0);
+        z.ramped = flag(inp);
+        z.ramp_face = inp.u32_below(8);
+    }
     e.particle_forces = flag(inp);
     e.traction_capacity = if inp.byte() % 32 == 0 {
         inp.u32_below(u32::MAX)

@@ -1,9 +1,11 @@
 //! Damping (seeds/000 sections 5.1.2 and 5.3): the declaration, the damping acceleration the
-//! particle update subtracts (eq 47, with eq 107's per-particle rates) and the thermostat that
-//! adds to the grid rate before each substep. The per-particle rates are set with
-//! [`crate::World::set_particle_damping`].
+//! particle update subtracts (eq 47, with eq 107's per-particle rates), the nodal damping the
+//! grid update subtracts (eqs 58-60 and 104-105: the grid rate on the force, and the zones of
+//! space that damp) and the thermostat that adds to the grid rate before each substep. The
+//! per-particle rates are set with [`crate::World::set_particle_damping`].
 
 use super::Schedule;
+use crate::def::Face;
 use crate::layout::Layout;
 use crate::particles::ParticleCols;
 use crate::phases::lanes::{load, Lane};
@@ -11,7 +13,7 @@ use crate::phases::rows::Compare;
 use crate::phases::wide::Wide;
 use crate::phases::Ctx;
 use crate::world::World;
-use crate::{Error, Real};
+use crate::{Error, Real, Vec3};
 
 /// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
 /// Nosé-Hoover-style controller): once per substep,
@@ -42,8 +44,94 @@ pub struct Damping {
     /// Reserve two per-particle columns, `alpha_g(x_p)` and `alpha_p(x_p)` in 1/s, added to the
     /// global values for that particle: position-dependent damping as eq 107 writes it (the
     /// host sets them with [`crate::World::set_particle_damping`], for example from each
-    /// particle's position).
+    /// particle's position). They act in the particle update whatever `grid_on_force` says.
     pub per_particle: bool,
+    /// Where the grid damping `alpha_g'(t)` (and the thermostat's alpha) acts. `false` (the
+    /// default): in the particle update, on the velocity extrapolated from the grid (eqs
+    /// 46-57). `true`: on the nodal force, `f_i - alpha_g' p_i` (eqs 58-65), so that the nodal
+    /// momenta the walls act on are already damped; the particle update keeps the PIC
+    /// damping and `alpha_p'`. The two agree for a resolved motion away from walls; at a wall
+    /// the force form damps only what the wall leaves free (the wall's fixed components take
+    /// the wall's value, damped or not), where the particle form also damps the velocity the
+    /// wall has taken out of the nodes.
+    pub grid_on_force: bool,
+    /// Zones of space where the grid damps, on the nodal force (eqs 104-106): a node at `x_i`
+    /// takes the rate `alpha_g(x_i)`, the sum of [`DampingZone::rate_at`] over the first
+    /// `zone_count` zones, besides the grid rate. An absorbing layer at a boundary, a region
+    /// to calm. Boxes rather than a nodal field the host fills: they are part of the
+    /// definition (a snapshot and a C host carry them as they are), cost no memory and do not
+    /// depend on the grid's resolution.
+    // A literal length: with the constant there, rustc 1.95 fails on struct-update syntax
+    // inside a closure (an internal compiler error).
+    pub zones: [DampingZone; 4],
+    /// How many of `zones` are used (at most [`DAMPING_ZONES`]).
+    pub zone_count: u32,
+}
+
+/// Most zones of [`Damping::zones`].
+pub const DAMPING_ZONES: usize = 4;
+
+/// A box of space where the grid damps (seeds/000 eqs 104-106), for
+/// [`Damping::zones`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DampingZone {
+    /// The box's lowest corner, m (z is not read in 2D).
+    pub min: Vec3,
+    /// The box's highest corner, m, above `min` on every axis the world has.
+    pub max: Vec3,
+    /// Rate, 1/s (finite, >= 0): uniform in the box, or its value on face `ramp`.
+    pub rate: Real,
+    /// `None`: the rate is uniform in the box. `Some(face)`: it rises as the square of the
+    /// distance from the box's opposite face, from 0 there to `rate` on `face`: an absorbing
+    /// layer against that face of the grid, graded so that a wave entering it is not
+    /// reflected by a jump in damping (a face of an axis the world has).
+    pub ramp: Option<Face>,
+}
+
+impl DampingZone {
+    /// An empty zone (rate 0): a starting point for struct-update syntax.
+    pub const NONE: DampingZone = DampingZone {
+        min: Vec3::ZERO,
+        max: Vec3::ZERO,
+        rate: 0.0,
+        ramp: None,
+    };
+
+    /// The zone's rate at `x` (m, the world's axes), 1/s: 0 outside the box (seeds/000's
+    /// `alpha_g(t, x_i)` of eq 105 for one zone).
+    pub fn rate_at(&self, x: &[Real]) -> Real {
+        let inside = x
+            .iter()
+            .enumerate()
+            .all(|(a, &c)| c >= self.min[a] && c <= self.max[a]);
+        if !inside {
+            return 0.0;
+        }
+        match self.ramp {
+            None => self.rate,
+            Some(face) => {
+                let axis = face as usize / 2;
+                let (lo, hi) = (self.min[axis], self.max[axis]);
+                let c = x.get(axis).copied().unwrap_or(lo);
+                let s = if face as usize % 2 == 1 {
+                    (c - lo) / (hi - lo)
+                } else {
+                    (hi - c) / (hi - lo)
+                };
+                self.rate * s * s
+            }
+        }
+    }
+
+    /// Whether the zone is valid in a world of `axes` axes.
+    fn is_valid(&self, axes: usize) -> bool {
+        self.rate.is_finite()
+            && self.rate >= 0.0
+            && (0..axes).all(|a| {
+                self.min[a].is_finite() && self.max[a].is_finite() && self.min[a] < self.max[a]
+            })
+            && self.ramp.is_none_or(|f| (f as usize / 2) < axes)
+    }
 }
 
 impl Damping {
@@ -53,13 +141,41 @@ impl Damping {
         particle: Schedule::ZERO,
         feedback: None,
         per_particle: false,
+        grid_on_force: false,
+        zones: [DampingZone::NONE; DAMPING_ZONES],
+        zone_count: 0,
     };
+
+    /// The zones in use.
+    pub fn used_zones(&self) -> &[DampingZone] {
+        &self.zones[..(self.zone_count as usize).min(DAMPING_ZONES)]
+    }
+
+    /// Whether the particle update damps: a particle rate, per-particle rates, or the grid
+    /// rate (or thermostat) where it acts in the particle update.
+    pub(crate) fn on_particles(&self) -> bool {
+        let grid = self.grid.max_value() > 0.0 || self.feedback.is_some();
+        self.particle.max_value() > 0.0 || self.per_particle || (grid && !self.grid_on_force)
+    }
+
+    /// Whether the grid update damps the nodes: the grid rate on the force, or a zone.
+    pub(crate) fn on_nodes(&self) -> bool {
+        self.grid_on_force || self.zone_count > 0
+    }
+
+    /// The largest rate the zones give any node, 1/s (the sum of their rates: zones may
+    /// overlap).
+    pub(crate) fn zones_max(&self) -> Real {
+        self.used_zones().iter().map(|z| z.rate).sum()
+    }
 }
 
 impl Damping {
-    /// Whether every parameter is valid.
-    pub(crate) fn is_valid(&self) -> bool {
-        self.grid.is_valid(true)
+    /// Whether every parameter is valid in a world of `axes` axes.
+    pub(crate) fn is_valid(&self, axes: usize) -> bool {
+        self.zone_count as usize <= DAMPING_ZONES
+            && self.used_zones().iter().all(|z| z.is_valid(axes))
+            && self.grid.is_valid(true)
             && self.particle.is_valid(true)
             && self.feedback.is_none_or(|f| {
                 f.gain.is_finite()
@@ -81,6 +197,82 @@ pub(crate) fn acceleration<I: Compare>(
     alpha_p: Wide<I>,
 ) -> Wide<I> {
     v_gp * alpha_g + v_p * alpha_p
+}
+
+/// The nodal damping of a substep (eqs 58-60 and 104-105): the grid rate when it acts on the
+/// force, and the zones.
+#[derive(Clone, Copy)]
+pub(crate) struct NodalDamping {
+    /// `alpha_g'(t)` and the thermostat's alpha when they act on the force, else 0; 1/s.
+    pub alpha: Real,
+    pub zones: [DampingZone; DAMPING_ZONES],
+    pub zone_count: usize,
+}
+
+impl NodalDamping {
+    /// The rates along the grid line through `p` (m) parallel to x: the zones it crosses,
+    /// each as its x range and its rate there (a grade along y or z is constant on the line).
+    pub fn on_line<const D: usize>(&self, p: &[Real; D]) -> LineRates {
+        let mut line = LineRates {
+            alpha: self.alpha,
+            zones: [(0.0, 0.0, 0.0, None); DAMPING_ZONES],
+            count: 0,
+        };
+        for z in &self.zones[..self.zone_count.min(DAMPING_ZONES)] {
+            if !(1..D).all(|a| p[a] >= z.min[a] && p[a] <= z.max[a]) {
+                continue;
+            }
+            let (rate, along_x) = match z.ramp {
+                Some(f) if f as usize / 2 == 0 => (z.rate, Some(f as usize % 2 == 1)),
+                // Evaluated where the line crosses the box (x at its low face).
+                _ => {
+                    let mut at = *p;
+                    at[0] = z.min[0];
+                    (z.rate_at(&at), None)
+                }
+            };
+            line.zones[line.count] = (z.min[0], z.max[0], rate, along_x);
+            line.count += 1;
+        }
+        line
+    }
+}
+
+/// The nodal damping along one grid line ([`NodalDamping::on_line`]): the rate besides the
+/// zones, and each zone the line crosses as `(x_min, x_max, rate, grade)`, `grade` whether
+/// the rate rises toward x max (true) or x min (false) when it is graded along x.
+#[derive(Clone, Copy)]
+pub(crate) struct LineRates {
+    alpha: Real,
+    zones: [(Real, Real, Real, Option<bool>); DAMPING_ZONES],
+    count: usize,
+}
+
+impl LineRates {
+    /// No zone crosses the line: the rate is the same on all of it.
+    pub fn uniform(&self) -> bool {
+        self.count == 0
+    }
+
+    /// The rate at the node of the line at `x` (m), 1/s: [`DampingZone::rate_at`] summed over
+    /// the zones, in the same arithmetic.
+    #[inline]
+    pub fn at(&self, x: Real) -> Real {
+        self.zones[..self.count.min(DAMPING_ZONES)].iter().fold(
+            self.alpha,
+            |r, &(lo, hi, rate, grade)| {
+                if x < lo || x > hi {
+                    return r;
+                }
+                let s = match grade {
+                    None => return r + rate,
+                    Some(true) => (x - lo) / (hi - lo),
+                    Some(false) => (hi - x) / (hi - lo),
+                };
+                r + rate * s * s
+            },
+        )
+    }
 }
 
 /// The damping rates of the chunk at `start`, lane by lane: the substep's global values plus

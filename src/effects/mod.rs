@@ -14,7 +14,7 @@ pub mod damping;
 pub mod forces;
 pub mod transport;
 
-pub use damping::{Damping, Feedback};
+pub use damping::{Damping, DampingZone, Feedback, DAMPING_ZONES};
 pub use transport::{ScalarBoundary, Transport};
 
 use crate::{Error, Real, Vec3};
@@ -159,7 +159,7 @@ impl Effects {
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
     pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
-        let ok_damping = self.damping.is_none_or(|d| d.is_valid());
+        let ok_damping = self.damping.is_none_or(|d| d.is_valid(axes));
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
             && self.body_force_scale.is_valid(false);
         let ok_transport = [self.heat, self.diffusion]

@@ -3,6 +3,7 @@
 //! then each face's boundary condition on both.
 
 use super::Ctx;
+use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
 use crate::Real;
 
@@ -77,6 +78,9 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     mirror_vector(ctx, &mut g.acc, true);
     divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
+    if let Some(nodal) = &ctx.nodal_damping {
+        damp_nodes(ctx, nodal, g);
+    }
     let inv_dt = 1.0 / ctx.dt;
     ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
@@ -87,6 +91,47 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
     });
     // Past the wall planes the nodes take their images' values.
     mirror_vector(ctx, &mut g.acc, false);
+}
+
+/// Nodal damping (eqs 60 and 105): `a_i -= alpha_g(t, x_i) v_i`, with the rate of the grid
+/// (when it acts on the force) and of the zones at the node. Before the walls: at a wall the
+/// fixed components then take the wall's value, damped or not.
+fn damp_nodes<const D: usize>(ctx: &Ctx<'_, D>, nodal: &NodalDamping, g: &mut GridCols<'_, D>) {
+    let geom = &ctx.geom;
+    let n = geom.nodes[0];
+    ctx.active.for_each_line(geom.stride, g.len(), |r| {
+        // A range may run past the end of its grid line: one line at a time.
+        let mut start = r.start;
+        while start < r.end {
+            let first = start % n;
+            let end = r.end.min(start - first + n);
+            let line = nodal.on_line(&geom.node_position(start));
+            // The rates of up to BLOCK nodes at a time, then `a -= rate v` on each axis.
+            const BLOCK: usize = 64;
+            let mut rates = [line.at(0.0); BLOCK];
+            for from in (start..end).step_by(BLOCK) {
+                let to = end.min(from + BLOCK);
+                let rates = &mut rates[..to - from];
+                if !line.uniform() {
+                    for (k, rate) in rates.iter_mut().enumerate() {
+                        let index = first + (from - start) + k;
+                        *rate = line.at(geom.origin[0] + index as Real * geom.h);
+                    }
+                }
+                for a in 0..D {
+                    let (Some(acc), Some(vel)) =
+                        (g.acc[a].get_mut(from..to), g.vel[a].get(from..to))
+                    else {
+                        return; // Unreachable: every line lies within the columns.
+                    };
+                    for ((acc, &v), &rate) in acc.iter_mut().zip(vel).zip(rates.iter()) {
+                        *acc -= rate * v;
+                    }
+                }
+            }
+            start = end;
+        }
+    });
 }
 
 /// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).

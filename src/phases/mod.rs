@@ -62,7 +62,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub particle_velocity: bool,
     /// Particle forces declared: the scatter adds `S_ip F_p`.
     pub forces: bool,
-    /// Damping declared: the particle update subtracts the damping acceleration.
+    /// Damping in the particle update declared (a particle rate, per-particle rates, or the
+    /// grid rate there): the particle update subtracts the damping acceleration.
     pub damp: bool,
     pub gravity: [Real; D],
     pub beta: Real,
@@ -70,6 +71,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// `alpha_p(t)`, 1/s (0 unless damping is declared).
     pub alpha_g: Real,
     pub alpha_p: Real,
+    /// The damping the grid update subtracts from the nodal acceleration (the grid rate on
+    /// the force, the zones), if any.
+    pub nodal_damping: Option<crate::effects::damping::NodalDamping>,
     /// Half-width of an undeformed particle domain, `h / (2 n)`, m (tractions).
     pub half_width: Real,
     pub exp_terms: u32,

@@ -255,7 +255,12 @@ impl<'a> WorldRef<'a> {
         // them: the step clamps it to the room this leaves (`World::update_feedback`).
         let other_damping = def.effects.damping.map_or(0.0, |dm| {
             let local = |k: usize| view_max(self.particles().damping[k], status);
-            dm.grid.max_value() as f64 + dm.particle.max_value() as f64 + local(0) + local(1)
+            let zones = dm.zones_max() as f64;
+            dm.grid.max_value() as f64
+                + dm.particle.max_value() as f64
+                + zones
+                + local(0)
+                + local(1)
         });
         // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
         // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.

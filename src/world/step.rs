@@ -5,6 +5,7 @@ use super::{StepReport, World};
 #[cfg(feature = "effects")]
 use crate::def::Dimension;
 use crate::def::{ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::effects::damping::NodalDamping;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
@@ -167,9 +168,19 @@ impl<'a> World<'a> {
         let mut g = GridCols::<D>::carve(gbytes, layout);
         let fx = &def.effects;
         let body = fx.body_force * fx.body_force_scale.at(time);
-        let (alpha_g, alpha_p) = match fx.damping {
-            Some(d) => (d.grid.at(time) + feedback_alpha, d.particle.at(time)),
-            None => (0.0, 0.0),
+        // The grid rate (thermostat included) acts in the particle update or on the force.
+        let (alpha_g, alpha_p, nodal_damping) = match fx.damping {
+            Some(d) => {
+                let grid = d.grid.at(time) + feedback_alpha;
+                let nodal = d.on_nodes().then_some(NodalDamping {
+                    alpha: if d.grid_on_force { grid } else { 0.0 },
+                    zones: d.zones,
+                    zone_count: d.zone_count as usize,
+                });
+                let on_particles = if d.grid_on_force { 0.0 } else { grid };
+                (on_particles, d.particle.at(time), nodal)
+            }
+            None => (0.0, 0.0, None),
         };
         let geom = Geom::<D>::new(def);
         let active = crate::phases::node_box::<D, K, S>(
@@ -187,11 +198,12 @@ impl<'a> World<'a> {
             apic: def.transfer == Transfer::Apic,
             particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
             forces: fx.particle_forces,
-            damp: fx.damping.is_some(),
+            damp: fx.damping.is_some_and(|d| d.on_particles()),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
             beta: def.flip_beta,
             alpha_g,
             alpha_p,
+            nodal_damping,
             half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
             exp_terms: def.exp_terms,
             jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
@@ -347,6 +359,7 @@ impl Kernel for PhaseRun {
             particle_velocity: false,
             forces: false,
             damp: false,
+            nodal_damping: None,
             ..*ctx
         };
         match self.phase {

@@ -4,9 +4,9 @@
 
 use crate::common::*;
 use mpm_gimp::{
-    Boundary, Damping, Dimension, Face, Feedback, MaterialDef, MaterialModel, ParticleBatch,
-    ParticleStatus, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer,
-    Transport, UpdateOrder, Vec3, World, WorldDef,
+    Boundary, Damping, DampingZone, Dimension, Face, Feedback, MaterialDef, MaterialModel,
+    ParticleBatch, ParticleStatus, Real, ScalarBoundary, ScalarField, Schedule, ShapeFunction,
+    Transfer, Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 
 /// An effect switched on in a hard case: how it changes the definition, and what it sets once
@@ -101,6 +101,16 @@ const EFFECTS: [Fx; 7] = [
                     max_alpha: 20.0,
                 }),
                 per_particle: true,
+                // And a zone graded toward the floor over the lower half of the grid: nodal
+                // damping (eq 105) besides the particle update's.
+                zones: [DampingZone {
+                    min: Vec3::new(-100.0, 0.0, -100.0),
+                    max: Vec3::new(100.0, 0.5, 100.0),
+                    rate: 2.0,
+                    ramp: Some(Face::YMin),
+                }; mpm_gimp::DAMPING_ZONES],
+                zone_count: 1,
+                ..Damping::NONE
             })
         },
         setup: set_local_damping,

@@ -109,6 +109,10 @@ struct Method {
     forces: bool,
     /// Damping (eq 47): the substep's global grid and particle rates, 1/s.
     damping: Option<[f64; 2]>,
+    /// The grid rate acts on the nodal force (eq 60) rather than in the particle update.
+    grid_on_force: bool,
+    /// Zones where the nodes are damped (eq 105).
+    zones: Vec<mpm_gimp::DampingZone>,
     /// The thermostat that adds to the grid rate, with its alpha before the substep.
     thermostat: Option<Thermostat>,
     /// Tractions (eq 21): the particle, the face of its domain (x low, x high, y low, ...) and
@@ -496,6 +500,26 @@ fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
         n.a = n.f;
     }
     divide_by_mass(m, grid, |n| &mut n.a, m.gravity);
+    // Nodal damping (eqs 60, 105), before the walls: `a_i -= alpha_g(x_i) v_i`, the zones'
+    // rates at the node (in the kernel's precision, as the kernel evaluates them) plus the
+    // grid rate when it acts on the force.
+    if let Some([grid_rate, _]) = m.damping {
+        let own = if m.grid_on_force { grid_rate } else { 0.0 };
+        for (i, n) in grid.iter_mut().enumerate() {
+            let mut rest = i;
+            let x: Vec<Real> = (0..m.d)
+                .map(|a| {
+                    let index = rest % m.nodes[a];
+                    rest /= m.nodes[a];
+                    (m.origin[a] as Real) + index as Real * m.h as Real
+                })
+                .collect();
+            let rate = m.zones.iter().fold(own, |r, z| r + z.rate_at(&x) as f64);
+            for a in 0..m.d {
+                n.a[a] -= rate * n.v[a];
+            }
+        }
+    }
     for_each_wall_node(m, |i, fixed| {
         for a in 0..m.d {
             if fixed[a] {
@@ -980,7 +1004,11 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
         }
         for a in 0..m.d {
             let damp = match m.damping {
-                Some([g, q]) => (g + p.alpha[0]) * v_gp[a] + (q + p.alpha[1]) * p.v[a],
+                Some([g, q]) => {
+                    // The grid rate acts here unless it acts on the nodal force.
+                    let g = if m.grid_on_force { 0.0 } else { g };
+                    (g + p.alpha[0]) * v_gp[a] + (q + p.alpha[1]) * p.v[a]
+                }
                 None => 0.0,
             };
             if m.apic {
@@ -1167,6 +1195,8 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         ],
         forces: fx.particle_forces,
         damping,
+        grid_on_force: fx.damping.is_some_and(|d| d.grid_on_force),
+        zones: fx.damping.map_or(vec![], |d| d.used_zones().to_vec()),
         thermostat,
         tractions: Vec::new(),
         transport: [fx.heat, fx.diffusion].map(|t| t.map(|t| t.faces)),
@@ -1280,6 +1310,7 @@ fn declared_effects() -> Effects {
                 target: Schedule::constant(1.0e-3),
                 max_alpha: 1.0e3,
             }),
+            ..Damping::NONE
         }),
         particle_forces: true,
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
@@ -1327,6 +1358,44 @@ enum Scene {
     /// A stick floor and a slip wall (x high) 0.3 cells from the block, so that its
     /// particles' stencils reach the wall nodes and the nodes past the walls' planes.
     Walls,
+    /// The walls, with the grid damping and the thermostat on the nodal force and two zones
+    /// of damping (one uniform, one graded toward the floor) over parts of the block
+    /// ([`nodal_damping`]).
+    #[cfg_attr(not(feature = "effects"), allow(dead_code))]
+    NodalDamping,
+}
+
+/// The damping of [`Scene::NodalDamping`]: the grid rate and the thermostat on the nodal
+/// force (eq 60), a particle rate, and zones over the block's left part (uniform) and its
+/// lower part (graded toward the floor), where the node rates differ from node to node.
+#[cfg(feature = "effects")]
+fn nodal_damping() -> Damping {
+    let mut zones = [mpm_gimp::DampingZone::NONE; mpm_gimp::DAMPING_ZONES];
+    zones[0] = mpm_gimp::DampingZone {
+        min: mpm_gimp::Vec3::new(0.0, 0.0, 0.0),
+        max: mpm_gimp::Vec3::new(0.47, 1.0, 1.0),
+        rate: 3.0,
+        ramp: None,
+    };
+    zones[1] = mpm_gimp::DampingZone {
+        min: mpm_gimp::Vec3::new(0.4, 0.0, 0.0),
+        max: mpm_gimp::Vec3::new(1.0, 0.52, 1.0),
+        rate: 5.0,
+        ramp: Some(Face::YMin),
+    };
+    Damping {
+        grid: Schedule::constant(0.8),
+        particle: Schedule::constant(0.5),
+        feedback: Some(Feedback {
+            gain: 1.0e6,
+            target: Schedule::constant(1.0e-3),
+            max_alpha: 1.0e3,
+        }),
+        grid_on_force: true,
+        zones,
+        zone_count: 2,
+        ..Damping::NONE
+    }
 }
 
 /// Steps a deforming, rotating block (after a few kernel steps, so it carries stress) once
@@ -1360,7 +1429,11 @@ fn check(
     if scene == Scene::Effects {
         def.effects = declared_effects();
     }
-    if scene == Scene::Walls {
+    #[cfg(feature = "effects")]
+    if scene == Scene::NodalDamping {
+        def.effects.damping = Some(nodal_damping());
+    }
+    if matches!(scene, Scene::Walls | Scene::NodalDamping) {
         // The block spans 0.35..0.65 m on each axis: the floor's plane 0.3 cells below it, the
         // slip wall's 0.3 cells beyond it.
         let (h, margin) = (def.cell_size, shape.margin_cells() as Real);
@@ -1592,6 +1665,28 @@ fn declared_effects_step_as_the_reference_does() {
                             simd,
                             Scene::Effects,
                         );
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Nodal damping (seeds/000 eqs 58-65 and 104-106: the grid rate and the thermostat on the
+/// nodal force, zones of space, uniform and graded) next to a stick floor and a slip wall,
+/// with every order and transfer, two shape families, in 2D and 3D, in every instance of the
+/// passes this CPU runs, agrees with the reference step to round-off.
+#[cfg(feature = "effects")]
+#[test]
+fn nodal_damping_steps_as_the_reference_does() {
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in [ShapeFunction::Gimp, ShapeFunction::QuadraticBspline] {
+            for order in ORDERS {
+                for transfer in [Transfer::Flip, Transfer::Apic] {
+                    for simd in INSTANCES {
+                        let material = soft_neo_hookean();
+                        let scene = Scene::NodalDamping;
+                        check(dim, shape, order, transfer, &material, simd, scene);
                     }
                 }
             }

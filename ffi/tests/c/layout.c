@@ -36,6 +36,7 @@ PROBE(MpmVec3)
 PROBE(MpmSchedule)
 PROBE(MpmFeedback)
 PROBE(MpmDamping)
+PROBE(MpmDampingZone)
 PROBE(MpmScalarBoundary)
 PROBE(MpmTransport)
 PROBE(MpmEffects)
@@ -106,6 +107,16 @@ int main(void) {
     FIELD(MpmDamping, particle);
     FIELD(MpmDamping, feedback);
     FIELD(MpmDamping, per_particle);
+    FIELD(MpmDamping, grid_on_force);
+    FIELD(MpmDamping, zone_count);
+    FIELD(MpmDamping, zones);
+
+    TYPE(MpmDampingZone);
+    FIELD(MpmDampingZone, min);
+    FIELD(MpmDampingZone, max);
+    FIELD(MpmDampingZone, rate);
+    FIELD(MpmDampingZone, ramped);
+    FIELD(MpmDampingZone, ramp_face);
 
     TYPE(MpmScalarBoundary);
     FIELD(MpmScalarBoundary, kind);

@@ -513,7 +513,7 @@ static void effects_def_misuse(void) {
     static const uint32_t bad_kind[] = {3u, 0x80000000u, 0xFFFFFFFFu};
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     const char *label[3] = {"NaN", "+inf", "-inf"};
-    MpmWorldDef d, damped = g_def2, fed, heated = g_def2, diffused = g_def2;
+    MpmWorldDef d, damped = g_def2, fed, zoned, heated = g_def2, diffused = g_def2;
     MpmMemoryRequirements req;
     unsigned k;
     int j, f;
@@ -525,6 +525,17 @@ static void effects_def_misuse(void) {
     fed.effects.damping.feedback.declared = 1;
     fed.effects.damping.feedback.gain = R(1.0);
     fed.effects.damping.feedback.max_alpha = R(1.0);
+    zoned = damped;
+    zoned.effects.damping.zone_count = 1;
+    zoned.effects.damping.zones[0].max = v3(0.5, 0.5, 0.0);
+    zoned.effects.damping.zones[0].rate = R(2.0);
+    {
+        MpmWorldDef ramped = zoned;
+        ramped.effects.damping.zones[0].ramped = 1;
+        ramped.effects.damping.zones[0].ramp_face = MPM_FACE_Y_MAX;
+        ACCEPTED("init: a zone graded toward Y_MAX (2D)", 0,
+                 mpm_memory_requirements(&ramped, &req));
+    }
 
     for (k = 0; k < sizeof bad_flag / sizeof bad_flag[0]; k++) {
         char name[96];
@@ -544,6 +555,20 @@ static void effects_def_misuse(void) {
         d = damped;
         d.effects.damping.feedback.declared = v;
         snprintf(name, sizeof name, "init: damping.feedback.declared %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = damped;
+        d.effects.damping.grid_on_force = v;
+        snprintf(name, sizeof name, "init: damping.grid_on_force %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = zoned;
+        d.effects.damping.zones[0].ramped = v;
+        snprintf(name, sizeof name, "init: damping.zones[0].ramped %u", (unsigned)v);
+        init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = zoned;
+        d.effects.damping.zones[0].ramped = 1;
+        d.effects.damping.zones[0].ramp_face = v == 2u ? 6u : v;
+        snprintf(name, sizeof name, "init: damping.zones[0].ramp_face %u",
+                 (unsigned)d.effects.damping.zones[0].ramp_face);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         d = g_def2;
         d.effects.particle_forces = v;
@@ -613,6 +638,21 @@ static void effects_def_misuse(void) {
                 d.effects.damping.feedback.target.values[0] = R(-1.0)));
     BAD_EFFECT("init: feedback target.points 9", fed,
                d.effects.damping.feedback.target.points = 9);
+    BAD_EFFECT("init: damping.zone_count 5", zoned, d.effects.damping.zone_count = 5);
+    BAD_EFFECT("init: damping.zone_count 0xFFFFFFFF", zoned,
+               d.effects.damping.zone_count = 0xFFFFFFFFu);
+    BAD_EFFECT("init: zone rate -1", zoned, d.effects.damping.zones[0].rate = R(-1.0));
+    BAD_EFFECT("init: zone without width in x", zoned,
+               d.effects.damping.zones[0].max.x = d.effects.damping.zones[0].min.x);
+    BAD_EFFECT("init: zone with max below min in y", zoned,
+               d.effects.damping.zones[0].max.y = R(-1.0));
+    BAD_EFFECT("init: zone graded toward Z_MIN in 2D", zoned,
+               (d.effects.damping.zones[0].ramped = 1,
+                d.effects.damping.zones[0].ramp_face = MPM_FACE_Z_MIN));
+    BAD_EFFECT("init: second zone rate -1 (zone_count 2)", zoned,
+               (d.effects.damping.zone_count = 2, d.effects.damping.zones[1] =
+                                                      d.effects.damping.zones[0],
+                d.effects.damping.zones[1].rate = R(-1.0)));
     BAD_EFFECT("init: body_force_scale.points 9", g_def2, d.effects.body_force_scale.points = 9);
     BAD_EFFECT("init: body_force_scale times decreasing", g_def2,
                (d.effects.body_force_scale.points = 2,
@@ -640,6 +680,12 @@ static void effects_def_misuse(void) {
         BAD_EFFECT(name, fed,
                    (d.effects.damping.feedback.target.points = 1,
                     d.effects.damping.feedback.target.times[0] = R(bad[j])));
+        snprintf(name, sizeof name, "init: zone rate %s", label[j]);
+        BAD_EFFECT(name, zoned, d.effects.damping.zones[0].rate = R(bad[j]));
+        snprintf(name, sizeof name, "init: zone min.x %s", label[j]);
+        BAD_EFFECT(name, zoned, d.effects.damping.zones[0].min.x = R(bad[j]));
+        snprintf(name, sizeof name, "init: zone max.y %s", label[j]);
+        BAD_EFFECT(name, zoned, d.effects.damping.zones[0].max.y = R(bad[j]));
         snprintf(name, sizeof name, "init: body_force.x %s", label[j]);
         BAD_EFFECT(name, g_def2, d.effects.body_force.x = R(bad[j]));
         snprintf(name, sizeof name, "init: body_force.y %s", label[j]);

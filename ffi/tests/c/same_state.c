@@ -19,8 +19,9 @@
  *              (a fixed face, a flux through the floor) in a conducting material with
  *              temperatures set; forces, tractions and concentrations change halfway. GIMP,
  *              MUSL.
- *   effects3d: a sphere with APIC, constant grid damping, particle forces, tractions on two
- *              faces and a body force, in 3D; cubic B-spline, USF.
+ *   effects3d: a sphere with APIC, constant grid damping on the nodal force and a zone of
+ *              damping graded toward the floor, particle forces, tractions on two faces and a
+ *              body force, in 3D; cubic B-spline, USF.
  *   axisym2d:  an axisymmetric cylinder on the axis, moving outwards, that expands with its
  *              temperatures (set, and conducted towards a fixed floor) and swells with its
  *              concentrations (diffusing in from a fixed outer face); GIMP, MUSL.
@@ -547,6 +548,13 @@ static void effects3d(void) {
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
     def.effects.damping.declared = 1;
     def.effects.damping.grid = schedule(1, one_t, one_v);
+    def.effects.damping.grid_on_force = 1;
+    def.effects.damping.zone_count = 1;
+    def.effects.damping.zones[0].min = v3(-1.0f, 0, -1.0f);
+    def.effects.damping.zones[0].max = v3(1.0f, 0.25f, 1.0f);
+    def.effects.damping.zones[0].rate = (mpm_real)3.0;
+    def.effects.damping.zones[0].ramped = 1;
+    def.effects.damping.zones[0].ramp_face = MPM_FACE_Y_MIN;
     def.effects.particle_forces = 1;
     def.effects.traction_capacity = 8;
     def.effects.body_force = v3(0, 0, -2.0f);
