@@ -160,9 +160,26 @@ pub enum Transfer {
     /// accurate as [`Transfer::Flip`]). For vibration and waves, not for large flows. Same
     /// columns and cost as [`Transfer::Flip`].
     FlipParticleVelocity = 2,
+    /// MLS-MPM (seeds/001): APIC's transfer, and every gradient of the momentum equation the
+    /// MLS gradient `D_p^-1 S_ip (x_i - x_p)` in place of the shape function's `G_ip`: the
+    /// nodal force is `f_i = -sum_p D_p^-1 S_ip V0 P F^T (x_i - x_p)` (`D_p^-1 = 4 / h^2`
+    /// with the quadratic B-spline, `3 / h^2` with the cubic), and the velocity gradient that
+    /// updates F is `C_p` itself (`dF = exp(C_p dt)`). It is not the gradient of `S_ip` (it
+    /// equals it for an affine velocity field only), but the force is then the exact
+    /// derivative of the energy with respect to the nodal motion that the same `C_p` gives.
+    /// The quadratic and cubic B-splines only (where `D_p` is constant), in 2D and 3D; any
+    /// other shape function, or the axisymmetric form, is [`crate::Error::InvalidTransfer`].
+    /// Heat and diffusion keep the shape functions' gradients. Reserves the columns of `C_p`
+    /// as [`Transfer::Apic`] does.
+    Mls = 3,
 }
 
 impl Transfer {
+    /// Whether the transfer carries the affine matrix `C_p` (APIC and MLS-MPM).
+    pub const fn is_affine(self) -> bool {
+        matches!(self, Transfer::Apic | Transfer::Mls)
+    }
+
     /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
     /// number becomes the enum without undefined behaviour.
     pub const fn from_code(code: u32) -> Option<Transfer> {
@@ -170,6 +187,7 @@ impl Transfer {
             0 => Some(Transfer::Flip),
             1 => Some(Transfer::Apic),
             2 => Some(Transfer::FlipParticleVelocity),
+            3 => Some(Transfer::Mls),
             _ => None,
         }
     }
@@ -494,7 +512,7 @@ mod tests {
         );
         use Transfer as Tr;
         check(
-            &[Tr::Flip, Tr::Apic, Tr::FlipParticleVelocity],
+            &[Tr::Flip, Tr::Apic, Tr::FlipParticleVelocity, Tr::Mls],
             |v| v as u32,
             Tr::from_code,
         );

@@ -89,6 +89,10 @@ pub enum Error {
     /// [`max_volume_ratio`](crate::WorldDef::max_volume_ratio) band, or whose stress is not
     /// finite.
     InvalidDeformation = 31,
+    /// A transfer that does not go with the shape function or the dimension:
+    /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
+    /// 3D.
+    InvalidTransfer = 32,
 }
 
 impl Error {
@@ -152,11 +156,14 @@ impl Error {
             Error::InvalidDeformation => {
                 c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"
             }
+            Error::InvalidTransfer => {
+                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D)"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 31] = [
+    pub const ALL: [Error; 32] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -188,6 +195,7 @@ impl Error {
         Error::InvalidState,
         Error::InvalidLimit,
         Error::InvalidDeformation,
+        Error::InvalidTransfer,
     ];
 }
 

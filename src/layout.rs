@@ -361,11 +361,7 @@ impl EffectColumns {
             if musl { d } else { 0 },
             if fx.particle_forces { d } else { 0 },
             if per_particle_damping { 2 } else { 0 },
-            if def.transfer == Transfer::Apic {
-                d * d
-            } else {
-                0
-            },
+            if def.transfer.is_affine() { d * d } else { 0 },
             fx.heat.map_or(0, |t| 2 + t.sources as usize),
             fx.diffusion.map_or(0, |t| 2 + t.sources as usize),
             (def.dimension == Dimension::Axisymmetric2D) as usize,
@@ -527,11 +523,20 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     if !(1..=crate::MAX_SUBSTEPS).contains(&def.max_substeps) || !ratio_ok {
         return Err(Error::InvalidLimit);
     }
+    // MLS-MPM's gradient is the shape function's only where D_p is constant: the B-splines.
+    if def.transfer == Transfer::Mls
+        && (!matches!(
+            def.shape,
+            ShapeFunction::QuadraticBspline | ShapeFunction::CubicBspline
+        ) || def.dimension == Dimension::Axisymmetric2D)
+    {
+        return Err(Error::InvalidTransfer);
+    }
     def.effects.validate(def.axes())?;
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")
         && (def.effects != crate::Effects::NONE
-            || def.transfer == Transfer::Apic
+            || def.transfer.is_affine()
             || def.dimension == Dimension::Axisymmetric2D)
     {
         return Err(Error::Unsupported);

@@ -32,6 +32,8 @@ pub enum Effect {
     BodyForce,
     /// The APIC transfer.
     Apic,
+    /// MLS-MPM (the quadratic and cubic B-splines only: `--shape quadratic` or `cubic`).
+    Mls,
     /// Heat conduction, insulated faces (the material's conductivity is 0: the passes run, the
     /// temperatures stay).
     Heat,
@@ -50,7 +52,7 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 13] = [
+    pub const ALL: [(Effect, &'static str); 14] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -60,6 +62,7 @@ impl Effect {
         (Effect::Tractions, "tractions"),
         (Effect::BodyForce, "body_force"),
         (Effect::Apic, "apic"),
+        (Effect::Mls, "mls"),
         (Effect::Heat, "heat"),
         (Effect::Diffusion, "diffusion"),
         (Effect::ThermalExpansion, "thermal_expansion"),
@@ -134,6 +137,18 @@ impl Effect {
                 fx.body_force_scale = Schedule::constant(1.0);
             }
             Effect::Apic => def.transfer = Transfer::Apic,
+            Effect::Mls => {
+                if !matches!(
+                    def.shape,
+                    ShapeFunction::QuadraticBspline | ShapeFunction::CubicBspline
+                ) {
+                    return Err(format!(
+                        "the {} transfer needs the quadratic or cubic B-spline (--shape)",
+                        self.name()
+                    ));
+                }
+                def.transfer = Transfer::Mls;
+            }
             Effect::Heat | Effect::ThermalExpansion => fx.heat = Some(Transport::INSULATED),
             Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
             Effect::Axisymmetric => {

@@ -51,6 +51,7 @@ impl Scheme {
             Transfer::FlipParticleVelocity => {
                 format!("FLIP beta={}, x += v(n+1) dt", self.flip_beta)
             }
+            Transfer::Mls => "MLS-MPM (APIC, MLS gradient)".to_string(),
         };
         format!(
             "{:?}, {transfer}, {:?}, exp terms {}",
@@ -138,6 +139,20 @@ pub const SCHEMES: &[Scheme] = &[
         label: "B2 APIC USL",
         shape: ShapeFunction::QuadraticBspline,
         transfer: Transfer::Apic,
+        order: UpdateOrder::Usl,
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "B2 MLS USL",
+        shape: ShapeFunction::QuadraticBspline,
+        transfer: Transfer::Mls,
+        order: UpdateOrder::Usl,
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "B3 MLS USL",
+        shape: ShapeFunction::CubicBspline,
+        transfer: Transfer::Mls,
         order: UpdateOrder::Usl,
         ..Scheme::DEFAULTS
     },

@@ -149,6 +149,9 @@ enum MpmStatus
   // (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
   // stress is not finite (nothing was set).
   MPM_STATUS_INVALID_DEFORMATION = 31,
+  // A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
+  // needs the quadratic or cubic B-spline, in 2D or 3D.
+  MPM_STATUS_INVALID_TRANSFER = 32,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -259,6 +262,11 @@ enum MpmTransfer
   // deformations do not converge (`mpm_gimp::Transfer::FlipParticleVelocity`). Same
   // columns and cost as `MPM_TRANSFER_FLIP`.
   MPM_TRANSFER_FLIP_PARTICLE_VELOCITY = 2,
+  // MLS-MPM: APIC's transfer, with the MLS gradient `D_p^-1 S_ip (x_i - x_p)` in place of
+  // the shape function's for the nodal force and the velocity gradient
+  // (`mpm_gimp::Transfer::Mls`). The quadratic and cubic B-splines, 2D and 3D only
+  // (otherwise `MPM_STATUS_INVALID_TRANSFER`). Reserves the columns APIC does.
+  MPM_TRANSFER_MLS = 3,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmTransfer;

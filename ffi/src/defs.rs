@@ -84,6 +84,11 @@ pub enum MpmTransfer {
     /// deformations do not converge (`mpm_gimp::Transfer::FlipParticleVelocity`). Same
     /// columns and cost as `MPM_TRANSFER_FLIP`.
     FlipParticleVelocity = 2,
+    /// MLS-MPM: APIC's transfer, with the MLS gradient `D_p^-1 S_ip (x_i - x_p)` in place of
+    /// the shape function's for the nodal force and the velocity gradient
+    /// (`mpm_gimp::Transfer::Mls`). The quadratic and cubic B-splines, 2D and 3D only
+    /// (otherwise `MPM_STATUS_INVALID_TRANSFER`). Reserves the columns APIC does.
+    Mls = 3,
 }
 
 /// Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).

@@ -95,6 +95,9 @@ pub enum MpmStatus {
     /// (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
     /// stress is not finite (nothing was set).
     InvalidDeformation = 31,
+    /// A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
+    /// needs the quadratic or cubic B-spline, in 2D or 3D.
+    InvalidTransfer = 32,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -153,13 +156,14 @@ impl From<Error> for MpmStatus {
             Error::InvalidState => MpmStatus::InvalidState,
             Error::InvalidLimit => MpmStatus::InvalidLimit,
             Error::InvalidDeformation => MpmStatus::InvalidDeformation,
+            Error::InvalidTransfer => MpmStatus::InvalidTransfer,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 38] = [
+    pub const ALL: [MpmStatus; 39] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -192,6 +196,7 @@ impl MpmStatus {
         MpmStatus::InvalidState,
         MpmStatus::InvalidLimit,
         MpmStatus::InvalidDeformation,
+        MpmStatus::InvalidTransfer,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

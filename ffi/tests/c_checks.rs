@@ -531,7 +531,7 @@ impl Text {
         let def = w.def();
         let force_used = |a: usize| def.effects.particle_forces && a < d;
         let damping_used = |_: usize| def.effects.damping.is_some_and(|dm| dm.per_particle);
-        let affine_used = |k: usize| def.transfer == Transfer::Apic && h_used(k);
+        let affine_used = |k: usize| def.transfer.is_affine() && h_used(k);
         let affine: Vec<&[Real]> = (0..9).map(|k| v.affine[k / 3][k % 3]).collect();
         self.line(format!(
             "{label}: effects present {} {} {} force {} damping {} affine {} tractions {} \
@@ -1764,8 +1764,8 @@ fn effects_definition_round_trip() {
         let mut d = c;
         d.effects.particle_forces = v;
         assert_eq!(refused(&d), MpmStatus::InvalidEnum, "particle_forces {v}");
-        // 2 is MPM_TRANSFER_FLIP_PARTICLE_VELOCITY.
-        if v != 2 {
+        // 2 and 3 are MPM_TRANSFER_FLIP_PARTICLE_VELOCITY and MPM_TRANSFER_MLS.
+        if v != 2 && v != 3 {
             let mut d = c;
             d.transfer = v;
             assert_eq!(refused(&d), MpmStatus::InvalidEnum, "transfer {v}");

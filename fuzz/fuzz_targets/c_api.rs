@@ -319,7 +319,7 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     }
     def.exp_terms = inp.u32_below(10);
     def.cfl = inp.real_in(0.05, 1.0);
-    def.transfer = inp.u32_below(4);
+    def.transfer = inp.u32_below(5); // 0..=3 the transfers (MLS 3), 4 out of range
     // The limits: mostly the defaults, sometimes anything (0 and NaN refused).
     if inp.byte() % 8 == 0 {
         def.max_substeps = inp.u32_below(2000);

@@ -609,7 +609,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             load_into(&mut x_low[a], p.x_low[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false);
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false, ctx.mls);
         if damp {
             damping::lane_rates(ctx, p, start, &mut alpha_g, &mut alpha_p);
         }
@@ -762,7 +762,7 @@ pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, cons
                 start,
             );
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false);
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, ctx.mls);
         const REMAP: u8 = Grad::Remap as u8;
         I::gather::<D, K, S, W, false, REMAP, false>(
             ctx,

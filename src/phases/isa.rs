@@ -209,6 +209,7 @@ passes! {
         x: &[Lane<W>; D],
         affine: bool,
         lanes: bool,
+        mls: bool,
     ) => lanes::stencils;
 
     /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the

@@ -274,6 +274,7 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: u
     x: &[Lane<W>; D],
     affine: bool,
     lanes: bool,
+    mls: bool,
 ) {
     let geom = &ctx.geom;
     let mut s = [[0.0; W]; D];
@@ -295,8 +296,11 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: u
         geom.nodes,
         geom.stride,
         geom.inv_h,
-        affine,
+        affine || mls,
     );
+    if mls {
+        st.use_mls_gradient();
+    }
     if lanes {
         st.fill_lanes::<S>(affine);
     }

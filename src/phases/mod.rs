@@ -58,6 +58,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub order: crate::UpdateOrder,
     /// APIC (seeds/001) in place of FLIP.
     pub apic: bool,
+    /// MLS-MPM (with `apic`): the momentum passes' gradients are the MLS gradient
+    /// ([`crate::shape::Stencils::use_mls_gradient`]).
+    pub mls: bool,
     /// FLIP moves the particles with their own new velocity ([`crate::Transfer::FlipParticleVelocity`]).
     pub particle_velocity: bool,
     /// Particle forces declared: the scatter adds `S_ip F_p`.

@@ -216,7 +216,8 @@ pub(crate) fn scatter_rows<
                 }
             }
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false);
+        let mls = ctx.mls;
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
         let live = super::lanes::live_lanes(p, start, count);
         products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);

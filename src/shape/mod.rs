@@ -495,6 +495,21 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         }
     }
 
+    /// MLS-MPM (seeds/001): every derivative factor becomes the moment factor times `D_p^-1`,
+    /// so that the gradient the passes form, node (i, j, k)'s `dwx_i wy_j wz_k` and the others,
+    /// is the MLS gradient `D_p^-1 S_ip (x_i - x_p)`. Needs the moments (`affine`) of the
+    /// last [`Stencils::compute`].
+    #[inline(always)]
+    pub fn use_mls_gradient(&mut self) {
+        for a in 0..D {
+            for k in 0..K {
+                for ln in 0..W {
+                    self.dw[a][k][ln] = self.e[a][k][ln] * self.inv_d[a][ln];
+                }
+            }
+        }
+    }
+
     /// Each lane's x factors for the row code ([`Stencils::lane`]), transposed four lanes at a
     /// time from the lane-fastest arrays of the last [`Stencils::compute`] (with its `affine`
     /// and family `S`).

@@ -3,7 +3,7 @@
 
 use super::add::material_record;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
-use crate::def::{MaterialDef, ShapeFunction, Transfer, WorldDef};
+use crate::def::{MaterialDef, ShapeFunction, WorldDef};
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
     eigenstrain_part, elastic_part, energy_density, model_of, particle_stress, Deformation, Params,
@@ -407,7 +407,7 @@ impl<'a> WorldRef<'a> {
                 m * (x[2] * v[0] - x[0] * v[2]),
                 m * (x[0] * v[1] - x[1] * v[0]),
             ];
-            if def.transfer == Transfer::Apic {
+            if def.transfer.is_affine() {
                 // B_p itself, or C_p D_p for linear weights, whose column holds C_p (the
                 // gradient form; D_p = f (1 - f) h^2 per axis, f the offset in the cell).
                 let linear = def.shape == ShapeFunction::Linear;

@@ -195,7 +195,8 @@ impl<'a> World<'a> {
             active,
             dt,
             order: def.update_order,
-            apic: def.transfer == Transfer::Apic,
+            apic: def.transfer.is_affine(),
+            mls: def.transfer == Transfer::Mls,
             particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
             forces: fx.particle_forces,
             damp: fx.damping.is_some_and(|d| d.on_particles()),
@@ -356,6 +357,7 @@ impl Kernel for PhaseRun {
         let ctx = &Ctx {
             order: UpdateOrder::Usl,
             apic: false,
+            mls: false,
             particle_velocity: false,
             forces: false,
             damp: false,

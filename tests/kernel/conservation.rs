@@ -1,27 +1,43 @@
 //! Conservation: mass exactly, linear momentum to round-off, for every shape function and
-//! update order, in 2D and 3D (except linear shapes with USL, unstable by nature).
+//! update order, in 2D and 3D (except linear shapes with USL, unstable by nature), and with
+//! MLS-MPM for the B-splines.
 
 use crate::common::*;
-use mpm_gimp::{Dimension, MaterialDef, ParticleBatch, Real, ShapeFunction, UpdateOrder, World};
+use mpm_gimp::{
+    Dimension, MaterialDef, ParticleBatch, Real, ShapeFunction, Transfer, UpdateOrder, World,
+};
 
 /// A block with translation, spin and shear (so stress develops), no gravity, open faces,
 /// 60 steps. Exact: the particles' total mass never changes (bit for bit), and total
 /// momentum is constant because `sum_i f_i = -sum_p m_p tau_p . sum_i G_ip = 0` and the PIC
-/// blend moves momentum between particles only. Tolerance 1e-6 of the momentum scale
-/// `sum m |v|`: f32 round-off of the grid sums over 60 steps (measured ~1e-7).
+/// blend moves momentum between particles only. MLS-MPM's gradient sums to zero over the
+/// nodes too (`sum_i S_ip (x_i - x_p) = 0`). Tolerance 1e-6 of the momentum scale `sum m |v|`:
+/// f32 round-off of the grid sums over 60 steps (measured ~1e-7).
 #[test]
 fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
         for shape in SHAPES {
-            for order in ORDERS {
+            for (order, transfer) in ORDERS
+                .iter()
+                .map(|&o| (o, Transfer::Flip))
+                .chain(ORDERS.iter().map(|&o| (o, Transfer::Mls)))
+            {
                 if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
                     // Classic MPM's cell-crossing instability: see the hard-case test
                     // `linear_usl_cell_crossing_instability_is_contained`.
                     continue;
                 }
+                let b_spline = matches!(
+                    shape,
+                    ShapeFunction::QuadraticBspline | ShapeFunction::CubicBspline
+                );
+                if transfer == Transfer::Mls && !b_spline {
+                    continue;
+                }
                 let mut def = free_space(dim, 24, 0.05);
                 def.shape = shape;
                 def.update_order = order;
+                def.transfer = transfer;
                 let mut buf = buffer_for(&def);
                 let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
                 let mat = w.add_material(&MaterialDef::DEFAULT).unwrap();
@@ -84,7 +100,7 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
                 for _ in 0..60 {
                     w.step(w.stable_dt()).unwrap();
                 }
-                let label = format!("{dim:?} {shape:?} {order:?}");
+                let label = format!("{dim:?} {shape:?} {order:?} {transfer:?}");
                 assert_eq!(w.particles().mass, &m0[..], "{label}: masses changed");
                 assert!(all_finite(&w), "{label}: non-finite state");
                 assert_eq!(

@@ -511,6 +511,7 @@ static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d)
 static void effects_def_misuse(void) {
     static const uint32_t bad_flag[] = {2u, 0x80000000u, 0xFFFFFFFFu};
     static const uint32_t bad_kind[] = {3u, 0x80000000u, 0xFFFFFFFFu};
+    static const uint32_t bad_transfer[] = {4u, 0x80000000u, 0xFFFFFFFFu};
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     const char *label[3] = {"NaN", "+inf", "-inf"};
     MpmWorldDef d, damped = g_def2, fed, zoned, heated = g_def2, diffused = g_def2;
@@ -541,8 +542,8 @@ static void effects_def_misuse(void) {
         char name[96];
         const uint32_t v = bad_flag[k];
         d = g_def2;
-        d.transfer = bad_kind[k]; /* 2 is MPM_TRANSFER_FLIP_PARTICLE_VELOCITY */
-        snprintf(name, sizeof name, "init: transfer %u", (unsigned)bad_kind[k]);
+        d.transfer = bad_transfer[k]; /* 2 and 3 are FLIP_PARTICLE_VELOCITY and MLS */
+        snprintf(name, sizeof name, "init: transfer %u", (unsigned)bad_transfer[k]);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         d = g_def2;
         d.effects.damping.declared = v;
@@ -2257,6 +2258,7 @@ static void status_strings(void) {
         MPM_STATUS_INVALID_STATE,
         MPM_STATUS_INVALID_LIMIT,
         MPM_STATUS_INVALID_DEFORMATION,
+        MPM_STATUS_INVALID_TRANSFER,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
