@@ -239,6 +239,25 @@ pub fn moving_block(
     count
 }
 
+/// Adds the block of [`moving_block`], of the default material with `model`, spinning rigidly
+/// at 1 rad/s about (0.5, 0.5); returns the material.
+pub fn spinning_block(def: &WorldDef, world: &mut World, model: MaterialModel) -> MaterialDef {
+    let mat = MaterialDef {
+        model,
+        ..MaterialDef::DEFAULT
+    };
+    moving_block(def, world, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
+    mat
+}
+
+/// The number of equal steps of a quarter turn at 1 rad/s, each at most `world`'s stable
+/// step, and their length.
+pub fn quarter_turn(world: &World) -> (usize, Real) {
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let steps = (quarter / world.stable_dt() as f64).ceil() as usize;
+    (steps, (quarter / steps as f64) as Real)
+}
+
 /// Corotated linear elastic, E = 1 MPa, Poisson's ratio `nu`, rho = 1000 kg/m^3 (with `nu = 0`
 /// uniaxial strain and stress are one, plane strain is plane stress, and c = 31.6 m/s).
 pub fn linear_elastic(nu: Real) -> MaterialDef {

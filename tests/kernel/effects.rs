@@ -1078,11 +1078,7 @@ fn mls_rigid_rotation_carries_only_the_centrifugal_stress() {
             def.update_order = UpdateOrder::Usl;
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = MaterialDef {
-                model,
-                ..MaterialDef::DEFAULT
-            };
-            moving_block(&def, &mut w, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
+            let mat = spinning_block(&def, &mut w, model);
             // The energy with the affine part of APIC's velocity field (seeds/001): a particle
             // carries `m_p tr(C_p D_p C_p^T) / 2 = m_p sum_ab B_ab^2 / D_b / 2` besides
             // `m_p v_p^2 / 2`, with `D_b = h^2/4` (quadratic) or `h^2/3` (cubic B-spline).
@@ -1105,10 +1101,7 @@ fn mls_rigid_rotation_carries_only_the_centrifugal_stress() {
                     .sum();
                 w.diagnostics().total_energy() + affine
             };
-            let quarter = std::f64::consts::FRAC_PI_2;
-            let dt = w.stable_dt();
-            let steps = (quarter / dt as f64).ceil() as usize;
-            let dt = (quarter / steps as f64) as Real;
+            let (steps, dt) = quarter_turn(&w);
             // The particles start with `C_p = 0`, which is not the rotation's affine field:
             // the first transfer sets it (and averages the velocities at the block's edges).
             // From then on the transfer carries the rigid field exactly.

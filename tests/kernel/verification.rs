@@ -285,16 +285,9 @@ fn rigid_rotation_creates_no_stress_beyond_the_transfer_error() {
             def.flip_beta = 1.0;
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-            let mat = MaterialDef {
-                model,
-                ..MaterialDef::DEFAULT
-            };
-            moving_block(&def, &mut w, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
+            let mat = spinning_block(&def, &mut w, model);
             let e0 = w.diagnostics().total_energy();
-            let quarter = std::f64::consts::FRAC_PI_2;
-            let dt = w.stable_dt();
-            let steps = (quarter / dt as f64).ceil() as usize;
-            let dt = (quarter / steps as f64) as Real;
+            let (steps, dt) = quarter_turn(&w);
             for _ in 0..steps {
                 w.step(dt).unwrap();
             }
