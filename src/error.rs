@@ -93,6 +93,8 @@ pub enum Error {
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
     /// 3D.
     InvalidTransfer = 32,
+    /// A traction id at or past the number of tractions ([`crate::World::remove_tractions`]).
+    UnknownTraction = 33,
 }
 
 impl Error {
@@ -156,6 +158,7 @@ impl Error {
             Error::InvalidDeformation => {
                 c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"
             }
+            Error::UnknownTraction => c"traction id at or past the number of tractions",
             Error::InvalidTransfer => {
                 c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D)"
             }
@@ -163,7 +166,7 @@ impl Error {
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 32] = [
+    pub const ALL: [Error; 33] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -196,6 +199,7 @@ impl Error {
         Error::InvalidLimit,
         Error::InvalidDeformation,
         Error::InvalidTransfer,
+        Error::UnknownTraction,
     ];
 }
 

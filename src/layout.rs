@@ -99,6 +99,7 @@ pub(crate) struct Header {
     pub damping_on_force: u64,
     pub damping_zone_count: u64,
     pub damping_zones: [ZoneRecord; DAMPING_ZONES],
+    pub traction_scale: ScheduleRecord,
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -246,7 +247,7 @@ unsafe impl Pod for Header {}
 
 const _: () = assert!(
     size_of::<Header>()
-        == 8 * (36 + 13 + 4 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14 + 2 + 8 * DAMPING_ZONES)
+        == 8 * (36 + 13 + 5 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14 + 2 + 8 * DAMPING_ZONES)
 );
 
 /// One material in the buffer's table: parameters and what the step derives from them.
@@ -609,6 +610,7 @@ impl Header {
             damping_on_force: damping.grid_on_force as u64,
             damping_zone_count: damping.zone_count as u64,
             damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
+            traction_scale: ScheduleRecord::of(&fx.traction_scale),
         }
     }
 
@@ -680,6 +682,7 @@ impl Header {
             traction_capacity: small(self.traction_capacity)?,
             body_force: v(self.body_force),
             body_force_scale: self.body_force_scale.schedule()?,
+            traction_scale: self.traction_scale.schedule()?,
             heat: self.heat.transport()?,
             diffusion: self.diffusion.transport()?,
         };

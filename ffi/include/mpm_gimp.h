@@ -152,6 +152,8 @@ enum MpmStatus
   // A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
   // needs the quadratic or cubic B-spline, in 2D or 3D.
   MPM_STATUS_INVALID_TRANSFER = 32,
+  // A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
+  MPM_STATUS_UNKNOWN_TRACTION = 33,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -509,6 +511,9 @@ typedef struct MpmEffects {
   struct MpmVec3 body_force;
   // Time factor of `body_force`; no point (default) is a factor of 0.
   struct MpmSchedule body_force_scale;
+  // Time factor of every traction (`mpm_gimp::Effects::traction_scale`); the default is
+  // the constant 1, and no point means a factor of 0.
+  struct MpmSchedule traction_scale;
   // Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
   // starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
   // Default not declared.
@@ -858,6 +863,16 @@ MpmStatus mpm_world_add_tractions(struct MpmWorld *world,
 // # Safety
 // `world` is NULL or a world.
 MpmStatus mpm_world_clear_tractions(struct MpmWorld *world);
+
+// Removes the `count` tractions from id `first` (a range `mpm_world_add_tractions` gave, or
+// any part of the table), so that loads applied together can be taken off together; the
+// tractions after them move down by `count`, in their order. Needs
+// `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range is not within
+// the table (nothing is removed).
+//
+// # Safety
+// `world` is NULL or a world.
+MpmStatus mpm_world_remove_tractions(struct MpmWorld *world, uint32_t first, uint32_t count);
 
 // Number of tractions the world holds (0 if it declares none).
 //

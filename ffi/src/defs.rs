@@ -315,6 +315,9 @@ pub struct MpmEffects {
     pub body_force: MpmVec3,
     /// Time factor of `body_force`; no point (default) is a factor of 0.
     pub body_force_scale: MpmSchedule,
+    /// Time factor of every traction (`mpm_gimp::Effects::traction_scale`); the default is
+    /// the constant 1, and no point means a factor of 0.
+    pub traction_scale: MpmSchedule,
     /// Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
     /// starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
     /// Default not declared.
@@ -545,6 +548,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         traction_capacity: e.traction_capacity,
         body_force: c_vec3(e.body_force),
         body_force_scale: schedule_to_c(&e.body_force_scale),
+        traction_scale: schedule_to_c(&e.traction_scale),
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
     }
@@ -648,6 +652,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         traction_capacity: e.traction_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
+        traction_scale: schedule_from_c(&e.traction_scale),
         heat: transport_from_c(&e.heat)?,
         diffusion: transport_from_c(&e.diffusion)?,
     })

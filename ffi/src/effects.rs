@@ -268,6 +268,29 @@ pub unsafe extern "C" fn mpm_world_clear_tractions(world: *mut MpmWorld) -> MpmS
     })
 }
 
+/// Removes the `count` tractions from id `first` (a range `mpm_world_add_tractions` gave, or
+/// any part of the table), so that loads applied together can be taken off together; the
+/// tractions after them move down by `count`, in their order. Needs
+/// `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range is not within
+/// the table (nothing is removed).
+///
+/// # Safety
+/// `world` is NULL or a world.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_remove_tractions(
+    world: *mut MpmWorld,
+    first: u32,
+    count: u32,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        // A range past u32 saturates: its end lies past any table (at most 2^24 entries).
+        w.remove_tractions(first..first.saturating_add(count))?;
+        Ok(())
+    })
+}
+
 /// Number of tractions the world holds (0 if it declares none).
 ///
 /// # Safety

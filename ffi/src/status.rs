@@ -98,6 +98,8 @@ pub enum MpmStatus {
     /// A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
     /// needs the quadratic or cubic B-spline, in 2D or 3D.
     InvalidTransfer = 32,
+    /// A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
+    UnknownTraction = 33,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -157,13 +159,14 @@ impl From<Error> for MpmStatus {
             Error::InvalidLimit => MpmStatus::InvalidLimit,
             Error::InvalidDeformation => MpmStatus::InvalidDeformation,
             Error::InvalidTransfer => MpmStatus::InvalidTransfer,
+            Error::UnknownTraction => MpmStatus::UnknownTraction,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 39] = [
+    pub const ALL: [MpmStatus; 40] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -197,6 +200,7 @@ impl MpmStatus {
         MpmStatus::InvalidLimit,
         MpmStatus::InvalidDeformation,
         MpmStatus::InvalidTransfer,
+        MpmStatus::UnknownTraction,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

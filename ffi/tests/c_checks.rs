@@ -152,6 +152,7 @@ fn rust_layout() -> String {
         traction_capacity,
         body_force,
         body_force_scale,
+        traction_scale,
         heat,
         diffusion,
     }));
@@ -826,6 +827,7 @@ fn effects2d(t: &mut Text) {
             traction_capacity: 16,
             body_force: Vec3::new(0.5, 0.25, 0.0),
             body_force_scale: schedule(&[(0.0, 0.0), (0.03125, 1.0), (0.0625, 0.0)]),
+            traction_scale: schedule(&[(0.0, 0.5), (0.0625, 1.5)]),
             heat: Some(Transport {
                 faces: heat_faces,
                 sources: true,
@@ -1257,6 +1259,11 @@ fn defaults_match_the_kernel() {
     assert_eq!(e.traction_capacity, 0);
     assert_eq!(e.body_force, MpmVec3::default());
     assert_eq!(e.body_force_scale, zero);
+    let one = schedules(&[(0.0, 1.0)]).0;
+    assert_eq!(
+        (e.traction_scale.points, e.traction_scale.values[0]),
+        (one.points, one.values[0])
+    );
     let insulated = MpmScalarBoundary {
         kind: MpmScalarBoundaryKind::Insulated as u32,
         value: 0.0,
@@ -1455,6 +1462,7 @@ fn effects_definition_round_trip() {
     let (part_c, part_k) = schedules(&[(0.125, 0.5)]);
     let (target_c, target_k) = schedules(&[(0.0, 2.0), (1.0, 0.0), (2.0, 0.0)]);
     let (scale_c, scale_k) = schedules(&[(0.0, 0.0), (0.25, -1.0)]);
+    let (traction_c, traction_k) = schedules(&[(0.0, 1.0), (0.5, 2.0)]);
     let unread_zone = MpmDampingZone {
         min: MpmVec3 {
             x: 0.0,
@@ -1528,6 +1536,7 @@ fn effects_definition_round_trip() {
             z: 0.0,
         },
         body_force_scale: scale_c,
+        traction_scale: traction_c,
         heat: MpmTransport {
             declared: 1,
             faces: [
@@ -1612,6 +1621,7 @@ fn effects_definition_round_trip() {
             traction_capacity: 5,
             body_force: Vec3::new(1.5, -2.0, 0.0),
             body_force_scale: scale_k,
+            traction_scale: traction_k,
             heat: Some(heat),
             diffusion: Some(diffusion),
         },

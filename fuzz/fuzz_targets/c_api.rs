@@ -291,6 +291,7 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     };
     e.body_force = inp.vec3_in(-20.0, 20.0);
     e.body_force_scale = schedule(inp, -2.0, 2.0);
+    e.traction_scale = schedule(inp, -2.0, 2.0);
     e.heat = transport(inp, -500.0, 500.0);
     e.diffusion = transport(inp, -2.0, 2.0);
     e
@@ -583,6 +584,9 @@ fuzz_target!(|data: &[u8]| {
                 10 => {
                     if inp.byte() % 4 == 0 {
                         mpm_world_clear_tractions(world)
+                    } else if inp.byte() % 4 == 0 {
+                        let (first, count) = (inp.u32_below(40), inp.u32_below(40));
+                        mpm_world_remove_tractions(world, first, count)
                     } else {
                         let (first, count) = particle_range(&mut inp, world);
                         let face = inp.u32_below(7);

@@ -74,6 +74,27 @@ impl World<'_> {
     pub fn clear_tractions(&mut self) {
         self.header_mut().traction_count = 0;
     }
+
+    /// Removes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of
+    /// the table), so that loads applied together can be taken off together; the tractions
+    /// after them move down by `ids.len()`, in their order, and their room is free again.
+    /// `UnknownTraction` if the range is not within the table (nothing is removed);
+    /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
+    pub fn remove_tractions(&mut self, ids: Range<u32>) -> Result<(), Error> {
+        if self.def().effects.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let used = self.header().traction_count as usize;
+        let (start, end) = (ids.start as usize, ids.end as usize);
+        if start > end || end > used {
+            return Err(Error::UnknownTraction);
+        }
+        let layout = Layout::of(&self.def());
+        self.traction_records_mut(&layout, 0, used)
+            .copy_within(end..used, start);
+        self.header_mut().traction_count = (used - (end - start)) as u64;
+        Ok(())
+    }
 }
 
 /// Adds the tractions of the table to the nodal force (eq 21): each loads one face of one
@@ -126,7 +147,7 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
         st.for_each_node(geom.stride, |node, w, _| {
             for a in 0..D {
                 if let Some(f) = g.acc[a].get_mut(node) {
-                    *f += w * rec.traction[a] * area;
+                    *f += w * rec.traction[a] * area * ctx.traction_scale;
                 }
             }
         });

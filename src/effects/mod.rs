@@ -135,6 +135,9 @@ pub struct Effects {
     pub body_force: Vec3,
     /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
     pub body_force_scale: Schedule,
+    /// Time factor of every traction (a ramp, a load cycle); default the constant 1. No point
+    /// means a factor of 0.
+    pub traction_scale: Schedule,
     /// Heat conduction (seeds/000 section 8), if declared: a temperature column (K) on the
     /// particles, conducted with each material's [`crate::MaterialDef::conductivity`] and
     /// [`crate::MaterialDef::heat_capacity`].
@@ -153,6 +156,7 @@ impl Effects {
         traction_capacity: 0,
         body_force: Vec3::ZERO,
         body_force_scale: Schedule::ZERO,
+        traction_scale: Schedule::constant(1.0),
         heat: None,
         diffusion: None,
     };
@@ -161,7 +165,8 @@ impl Effects {
     pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
         let ok_damping = self.damping.is_none_or(|d| d.is_valid(axes));
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
-            && self.body_force_scale.is_valid(false);
+            && self.body_force_scale.is_valid(false)
+            && self.traction_scale.is_valid(false);
         let ok_transport = [self.heat, self.diffusion]
             .iter()
             .all(|t| t.is_none_or(|t| t.is_valid(axes)));

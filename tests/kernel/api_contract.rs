@@ -1440,6 +1440,12 @@ fn every_rejected_call_returns_its_error_and_changes_no_byte() {
     assert_rejected(&mut world, "step(1e9)", Error::SubstepLimit, |w| {
         w.step(1.0e9)
     });
+    assert_rejected(
+        &mut world,
+        "remove_tractions without tractions declared",
+        Error::EffectNotDeclared,
+        |w| w.remove_tractions(0..0),
+    );
 
     // Control: the accepted neighbours of the rejected calls do change the world, so the hash
     // comparison above could have failed.
@@ -1630,7 +1636,7 @@ fn every_error_has_a_distinct_message_and_its_one_based_position_as_number() {
     // Every variant is listed once (distinct numbers, and the last number is the count).
     let numbers: HashSet<u32> = Error::ALL.iter().map(|&e| e as u32).collect();
     assert_eq!(numbers.len(), Error::ALL.len());
-    assert_eq!(Error::InvalidTransfer as u32 as usize, Error::ALL.len());
+    assert_eq!(Error::UnknownTraction as u32 as usize, Error::ALL.len());
 }
 
 // ---------------------------------------------------------------------------------------------

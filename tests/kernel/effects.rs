@@ -852,6 +852,76 @@ fn particle_forces_and_body_force_give_exact_momentum() {
     }
 }
 
+/// Tractions follow `Effects::traction_scale` and come off group by group. A free block in
+/// open space (no gravity) carries three groups of tractions on the +x faces of its particles
+/// (10 particles each, `T_k` along x, y or both). A traction's resultant on the nodes is exactly
+/// `T A` (the weights sum to 1, `A = 2 l_p` per unit thickness in 2D), so the block's momentum
+/// grows by `sum T A s(t_k) dt` over the substeps, `s` the scale at each substep's start. Exact:
+/// with a ramp `s(t) = t / 0.05 s`, the left sum; then with the middle group removed, only the
+/// others'. Removing a range past the table is `UnknownTraction` and removes nothing.
+/// Tolerance 1e-5 relative (f32 round-off of the nodal sums over 40 steps).
+#[test]
+fn tractions_follow_their_schedule_and_come_off_by_group() {
+    let ramp = Schedule::from_points(&[(0.0, 0.0), (0.05, 1.0)]).unwrap();
+    let (def, mut buf) = free_block(Dimension::Plane2D, |def| {
+        def.effects.traction_capacity = 64;
+        def.effects.traction_scale = ramp;
+    });
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    moving_block(&def, &mut w, &MaterialDef::DEFAULT, |_| [0.0; 3]);
+    let loads = [[400.0, 0.0], [0.0, -300.0], [200.0, 100.0]];
+    let mut groups = vec![];
+    for (k, t) in loads.iter().enumerate() {
+        let particles = 10 * k as u32..10 * (k as u32 + 1);
+        let traction = Vec3::new(t[0], t[1], 0.0);
+        groups.push(w.add_tractions(particles, Face::XMax, traction).unwrap());
+    }
+    assert_eq!(groups, vec![0..10, 10..20, 20..30]);
+    let area = (def.cell_size / def.particles_per_cell as Real) as f64;
+    let (dt, n) = (1e-3 as Real, 20);
+    // Runs n steps and checks the momentum they added against the scaled resultants of the
+    // groups in `on`.
+    let run = |w: &mut World, on: &[usize]| {
+        let p0 = w.diagnostics().momentum;
+        let mut impulse = 0.0;
+        for _ in 0..n {
+            let t0 = w.time();
+            let r = w.step(dt).unwrap();
+            for k in 0..r.substeps {
+                impulse +=
+                    ramp.at(t0 + (k as f64) * r.substep_dt as f64) as f64 * r.substep_dt as f64;
+            }
+        }
+        let p1 = w.diagnostics().momentum;
+        for a in 0..2 {
+            let want: f64 = on
+                .iter()
+                .map(|&k| 10.0 * loads[k][a] as f64 * area)
+                .sum::<f64>()
+                * impulse;
+            let scale: f64 = on
+                .iter()
+                .map(|&k| 10.0 * loads[k][0].abs().max(loads[k][1].abs()) as f64 * area)
+                .sum::<f64>()
+                * impulse;
+            assert!(
+                (p1[a] - p0[a] - want).abs() < 1e-5 * scale,
+                "groups {on:?} axis {a}: {} vs {want}",
+                p1[a] - p0[a]
+            );
+        }
+    };
+    run(&mut w, &[0, 1, 2]);
+    assert_eq!(
+        w.remove_tractions(25..31),
+        Err(mpm_gimp::Error::UnknownTraction)
+    );
+    assert_eq!(w.traction_count(), 30);
+    w.remove_tractions(groups[1].clone()).unwrap();
+    assert_eq!(w.traction_count(), 20);
+    run(&mut w, &[0, 2]);
+}
+
 /// Traction: a bar fixed at x = wall, loaded at its free end by a traction T along x, settles
 /// under damping to the uniform stress sigma_xx = T (exact static solution of a bar with
 /// Poisson's ratio 0 between slip walls). Checked on the mean Cauchy sigma_xx of the particles

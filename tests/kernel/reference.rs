@@ -121,6 +121,8 @@ struct Method {
     /// the traction, Pa. The world's table is not readable through the API: the test that
     /// adds them sets them here.
     tractions: Vec<(usize, usize, [f64; 3])>,
+    /// The tractions' time factor this substep.
+    traction_scale: f64,
     /// The declared transported scalars (heat, diffusion): each face's condition.
     transport: [Option<[ScalarBoundary; 6]>; 2],
     /// The material's heat capacity (J/(kg K)), conductivity (W/(m K)) and diffusivity (m^2/s).
@@ -794,7 +796,7 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
         };
         for &(node, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
             for a in 0..m.d {
-                grid[node].f[a] += s * t[a] * area;
+                grid[node].f[a] += s * t[a] * area * m.traction_scale;
             }
         }
     }
@@ -1213,6 +1215,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         zones: fx.damping.map_or(vec![], |d| d.used_zones().to_vec()),
         thermostat,
         tractions: Vec::new(),
+        traction_scale: fx.traction_scale.at(world.time()) as f64,
         transport: [fx.heat, fx.diffusion].map(|t| t.map(|t| t.faces)),
         heat_capacity: material.heat_capacity as f64,
         conductivity: material.conductivity as f64,
@@ -1330,6 +1333,8 @@ fn declared_effects() -> Effects {
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
         body_force_scale: Schedule::constant(1.0),
         traction_capacity: 64,
+        // A ramp, read at the time of the step the reference takes.
+        traction_scale: Schedule::from_points(&[(0.0, 0.5), (1.0, 1.5)]).unwrap(),
         heat: Some(Transport {
             sources: true,
             ..Transport::INSULATED

@@ -837,6 +837,7 @@ static void not_a_world_at_page_end(void) {
         NAW("mpm_world_add_tractions",
             mpm_world_add_tractions(w, 0, 1, MPM_FACE_Y_MAX, v3(0, -1, 0), OUT(MpmIdRange)));
         NAW("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
+        NAW("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         NAW("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
         NAW("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, OUT(double)));
 #undef NAW
@@ -1188,8 +1189,13 @@ static void state_edits(const Host *hs) {
 
 /* Whether every active particle's values are moderate (|x| <= 1e60): in double precision the
  * diagnostics of a state with, say, a finite velocity of 1e200 (valid: the contract asks only
- * for finite values) overflow, so their finiteness is required only for moderate states. In
- * single precision every finite value is moderate. */
+ * for finite values) overflow, so their finiteness is required only for moderate states. The
+ * strain energy reads the temperature and concentration too, and the material's parameters
+ * (moduli, expansion and swelling coefficients), which the view does not show: a thermal
+ * expansion coefficient corrupted to a huge finite value (so valid) leaves F moderate and made
+ * the energy overflow (a stress of -5.7e272 in the round that found it). The stress carries
+ * them (sigma ~ E eps, W ~ E eps^2 / 2), so a moderate stress stands for them. In single
+ * precision every finite value is moderate. */
 static int state_moderate(const MpmWorld *w) {
 #ifdef MPM_GIMP_F64
     MpmParticlesView v;
@@ -1205,6 +1211,15 @@ static int state_moderate(const MpmWorld *w) {
         }
         if (fabs(v.mass[i]) > big || fabs(v.volume0[i]) > big) {
             return 0;
+        }
+        if ((v.temperature != NULL && fabs(v.temperature[i]) > big) ||
+            (v.concentration != NULL && fabs(v.concentration[i]) > big)) {
+            return 0;
+        }
+        for (a = 0; a < 6; a++) {
+            if (v.stress[a] != NULL && fabs(v.stress[a][i]) > big) {
+                return 0;
+            }
         }
         for (a = 0; a < 2; a++) {
             if (fabs(v.velocity[a][i]) > big || fabs(v.position[a][i]) > big) {

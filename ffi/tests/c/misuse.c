@@ -370,6 +370,8 @@ static void null_pointers(void) {
                 mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Y_MAX, zero, NULL));
         REFUSED("null: mpm_world_clear_tractions world", MPM_STATUS_NULL_POINTER,
                 mpm_world_clear_tractions(NULL));
+        REFUSED("null: mpm_world_remove_tractions world", MPM_STATUS_NULL_POINTER,
+                mpm_world_remove_tractions(NULL, 0, 0));
         REFUSED("null: mpm_world_traction_count world", MPM_STATUS_NULL_POINTER,
                 mpm_world_traction_count(NULL, OUT(size_t)));
         REFUSED("null: mpm_world_traction_count count_out", MPM_STATUS_NULL_POINTER,
@@ -470,6 +472,7 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_add_tractions",
                   mpm_world_add_tractions(w, 0, 1, MPM_FACE_Y_MAX, v3(0, -1, 0), OUT(MpmIdRange)));
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
+        BAD_WORLD("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
         BAD_WORLD("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, OUT(double)));
         BAD_WORLD("mpm_world_set_particle_scalar",
@@ -1503,6 +1506,8 @@ static void effects_misuse(void) {
             mpm_world_clear_tractions(g_w2));
     REFUSED("effects: clear_tractions without tractions (3D)", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_clear_tractions(g_w3));
+    REFUSED("effects: remove_tractions without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_remove_tractions(g_w2, 0, 0));
     ACCEPTED("effects: traction_count without tractions", 0,
              mpm_world_traction_count(g_w2, &count));
     expect_true("effects: traction_count without tractions is 0", count == 0);
@@ -1698,6 +1703,17 @@ static void effects_misuse(void) {
              mpm_world_step(g_we2, R(1.0 / 256.0), OUT(MpmStepReport)));
     ACCEPTED("effects: step with a full traction table (3D)", 1,
              mpm_world_step(g_we3, R(1.0 / 256.0), OUT(MpmStepReport)));
+    REFUSED("effects: remove_tractions past the table", MPM_STATUS_UNKNOWN_TRACTION,
+            mpm_world_remove_tractions(g_we2, 6, 3));
+    REFUSED("effects: remove_tractions from past the table", MPM_STATUS_UNKNOWN_TRACTION,
+            mpm_world_remove_tractions(g_we2, 9, 0));
+    REFUSED("effects: remove_tractions, a range past u32", MPM_STATUS_UNKNOWN_TRACTION,
+            mpm_world_remove_tractions(g_we2, 0xFFFFFFFFu, 0xFFFFFFFFu));
+    ACCEPTED("effects: remove_tractions 0 at the end", 0,
+             mpm_world_remove_tractions(g_we2, 8, 0));
+    ACCEPTED("effects: remove_tractions 2..5", 1, mpm_world_remove_tractions(g_we2, 2, 3));
+    ACCEPTED("effects: traction_count after remove", 0, mpm_world_traction_count(g_we2, &count));
+    expect_true("effects: traction_count after removing 3 of 8 is 5", count == 5);
     ACCEPTED("effects: clear_tractions", 1, mpm_world_clear_tractions(g_we2));
     ACCEPTED("effects: traction_count after clear", 0, mpm_world_traction_count(g_we2, &count));
     expect_true("effects: traction_count after clear is 0", count == 0);
@@ -2259,6 +2275,7 @@ static void status_strings(void) {
         MPM_STATUS_INVALID_LIMIT,
         MPM_STATUS_INVALID_DEFORMATION,
         MPM_STATUS_INVALID_TRANSFER,
+        MPM_STATUS_UNKNOWN_TRACTION,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,

@@ -14,7 +14,7 @@
  *   space3d:   a sphere falling towards a stick floor and a box that leaves through an open
  *              face, in 3D; quadratic B-spline, USL.
  *   effects2d: a block with every effect declared: APIC, grid and particle damping schedules,
- *              a thermostat, per-particle damping, particle forces, tractions, a ramped body
+ *              a thermostat, per-particle damping, particle forces, tractions (ramped), a ramped body
  *              force, and heat conduction (a fixed floor, a flux face, sources) and diffusion
  *              (a fixed face, a flux through the floor) in a conducting material with
  *              temperatures set; forces, tractions and concentrations change halfway. GIMP,
@@ -432,6 +432,7 @@ static void effects2d(void) {
     static const double grid_t[] = {0.0, 0.0625}, grid_v[] = {0.5, 2.0};
     static const double particle_t[] = {0.0}, particle_v[] = {0.25};
     static const double ramp_t[] = {0.0, 0.03125, 0.0625}, ramp_v[] = {0.0, 1.0, 0.0};
+    static const double traction_t[] = {0.0, 0.0625}, traction_v[] = {0.5, 1.5};
     MpmWorldDef def = mpm_world_def_default();
     MpmMaterialDef rubber = conducting_rubber();
     uint32_t id = 0, i, n;
@@ -459,6 +460,7 @@ static void effects2d(void) {
     def.effects.traction_capacity = 16;
     def.effects.body_force = v3(0.5f, 0.25f, 0);
     def.effects.body_force_scale = schedule(3, ramp_t, ramp_v);
+    def.effects.traction_scale = schedule(2, traction_t, traction_v);
     def.effects.heat.declared = 1;
     def.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
     def.effects.heat.faces[MPM_FACE_Y_MIN].value = (mpm_real)320.0;
