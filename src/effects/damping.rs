@@ -113,12 +113,7 @@ impl DampingZone {
                 let axis = face as usize / 2;
                 let (lo, hi) = (self.min[axis], self.max[axis]);
                 let c = x.get(axis).copied().unwrap_or(lo);
-                let s = if face as usize % 2 == 1 {
-                    (c - lo) / (hi - lo)
-                } else {
-                    (hi - c) / (hi - lo)
-                };
-                self.rate * s * s
+                graded(self.rate, c, lo, hi, face as usize % 2 == 1)
             }
         }
     }
@@ -132,6 +127,19 @@ impl DampingZone {
             })
             && self.ramp.is_none_or(|f| (f as usize / 2) < axes)
     }
+}
+
+/// A graded zone's rate at coordinate `c` of its grading axis, the box spanning `lo..hi` on
+/// it: `rate s^2`, `s` the distance from the face opposite the one the rate rises toward
+/// (`toward_max`: the high face) over the box's width.
+#[inline]
+fn graded(rate: Real, c: Real, lo: Real, hi: Real, toward_max: bool) -> Real {
+    let s = if toward_max {
+        (c - lo) / (hi - lo)
+    } else {
+        (hi - c) / (hi - lo)
+    };
+    rate * s * s
 }
 
 impl Damping {
@@ -264,12 +272,10 @@ impl LineRates {
                 if x < lo || x > hi {
                     return r;
                 }
-                let s = match grade {
-                    None => return r + rate,
-                    Some(true) => (x - lo) / (hi - lo),
-                    Some(false) => (hi - x) / (hi - lo),
-                };
-                r + rate * s * s
+                match grade {
+                    None => r + rate,
+                    Some(toward_max) => r + graded(rate, x, lo, hi, toward_max),
+                }
             },
         )
     }

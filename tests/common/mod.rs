@@ -199,29 +199,8 @@ pub fn moving_block(
     let mat = world.add_material(material).unwrap();
     let d = def.axes();
     let spacing = def.cell_size / 2.0;
-    let n = (0.3 / spacing).round() as usize;
     let mut cols: [Vec<Real>; 6] = Default::default();
-    let nz = if d == 3 { n } else { 1 };
-    for k in 0..nz {
-        for j in 0..n {
-            for i in 0..n {
-                let x = [
-                    0.35 + (i as Real + 0.5) * spacing,
-                    0.35 + (j as Real + 0.5) * spacing,
-                    if d == 3 {
-                        0.35 + (k as Real + 0.5) * spacing
-                    } else {
-                        0.0
-                    },
-                ];
-                let vel = v(x);
-                for a in 0..3 {
-                    cols[a].push(x[a]);
-                    cols[3 + a].push(vel[a]);
-                }
-            }
-        }
-    }
+    block_lattice(&mut cols, d, [0.35; 3], 0.3, spacing, v);
     let count = cols[0].len();
     let vol = spacing.powi(d as i32);
     let mass = vec![material.density * vol; count];
@@ -256,6 +235,40 @@ pub fn quarter_turn(world: &World) -> (usize, Real) {
     let quarter = std::f64::consts::FRAC_PI_2;
     let steps = (quarter / world.stable_dt() as f64).ceil() as usize;
     (steps, (quarter / steps as f64) as Real)
+}
+
+/// Appends to `cols` (x, y, z, vx, vy, vz) the particles of a square (2D, `d` = 2) or cube of
+/// side `side` m with lowest corner `at`, one per lattice site of spacing `spacing` (at the
+/// sites' centres), moving at `v(x)`.
+pub fn block_lattice(
+    cols: &mut [Vec<Real>; 6],
+    d: usize,
+    at: [Real; 3],
+    side: Real,
+    spacing: Real,
+    v: impl Fn([Real; 3]) -> [Real; 3],
+) {
+    let n = (side / spacing).round() as usize;
+    let nz = if d == 3 { n } else { 1 };
+    for k in 0..nz {
+        for j in 0..n {
+            for i in 0..n {
+                let ijk = [i, j, k];
+                let x: [Real; 3] = core::array::from_fn(|a| {
+                    if a < d {
+                        at[a] + (ijk[a] as Real + 0.5) * spacing
+                    } else {
+                        0.0
+                    }
+                });
+                let vel = v(x);
+                for a in 0..3 {
+                    cols[a].push(x[a]);
+                    cols[3 + a].push(vel[a]);
+                }
+            }
+        }
+    }
 }
 
 /// Corotated linear elastic, E = 1 MPa, Poisson's ratio `nu`, rho = 1000 kg/m^3 (with `nu = 0`

@@ -599,29 +599,6 @@ fn grid_damping_on_the_force_leaves_the_stick_walls_reaction_alone() {
     }
 }
 
-/// Particles of a block of side `side` m, lower corner `at`, 2 per cell per axis of size `h`,
-/// moving at `v`, appended to `cols` (x, y, z, vx, vy, vz).
-fn block_at(cols: &mut [Vec<Real>; 6], d: usize, at: [Real; 3], side: Real, h: Real, v: [Real; 3]) {
-    let n = (2.0 * side / h).round() as usize;
-    let nz = if d == 3 { n } else { 1 };
-    for k in 0..nz {
-        for j in 0..n {
-            for i in 0..n {
-                let ijk = [i, j, k];
-                for a in 0..3 {
-                    let x = if a < d {
-                        at[a] + (ijk[a] as Real + 0.5) * h / 2.0
-                    } else {
-                        0.0
-                    };
-                    cols[a].push(x);
-                    cols[3 + a].push(v[a]);
-                }
-            }
-        }
-    }
-}
-
 /// Zones damp only where they are (eq 105). Two blocks translate rigidly, far enough apart
 /// that no node is reached from both; a zone covers the second. The first steps bit for bit
 /// as with no damping declared; the second slows exactly as `v0 (1 - alpha dt)^n` (a rigid
@@ -653,9 +630,23 @@ fn a_damping_zone_damps_only_inside_it() {
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
             let mat = w.add_material(&soft_neo_hookean()).unwrap();
             let mut cols: [Vec<Real>; 6] = Default::default();
-            block_at(&mut cols, d, [0.15, 0.4, 0.4], 0.2, def.cell_size, v0);
+            block_lattice(
+                &mut cols,
+                d,
+                [0.15, 0.4, 0.4],
+                0.2,
+                def.cell_size / 2.0,
+                |_| v0,
+            );
             let first = cols[0].len();
-            block_at(&mut cols, d, [0.6, 0.4, 0.4], 0.2, def.cell_size, v0);
+            block_lattice(
+                &mut cols,
+                d,
+                [0.6, 0.4, 0.4],
+                0.2,
+                def.cell_size / 2.0,
+                |_| v0,
+            );
             let count = cols[0].len();
             let vol = (def.cell_size / 2.0).powi(d as i32);
             w.add_particles(&ParticleBatch {
