@@ -30,7 +30,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 8;
+const VERSION: u64 = 9;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -278,19 +278,44 @@ unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.
 unsafe impl Pod for MaterialRecord {}
 
-/// One traction in the buffer's table: particle id, face ([`crate::Face`] number) and the
-/// traction vector (Pa; the fourth entry is unused padding that keeps the record free of
-/// implicit padding in both precisions).
+/// One traction in the buffer's table: the particle id, a reserved word (zero), the traction
+/// vector (Pa) with the loaded face's area in the reference configuration (m^2, m per unit
+/// thickness in 2D) as fourth entry, and the face's outward unit normal in the reference
+/// configuration (fourth entry zero). Two u32 then floats: no implicit padding in either
+/// precision.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct TractionRecord {
     pub particle: u32,
-    pub face: u32,
+    pub reserved: u32,
     pub traction: [Real; 4],
+    pub normal: [Real; 4],
 }
 
-// SAFETY: repr(C): two u32 then four floats; 8 bytes before a 4- or 8-byte aligned float array,
-// 24 or 40 bytes in all, so there is no padding; every bit pattern is valid.
+impl TractionRecord {
+    /// Whether the record is one [`crate::World::add_tractions`] or
+    /// [`crate::World::add_surface_tractions`] could have written for a world of `count`
+    /// particles in `d` dimensions: finite, a positive area, a unit normal in the plane of the
+    /// first `d` axes.
+    pub fn is_valid(&self, count: usize, d: usize) -> bool {
+        let finite = self
+            .traction
+            .iter()
+            .chain(&self.normal)
+            .all(|c| c.is_finite());
+        let norm2: Real = self.normal[..d].iter().map(|c| c * c).sum();
+        let off_plane = self.normal[d..].iter().any(|&c| c != 0.0);
+        (self.particle as usize) < count
+            && self.reserved == 0
+            && finite
+            && self.traction[3] > 0.0
+            && (norm2 - 1.0).abs() < 1.0e-3
+            && !off_plane
+    }
+}
+
+// SAFETY: repr(C): two u32 then eight floats; 8 bytes before a 4- or 8-byte aligned float
+// array, 40 or 72 bytes in all, so there is no padding; every bit pattern is valid.
 unsafe impl Zeroable for TractionRecord {}
 // SAFETY: as above; Copy and 'static.
 unsafe impl Pod for TractionRecord {}

@@ -37,9 +37,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.3.0"
+#define MPM_GIMP_VERSION "0.4.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 300
+#define MPM_GIMP_ABI_VERSION 400
 
 
 // Most points an `MpmSchedule` holds.
@@ -842,8 +842,10 @@ MpmStatus mpm_world_set_particle_sources(struct MpmWorld *world,
                                          size_t count);
 
 // Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
-// loading the `face` of that particle's domain with `traction` (Pa, force per area of that
-// face; z ignored in 2D), and returns the traction ids in `ids_out`. All or nothing. Needs
+// loading the `face` of that particle's domain (the side of its undeformed square or cube of
+// side `h / particles_per_cell`, deformed with it) with `traction` (Pa, force per area of the
+// deformed face, per radian axisymmetric; z ignored in 2D), and returns the traction ids in
+// `ids_out`: `mpm_world_add_surface_tractions` with the face's normal and area. All or nothing. Needs
 // `MpmEffects::traction_capacity`; a face out of range is `MPM_STATUS_INVALID_ENUM`, a z face
 // in 2D or a traction not finite `MPM_STATUS_INVALID_EFFECT`, more tractions than the
 // remaining capacity `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`. A traction acts while its
@@ -857,6 +859,28 @@ MpmStatus mpm_world_add_tractions(struct MpmWorld *world,
                                   MpmFace face,
                                   struct MpmVec3 traction,
                                   struct MpmIdRange *ids_out);
+
+// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
+// loading a plane face of outward `normal` and `area` (m^2; in 2D the face's length, per unit
+// thickness, axisymmetric its trace in the (r, z) plane), both in the undeformed state, with
+// `traction` (Pa, per area of the deformed face; per radian axisymmetric; z ignored in 2D),
+// and returns the traction ids in `ids_out`. The face lies across the normal where the normal
+// leaves the particle's undeformed square (cube) of half-width `l_p`, and deforms with the
+// particle: give the particles along a curved surface its local normal and each one's share of
+// its area. All or nothing. Needs `MpmEffects::traction_capacity`; a normal of zero length or
+// not finite, an area not positive or not finite, or a traction not finite is
+// `MPM_STATUS_INVALID_EFFECT`; more tractions than the remaining capacity
+// `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`.
+//
+// # Safety
+// `world` is NULL or a world; `ids_out` is NULL or valid.
+MpmStatus mpm_world_add_surface_tractions(struct MpmWorld *world,
+                                          uint32_t first_particle,
+                                          uint32_t particle_count,
+                                          struct MpmVec3 normal,
+                                          mpm_real area,
+                                          struct MpmVec3 traction,
+                                          struct MpmIdRange *ids_out);
 
 // Removes every traction (the capacity stays). Needs `MpmEffects::traction_capacity`.
 //

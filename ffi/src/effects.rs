@@ -217,8 +217,10 @@ pub unsafe extern "C" fn mpm_world_set_particle_sources(
 }
 
 /// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
-/// loading the `face` of that particle's domain with `traction` (Pa, force per area of that
-/// face; z ignored in 2D), and returns the traction ids in `ids_out`. All or nothing. Needs
+/// loading the `face` of that particle's domain (the side of its undeformed square or cube of
+/// side `h / particles_per_cell`, deformed with it) with `traction` (Pa, force per area of the
+/// deformed face, per radian axisymmetric; z ignored in 2D), and returns the traction ids in
+/// `ids_out`: `mpm_world_add_surface_tractions` with the face's normal and area. All or nothing. Needs
 /// `MpmEffects::traction_capacity`; a face out of range is `MPM_STATUS_INVALID_ENUM`, a z face
 /// in 2D or a traction not finite `MPM_STATUS_INVALID_EFFECT`, more tractions than the
 /// remaining capacity `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`. A traction acts while its
@@ -245,6 +247,45 @@ pub unsafe extern "C" fn mpm_world_add_tractions(
         // so the kernel refuses it as an unknown particle, after its other checks.
         let end = first_particle.saturating_add(particle_count);
         let ids = w.add_tractions(first_particle..end, face, vec3(traction))?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(ids_out, id_range(ids)) };
+        Ok(())
+    })
+}
+
+/// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
+/// loading a plane face of outward `normal` and `area` (m^2; in 2D the face's length, per unit
+/// thickness, axisymmetric its trace in the (r, z) plane), both in the undeformed state, with
+/// `traction` (Pa, per area of the deformed face; per radian axisymmetric; z ignored in 2D),
+/// and returns the traction ids in `ids_out`. The face lies across the normal where the normal
+/// leaves the particle's undeformed square (cube) of half-width `l_p`, and deforms with the
+/// particle: give the particles along a curved surface its local normal and each one's share of
+/// its area. All or nothing. Needs `MpmEffects::traction_capacity`; a normal of zero length or
+/// not finite, an area not positive or not finite, or a traction not finite is
+/// `MPM_STATUS_INVALID_EFFECT`; more tractions than the remaining capacity
+/// `MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`.
+///
+/// # Safety
+/// `world` is NULL or a world; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_surface_tractions(
+    world: *mut MpmWorld,
+    first_particle: u32,
+    particle_count: u32,
+    normal: MpmVec3,
+    area: mpm_real,
+    traction: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    guard(|| {
+        non_null(ids_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), ids_out, 1)?;
+        // As in `mpm_world_add_tractions`: a range past u32 is an unknown particle.
+        let end = first_particle.saturating_add(particle_count);
+        let ids =
+            w.add_surface_tractions(first_particle..end, vec3(normal), area, vec3(traction))?;
         // SAFETY: checked non-NULL.
         unsafe { put(ids_out, id_range(ids)) };
         Ok(())

@@ -1,12 +1,13 @@
 //! Random sequences of C interface calls (init with arbitrary dimension, shape (cpGIMP included),
 //! transfer and effects, axisymmetric worlds with their axis mostly in place, heat conduction and
 //! diffusion included; add material, thermal expansion and swelling included; add particles, seed,
-//! set particle forces, damping, temperatures, concentrations and sources, add and clear tractions,
-//! step, read, open a damaged snapshot) with arbitrary values, through the same `extern "C"`
-//! functions a C host calls. After every call, either it returned a status and the world's bytes
-//! are unchanged, or it succeeded and every particle value (forces, damping, APIC moments,
-//! temperatures and concentrations and their grid values, hoop stretches included) is finite
-//! and every position inside the grid box. Single precision (the default build of the library).
+//! set particle forces, damping, temperatures, concentrations and sources, add (on a face or
+//! with any normal) and clear tractions, step, read, open a damaged snapshot) with arbitrary
+//! values, through the same `extern "C"` functions a C host calls. After every call, either it
+//! returned a status and the world's bytes are unchanged, or it succeeded and every particle
+//! value (forces, damping, APIC moments, temperatures and concentrations and their grid values,
+//! hoop stretches included) is finite and every position inside the grid box. Single precision
+//! (the default build of the library).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -589,11 +590,19 @@ fuzz_target!(|data: &[u8]| {
                         mpm_world_remove_tractions(world, first, count)
                     } else {
                         let (first, count) = particle_range(&mut inp, world);
-                        let face = inp.u32_below(7);
                         let traction = inp.vec3_in(-1.0e4, 1.0e4);
                         let mut ids = MpmIdRange::default();
-                        let s =
-                            mpm_world_add_tractions(world, first, count, face, traction, &mut ids);
+                        let s = if inp.byte() % 2 == 0 {
+                            let face = inp.u32_below(7);
+                            mpm_world_add_tractions(world, first, count, face, traction, &mut ids)
+                        } else {
+                            // Any normal (zero and non-finite ones included) and any area.
+                            let normal = inp.vec3_in(-1.0, 1.0);
+                            let area = inp.real();
+                            mpm_world_add_surface_tractions(
+                                world, first, count, normal, area, traction, &mut ids,
+                            )
+                        };
                         if s == MpmStatus::Ok {
                             let mut n = 0;
                             assert_eq!(mpm_world_traction_count(world, &mut n), MpmStatus::Ok);

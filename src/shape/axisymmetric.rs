@@ -68,6 +68,11 @@ impl<const K: usize, S: Shape1D<K>> Shape1D<K> for Axisymmetric<S> {
     }
 
     #[inline(always)]
+    fn domain_half_width(&self, stretch: Real) -> Real {
+        self.inner.domain_half_width(stretch)
+    }
+
+    #[inline(always)]
     fn eval(&self, xi: Real) -> (Real, Real) {
         self.inner.eval(xi)
     }

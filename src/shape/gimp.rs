@@ -87,6 +87,11 @@ impl Shape1D<3> for Gimp {
     const FINITE_DOMAIN: bool = true;
 
     #[inline(always)]
+    fn domain_half_width(&self, _stretch: Real) -> Real {
+        self.l
+    }
+
+    #[inline(always)]
     fn radial_terms(&self, f: Real, _stretch: Real) -> ([Real; 3], [Real; 3]) {
         let mut m = [0.0; 3];
         let mut ends = [0.0; 3];
@@ -211,6 +216,11 @@ impl Shape1D<3> for CpGimp {
     #[inline(always)]
     fn stencil_stretched(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
         self.at(stretch).stencil(f)
+    }
+
+    #[inline(always)]
+    fn domain_half_width(&self, stretch: Real) -> Real {
+        self.at(stretch).l
     }
 
     #[inline(always)]

@@ -80,6 +80,15 @@ pub trait Shape1D<const K: usize>: Copy {
         ([0.0; K], [0.0; K])
     }
 
+    /// Half-width of the particle domain the weights integrate over, cell units, along an axis
+    /// stretched by `stretch` (1 undeformed): `l_p / h` for uGIMP, cpGIMP's stretched and
+    /// clamped half-width, 0 for a point family (linear, B-splines). The tractions' face
+    /// integral keeps its points inside this domain ([`crate::effects::forces`]).
+    #[inline(always)]
+    fn domain_half_width(&self, _stretch: Real) -> Real {
+        0.0
+    }
+
     /// Runs `v` on the family as a concrete type: `self`, except for a family chosen at run
     /// time ([`ThreeNode`]), which passes the family it holds. The stencil computations go
     /// through it once per chunk, so their lane loops always see one concrete family.
@@ -184,6 +193,11 @@ impl Shape1D<3> for ThreeNode {
     #[inline(always)]
     fn radial_terms(&self, f: Real, stretch: Real) -> ([Real; 3], [Real; 3]) {
         three_node!(self, s => s.radial_terms(f, stretch))
+    }
+
+    #[inline(always)]
+    fn domain_half_width(&self, stretch: Real) -> Real {
+        three_node!(self, s => s.domain_half_width(stretch))
     }
 }
 

@@ -79,11 +79,8 @@ impl<'a> WorldRef<'a> {
         let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
         let tractions: &[TractionRecord] =
             bytemuck::cast_slice(&self.buf[trac_start..trac_start + trac_bytes]);
-        for t in tractions {
-            let finite = t.traction.iter().all(|c| c.is_finite());
-            if t.particle as usize >= n || t.face as usize >= 2 * d || !finite {
-                return invalid;
-            }
+        if !tractions.iter().all(|t| t.is_valid(n, d)) {
+            return invalid;
         }
         let v = self.particles();
         let materials = self.material_count();
@@ -590,7 +587,7 @@ mod tests {
             .unwrap();
         let snapshot = w.as_bytes().to_vec();
         type Edit = fn(&mut Header, &mut MaterialRecord, &mut TractionRecord);
-        let edits: [(&str, Edit); 15] = [
+        let edits: [(&str, Edit); 18] = [
             ("count over empty slots", |h, _, _| h.particle_count += 30),
             ("time NaN", |h, _, _| h.time = f64::NAN),
             ("time negative", |h, _, _| h.time = -1.0),
@@ -606,9 +603,10 @@ mod tests {
             ("Lame parameter edited", |_, r, _| r.lambda *= 2.0),
             ("unknown model", |_, r, _| r.model = 7.0),
             ("traction of no particle", |_, _, t| t.particle = 999),
-            ("traction on a 3D face", |_, _, t| {
-                t.face = Face::ZMax as u32
-            }),
+            ("traction normal off the plane", |_, _, t| t.normal[2] = 1.0),
+            ("traction normal not unit", |_, _, t| t.normal[0] = 2.0),
+            ("traction area zero", |_, _, t| t.traction[3] = 0.0),
+            ("traction reserved word", |_, _, t| t.reserved = 1),
             ("traction NaN", |_, _, t| t.traction[1] = Real::NAN),
         ];
         let mut copy = HeapBuffer::new(snapshot.len());

@@ -113,9 +113,11 @@ fn uniform_radial_expansion_strains_exactly_at_any_distance_from_the_axis() {
 /// with no hole). Only a right hoop term lets a uniform stress balance, and only tractions
 /// taken per radian give its level.
 ///
-/// Linear and uGIMP: every particle but the loaded outermost cell's within 1 % of exact
-/// (measured 0.6 %: the traction pass applies the load at the outer particles' centres, `l_p`
-/// inside the surface, see `p2g::tractions`, which stresses the interior `~l_p / R` more).
+/// uGIMP and cpGIMP: every particle within 0.5 % of exact, the loaded ones included (measured
+/// 0.16 %: the traction is integrated over the faces on the surface, eq 121; applied at the
+/// outer particles' centres, `l_p` inside the surface, as before, it put 0.6 % on the
+/// interior). Linear: every particle but the loaded outermost cell's within 1 % (measured
+/// 0.8 %; a point family takes the load at the particle, see `effects::forces::tractions`).
 /// B-splines: their nodes past a wall plane make a uniformly stressed block off by a few
 /// percent next to the z walls and the free surface, as in plane strain (measured here 2.5 %
 /// quadratic, 4 % cubic in the interior), so for them the check is that the axis adds nothing:
@@ -176,19 +178,28 @@ fn pressurised_cylinder_settles_to_the_uniform_lame_stress() {
         // Stored 2D components: rr, zz (y), rz, thetatheta.
         let expect = [-p, -2.0 * nu * p, 0.0, -p];
         let names = ["rr", "zz", "rz", "thetatheta"];
-        let point_or_gimp = matches!(shape, ShapeFunction::Linear | ShapeFunction::Gimp);
+        let domain = matches!(shape, ShapeFunction::Gimp | ShapeFunction::CpGimp);
         for k in 0..4 {
             let mean =
                 |set: &[usize]| set.iter().map(|&i| cauchy(k, i)).sum::<f64>() / set.len() as f64;
-            let worst = interior
-                .iter()
-                .map(|&i| (cauchy(k, i) - expect[k]).abs())
-                .fold(0.0, f64::max);
+            let worst = |set: &mut dyn Iterator<Item = usize>| {
+                set.map(|i| (cauchy(k, i) - expect[k]).abs())
+                    .fold(0.0, f64::max)
+            };
             let (interior_mean, axis_mean) = (mean(&interior), mean(&on_axis));
-            if point_or_gimp {
+            if domain {
+                let all = worst(&mut (0..v.count));
                 assert!(
-                    worst < 0.01 * p,
-                    "{shape:?}: sigma_{} off by {worst} in the interior (exact {})",
+                    all < 0.005 * p,
+                    "{shape:?}: sigma_{} off by {all} (exact {})",
+                    names[k],
+                    expect[k]
+                );
+            } else if shape == ShapeFunction::Linear {
+                let inside = worst(&mut interior.iter().copied());
+                assert!(
+                    inside < 0.01 * p,
+                    "{shape:?}: sigma_{} off by {inside} in the interior (exact {})",
                     names[k],
                     expect[k]
                 );
@@ -271,6 +282,98 @@ fn radial_heat_mode_decays_at_the_bessel_rate() {
         assert!(errors[2] < 0.01, "{shape:?}: {errors:?}");
         for k in 0..2 {
             assert!(errors[k] / errors[k + 1] >= 3.0, "{shape:?}: {errors:?}");
+        }
+    }
+}
+
+/// Lamé's thick cylinder: a hollow cylinder `a <= r <= 3a` between two slip walls (plane
+/// strain along z), loaded by a pressure `p` on its bore and damped to rest. Exact:
+/// `sigma_rr = A - B / r^2`, `sigma_thetatheta = A + B / r^2`, `sigma_zz = 2 nu A`, with
+/// `A = p a^2 / (b^2 - a^2)` and `B = p a^2 b^2 / (b^2 - a^2)`. The traction is integrated over
+/// the bore faces (eq 121, `dS = r dL` per radian), where the load acts.
+///
+/// uGIMP and cpGIMP, `a = 48 h`: the innermost particles' `sigma_rr` and `sigma_thetatheta`
+/// within 2 % of `p` of Lamé's at their radius (measured 1.0 to 1.3 %, f32 and f64), every
+/// particle within 3 % (measured 2.6 %). The linear hat
+/// gives each cell one radial strain, so a particle's stress is off by about
+/// `|d sigma / dr| h / 4`, first order in `h`: at the bore (measured, `sigma_rr`) 13 % at
+/// `a = 6 h`, 6.7 % at `12 h`, 3.4 % at `24 h`, 1.0 % at `48 h`. The mean over the innermost
+/// cell's particles is within 1 % at every one of these. Applying the load at the particles'
+/// centres instead (the kernel's former rule) left the bore 28 to 37 % off at all four, the
+/// cell mean 24 to 26 %: an error of the load's placement, which refining does not remove.
+/// The point families (linear, B-splines) still apply the load at the particle (see
+/// `effects::forces::tractions`), and the B-splines carry their own error at a free surface;
+/// they are not held to this bound (measured at `a = 24 h`, bore `sigma_rr`: linear 31 %,
+/// quadratic 100 %, cubic 79 %).
+#[test]
+fn thick_cylinder_under_bore_pressure_settles_to_lames_stress() {
+    for shape in [ShapeFunction::Gimp, ShapeFunction::CpGimp] {
+        let cells_to_bore = 48;
+        let h: Real = 0.3 / cells_to_bore as Real;
+        let margin = shape.margin_cells();
+        let (a, b) = (cells_to_bore as Real * h, 3.0 * cells_to_bore as Real * h);
+        let cells = [3 * cells_to_bore + 2 + margin, 4 + 2 * margin];
+        let mut def = axisymmetric(shape, cells, h);
+        def.particles_per_cell = 2;
+        let material = linear_elastic(0.3);
+        let c = material.wave_speed();
+        // Critical damping of the slowest radial mode, omega ~ pi c / (2 (b - a)).
+        let omega = core::f64::consts::PI as Real * c / (2.0 * (b - a));
+        def.effects = Effects {
+            damping: Some(Damping {
+                grid: Schedule::constant(omega),
+                ..Damping::NONE
+            }),
+            traction_capacity: 64,
+            ..Effects::NONE
+        };
+        def.flip_beta = 1.0;
+        let mut buf = buffer_for(&def);
+        let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let m = world.add_material(&material).unwrap();
+        let ids = world
+            .fill_box(
+                Vec3::new(a, 0.0, 0.0),
+                Vec3::new(b, 4.0 * h, 0.0),
+                m,
+                Vec3::ZERO,
+            )
+            .unwrap();
+        let p: Real = 1.0e3;
+        let bore = load_outer_column(&mut world, ids, Face::XMin, Vec3::new(p, 0.0, 0.0));
+        let t_end = 30.0 / omega as f64;
+        let dt = world.stable_dt();
+        while world.time() < t_end {
+            world.step(dt).unwrap();
+        }
+        assert!(all_finite(&world), "{shape:?}");
+        let v = world.particles();
+        let rho0 = material.density as f64;
+        let (p, a, b) = (p as f64, a as f64, b as f64);
+        let big_a = p * a * a / (b * b - a * a);
+        let big_b = big_a * b * b;
+        let cauchy = |k: usize, i: usize| v.stress[k][i] as f64 * rho0 / v.jacobian(i) as f64;
+        // Stored 2D components: rr, zz (y), rz, thetatheta.
+        let exact = |k: usize, r: f64| {
+            if k == 0 {
+                big_a - big_b / (r * r)
+            } else {
+                big_a + big_b / (r * r)
+            }
+        };
+        let error =
+            |k: usize, i: usize| (cauchy(k, i) - exact(k, v.position[0][i] as f64)).abs() / p;
+        for (k, name) in [(0, "rr"), (3, "thetatheta")] {
+            let at_bore = bore
+                .iter()
+                .map(|&i| error(k, i as usize))
+                .fold(0.0, f64::max);
+            let all = (0..v.count).map(|i| error(k, i)).fold(0.0, f64::max);
+            assert!(
+                at_bore < 0.02,
+                "{shape:?}: sigma_{name} at the bore off by {at_bore} p"
+            );
+            assert!(all < 0.03, "{shape:?}: sigma_{name} off by {all} p");
         }
     }
 }

@@ -836,6 +836,9 @@ static void not_a_world_at_page_end(void) {
             mpm_world_set_particle_sources(w, MPM_SCALAR_FIELD_CONCENTRATION, 0, vals, 1));
         NAW("mpm_world_add_tractions",
             mpm_world_add_tractions(w, 0, 1, MPM_FACE_Y_MAX, v3(0, -1, 0), OUT(MpmIdRange)));
+        NAW("mpm_world_add_surface_tractions",
+            mpm_world_add_surface_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(0, -1, 0),
+                                            OUT(MpmIdRange)));
         NAW("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         NAW("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         NAW("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));

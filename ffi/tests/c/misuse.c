@@ -368,6 +368,11 @@ static void null_pointers(void) {
                 mpm_world_add_tractions(NULL, 0, 1, MPM_FACE_Y_MAX, zero, OUT(MpmIdRange)));
         REFUSED("null: mpm_world_add_tractions ids_out", MPM_STATUS_NULL_POINTER,
                 mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Y_MAX, zero, NULL));
+        REFUSED("null: mpm_world_add_surface_tractions world", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_surface_tractions(NULL, 0, 1, v3(0, 1, 0), R(0.1), zero,
+                                                OUT(MpmIdRange)));
+        REFUSED("null: mpm_world_add_surface_tractions ids_out", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_surface_tractions(g_we2, 0, 1, v3(0, 1, 0), R(0.1), zero, NULL));
         REFUSED("null: mpm_world_clear_tractions world", MPM_STATUS_NULL_POINTER,
                 mpm_world_clear_tractions(NULL));
         REFUSED("null: mpm_world_remove_tractions world", MPM_STATUS_NULL_POINTER,
@@ -471,6 +476,9 @@ static void not_a_world(void) {
                   mpm_world_set_particle_damping(w, 0, b.mass, b.volume, 1));
         BAD_WORLD("mpm_world_add_tractions",
                   mpm_world_add_tractions(w, 0, 1, MPM_FACE_Y_MAX, v3(0, -1, 0), OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_add_surface_tractions",
+                  mpm_world_add_surface_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(0, -1, 0),
+                                                  OUT(MpmIdRange)));
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         BAD_WORLD("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
@@ -1498,6 +1506,9 @@ static void effects_misuse(void) {
             mpm_world_add_tractions(g_w2, 0, 1, MPM_FACE_Y_MAX, down, OUT(MpmIdRange)));
     REFUSED("effects: add_tractions without tractions (3D)", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_tractions(g_w3, 0, 1, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+    REFUSED("effects: add_surface_tractions without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_surface_tractions(g_w2, 0, 1, v3(0, 1, 0), R(0.1), down,
+                                            OUT(MpmIdRange)));
     REFUSED("effects: add_tractions without tractions, unknown ids",
             MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_tractions(g_w2, 0xFFFFFFFFu, 0xFFFFFFFFu, MPM_FACE_Y_MAX, down,
@@ -1663,6 +1674,37 @@ static void effects_misuse(void) {
             mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Z_MIN, down, OUT(MpmIdRange)));
     REFUSED("effects: add_tractions face Z_MAX in 2D", MPM_STATUS_INVALID_EFFECT,
             mpm_world_add_tractions(g_we2, 0, 1, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+
+    /* A surface traction's normal must have a length and its area be positive, all finite;
+     * the particle range is checked as add_tractions' is. */
+    {
+        const struct {
+            const char *what;
+            MpmVec3 normal;
+            mpm_real area;
+            MpmVec3 traction;
+        } bad[] = {
+            {"zero normal", {0, 0, 0}, R(0.1), {0, -1, 0}},
+            {"normal only along z in 2D", {0, 0, 1}, R(0.1), {0, -1, 0}},
+            {"NaN normal", {R(NAN), 1, 0}, R(0.1), {0, -1, 0}},
+            {"infinite normal", {R(INFINITY), 0, 0}, R(0.1), {0, -1, 0}},
+            {"area 0", {1, 0, 0}, 0, {0, -1, 0}},
+            {"area -1", {1, 0, 0}, R(-1.0), {0, -1, 0}},
+            {"area NaN", {1, 0, 0}, R(NAN), {0, -1, 0}},
+            {"area infinite", {1, 0, 0}, R(INFINITY), {0, -1, 0}},
+            {"traction NaN", {1, 0, 0}, R(0.1), {R(NAN), 0, 0}},
+        };
+        char name[96];
+        for (k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+            snprintf(name, sizeof name, "effects: add_surface_tractions %s", bad[k].what);
+            REFUSED(name, MPM_STATUS_INVALID_EFFECT,
+                    mpm_world_add_surface_tractions(g_we2, 0, 1, bad[k].normal, bad[k].area,
+                                                    bad[k].traction, OUT(MpmIdRange)));
+        }
+        REFUSED("effects: add_surface_tractions first = count", MPM_STATUS_UNKNOWN_PARTICLE,
+                mpm_world_add_surface_tractions(g_we2, (uint32_t)n2, 1, v3(1, 0, 0), R(0.1),
+                                                down, OUT(MpmIdRange)));
+    }
 
     /* The traction capacity (8 in 2D, 4 in 3D); a z component in 2D is not read. */
     {
