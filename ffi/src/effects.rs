@@ -17,6 +17,7 @@ use crate::defs::{face_from_c, scalar_field_from_c, vec3, MpmFaceValue, MpmScala
 use crate::status::MpmStatus;
 use crate::world::{id_range, put, world_at, world_ref, MpmIdRange, MpmWorld};
 use crate::{apart, guard, mpm_real, non_null, MpmVec3};
+use core::ops::Range;
 use kernel::{ScalarField, World};
 
 /// `Err(UnknownParticle)` unless particles `first .. first + count` exist: checked before any
@@ -237,20 +238,14 @@ pub unsafe extern "C" fn mpm_world_add_tractions(
     traction: MpmVec3,
     ids_out: *mut MpmIdRange,
 ) -> MpmStatus {
-    guard(|| {
-        non_null(ids_out)?;
-        // SAFETY: the caller promises a world.
-        let mut w = unsafe { world_at(world) }?;
-        apart(w.as_bytes(), ids_out, 1)?;
-        let face = face_from_c(face)?;
-        // A range past u32 saturates: its end lies past any world's particles (at most 2^30),
-        // so the kernel refuses it as an unknown particle, after its other checks.
-        let end = first_particle.saturating_add(particle_count);
-        let ids = w.add_tractions(first_particle..end, face, vec3(traction))?;
-        // SAFETY: checked non-NULL.
-        unsafe { put(ids_out, id_range(ids)) };
-        Ok(())
-    })
+    let range = (first_particle, particle_count);
+    // SAFETY: forwarded contract.
+    unsafe {
+        add_tractions_by(world, range, ids_out, |w, particles| {
+            let face = face_from_c(face)?;
+            Ok(w.add_tractions(particles, face, vec3(traction))?)
+        })
+    }
 }
 
 /// Adds one traction per particle of `first_particle .. first_particle + particle_count`, each
@@ -277,15 +272,34 @@ pub unsafe extern "C" fn mpm_world_add_surface_tractions(
     traction: MpmVec3,
     ids_out: *mut MpmIdRange,
 ) -> MpmStatus {
+    let range = (first_particle, particle_count);
+    // SAFETY: forwarded contract.
+    unsafe {
+        add_tractions_by(world, range, ids_out, |w, particles| {
+            Ok(w.add_surface_tractions(particles, vec3(normal), area, vec3(traction))?)
+        })
+    }
+}
+
+/// What the traction adders share: `ids_out` not NULL and apart from the world, the particle
+/// range `first .. first + count` (a range past u32 saturates: its end lies past any world's
+/// particles, at most 2^30, so the kernel refuses it as an unknown particle, after its other
+/// checks), and the ids `add` returns written to `ids_out` on success.
+///
+/// # Safety
+/// `world` is NULL or a world; `ids_out` is NULL or valid.
+unsafe fn add_tractions_by(
+    world: *mut MpmWorld,
+    (first, count): (u32, u32),
+    ids_out: *mut MpmIdRange,
+    add: impl FnOnce(&mut World<'_>, Range<u32>) -> Result<Range<u32>, MpmStatus>,
+) -> MpmStatus {
     guard(|| {
         non_null(ids_out)?;
         // SAFETY: the caller promises a world.
         let mut w = unsafe { world_at(world) }?;
         apart(w.as_bytes(), ids_out, 1)?;
-        // As in `mpm_world_add_tractions`: a range past u32 is an unknown particle.
-        let end = first_particle.saturating_add(particle_count);
-        let ids =
-            w.add_surface_tractions(first_particle..end, vec3(normal), area, vec3(traction))?;
+        let ids = add(&mut w, first..first.saturating_add(count))?;
         // SAFETY: checked non-NULL.
         unsafe { put(ids_out, id_range(ids)) };
         Ok(())

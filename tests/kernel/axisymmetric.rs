@@ -4,8 +4,8 @@
 
 use crate::common::{all_finite, buffer_for, conductor, linear_elastic, load_outer_column, SHAPES};
 use mpm_gimp::{
-    Boundary, Damping, Dimension, Effects, Face, MaterialDef, ParticleBatch, Real, ScalarField,
-    Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
+    Boundary, Damping, Dimension, Effects, Face, HeapBuffer, MaterialDef, ParticleBatch, Real,
+    ScalarField, Schedule, ShapeFunction, Transport, UpdateOrder, Vec3, World, WorldDef,
 };
 
 /// An axisymmetric definition: `cells` cells of size `h` along r and z, the axis r = 0 on the
@@ -107,6 +107,55 @@ fn uniform_radial_expansion_strains_exactly_at_any_distance_from_the_axis() {
     }
 }
 
+/// A cylinder `r_lo <= r <= r_hi`, `0 <= z <= z_top` (slip walls at both z ends: plane strain
+/// along z) of the linear elastic material with Poisson's ratio 0.3, `n` particles per cell per
+/// axis, pressed by `p` on the faces `face` of its innermost (`XMin`) or outermost (`XMax`)
+/// column of particles, damped critically in its slowest radial mode and stepped for 30 time
+/// constants of that damping. Returns the buffer holding the world at rest, the material, and
+/// the loaded particles.
+fn pressurised(
+    shape: ShapeFunction,
+    (cells, h, n): ([u32; 2], Real, u32),
+    (r_lo, r_hi, z_top): (Real, Real, Real),
+    face: Face,
+    p: Real,
+) -> (HeapBuffer, MaterialDef, Vec<u32>) {
+    let mut def = axisymmetric(shape, cells, h);
+    def.particles_per_cell = n;
+    let material = linear_elastic(0.3);
+    // Critical damping of the slowest radial mode, omega ~ pi c / (2 (r_hi - r_lo)).
+    let omega = core::f64::consts::PI as Real * material.wave_speed() / (2.0 * (r_hi - r_lo));
+    def.effects = Effects {
+        damping: Some(Damping {
+            grid: Schedule::constant(omega),
+            ..Damping::NONE
+        }),
+        traction_capacity: 512,
+        ..Effects::NONE
+    };
+    def.flip_beta = 1.0;
+    let mut buf = buffer_for(&def);
+    let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let m = world.add_material(&material).unwrap();
+    let ids = world
+        .fill_box(
+            Vec3::new(r_lo, 0.0, 0.0),
+            Vec3::new(r_hi, z_top, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .unwrap();
+    let inward = if face == Face::XMin { 1.0 } else { -1.0 };
+    let loaded = load_outer_column(&mut world, ids, face, Vec3::new(inward * p, 0.0, 0.0));
+    let t_end = 30.0 / omega as f64;
+    let dt = world.stable_dt();
+    while world.time() < t_end {
+        world.step(dt).unwrap();
+    }
+    assert!(all_finite(&world), "{shape:?}");
+    (buf, material, loaded)
+}
+
 /// A solid cylinder of radius `R` between two slip walls (plane strain along z), loaded by a
 /// pressure `p` on its curved surface and damped to rest. The exact state is uniform:
 /// `sigma_rr = sigma_thetatheta = -p`, `sigma_zz = -2 nu p`, `sigma_rz = 0` (Lamé's solution
@@ -130,43 +179,13 @@ fn pressurised_cylinder_settles_to_the_uniform_lame_stress() {
         let h: Real = 0.05;
         let margin = shape.margin_cells() as Real;
         let cells = [16u32, 4 + 2 * shape.margin_cells()];
-        let mut def = axisymmetric(shape, cells, h);
-        def.particles_per_cell = 4;
-        let material = linear_elastic(0.3);
         let radius: Real = 10.0 * h;
-        let c = material.wave_speed();
-        // Critical damping of the slowest radial mode, omega ~ pi c / (2 R).
-        let omega = core::f64::consts::PI as Real * c / (2.0 * radius);
-        def.effects = Effects {
-            damping: Some(Damping {
-                grid: Schedule::constant(omega),
-                ..Damping::NONE
-            }),
-            traction_capacity: 512,
-            ..Effects::NONE
-        };
-        def.flip_beta = 1.0;
-        let mut buf = buffer_for(&def);
-        let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
-        let m = world.add_material(&material).unwrap();
         // The block fills z from wall to wall.
         let z_top = (cells[1] as Real - 2.0 * margin) * h;
-        let ids = world
-            .fill_box(
-                Vec3::new(0.0, 0.0, 0.0),
-                Vec3::new(radius, z_top, 0.0),
-                m,
-                Vec3::ZERO,
-            )
-            .unwrap();
         let p: Real = 1.0e3;
-        load_outer_column(&mut world, ids, Face::XMax, Vec3::new(-p, 0.0, 0.0));
-        let t_end = 30.0 / omega as f64;
-        let dt = world.stable_dt();
-        while world.time() < t_end {
-            world.step(dt).unwrap();
-        }
-        assert!(all_finite(&world), "{shape:?}");
+        let extent = (0.0, radius, z_top);
+        let (mut buf, material, _) = pressurised(shape, (cells, h, 4), extent, Face::XMax, p);
+        let world = World::open(buf.as_mut_bytes()).unwrap();
         let v = world.particles();
         let rho0 = material.density as f64;
         let nu = material.poisson_ratio as f64;
@@ -313,40 +332,10 @@ fn thick_cylinder_under_bore_pressure_settles_to_lames_stress() {
         let margin = shape.margin_cells();
         let (a, b) = (cells_to_bore as Real * h, 3.0 * cells_to_bore as Real * h);
         let cells = [3 * cells_to_bore + 2 + margin, 4 + 2 * margin];
-        let mut def = axisymmetric(shape, cells, h);
-        def.particles_per_cell = 2;
-        let material = linear_elastic(0.3);
-        let c = material.wave_speed();
-        // Critical damping of the slowest radial mode, omega ~ pi c / (2 (b - a)).
-        let omega = core::f64::consts::PI as Real * c / (2.0 * (b - a));
-        def.effects = Effects {
-            damping: Some(Damping {
-                grid: Schedule::constant(omega),
-                ..Damping::NONE
-            }),
-            traction_capacity: 64,
-            ..Effects::NONE
-        };
-        def.flip_beta = 1.0;
-        let mut buf = buffer_for(&def);
-        let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
-        let m = world.add_material(&material).unwrap();
-        let ids = world
-            .fill_box(
-                Vec3::new(a, 0.0, 0.0),
-                Vec3::new(b, 4.0 * h, 0.0),
-                m,
-                Vec3::ZERO,
-            )
-            .unwrap();
         let p: Real = 1.0e3;
-        let bore = load_outer_column(&mut world, ids, Face::XMin, Vec3::new(p, 0.0, 0.0));
-        let t_end = 30.0 / omega as f64;
-        let dt = world.stable_dt();
-        while world.time() < t_end {
-            world.step(dt).unwrap();
-        }
-        assert!(all_finite(&world), "{shape:?}");
+        let extent = (a, b, 4.0 * h);
+        let (mut buf, material, bore) = pressurised(shape, (cells, h, 2), extent, Face::XMin, p);
+        let world = World::open(buf.as_mut_bytes()).unwrap();
         let v = world.particles();
         let rho0 = material.density as f64;
         let (p, a, b) = (p as f64, a as f64, b as f64);
