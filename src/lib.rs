@@ -6,10 +6,33 @@
 //! or sub-frame and reads particle state back through [`World::particles`].
 //!
 //! - `#![no_std]`, no heap: all state lives in the caller's buffer, sized by the pure function
-//!   [`memory_requirements`]. A byte copy of [`World::as_bytes`] is a snapshot.
-//! - Structure of arrays: one contiguous column per scalar component, for particles and nodes.
-//! - 2D plane strain and 3D share one code path, generic over the dimension inside the crate;
-//!   f32 by default, f64 with the `f64` feature.
+//!   [`memory_requirements`]. A byte copy of [`World::as_bytes`] is a snapshot, and
+//!   [`World::open`] checks one before use.
+//! - Structure of arrays: one contiguous column per scalar component, for particles and nodes;
+//!   the particle passes run on SSE2, AVX2 (`wide-simd`) or AVX-512 (`avx512`), bit for bit
+//!   alike.
+//! - 2D plane strain, 2D axisymmetric and 3D share one code path ([`Dimension`]); f32 by
+//!   default, f64 with the `f64` feature.
+//! - Shape functions ([`ShapeFunction`]): linear, uGIMP, cpGIMP, quadratic and cubic B-splines.
+//!   Stress update order ([`UpdateOrder`]): USF, USL, MUSL. Transfers ([`Transfer`]): FLIP
+//!   blended with PIC, FLIP moving with the particle velocity, APIC, MLS-MPM.
+//! - Materials ([`MaterialModel`]): neo-Hookean and corotated linear elasticity.
+//! - Effects, declared in [`Effects`] and paid for only when declared: grid, particle and PIC
+//!   damping on schedules, a kinetic-energy thermostat, per-particle damping, zones of damping,
+//!   particle forces, tractions on deformed faces of any normal, a body force, heat conduction
+//!   and diffusion with thermal expansion and swelling.
+//! - Every fallible call returns an [`Error`] and changes nothing; the step reports clamped,
+//!   frozen and escaped particles in a [`StepReport`].
+//! - A C interface (`mpm-gimp-ffi`, a cbindgen header) exposes all of it to C and C++ hosts.
+//!
+//! **Debug builds.** The step is written to be optimised: unoptimised, it runs about 170 times
+//! slower (`step_cost --dim 2`: 4,162 ns per particle-step in a debug build, 24.2 in release).
+//! Keep the kernel optimised in the host's debug profile:
+//!
+//! ```toml
+//! [profile.dev.package.mpm-gimp]
+//! opt-level = 3
+//! ```
 //!
 //! ```
 //! use mpm_gimp::{memory_requirements, HeapBuffer, MaterialDef, Vec3, World, WorldDef};
