@@ -17,7 +17,7 @@
 use crate::def::{Boundary, Dimension, Face, ShapeFunction, Transfer, UpdateOrder, WorldDef};
 use crate::effects::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
-    SCHEDULE_POINTS,
+    SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
 use crate::{Error, Real, Vec3};
 use bytemuck::{Pod, Zeroable};
@@ -30,7 +30,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 9;
+const VERSION: u64 = 10;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -99,7 +99,7 @@ pub(crate) struct Header {
     pub damping_on_force: u64,
     pub damping_zone_count: u64,
     pub damping_zones: [ZoneRecord; DAMPING_ZONES],
-    pub traction_scale: ScheduleRecord,
+    pub traction_schedules: [ScheduleRecord; TRACTION_SCHEDULES],
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -247,7 +247,12 @@ unsafe impl Pod for Header {}
 
 const _: () = assert!(
     size_of::<Header>()
-        == 8 * (36 + 13 + 5 * (1 + 2 * SCHEDULE_POINTS) + 2 * 14 + 2 + 8 * DAMPING_ZONES)
+        == 8 * (36
+            + 13
+            + (4 + TRACTION_SCHEDULES) * (1 + 2 * SCHEDULE_POINTS)
+            + 2 * 14
+            + 2
+            + 8 * DAMPING_ZONES)
 );
 
 /// One material in the buffer's table: parameters and what the step derives from them.
@@ -278,7 +283,8 @@ unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.
 unsafe impl Pod for MaterialRecord {}
 
-/// One traction in the buffer's table: the particle id, a reserved word (zero), the traction
+/// One traction in the buffer's table: the particle id, the schedule it follows (an index of
+/// [`crate::Effects::traction_schedules`]), the traction
 /// vector (Pa) with the loaded face's area in the reference configuration (m^2, m per unit
 /// thickness in 2D) as fourth entry, and the face's outward unit normal in the reference
 /// configuration (fourth entry zero). Two u32 then floats: no implicit padding in either
@@ -287,7 +293,7 @@ unsafe impl Pod for MaterialRecord {}
 #[repr(C)]
 pub(crate) struct TractionRecord {
     pub particle: u32,
-    pub reserved: u32,
+    pub schedule: u32,
     pub traction: [Real; 4],
     pub normal: [Real; 4],
 }
@@ -306,7 +312,7 @@ impl TractionRecord {
         let norm2: Real = self.normal[..d].iter().map(|c| c * c).sum();
         let off_plane = self.normal[d..].iter().any(|&c| c != 0.0);
         (self.particle as usize) < count
-            && self.reserved == 0
+            && (self.schedule as usize) < TRACTION_SCHEDULES
             && finite
             && self.traction[3] > 0.0
             && (norm2 - 1.0).abs() < 1.0e-3
@@ -635,7 +641,7 @@ impl Header {
             damping_on_force: damping.grid_on_force as u64,
             damping_zone_count: damping.zone_count as u64,
             damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
-            traction_scale: ScheduleRecord::of(&fx.traction_scale),
+            traction_schedules: fx.traction_schedules.each_ref().map(ScheduleRecord::of),
         }
     }
 
@@ -707,7 +713,13 @@ impl Header {
             traction_capacity: small(self.traction_capacity)?,
             body_force: v(self.body_force),
             body_force_scale: self.body_force_scale.schedule()?,
-            traction_scale: self.traction_scale.schedule()?,
+            traction_schedules: {
+                let mut s = [Schedule::ZERO; TRACTION_SCHEDULES];
+                for (s, r) in s.iter_mut().zip(&self.traction_schedules) {
+                    *s = r.schedule()?;
+                }
+                s
+            },
             heat: self.heat.transport()?,
             diffusion: self.diffusion.transport()?,
         };

@@ -85,7 +85,7 @@ pub use def::{
 };
 pub use effects::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
-    SCHEDULE_POINTS,
+    SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};

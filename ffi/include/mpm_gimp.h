@@ -48,6 +48,9 @@
 // Most zones an `MpmDamping` holds.
 #define MPM_DAMPING_ZONES 4
 
+// How many schedules the tractions may follow (`MpmEffects::traction_schedules`).
+#define MPM_TRACTION_SCHEDULES 4
+
 // `MpmStepReport::flags`: some particle froze in the step.
 #define MPM_STEP_FLAG_FROZE 1
 
@@ -511,9 +514,10 @@ typedef struct MpmEffects {
   struct MpmVec3 body_force;
   // Time factor of `body_force`; no point (default) is a factor of 0.
   struct MpmSchedule body_force_scale;
-  // Time factor of every traction (`mpm_gimp::Effects::traction_scale`); the default is
-  // the constant 1, and no point means a factor of 0.
-  struct MpmSchedule traction_scale;
+  // Time factors of the tractions (`mpm_gimp::Effects::traction_schedules`): each traction
+  // follows one, the first unless `mpm_world_set_traction_schedule` chose another. The
+  // default is the constant 1 for all; no point means a factor of 0.
+  struct MpmSchedule traction_schedules[MPM_TRACTION_SCHEDULES];
   // Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
   // starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
   // Default not declared.
@@ -881,6 +885,19 @@ MpmStatus mpm_world_add_surface_tractions(struct MpmWorld *world,
                                           mpm_real area,
                                           struct MpmVec3 traction,
                                           struct MpmIdRange *ids_out);
+
+// Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
+// table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions
+// follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if
+// the range is not within the table, `MPM_STATUS_INVALID_EFFECT` for a schedule past
+// `MPM_TRACTION_SCHEDULES` (nothing changes).
+//
+// # Safety
+// `world` is NULL or a world.
+MpmStatus mpm_world_set_traction_schedule(struct MpmWorld *world,
+                                          uint32_t first,
+                                          uint32_t count,
+                                          uint32_t schedule);
 
 // Removes every traction (the capacity stays). Needs `MpmEffects::traction_capacity`.
 //

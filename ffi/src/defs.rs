@@ -255,6 +255,11 @@ pub const MPM_DAMPING_ZONES: usize = 4;
 
 const _: () = assert!(MPM_DAMPING_ZONES == kernel::DAMPING_ZONES);
 
+/// How many schedules the tractions may follow (`MpmEffects::traction_schedules`).
+pub const MPM_TRACTION_SCHEDULES: usize = 4;
+
+const _: () = assert!(MPM_TRACTION_SCHEDULES == kernel::TRACTION_SCHEDULES);
+
 /// A box of space where the grid damps (`mpm_gimp::DampingZone`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
@@ -315,9 +320,10 @@ pub struct MpmEffects {
     pub body_force: MpmVec3,
     /// Time factor of `body_force`; no point (default) is a factor of 0.
     pub body_force_scale: MpmSchedule,
-    /// Time factor of every traction (`mpm_gimp::Effects::traction_scale`); the default is
-    /// the constant 1, and no point means a factor of 0.
-    pub traction_scale: MpmSchedule,
+    /// Time factors of the tractions (`mpm_gimp::Effects::traction_schedules`): each traction
+    /// follows one, the first unless `mpm_world_set_traction_schedule` chose another. The
+    /// default is the constant 1 for all; no point means a factor of 0.
+    pub traction_schedules: [MpmSchedule; MPM_TRACTION_SCHEDULES],
     /// Heat conduction: a temperature column (K, set with `mpm_world_set_particle_scalar`,
     /// starting at 0) conducted with each material's `conductivity` and `heat_capacity`.
     /// Default not declared.
@@ -548,7 +554,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         traction_capacity: e.traction_capacity,
         body_force: c_vec3(e.body_force),
         body_force_scale: schedule_to_c(&e.body_force_scale),
-        traction_scale: schedule_to_c(&e.traction_scale),
+        traction_schedules: e.traction_schedules.each_ref().map(schedule_to_c),
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
     }
@@ -652,7 +658,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         traction_capacity: e.traction_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
-        traction_scale: schedule_from_c(&e.traction_scale),
+        traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),
         heat: transport_from_c(&e.heat)?,
         diffusion: transport_from_c(&e.diffusion)?,
     })

@@ -281,6 +281,30 @@ pub unsafe extern "C" fn mpm_world_add_surface_tractions(
     }
 }
 
+/// Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
+/// table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions
+/// follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if
+/// the range is not within the table, `MPM_STATUS_INVALID_EFFECT` for a schedule past
+/// `MPM_TRACTION_SCHEDULES` (nothing changes).
+///
+/// # Safety
+/// `world` is NULL or a world.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_traction_schedule(
+    world: *mut MpmWorld,
+    first: u32,
+    count: u32,
+    schedule: u32,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        // A range past u32 saturates: its end lies past any table (at most 2^24 entries).
+        w.set_traction_schedule(first..first.saturating_add(count), schedule)?;
+        Ok(())
+    })
+}
+
 /// What the traction adders share: `ids_out` not NULL and apart from the world, the particle
 /// range `first .. first + count` (a range past u32 saturates: its end lies past any world's
 /// particles, at most 2^30, so the kernel refuses it as an unknown particle, after its other

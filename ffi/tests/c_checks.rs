@@ -152,7 +152,7 @@ fn rust_layout() -> String {
         traction_capacity,
         body_force,
         body_force_scale,
-        traction_scale,
+        traction_schedules,
         heat,
         diffusion,
     }));
@@ -827,7 +827,12 @@ fn effects2d(t: &mut Text) {
             traction_capacity: 16,
             body_force: Vec3::new(0.5, 0.25, 0.0),
             body_force_scale: schedule(&[(0.0, 0.0), (0.03125, 1.0), (0.0625, 0.0)]),
-            traction_scale: schedule(&[(0.0, 0.5), (0.0625, 1.5)]),
+            traction_schedules: [
+                schedule(&[(0.0, 0.5), (0.0625, 1.5)]),
+                Schedule::constant(1.0),
+                Schedule::constant(1.0),
+                Schedule::constant(1.0),
+            ],
             heat: Some(Transport {
                 faces: heat_faces,
                 sources: true,
@@ -1260,10 +1265,9 @@ fn defaults_match_the_kernel() {
     assert_eq!(e.body_force, MpmVec3::default());
     assert_eq!(e.body_force_scale, zero);
     let one = schedules(&[(0.0, 1.0)]).0;
-    assert_eq!(
-        (e.traction_scale.points, e.traction_scale.values[0]),
-        (one.points, one.values[0])
-    );
+    for s in &e.traction_schedules {
+        assert_eq!((s.points, s.values[0]), (one.points, one.values[0]));
+    }
     let insulated = MpmScalarBoundary {
         kind: MpmScalarBoundaryKind::Insulated as u32,
         value: 0.0,
@@ -1463,6 +1467,7 @@ fn effects_definition_round_trip() {
     let (target_c, target_k) = schedules(&[(0.0, 2.0), (1.0, 0.0), (2.0, 0.0)]);
     let (scale_c, scale_k) = schedules(&[(0.0, 0.0), (0.25, -1.0)]);
     let (traction_c, traction_k) = schedules(&[(0.0, 1.0), (0.5, 2.0)]);
+    let (pulse_c, pulse_k) = schedules(&[(0.0, 0.0), (0.25, 3.0), (0.5, 0.0)]);
     let unread_zone = MpmDampingZone {
         min: MpmVec3 {
             x: 0.0,
@@ -1536,7 +1541,7 @@ fn effects_definition_round_trip() {
             z: 0.0,
         },
         body_force_scale: scale_c,
-        traction_scale: traction_c,
+        traction_schedules: [traction_c, pulse_c, traction_c, pulse_c],
         heat: MpmTransport {
             declared: 1,
             faces: [
@@ -1621,7 +1626,7 @@ fn effects_definition_round_trip() {
             traction_capacity: 5,
             body_force: Vec3::new(1.5, -2.0, 0.0),
             body_force_scale: scale_k,
-            traction_scale: traction_k,
+            traction_schedules: [traction_k, pulse_k, traction_k, pulse_k],
             heat: Some(heat),
             diffusion: Some(diffusion),
         },

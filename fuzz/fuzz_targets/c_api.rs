@@ -2,7 +2,7 @@
 //! transfer and effects, axisymmetric worlds with their axis mostly in place, heat conduction and
 //! diffusion included; add material, thermal expansion and swelling included; add particles, seed,
 //! set particle forces, damping, temperatures, concentrations and sources, add (on a face or
-//! with any normal) and clear tractions, step, read, open a damaged snapshot) with arbitrary
+//! with any normal), schedule and clear tractions, step, read, open a damaged snapshot) with arbitrary
 //! values, through the same `extern "C"` functions a C host calls. After every call, either it
 //! returned a status and the world's bytes are unchanged, or it succeeded and every particle
 //! value (forces, damping, APIC moments, temperatures and concentrations and their grid values,
@@ -292,7 +292,9 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     };
     e.body_force = inp.vec3_in(-20.0, 20.0);
     e.body_force_scale = schedule(inp, -2.0, 2.0);
-    e.traction_scale = schedule(inp, -2.0, 2.0);
+    for s in e.traction_schedules.iter_mut() {
+        *s = schedule(inp, -2.0, 2.0);
+    }
     e.heat = transport(inp, -500.0, 500.0);
     e.diffusion = transport(inp, -2.0, 2.0);
     e
@@ -588,6 +590,9 @@ fuzz_target!(|data: &[u8]| {
                     } else if inp.byte() % 4 == 0 {
                         let (first, count) = (inp.u32_below(40), inp.u32_below(40));
                         mpm_world_remove_tractions(world, first, count)
+                    } else if inp.byte() % 4 == 0 {
+                        let (first, count) = (inp.u32_below(40), inp.u32_below(40));
+                        mpm_world_set_traction_schedule(world, first, count, inp.u32_below(6))
                     } else {
                         let (first, count) = particle_range(&mut inp, world);
                         let traction = inp.vec3_in(-1.0e4, 1.0e4);

@@ -105,7 +105,7 @@ impl World<'_> {
         let in_plane = |v: Vec3, a: usize| if a < d { v[a] } else { 0.0 };
         let record = TractionRecord {
             particle: 0,
-            reserved: 0,
+            schedule: 0,
             traction: core::array::from_fn(|a| if a == 3 { area } else { in_plane(traction, a) }),
             normal: core::array::from_fn(|a| in_plane(normal, a) / length),
         };
@@ -115,6 +115,30 @@ impl World<'_> {
         }
         self.header_mut().traction_count += n as u64;
         Ok(used as u32..(used + n) as u32)
+    }
+
+    /// Makes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of the
+    /// table) follow the schedule `schedule` of [`crate::Effects::traction_schedules`] (new
+    /// tractions follow the first). All or nothing: `UnknownTraction` if the range is not
+    /// within the table, `InvalidEffect` for a schedule past the list (nothing changes);
+    /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
+    pub fn set_traction_schedule(&mut self, ids: Range<u32>, schedule: u32) -> Result<(), Error> {
+        if self.def().effects.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let used = self.header().traction_count as usize;
+        let (start, end) = (ids.start as usize, ids.end as usize);
+        if start > end || end > used {
+            return Err(Error::UnknownTraction);
+        }
+        if schedule as usize >= crate::TRACTION_SCHEDULES {
+            return Err(Error::InvalidEffect);
+        }
+        let layout = Layout::of(&self.def());
+        for rec in &mut self.traction_records_mut(&layout, 0, used)[start..end] {
+            rec.schedule = schedule;
+        }
+        Ok(())
     }
 
     /// Removes every traction (the capacity stays).
@@ -177,7 +201,8 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
             core::array::from_fn(|b| p.h[a][b][i] + if a == b { 1.0 } else { 0.0 })
         });
         let face = Face::<D>::of(rec, x, &f, ctx.half_width, S::AXISYMMETRIC);
-        let t: [Real; D] = core::array::from_fn(|a| rec.traction[a] * ctx.traction_scale);
+        let scale = ctx.traction_scales.get(rec.schedule as usize).copied();
+        let t: [Real; D] = core::array::from_fn(|a| rec.traction[a] * scale.unwrap_or(0.0));
         let s: [Real; D] = core::array::from_fn(|a| (x[a] - geom.origin[a]) * geom.inv_h);
         let stretch = p.domain_stretch(i);
         let half: [Real; D] = core::array::from_fn(|a| shape.domain_half_width(stretch[a]));

@@ -135,9 +135,10 @@ pub struct Effects {
     pub body_force: Vec3,
     /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
     pub body_force_scale: Schedule,
-    /// Time factor of every traction (a ramp, a load cycle); default the constant 1. No point
-    /// means a factor of 0.
-    pub traction_scale: Schedule,
+    /// Time factors of the tractions (a ramp, a load cycle): each traction follows one of
+    /// them, the first unless [`crate::World::set_traction_schedule`] chose another. Default
+    /// the constant 1 for all. No point means a factor of 0.
+    pub traction_schedules: [Schedule; TRACTION_SCHEDULES],
     /// Heat conduction (seeds/000 section 8), if declared: a temperature column (K) on the
     /// particles, conducted with each material's [`crate::MaterialDef::conductivity`] and
     /// [`crate::MaterialDef::heat_capacity`].
@@ -148,6 +149,9 @@ pub struct Effects {
     pub diffusion: Option<Transport>,
 }
 
+/// How many schedules the tractions may follow ([`Effects::traction_schedules`]).
+pub const TRACTION_SCHEDULES: usize = 4;
+
 impl Effects {
     /// Nothing declared.
     pub const NONE: Effects = Effects {
@@ -156,7 +160,7 @@ impl Effects {
         traction_capacity: 0,
         body_force: Vec3::ZERO,
         body_force_scale: Schedule::ZERO,
-        traction_scale: Schedule::constant(1.0),
+        traction_schedules: [Schedule::constant(1.0); TRACTION_SCHEDULES],
         heat: None,
         diffusion: None,
     };
@@ -166,7 +170,7 @@ impl Effects {
         let ok_damping = self.damping.is_none_or(|d| d.is_valid(axes));
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
             && self.body_force_scale.is_valid(false)
-            && self.traction_scale.is_valid(false);
+            && self.traction_schedules.iter().all(|s| s.is_valid(false));
         let ok_transport = [self.heat, self.diffusion]
             .iter()
             .all(|t| t.is_none_or(|t| t.is_valid(axes)));

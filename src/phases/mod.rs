@@ -88,8 +88,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub materials: &'m [MaterialRecord],
     /// The traction table's used entries.
     pub tractions: &'m [TractionRecord],
-    /// The tractions' time factor this substep.
-    pub traction_scale: Real,
+    /// The tractions' time factors this substep, one per schedule.
+    pub traction_scales: [Real; crate::TRACTION_SCHEDULES],
     /// The transported scalars declared (heat, diffusion).
     pub transport: [Option<crate::Transport>; 2],
     /// Per transported scalar: declared, and some material expands (heat) or swells

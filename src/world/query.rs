@@ -606,7 +606,7 @@ mod tests {
             ("traction normal off the plane", |_, _, t| t.normal[2] = 1.0),
             ("traction normal not unit", |_, _, t| t.normal[0] = 2.0),
             ("traction area zero", |_, _, t| t.traction[3] = 0.0),
-            ("traction reserved word", |_, _, t| t.reserved = 1),
+            ("traction schedule past the table", |_, _, t| t.schedule = 4),
             ("traction NaN", |_, _, t| t.traction[1] = Real::NAN),
         ];
         let mut copy = HeapBuffer::new(snapshot.len());

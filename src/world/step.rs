@@ -211,7 +211,7 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
-            traction_scale: fx.traction_scale.at(time),
+            traction_scales: fx.traction_schedules.each_ref().map(|s| s.at(time)),
             transport: [fx.heat, fx.diffusion],
             eigenstrain: [
                 fx.heat.is_some() && materials.iter().any(|m| m.thermal_expansion != 0.0),

@@ -845,21 +845,29 @@ fn particle_forces_and_body_force_give_exact_momentum() {
     }
 }
 
-/// Tractions follow `Effects::traction_scale` and come off group by group. A free block in
-/// open space (no gravity) carries three groups of tractions on the +x faces of its particles
-/// (10 particles each, `T_k` along x, y or both). A traction's resultant on the nodes is exactly
-/// `T a` (the hats sum to 1 at each point of the face), `a = 2 l_p |F e_y|` the deformed length
-/// of the face (per unit thickness in 2D), so the block's momentum grows by `sum T a s(t_k) dt`
-/// over the steps, `s` the scale and `a` the length at each step's start. Exact:
-/// with a ramp `s(t) = t / 0.05 s`, the left sum; then with the middle group removed, only the
-/// others'. Removing a range past the table is `UnknownTraction` and removes nothing.
-/// Tolerance 1e-5 relative (f32 round-off of the nodal sums over 40 steps).
+/// Tractions follow their own schedules (`Effects::traction_schedules`) and come off group by
+/// group. A free block in open space (no gravity) carries three groups of tractions on the +x
+/// faces of its particles (10 particles each, `T_k` along x, y or both), following a ramp up
+/// (`t / 0.05 s`), a ramp down (`1 - t / 0.05 s`) and a constant 0.5. A traction's resultant on
+/// the nodes is exactly `T a` (the hats sum to 1 at each point of the face),
+/// `a = 2 l_p |F e_y|` the deformed length of the face (per unit thickness in 2D), so the
+/// block's momentum grows by `sum_k T_k a s_k(t) dt` over the steps, `s_k` the group's factor
+/// and `a` the length at each step's start. Exact: the left sum; then with the middle group
+/// removed (the last moves down the table with its schedule), only the others'. Removing or
+/// rescheduling a range past the table is `UnknownTraction`, a schedule past the list
+/// `InvalidEffect`, and changes nothing. Tolerance 1e-5 relative (f32 round-off of the nodal
+/// sums over 40 steps).
 #[test]
 fn tractions_follow_their_schedule_and_come_off_by_group() {
-    let ramp = Schedule::from_points(&[(0.0, 0.0), (0.05, 1.0)]).unwrap();
+    let schedules = [
+        Schedule::from_points(&[(0.0, 0.0), (0.05, 1.0)]).unwrap(),
+        Schedule::from_points(&[(0.0, 1.0), (0.05, 0.0)]).unwrap(),
+        Schedule::constant(0.5),
+        Schedule::constant(1.0),
+    ];
     let (def, mut buf) = free_block(Dimension::Plane2D, |def| {
         def.effects.traction_capacity = 64;
-        def.effects.traction_scale = ramp;
+        def.effects.traction_schedules = schedules;
     });
     let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
     moving_block(&def, &mut w, &MaterialDef::DEFAULT, |_| [0.0; 3]);
@@ -871,6 +879,21 @@ fn tractions_follow_their_schedule_and_come_off_by_group() {
         groups.push(w.add_tractions(particles, Face::XMax, traction).unwrap());
     }
     assert_eq!(groups, vec![0..10, 10..20, 20..30]);
+    w.set_traction_schedule(groups[1].clone(), 1).unwrap();
+    w.set_traction_schedule(groups[2].clone(), 2).unwrap();
+    let before = w.as_bytes().to_vec();
+    assert_eq!(
+        w.set_traction_schedule(25..31, 0),
+        Err(mpm_gimp::Error::UnknownTraction)
+    );
+    assert_eq!(
+        w.set_traction_schedule(0..10, 4),
+        Err(mpm_gimp::Error::InvalidEffect)
+    );
+    assert!(
+        w.as_bytes() == &before[..],
+        "a refused call changed the world"
+    );
     let area = (def.cell_size / def.particles_per_cell as Real) as f64;
     let n = 20;
     // Runs n steps and checks the momentum they added against the scaled resultants of the
@@ -881,10 +904,10 @@ fn tractions_follow_their_schedule_and_come_off_by_group() {
         let mut scale = 0.0f64;
         for _ in 0..n {
             let (t0, dt) = (w.time(), w.stable_dt());
-            let s = ramp.at(t0) as f64 * dt as f64;
             let v = w.particles();
             let h = &v.displacement_gradient;
             for &k in on {
+                let s = schedules[k].at(t0) as f64 * dt as f64;
                 let group = 10 * k..10 * (k + 1);
                 for (&h01, &h11) in h[0][1][group.clone()].iter().zip(&h[1][1][group]) {
                     let (f01, f11) = (h01 as f64, 1.0 + h11 as f64);

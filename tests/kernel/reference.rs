@@ -71,6 +71,17 @@ struct Particle {
     lp: [f64; 3],
 }
 
+/// One traction: the particle, the unit normal and area of the loaded face in the reference
+/// configuration (m^2, m in 2D), the traction (Pa) and the schedule it follows.
+#[derive(Clone, Copy)]
+struct Traction {
+    particle: usize,
+    normal: [f64; 3],
+    area: f64,
+    traction: [f64; 3],
+    schedule: usize,
+}
+
 /// A grid node's accumulators and values.
 #[derive(Clone, Copy, Default)]
 struct Node {
@@ -117,12 +128,11 @@ struct Method {
     zones: Vec<mpm_gimp::DampingZone>,
     /// The thermostat that adds to the grid rate, with its alpha before the substep.
     thermostat: Option<Thermostat>,
-    /// Tractions (eq 21): the particle, the unit normal and area of the loaded face in the
-    /// reference configuration (m^2, m in 2D) and the traction, Pa. The world's table is not
-    /// readable through the API: the test that adds them sets them here.
-    tractions: Vec<(usize, [f64; 3], f64, [f64; 3])>,
-    /// The tractions' time factor this substep.
-    traction_scale: f64,
+    /// Tractions (eq 21). The world's table is not readable through the API: the test that
+    /// adds them sets them here.
+    tractions: Vec<Traction>,
+    /// The tractions' time factors this substep, one per schedule.
+    traction_scales: [f64; mpm_gimp::TRACTION_SCHEDULES],
     /// The declared transported scalars (heat, diffusion): each face's condition.
     transport: [Option<[ScalarBoundary; 6]>; 2],
     /// The material's heat capacity (J/(kg K)), conductivity (W/(m K)) and diffusivity (m^2/s).
@@ -785,7 +795,14 @@ fn for_each_fixed_image(
 /// `f_i += S_ip sum_q T dS_q`.
 fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
     let d = m.d;
-    for &(i, n, area, t) in &m.tractions {
+    for &Traction {
+        particle: i,
+        normal: n,
+        area,
+        traction: t,
+        schedule,
+    } in &m.tractions
+    {
         let p = &ps[i];
         let f = |a: usize, b: usize| p.h[a][b] + if a == b { 1.0 } else { 0.0 };
         let times_f = |v: [f64; 3]| -> [f64; 3] {
@@ -834,7 +851,7 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
             let w = element * if m.axisymmetric { x[0].max(0.0) } else { 1.0 };
             points.push((x, w));
         }
-        let scale = m.traction_scale;
+        let scale = m.traction_scales[schedule];
         if matches!(m.shape, ShapeFunction::Gimp | ShapeFunction::CpGimp) {
             for (x, w) in points {
                 let q: [f64; 3] = std::array::from_fn(|a| {
@@ -1281,7 +1298,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         zones: fx.damping.map_or(vec![], |d| d.used_zones().to_vec()),
         thermostat,
         tractions: Vec::new(),
-        traction_scale: fx.traction_scale.at(world.time()) as f64,
+        traction_scales: fx.traction_schedules.map(|s| s.at(world.time()) as f64),
         transport: [fx.heat, fx.diffusion].map(|t| t.map(|t| t.faces)),
         heat_capacity: material.heat_capacity as f64,
         conductivity: material.conductivity as f64,
@@ -1399,8 +1416,14 @@ fn declared_effects() -> Effects {
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
         body_force_scale: Schedule::constant(1.0),
         traction_capacity: 64,
-        // A ramp, read at the time of the step the reference takes.
-        traction_scale: Schedule::from_points(&[(0.0, 0.5), (1.0, 1.5)]).unwrap(),
+        // Ramps, read at the time of the step the reference takes: the oblique faces follow
+        // the second.
+        traction_schedules: [
+            Schedule::from_points(&[(0.0, 0.5), (1.0, 1.5)]).unwrap(),
+            Schedule::from_points(&[(0.0, 2.0), (1.0, -1.0)]).unwrap(),
+            Schedule::constant(1.0),
+            Schedule::constant(1.0),
+        ],
         heat: Some(Transport {
             sources: true,
             ..Transport::INSULATED
@@ -1657,9 +1680,10 @@ fn check(
                     face_area
                 }
                 None => {
-                    world
+                    let ids = world
                         .add_surface_tractions(range.clone(), nv, area as Real, v)
                         .unwrap();
+                    world.set_traction_schedule(ids, 1).unwrap();
                     // The kernel's area is a float of the working precision.
                     area as Real as f64
                 }
@@ -1668,8 +1692,15 @@ fn check(
             let unit: [f64; 3] =
                 std::array::from_fn(|a| if a < d { normal[a] / length } else { 0.0 });
             let t: [f64; 3] = std::array::from_fn(|a| if a < d { t[a] } else { 0.0 });
+            let schedule = if face.is_some() { 0 } else { 1 };
             for i in range {
-                traction_list.push((i as usize, unit, area, t));
+                traction_list.push(Traction {
+                    particle: i as usize,
+                    normal: unit,
+                    area,
+                    traction: t,
+                    schedule,
+                });
             }
         }
     }

@@ -133,7 +133,7 @@ int main(void) {
     FIELD(MpmEffects, traction_capacity);
     FIELD(MpmEffects, body_force);
     FIELD(MpmEffects, body_force_scale);
-    FIELD(MpmEffects, traction_scale);
+    FIELD(MpmEffects, traction_schedules);
     FIELD(MpmEffects, heat);
     FIELD(MpmEffects, diffusion);
 

@@ -373,6 +373,8 @@ static void null_pointers(void) {
                                                 OUT(MpmIdRange)));
         REFUSED("null: mpm_world_add_surface_tractions ids_out", MPM_STATUS_NULL_POINTER,
                 mpm_world_add_surface_tractions(g_we2, 0, 1, v3(0, 1, 0), R(0.1), zero, NULL));
+        REFUSED("null: mpm_world_set_traction_schedule world", MPM_STATUS_NULL_POINTER,
+                mpm_world_set_traction_schedule(NULL, 0, 1, 1));
         REFUSED("null: mpm_world_clear_tractions world", MPM_STATUS_NULL_POINTER,
                 mpm_world_clear_tractions(NULL));
         REFUSED("null: mpm_world_remove_tractions world", MPM_STATUS_NULL_POINTER,
@@ -479,6 +481,7 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_add_surface_tractions",
                   mpm_world_add_surface_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(0, -1, 0),
                                                   OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_set_traction_schedule", mpm_world_set_traction_schedule(w, 0, 1, 1));
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         BAD_WORLD("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
@@ -1506,6 +1509,8 @@ static void effects_misuse(void) {
             mpm_world_add_tractions(g_w2, 0, 1, MPM_FACE_Y_MAX, down, OUT(MpmIdRange)));
     REFUSED("effects: add_tractions without tractions (3D)", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_tractions(g_w3, 0, 1, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
+    REFUSED("effects: set_traction_schedule without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_traction_schedule(g_w2, 0, 1, 1));
     REFUSED("effects: add_surface_tractions without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_surface_tractions(g_w2, 0, 1, v3(0, 1, 0), R(0.1), down,
                                             OUT(MpmIdRange)));
@@ -1734,6 +1739,20 @@ static void effects_misuse(void) {
     expect_true("effects: 0 tractions give an empty range", ids.count == 0);
     ACCEPTED("effects: traction_count", 0, mpm_world_traction_count(g_we2, &count));
     expect_true("effects: traction_count is the capacity", count == 8);
+    /* A schedule for part of the table; a schedule past the list or a range past the table
+     * is refused and changes nothing; an empty range at its end changes nothing. */
+    ACCEPTED("effects: set_traction_schedule 2..5 to the last", 1,
+             mpm_world_set_traction_schedule(g_we2, 2, 3, MPM_TRACTION_SCHEDULES - 1));
+    REFUSED("effects: set_traction_schedule past the list", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_set_traction_schedule(g_we2, 0, 1, MPM_TRACTION_SCHEDULES));
+    REFUSED("effects: set_traction_schedule 0xFFFFFFFF", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_set_traction_schedule(g_we2, 0, 1, 0xFFFFFFFFu));
+    REFUSED("effects: set_traction_schedule 7..9 of 8", MPM_STATUS_UNKNOWN_TRACTION,
+            mpm_world_set_traction_schedule(g_we2, 7, 2, 0));
+    REFUSED("effects: set_traction_schedule from 0xFFFFFFFF", MPM_STATUS_UNKNOWN_TRACTION,
+            mpm_world_set_traction_schedule(g_we2, 0xFFFFFFFFu, 2, 0));
+    ACCEPTED("effects: set_traction_schedule of none at the end", 0,
+             mpm_world_set_traction_schedule(g_we2, 8, 0, 1));
     REFUSED("effects: add_tractions 5 into 4 (3D)", MPM_STATUS_TRACTION_CAPACITY_EXCEEDED,
             mpm_world_add_tractions(g_we3, 0, 5, MPM_FACE_Z_MAX, down, OUT(MpmIdRange)));
     ACCEPTED("effects: add_tractions 4 (3D)", 1,
