@@ -123,14 +123,7 @@ impl World<'_> {
     /// within the table, `InvalidEffect` for a schedule past the list (nothing changes);
     /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
     pub fn set_traction_schedule(&mut self, ids: Range<u32>, schedule: u32) -> Result<(), Error> {
-        if self.def().effects.traction_capacity == 0 {
-            return Err(Error::EffectNotDeclared);
-        }
-        let used = self.header().traction_count as usize;
-        let (start, end) = (ids.start as usize, ids.end as usize);
-        if start > end || end > used {
-            return Err(Error::UnknownTraction);
-        }
+        let (start, end, used) = self.traction_range(ids)?;
         if schedule as usize >= crate::TRACTION_SCHEDULES {
             return Err(Error::InvalidEffect);
         }
@@ -152,6 +145,18 @@ impl World<'_> {
     /// `UnknownTraction` if the range is not within the table (nothing is removed);
     /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
     pub fn remove_tractions(&mut self, ids: Range<u32>) -> Result<(), Error> {
+        let (start, end, used) = self.traction_range(ids)?;
+        let layout = Layout::of(&self.def());
+        self.traction_records_mut(&layout, 0, used)
+            .copy_within(end..used, start);
+        self.header_mut().traction_count = (used - (end - start)) as u64;
+        Ok(())
+    }
+
+    /// `ids` as indices of the traction table, `(start, end, used)`, if it lies within the
+    /// `used` entries: `EffectNotDeclared` without [`crate::Effects::traction_capacity`],
+    /// else `UnknownTraction`.
+    fn traction_range(&self, ids: Range<u32>) -> Result<(usize, usize, usize), Error> {
         if self.def().effects.traction_capacity == 0 {
             return Err(Error::EffectNotDeclared);
         }
@@ -160,11 +165,7 @@ impl World<'_> {
         if start > end || end > used {
             return Err(Error::UnknownTraction);
         }
-        let layout = Layout::of(&self.def());
-        self.traction_records_mut(&layout, 0, used)
-            .copy_within(end..used, start);
-        self.header_mut().traction_count = (used - (end - start)) as u64;
-        Ok(())
+        Ok((start, end, used))
     }
 }
 
