@@ -4,7 +4,8 @@
 //!   carrying every column the world has, for ParaView;
 //! - [`Series`]: frames in a directory plus the `.pvd` file that lists them with their times
 //!   (ParaView opens it as one time series);
-//! - [`write_csv`]: one frame as CSV, a row per particle, for spreadsheets and scripts.
+//! - [`write_csv`]: one frame as CSV, a row per particle, for spreadsheets and scripts;
+//! - [`picture`]: pictures without a window, PNG frames and animated GIFs.
 //!
 //! The columns ([`columns`]): the position (`position + position_low`, in f64), velocity, mass,
 //! initial volume, material, status, `J`, the displacement gradient `H = F - I` (row major),
@@ -20,6 +21,8 @@
 //! # Ok(()) }
 //! ```
 #![deny(missing_docs)]
+
+pub mod picture;
 
 use mpm_gimp::{Dimension, Real, World};
 use std::fmt::Write as _;
