@@ -8,30 +8,12 @@
 //! Scenes: `drop` (an elastic block dropped on a stick floor, 2D, coloured by speed) and
 //! `drop3d` (the same in 3D, seen along z).
 
-use mpm_gimp::{
-    memory_requirements, Boundary, Dimension, Face, HeapBuffer, MaterialDef, Vec3, World, WorldDef,
-};
+use mpm_gimp::{memory_requirements, HeapBuffer, World};
 use mpm_gimp_output::picture::{render, write_gif, write_png, Colour};
+use mpm_gimp_output::scenes::{drop_def, drop_fill};
 use std::path::PathBuf;
 
 const SCENES: [&str; 2] = ["drop", "drop3d"];
-
-/// The drop example's scene, 2D or 3D.
-fn drop_scene(three_d: bool) -> WorldDef {
-    let mut def = WorldDef {
-        cells: [40, 40, if three_d { 40 } else { 1 }],
-        cell_size: 0.025,
-        particle_capacity: 100_000,
-        dimension: if three_d {
-            Dimension::ThreeD
-        } else {
-            Dimension::Plane2D
-        },
-        ..WorldDef::DEFAULT
-    };
-    def.faces[Face::YMin as usize] = Boundary::Stick;
-    def
-}
 
 fn arg(name: &str) -> Option<String> {
     let args: Vec<String> = std::env::args().collect();
@@ -56,23 +38,10 @@ fn main() -> std::io::Result<()> {
             "drop3d" => true,
             other => panic!("unknown scene {other}: one of {SCENES:?}"),
         };
-        let def = drop_scene(three_d);
+        let def = drop_def(three_d, false);
         let mut storage = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
         let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
-        let rubber = world
-            .add_material(&MaterialDef {
-                youngs_modulus: 2.0e5,
-                ..MaterialDef::DEFAULT
-            })
-            .expect("valid material");
-        let (lo, hi) = if three_d {
-            (Vec3::new(0.35, 0.4, 0.35), Vec3::new(0.65, 0.7, 0.65))
-        } else {
-            (Vec3::new(0.3, 0.4, 0.0), Vec3::new(0.7, 0.7, 0.0))
-        };
-        world
-            .fill_box(lo, hi, rubber, Vec3::ZERO)
-            .expect("block fits");
+        drop_fill(&mut world).expect("block fits");
         // Speeds from rest to the fall's 2.2 m/s at the floor, one colour scale for every frame.
         let range = (0.0, 2.5);
         let mut pictures = vec![];

@@ -5,7 +5,8 @@
 //! - [`Series`]: frames in a directory plus the `.pvd` file that lists them with their times
 //!   (ParaView opens it as one time series);
 //! - [`write_csv`]: one frame as CSV, a row per particle, for spreadsheets and scripts;
-//! - [`picture`]: pictures without a window, PNG frames and animated GIFs.
+//! - [`picture`]: pictures without a window, PNG frames and animated GIFs;
+//! - [`scenes`]: the example scenes, defined once.
 //!
 //! The columns ([`columns`]): the position (`position + position_low`, in f64), velocity, mass,
 //! initial volume, material, status, `J`, the displacement gradient `H = F - I` (row major),
@@ -23,6 +24,7 @@
 #![deny(missing_docs)]
 
 pub mod picture;
+pub mod scenes;
 
 use mpm_gimp::{Dimension, Real, World};
 use std::fmt::Write as _;
