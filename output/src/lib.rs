@@ -76,6 +76,16 @@ pub fn columns(world: &World) -> Vec<Column> {
     };
     let vector = |col: &[&[Real]; 3]| float(3, &|i, a| if a < d { col[a][i] as f64 } else { 0.0 });
     let scalar = |col: &[Real]| float(1, &|i, _| col[i] as f64);
+    let tensor = |col: &[[&[Real]; 3]; 3]| {
+        float(9, &|i, k| {
+            let (a, b) = (k / 3, k % 3);
+            if a < d && b < d {
+                col[a][b][i] as f64
+            } else {
+                0.0
+            }
+        })
+    };
     let mut out = vec![
         Column {
             name: "position",
@@ -121,14 +131,7 @@ pub fn columns(world: &World) -> Vec<Column> {
         Column {
             name: "H",
             components: TENSOR,
-            values: float(9, &|i, k| {
-                let (a, b) = (k / 3, k % 3);
-                if a < d && b < d {
-                    v.displacement_gradient[a][b][i] as f64
-                } else {
-                    0.0
-                }
-            }),
+            values: tensor(&v.displacement_gradient),
         },
     ];
     // Stored stress components: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy, xz, yz.
@@ -137,9 +140,7 @@ pub fn columns(world: &World) -> Vec<Column> {
     } else {
         [Some(0), Some(1), Some(2), Some(3), Some(5), Some(4)]
     };
-    let rho0: Vec<f64> = (0..world.material_count() as u32)
-        .map(|m| world.material(m).map_or(0.0, |m| m.density as f64))
-        .collect();
+    let rho0 = densities(world);
     out.push(Column {
         name: "stress",
         components: SYMMETRIC,
@@ -186,17 +187,18 @@ pub fn columns(world: &World) -> Vec<Column> {
         out.push(Column {
             name: "apic_moment",
             components: TENSOR,
-            values: float(9, &|i, k| {
-                let (a, b) = (k / 3, k % 3);
-                if a < d && b < d {
-                    v.affine[a][b][i] as f64
-                } else {
-                    0.0
-                }
-            }),
+            values: tensor(&v.affine),
         });
     }
     out
+}
+
+/// Each material's initial density, kg/m^3, by material id (what turns the stored stress
+/// over density into stress).
+pub(crate) fn densities(world: &World) -> Vec<f64> {
+    (0..world.material_count() as u32)
+        .map(|m| world.material(m).map_or(0.0, |m| m.density as f64))
+        .collect()
 }
 
 /// A float written so that it reads back to the same f64 (Rust's shortest round trip).

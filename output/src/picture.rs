@@ -2,7 +2,7 @@
 //! onto x-y, far particles drawn first), each a disc of the particle spacing coloured by a
 //! field, as RGB pixels; PNG frames and animated GIFs of them.
 
-use mpm_gimp::{Boundary, Dimension, Face, World};
+use mpm_gimp::{Boundary, Dimension, Face, ParticlesView, World};
 use std::io::{self, Write};
 
 /// What colours the particles.
@@ -51,9 +51,8 @@ fn colour_map(t: f64) -> [u8; 3] {
     core::array::from_fn(|c| (STOPS[k][c] + f * (STOPS[k + 1][c] - STOPS[k][c])).round() as u8)
 }
 
-/// The value `colour` gives particle `i`.
-fn value(world: &World, colour: Colour, i: usize, density: &[f64]) -> f64 {
-    let v = world.particles();
+/// The value `colour` gives particle `i` of the view `v` (`density` by material id).
+fn value(v: &ParticlesView<'_>, colour: Colour, i: usize, density: &[f64]) -> f64 {
     let d = if v.dimension == Dimension::ThreeD {
         3
     } else {
@@ -89,9 +88,7 @@ pub fn render(world: &World, colour: Colour, range: (f64, f64), width: u32) -> P
         rgb.extend_from_slice(&BACKGROUND);
     }
     let v = world.particles();
-    let density: Vec<f64> = (0..world.material_count() as u32)
-        .map(|m| world.material(m).map_or(0.0, |m| m.density as f64))
-        .collect();
+    let density = crate::densities(world);
     // Far particles first (3D), so that near ones cover them.
     let mut order: Vec<usize> = (0..v.count).filter(|&i| v.status[i] == 0).collect();
     if d == 3 {
@@ -104,7 +101,7 @@ pub fn render(world: &World, colour: Colour, range: (f64, f64), width: u32) -> P
     let span = if hi > lo { hi - lo } else { 1.0 };
     let origin = [def.origin.x as f64, def.origin.y as f64];
     for i in order {
-        let value = value(world, colour, i, &density);
+        let value = value(&v, colour, i, &density);
         let c = if value.is_nan() {
             [160, 160, 160]
         } else {
@@ -193,12 +190,10 @@ pub fn write_gif(out: impl Write, frames: &[Picture], delay: u16) -> io::Result<
 /// [`render`]; `(0, 1)` when there are none).
 pub fn value_range(world: &World, colour: Colour) -> (f64, f64) {
     let v = world.particles();
-    let density: Vec<f64> = (0..world.material_count() as u32)
-        .map(|m| world.material(m).map_or(0.0, |m| m.density as f64))
-        .collect();
+    let density = crate::densities(world);
     let values = (0..v.count)
         .filter(|&i| v.status[i] == 0)
-        .map(|i| value(world, colour, i, &density))
+        .map(|i| value(&v, colour, i, &density))
         .filter(|x| x.is_finite());
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
         (lo.min(x), hi.max(x))
