@@ -15,7 +15,7 @@
 //! `elapsed_ns / (steps * particles)` for each run and their median.
 //!
 //! Options: `--dim 2|3`, `--shape linear|gimp|quadratic|cubic`,
-//! `--material neo_hookean|linear_elastic`, `--order usf|usl|musl`, `--runs N`, `--steps S`,
+//! `--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow`, `--order usf|usl|musl`, `--runs N`, `--steps S`,
 //! `--simd auto|avx2|baseline` (`auto`, the default, is what `World::step` does: the widest
 //! instance the CPU has, AVX-512 or AVX2; `avx2` caps it at AVX2; `baseline` forces the SSE2
 //! instance, e.g. under valgrind, which cannot decode every AVX instruction). The JSON line
@@ -42,7 +42,7 @@ use mpm_gimp::{Dimension, MaterialModel, Real, ShapeFunction, UpdateOrder};
 use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
-[--material neo_hookean|linear_elastic] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
+[--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
 [--particle-order fill|rows|shuffled] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
 body_force|apic|mls (B-splines)|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
@@ -142,6 +142,11 @@ fn parse_options() -> Options {
                 o.material = match value.as_str() {
                     "neo_hookean" => MaterialModel::NeoHookean,
                     "linear_elastic" => MaterialModel::LinearElastic,
+                    "fixed_corotated" => MaterialModel::FixedCorotated,
+                    "fluid" => MaterialModel::Fluid,
+                    "von_mises" => MaterialModel::VonMises,
+                    "drucker_prager" => MaterialModel::DruckerPrager,
+                    "snow" => MaterialModel::Snow,
                     _ => bad(),
                 }
             }
@@ -217,6 +222,11 @@ fn material_name(m: MaterialModel) -> &'static str {
     match m {
         MaterialModel::NeoHookean => "neo_hookean",
         MaterialModel::LinearElastic => "linear_elastic",
+        MaterialModel::FixedCorotated => "fixed_corotated",
+        MaterialModel::Fluid => "fluid",
+        MaterialModel::VonMises => "von_mises",
+        MaterialModel::DruckerPrager => "drucker_prager",
+        MaterialModel::Snow => "snow",
     }
 }
 

@@ -1,4 +1,4 @@
-//! Gives the shared library a soname that carries the ABI's version (`libmpm_gimp.so.0.4`:
+//! Gives the shared library a soname that carries the ABI's version (`libmpm_gimp.so.0.5`:
 //! before 1.0 a minor version may break the ABI), so that hosts linked against one version
 //! load no other (`ffi/install.sh` installs the matching file and links).
 fn main() {

@@ -265,6 +265,31 @@ pub enum MaterialModel {
     LinearElastic = 0,
     /// Compressible neo-Hookean: `tau = mu (B - I) + lambda ln(J) I`, `B = F F^T`.
     NeoHookean = 1,
+    /// Fixed-corotated elasticity (Stomakhin et al. 2012), the usual solid of game MPM:
+    /// `tau = 2 mu (F - R) F^T + lambda (J - 1) J I` with `F = R S`. Rotations create no
+    /// stress; unlike [`MaterialModel::LinearElastic`] it stays well posed at large strain.
+    FixedCorotated = 2,
+    /// Weakly compressible fluid: pressure from the volume ratio only (Tait's equation,
+    /// `p = K / gamma (J^-gamma - 1)`, [`MaterialDef::bulk_modulus`] and
+    /// [`MaterialDef::pressure_exponent`]), no elastic shear stress, plus the Newtonian
+    /// viscous stress of [`MaterialDef::viscosity`]. The deformation gradient is kept as
+    /// `J^(1/3) I`, so only J is carried and no shear accumulates.
+    Fluid = 3,
+    /// Metal: J2 (von Mises) plasticity with linear isotropic hardening
+    /// ([`MaterialDef::yield_stress`], [`MaterialDef::hardening_modulus`]), `F = F_e F_p`,
+    /// Hencky elasticity on `F_e` and the radial return in principal logarithmic strains.
+    /// Needs [`crate::Effects::plasticity`] (the equivalent plastic strain per particle).
+    VonMises = 4,
+    /// Sand: Drucker-Prager plasticity on Hencky elasticity with the return mapping of Klar et
+    /// al. 2016 ([`MaterialDef::friction_angle`], [`MaterialDef::cohesion`]); no volume
+    /// correction. Needs [`crate::Effects::plasticity`] (the accumulated plastic shear).
+    DruckerPrager = 5,
+    /// Snow: fixed-corotated elasticity of `F_e` whose singular values are clamped to
+    /// `[1 - theta_c, 1 + theta_s]` and whose moduli harden as `exp(xi (1 - J_p))`
+    /// (Stomakhin et al. 2013: [`MaterialDef::critical_compression`],
+    /// [`MaterialDef::critical_stretch`], [`MaterialDef::hardening_coefficient`]). Needs
+    /// [`crate::Effects::plasticity`] (`J_p - 1` per particle).
+    Snow = 6,
 }
 
 impl MaterialModel {
@@ -274,8 +299,22 @@ impl MaterialModel {
         match code {
             0 => Some(MaterialModel::LinearElastic),
             1 => Some(MaterialModel::NeoHookean),
+            2 => Some(MaterialModel::FixedCorotated),
+            3 => Some(MaterialModel::Fluid),
+            4 => Some(MaterialModel::VonMises),
+            5 => Some(MaterialModel::DruckerPrager),
+            6 => Some(MaterialModel::Snow),
             _ => None,
         }
+    }
+
+    /// Whether the model keeps a plastic history per particle (and so needs
+    /// [`crate::Effects::plasticity`]).
+    pub const fn plastic(self) -> bool {
+        matches!(
+            self,
+            MaterialModel::VonMises | MaterialModel::DruckerPrager | MaterialModel::Snow
+        )
     }
 }
 
@@ -312,6 +351,40 @@ pub struct MaterialDef {
     pub swelling: Real,
     /// Stress-free concentration potential `c_0` of the swelling, finite. Default 0.
     pub reference_concentration: Real,
+    /// Dynamic viscosity eta, Pa s, >= 0: the Newtonian stress `2 eta dev(sym grad v)` added
+    /// to the model's (a fluid's viscosity; with a solid model, a Kelvin-Voigt damper).
+    /// Default 0. Integrated explicitly: the step keeps `dt <= h^2 rho / (2 d eta)`.
+    pub viscosity: Real,
+    /// Bulk modulus K of [`MaterialModel::Fluid`], Pa, > 0 (other models take theirs from E
+    /// and nu). Default 1e5 Pa: a sound speed of 10 m/s in a fluid of water's density, which
+    /// keeps a 1 m deep tank within about 1 % of its volume under gravity (the usual weakly
+    /// compressible choice: water's own 2.2 GPa would take a step 470 times shorter).
+    pub bulk_modulus: Real,
+    /// Exponent gamma of Tait's equation of state of [`MaterialModel::Fluid`], >= 1. Default 7,
+    /// the value for water (Cole 1948; Monaghan's weakly compressible SPH).
+    pub pressure_exponent: Real,
+    /// Initial yield stress sigma_y of [`MaterialModel::VonMises`] in uniaxial tension, Pa,
+    /// > 0. Default 1e4 Pa: yield at 1 % strain of the default E.
+    pub yield_stress: Real,
+    /// Linear isotropic hardening modulus H of [`MaterialModel::VonMises`], Pa, >= 0: the yield
+    /// stress grows as `sigma_y + H eps_p` with the equivalent plastic strain. Default 0,
+    /// perfectly plastic.
+    pub hardening_modulus: Real,
+    /// Friction angle phi of [`MaterialModel::DruckerPrager`], degrees, in [0, 90). Default 30,
+    /// a typical dry sand.
+    pub friction_angle: Real,
+    /// Cohesion c of [`MaterialModel::DruckerPrager`], Pa, >= 0: the tension the material holds
+    /// (its yield surface's apex is shifted by it). Default 0, dry sand.
+    pub cohesion: Real,
+    /// Critical compression theta_c of [`MaterialModel::Snow`], in (0, 1): singular values of
+    /// `F_e` below `1 - theta_c` flow plastically. Default 0.025 (Stomakhin et al. 2013).
+    pub critical_compression: Real,
+    /// Critical stretch theta_s of [`MaterialModel::Snow`], > 0: singular values above
+    /// `1 + theta_s` flow plastically. Default 0.0075 (Stomakhin et al. 2013).
+    pub critical_stretch: Real,
+    /// Hardening coefficient xi of [`MaterialModel::Snow`], >= 0: the moduli scale by
+    /// `exp(xi (1 - J_p))`. Default 10 (Stomakhin et al. 2013).
+    pub hardening_coefficient: Real,
 }
 
 impl MaterialDef {
@@ -328,10 +401,23 @@ impl MaterialDef {
         reference_temperature: 0.0,
         swelling: 0.0,
         reference_concentration: 0.0,
+        viscosity: 0.0,
+        bulk_modulus: 1.0e5,
+        pressure_exponent: 7.0,
+        yield_stress: 1.0e4,
+        hardening_modulus: 0.0,
+        friction_angle: 30.0,
+        cohesion: 0.0,
+        critical_compression: 0.025,
+        critical_stretch: 0.0075,
+        hardening_coefficient: 10.0,
     };
 
-    /// Lamé constants (lambda, mu) for 3D and plane strain.
+    /// Lamé constants (lambda, mu) for 3D and plane strain; a fluid's are `(K, 0)`.
     pub fn lame(&self) -> (Real, Real) {
+        if self.model == MaterialModel::Fluid {
+            return (self.bulk_modulus, 0.0);
+        }
         let e = self.youngs_modulus;
         let nu = self.poisson_ratio;
         let mu = e / (2.0 * (1.0 + nu));
@@ -340,7 +426,7 @@ impl MaterialDef {
     }
 
     /// Dilatational (P) wave speed `c = sqrt((K + 4G/3) / rho)`, m/s: the speed the stable
-    /// time step must resolve.
+    /// time step must resolve (a fluid's sound speed `sqrt(K / rho)`).
     pub fn wave_speed(&self) -> Real {
         let (lambda, mu) = self.lame();
         crate::math::sqrt((lambda + 2.0 * mu) / self.density)
@@ -518,7 +604,15 @@ mod tests {
         );
         use MaterialModel as Mm;
         check(
-            &[Mm::LinearElastic, Mm::NeoHookean],
+            &[
+                Mm::LinearElastic,
+                Mm::NeoHookean,
+                Mm::FixedCorotated,
+                Mm::Fluid,
+                Mm::VonMises,
+                Mm::DruckerPrager,
+                Mm::Snow,
+            ],
             |v| v as u32,
             Mm::from_code,
         );

@@ -30,7 +30,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 10;
+const VERSION: u64 = 11;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,6 +100,8 @@ pub(crate) struct Header {
     pub damping_zone_count: u64,
     pub damping_zones: [ZoneRecord; DAMPING_ZONES],
     pub traction_schedules: [ScheduleRecord; TRACTION_SCHEDULES],
+    /// `Effects::plasticity`.
+    pub plasticity: u64,
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -247,7 +249,7 @@ unsafe impl Pod for Header {}
 
 const _: () = assert!(
     size_of::<Header>()
-        == 8 * (36
+        == 8 * (37
             + 13
             + (4 + TRACTION_SCHEDULES) * (1 + 2 * SCHEDULE_POINTS)
             + 2 * 14
@@ -274,10 +276,19 @@ pub(crate) struct MaterialRecord {
     pub reference_temperature: Real,
     pub swelling: Real,
     pub reference_concentration: Real,
-    pub reserved: [Real; 2],
+    pub viscosity: Real,
+    pub bulk_modulus: Real,
+    pub pressure_exponent: Real,
+    pub yield_stress: Real,
+    pub hardening_modulus: Real,
+    pub friction_angle: Real,
+    pub cohesion: Real,
+    pub critical_compression: Real,
+    pub critical_stretch: Real,
+    pub hardening_coefficient: Real,
 }
 
-// SAFETY: MaterialRecord is repr(C) with sixteen values of one float type: no padding, and every
+// SAFETY: MaterialRecord is repr(C) with twenty-four values of one float type: no padding, and every
 // bit pattern is a valid float.
 unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.
@@ -361,6 +372,8 @@ pub(crate) struct Layout {
     pub hoop: ColumnGroup,
     /// cpGIMP: each particle's domain stretch per axis, frozen for a substep.
     pub stretch: ColumnGroup,
+    /// `Effects::plasticity`: the plastic models' history value.
+    pub plastic: ColumnGroup,
     /// Whether each transported scalar (heat, diffusion) has its 4 grid columns.
     pub scalar_grid: [bool; 2],
     pub grid_offset: usize,
@@ -383,9 +396,9 @@ pub(crate) struct ColumnGroup {
 pub(crate) struct EffectColumns;
 
 impl EffectColumns {
-    /// Groups `(x_start, force, damping, affine, heat, diffusion, hoop)` for a definition,
-    /// starting at column `first`; returns them and the column after the last.
-    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 8], usize) {
+    /// Groups `(x_start, force, damping, affine, heat, diffusion, hoop, stretch, plastic)` for a
+    /// definition, starting at column `first`; returns them and the column after the last.
+    fn of(def: &WorldDef, d: usize, first: usize) -> ([ColumnGroup; 9], usize) {
         let musl = def.update_order == UpdateOrder::Musl;
         let fx = &def.effects;
         let per_particle_damping = fx.damping.is_some_and(|dm| dm.per_particle);
@@ -402,6 +415,7 @@ impl EffectColumns {
             } else {
                 0
             },
+            fx.plasticity as usize,
         ];
         let mut next = first;
         let groups = counts.map(|count| {
@@ -443,7 +457,7 @@ impl Layout {
         let real_column_bytes = column_stride(cap * size_of::<Real>());
         let u32_column_bytes = column_stride(cap * 4);
         let (
-            [x_start, force, damping, affine, heat, diffusion, hoop, stretch],
+            [x_start, force, damping, affine, heat, diffusion, hoop, stretch, plastic],
             particle_real_columns,
         ) = EffectColumns::of(def, d, col::x_low(d, d));
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
@@ -486,6 +500,7 @@ impl Layout {
             scalar: [heat, diffusion],
             hoop,
             stretch,
+            plastic,
             scalar_grid,
             grid_offset,
             node_column_bytes,
@@ -642,6 +657,7 @@ impl Header {
             damping_zone_count: damping.zone_count as u64,
             damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
             traction_schedules: fx.traction_schedules.each_ref().map(ScheduleRecord::of),
+            plasticity: fx.plasticity as u64,
         }
     }
 
@@ -722,6 +738,7 @@ impl Header {
             },
             heat: self.heat.transport()?,
             diffusion: self.diffusion.transport()?,
+            plasticity: flag(self.plasticity)?,
         };
         Ok(WorldDef {
             dimension,

@@ -51,6 +51,19 @@ pub fn ln(x: Real) -> Real {
     }
 }
 
+/// `exp(x) - 1`, accurate for small x.
+#[inline(always)]
+pub fn exp_m1(x: Real) -> Real {
+    #[cfg(not(feature = "f64"))]
+    {
+        libm::expm1f(x)
+    }
+    #[cfg(feature = "f64")]
+    {
+        libm::expm1(x)
+    }
+}
+
 /// `ln(1 + x)`, accurate for small x.
 #[inline(always)]
 pub fn ln_1p(x: Real) -> Real {

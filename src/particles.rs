@@ -83,6 +83,9 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub hoop: &'a mut [Real],
     /// cpGIMP only: each particle's domain stretch per axis for the current substep.
     pub stretch: [&'a mut [Real]; D],
+    /// Declared plasticity only: the plastic models' history value (see
+    /// [`crate::ParticlesView::plastic`]).
+    pub plastic: &'a mut [Real],
     pub material: &'a mut [u32],
     pub status: &'a mut [u32],
 }
@@ -182,6 +185,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         });
         let hoop = group(&mut c, layout.hoop.count > 0);
         let stretch = core::array::from_fn(|_| group(&mut c, layout.stretch.count > 0));
+        let plastic = group(&mut c, layout.plastic.count > 0);
         let material = c.take(ub, n);
         let status = c.take(ub, n);
         ParticleCols {
@@ -199,6 +203,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
             scalar,
             hoop,
             stretch,
+            plastic,
             material,
             status,
         }

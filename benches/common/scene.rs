@@ -348,6 +348,8 @@ impl Scene {
             ..WorldDef::DEFAULT
         };
         s.effect.declare(&mut def, expected)?;
+        // The plastic models keep their history in a column of their own.
+        def.effects.plasticity = s.material.plastic();
         let req = memory_requirements(&def).map_err(|e| format!("invalid definition: {e:?}"))?;
         let mut storage = HeapBuffer::new(req.bytes);
         let mut world = World::init(&def, storage.as_mut_bytes())

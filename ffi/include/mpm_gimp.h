@@ -37,9 +37,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.4.0"
+#define MPM_GIMP_VERSION "0.5.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 400
+#define MPM_GIMP_ABI_VERSION 500
 
 
 // Most points an `MpmSchedule` holds.
@@ -328,6 +328,20 @@ enum MpmMaterialModel
   MPM_MATERIAL_MODEL_LINEAR_ELASTIC = 0,
   // Compressible neo-Hookean.
   MPM_MATERIAL_MODEL_NEO_HOOKEAN = 1,
+  // Fixed-corotated elasticity (Stomakhin et al. 2012).
+  MPM_MATERIAL_MODEL_FIXED_COROTATED = 2,
+  // Weakly compressible fluid (Tait's equation: `bulk_modulus`, `pressure_exponent`; with
+  // `viscosity`).
+  MPM_MATERIAL_MODEL_FLUID = 3,
+  // Metal: J2 plasticity with linear isotropic hardening (`yield_stress`,
+  // `hardening_modulus`). Needs `MpmEffects::plasticity`.
+  MPM_MATERIAL_MODEL_VON_MISES = 4,
+  // Sand: Drucker-Prager plasticity (`friction_angle`, `cohesion`). Needs
+  // `MpmEffects::plasticity`.
+  MPM_MATERIAL_MODEL_DRUCKER_PRAGER = 5,
+  // Snow: clamped fixed-corotated with hardening (`critical_compression`,
+  // `critical_stretch`, `hardening_coefficient`). Needs `MpmEffects::plasticity`.
+  MPM_MATERIAL_MODEL_SNOW = 6,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmMaterialModel;
@@ -525,6 +539,9 @@ typedef struct MpmEffects {
   // Diffusion: a concentration-potential column (c / c_sat, starting at 0) diffused with
   // each material's `diffusivity`. Default not declared.
   struct MpmTransport diffusion;
+  // 1: reserve the plastic history column the plastic models need
+  // (`mpm_gimp::Effects::plasticity`); 0 (default): none.
+  uint32_t plasticity;
 } MpmEffects;
 
 // Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -605,6 +622,27 @@ typedef struct MpmMaterialDef {
   mpm_real swelling;
   // Stress-free concentration potential c_0 of the swelling, finite. Default 0.
   mpm_real reference_concentration;
+  // Dynamic viscosity eta, Pa s, >= 0: Newtonian stress added to any model's. Default 0.
+  mpm_real viscosity;
+  // Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
+  mpm_real bulk_modulus;
+  // Tait exponent gamma of the fluid model, >= 1. Default 7.
+  mpm_real pressure_exponent;
+  // Initial uniaxial yield stress of the von Mises model, Pa, > 0. Default 1e4.
+  mpm_real yield_stress;
+  // Linear isotropic hardening modulus of the von Mises model, Pa, >= 0. Default 0.
+  mpm_real hardening_modulus;
+  // Friction angle of the Drucker-Prager model, degrees, in [0, 90). Default 30.
+  mpm_real friction_angle;
+  // Cohesion of the Drucker-Prager model, Pa, >= 0 (> 0 needs a friction angle > 0).
+  // Default 0.
+  mpm_real cohesion;
+  // Critical compression theta_c of the snow model, in (0, 1). Default 0.025.
+  mpm_real critical_compression;
+  // Critical stretch theta_s of the snow model, > 0. Default 0.0075.
+  mpm_real critical_stretch;
+  // Hardening coefficient xi of the snow model, >= 0. Default 10.
+  mpm_real hardening_coefficient;
   // Set by `mpm_material_def_default`; do not change.
   uint32_t internal_cookie;
 } MpmMaterialDef;
@@ -655,7 +693,7 @@ typedef struct MpmParticlesView {
   // `MpmDamping::per_particle`).
   const mpm_real *damping[2];
   // APIC moment matrix B_p, m^2/s, entry (a, b) at index `3 a + b`; 2D uses a, b < 2 (NULL
-  // unless the transfer is `MPM_TRANSFER_APIC`). The affine velocity field is
+  // unless the transfer is `MPM_TRANSFER_APIC` or `MPM_TRANSFER_MLS`). The affine velocity field is
   // `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
   // scatters.
   const mpm_real *affine[9];
@@ -673,6 +711,10 @@ typedef struct MpmParticlesView {
   // The hoop stretch F_thetatheta - 1 = r / r_0 - 1, the out-of-plane part of the
   // deformation gradient (NULL unless the dimension is `MPM_DIMENSION_AXISYMMETRIC2D`).
   const mpm_real *hoop;
+  // The plastic history: the equivalent plastic strain (von Mises), the accumulated plastic
+  // shear (Drucker-Prager), J_p - 1 (snow); 0 for other models (NULL unless
+  // `MpmEffects::plasticity`).
+  const mpm_real *plastic;
 } MpmParticlesView;
 
 // Sums over the active particles, in double precision. In plane strain mass, momentum and

@@ -155,6 +155,20 @@ pub enum MpmMaterialModel {
     LinearElastic = 0,
     /// Compressible neo-Hookean.
     NeoHookean = 1,
+    /// Fixed-corotated elasticity (Stomakhin et al. 2012).
+    FixedCorotated = 2,
+    /// Weakly compressible fluid (Tait's equation: `bulk_modulus`, `pressure_exponent`; with
+    /// `viscosity`).
+    Fluid = 3,
+    /// Metal: J2 plasticity with linear isotropic hardening (`yield_stress`,
+    /// `hardening_modulus`). Needs `MpmEffects::plasticity`.
+    VonMises = 4,
+    /// Sand: Drucker-Prager plasticity (`friction_angle`, `cohesion`). Needs
+    /// `MpmEffects::plasticity`.
+    DruckerPrager = 5,
+    /// Snow: clamped fixed-corotated with hardening (`critical_compression`,
+    /// `critical_stretch`, `hardening_coefficient`). Needs `MpmEffects::plasticity`.
+    Snow = 6,
 }
 
 /// Status of a particle in the status column (`mpm_gimp::ParticleStatus`).
@@ -331,6 +345,9 @@ pub struct MpmEffects {
     /// Diffusion: a concentration-potential column (c / c_sat, starting at 0) diffused with
     /// each material's `diffusivity`. Default not declared.
     pub diffusion: MpmTransport,
+    /// 1: reserve the plastic history column the plastic models need
+    /// (`mpm_gimp::Effects::plasticity`); 0 (default): none.
+    pub plasticity: u32,
 }
 
 /// Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -415,6 +432,27 @@ pub struct MpmMaterialDef {
     pub swelling: mpm_real,
     /// Stress-free concentration potential c_0 of the swelling, finite. Default 0.
     pub reference_concentration: mpm_real,
+    /// Dynamic viscosity eta, Pa s, >= 0: Newtonian stress added to any model's. Default 0.
+    pub viscosity: mpm_real,
+    /// Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
+    pub bulk_modulus: mpm_real,
+    /// Tait exponent gamma of the fluid model, >= 1. Default 7.
+    pub pressure_exponent: mpm_real,
+    /// Initial uniaxial yield stress of the von Mises model, Pa, > 0. Default 1e4.
+    pub yield_stress: mpm_real,
+    /// Linear isotropic hardening modulus of the von Mises model, Pa, >= 0. Default 0.
+    pub hardening_modulus: mpm_real,
+    /// Friction angle of the Drucker-Prager model, degrees, in [0, 90). Default 30.
+    pub friction_angle: mpm_real,
+    /// Cohesion of the Drucker-Prager model, Pa, >= 0 (> 0 needs a friction angle > 0).
+    /// Default 0.
+    pub cohesion: mpm_real,
+    /// Critical compression theta_c of the snow model, in (0, 1). Default 0.025.
+    pub critical_compression: mpm_real,
+    /// Critical stretch theta_s of the snow model, > 0. Default 0.0075.
+    pub critical_stretch: mpm_real,
+    /// Hardening coefficient xi of the snow model, >= 0. Default 10.
+    pub hardening_coefficient: mpm_real,
     /// Set by `mpm_material_def_default`; do not change.
     pub internal_cookie: u32,
 }
@@ -557,6 +595,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         traction_schedules: e.traction_schedules.each_ref().map(schedule_to_c),
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
+        plasticity: e.plasticity as u32,
     }
 }
 
@@ -661,6 +700,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),
         heat: transport_from_c(&e.heat)?,
         diffusion: transport_from_c(&e.diffusion)?,
+        plasticity: flag(e.plasticity)?,
     })
 }
 
@@ -733,6 +773,16 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         reference_temperature: d.reference_temperature,
         swelling: d.swelling,
         reference_concentration: d.reference_concentration,
+        viscosity: d.viscosity,
+        bulk_modulus: d.bulk_modulus,
+        pressure_exponent: d.pressure_exponent,
+        yield_stress: d.yield_stress,
+        hardening_modulus: d.hardening_modulus,
+        friction_angle: d.friction_angle,
+        cohesion: d.cohesion,
+        critical_compression: d.critical_compression,
+        critical_stretch: d.critical_stretch,
+        hardening_coefficient: d.hardening_coefficient,
     })
 }
 
@@ -788,6 +838,16 @@ fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
         reference_temperature: d.reference_temperature,
         swelling: d.swelling,
         reference_concentration: d.reference_concentration,
+        viscosity: d.viscosity,
+        bulk_modulus: d.bulk_modulus,
+        pressure_exponent: d.pressure_exponent,
+        yield_stress: d.yield_stress,
+        hardening_modulus: d.hardening_modulus,
+        friction_angle: d.friction_angle,
+        cohesion: d.cohesion,
+        critical_compression: d.critical_compression,
+        critical_stretch: d.critical_stretch,
+        hardening_coefficient: d.hardening_coefficient,
         internal_cookie: MATERIAL_COOKIE,
     }
 }

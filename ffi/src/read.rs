@@ -46,7 +46,7 @@ pub struct MpmParticlesView {
     /// `MpmDamping::per_particle`).
     pub damping: [*const mpm_real; 2],
     /// APIC moment matrix B_p, m^2/s, entry (a, b) at index `3 a + b`; 2D uses a, b < 2 (NULL
-    /// unless the transfer is `MPM_TRANSFER_APIC`). The affine velocity field is
+    /// unless the transfer is `MPM_TRANSFER_APIC` or `MPM_TRANSFER_MLS`). The affine velocity field is
     /// `C_p = B_p D_p^-1`, with D_p the second moment of the particle's weights where it next
     /// scatters.
     pub affine: [*const mpm_real; 9],
@@ -64,6 +64,10 @@ pub struct MpmParticlesView {
     /// The hoop stretch F_thetatheta - 1 = r / r_0 - 1, the out-of-plane part of the
     /// deformation gradient (NULL unless the dimension is `MPM_DIMENSION_AXISYMMETRIC2D`).
     pub hoop: *const mpm_real,
+    /// The plastic history: the equivalent plastic strain (von Mises), the accumulated plastic
+    /// shear (Drucker-Prager), J_p - 1 (snow); 0 for other models (NULL unless
+    /// `MpmEffects::plasticity`).
+    pub plastic: *const mpm_real,
 }
 
 /// Sums over the active particles, in double precision. In plane strain mass, momentum and
@@ -114,7 +118,7 @@ pub unsafe extern "C" fn mpm_world_particles(
         let axis = |s: &[mpm_real], used: bool| if used { s.as_ptr() } else { core::ptr::null() };
         let forces = def.effects.particle_forces;
         let per_particle = def.effects.damping.is_some_and(|dm| dm.per_particle);
-        let apic = def.transfer == kernel::Transfer::Apic;
+        let apic = def.transfer.is_affine();
         let heat = def.effects.heat.is_some();
         let diffusion = def.effects.diffusion.is_some();
         let axisymmetric = def.dimension == kernel::Dimension::Axisymmetric2D;
@@ -145,6 +149,7 @@ pub unsafe extern "C" fn mpm_world_particles(
             grid_temperature: axis(v.grid_temperature, heat),
             grid_concentration: axis(v.grid_concentration, diffusion),
             hoop: axis(v.hoop, axisymmetric),
+            plastic: axis(v.plastic, def.effects.plasticity),
         };
         // SAFETY: checked non-NULL.
         unsafe { put(view_out, out) };

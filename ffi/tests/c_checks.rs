@@ -155,6 +155,7 @@ fn rust_layout() -> String {
         traction_schedules,
         heat,
         diffusion,
+        plasticity,
     }));
     lines.extend(struct_lines!(MpmWorldDef {
         dimension,
@@ -189,6 +190,16 @@ fn rust_layout() -> String {
         reference_temperature,
         swelling,
         reference_concentration,
+        viscosity,
+        bulk_modulus,
+        pressure_exponent,
+        yield_stress,
+        hardening_modulus,
+        friction_angle,
+        cohesion,
+        critical_compression,
+        critical_stretch,
+        hardening_coefficient,
         internal_cookie,
     }));
     lines.extend(struct_lines!(MpmParticlesView {
@@ -211,6 +222,7 @@ fn rust_layout() -> String {
         grid_temperature,
         grid_concentration,
         hoop,
+        plastic,
     }));
     lines.extend(struct_lines!(MpmDiagnostics {
         particle_count,
@@ -841,6 +853,7 @@ fn effects2d(t: &mut Text) {
                 faces: diffusion_faces,
                 sources: false,
             }),
+            plasticity: false,
         },
         ..WorldDef::DEFAULT
     };
@@ -1292,6 +1305,16 @@ fn defaults_match_the_kernel() {
     assert_eq!(md.reference_temperature, m.reference_temperature);
     assert_eq!(md.swelling, m.swelling);
     assert_eq!(md.reference_concentration, m.reference_concentration);
+    assert_eq!(md.viscosity, m.viscosity);
+    assert_eq!(md.bulk_modulus, m.bulk_modulus);
+    assert_eq!(md.pressure_exponent, m.pressure_exponent);
+    assert_eq!(md.yield_stress, m.yield_stress);
+    assert_eq!(md.hardening_modulus, m.hardening_modulus);
+    assert_eq!(md.friction_angle, m.friction_angle);
+    assert_eq!(md.cohesion, m.cohesion);
+    assert_eq!(md.critical_compression, m.critical_compression);
+    assert_eq!(md.critical_stretch, m.critical_stretch);
+    assert_eq!(md.hardening_coefficient, m.hardening_coefficient);
     assert_ne!(md.internal_cookie, 0);
     assert_ne!(md.internal_cookie, wd.internal_cookie);
 
@@ -1566,6 +1589,7 @@ fn effects_definition_round_trip() {
             ],
             sources: 0,
         },
+        plasticity: 1,
     };
     let heat = Transport {
         faces: [
@@ -1629,6 +1653,7 @@ fn effects_definition_round_trip() {
             traction_schedules: [traction_k, pulse_k, traction_k, pulse_k],
             heat: Some(heat),
             diffusion: Some(diffusion),
+            plasticity: true,
         },
         ..WorldDef::DEFAULT
     };
@@ -1673,6 +1698,17 @@ fn effects_definition_round_trip() {
     m.reference_temperature = 293.5;
     m.swelling = -0.0625;
     m.reference_concentration = 0.25;
+    m.model = MpmMaterialModel::Snow as u32;
+    m.viscosity = 0.5;
+    m.bulk_modulus = 3.0e5;
+    m.pressure_exponent = 3.0;
+    m.yield_stress = 2.0e4;
+    m.hardening_modulus = 1.0e5;
+    m.friction_angle = 35.0;
+    m.cohesion = 10.0;
+    m.critical_compression = 0.03125;
+    m.critical_stretch = 0.005;
+    m.hardening_coefficient = 8.0;
     let mut id = u32::MAX;
     // SAFETY: `world` is the world just made; the other pointers are locals.
     assert_eq!(
@@ -1691,6 +1727,17 @@ fn effects_definition_round_trip() {
             reference_temperature: 293.5,
             swelling: -0.0625,
             reference_concentration: 0.25,
+            model: kernel::MaterialModel::Snow,
+            viscosity: 0.5,
+            bulk_modulus: 3.0e5,
+            pressure_exponent: 3.0,
+            yield_stress: 2.0e4,
+            hardening_modulus: 1.0e5,
+            friction_angle: 35.0,
+            cohesion: 10.0,
+            critical_compression: 0.03125,
+            critical_stretch: 0.005,
+            hardening_coefficient: 8.0,
             ..MaterialDef::DEFAULT
         })
     );

@@ -297,6 +297,8 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     }
     e.heat = transport(inp, -500.0, 500.0);
     e.diffusion = transport(inp, -2.0, 2.0);
+    // The plastic models' history column, about half the time (2: an invalid flag).
+    e.plasticity = inp.u32_below(3) % 3;
     e
 }
 
@@ -412,7 +414,8 @@ fuzz_target!(|data: &[u8]| {
             match op {
                 1 => {
                     let mut m = mpm_material_def_default_f32();
-                    m.model = inp.u32_below(3);
+                    // Every model and one past them.
+                    m.model = inp.u32_below(8);
                     m.youngs_modulus = inp.real_in(1.0e3, 1.0e7);
                     m.poisson_ratio = inp.real_in(-0.9, 0.49);
                     m.density = inp.real_in(10.0, 5000.0);
@@ -428,6 +431,20 @@ fuzz_target!(|data: &[u8]| {
                     if inp.byte() % 2 == 0 {
                         m.swelling = inp.real_in(-0.1, 0.1);
                         m.reference_concentration = inp.real_in(-2.0, 2.0);
+                    }
+                    // The fluid, plastic and viscous parameters, half the time (else the
+                    // defaults), each from below its range to past it.
+                    if inp.byte() % 2 == 0 {
+                        m.viscosity = inp.real_in(-1.0, 50.0);
+                        m.bulk_modulus = inp.real_in(-1.0e3, 1.0e7);
+                        m.pressure_exponent = inp.real_in(0.0, 10.0);
+                        m.yield_stress = inp.real_in(-1.0e3, 1.0e6);
+                        m.hardening_modulus = inp.real_in(-1.0e3, 1.0e7);
+                        m.friction_angle = inp.real_in(-5.0, 95.0);
+                        m.cohesion = inp.real_in(-1.0e2, 1.0e4);
+                        m.critical_compression = inp.real_in(-0.1, 1.1);
+                        m.critical_stretch = inp.real_in(-0.1, 0.5);
+                        m.hardening_coefficient = inp.real_in(-1.0, 20.0);
                     }
                     let mut id = 0;
                     mpm_world_add_material(world, &m, &mut id)

@@ -147,6 +147,13 @@ pub struct Effects {
     /// (dimensionless, c / c_sat) on the particles, diffused with each material's
     /// [`crate::MaterialDef::diffusivity`].
     pub diffusion: Option<Transport>,
+    /// Reserve the plastic history column: one value per particle that the plastic models
+    /// keep ([`crate::MaterialModel::plastic`]: the equivalent plastic strain of
+    /// [`crate::MaterialModel::VonMises`], the accumulated plastic shear of
+    /// [`crate::MaterialModel::DruckerPrager`], `J_p - 1` of [`crate::MaterialModel::Snow`]).
+    /// Those models can be added only when it is declared; a world without it has the memory
+    /// and the step of one without plastic materials.
+    pub plasticity: bool,
 }
 
 /// How many schedules the tractions may follow ([`Effects::traction_schedules`]).
@@ -163,6 +170,7 @@ impl Effects {
         traction_schedules: [Schedule::constant(1.0); TRACTION_SCHEDULES],
         heat: None,
         diffusion: None,
+        plasticity: false,
     };
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).

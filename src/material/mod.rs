@@ -9,11 +9,17 @@
 //! An isotropic eigenstrain (thermal expansion, swelling: `F_0 = (1 + d) I`) is taken out of the
 //! deformation before the model sees it ([`elastic_part`]), so the models know nothing of it.
 
+mod drucker_prager;
+mod fixed_corotated;
+mod fluid;
 mod linear_elastic;
 mod neo_hookean;
+mod principal;
+mod snow;
+mod von_mises;
 
 use crate::layout::MaterialRecord;
-use crate::pack::{matrix, packs, MatOf, Num, Pack};
+use crate::pack::{matrix, packs, unpacked, MatOf, Num, Pack};
 use crate::{MaterialModel, Real};
 
 /// Stress as a D x D matrix plus the plane-strain `zz` component (0 in 3D), of one particle
@@ -24,23 +30,36 @@ pub(crate) struct Stress<const D: usize, T = Real> {
     pub zz: T,
 }
 
-/// The deformation a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
-/// `F_zz - 1` (2D only; ignored in 3D) and `J - 1 = det F - 1` of the whole 3 x 3 `F`, of one
-/// particle (`T = Real`) or of a pack of them.
+/// The state a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
+/// `F_zz - 1` (2D only; ignored in 3D), `J - 1 = det F - 1` of the whole 3 x 3 `F`, and the
+/// plastic history (0 for models without one), of one particle (`T = Real`) or of a pack of
+/// them. For the inelastic models F is the elastic part `F_e`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Deformation<const D: usize, T = Real> {
     pub h: MatOf<T, D>,
     pub hzz: T,
     pub jm1: T,
+    pub plastic: T,
 }
 
 impl<const D: usize, T: Num> Deformation<D, T> {
-    /// From `H` and the out-of-plane `F_zz - 1` (0 in plane strain and in 3D).
+    /// From `H` and the out-of-plane `F_zz - 1` (0 in plane strain and in 3D), no history.
     #[inline(always)]
     pub fn new(h: MatOf<T, D>, hzz: T) -> Self {
+        Self::with_plastic(h, hzz, T::splat(0.0))
+    }
+
+    /// From `H`, `F_zz - 1` and the plastic history.
+    #[inline(always)]
+    pub fn with_plastic(h: MatOf<T, D>, hzz: T, plastic: T) -> Self {
         let j2 = crate::math::det_identity_plus_minus_one(&h);
         let jm1 = if D == 2 { j2 + hzz + j2 * hzz } else { j2 };
-        Deformation { h, hzz, jm1 }
+        Deformation {
+            h,
+            hzz,
+            jm1,
+            plastic,
+        }
     }
 }
 
@@ -70,6 +89,7 @@ pub(crate) fn elastic_part<const D: usize, T: Num>(
         h,
         hzz: (f.hzz - d) * inv,
         jm1: (f.jm1 - cube_m1) / cube,
+        plastic: f.plastic,
     };
     (e, cube)
 }
@@ -89,34 +109,80 @@ pub(crate) fn eigenstrain_part(r: &MaterialRecord, field: usize, value: Real) ->
 /// Parameters the models need, taken from a material record once per step.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Params {
+    /// Lamé's lambda (a fluid's bulk modulus K), Pa.
     pub lambda: Real,
     pub mu: Real,
     pub inv_rho0: Real,
+    /// Tait's exponent gamma (fluid).
+    pub pressure_exponent: Real,
+    /// Initial yield stress and hardening modulus, Pa (von Mises).
+    pub yield_stress: Real,
+    pub hardening_modulus: Real,
+    /// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` and the apex's mean
+    /// tension `c cot(phi)`, Pa.
+    pub friction: Real,
+    pub apex_tension: Real,
+    /// Snow: `ln(1 - theta_c)`, `ln(1 + theta_s)` and xi.
+    pub log_compression: Real,
+    pub log_stretch: Real,
+    pub hardening_coefficient: Real,
 }
 
 impl Params {
     pub fn of(r: &MaterialRecord) -> Params {
+        let phi = r.friction_angle as f64 * core::f64::consts::PI / 180.0;
+        let (sin, cos) = (libm::sin(phi), libm::cos(phi));
+        let friction = libm::sqrt(2.0 / 3.0) * 2.0 * sin / (3.0 - sin);
+        let apex_tension = if r.cohesion > 0.0 {
+            r.cohesion as f64 * cos / sin
+        } else {
+            0.0
+        };
         Params {
             lambda: r.lambda,
             mu: r.mu,
             inv_rho0: 1.0 / r.density,
+            pressure_exponent: r.pressure_exponent,
+            yield_stress: r.yield_stress,
+            hardening_modulus: r.hardening_modulus,
+            friction: friction as Real,
+            apex_tension: apex_tension as Real,
+            log_compression: libm::log1p(-(r.critical_compression as f64)) as Real,
+            log_stretch: libm::log1p(r.critical_stretch as f64) as Real,
+            hardening_coefficient: r.hardening_coefficient,
         }
     }
 }
 
 /// The model stored in a record.
 pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
-    if r.model == MaterialModel::LinearElastic as u32 as Real {
-        MaterialModel::LinearElastic
-    } else {
-        MaterialModel::NeoHookean
-    }
+    // A stored record holds a valid code (`add_material` wrote it, `World::open` checks it);
+    // anything else reads as the default model, which then fails that check.
+    MaterialModel::from_code(r.model as u32).unwrap_or(MaterialModel::NeoHookean)
 }
 
-/// A constitutive model (seeds/000 eq 18): the deformation in, Kirchhoff stress out. Adding a
-/// model is one file implementing this trait, one arm of [`MaterialModel`] (and of the C enum)
-/// and of [`by_model!`], and its tests.
+/// A constitutive model (seeds/000 eq 18): the deformation in, Kirchhoff stress out; an
+/// inelastic model (a fluid, plasticity) also changes the deformation each step before its
+/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait,
+/// one arm of [`MaterialModel`] (and of the C enum) and of [`by_model!`], and its tests.
 pub(crate) trait Model {
+    /// Whether [`Model::inelastic`] changes anything (false: the step skips it).
+    const INELASTIC: bool = false;
+
+    /// The deformation after this step's inelastic part: the trial state (`F_e` updated by
+    /// `dF`) in, the elastic state and history the stress is taken from out (a plastic
+    /// return mapping; a fluid's projection to `J^(1/3) I`). `hoop`: the out-of-plane
+    /// stretch of a 2D deformation is free (axisymmetric), not held at 1 (plane strain).
+    /// Written on [`Num`] without branches, as [`Model::kirchhoff`].
+    #[inline(always)]
+    fn inelastic<const D: usize, T: Num>(
+        _p: &Params,
+        f: &Deformation<D, T>,
+        _hoop: bool,
+    ) -> Deformation<D, T> {
+        *f
+    }
+
     /// The Kirchhoff stress `tau` (not yet divided by `rho0`) for `jm1 = det F - 1 > -1`,
     /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of a pack
     /// of particles sharing this material (`T = Pack<W>`, a chunk's stress update). Lanes of
@@ -147,6 +213,26 @@ macro_rules! by_model {
             }
             MaterialModel::LinearElastic => {
                 type $m = linear_elastic::LinearElastic;
+                $e
+            }
+            MaterialModel::FixedCorotated => {
+                type $m = fixed_corotated::FixedCorotated;
+                $e
+            }
+            MaterialModel::Fluid => {
+                type $m = fluid::Fluid;
+                $e
+            }
+            MaterialModel::VonMises => {
+                type $m = von_mises::VonMises;
+                $e
+            }
+            MaterialModel::DruckerPrager => {
+                type $m = drucker_prager::DruckerPrager;
+                $e
+            }
+            MaterialModel::Snow => {
+                type $m = snow::Snow;
                 $e
             }
         }
@@ -195,9 +281,10 @@ pub(crate) fn particle_stress<const D: usize>(
 }
 
 /// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
-/// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D) and `jm1[lane]` in,
-/// `tau[k][lane]` out in the stored component order ([`crate::phases::sym_pairs`], then `zz`
-/// in 2D). Lane by lane, or as one pack where the model asks for it ([`Model::packed`]).
+/// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D), `jm1[lane]` and the
+/// plastic history `plastic[lane]` in, `tau[k][lane]` out in the stored component order
+/// ([`crate::phases::sym_pairs`], then `zz` in 2D). Lane by lane, or as one pack where the
+/// model asks for it ([`Model::packed`]).
 #[inline(always)]
 pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
     model: MaterialModel,
@@ -205,6 +292,7 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
     h: &[[[Real; W]; D]; D],
     hzz: &[Real; W],
     jm1: &[Real; W],
+    plastic: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
     // The whole model inside its arm: a stress matrix of packs carried out of the `match` was
@@ -215,6 +303,7 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
                 h: *packs(h),
                 hzz: Pack(*hzz),
                 jm1: Pack(*jm1),
+                plastic: Pack(*plastic),
             };
             let s = M::kirchhoff(p, &f);
             for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
@@ -229,6 +318,7 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
                     h: matrix(|a, b| h[a][b][ln]),
                     hzz: hzz[ln],
                     jm1: jm1[ln],
+                    plastic: plastic[ln],
                 };
                 let s = M::kirchhoff(p, &f);
                 for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
@@ -240,6 +330,91 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
             }
         }
     })
+}
+
+/// Whether the model has an inelastic part ([`Model::INELASTIC`]).
+#[inline(always)]
+pub(crate) fn inelastic(model: MaterialModel) -> bool {
+    by_model!(model, M => M::INELASTIC)
+}
+
+/// The inelastic part of the material update ([`Model::inelastic`]) of the `W` particles of a
+/// chunk that share the material `model`, on the chunk's lane arrays in place, as one pack
+/// (its return mappings are written without branches, and their logarithms and exponentials
+/// are calls that a loop over lanes would not vectorise around). `hoop`: axisymmetric.
+#[inline(always)]
+pub(crate) fn inelastic_lanes<const D: usize, const W: usize>(
+    model: MaterialModel,
+    p: &Params,
+    h: &mut [[[Real; W]; D]; D],
+    hzz: &mut [Real; W],
+    jm1: &mut [Real; W],
+    plastic: &mut [Real; W],
+    hoop: bool,
+) {
+    by_model!(model, M => {
+        if M::INELASTIC {
+            let f = Deformation::<D, Pack<W>> {
+                h: *packs(h),
+                hzz: Pack(*hzz),
+                jm1: Pack(*jm1),
+                plastic: Pack(*plastic),
+            };
+            let g = M::inelastic(p, &f, hoop);
+            *h = *unpacked(&g.h);
+            *hzz = g.hzz.0;
+            *jm1 = g.jm1.0;
+            *plastic = g.plastic.0;
+        }
+    })
+}
+
+/// The inelastic part of the material update of one particle of material `r`
+/// ([`Model::inelastic`]); `hoop`: axisymmetric.
+#[inline(always)]
+pub(crate) fn particle_inelastic<const D: usize>(
+    r: &MaterialRecord,
+    f: &Deformation<D>,
+    hoop: bool,
+) -> Deformation<D> {
+    by_model!(model_of(r), M => M::inelastic(&Params::of(r), f, hoop))
+}
+
+/// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0`:
+/// `tau_visc = J sigma_visc`, `sigma_visc = eta (L + L^T - 2/3 tr(L) I)` with `L = grad v`
+/// (`l[a][b][lane]`) and, in 2D, the out-of-plane rate `lzz` (`v_r / r` axisymmetric, 0 in
+/// plane strain), which enters the trace and `zz`. Lanes of materials without viscosity, or of
+/// no material, get nothing.
+#[inline(always)]
+pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
+    materials: &[MaterialRecord],
+    ids: &[u32; W],
+    l: &[[[Real; W]; D]; D],
+    lzz: &[Real; W],
+    jm1: &[Real; W],
+    tau: &mut [[Real; W]; 6],
+) {
+    for ln in 0..W {
+        let k = materials
+            .get(ids[ln] as usize)
+            .map_or(0.0, |r| r.viscosity / r.density);
+        let k = k * (jm1[ln] + 1.0);
+        let mut tr = if D == 2 { lzz[ln] } else { 0.0 };
+        for a in 0..D {
+            tr += l[a][a][ln];
+        }
+        let third = tr * (2.0 / 3.0);
+        for (c, &(a, b)) in crate::phases::sym_pairs(D).iter().enumerate() {
+            let mut s = l[a][b][ln] + l[b][a][ln];
+            if a == b {
+                s -= third;
+            }
+            tau[c][ln] += k * s;
+        }
+        if D == 2 {
+            tau[3][ln] += k * (2.0 * lzz[ln] - third);
+        }
+    }
 }
 
 /// Strain energy per unit initial volume, J/m^3, of a deformation.
@@ -255,6 +430,29 @@ pub(crate) fn energy_density<const D: usize>(
 mod tests {
     use super::*;
     use crate::math::Mat;
+
+    /// Every model.
+    const ALL: [MaterialModel; 7] = [
+        MaterialModel::LinearElastic,
+        MaterialModel::NeoHookean,
+        MaterialModel::FixedCorotated,
+        MaterialModel::Fluid,
+        MaterialModel::VonMises,
+        MaterialModel::DruckerPrager,
+        MaterialModel::Snow,
+    ];
+
+    /// Parameters with the given Lamé constants and `1 / rho0`, the other models' from the
+    /// default material.
+    fn params(lambda: Real, mu: Real, inv_rho0: Real) -> Params {
+        let r = crate::world::material_record(&crate::MaterialDef::DEFAULT).unwrap();
+        Params {
+            lambda,
+            mu,
+            inv_rho0,
+            ..Params::of(&r)
+        }
+    }
 
     fn rotation_minus_identity(angle: Real, axis: usize) -> Mat<3> {
         let (s, c) = (
@@ -274,12 +472,8 @@ mod tests {
     /// in both models, to round-off, for many angles about every axis, in 3D and 2D.
     #[test]
     fn rigid_rotation_gives_zero_stress_and_energy() {
-        let p = Params {
-            lambda: 5.0e5,
-            mu: 4.0e5,
-            inv_rho0: 1.0e-3,
-        };
-        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+        let p = params(5.0e5, 4.0e5, 1.0e-3);
+        for model in ALL {
             for k in 0..64 {
                 let angle = -3.0 + 6.0 * k as Real / 63.0;
                 for axis in 0..3 {
@@ -307,18 +501,14 @@ mod tests {
         }
     }
 
-    /// Uniaxial small strain (H = diag(eps, 0, 0)): both models give the linear-elastic stress
+    /// Uniaxial small strain (H = diag(eps, 0, 0)): every solid model gives the linear-elastic stress
     /// `tau_xx = (lambda + 2 mu) eps`, `tau_yy = lambda eps` to first order (relative 2 eps).
     #[test]
     fn small_uniaxial_strain_matches_linear_elasticity() {
-        let p = Params {
-            lambda: 5.0e5,
-            mu: 4.0e5,
-            inv_rho0: 1.0,
-        };
+        let p = params(5.0e5, 4.0e5, 1.0);
         let eps = 1.0e-4;
         let f = Deformation::<3>::new([[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]], 0.0);
-        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+        for model in ALL.into_iter().filter(|&m| m != MaterialModel::Fluid) {
             let s = kirchhoff_over_rho0(model, &p, &f);
             let xx = (p.lambda + 2.0 * p.mu) * eps;
             let yy = p.lambda * eps;
@@ -336,11 +526,7 @@ mod tests {
     /// both models, at small and large strain.
     #[test]
     fn out_of_plane_stretch_matches_the_3d_model() {
-        let p = Params {
-            lambda: 5.0e5,
-            mu: 4.0e5,
-            inv_rho0: 1.0e-3,
-        };
+        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for (scale, hzz) in [(1.0e-4, -3.0e-5), (0.2, 0.3), (0.3, -0.4)] {
             let h2: Mat<2> = [[0.5 * scale, -0.3 * scale], [0.2 * scale, -0.4 * scale]];
             let h3: Mat<3> = [
@@ -350,7 +536,7 @@ mod tests {
             ];
             let (f2, f3) = (Deformation::new(h2, hzz), Deformation::new(h3, 0.0));
             assert!((f2.jm1 - f3.jm1).abs() <= 4.0 * Real::EPSILON * (1.0 + f3.jm1.abs()));
-            for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+            for model in ALL {
                 let (s2, s3) = (
                     kirchhoff_over_rho0(model, &p, &f2),
                     kirchhoff_over_rho0(model, &p, &f3),
@@ -379,11 +565,7 @@ mod tests {
     /// out-of-plane stretch too), leaves no elastic part: zero stress and energy, both models.
     #[test]
     fn a_free_eigenstrain_is_stress_free() {
-        let p = Params {
-            lambda: 5.0e5,
-            mu: 4.0e5,
-            inv_rho0: 1.0e-3,
-        };
+        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for d in [1.0e-4, -2.0e-3, 0.05, -0.3] {
             let f2 = Deformation::<2>::new([[d, 0.0], [0.0, d]], d);
             let f3 = Deformation::<3>::new([[d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d]], 0.0);
@@ -393,7 +575,7 @@ mod tests {
             assert!(
                 (k2 - cube).abs() < 8.0 * Real::EPSILON && (k3 - cube).abs() < 8.0 * Real::EPSILON
             );
-            for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+            for model in ALL {
                 let bound = 16.0 * Real::EPSILON * 1300.0;
                 let s2 = kirchhoff_over_rho0(model, &p, &e2);
                 let s3 = kirchhoff_over_rho0(model, &p, &e3);
@@ -415,11 +597,7 @@ mod tests {
     #[test]
     fn every_model_gives_a_chunk_the_bits_of_one_particle() {
         const W: usize = 16;
-        let p = Params {
-            lambda: 5.0e5,
-            mu: 4.0e5,
-            inv_rho0: 1.0e-3,
-        };
+        let p = params(5.0e5, 4.0e5, 1.0e-3);
         let mut state = 12345u64;
         let mut next = |scale: Real| {
             state = state
@@ -476,13 +654,39 @@ mod tests {
                     (hzz[ln], jm1[ln]) = (zz, each[ln].jm1);
                 }
                 let mut tau = [[0.0; W]; 6];
-                kirchhoff_lanes(model, p, &h, &hzz, &jm1, &mut tau);
+                let mut plastic = [0.0; W];
+                for (ln, f) in each.iter_mut().enumerate() {
+                    f.plastic = next(0.2);
+                    plastic[ln] = f.plastic;
+                }
+                kirchhoff_lanes(model, p, &h, &hzz, &jm1, &plastic, &mut tau);
                 let f = Deformation {
                     h: *packs(&h),
                     hzz: Pack(hzz),
                     jm1: Pack(jm1),
+                    plastic: Pack(plastic),
                 };
                 let packed = kirchhoff_over_rho0(model, p, &f);
+                // The inelastic part: the chunk's pack against one particle at a time.
+                for hoop in [false, true] {
+                    let (mut h2, mut hzz2, mut jm12, mut pl2) = (h, hzz, jm1, plastic);
+                    inelastic_lanes(model, p, &mut h2, &mut hzz2, &mut jm12, &mut pl2, hoop);
+                    for (ln, f) in each.iter().enumerate() {
+                        let g = by_model!(model, M => M::inelastic(p, f, hoop));
+                        for r in 0..D {
+                            for c in 0..D {
+                                assert_eq!(
+                                    h2[r][c][ln].to_bits(),
+                                    g.h[r][c].to_bits(),
+                                    "{model:?}"
+                                );
+                            }
+                        }
+                        assert_eq!(hzz2[ln].to_bits(), g.hzz.to_bits(), "{model:?}");
+                        assert_eq!(jm12[ln].to_bits(), g.jm1.to_bits(), "{model:?}");
+                        assert_eq!(pl2[ln].to_bits(), g.plastic.to_bits(), "{model:?}");
+                    }
+                }
                 for (ln, f) in each.iter().enumerate() {
                     let s = kirchhoff_over_rho0(model, p, f);
                     for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
@@ -497,7 +701,7 @@ mod tests {
                 }
             }
         }
-        for model in [MaterialModel::NeoHookean, MaterialModel::LinearElastic] {
+        for model in ALL {
             check::<2>(&p, model, &mut next);
             check::<3>(&p, model, &mut next);
         }

@@ -34,7 +34,8 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::material::{
-    eigenstrain_part, elastic_part, model_of, particle_stress, Deformation, Params,
+    add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, particle_inelastic,
+    particle_stress, Deformation, Params,
 };
 use crate::math::INV;
 use crate::pack::{matrix, packs, unpacked, Pack};
@@ -387,7 +388,13 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
-    let jm1 = Deformation::new(*packs(h), Pack(hzz)).jm1.0;
+    let mut jm1 = Deformation::new(*packs(h), Pack(hzz)).jm1.0;
+    // The plastic history, when declared (the plastic models read and change it).
+    let mut plastic: Lane<W> = if ctx.plastic {
+        load(p.plastic, start)
+    } else {
+        [0.0; W]
+    };
     // Material: the model's chunk path when every lane shares one material (the common case,
     // vectorised); otherwise lane by lane.
     // Without `Option` combinators: their closures were left out of line (a profile showed
@@ -412,20 +419,34 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     let eigen = eigenstrain(ctx, p, start, &ids);
     let ok = if let Some(rec) = uniform {
         let (model, params) = (model_of(rec), Params::of(rec));
+        // The inelastic part first (a return mapping, a fluid's projection): the stress is
+        // that of the state it leaves.
+        if inelastic(model) {
+            I::inelastic::<D, W>(
+                model,
+                &params,
+                h,
+                &mut hzz,
+                &mut jm1,
+                &mut plastic,
+                S::AXISYMMETRIC,
+            );
+        }
         let mut admissible = Lanes::ALL;
         match &eigen {
-            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, tau),
+            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, &plastic, tau),
             Some(d) => {
                 let f = Deformation {
                     h: *packs(h),
                     hzz: Pack(hzz),
                     jm1: Pack(jm1),
+                    plastic: Pack(plastic),
                 };
                 let (e, cube) = elastic_part(&f, Pack(*d));
                 let he = *unpacked(&e.h);
                 // The eigenstrain must not invert the material either.
                 admissible = rows::above::<I, W>(d, -1.0);
-                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, tau);
+                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, &plastic, tau);
                 for row in tau.iter_mut() {
                     *row = (Pack(*row) * cube).0;
                 }
@@ -436,14 +457,27 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         stress_lane_by_lane(
             ctx.materials,
             &ids,
-            h,
-            &hzz,
-            &jm1,
+            LaneDeformation {
+                h,
+                hzz: &mut hzz,
+                jm1: &mut jm1,
+                plastic: &mut plastic,
+            },
+            S::AXISYMMETRIC,
             eigen.as_ref(),
             update,
             tau,
         )
     };
+    if ctx.viscous {
+        let zero = [0.0; W];
+        let lzz = if S::AXISYMMETRIC {
+            &gathered.hoop
+        } else {
+            &zero
+        };
+        add_viscous_lanes(ctx.materials, &ids, l, lzz, &jm1, tau);
+    }
     // The runaway bound: an updated lane whose volume ratio left the band freezes (the
     // inverted and NaN lanes failed above).
     let [lo, hi] = ctx.jm1_band;
@@ -453,7 +487,7 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
     let mut sum = [0.0; W];
     for ln in 0..W {
-        sum[ln] = jm1[ln] + hzz[ln];
+        sum[ln] = jm1[ln] + hzz[ln] + plastic[ln];
         for k in 0..ns {
             sum[ln] += tau[k][ln];
         }
@@ -474,6 +508,9 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     }
     if S::AXISYMMETRIC {
         commit(p.hoop, start, &hzz, ok);
+    }
+    if ctx.plastic {
+        commit(p.plastic, start, &plastic, ok);
     }
     (ok, runaway)
 }
@@ -507,18 +544,25 @@ fn eigenstrain<const D: usize, const W: usize>(
     Some(d)
 }
 
-/// The stress of the lanes in `update` of a chunk whose lanes do not share one material, one
-/// lane at a time ([`particle_stress`]); returns the lanes it updated (not those inverted or
+/// A chunk's deformation lane arrays, borrowed for the lane-by-lane material update.
+struct LaneDeformation<'a, const D: usize, const W: usize> {
+    h: &'a mut [[Lane<W>; D]; D],
+    hzz: &'a mut Lane<W>,
+    jm1: &'a mut Lane<W>,
+    plastic: &'a mut Lane<W>,
+}
+
+/// The material update of the lanes in `update` of a chunk whose lanes do not share one
+/// material, one lane at a time: the inelastic part ([`particle_inelastic`]) on `f` in place,
+/// then the stress ([`particle_stress`]); returns the lanes it updated (not those inverted or
 /// of an unknown material). A function of its own per dimension, not inlined into every pass
 /// form: chunks that mix materials are few, and each inlined copy cost build time and size.
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 fn stress_lane_by_lane<const D: usize, const W: usize>(
     materials: &[crate::layout::MaterialRecord],
     ids: &[u32; W],
-    h: &[[Lane<W>; D]; D],
-    hzz: &Lane<W>,
-    jm1: &Lane<W>,
+    f: LaneDeformation<'_, D, W>,
+    hoop: bool,
     eigen: Option<&Lane<W>>,
     update: Lanes<W>,
     tau: &mut [Lane<W>; 6],
@@ -528,13 +572,21 @@ fn stress_lane_by_lane<const D: usize, const W: usize>(
         let Some(rec) = materials.get(ids[ln] as usize) else {
             continue;
         };
-        let f = Deformation::<D> {
-            h: matrix(|r, c| h[r][c][ln]),
-            hzz: hzz[ln],
-            jm1: jm1[ln],
+        let one = Deformation::<D> {
+            h: matrix(|r, c| f.h[r][c][ln]),
+            hzz: f.hzz[ln],
+            jm1: f.jm1[ln],
+            plastic: f.plastic[ln],
         };
+        let one = particle_inelastic(rec, &one, hoop);
+        for r in 0..D {
+            for c in 0..D {
+                f.h[r][c][ln] = one.h[r][c];
+            }
+        }
+        (f.hzz[ln], f.jm1[ln], f.plastic[ln]) = (one.hzz, one.jm1, one.plastic);
         let d = eigen.map_or(0.0, |d| d[ln]);
-        if let Some(s) = particle_stress(rec, &f, d) {
+        if let Some(s) = particle_stress(rec, &one, d) {
             for (row, &v) in tau
                 .iter_mut()
                 .zip(&s)

@@ -233,8 +233,21 @@ passes! {
         h: &[[Lane<W>; D]; D],
         hzz: &Lane<W>,
         jm1: &Lane<W>,
+        plastic: &Lane<W>,
         tau: &mut [Lane<W>; 6],
     ) => crate::material::kirchhoff_lanes;
+
+    /// [`crate::material::inelastic_lanes`]: the inelastic part of one chunk's material
+    /// update (return mapping, projection), a function of its own as the stress is.
+    fn inelastic [const D: usize, const W: usize] [] [D, W] (
+        model: MaterialModel,
+        params: &Params,
+        h: &mut [[Lane<W>; D]; D],
+        hzz: &mut Lane<W>,
+        jm1: &mut Lane<W>,
+        plastic: &mut Lane<W>,
+        hoop: bool,
+    ) => crate::material::inelastic_lanes;
 
     /// [`crate::world::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64

@@ -95,6 +95,10 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// Per transported scalar: declared, and some material expands (heat) or swells
     /// (diffusion) with it, so the stress update takes the eigenstrain out.
     pub eigenstrain: [bool; 2],
+    /// Plasticity is declared: the plastic history column is read and written.
+    pub plastic: bool,
+    /// Some material has a viscosity: the stress update adds the viscous stress.
+    pub viscous: bool,
 }
 
 /// The node box of a substep ([`NodeBox::of_particles`]), scanned in the instruction set

@@ -16,6 +16,9 @@ impl<'a> World<'a> {
     pub fn add_material(&mut self, m: &MaterialDef) -> Result<u32, Error> {
         let record = material_record(m)?;
         let def = self.def();
+        if m.model.plastic() && !def.effects.plasticity {
+            return Err(Error::EffectNotDeclared);
+        }
         let id = self.material_count();
         if id >= def.material_capacity as usize {
             return Err(Error::MaterialCapacityExceeded);
@@ -260,6 +263,9 @@ impl<'a> World<'a> {
             for k in 0..crate::layout::stress_components(d) {
                 self.real_col_mut(&layout, col::tau(d, k), cap)[i] = 0.0;
             }
+            if layout.plastic.count > 0 {
+                self.real_col_mut(&layout, layout.plastic.first, cap)[i] = 0.0;
+            }
             self.u32_col_mut(&layout, col::MATERIAL, cap)[i] = mat;
             self.u32_col_mut(&layout, col::STATUS, cap)[i] = ACTIVE;
             min_mass = min_mass.min(m as f64);
@@ -274,7 +280,7 @@ impl<'a> World<'a> {
 
 /// The record of a valid material definition, with what the step derives from it (Lame
 /// parameters, wave speed), or `InvalidMaterial`.
-pub(super) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> {
+pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> {
     let ok = m.youngs_modulus.is_finite()
         && m.youngs_modulus > 0.0
         && m.poisson_ratio > -1.0
@@ -290,7 +296,29 @@ pub(super) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         && m.thermal_expansion.is_finite()
         && m.reference_temperature.is_finite()
         && m.swelling.is_finite()
-        && m.reference_concentration.is_finite();
+        && m.reference_concentration.is_finite()
+        && m.viscosity.is_finite()
+        && m.viscosity >= 0.0
+        && m.bulk_modulus.is_finite()
+        && m.bulk_modulus > 0.0
+        && m.pressure_exponent.is_finite()
+        && m.pressure_exponent >= 1.0
+        && m.yield_stress.is_finite()
+        && m.yield_stress > 0.0
+        && m.hardening_modulus.is_finite()
+        && m.hardening_modulus >= 0.0
+        && m.friction_angle >= 0.0
+        && m.friction_angle < 90.0
+        && m.cohesion.is_finite()
+        && m.cohesion >= 0.0
+        // The apex of the yield surface is at the tension c cot(phi).
+        && (m.cohesion == 0.0 || m.friction_angle > 0.0)
+        && m.critical_compression > 0.0
+        && m.critical_compression < 1.0
+        && m.critical_stretch.is_finite()
+        && m.critical_stretch > 0.0
+        && m.hardening_coefficient.is_finite()
+        && m.hardening_coefficient >= 0.0;
     if !ok {
         return Err(Error::InvalidMaterial);
     }
@@ -314,7 +342,16 @@ pub(super) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         reference_temperature: m.reference_temperature,
         swelling: m.swelling,
         reference_concentration: m.reference_concentration,
-        reserved: [0.0; 2],
+        viscosity: m.viscosity,
+        bulk_modulus: m.bulk_modulus,
+        pressure_exponent: m.pressure_exponent,
+        yield_stress: m.yield_stress,
+        hardening_modulus: m.hardening_modulus,
+        friction_angle: m.friction_angle,
+        cohesion: m.cohesion,
+        critical_compression: m.critical_compression,
+        critical_stretch: m.critical_stretch,
+        hardening_coefficient: m.hardening_coefficient,
     })
 }
 

@@ -8,6 +8,8 @@ mod seed;
 mod step;
 mod types;
 
+#[cfg(test)]
+pub(crate) use add::material_record;
 pub(crate) use query::fastest_squared;
 pub use query::WorldRef;
 pub use step::{Phase, MAX_SUBSTEPS};

@@ -74,6 +74,9 @@ impl<'a> WorldRef<'a> {
             if !matches!(again, Some(Ok(r)) if bytemuck::bytes_of(&r) == bytemuck::bytes_of(rec)) {
                 return invalid;
             }
+            if model_of(rec).plastic() && !def.effects.plasticity {
+                return invalid;
+            }
         }
         let trac_start = layout.tractions_offset;
         let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
@@ -95,6 +98,7 @@ impl<'a> WorldRef<'a> {
             layout.scalar[0],
             layout.scalar[1],
             layout.hoop,
+            layout.plastic,
         ];
         let columns = (0..d * d)
             .map(|k| col::h(d, k / d, k % d))
@@ -209,6 +213,16 @@ impl<'a> WorldRef<'a> {
                 reference_temperature: r.reference_temperature,
                 swelling: r.swelling,
                 reference_concentration: r.reference_concentration,
+                viscosity: r.viscosity,
+                bulk_modulus: r.bulk_modulus,
+                pressure_exponent: r.pressure_exponent,
+                yield_stress: r.yield_stress,
+                hardening_modulus: r.hardening_modulus,
+                friction_angle: r.friction_angle,
+                cohesion: r.cohesion,
+                critical_compression: r.critical_compression,
+                critical_stretch: r.critical_stretch,
+                hardening_coefficient: r.hardening_coefficient,
             })
     }
 
@@ -230,13 +244,46 @@ impl<'a> WorldRef<'a> {
     pub(super) fn time_step_limits(&self, simd: Simd) -> TimeStepLimits {
         let layout = self.layout();
         let def = self.def();
-        let c_max = self
-            .materials(&layout)
-            .iter()
-            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
         let n = self.particle_count();
         let d = layout.d;
         let status = self.u32_col(&layout, col::STATUS, n);
+        // Snow's moduli harden by exp(xi (1 - J_p)), its wave speed by the square root of
+        // that: the fastest is that of the most compacted active particle of each snow
+        // material.
+        let materials = self.materials(&layout);
+        let mut hardening = [1.0f64; 8];
+        let snow = |id: usize| {
+            materials
+                .get(id)
+                .filter(|r| model_of(r) == crate::MaterialModel::Snow)
+        };
+        if layout.plastic.count > 0 && (0..materials.len()).any(|id| snow(id).is_some()) {
+            let plastic = self.real_col(&layout, layout.plastic.first, n);
+            let material = self.u32_col(&layout, col::MATERIAL, n);
+            for i in 0..n {
+                if status[i] != ACTIVE {
+                    continue;
+                }
+                let id = material[i] as usize;
+                if let Some(r) = snow(id) {
+                    let k = libm::exp(-(r.hardening_coefficient as f64) * plastic[i] as f64);
+                    let slot = &mut hardening[id.min(7)];
+                    *slot = slot.max(k);
+                }
+            }
+        }
+        let c_max = materials
+            .iter()
+            .enumerate()
+            .fold(0.0 as Real, |c, (id, r)| {
+                let k = if snow(id).is_some() {
+                    // Materials past the eighth share the last slot (a bound, not a value).
+                    libm::sqrt(hardening[id.min(7)])
+                } else {
+                    1.0
+                };
+                c.max((r.wave_speed as f64 * k) as Real)
+            });
         let v: [&[Real]; 3] = core::array::from_fn(|a| {
             if a < d {
                 self.real_col(&layout, col::v(d, a), n)
@@ -259,8 +306,9 @@ impl<'a> WorldRef<'a> {
                 + local(0)
                 + local(1)
         });
-        // Conduction and diffusion are explicit too: `dt <= h^2 / (2 d kappa)` with kappa the
-        // largest thermal diffusivity `k / (rho C_p)` or diffusivity D of a declared field.
+        // Conduction, diffusion and viscosity are explicit too: `dt <= h^2 / (2 d kappa)` with
+        // kappa the largest thermal diffusivity `k / (rho C_p)`, diffusivity D of a declared
+        // field or kinematic viscosity `eta / rho0`.
         let fx = &def.effects;
         let kappa = self.materials(&layout).iter().fold(0.0f64, |m, r| {
             let thermal = if fx.heat.is_some() {
@@ -273,7 +321,9 @@ impl<'a> WorldRef<'a> {
             } else {
                 0.0
             };
-            m.max(thermal).max(solvent)
+            // Viscosity diffuses momentum: its kinematic viscosity eta / rho0.
+            let viscous = r.viscosity as f64 / r.density as f64;
+            m.max(thermal).max(solvent).max(viscous)
         });
         let h = def.cell_size as f64;
         let conduction = h * h / (2.0 * d as f64 * kappa);
@@ -332,6 +382,7 @@ impl<'a> WorldRef<'a> {
             grid_temperature: group(layout.scalar[0], 1),
             grid_concentration: group(layout.scalar[1], 1),
             hoop: group(layout.hoop, 0),
+            plastic: group(layout.plastic, 0),
             damping: core::array::from_fn(|k| group(layout.damping, k)),
             affine: core::array::from_fn(|a| {
                 core::array::from_fn(|b| {

@@ -217,6 +217,8 @@ impl<'a> World<'a> {
                 fx.heat.is_some() && materials.iter().any(|m| m.thermal_expansion != 0.0),
                 fx.diffusion.is_some() && materials.iter().any(|m| m.swelling != 0.0),
             ],
+            plastic: fx.plasticity,
+            viscous: materials.iter().any(|m| m.viscosity != 0.0),
         };
         run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
     }

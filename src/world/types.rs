@@ -144,7 +144,8 @@ pub struct ParticlesView<'w> {
     pub volume0: &'w [Real],
     /// Displacement gradient `H = F - I`, entry `[a][b]` (row a, column b) with F the
     /// deformation gradient; 2D uses a, b < 2 (F_zz = 1). Stored as `F - I` so that small
-    /// strains keep full precision in f32.
+    /// strains keep full precision in f32. For a fluid and the plastic models, the elastic
+    /// part `F_e - I` (`F = F_e F_p`; a fluid keeps `F_e = J^(1/3) I`).
     pub displacement_gradient: [[&'w [Real]; 3]; 3],
     /// Kirchhoff stress over initial density, m^2/s^2: 2D xx, yy, xy, zz; 3D xx, yy, zz, xy,
     /// xz, yz. Cauchy stress is `rho0 / J` times it.
@@ -172,6 +173,12 @@ pub struct ParticlesView<'w> {
     /// Axisymmetric only (else empty): the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`, the
     /// out-of-plane part of the deformation gradient.
     pub hoop: &'w [Real],
+    /// The plastic history of each particle (empty unless [`crate::Effects::plasticity`] is
+    /// declared; 0 for particles of other models): the equivalent plastic strain
+    /// `sqrt(2/3) |eps_p|` of [`crate::MaterialModel::VonMises`], the accumulated plastic
+    /// shear strain of [`crate::MaterialModel::DruckerPrager`], `J_p - 1` of
+    /// [`crate::MaterialModel::Snow`] (its volume ratio is `J_e J_p`).
+    pub plastic: &'w [Real],
     /// APIC moment matrix `B_p = sum_i S_ip v_i (x_i - x_p)^T`, entry `[a][b]`, m^2/s (empty
     /// unless the transfer is APIC); with linear shape functions, the affine velocity matrix
     /// `C_p` itself, 1/s, in its gradient form (see [`crate::shape::Shape1D::GRADIENT_AFFINE`]). The affine velocity field is `C_p = B_p D_p^-1`, with
@@ -196,7 +203,11 @@ impl ParticlesView<'_> {
     pub(crate) fn deformation<const D: usize>(&self, i: usize) -> Deformation<D> {
         let h = &self.displacement_gradient;
         let m: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i]));
-        Deformation::new(m, self.hoop.get(i).copied().unwrap_or(0.0))
+        Deformation::with_plastic(
+            m,
+            self.hoop.get(i).copied().unwrap_or(0.0),
+            self.plastic.get(i).copied().unwrap_or(0.0),
+        )
     }
 
     /// `J = det F` of particle `i` (current volume over initial volume).

@@ -30,7 +30,11 @@ const HEATING: Real = 50.0;
 /// Cell size, m.
 const H: Real = 0.05;
 
-const MODELS: [MaterialModel; 2] = [MaterialModel::LinearElastic, MaterialModel::NeoHookean];
+const MODELS: [MaterialModel; 3] = [
+    MaterialModel::LinearElastic,
+    MaterialModel::NeoHookean,
+    MaterialModel::FixedCorotated,
+];
 
 /// The solid of these tests: it expands with temperature (alpha, `T_0`), and conducts heat and
 /// the concentration potential a little (with a uniform field and insulated faces that changes
@@ -82,7 +86,9 @@ fn bulk() -> f64 {
 /// - corotated linear: `e = F_e - I` (no rotation), `tau = J_e (lambda tr e I + 2 mu e)`,
 ///   `W = mu e:e + lambda (tr e)^2 / 2`;
 /// - neo-Hookean: `tau = mu (B_e - I) + lambda ln J_e I`,
-///   `W = mu/2 (tr B_e - 3) - mu ln J_e + lambda/2 (ln J_e)^2`.
+///   `W = mu/2 (tr B_e - 3) - mu ln J_e + lambda/2 (ln J_e)^2`;
+/// - fixed-corotated: `tau = 2 mu (F_e - I) F_e + lambda (J_e - 1) J_e I` (no rotation),
+///   `W = mu |F_e - I|^2 + lambda/2 (J_e - 1)^2`.
 fn exact_state(model: MaterialModel, s: [f64; 3], d: f64) -> ([f64; 3], f64) {
     let (lambda, mu) = lame();
     let fe = s.map(|v| v / (1.0 + d));
@@ -105,6 +111,14 @@ fn exact_state(model: MaterialModel, s: [f64; 3], d: f64) -> ([f64; 3], f64) {
                 0.5 * mu * (trb - 3.0) - mu * lnj + 0.5 * lambda * lnj * lnj,
             )
         }
+        MaterialModel::FixedCorotated => {
+            let ee: f64 = fe.iter().map(|v| (v - 1.0) * (v - 1.0)).sum();
+            (
+                fe.map(|f| 2.0 * mu * (f - 1.0) * f + lambda * (je - 1.0) * je),
+                mu * ee + 0.5 * lambda * (je - 1.0) * (je - 1.0),
+            )
+        }
+        other => unreachable!("{other:?} is not among the elastic models tested here"),
     };
     let cube = (1.0 + d).powi(3);
     let j = s[0] * s[1] * s[2];

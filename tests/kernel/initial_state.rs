@@ -11,7 +11,11 @@ use mpm_gimp::{
 const YOUNG: Real = 1.0e6;
 const POISSON: Real = 0.3;
 const DENSITY: Real = 1000.0;
-const MODELS: [MaterialModel; 2] = [MaterialModel::NeoHookean, MaterialModel::LinearElastic];
+const MODELS: [MaterialModel; 3] = [
+    MaterialModel::NeoHookean,
+    MaterialModel::LinearElastic,
+    MaterialModel::FixedCorotated,
+];
 
 fn solid(model: MaterialModel) -> MaterialDef {
     MaterialDef {
@@ -63,7 +67,9 @@ fn det3(f: &[[f64; 3]; 3]) -> f64 {
 /// - neo-Hookean: `tau = mu (F F^T - I) + lambda ln J I`,
 ///   `W = mu/2 (tr F F^T - 3) - mu ln J + lambda/2 (ln J)^2`;
 /// - corotated linear: `e = U - I = F - I`, `tau = J (lambda tr e I + 2 mu e)`,
-///   `W = mu e:e + lambda/2 (tr e)^2`.
+///   `W = mu e:e + lambda/2 (tr e)^2`;
+/// - fixed-corotated: `tau = 2 mu (F - I) F^T + lambda (J - 1) J I` (R = I),
+///   `W = mu |F - I|^2 + lambda/2 (J - 1)^2`.
 fn exact(model: MaterialModel, f: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
     let (lambda, mu) = lame();
     let j = det3(f);
@@ -94,6 +100,19 @@ fn exact(model: MaterialModel, f: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
             }
             mu * ee + 0.5 * lambda * tr * tr
         }
+        MaterialModel::FixedCorotated => {
+            let e = |a: usize, b: usize| f[a][b] - id(a, b);
+            let mut ee = 0.0;
+            for (a, row) in tau.iter_mut().enumerate() {
+                for (b, t) in row.iter_mut().enumerate() {
+                    let efb: f64 = (0..3).map(|k| e(a, k) * f[b][k]).sum();
+                    *t = 2.0 * mu * efb + lambda * (j - 1.0) * j * id(a, b);
+                    ee += e(a, b) * e(a, b);
+                }
+            }
+            mu * ee + 0.5 * lambda * (j - 1.0) * (j - 1.0)
+        }
+        other => unreachable!("{other:?} is not among the elastic models tested here"),
     };
     (tau, w)
 }

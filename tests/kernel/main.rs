@@ -22,6 +22,8 @@ mod equilibrium;
 mod hard_cases;
 mod initial_state;
 #[cfg(feature = "effects")]
+mod materials;
+#[cfg(feature = "effects")]
 mod precision;
 mod reference;
 mod reliability;

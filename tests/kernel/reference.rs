@@ -1429,6 +1429,7 @@ fn declared_effects() -> Effects {
             ..Transport::INSULATED
         }),
         diffusion: Some(Transport::INSULATED),
+        plasticity: false,
     }
 }
 

@@ -136,6 +136,7 @@ int main(void) {
     FIELD(MpmEffects, traction_schedules);
     FIELD(MpmEffects, heat);
     FIELD(MpmEffects, diffusion);
+    FIELD(MpmEffects, plasticity);
 
     TYPE(MpmWorldDef);
     FIELD(MpmWorldDef, dimension);
@@ -170,6 +171,16 @@ int main(void) {
     FIELD(MpmMaterialDef, reference_temperature);
     FIELD(MpmMaterialDef, swelling);
     FIELD(MpmMaterialDef, reference_concentration);
+    FIELD(MpmMaterialDef, viscosity);
+    FIELD(MpmMaterialDef, bulk_modulus);
+    FIELD(MpmMaterialDef, pressure_exponent);
+    FIELD(MpmMaterialDef, yield_stress);
+    FIELD(MpmMaterialDef, hardening_modulus);
+    FIELD(MpmMaterialDef, friction_angle);
+    FIELD(MpmMaterialDef, cohesion);
+    FIELD(MpmMaterialDef, critical_compression);
+    FIELD(MpmMaterialDef, critical_stretch);
+    FIELD(MpmMaterialDef, hardening_coefficient);
     FIELD(MpmMaterialDef, internal_cookie);
 
     TYPE(MpmParticlesView);
@@ -192,6 +203,7 @@ int main(void) {
     FIELD(MpmParticlesView, grid_temperature);
     FIELD(MpmParticlesView, grid_concentration);
     FIELD(MpmParticlesView, hoop);
+    FIELD(MpmParticlesView, plastic);
 
     TYPE(MpmDiagnostics);
     FIELD(MpmDiagnostics, particle_count);

@@ -1071,7 +1071,7 @@ static void open_misuse(void) {
 /* mpm_world_add_material: definitions, enum, parameters. */
 static void material_misuse(void) {
     MpmMaterialDef m;
-    static const uint32_t bad_model[] = {2u, 3u, 0x80000000u, 0xFFFFFFFFu};
+    static const uint32_t bad_model[] = {7u, 99u, 0x80000000u, 0xFFFFFFFFu};
     unsigned k;
 
     memset(&m, 0, sizeof m);
@@ -1142,7 +1142,42 @@ static void material_misuse(void) {
     BAD_MAT("material: reference_concentration NaN", reference_concentration, R(NAN));
     BAD_MAT("material: reference_concentration +inf", reference_concentration, R(INFINITY));
     BAD_MAT("material: reference_concentration -inf", reference_concentration, R(-INFINITY));
+    BAD_MAT("material: viscosity NaN", viscosity, R(NAN));
+    BAD_MAT("material: viscosity -1", viscosity, R(-1.0));
+    BAD_MAT("material: viscosity +inf", viscosity, R(INFINITY));
+    BAD_MAT("material: bulk_modulus 0", bulk_modulus, R(0.0));
+    BAD_MAT("material: bulk_modulus NaN", bulk_modulus, R(NAN));
+    BAD_MAT("material: pressure_exponent 0.5", pressure_exponent, R(0.5));
+    BAD_MAT("material: pressure_exponent +inf", pressure_exponent, R(INFINITY));
+    BAD_MAT("material: yield_stress 0", yield_stress, R(0.0));
+    BAD_MAT("material: yield_stress NaN", yield_stress, R(NAN));
+    BAD_MAT("material: hardening_modulus -1", hardening_modulus, R(-1.0));
+    BAD_MAT("material: friction_angle 90", friction_angle, R(90.0));
+    BAD_MAT("material: friction_angle -1", friction_angle, R(-1.0));
+    BAD_MAT("material: friction_angle NaN", friction_angle, R(NAN));
+    BAD_MAT("material: cohesion -1", cohesion, R(-1.0));
+    BAD_MAT("material: critical_compression 0", critical_compression, R(0.0));
+    BAD_MAT("material: critical_compression 1", critical_compression, R(1.0));
+    BAD_MAT("material: critical_stretch 0", critical_stretch, R(0.0));
+    BAD_MAT("material: critical_stretch +inf", critical_stretch, R(INFINITY));
+    BAD_MAT("material: hardening_coefficient -1", hardening_coefficient, R(-1.0));
 #undef BAD_MAT
+    /* A cohesion needs a friction angle (the apex of the yield surface is c cot(phi)). */
+    m = mpm_material_def_default();
+    m.model = MPM_MATERIAL_MODEL_DRUCKER_PRAGER;
+    m.friction_angle = R(0.0);
+    m.cohesion = R(1e3);
+    REFUSED("material: cohesion without friction", MPM_STATUS_INVALID_MATERIAL,
+            mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    /* The plastic models keep a history the definition must declare. */
+    for (k = MPM_MATERIAL_MODEL_VON_MISES; k <= MPM_MATERIAL_MODEL_SNOW; k++) {
+        char name[64];
+        m = mpm_material_def_default();
+        m.model = k;
+        snprintf(name, sizeof name, "material: plastic model %u undeclared", k);
+        REFUSED(name, MPM_STATUS_EFFECT_NOT_DECLARED,
+                mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+    }
     /* The same on the axisymmetric world, which declares heat and diffusion. */
     m = mpm_material_def_default();
     m.thermal_expansion = R(NAN);

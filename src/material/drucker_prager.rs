@@ -1,0 +1,80 @@
+//! Sand: Drucker-Prager plasticity on Hencky elasticity, with the return mapping of Klar et
+//! al. 2016 ("Drucker-Prager elastoplasticity for sand animation", section 7.3) extended by a
+//! cohesion. In the principal log strains `eps` of the trial `F_e`, with `n` axes, trace `tr`
+//! and deviator `e`, the Kirchhoff stress has the deviator `2 mu e` and trace `(2 mu + n lambda)
+//! tr`. The yield condition is `|dev tau| + alpha (tr tau - n p_t) <= 0` with `alpha =
+//! sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` (phi the friction angle) and the apex at the mean
+//! tension `p_t = c cot(phi)` (c the cohesion; 0 for dry sand). Then:
+//! - past the apex (`tr tau >= n p_t`, the material pulled apart): `F_e` returns to the apex,
+//!   an isotropic stretch carrying the tension `p_t` (no stress for dry sand);
+//! - else `dgamma = |e| + alpha (2 mu + n lambda) / (2 mu) (tr - tr_t)` and, where it is
+//!   positive, `e` shrinks by `dgamma` along itself (`tr_t` the apex's strain trace).
+//!
+//! The history is the accumulated plastic shear (the sum of `dgamma`). No hardening of the
+//! friction angle and no volume correction (Tampubolon et al. 2017): the volume a return
+//! removes from `F_e` at the apex is not given back.
+
+use super::principal::{plastic_axes, Principal};
+use super::{Deformation, Model, Params, Stress};
+use crate::pack::Num;
+use crate::Real;
+
+/// Drucker-Prager plasticity.
+pub(crate) struct DruckerPrager;
+
+impl Model for DruckerPrager {
+    const INELASTIC: bool = true;
+
+    #[inline(always)]
+    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+        Principal::of(f).hencky(T::splat(p.mu), T::splat(p.lambda))
+    }
+
+    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+        super::von_mises::hencky_energy(p, f)
+    }
+
+    #[inline(always)]
+    fn inelastic<const D: usize, T: Num>(
+        p: &Params,
+        f: &Deformation<D, T>,
+        hoop: bool,
+    ) -> Deformation<D, T> {
+        let n = plastic_axes(D, hoop);
+        let nr = n as Real;
+        let pr = Principal::of(f);
+        let mut tr = T::splat(0.0);
+        for i in 0..n {
+            tr += pr.eps[i];
+        }
+        let mean = tr * (1.0 / nr);
+        let e: [T; 3] = core::array::from_fn(|i| {
+            if i < n {
+                pr.eps[i] - mean
+            } else {
+                T::splat(0.0)
+            }
+        });
+        let norm = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
+        // The apex: the strain trace that carries the mean tension p_t.
+        let bulk = 2.0 * p.mu + nr * p.lambda;
+        let tr_apex = nr * p.apex_tension / bulk;
+        let zero = T::splat(0.0);
+        let beyond = tr.ge(T::splat(tr_apex));
+        let dgamma = norm + (tr - tr_apex) * (p.friction * bulk / (2.0 * p.mu));
+        let flows = dgamma.gt(zero);
+        let along = T::select(flows, dgamma, zero) / (norm + Real::MIN_POSITIVE);
+        let delta: [T; 3] = core::array::from_fn(|i| {
+            if i < n {
+                let cone = -(e[i] * along);
+                let apex = T::splat(tr_apex / nr) - pr.eps[i];
+                T::select(beyond, apex, cone)
+            } else {
+                zero
+            }
+        });
+        let mut g = pr.change(f, &delta);
+        g.plastic = f.plastic + T::select(beyond, norm, T::select(flows, dgamma, zero));
+        g
+    }
+}

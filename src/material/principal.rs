@@ -1,0 +1,278 @@
+//! Principal logarithmic strains of a deformation and a change of them: what the Hencky models
+//! ([`super::von_mises`], [`super::drucker_prager`]) and snow's clamp ([`super::snow`]) work in.
+//!
+//! With `F = V S R` (left stretch `V`, rotation `R`), `b = F F^T = V^2` has the eigenvectors
+//! `n_i` and eigenvalues `s_i^2`; the principal log strains are `eps_i = ln s_i`. A return
+//! mapping that changes them to `eps_i + delta_i` along the same directions gives
+//! `F' = M F` with `M = sum_i exp(delta_i) n_i n_i^T`. Everything is written in `H = F - I` and
+//! `b - I = H + H^T + H H^T`, so that small strains keep their precision in f32, and on
+//! [`Num`], with a fixed number of Jacobi rotations and no branch, so that a pack of particles
+//! runs it lane by lane in step.
+//!
+//! In 2D the out-of-plane axis is always principal: its strain is `ln(1 + hzz)`, the hoop
+//! stretch when axisymmetric, 0 in plane strain, where a return leaves it alone (the 2D form
+//! of the plastic models: their flow is in the plane).
+
+use super::Deformation;
+use crate::math::{exp_m1, ln_1p_fast};
+use crate::pack::{matrix, MatOf, Num};
+use crate::Real;
+
+/// Sweeps of cyclic Jacobi rotations in 3D: convergence is quadratic, and five sweeps leave
+/// off-diagonal entries at round-off of the largest eigenvalue for any symmetric 3 x 3 matrix
+/// (tested); one rotation is exact in 2D.
+const SWEEPS_3D: usize = 5;
+
+/// `|x|`.
+#[inline(always)]
+pub(crate) fn abs<T: Num>(x: T) -> T {
+    x.map(|v| v.abs())
+}
+
+/// The eigen decomposition of the symmetric `a`: eigenvalues and the matrix whose columns are
+/// the eigenvectors (`a = V diag(lambda) V^T`), by cyclic Jacobi rotations.
+#[inline(always)]
+pub(crate) fn eigen_symmetric<T: Num, const D: usize>(a: &MatOf<T, D>) -> ([T; D], MatOf<T, D>) {
+    let mut a = *a;
+    let mut v: MatOf<T, D> = matrix(|r, c| T::splat(if r == c { 1.0 } else { 0.0 }));
+    let sweeps = if D == 2 { 1 } else { SWEEPS_3D };
+    let zero = T::splat(0.0);
+    for _ in 0..sweeps {
+        for p in 0..D {
+            for q in p + 1..D {
+                let apq = a[p][q];
+                let d = a[q][q] - a[p][p];
+                // tan of the rotation angle, the smaller root: sign(d) 2 a_pq / (|d| +
+                // sqrt(d^2 + 4 a_pq^2)); the smallest positive real keeps a_pq = d = 0 at 0.
+                let sign = T::select(d.ge(zero), T::splat(1.0), T::splat(-1.0));
+                let root = (d * d + apq * apq * 4.0).sqrt();
+                let t = sign * apq * 2.0 / (abs(d) + root + Real::MIN_POSITIVE);
+                let c = T::splat(1.0) / (t * t + 1.0).sqrt();
+                let s = t * c;
+                a[p][p] -= t * apq;
+                a[q][q] += t * apq;
+                a[p][q] = zero;
+                a[q][p] = zero;
+                for r in 0..D {
+                    if r != p && r != q {
+                        let (arp, arq) = (a[r][p], a[r][q]);
+                        a[r][p] = c * arp - s * arq;
+                        a[p][r] = a[r][p];
+                        a[r][q] = s * arp + c * arq;
+                        a[q][r] = a[r][q];
+                    }
+                }
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p], row[q]);
+                    row[p] = c * vp - s * vq;
+                    row[q] = s * vp + c * vq;
+                }
+            }
+        }
+    }
+    (core::array::from_fn(|i| a[i][i]), v)
+}
+
+/// The principal directions and log strains of a deformation: `n[a][i]` is component a of
+/// direction i (in the plane in 2D), `eps[i]` for i < D, and `eps[2]` the out-of-plane strain
+/// in 2D (`ln(1 + hzz)`).
+#[derive(Clone, Copy)]
+pub(crate) struct Principal<const D: usize, T> {
+    pub n: MatOf<T, D>,
+    pub eps: [T; 3],
+}
+
+/// `ln(1 + x)` for `x > -1`, on any [`Num`].
+#[inline(always)]
+fn ln_1p<T: Num>(x: T) -> T {
+    x.map(|v| ln_1p_fast(v.max(-1.0 + Real::EPSILON)))
+}
+
+impl<const D: usize, T: Num> Principal<D, T> {
+    /// The principal log strains of `f`.
+    #[inline(always)]
+    pub fn of(f: &Deformation<D, T>) -> Self {
+        let h = &f.h;
+        // b - I = H + H^T + H H^T
+        let bm1: MatOf<T, D> = matrix(|a, b| {
+            let mut hh = h[a][b] + h[b][a];
+            for k in 0..D {
+                hh += h[a][k] * h[b][k];
+            }
+            hh
+        });
+        let (lam, n) = eigen_symmetric(&bm1);
+        let mut eps = [T::splat(0.0); 3];
+        for i in 0..D {
+            eps[i] = ln_1p(lam[i]) * 0.5;
+        }
+        if D == 2 {
+            eps[2] = ln_1p(f.hzz);
+        }
+        Principal { n, eps }
+    }
+
+    /// The Kirchhoff stress of Hencky elasticity, `tau = sum_i (2 mu eps_i + lambda tr eps)
+    /// n_i n_i^T` (with the out-of-plane `2 mu eps_zz + lambda tr eps` in 2D).
+    #[inline(always)]
+    pub fn hencky(&self, mu: T, lambda: T) -> super::Stress<D, T> {
+        let tr = self.eps[0] + self.eps[1] + self.eps[2];
+        let t: [T; 3] = core::array::from_fn(|i| self.eps[i] * mu * 2.0 + lambda * tr);
+        let m = matrix(|a, b| {
+            let mut s = T::splat(0.0);
+            for i in 0..D {
+                s += self.n[a][i] * self.n[b][i] * t[i];
+            }
+            s
+        });
+        let zz = if D == 2 { t[2] } else { T::splat(0.0) };
+        super::Stress { m, zz }
+    }
+
+    /// `f` with its principal log strains changed by `delta` (`delta[2]` the out-of-plane one in
+    /// 2D): `F' = M F`, `M - I = sum_i (exp(delta_i) - 1) n_i n_i^T`, so `H' = H + (M - I)(I +
+    /// H)`; `J - 1` follows.
+    #[inline(always)]
+    pub fn change(&self, f: &Deformation<D, T>, delta: &[T; 3]) -> Deformation<D, T> {
+        let g: [T; 3] = core::array::from_fn(|i| delta[i].map(exp_m1));
+        let mm1: MatOf<T, D> = matrix(|a, b| {
+            let mut s = T::splat(0.0);
+            for i in 0..D {
+                s += self.n[a][i] * self.n[b][i] * g[i];
+            }
+            s
+        });
+        let h = matrix(|a, b| {
+            let mut s = f.h[a][b] + mm1[a][b];
+            for k in 0..D {
+                s += mm1[a][k] * f.h[k][b];
+            }
+            s
+        });
+        let hzz = if D == 2 {
+            f.hzz + (f.hzz + 1.0) * g[2]
+        } else {
+            f.hzz
+        };
+        Deformation::with_plastic(h, hzz, f.plastic)
+    }
+}
+
+/// How many principal strains a return acts on: 3 in 3D and axisymmetric, the 2 in-plane ones
+/// in plane strain (the out-of-plane stretch stays 1).
+#[inline(always)]
+pub(crate) fn plastic_axes(d: usize, hoop: bool) -> usize {
+    if d == 3 || hoop {
+        3
+    } else {
+        2
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Mat;
+
+    /// Over many random symmetric matrices (entries from 1e-6 to 10, 2D and 3D), the Jacobi
+    /// decomposition reproduces the matrix (`V diag V^T`) to 64 eps of its largest entry and
+    /// its vectors are orthonormal to 16 eps.
+    #[test]
+    fn jacobi_decomposes_symmetric_matrices() {
+        let mut state = 99u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 40) as f64 / (1u64 << 24) as f64) as Real - 0.5
+        };
+        fn check<const D: usize>(a: &Mat<D>) {
+            let (lam, v) = eigen_symmetric(a);
+            let scale = a.iter().flatten().fold(0.0 as Real, |m, x| m.max(x.abs()));
+            for r in 0..D {
+                for c in 0..D {
+                    let mut back = 0.0;
+                    let mut dot = 0.0;
+                    for i in 0..D {
+                        back += v[r][i] * v[c][i] * lam[i];
+                        dot += v[i][r] * v[i][c];
+                    }
+                    let eye = if r == c { 1.0 } else { 0.0 };
+                    assert!(
+                        (back - a[r][c]).abs() <= 64.0 * Real::EPSILON * scale,
+                        "{a:?}"
+                    );
+                    assert!((dot - eye).abs() <= 16.0 * Real::EPSILON, "{a:?}");
+                }
+            }
+        }
+        for k in 0..2000 {
+            let scale = [1.0e-6, 1.0e-2, 1.0, 10.0][k % 4];
+            let mut a3: Mat<3> = [[0.0; 3]; 3];
+            for r in 0..3 {
+                for c in r..3 {
+                    a3[r][c] = next() * scale;
+                    a3[c][r] = a3[r][c];
+                }
+            }
+            if k % 7 == 0 {
+                a3[0][1] = 0.0;
+                a3[1][0] = 0.0;
+                a3[1][1] = a3[0][0];
+            }
+            check(&a3);
+            check(&[[a3[0][0], a3[0][1]], [a3[1][0], a3[1][1]]]);
+        }
+        check(&[[0.0; 3]; 3]);
+    }
+
+    /// A deformation with known principal stretches (a rotated diagonal stretch) gives their
+    /// logs, and changing them by `delta` gives the stretches times `exp(delta)` in the same
+    /// directions.
+    #[test]
+    fn principal_strains_of_a_rotated_stretch() {
+        let (c, s) = (0.8 as Real, 0.6 as Real);
+        let rot: Mat<3> = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        let st = [1.2 as Real, 0.9, 1.05];
+        // F = Q diag(st) Q^T, H = F - I
+        let f: Mat<3> = matrix(|a, b| {
+            let mut v = 0.0;
+            for i in 0..3 {
+                v += rot[a][i] * st[i] * rot[b][i];
+            }
+            v - if a == b { 1.0 } else { 0.0 }
+        });
+        let def = Deformation::new(f, 0.0);
+        let p = Principal::of(&def);
+        let mut got = p.eps;
+        got.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let mut want = st.map(|x| x.ln());
+        want.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        for i in 0..3 {
+            assert!((got[i] - want[i]).abs() < 1e-5, "{got:?} {want:?}");
+        }
+        let delta = [0.01 as Real, -0.02, 0.03];
+        let g = p.change(&def, &delta);
+        let q = Principal::of(&g);
+        for i in 0..3 {
+            // Each direction of `p` is still principal with strain eps_i + delta_i.
+            let mut bn = [0.0 as Real; 3];
+            for a in 0..3 {
+                for b in 0..3 {
+                    let mut bab = 0.0;
+                    for k in 0..3 {
+                        let fa = g.h[a][k] + if a == k { 1.0 } else { 0.0 };
+                        let fb = g.h[b][k] + if b == k { 1.0 } else { 0.0 };
+                        bab += fa * fb;
+                    }
+                    bn[a] += bab * p.n[b][i];
+                }
+            }
+            let want = libm::exp(2.0 * (p.eps[i] + delta[i]) as f64) as Real;
+            for a in 0..3 {
+                assert!((bn[a] - want * p.n[a][i]).abs() < 1e-5, "{i} {bn:?}");
+            }
+        }
+        let _ = q;
+    }
+}

@@ -1,0 +1,744 @@
+//! The fluid, metal, sand and snow models and fixed-corotated elasticity, through the public
+//! API, against exact answers: rigid motion without stress, hydrostatic pressure, Poiseuille
+//! flow, the elastic-plastic curve of a bar loaded, unloaded and reloaded, the lithostatic
+//! stress of a sand column, snow's clamp and hardening; and the hard cases with every model.
+
+// Index loops over particles read as the sums of the exact solutions do.
+#![allow(clippy::needless_range_loop)]
+
+use crate::common::{buffer_for, free_space, max_stress, moving_block, quarter_turn, total_mass};
+use mpm_gimp::{
+    Boundary, Damping, Dimension, Face, MaterialDef, MaterialModel, ParticleStatus, Real, Schedule,
+    Transfer, Vec3, World, WorldDef,
+};
+
+/// The models added with the materials issue.
+const NEW_MODELS: [MaterialModel; 5] = [
+    MaterialModel::FixedCorotated,
+    MaterialModel::Fluid,
+    MaterialModel::VonMises,
+    MaterialModel::DruckerPrager,
+    MaterialModel::Snow,
+];
+
+/// A definition that can hold any model (the plastic ones need their history column).
+fn plastic(mut def: WorldDef) -> WorldDef {
+    def.effects.plasticity = true;
+    def
+}
+
+/// The default material of `model`; the sand is given a cohesion so that it holds the small
+/// tension of a spinning block (a cohesionless sand flies apart, as it should).
+fn material(model: MaterialModel) -> MaterialDef {
+    MaterialDef {
+        model,
+        cohesion: if model == MaterialModel::DruckerPrager {
+            1.0e4
+        } else {
+            0.0
+        },
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// Pressure `-tr(sigma) / 3` of particle `i`, Pa (2D: with `sigma_zz`).
+fn pressure(w: &World, i: usize, rho0: f64) -> f64 {
+    let v = w.particles();
+    let j = v.jacobian(i) as f64;
+    // The normal components: 2D xx, yy, (xy,) zz; 3D xx, yy, zz.
+    let normal = if w.def().axes() == 2 {
+        [0, 1, 3]
+    } else {
+        [0, 1, 2]
+    };
+    let tr: f64 = normal.iter().map(|&k| v.stress[k][i] as f64).sum();
+    -rho0 * tr / (3.0 * j)
+}
+
+/// Rigid rotation of a free block for a quarter turn (pure FLIP, MUSL, as the elastic models'
+/// test in `verification`), every new solid model: the exact stress is the centrifugal `~ rho
+/// omega^2 R^2 = 45 Pa`, and the transfer's O(h) edge error puts 2-3e-3 E on the elastic
+/// models (measured 2.8e-3 E for fixed-corotated). Bound: 1 % of E, 10 kPa, which no plastic
+/// model's default yield reaches before it (snow's critical stretch 0.75 % is 7.5 kPa of
+/// stretch), so that a model whose return or stress is not invariant under rotation (strain
+/// `1 - cos 90 deg = 1`, stress order E) fails by two orders of magnitude. No particle yields
+/// beyond round-off (the plastic history stays below 1e-4), energy is conserved within 1 %,
+/// nothing is frozen.
+///
+/// The fluid is not in it: a spinning square of fluid has no rigid solution (nothing holds its
+/// corners), and a spinning disk's exact state (the pressure `-rho omega^2 (R^2 - r^2) / 2`,
+/// tension inside) is unstable in the particles (measured: its velocity 40-70 % off rigid
+/// within two tenths of a turn, APIC and FLIP alike). The fluid's stress is rotation-free at
+/// the model level (the material module's tests) and in translation below.
+#[test]
+fn rigid_rotation_creates_no_stress_in_any_new_solid_model() {
+    for model in NEW_MODELS
+        .into_iter()
+        .filter(|&m| m != MaterialModel::Fluid)
+    {
+        let mut def = plastic(free_space(Dimension::Plane2D, 40, 0.025));
+        def.flip_beta = 1.0;
+        let mut buf = buffer_for(&def);
+        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let mat = material(model);
+        moving_block(&def, &mut w, &mat, |x| [-(x[1] - 0.5), x[0] - 0.5, 0.0]);
+        let e0 = w.diagnostics().total_energy();
+        let (steps, dt) = quarter_turn(&w);
+        for _ in 0..steps {
+            w.step(dt).unwrap();
+        }
+        let s = max_stress(&w, mat.density);
+        assert!(
+            s < 0.01 * mat.youngs_modulus as f64,
+            "{model:?}: stress {s}"
+        );
+        let v = w.particles();
+        let worst = v.plastic.iter().fold(0.0 as Real, |m, p| m.max(p.abs()));
+        assert!(worst < 1.0e-4, "{model:?}: plastic history {worst}");
+        let e1 = w.diagnostics().total_energy();
+        assert!(
+            (e1 / e0 - 1.0).abs() < 0.01,
+            "{model:?}: energy {e0} -> {e1}"
+        );
+        let active = ParticleStatus::Active as u32;
+        assert!(v.status.iter().all(|&s| s == active), "{model:?}");
+    }
+}
+
+/// Rigid translation, every new model, 2D and 3D: a free block moving at (1, 0.5, 0.25) m/s
+/// for 0.2 s (8 cells). A uniform velocity is represented exactly by every shape function
+/// (partition of unity), so `grad v` is round-off: the stress stays below 1e-5 of the modulus
+/// (E, a fluid's K), the plastic history at zero, and every particle keeps its velocity to
+/// 1e-5 m/s.
+#[test]
+fn rigid_translation_creates_no_stress_in_any_new_model() {
+    for model in NEW_MODELS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            let def = plastic(free_space(dim, 20, 0.05));
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let mat = material(model);
+            let u = [1.0, 0.5, if dim == Dimension::ThreeD { 0.25 } else { 0.0 }];
+            moving_block(&def, &mut w, &mat, |_| u);
+            for _ in 0..20 {
+                w.step(0.01).unwrap();
+            }
+            let modulus = if model == MaterialModel::Fluid {
+                mat.bulk_modulus
+            } else {
+                mat.youngs_modulus
+            } as f64;
+            let label = format!("{model:?} {dim:?}");
+            let s = max_stress(&w, mat.density);
+            assert!(s < 1.0e-5 * modulus, "{label}: stress {s}");
+            let v = w.particles();
+            assert!(v.plastic.iter().all(|&p| p == 0.0), "{label}");
+            for a in 0..w.def().axes() {
+                assert!(
+                    v.velocity[a].iter().all(|&x| (x - u[a]).abs() < 1.0e-5),
+                    "{label}: velocity"
+                );
+            }
+        }
+    }
+}
+
+/// A tank of fluid, `h = 2 cm`, 40 cm wide and 40 cm deep between slip walls, settled under
+/// gravity with grid damping (20/s for 1 s: the sloshing decays as `exp(-10 t)`). Exact: the
+/// mass above a particle per unit width is `rho0` times its initial depth `d0` whatever the
+/// compression, so at rest its pressure is `rho0 g d0`: checked below the top cell by
+/// [`layers_carry`]. And the fluid at rest carries no shear stress (below 1 % of the bottom
+/// pressure).
+#[test]
+fn fluid_tank_at_rest_carries_hydrostatic_pressure() {
+    let h: Real = 0.02;
+    let mut def = WorldDef {
+        cells: [22, 24, 1],
+        cell_size: h,
+        particle_capacity: 4000,
+        ..WorldDef::DEFAULT
+    };
+    def.effects.damping = Some(Damping {
+        grid: Schedule::constant(20.0),
+        ..Damping::NONE
+    });
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let water = MaterialDef {
+        model: MaterialModel::Fluid,
+        bulk_modulus: 1.0e6,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&water).unwrap();
+    let (top, depth) = (h + 0.4, 0.4);
+    w.fill_box(
+        Vec3::new(h, h, 0.0),
+        Vec3::new(h + 0.4, top, 0.0),
+        id,
+        Vec3::ZERO,
+    )
+    .unwrap();
+    let y0: Vec<f64> = w.particles().position[1]
+        .iter()
+        .map(|&y| y as f64)
+        .collect();
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    let g = 9.81f64;
+    let rho0 = water.density as f64;
+    let bottom = rho0 * g * depth as f64;
+    let v = w.particles();
+    let mut samples = vec![];
+    for i in 0..v.count {
+        let d0 = top as f64 - y0[i];
+        let shear = (v.stress[2][i] as f64 * rho0).abs();
+        assert!(shear < 0.01 * bottom, "shear {shear} at depth {d0}");
+        samples.push((d0, pressure(&w, i, rho0)));
+    }
+    layers_carry(&samples, |d0| rho0 * g * d0, h as f64, "tank pressure");
+}
+
+/// The check of a column at rest against its weight: `samples` are (initial depth, value) of
+/// its particles, `exact` the value at a depth. Below the top cell (which carries the free
+/// surface's error), each cell layer's mean within 2 % of the mean of the exact values, and
+/// each particle within 2 % of the column's largest exact value. Particle by particle the
+/// two rows of a cell (2 particles per cell per axis) settle to values about `rho g h / 4`
+/// above and below the exact one (a pattern of stresses that the nodes' forces do not see,
+/// so nothing removes it), which is 1.25 % of the bottom value at 20 cells of depth but more
+/// than 2 % of the exact value near the top.
+fn layers_carry(samples: &[(f64, f64)], exact: impl Fn(f64) -> f64, h: f64, label: &str) {
+    let scale = samples.iter().map(|s| exact(s.0).abs()).fold(0.0, f64::max);
+    let layers = samples.iter().map(|s| (s.0 / h) as usize).max().unwrap() + 1;
+    let mut sum = vec![(0.0, 0.0, 0usize); layers];
+    for &(d0, value) in samples {
+        let k = (d0 / h) as usize;
+        if k == 0 {
+            continue;
+        }
+        let e = exact(d0);
+        assert!(
+            (value - e).abs() <= 0.02 * scale,
+            "{label}: {value} at depth {d0}, exact {e}"
+        );
+        sum[k].0 += value;
+        sum[k].1 += e;
+        sum[k].2 += 1;
+    }
+    for (k, &(value, e, n)) in sum.iter().enumerate().skip(1) {
+        assert!(n > 0, "{label}: layer {k} empty");
+        assert!(
+            (value - e).abs() <= 0.02 * e.abs(),
+            "{label}: layer {k} mean {} exact {}",
+            value / n as f64,
+            e / n as f64
+        );
+    }
+}
+
+/// Plane Poiseuille flow started from rest: fluid (`eta = 100 Pa s`, `rho = 1000`, so `nu =
+/// 0.1 m^2/s`) between stick walls `W = 0.2 m` apart (x), driven along -y by a body force `g =
+/// 1 m/s^2` with free ends (open faces), so no pressure gradient builds. Exact (Batchelor
+/// 4.3): `u(x, t) = g x (W - x) / (2 nu) - sum_(n odd) 4 g W^2 / (nu pi^3 n^3) sin(n pi x / W)
+/// exp(-n^2 pi^2 nu t / W^2)`, reaching the parabola of centre speed `g W^2 / (8 nu) = 5 cm/s`
+/// with the time scale `W^2 / (pi^2 nu) = 0.04 s`. At t = 0.5 s every particle of the
+/// channel's middle third within 3 % of the centre speed of the exact profile at its position
+/// (20 cells across): measured 0.44 %. The APIC transfer, the one for fluids: with FLIP the
+/// row of particles next to each stick wall keeps a velocity the grid does not have (each
+/// step the wall node's reaction `-v_i / dt` reaches it with weight 3/4; measured: -1 times
+/// the exact speed there, a 10 % error), and the PIC part of a FLIP blend smooths the velocity
+/// at each transfer, an added viscosity of order `(1 - beta) h^2 / dt` (the default beta 0.99
+/// ran 3 % slow at the centre).
+///
+/// Measured, not asserted: under sustained shear the particles' arrangement degrades and
+/// pressure noise grows (`J` within 1.3 % of 1 here), which slows the flow by about 2 % by
+/// t = 1 s (10 cells of shear).
+#[test]
+fn plane_poiseuille_flow_reaches_the_parabolic_profile() {
+    let h: Real = 0.01;
+    let width: f64 = 0.2;
+    let mut def = WorldDef {
+        cells: [22, 62, 1],
+        cell_size: h,
+        particle_capacity: 6000,
+        gravity: Vec3::new(0.0, -1.0, 0.0),
+        transfer: Transfer::Apic,
+        ..WorldDef::DEFAULT
+    };
+    def.faces[Face::XMin as usize] = Boundary::Stick;
+    def.faces[Face::XMax as usize] = Boundary::Stick;
+    def.faces[Face::YMin as usize] = Boundary::Open;
+    def.faces[Face::YMax as usize] = Boundary::Open;
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let fluid = MaterialDef {
+        model: MaterialModel::Fluid,
+        viscosity: 100.0,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&fluid).unwrap();
+    w.fill_box(
+        Vec3::new(h, h, 0.0),
+        Vec3::new(h + width as Real, 61.0 * h, 0.0),
+        id,
+        Vec3::ZERO,
+    )
+    .unwrap();
+    let t: f64 = 0.5;
+    for _ in 0..(t * 60.0).round() as usize {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    let nu = 0.1f64;
+    let g = 1.0f64;
+    let pi = std::f64::consts::PI;
+    let exact = |x: f64| {
+        let mut u = g * x * (width - x) / (2.0 * nu);
+        for n in (1..200).step_by(2) {
+            let n = n as f64;
+            u -= 4.0 * g * width * width / (nu * pi.powi(3) * n.powi(3))
+                * (n * pi * x / width).sin()
+                * (-n * n * pi * pi * nu * t / (width * width)).exp();
+        }
+        u
+    };
+    let centre = g * width * width / (8.0 * nu);
+    let v = w.particles();
+    let (mut worst, mut checked) = (0.0f64, 0);
+    for i in 0..v.count {
+        let y = v.position[1][i] as f64;
+        if v.status[i] != ParticleStatus::Active as u32 || !(0.2..0.4).contains(&y) {
+            continue;
+        }
+        let x = v.position[0][i] as f64 - h as f64;
+        let u = -(v.velocity[1][i] as f64);
+        worst = worst.max((u - exact(x)).abs() / centre);
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked}");
+    assert!(worst < 0.03, "worst error {worst} of the centre speed");
+}
+
+/// A steel-like bar (scaled: `E = 10 MPa`, `nu = 0.3`, `sigma_y = 100 kPa`, `H = 1 MPa`) of
+/// the von Mises model, 0.1 x 0.05 x 0.05 m in 3D between the slip walls x = y = z = h
+/// (symmetry planes), pulled by a traction on its far face: up to 1.5 sigma_y, held, down to
+/// 0, held, up to 2 sigma_y, held; quasi-static: each ramp lasts 100 elastic wave transits,
+/// and grid damping of 1000/s, about critical for the bar's slowest (plastic) mode, keeps the
+/// dynamic overshoot of the ramps' corners from yielding the bar further (with 100/s the
+/// overshoot added 6 % to the plastic strain, for good: plastic flow does not spring back). Exact for Hencky elasticity with J2 flow under uniaxial Kirchhoff stress `tau`:
+/// logarithmic strain `eps = tau / E + eps_p`, `eps_p` growing on loading past the current
+/// yield stress as `(tau - sigma_y) / H` and frozen on unloading. At the end of each hold the
+/// bar's strain (from the particles' positions: the slope of x against the initial x over
+/// the middle 60 % of the bar) and its mean stress `tau_xx` (interior particles) give:
+/// - the loaded strain within 1 % of `tau / E + (tau - sigma_y) / H`;
+/// - the permanent strain after unloading within 1 % of the plastic strain of the first load;
+/// - the unloading slope within 1 % of E;
+/// - the strain on reloading past the first peak within 1 % of the hardening curve;
+/// - the plastic history of the interior particles within 1 % of `eps_p`.
+#[test]
+fn metal_bar_follows_the_elastic_plastic_curve_when_loaded_unloaded_and_reloaded() {
+    let h: Real = 0.0125;
+    let mut def = plastic(WorldDef {
+        dimension: Dimension::ThreeD,
+        cells: [14, 7, 7],
+        cell_size: h,
+        particle_capacity: 2000,
+        gravity: Vec3::ZERO,
+        ..WorldDef::DEFAULT
+    });
+    def.effects.traction_capacity = 200;
+    let (e, sy, hard) = (1.0e7, 1.0e5, 1.0e6);
+    def.effects.traction_schedules[0] = Schedule::from_points(&[
+        (0.0, 0.0),
+        (0.1, 1.5 * sy),
+        (0.2, 1.5 * sy),
+        (0.3, 0.0),
+        (0.4, 0.0),
+        (0.55, 2.0 * sy),
+        (0.65, 2.0 * sy),
+    ])
+    .unwrap();
+    def.effects.damping = Some(Damping {
+        grid: Schedule::constant(1000.0),
+        ..Damping::NONE
+    });
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let metal = MaterialDef {
+        model: MaterialModel::VonMises,
+        youngs_modulus: e,
+        poisson_ratio: 0.3,
+        yield_stress: sy,
+        hardening_modulus: hard,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&metal).unwrap();
+    let length: Real = 0.1;
+    let ids = w
+        .fill_box(
+            Vec3::new(h, h, h),
+            Vec3::new(h + length, h + 0.05, h + 0.05),
+            id,
+            Vec3::ZERO,
+        )
+        .unwrap();
+    let x0: Vec<f64> = w.particles().position[0]
+        .iter()
+        .map(|&x| x as f64)
+        .collect();
+    let far = x0.iter().cloned().fold(f64::MIN, f64::max);
+    // The far face's particles, each loaded on its +x face with a unit traction (the schedule
+    // carries the magnitude). Their ids are not contiguous: add them one at a time.
+    for i in ids.clone() {
+        if x0[i as usize] > far - 1e-6 {
+            w.add_tractions(i..i + 1, Face::XMax, Vec3::new(1.0, 0.0, 0.0))
+                .unwrap();
+        }
+    }
+    let (lo, hi) = (
+        h as f64 + 0.2 * length as f64,
+        h as f64 + 0.8 * length as f64,
+    );
+    // (strain, mean tau_xx, mean plastic history) at time t.
+    let measure = |w: &mut World, t: f64| {
+        while w.time() < t - 1e-9 {
+            let dt = (t - w.time()).min(1.0 / 240.0);
+            w.step(dt as Real).unwrap();
+        }
+        let v = w.particles();
+        let (mut sx, mut sy_, mut sxx, mut sxy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut tau, mut hist, mut m) = (0.0, 0.0, 0.0);
+        for i in 0..v.count {
+            if !(lo..hi).contains(&x0[i]) {
+                continue;
+            }
+            let x = v.position[0][i] as f64 + v.position_low[0][i] as f64;
+            sx += x0[i];
+            sy_ += x;
+            sxx += x0[i] * x0[i];
+            sxy += x0[i] * x;
+            n += 1.0;
+            tau += v.stress[0][i] as f64 * metal.density as f64;
+            hist += v.plastic[i] as f64;
+            m += 1.0;
+        }
+        let slope = (n * sxy - sx * sy_) / (n * sxx - sx * sx);
+        (slope.ln(), tau / m, hist / m)
+    };
+    let (e, sy, hard) = (e as f64, sy as f64, hard as f64);
+    let (eps1, tau1, p1) = measure(&mut w, 0.2);
+    let plastic1 = (tau1 - sy) / hard;
+    let loaded = tau1 / e + plastic1;
+    assert!(
+        (eps1 - loaded).abs() < 0.01 * loaded,
+        "loaded: strain {eps1}, exact {loaded} at tau {tau1}"
+    );
+    assert!(
+        (p1 - plastic1).abs() < 0.01 * plastic1,
+        "history {p1} vs {plastic1}"
+    );
+    let (eps2, tau2, p2) = measure(&mut w, 0.4);
+    let permanent = plastic1 + tau2 / e;
+    assert!(
+        (eps2 - permanent).abs() < 0.01 * plastic1,
+        "unloaded: strain {eps2}, exact {permanent}"
+    );
+    assert!(
+        (p2 - p1).abs() < 1e-3 * plastic1,
+        "unloading changed the history"
+    );
+    let slope = (tau1 - tau2) / (eps1 - eps2);
+    assert!((slope / e - 1.0).abs() < 0.01, "unloading modulus {slope}");
+    let (eps3, tau3, _) = measure(&mut w, 0.65);
+    let reloaded = tau3 / e + (tau3 - sy) / hard;
+    assert!(
+        (eps3 - reloaded).abs() < 0.01 * reloaded,
+        "reloaded: strain {eps3}, exact {reloaded} at tau {tau3}"
+    );
+    let active = ParticleStatus::Active as u32;
+    assert!(w.particles().status.iter().all(|&s| s == active));
+}
+
+/// A column of sand (Drucker-Prager, phi = 30 deg, no cohesion) 0.2 m wide and 0.4 m high on
+/// a stick floor between slip walls, settled under gravity with grid damping (20/s for 1 s).
+/// Exact: the slip walls carry no shear, so the vertical stress at a particle is the weight
+/// above it per unit width, `-rho0 g d0` (`d0` its initial depth) whatever the lateral stress
+/// the friction leaves: checked below the top cell by [`layers_carry`].
+#[test]
+fn sand_column_carries_the_lithostatic_vertical_stress() {
+    let h: Real = 0.02;
+    let mut def = plastic(WorldDef {
+        cells: [12, 24, 1],
+        cell_size: h,
+        particle_capacity: 2000,
+        ..WorldDef::DEFAULT
+    });
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    def.effects.damping = Some(Damping {
+        grid: Schedule::constant(20.0),
+        ..Damping::NONE
+    });
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let sand = MaterialDef {
+        model: MaterialModel::DruckerPrager,
+        youngs_modulus: 1.0e7,
+        poisson_ratio: 0.3,
+        density: 1600.0,
+        friction_angle: 30.0,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&sand).unwrap();
+    let top = h + 0.4;
+    w.fill_box(
+        Vec3::new(h, h, 0.0),
+        Vec3::new(h + 0.2, top, 0.0),
+        id,
+        Vec3::ZERO,
+    )
+    .unwrap();
+    let y0: Vec<f64> = w.particles().position[1]
+        .iter()
+        .map(|&y| y as f64)
+        .collect();
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    let (g, rho0) = (9.81f64, sand.density as f64);
+    let v = w.particles();
+    let samples: Vec<(f64, f64)> = (0..v.count)
+        .map(|i| {
+            let syy = v.stress[1][i] as f64 * rho0 / v.jacobian(i) as f64;
+            (top as f64 - y0[i], syy)
+        })
+        .collect();
+    layers_carry(
+        &samples,
+        |d0| -rho0 * g * d0,
+        h as f64,
+        "sand vertical stress",
+    );
+}
+
+/// Snow's return, through one step of particles at rest deformed by `set_displacement_gradient`
+/// (uniform stretches s in 3D, from deep compression to stretch, no gravity, free space):
+/// the clamp leaves every singular value of `F_e` in `[1 - theta_c, 1 + theta_s]` (to a few
+/// ulps), `J_p = J / J_e` takes what the clamp removed (exact: `(s / clamp(s))^3` for the
+/// particle's stretch s times the step's own `det dF`, which is 1 to round-off here as nothing
+/// moves yet), and the stress is the fixed-corotated stress of the clamped `F_e` scaled by the
+/// hardening `exp(xi (1 - J_p))` (relative 1e-4).
+#[test]
+fn snow_clamps_its_stretches_and_hardens_as_exp_xi_one_minus_jp() {
+    let def = plastic(WorldDef {
+        dimension: Dimension::ThreeD,
+        ..free_space(Dimension::ThreeD, 8, 0.1)
+    });
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let snow = MaterialDef {
+        model: MaterialModel::Snow,
+        youngs_modulus: 1.4e5,
+        poisson_ratio: 0.2,
+        density: 400.0,
+        ..MaterialDef::DEFAULT
+    };
+    let id = w.add_material(&snow).unwrap();
+    let stretches: [Real; 8] = [0.8, 0.9, 0.96, 0.98, 1.0, 1.005, 1.01, 1.05];
+    // Particles far apart (in different cells), at rest.
+    for (k, _) in stretches.iter().enumerate() {
+        w.add_particle(&mpm_gimp::ParticleDef {
+            position: Vec3::new(0.2 + 0.05 * k as Real, 0.4, 0.4),
+            velocity: Vec3::ZERO,
+            mass: 1.0e-3,
+            volume: 2.5e-6,
+            material: id,
+        })
+        .unwrap();
+    }
+    let n = stretches.len();
+    let mut hcols: [Vec<Real>; 9] = Default::default();
+    for s in stretches {
+        for a in 0..3 {
+            for b in 0..3 {
+                hcols[3 * a + b].push(if a == b { s - 1.0 } else { 0.0 });
+            }
+        }
+    }
+    let refs: [[&[Real]; 3]; 3] =
+        core::array::from_fn(|a| core::array::from_fn(|b| &hcols[3 * a + b][..]));
+    w.set_displacement_gradient(0, refs).unwrap();
+    w.step(1.0e-6).unwrap();
+    let (tc, ts, xi) = (0.025f64, 0.0075f64, 10.0f64);
+    let (lambda, mu) = {
+        let (e, nu) = (snow.youngs_modulus as f64, snow.poisson_ratio as f64);
+        (
+            e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            e / (2.0 * (1.0 + nu)),
+        )
+    };
+    let v = w.particles();
+    let eps = 64.0 * Real::EPSILON as f64;
+    for i in 0..n {
+        let s = stretches[i] as f64;
+        let clamped = s.clamp(1.0 - tc, 1.0 + ts);
+        for a in 0..3 {
+            let fe = 1.0 + v.displacement_gradient[a][a][i] as f64;
+            assert!(
+                fe >= (1.0 - tc) * (1.0 - eps) && fe <= (1.0 + ts) * (1.0 + eps),
+                "s = {s}: F_e {fe}"
+            );
+            assert!(
+                (fe - clamped).abs() < 1e-5,
+                "s = {s}: F_e {fe} vs {clamped}"
+            );
+        }
+        let jp = 1.0 + v.plastic[i] as f64;
+        let jp_exact = (s / clamped).powi(3);
+        assert!(
+            (jp - jp_exact).abs() < 1e-5 * jp_exact,
+            "s = {s}: J_p {jp} vs {jp_exact}"
+        );
+        // Fixed-corotated at F_e = c I: tau = 2 mu (c - 1) c + lambda (c^3 - 1) c^3, hardened.
+        let je = clamped.powi(3);
+        let tau = (2.0 * mu * (clamped - 1.0) * clamped + lambda * (je - 1.0) * je)
+            * (xi * (1.0 - jp_exact)).exp();
+        let got = v.stress[0][i] as f64 * snow.density as f64;
+        assert!(
+            (got - tau).abs() <= 1e-4 * tau.abs() + 1e-3,
+            "s = {s}: tau {got} vs {tau}"
+        );
+    }
+}
+
+/// Every model, the elastic ones too.
+const ALL_MODELS: [MaterialModel; 7] = [
+    MaterialModel::LinearElastic,
+    MaterialModel::NeoHookean,
+    MaterialModel::FixedCorotated,
+    MaterialModel::Fluid,
+    MaterialModel::VonMises,
+    MaterialModel::DruckerPrager,
+    MaterialModel::Snow,
+];
+
+/// Finite everywhere, mass exact, nothing frozen (unless `may_freeze`), and kinetic plus strain
+/// energy below its start plus what gravity released by more than 1 % (every model conserves
+/// or dissipates).
+fn sound(w: &World, mass0: f64, budget0: (f64, f64), label: &str, may_freeze: bool) {
+    assert!(crate::common::all_finite(w), "{label}: non-finite state");
+    assert_eq!(total_mass(w), mass0, "{label}: mass changed");
+    let frozen = ParticleStatus::Frozen as u32;
+    let v = w.particles();
+    let n_frozen = v.status.iter().filter(|&&s| s == frozen).count();
+    assert!(may_freeze || n_frozen == 0, "{label}: {n_frozen} frozen");
+    let d = w.diagnostics();
+    let budget = budget0.0 + (budget0.1 - d.potential);
+    assert!(
+        d.kinetic + d.strain <= 1.01 * budget,
+        "{label}: energy {} above its budget {budget}",
+        d.kinetic + d.strain
+    );
+}
+
+/// Fast impact and a long run, every model, 2D and 3D: a block thrown down at 5 m/s (the
+/// fluid's sound speed is 10 m/s) onto a stick floor under gravity, stepped 10,000 substeps
+/// (2D; 3000 in 3D) at the stable step: particles cross cells all along, the plastic models
+/// flow, the fluid splashes. Checked every 1000 substeps: [`sound`].
+#[test]
+fn every_model_survives_a_fast_impact_and_ten_thousand_steps() {
+    for model in ALL_MODELS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            let mut def = plastic(free_space(dim, 20, 0.05));
+            def.gravity = Vec3::new(0.0, -9.81, 0.0);
+            def.faces = [Boundary::Slip; 6];
+            def.faces[Face::YMin as usize] = Boundary::Stick;
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            moving_block(&def, &mut w, &material(model), |_| [1.0, -5.0, 0.5]);
+            let label = format!("{model:?} {dim:?}");
+            let d0 = w.diagnostics();
+            let (mass0, budget0) = (total_mass(&w), (d0.kinetic + d0.strain, d0.potential));
+            let steps = if dim == Dimension::ThreeD {
+                3000
+            } else {
+                10_000
+            };
+            for k in 0..steps {
+                w.step(w.stable_dt()).unwrap();
+                if k % 1000 == 999 {
+                    sound(&w, mass0, budget0, &label, false);
+                }
+            }
+            sound(&w, mass0, budget0, &label, false);
+        }
+    }
+}
+
+/// J near 0: a block whose velocity field `v = -k (x - c)` converges on its centre (k =
+/// 500/s: an edge speed of 75 m/s, far past every model's wave speed), 300 substeps of at most
+/// 2e-5 s, every model, 2D and 3D: [`sound`], and every particle's `J_e > 0`. The corotated
+/// linear and fixed-corotated models have no volumetric barrier (their pressure stays finite,
+/// fixed-corotated's `lambda (J - 1) J` even vanishes, as `J -> 0`), so they invert and the
+/// step freezes those particles, as documented (measured: all of them); every other model
+/// resists (snow because its clamp bounds `F_e`) and nothing of it freezes.
+#[test]
+fn every_model_crushed_toward_zero_volume_stays_finite() {
+    for model in ALL_MODELS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            let mut def = plastic(free_space(dim, 40, 0.025));
+            if dim == Dimension::ThreeD {
+                def.cells = [20; 3];
+                def.cell_size = 0.05;
+            }
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let k = 500.0;
+            moving_block(&def, &mut w, &material(model), |x| {
+                let z = if dim == Dimension::ThreeD {
+                    -k * (x[2] - 0.5)
+                } else {
+                    0.0
+                };
+                [-k * (x[0] - 0.5), -k * (x[1] - 0.5), z]
+            });
+            let label = format!("{model:?} {dim:?}");
+            let d0 = w.diagnostics();
+            let (mass0, budget0) = (total_mass(&w), (d0.kinetic + d0.strain, d0.potential));
+            for _ in 0..300 {
+                w.step(w.stable_dt().min(2.0e-5)).unwrap();
+            }
+            let barrier = !matches!(
+                model,
+                MaterialModel::LinearElastic | MaterialModel::FixedCorotated
+            );
+            sound(&w, mass0, budget0, &label, !barrier);
+            let v = w.particles();
+            assert!((0..v.count).all(|i| v.jacobian(i) > 0.0), "{label}");
+        }
+    }
+}
+
+/// Particles leaving the grid: a block thrown at 20 m/s at an open face, every model, 2D and
+/// 3D. Every particle leaves through it and is counted; none is left outside the grid.
+#[test]
+fn every_model_escapes_through_an_open_face_cleanly() {
+    for model in ALL_MODELS {
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            let def = plastic(free_space(dim, 20, 0.05));
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let n = moving_block(&def, &mut w, &material(model), |_| [20.0, 0.0, 0.0]);
+            let label = format!("{model:?} {dim:?}");
+            let mass0 = total_mass(&w);
+            let mut escaped = 0;
+            for _ in 0..40 {
+                escaped += w.step(1.0 / 400.0).unwrap().escaped as usize;
+            }
+            assert!(crate::common::all_finite(&w), "{label}");
+            assert_eq!(total_mass(&w), mass0, "{label}");
+            assert_eq!(
+                escaped, n,
+                "{label}: every particle should have left through +x"
+            );
+        }
+    }
+}
