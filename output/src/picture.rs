@@ -29,10 +29,12 @@ pub struct Picture {
     pub rgb: Vec<u8>,
 }
 
-const BACKGROUND: [u8; 3] = [246, 246, 242];
+/// The colour of the pixels no particle or wall covers.
+pub const BACKGROUND: [u8; 3] = [246, 246, 242];
 
-/// A perceptually ordered colour map (dark blue, teal, green, yellow) at `t` in [0, 1].
-fn colour_map(t: f64) -> [u8; 3] {
+/// The colour map of [`render`], perceptually ordered (dark blue, teal, green, yellow), at `t`
+/// in [0, 1] (clamped; 0 where not finite): what a legend draws.
+pub fn colour_map(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] = [
         [68.0, 1.0, 84.0],
         [59.0, 82.0, 139.0],
