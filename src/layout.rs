@@ -286,9 +286,16 @@ pub(crate) struct MaterialRecord {
     pub critical_compression: Real,
     pub critical_stretch: Real,
     pub hardening_coefficient: Real,
+    /// Derived once when the material is added (the step's `Params` copies them): the
+    /// Drucker-Prager `alpha` and apex tension `c cot(phi)` (Pa), and snow's `ln(1 - theta_c)`
+    /// and `ln(1 + theta_s)`.
+    pub friction_coefficient: Real,
+    pub apex_tension: Real,
+    pub log_compression: Real,
+    pub log_stretch: Real,
 }
 
-// SAFETY: MaterialRecord is repr(C) with twenty-four values of one float type: no padding, and every
+// SAFETY: MaterialRecord is repr(C) with twenty-eight values of one float type: no padding, and every
 // bit pattern is a valid float.
 unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.

@@ -16,7 +16,10 @@
 //! - Shape functions ([`ShapeFunction`]): linear, uGIMP, cpGIMP, quadratic and cubic B-splines.
 //!   Stress update order ([`UpdateOrder`]): USF, USL, MUSL. Transfers ([`Transfer`]): FLIP
 //!   blended with PIC, FLIP moving with the particle velocity, APIC, MLS-MPM.
-//! - Materials ([`MaterialModel`]): neo-Hookean and corotated linear elasticity.
+//! - Materials ([`MaterialModel`]): neo-Hookean, corotated linear and fixed-corotated
+//!   elasticity; a weakly compressible fluid; J2 plasticity (metal), Drucker-Prager (sand)
+//!   and snow, whose history column [`Effects::plasticity`] reserves; a Newtonian viscosity on
+//!   any material.
 //! - Effects, declared in [`Effects`] and paid for only when declared: grid, particle and PIC
 //!   damping on schedules, a kinetic-energy thermostat, per-particle damping, zones of damping,
 //!   particle forces, tractions on deformed faces of any normal, a body force, heat conduction

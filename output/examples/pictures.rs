@@ -1,9 +1,9 @@
 //! Renders scenes headless to an animated GIF (and PNG frames with `--png`): the pictures in
 //! the README.
 //!
-//! `cargo run --release -p mpm-gimp-output --example pictures` renders every scene of the
-//! registry (`mpm_gimp_output::scenes::ALL`) into `results/pictures/`, `NAME.gif` each;
-//! `-- --scene drop3d --frames 90 --width 320 --out dir --png` picks one scene, the length
+//! `cargo run --release -p mpm-gimp-output --example pictures` renders the scenes of the
+//! registry (`mpm_gimp_output::scenes::ALL`) the README shows into `results/pictures/`,
+//! `NAME.gif` each (`-- --all`: every scene); `-- --scene drop3d --frames 90 --width 320 --out dir --png` picks one scene, the length
 //! (default: the scene's own), the size, the directory, and also writes the frames as PNG
 //! (`NAME_0000.png`, ...). `-- --list` prints the scenes.
 
@@ -35,7 +35,8 @@ fn main() -> std::io::Result<()> {
             let names: Vec<_> = ALL.iter().map(|s| s.name).collect();
             panic!("unknown scene {name}: one of {names:?}")
         })],
-        None => ALL.iter().collect(),
+        None if std::env::args().any(|a| a == "--all") => ALL.iter().collect(),
+        None => ALL.iter().filter(|s| s.in_readme).collect(),
     };
     std::fs::create_dir_all(&out)?;
     for scene in scenes {

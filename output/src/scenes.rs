@@ -8,8 +8,8 @@
 
 use crate::picture::Colour;
 use mpm_gimp::{
-    memory_requirements, Boundary, Dimension, Error, Face, HeapBuffer, MaterialDef, Real,
-    ScalarBoundary, ScalarField, Transfer, Transport, Vec3, World, WorldDef,
+    memory_requirements, Boundary, Dimension, Error, Face, HeapBuffer, MaterialDef, MaterialModel,
+    Real, ScalarBoundary, ScalarField, Transfer, Transport, Vec3, World, WorldDef,
 };
 
 /// One example scene: how to make it, how to show it, how long it runs.
@@ -33,6 +33,9 @@ pub struct Scene {
     pub colour: Colour,
     /// The range of that colour, dark to light, one scale for the whole run.
     pub range: (f64, f64),
+    /// Whether the README shows it: the `pictures` example renders these unless asked for
+    /// one scene or `--all`.
+    pub in_readme: bool,
 }
 
 impl Scene {
@@ -55,6 +58,7 @@ pub const ALL: &[Scene] = &[
         // Speeds from rest to the fall's 2.2 m/s at the floor.
         colour: Colour::Speed,
         range: (0.0, 2.5),
+        in_readme: true,
     },
     Scene {
         name: "drop3d",
@@ -65,6 +69,7 @@ pub const ALL: &[Scene] = &[
         frames: 60,
         colour: Colour::Speed,
         range: (0.0, 2.5),
+        in_readme: true,
     },
     Scene {
         name: "collide",
@@ -75,6 +80,7 @@ pub const ALL: &[Scene] = &[
         frames: 90,
         colour: Colour::Speed,
         range: (0.0, 1.5),
+        in_readme: false,
     },
     Scene {
         name: "beam",
@@ -87,6 +93,7 @@ pub const ALL: &[Scene] = &[
         // of axial stress at the fibres).
         colour: Colour::Pressure,
         range: (-6.0e4, 6.0e4),
+        in_readme: false,
     },
     Scene {
         name: "heat",
@@ -97,6 +104,54 @@ pub const ALL: &[Scene] = &[
         frames: 120,
         colour: Colour::Temperature,
         range: (HEAT_COLD as f64, HEAT_HOT as f64),
+        in_readme: false,
+    },
+    Scene {
+        name: "water",
+        title: "Wooden block dropped into a water tank",
+        def: water_def,
+        fill: water_fill,
+        frame_dt: 1.0 / 60.0,
+        frames: 90,
+        // Water (material 0) dark, wood (1) light: flat colours keep its GIF small, where the
+        // sloshing speeds made it 0.8 MB.
+        colour: Colour::Material,
+        range: (0.0, 1.0),
+        in_readme: true,
+    },
+    Scene {
+        name: "sand",
+        title: "Sand column collapses into a pile",
+        def: sand_def,
+        fill: sand_fill,
+        frame_dt: 1.0 / 60.0,
+        frames: 75,
+        colour: Colour::Speed,
+        range: (0.0, 1.5),
+        in_readme: true,
+    },
+    Scene {
+        name: "snowball",
+        title: "Snowball thrown at a wall",
+        def: snowball_def,
+        fill: snowball_fill,
+        frame_dt: 1.0 / 60.0,
+        frames: 60,
+        colour: Colour::Speed,
+        range: (0.0, 6.0),
+        in_readme: true,
+    },
+    Scene {
+        name: "metal",
+        title: "Weight dropped on a soft-metal cantilever bends it for good",
+        def: metal_def,
+        fill: metal_fill,
+        frame_dt: 1.0 / 60.0,
+        frames: 60,
+        // The bending stress at the root passes the yield stress (1 MPa) and stays there.
+        colour: Colour::Pressure,
+        range: (-1.0e6, 1.0e6),
+        in_readme: true,
     },
 ];
 
@@ -251,4 +306,168 @@ fn heat_fill(world: &mut World) -> Result<usize, Error> {
     let cold = vec![HEAT_COLD; ids.len()];
     world.set_particle_scalar(ScalarField::Temperature, ids.start, &cold)?;
     Ok(ids.len())
+}
+
+/// The floor of a world: its lower y wall plane, m.
+fn floor(def: &WorldDef) -> Real {
+    def.origin.y + def.shape.margin_cells() as Real * def.cell_size
+}
+
+/// A 1 m box of 50 cells with slip walls, APIC (the transfer for fluids: no particle noise
+/// near the walls, little numerical viscosity).
+fn water_def() -> WorldDef {
+    WorldDef {
+        cells: [50, 50, 1],
+        cell_size: 0.02,
+        transfer: Transfer::Apic,
+        ..WorldDef::DEFAULT
+    }
+}
+
+/// Water 0.35 m deep across the box (weakly compressible: K = 100 kPa, a sound speed of 10
+/// m/s, with a little viscosity) and a wooden block (fixed-corotated, 600 kg/m^3, so it floats)
+/// 0.2 m square dropped from 0.3 m above the surface.
+fn water_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let water = world.add_material(&MaterialDef {
+        model: MaterialModel::Fluid,
+        bulk_modulus: 1.0e5,
+        viscosity: 1.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    let wood = world.add_material(&MaterialDef {
+        model: MaterialModel::FixedCorotated,
+        youngs_modulus: 1.0e6,
+        density: 600.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    let a = world.fill_box(
+        Vec3::new(wall, y0, 0.0),
+        Vec3::new(1.0 - wall, y0 + 0.35, 0.0),
+        water,
+        Vec3::ZERO,
+    )?;
+    let b = world.fill_box(
+        Vec3::new(0.4, y0 + 0.65, 0.0),
+        Vec3::new(0.6, y0 + 0.85, 0.0),
+        wood,
+        Vec3::ZERO,
+    )?;
+    Ok(a.len() + b.len())
+}
+
+/// A 1 m box of 50 cells with a rough (stick) floor; plasticity declared.
+fn sand_def() -> WorldDef {
+    let mut def = WorldDef {
+        cells: [50, 50, 1],
+        cell_size: 0.02,
+        ..WorldDef::DEFAULT
+    };
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    def.effects.plasticity = true;
+    def
+}
+
+/// A column of dry sand (Drucker-Prager, friction angle 30 degrees, 1600 kg/m^3), 0.2 m wide
+/// and 0.4 m high against the left wall, released: it collapses and spreads into a pile whose
+/// slope its friction holds.
+fn sand_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let sand = world.add_material(&MaterialDef {
+        model: MaterialModel::DruckerPrager,
+        youngs_modulus: 1.0e6,
+        density: 1600.0,
+        friction_angle: 30.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    Ok(world
+        .fill_box(
+            Vec3::new(wall, y0, 0.0),
+            Vec3::new(wall + 0.2, y0 + 0.4, 0.0),
+            sand,
+            Vec3::ZERO,
+        )?
+        .len())
+}
+
+/// A 1 m box of 50 cells whose right wall and floor are stick walls; plasticity declared.
+fn snowball_def() -> WorldDef {
+    let mut def = WorldDef {
+        cells: [50, 50, 1],
+        cell_size: 0.02,
+        ..WorldDef::DEFAULT
+    };
+    def.faces[Face::XMax as usize] = Boundary::Stick;
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    def.effects.plasticity = true;
+    def
+}
+
+/// A snowball of radius 0.1 m (Stomakhin et al.'s snow: E = 140 kPa, nu = 0.2, 400 kg/m^3,
+/// critical compression 2.5 %, stretch 0.75 %, hardening 10) thrown at 6 m/s at the right
+/// wall: it flattens and packs harder where it hits (its moduli harden as it compacts), and
+/// stays stuck to the wall.
+fn snowball_fill(world: &mut World) -> Result<usize, Error> {
+    let snow = world.add_material(&MaterialDef {
+        model: MaterialModel::Snow,
+        youngs_modulus: 1.4e5,
+        poisson_ratio: 0.2,
+        density: 400.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    Ok(world
+        .fill_disk(
+            Vec3::new(0.3, 0.6, 0.0),
+            0.1,
+            snow,
+            Vec3::new(6.0, 1.0, 0.0),
+        )?
+        .len())
+}
+
+/// A 1 m box of 80 cells whose left wall sticks (the cantilever's clamp); plasticity
+/// declared.
+fn metal_def() -> WorldDef {
+    let mut def = beam_def();
+    def.effects.plasticity = true;
+    def
+}
+
+/// A cantilever of a soft metal (von Mises: E = 50 MPa, yield stress 1 MPa, hardening 5
+/// MPa; scaled down from a real metal so that the scene steps fast) 0.6 m long and 0.05 m
+/// deep, and a rubber weight dropped on its tip: the bending stress at the root (about 0.6
+/// MPa from the beam's own weight, as much again from the weight's, more while it lands)
+/// passes the yield stress, and the beam springs back only partly: it stays bent.
+fn metal_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let wall = def.origin.x + def.shape.margin_cells() as Real * def.cell_size;
+    let metal = world.add_material(&MaterialDef {
+        model: MaterialModel::VonMises,
+        youngs_modulus: 5.0e7,
+        poisson_ratio: 0.3,
+        density: 2700.0,
+        yield_stress: 1.0e6,
+        hardening_modulus: 5.0e6,
+        ..MaterialDef::DEFAULT
+    })?;
+    let weight = world.add_material(&MaterialDef {
+        youngs_modulus: 1.0e6,
+        density: 3000.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    let a = world.fill_box(
+        Vec3::new(wall, 0.6, 0.0),
+        Vec3::new(wall + 0.6, 0.65, 0.0),
+        metal,
+        Vec3::ZERO,
+    )?;
+    let b = world.fill_box(
+        Vec3::new(wall + 0.45, 0.75, 0.0),
+        Vec3::new(wall + 0.6, 0.85, 0.0),
+        weight,
+        Vec3::new(0.0, -2.0, 0.0),
+    )?;
+    Ok(a.len() + b.len())
 }

@@ -1,6 +1,9 @@
 //! Constitutive models: the displacement gradient `H = F - I` and `J - 1` in, Kirchhoff stress
 //! over initial density `tau / rho0` out (seeds/000 eq 18), plus the strain energy per unit
-//! initial volume for energy checks.
+//! initial volume for energy checks. The elastic models (corotated linear, neo-Hookean,
+//! fixed-corotated) are that alone; the fluid and the plastic models (von Mises, Drucker-Prager,
+//! snow) first change the deformation each step ([`Model::inelastic`]) and keep `F_e` in `H`.
+//! Any material may add a Newtonian viscous stress ([`add_viscous_lanes`]).
 //!
 //! In 2D the out-of-plane stretch is given separately ([`Deformation::hzz`]: 0 in plane strain,
 //! `F_thetatheta - 1` in the axisymmetric form) and the out-of-plane stress is returned
@@ -129,15 +132,10 @@ pub(crate) struct Params {
 }
 
 impl Params {
+    /// The parameters of a record: copies (what is derived was derived when the material was
+    /// added), so that a chunk's stress update pays nothing for models it does not run.
+    #[inline(always)]
     pub fn of(r: &MaterialRecord) -> Params {
-        let phi = r.friction_angle as f64 * core::f64::consts::PI / 180.0;
-        let (sin, cos) = (libm::sin(phi), libm::cos(phi));
-        let friction = libm::sqrt(2.0 / 3.0) * 2.0 * sin / (3.0 - sin);
-        let apex_tension = if r.cohesion > 0.0 {
-            r.cohesion as f64 * cos / sin
-        } else {
-            0.0
-        };
         Params {
             lambda: r.lambda,
             mu: r.mu,
@@ -145,10 +143,10 @@ impl Params {
             pressure_exponent: r.pressure_exponent,
             yield_stress: r.yield_stress,
             hardening_modulus: r.hardening_modulus,
-            friction: friction as Real,
-            apex_tension: apex_tension as Real,
-            log_compression: libm::log1p(-(r.critical_compression as f64)) as Real,
-            log_stretch: libm::log1p(r.critical_stretch as f64) as Real,
+            friction: r.friction_coefficient,
+            apex_tension: r.apex_tension,
+            log_compression: r.log_compression,
+            log_stretch: r.log_stretch,
             hardening_coefficient: r.hardening_coefficient,
         }
     }

@@ -18,10 +18,11 @@ use crate::math::{exp_m1, ln_1p_fast};
 use crate::pack::{matrix, MatOf, Num};
 use crate::Real;
 
-/// Sweeps of cyclic Jacobi rotations in 3D: convergence is quadratic, and five sweeps leave
-/// off-diagonal entries at round-off of the largest eigenvalue for any symmetric 3 x 3 matrix
-/// (tested); one rotation is exact in 2D.
-const SWEEPS_3D: usize = 5;
+/// Sweeps of cyclic Jacobi rotations in 3D: convergence is quadratic, and four sweeps
+/// reconstruct any symmetric 3 x 3 matrix to 64 eps of its largest entry in f32 and f64
+/// (tested over 2000 random matrices; three sweeps fail that in f64); one rotation is exact in
+/// 2D.
+const SWEEPS_3D: usize = 4;
 
 /// `|x|`.
 #[inline(always)]
@@ -156,6 +157,45 @@ impl<const D: usize, T: Num> Principal<D, T> {
         };
         Deformation::with_plastic(h, hzz, f.plastic)
     }
+}
+
+/// The volumetric and deviatoric parts of the first `n` principal strains.
+#[derive(Clone, Copy)]
+pub(crate) struct Split<T> {
+    /// Their trace.
+    pub trace: T,
+    /// Each less the mean (0 past `n`).
+    pub dev: [T; 3],
+    /// The deviator's norm.
+    pub norm: T,
+}
+
+impl<const D: usize, T: Num> Principal<D, T> {
+    /// The split of the first `n` principal strains ([`plastic_axes`]).
+    #[inline(always)]
+    pub fn split(&self, n: usize) -> Split<T> {
+        let mut trace = T::splat(0.0);
+        for i in 0..n {
+            trace += self.eps[i];
+        }
+        let mean = trace * (1.0 / n as Real);
+        let dev: [T; 3] = core::array::from_fn(|i| {
+            if i < n {
+                self.eps[i] - mean
+            } else {
+                T::splat(0.0)
+            }
+        });
+        let norm = (dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]).sqrt();
+        Split { trace, dev, norm }
+    }
+}
+
+/// Hencky strain energy `mu |eps|^2 + lambda/2 (tr eps)^2` in the principal log strains.
+pub(crate) fn hencky_energy<const D: usize>(p: &super::Params, f: &Deformation<D>) -> Real {
+    let e = Principal::<D, Real>::of(f).eps;
+    let tr = e[0] + e[1] + e[2];
+    p.mu * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) + 0.5 * p.lambda * tr * tr
 }
 
 /// How many principal strains a return acts on: 3 in 3D and axisymmetric, the 2 in-plane ones

@@ -487,7 +487,7 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
     let mut sum = [0.0; W];
     for ln in 0..W {
-        sum[ln] = jm1[ln] + hzz[ln] + plastic[ln];
+        sum[ln] = jm1[ln] + hzz[ln];
         for k in 0..ns {
             sum[ln] += tau[k][ln];
         }
@@ -495,6 +495,11 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
             for c in 0..D {
                 sum[ln] += h[r][c][ln];
             }
+        }
+    }
+    if ctx.plastic {
+        for ln in 0..W {
+            sum[ln] += plastic[ln];
         }
     }
     let ok = ok & rows::finite::<I, W>(&sum);

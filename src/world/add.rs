@@ -352,7 +352,29 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         critical_compression: m.critical_compression,
         critical_stretch: m.critical_stretch,
         hardening_coefficient: m.hardening_coefficient,
+        friction_coefficient: friction_coefficient(m.friction_angle),
+        apex_tension: apex_tension(m.friction_angle, m.cohesion),
+        log_compression: libm::log1p(-(m.critical_compression as f64)) as Real,
+        log_stretch: libm::log1p(m.critical_stretch as f64) as Real,
     })
+}
+
+/// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` of a friction angle in
+/// degrees (Klar et al. 2016, eq 28: the cone that touches the Mohr-Coulomb pyramid).
+fn friction_coefficient(degrees: Real) -> Real {
+    let sin = libm::sin(degrees as f64 * core::f64::consts::PI / 180.0);
+    (libm::sqrt(2.0 / 3.0) * 2.0 * sin / (3.0 - sin)) as Real
+}
+
+/// The mean tension `c cot(phi)` the Drucker-Prager cone's apex sits at, Pa (0 without a
+/// cohesion).
+fn apex_tension(degrees: Real, cohesion: Real) -> Real {
+    if cohesion > 0.0 {
+        let phi = degrees as f64 * core::f64::consts::PI / 180.0;
+        (cohesion as f64 * libm::cos(phi) / libm::sin(phi)) as Real
+    } else {
+        0.0
+    }
 }
 
 /// A particle to append: position, velocity, mass, volume, material id.

@@ -496,7 +496,13 @@ impl<'a> WorldRef<'a> {
                     let (f, k) = elastic_part(&view.deformation::<2>(i), eig);
                     (energy_density(model, &params, &f), k)
                 };
-                out.strain += view.volume0[i] as f64 * (scale * w) as f64;
+                // An energy density past the largest Real (the step keeps stresses finite, not
+                // energies: an eigenstrain near -1 leaves an elastic part whose energy
+                // overflows in f32 though its scaled stress does not) counts as the largest
+                // Real, so that the sum stays finite.
+                let e = scale as f64 * w as f64;
+                let e = if e.is_finite() { e } else { Real::MAX as f64 };
+                out.strain += view.volume0[i] as f64 * e;
             }
         }
         if out.mass > 0.0 {
