@@ -806,3 +806,68 @@ fn sand_column_collapse_runs_out_as_lube_et_al_measured() {
     let (r20, r30, r40) = (runout(2.0, 20.0), runout(2.0, 30.0), runout(2.0, 40.0));
     assert!(r20 > r30 && r30 > r40, "runouts {r20} {r30} {r40}");
 }
+
+/// Dam break against experiment: a water column (fluid, K = 1 MPa, so a sound speed 11 times
+/// the flow's) of width a = 0.2 m and height 2a collapses along a slip floor, 2D, 20 cells
+/// across the column, APIC. Martin and Moyce 1952 ("An experimental study of the collapse of
+/// liquid columns on a rigid horizontal plane", Phil. Trans. R. Soc. A 244, Fig. 3, n^2 = 2,
+/// a = 2.25 in) measured the surge front `Z = x / a` against `T = t sqrt(2 g / a)`: (0.832,
+/// 1.217), (1.219, 1.474), (1.997, 2.292), (2.547, 2.995), (3.345, 4.134). The front (the
+/// farthest particle) runs ahead of the data, by 10 to 17 % (measured: +10.2, +16.9, +15.5,
+/// +13.4, +11.5 %; the same within 1 % at 40 cells across): the simulation has no floor
+/// friction and no gate to lift, and inviscid simulations are commonly reported to lead this
+/// data alike. Checked: every point ahead of the data and within 20 % of it.
+#[test]
+fn dam_break_front_follows_martin_and_moyce() {
+    let n = 20;
+    let a: f64 = 0.2;
+    let h = (a / n as f64) as Real;
+    let mut def = WorldDef {
+        cells: [5 * n + 2, 2 * n + 4, 1],
+        cell_size: h,
+        particle_capacity: 4000,
+        transfer: Transfer::Apic,
+        ..WorldDef::DEFAULT
+    };
+    def.faces[Face::YMax as usize] = Boundary::Open;
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let water = w
+        .add_material(&MaterialDef {
+            model: MaterialModel::Fluid,
+            bulk_modulus: 1.0e6,
+            ..MaterialDef::DEFAULT
+        })
+        .unwrap();
+    let side = a as Real;
+    w.fill_box(
+        Vec3::new(h, h, 0.0),
+        Vec3::new(h + side, h + 2.0 * side, 0.0),
+        water,
+        Vec3::ZERO,
+    )
+    .unwrap();
+    let data = [
+        (0.832, 1.217),
+        (1.219, 1.474),
+        (1.997, 2.292),
+        (2.547, 2.995),
+        (3.345, 4.134),
+    ];
+    let scale = (2.0 * 9.81 / a).sqrt();
+    for (big_t, z) in data {
+        let t = big_t / scale;
+        while w.time() < t - 1e-9 {
+            w.step((t - w.time()).min(1.0 / 240.0) as Real).unwrap();
+        }
+        let v = w.particles();
+        let front = (0..v.count)
+            .map(|i| (v.position[0][i] - h) as f64)
+            .fold(0.0, f64::max)
+            / a;
+        assert!(
+            front > z && front < 1.2 * z,
+            "T = {big_t}: front at {front} a, measured {z} a"
+        );
+    }
+}
