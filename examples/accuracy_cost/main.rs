@@ -29,6 +29,7 @@ mod scene;
 #[path = "../../benches/common/timing.rs"]
 mod timing;
 
+use mpm_gimp::MaterialModel;
 use problems::{Declares, PROBLEMS, SCHEMES};
 use scene::{Effect, Scene, SceneDef};
 use std::collections::BTreeSet;
@@ -78,6 +79,7 @@ fn declares_name(d: Declares) -> &'static str {
         Declares::Nothing => "none",
         Declares::ParticleForces => "particle_forces",
         Declares::Heat => "heat",
+        Declares::Fluid => "fluid",
     }
 }
 
@@ -147,9 +149,14 @@ fn costs() -> Vec<Cost> {
                 flip_beta: scheme.flip_beta,
                 exp_terms: scheme.exp_terms,
                 effect: match d {
-                    Declares::Nothing => Effect::None,
+                    Declares::Nothing | Declares::Fluid => Effect::None,
                     Declares::ParticleForces => Effect::ParticleForces,
                     Declares::Heat => Effect::Heat,
+                },
+                material: if d == Declares::Fluid {
+                    MaterialModel::Fluid
+                } else {
+                    SceneDef::PLANE_2D.material
                 },
                 ..SceneDef::PLANE_2D
             };

@@ -186,6 +186,8 @@ pub enum Declares {
     Nothing,
     ParticleForces,
     Heat,
+    /// No effect: the fluid model (priced in the step_cost scene made of it).
+    Fluid,
 }
 
 /// A verification problem: its metrics, its refinement series and how to run one level.
@@ -275,6 +277,22 @@ fallen to 1/e.",
         quick_levels: &[16, 32],
         declares: Declares::Heat,
         run: heat_mode,
+    },
+    Problem {
+        key: "poiseuille",
+        title: "Plane Poiseuille flow from rest (fluid)",
+        about: "Fluid (K = 100 kPa, eta = 100 Pa s, rho = 1000) between stick walls W = 0.2 m \
+apart, driven by a body force g = 1 m/s^2 along them with free ends (open faces, a channel 3 W \
+long). Exact (series): u = g x (W - x) / (2 nu) - sum_(n odd) 4 g W^2 / (nu pi^3 n^3) \
+sin(n pi x / W) exp(-n^2 pi^2 nu t / W^2). Error: RMS of the particles' velocity error over \
+the centre speed g W^2 / (8 nu) = 5 cm/s in the channel's middle third at t = 0.25 s (six \
+time constants). Cells per unit length: 40 is 8 across the channel.",
+        metrics: &["velocity"],
+        targets: &[1e-2],
+        levels: &[20, 40, 80],
+        quick_levels: &[40],
+        declares: Declares::Fluid,
+        run: poiseuille,
     },
 ];
 
@@ -622,6 +640,76 @@ pub fn heat_mode(scheme: &Scheme, cells: u32) -> Outcome {
         v.temperature[i] as f64 - (PI * x[i] / length).sin() * decay
     }) / decay;
     outcome(vec![error], v.count, steps)
+}
+
+/// Problem 5: plane Poiseuille flow started from rest between stick walls, driven by a body
+/// force along the channel whose ends are open (no pressure gradient builds).
+pub fn poiseuille(scheme: &Scheme, cells: u32) -> Outcome {
+    let (width, g, eta, rho) = (0.2f64, 1.0f64, 100.0f64, 1000.0f64);
+    let nu = eta / rho;
+    let m = scheme.shape.margin_cells();
+    let across = (width * cells as f64).round() as u32;
+    let mut def = WorldDef {
+        dimension: Dimension::Plane2D,
+        cells: [across + 2 * m, 3 * across + 2 * m, 1],
+        cell_size: (1.0 / cells as f64) as Real,
+        gravity: Vec3::new(0.0, -g as Real, 0.0),
+        faces: [Boundary::Stick; 6],
+        particle_capacity: 4 * across * 3 * across,
+        material_capacity: 1,
+        ..WorldDef::DEFAULT
+    };
+    scheme.apply(&mut def);
+    def.faces[Face::YMin as usize] = Boundary::Open;
+    def.faces[Face::YMax as usize] = Boundary::Open;
+    let fluid = MaterialDef {
+        model: MaterialModel::Fluid,
+        bulk_modulus: 1.0e5,
+        viscosity: eta as Real,
+        density: rho as Real,
+        ..MaterialDef::DEFAULT
+    };
+    let mut run = Run::new(&def);
+    let mut w = run.world();
+    let h = def.cell_size as f64;
+    let wall = def.origin.x as f64 + m as f64 * h;
+    let length = 3.0 * width;
+    lattice(
+        &mut w,
+        &fluid,
+        ([wall, wall], [wall + width, wall + length]),
+        |_, _| true,
+        |_, _| [0.0, 0.0],
+    );
+    let t_end = 0.25;
+    let max_dt = w.stable_dt() as f64;
+    let Some(steps) = run_to(&mut w, t_end, max_dt, |_, _| {}) else {
+        return outcome(vec![f64::NAN], w.particle_count(), None);
+    };
+    let exact = |x: f64| {
+        let mut u = g * x * (width - x) / (2.0 * nu);
+        for n in (1..200).step_by(2) {
+            let n = n as f64;
+            u -= 4.0 * g * width * width / (nu * PI.powi(3) * n.powi(3))
+                * (n * PI * x / width).sin()
+                * (-n * n * PI * PI * nu * t_end / (width * width)).exp();
+        }
+        u
+    };
+    let centre = g * width * width / (8.0 * nu);
+    let v = w.particles();
+    let middle: Vec<usize> = (0..v.count)
+        .filter(|&i| {
+            let y = v.position[1][i] as f64 - wall;
+            v.status[i] == 0 && (width..2.0 * width).contains(&y)
+        })
+        .collect();
+    let error = rms(middle.len(), |k| {
+        let i = middle[k];
+        let x = v.position[0][i] as f64 - wall;
+        (-(v.velocity[1][i] as f64) - exact(x)) / centre
+    });
+    outcome(vec![error], v.count, Some(steps))
 }
 
 /// Observed order of convergence between two levels: `log(e_coarse / e_fine) / log(n_fine /
