@@ -151,52 +151,73 @@ fn rigid_translation_creates_no_stress_in_any_new_model() {
 /// pressure).
 #[test]
 fn fluid_tank_at_rest_carries_hydrostatic_pressure() {
-    let h: Real = 0.02;
-    let mut def = WorldDef {
-        cells: [22, 24, 1],
-        cell_size: h,
-        particle_capacity: 4000,
-        ..WorldDef::DEFAULT
-    };
-    def.effects.damping = Some(Damping {
-        grid: Schedule::constant(20.0),
-        ..Damping::NONE
-    });
-    let mut buf = buffer_for(&def);
-    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
     let water = MaterialDef {
         model: MaterialModel::Fluid,
         bulk_modulus: 1.0e6,
         ..MaterialDef::DEFAULT
     };
-    let id = w.add_material(&water).unwrap();
-    let (top, depth) = (h + 0.4, 0.4);
-    w.fill_box(
-        Vec3::new(h, h, 0.0),
-        Vec3::new(h + 0.4, top, 0.0),
-        id,
-        Vec3::ZERO,
-    )
-    .unwrap();
-    let y0: Vec<f64> = w.particles().position[1]
-        .iter()
-        .map(|&y| y as f64)
-        .collect();
-    for _ in 0..60 {
-        w.step(1.0 / 60.0).unwrap();
-    }
-    let g = 9.81f64;
-    let rho0 = water.density as f64;
-    let bottom = rho0 * g * depth as f64;
+    let def = WorldDef {
+        cells: [22, 24, 1],
+        ..WorldDef::DEFAULT
+    };
+    let mut buf = buffer_for(&settling(def));
+    let (w, depth0) = settled_column(&def, &mut buf, &water, 0.4);
+    let (g, rho0) = (9.81f64, water.density as f64);
+    let bottom = rho0 * g * 0.4;
     let v = w.particles();
     let mut samples = vec![];
-    for i in 0..v.count {
-        let d0 = top as f64 - y0[i];
+    for (i, &d0) in depth0.iter().enumerate() {
         let shear = (v.stress[2][i] as f64 * rho0).abs();
         assert!(shear < 0.01 * bottom, "shear {shear} at depth {d0}");
         samples.push((d0, pressure(&w, i, rho0)));
     }
-    layers_carry(&samples, |d0| rho0 * g * d0, h as f64, "tank pressure");
+    layers_carry(&samples, |d0| rho0 * g * d0, COLUMN_CELL, "tank pressure");
+}
+
+/// The cell size of the columns at rest, m.
+const COLUMN_CELL: f64 = 0.02;
+
+/// `def` with the columns' cell size and grid damping of 20/s (the sloshing decays as
+/// `exp(-10 t)`).
+fn settling(mut def: WorldDef) -> WorldDef {
+    def.cell_size = COLUMN_CELL as Real;
+    def.particle_capacity = 4000;
+    def.effects.damping = Some(Damping {
+        grid: Schedule::constant(20.0),
+        ..Damping::NONE
+    });
+    def
+}
+
+/// A column of `material` `height` m high filling a world of [`settling`]`(def)` from wall to
+/// wall, settled under gravity for 1 s; returns the world and each particle's initial depth.
+fn settled_column<'a>(
+    def: &WorldDef,
+    buf: &'a mut mpm_gimp::HeapBuffer,
+    material: &MaterialDef,
+    height: Real,
+) -> (World<'a>, Vec<f64>) {
+    let def = settling(*def);
+    let h = def.cell_size;
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let id = w.add_material(material).unwrap();
+    let top = h + height;
+    let width = (def.cells[0] - 2) as Real * h;
+    w.fill_box(
+        Vec3::new(h, h, 0.0),
+        Vec3::new(h + width, top, 0.0),
+        id,
+        Vec3::ZERO,
+    )
+    .unwrap();
+    let depth0 = w.particles().position[1]
+        .iter()
+        .map(|&y| (top - y) as f64)
+        .collect();
+    for _ in 0..60 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    (w, depth0)
 }
 
 /// The check of a column at rest against its weight: `samples` are (initial depth, value) of
@@ -465,20 +486,6 @@ fn metal_bar_follows_the_elastic_plastic_curve_when_loaded_unloaded_and_reloaded
 /// the friction leaves: checked below the top cell by [`layers_carry`].
 #[test]
 fn sand_column_carries_the_lithostatic_vertical_stress() {
-    let h: Real = 0.02;
-    let mut def = plastic(WorldDef {
-        cells: [12, 24, 1],
-        cell_size: h,
-        particle_capacity: 2000,
-        ..WorldDef::DEFAULT
-    });
-    def.faces[Face::YMin as usize] = Boundary::Stick;
-    def.effects.damping = Some(Damping {
-        grid: Schedule::constant(20.0),
-        ..Damping::NONE
-    });
-    let mut buf = buffer_for(&def);
-    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
     let sand = MaterialDef {
         model: MaterialModel::DruckerPrager,
         youngs_modulus: 1.0e7,
@@ -487,34 +494,24 @@ fn sand_column_carries_the_lithostatic_vertical_stress() {
         friction_angle: 30.0,
         ..MaterialDef::DEFAULT
     };
-    let id = w.add_material(&sand).unwrap();
-    let top = h + 0.4;
-    w.fill_box(
-        Vec3::new(h, h, 0.0),
-        Vec3::new(h + 0.2, top, 0.0),
-        id,
-        Vec3::ZERO,
-    )
-    .unwrap();
-    let y0: Vec<f64> = w.particles().position[1]
-        .iter()
-        .map(|&y| y as f64)
-        .collect();
-    for _ in 0..60 {
-        w.step(1.0 / 60.0).unwrap();
-    }
+    let mut def = plastic(WorldDef {
+        cells: [12, 24, 1],
+        ..WorldDef::DEFAULT
+    });
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    let mut buf = buffer_for(&settling(def));
+    let (w, depth0) = settled_column(&def, &mut buf, &sand, 0.4);
     let (g, rho0) = (9.81f64, sand.density as f64);
     let v = w.particles();
-    let samples: Vec<(f64, f64)> = (0..v.count)
-        .map(|i| {
-            let syy = v.stress[1][i] as f64 * rho0 / v.jacobian(i) as f64;
-            (top as f64 - y0[i], syy)
-        })
+    let samples: Vec<(f64, f64)> = depth0
+        .iter()
+        .enumerate()
+        .map(|(i, &d0)| (d0, v.stress[1][i] as f64 * rho0 / v.jacobian(i) as f64))
         .collect();
     layers_carry(
         &samples,
         |d0| -rho0 * g * d0,
-        h as f64,
+        COLUMN_CELL,
         "sand vertical stress",
     );
 }
