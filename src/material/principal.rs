@@ -293,7 +293,6 @@ mod tests {
         }
         let delta = [0.01 as Real, -0.02, 0.03];
         let g = p.change(&def, &delta);
-        let q = Principal::of(&g);
         for i in 0..3 {
             // Each direction of `p` is still principal with strain eps_i + delta_i.
             let mut bn = [0.0 as Real; 3];
@@ -313,6 +312,5 @@ mod tests {
                 assert!((bn[a] - want * p.n[a][i]).abs() < 1e-5, "{i} {bn:?}");
             }
         }
-        let _ = q;
     }
 }

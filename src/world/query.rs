@@ -247,43 +247,26 @@ impl<'a> WorldRef<'a> {
         let n = self.particle_count();
         let d = layout.d;
         let status = self.u32_col(&layout, col::STATUS, n);
-        // Snow's moduli harden by exp(xi (1 - J_p)), its wave speed by the square root of
-        // that: the fastest is that of the most compacted active particle of each snow
-        // material.
         let materials = self.materials(&layout);
-        let mut hardening = [1.0f64; 8];
-        let snow = |id: usize| {
-            materials
-                .get(id)
-                .filter(|r| model_of(r) == crate::MaterialModel::Snow)
-        };
-        if layout.plastic.count > 0 && (0..materials.len()).any(|id| snow(id).is_some()) {
+        let mut c_max = materials
+            .iter()
+            .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
+        // Snow's moduli harden by exp(xi (1 - J_p)), its wave speed by the square root of
+        // that: the most compacted active snow particle may be the fastest.
+        let snow = |r: &&MaterialRecord| model_of(r) == crate::MaterialModel::Snow;
+        if layout.plastic.count > 0 && materials.iter().any(|r| snow(&r)) {
             let plastic = self.real_col(&layout, layout.plastic.first, n);
             let material = self.u32_col(&layout, col::MATERIAL, n);
             for i in 0..n {
-                if status[i] != ACTIVE {
+                let Some(r) = materials.get(material[i] as usize).filter(snow) else {
                     continue;
-                }
-                let id = material[i] as usize;
-                if let Some(r) = snow(id) {
+                };
+                if status[i] == ACTIVE {
                     let k = libm::exp(-(r.hardening_coefficient as f64) * plastic[i] as f64);
-                    let slot = &mut hardening[id.min(7)];
-                    *slot = slot.max(k);
+                    c_max = c_max.max((r.wave_speed as f64 * libm::sqrt(k)) as Real);
                 }
             }
         }
-        let c_max = materials
-            .iter()
-            .enumerate()
-            .fold(0.0 as Real, |c, (id, r)| {
-                let k = if snow(id).is_some() {
-                    // Materials past the eighth share the last slot (a bound, not a value).
-                    libm::sqrt(hardening[id.min(7)])
-                } else {
-                    1.0
-                };
-                c.max((r.wave_speed as f64 * k) as Real)
-            });
         let v: [&[Real]; 3] = core::array::from_fn(|a| {
             if a < d {
                 self.real_col(&layout, col::v(d, a), n)
