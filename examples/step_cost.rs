@@ -45,7 +45,7 @@ const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
 [--particle-order fill|rows|shuffled] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
-body_force|apic|mls (B-splines)|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
+body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;

@@ -172,6 +172,20 @@ pub enum Transfer {
     /// Heat and diffusion keep the shape functions' gradients. Reserves the columns of `C_p`
     /// as [`Transfer::Apic`] does.
     Mls = 3,
+    /// FLIP in seeds/000's momentum approach (section 5.2): the particle reads the grid
+    /// through the nodes' momenta over the grid's mass at the particle, `m_gp = sum_i S_ip
+    /// m_i`, so a node that carries a sliver of mass weighs in with that sliver. The
+    /// velocity gradient is that of the mass-weighted velocity field (eq 67 where the mass is
+    /// uniform, and invariant under translation and exact for rigid rotation everywhere), the
+    /// internal force its work conjugate (energy, momentum and angular momentum pass between
+    /// particles and grid unchanged), and the particle moves with the mass-weighted grid
+    /// velocity (eq 90). The particle velocity takes [`Transfer::Flip`]'s update (eq 91 read
+    /// with the particle's share of each nodal force, which conserves momentum). Plane strain
+    /// and 3D, every shape function; the axisymmetric form is
+    /// [`crate::Error::InvalidTransfer`]. Same columns as [`Transfer::Flip`]; its force and
+    /// gradient passes are plain loops, several times the cost of the velocity approach's
+    /// (benches/PERFORMANCE.md). See `phases/momentum.rs` for why eq 67 as printed is not used.
+    FlipMomentum = 4,
 }
 
 impl Transfer {
@@ -188,6 +202,7 @@ impl Transfer {
             1 => Some(Transfer::Apic),
             2 => Some(Transfer::FlipParticleVelocity),
             3 => Some(Transfer::Mls),
+            4 => Some(Transfer::FlipMomentum),
             _ => None,
         }
     }
@@ -598,7 +613,13 @@ mod tests {
         );
         use Transfer as Tr;
         check(
-            &[Tr::Flip, Tr::Apic, Tr::FlipParticleVelocity, Tr::Mls],
+            &[
+                Tr::Flip,
+                Tr::Apic,
+                Tr::FlipParticleVelocity,
+                Tr::Mls,
+                Tr::FlipMomentum,
+            ],
             |v| v as u32,
             Tr::from_code,
         );

@@ -91,7 +91,7 @@ pub enum Error {
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or the dimension:
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
-    /// 3D.
+    /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric.
     InvalidTransfer = 32,
     /// A traction id at or past the number of tractions ([`crate::World::remove_tractions`]).
     UnknownTraction = 33,
@@ -160,7 +160,7 @@ impl Error {
             }
             Error::UnknownTraction => c"traction id at or past the number of tractions",
             Error::InvalidTransfer => {
-                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D)"
+                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric)"
             }
         }
     }

@@ -586,6 +586,10 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     {
         return Err(Error::InvalidTransfer);
     }
+    // The momentum approach's gradient has no hoop term of its own yet.
+    if def.transfer == Transfer::FlipMomentum && def.dimension == Dimension::Axisymmetric2D {
+        return Err(Error::InvalidTransfer);
+    }
     def.effects.validate(def.axes())?;
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")

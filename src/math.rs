@@ -224,7 +224,7 @@ pub fn x_minus_ln_1p(x: Real) -> Real {
 
 /// Inverse transpose `m^-T` from cofactors (D = 2 or 3); the caller guarantees `det != 0`.
 #[inline(always)]
-fn inverse_transpose<T: Num, const D: usize>(m: &MatOf<T, D>) -> MatOf<T, D> {
+pub(crate) fn inverse_transpose<T: Num, const D: usize>(m: &MatOf<T, D>) -> MatOf<T, D> {
     let inv_det = T::splat(1.0) / det(m);
     matrix(|i, j| {
         if D == 2 {

@@ -34,6 +34,8 @@ pub enum Effect {
     Apic,
     /// MLS-MPM (the quadratic and cubic B-splines only: `--shape quadratic` or `cubic`).
     Mls,
+    /// FLIP in the momentum approach.
+    Momentum,
     /// Heat conduction, insulated faces (the material's conductivity is 0: the passes run, the
     /// temperatures stay).
     Heat,
@@ -52,7 +54,7 @@ pub enum Effect {
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 14] = [
+    pub const ALL: [(Effect, &'static str); 15] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -63,6 +65,7 @@ impl Effect {
         (Effect::BodyForce, "body_force"),
         (Effect::Apic, "apic"),
         (Effect::Mls, "mls"),
+        (Effect::Momentum, "momentum"),
         (Effect::Heat, "heat"),
         (Effect::Diffusion, "diffusion"),
         (Effect::ThermalExpansion, "thermal_expansion"),
@@ -149,6 +152,7 @@ impl Effect {
                 }
                 def.transfer = Transfer::Mls;
             }
+            Effect::Momentum => def.transfer = Transfer::FlipMomentum,
             Effect::Heat | Effect::ThermalExpansion => fx.heat = Some(Transport::INSULATED),
             Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
             Effect::Axisymmetric => {

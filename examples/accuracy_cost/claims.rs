@@ -60,6 +60,10 @@ pub const APIC_FRACTION: f64 = 0.01;
 /// coordinate, a position rounded after every step lost it: f32 errors of order 1 there).
 pub const FAR_FACTOR: f64 = 1.5;
 
+/// The momentum approach's error on the vibrating bar and the spinning disk is at most this
+/// multiple of the velocity approach's (the defaults), at every level.
+pub const MOMENTUM_FACTOR: f64 = 1.05;
+
 /// Evaluates every claim on the errors `series` gives.
 pub fn check(series: Series) -> Vec<Claim> {
     let mut claims = vec![];
@@ -132,6 +136,33 @@ levels {orders:.2?} (each >= {CPGIMP_MIN_STEP_ORDER})",
             show(&near),
             show(&far)
         ),
+    });
+    // The momentum approach against the velocity approach it replaces (same shape, order and
+    // blend): the bar's displacement and the disk's angular momentum and energy.
+    let mut holds = true;
+    let mut detail = vec![];
+    for (problem, metric) in [("bar", 0), ("disk", 0), ("disk", 1)] {
+        let (velocity, momentum) = (
+            series(problem, metric, "defaults"),
+            series(problem, metric, "momentum"),
+        );
+        holds &= !velocity.is_empty()
+            && velocity.len() == momentum.len()
+            && velocity
+                .iter()
+                .zip(&momentum)
+                .all(|(v, m)| m.1 <= MOMENTUM_FACTOR * v.1);
+        detail.push(format!(
+            "{problem} metric {metric}: velocity approach {}, momentum approach {}",
+            show(&velocity),
+            show(&momentum)
+        ));
+    }
+    claims.push(Claim {
+        text: "the momentum approach is as accurate as the velocity approach on the vibrating \
+bar and the spinning disk",
+        holds,
+        detail: format!("{} (each <= {MOMENTUM_FACTOR} x)", detail.join("; ")),
     });
     claims
 }

@@ -52,6 +52,7 @@ impl Scheme {
                 format!("FLIP beta={}, x += v(n+1) dt", self.flip_beta)
             }
             Transfer::Mls => "MLS-MPM (APIC, MLS gradient)".to_string(),
+            Transfer::FlipMomentum => format!("FLIP beta={}, momentum approach", self.flip_beta),
         };
         format!(
             "{:?}, {transfer}, {:?}, exp terms {}",
@@ -110,6 +111,11 @@ pub const SCHEMES: &[Scheme] = &[
     Scheme {
         label: "FLIP x+=v dt",
         transfer: Transfer::FlipParticleVelocity,
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "momentum",
+        transfer: Transfer::FlipMomentum,
         ..Scheme::DEFAULTS
     },
     // Update orders.

@@ -153,7 +153,8 @@ enum MpmStatus
   // stress is not finite (nothing was set).
   MPM_STATUS_INVALID_DEFORMATION = 31,
   // A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
-  // needs the quadratic or cubic B-spline, in 2D or 3D.
+  // needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not
+  // axisymmetric.
   MPM_STATUS_INVALID_TRANSFER = 32,
   // A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
   MPM_STATUS_UNKNOWN_TRACTION = 33,
@@ -272,6 +273,13 @@ enum MpmTransfer
   // (`mpm_gimp::Transfer::Mls`). The quadratic and cubic B-splines, 2D and 3D only
   // (otherwise `MPM_STATUS_INVALID_TRANSFER`). Reserves the columns APIC does.
   MPM_TRANSFER_MLS = 3,
+  // FLIP in the momentum approach (seeds/000 section 5.2,
+  // `mpm_gimp::Transfer::FlipMomentum`): the velocity gradient of the mass-weighted grid
+  // velocity field, exact for affine fields, with its work-conjugate internal force, and the
+  // particles moving with the mass-weighted grid velocity. Plane strain and 3D only
+  // (otherwise `MPM_STATUS_INVALID_TRANSFER`). Same columns as `MPM_TRANSFER_FLIP`, several
+  // times its cost per step.
+  MPM_TRANSFER_FLIP_MOMENTUM = 4,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmTransfer;

@@ -89,6 +89,13 @@ pub enum MpmTransfer {
     /// (`mpm_gimp::Transfer::Mls`). The quadratic and cubic B-splines, 2D and 3D only
     /// (otherwise `MPM_STATUS_INVALID_TRANSFER`). Reserves the columns APIC does.
     Mls = 3,
+    /// FLIP in the momentum approach (seeds/000 section 5.2,
+    /// `mpm_gimp::Transfer::FlipMomentum`): the velocity gradient of the mass-weighted grid
+    /// velocity field, exact for affine fields, with its work-conjugate internal force, and the
+    /// particles moving with the mass-weighted grid velocity. Plane strain and 3D only
+    /// (otherwise `MPM_STATUS_INVALID_TRANSFER`). Same columns as `MPM_TRANSFER_FLIP`, several
+    /// times its cost per step.
+    FlipMomentum = 4,
 }
 
 /// Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).

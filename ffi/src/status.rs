@@ -96,7 +96,8 @@ pub enum MpmStatus {
     /// stress is not finite (nothing was set).
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
-    /// needs the quadratic or cubic B-spline, in 2D or 3D.
+    /// needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not
+    /// axisymmetric.
     InvalidTransfer = 32,
     /// A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
     UnknownTraction = 33,

@@ -325,7 +325,7 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     }
     def.exp_terms = inp.u32_below(10);
     def.cfl = inp.real_in(0.05, 1.0);
-    def.transfer = inp.u32_below(5); // 0..=3 the transfers (MLS 3), 4 out of range
+    def.transfer = inp.u32_below(6); // 0..=4 the transfers (MLS 3, FLIP momentum 4), 5 out of range
     // The limits: mostly the defaults, sometimes anything (0 and NaN refused).
     if inp.byte() % 8 == 0 {
         def.max_substeps = inp.u32_below(2000);

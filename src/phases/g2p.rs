@@ -646,6 +646,9 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     // `commit_gradient_affine`).
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut scratch = StressScratch::new();
+    // The momentum approach: the mass-weighted grid velocity and acceleration each lane moves
+    // with (eq 90).
+    let (mut v_move, mut a_move) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     // MUSL: what the re-map scatters (it reads no stress).
     let mut products = Products::zero();
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
@@ -680,6 +683,16 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             (true, false) => I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, aff, out),
             (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, aff, out),
         }
+        if ctx.momentum {
+            use super::momentum::{gather, Differentiate};
+            let which = if fused_stress {
+                Differentiate::Updated
+            } else {
+                Differentiate::Nothing
+            };
+            let (l, moving) = (&mut gathered.l, Some((&mut *v_move, &mut *a_move)));
+            gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, moving);
+        }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // FLIP with PIC damping (or APIC) and the position update, then the walls and open
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
@@ -700,7 +713,12 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                 let (vn, dx) = if apic {
                     update::apic(&step, v_gp, a_gp, d)
                 } else {
-                    update::flip(&step, v_p, v_gp, a_gp, d)
+                    let moves_with = if ctx.momentum {
+                        (ld(&v_move[a]), ld(&a_move[a]))
+                    } else {
+                        (v_gp, a_gp)
+                    };
+                    update::flip(&step, v_p, (v_gp, a_gp), moves_with, d)
                 };
                 let (xn, xn_low) = update::advance(ld(&x[a]), ld(&x_low[a]), dx);
                 sum = sum + (vn + xn);
@@ -828,6 +846,11 @@ pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, cons
             &mut unused_affine,
             &mut gathered,
         );
+        if ctx.momentum {
+            use super::momentum::{gather, Differentiate};
+            let (which, l) = (Differentiate::Remap, &mut gathered.l);
+            gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, None);
+        }
         let (ok, runaway) =
             update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
         if S::GRADIENT_AFFINE {

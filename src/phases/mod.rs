@@ -11,6 +11,7 @@ pub(crate) mod g2p;
 pub(crate) mod grid_update;
 pub(crate) mod isa;
 pub(crate) mod lanes;
+pub(crate) mod momentum;
 pub(crate) mod p2g;
 pub(crate) mod rows;
 pub(crate) mod transport;
@@ -63,6 +64,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub mls: bool,
     /// FLIP moves the particles with their own new velocity ([`crate::Transfer::FlipParticleVelocity`]).
     pub particle_velocity: bool,
+    /// The momentum approach ([`crate::Transfer::FlipMomentum`], [`momentum`]): its own
+    /// gradient, force and position update.
+    pub momentum: bool,
     /// Particle forces declared: the scatter adds `S_ip F_p`.
     pub forces: bool,
     /// Damping in the particle update declared (a particle rate, per-particle rates, or the

@@ -52,16 +52,18 @@ impl<I: Compare> Step<I> {
 /// FLIP with PIC damping (seeds/000 eq 52) and the position update of eq 51, less the damping
 /// acceleration `d` when damping is declared (eqs 46-49):
 /// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
-/// - `x(n+1) = x_p + dx`, `dx = (v_gp + a_gp dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`,
+/// - `x(n+1) = x_p + dx`, `dx = (v_m + a_m dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`,
 ///   or with `particle_velocity` the particle's own new velocity, `dx = v(n+1) dt` (seeds/003).
 ///
-/// Returns the new velocity and the displacement `dx` (see [`advance`]).
+/// `(v_m, a_m)`, the grid velocity and acceleration the particle moves with, are `(v_gp,
+/// a_gp)` in the velocity approach and the mass-weighted ones in the momentum approach (eq 90,
+/// [`super::momentum`]). Returns the new velocity and the displacement `dx` (see [`advance`]).
 #[inline(always)]
 pub(crate) fn flip<I: Compare>(
     k: &Step<I>,
     v_p: Wide<I>,
-    v_gp: Wide<I>,
-    a_gp: Wide<I>,
+    (v_gp, a_gp): (Wide<I>, Wide<I>),
+    (v_m, a_m): (Wide<I>, Wide<I>),
     d: Option<Wide<I>>,
 ) -> (Wide<I>, Wide<I>) {
     let inversion = (v_p - v_gp) * k.pic;
@@ -73,7 +75,7 @@ pub(crate) fn flip<I: Compare>(
     if k.particle_velocity {
         return (v, v * k.dt);
     }
-    let dx = (v_gp + a_gp * k.half * k.dt - inversion * k.half) * k.dt;
+    let dx = (v_m + a_m * k.half * k.dt - inversion * k.half) * k.dt;
     match d {
         Some(d) => (v, dx - d * k.half_dt2),
         None => (v, dx),

@@ -198,6 +198,7 @@ impl<'a> World<'a> {
             apic: def.transfer.is_affine(),
             mls: def.transfer == Transfer::Mls,
             particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
+            momentum: def.transfer == Transfer::FlipMomentum,
             forces: fx.particle_forces,
             damp: fx.damping.is_some_and(|d| d.on_particles()),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
@@ -295,6 +296,9 @@ impl Kernel for Substep<'_> {
         }
         grid_update::reset(ctx, g);
         let adds = |mode| Adds::of(mode, ctx);
+        if ctx.momentum {
+            return momentum_approach::<I, D, K, S, W>(s, ctx, p, count, g, report);
+        }
         match ctx.order {
             UpdateOrder::Usf => {
                 p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
@@ -324,6 +328,48 @@ impl Kernel for Substep<'_> {
                 grid_update::remap_velocity(ctx, g);
                 I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
             }
+        }
+    }
+}
+
+/// One substep in the momentum approach ([`crate::phases::momentum`]): the masses and momenta
+/// first, then (with the masses complete and mirrored at the walls) the internal force with
+/// the particles' mass-weighted gradient weights; the particle and stress passes take that
+/// gradient and the mass-weighted position update.
+fn momentum_approach<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    s: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &mut GridCols<'_, D>,
+    report: &mut StepReport,
+) {
+    use crate::phases::momentum::{forces, mirror_masses};
+    p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::MassMomentum, ctx));
+    grid_update::velocity(ctx, g);
+    mirror_masses(ctx, g);
+    match ctx.order {
+        UpdateOrder::Usf => {
+            grid_update::constrained_velocity(ctx, g);
+            I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+            forces::<I, D, K, S, W>(s, ctx, p, count, g);
+            crate::effects::forces::tractions(s, ctx, p, count, g);
+            grid_update::acceleration(ctx, g);
+            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        }
+        UpdateOrder::Usl => {
+            forces::<I, D, K, S, W>(s, ctx, p, count, g);
+            crate::effects::forces::tractions(s, ctx, p, count, g);
+            grid_update::acceleration(ctx, g);
+            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        }
+        UpdateOrder::Musl => {
+            forces::<I, D, K, S, W>(s, ctx, p, count, g);
+            crate::effects::forces::tractions(s, ctx, p, count, g);
+            grid_update::acceleration(ctx, g);
+            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+            grid_update::remap_velocity(ctx, g);
+            I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
         }
     }
 }
@@ -362,6 +408,7 @@ impl Kernel for PhaseRun {
             apic: false,
             mls: false,
             particle_velocity: false,
+            momentum: false,
             forces: false,
             damp: false,
             nodal_damping: None,

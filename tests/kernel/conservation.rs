@@ -1,6 +1,6 @@
 //! Conservation: mass exactly, linear momentum to round-off, for every shape function and
 //! update order, in 2D and 3D (except linear shapes with USL, unstable by nature), and with
-//! MLS-MPM for the B-splines.
+//! MLS-MPM for the B-splines and with the momentum approach.
 
 use crate::common::*;
 use mpm_gimp::{
@@ -11,7 +11,8 @@ use mpm_gimp::{
 /// 60 steps. Exact: the particles' total mass never changes (bit for bit), and total
 /// momentum is constant because `sum_i f_i = -sum_p m_p tau_p . sum_i G_ip = 0` and the PIC
 /// blend moves momentum between particles only. MLS-MPM's gradient sums to zero over the
-/// nodes too (`sum_i S_ip (x_i - x_p) = 0`). Tolerance 1e-6 of the momentum scale `sum m |v|`:
+/// nodes too (`sum_i S_ip (x_i - x_p) = 0`), and so do the momentum approach's mass-weighted
+/// weights (`sum_i (m_i / m_gp)(G_ip - S_ip g_p) = 0`). Tolerance 1e-6 of the momentum scale `sum m |v|`:
 /// f32 round-off of the grid sums over 60 steps (measured ~1e-7).
 #[test]
 fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
@@ -21,6 +22,7 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
                 .iter()
                 .map(|&o| (o, Transfer::Flip))
                 .chain(ORDERS.iter().map(|&o| (o, Transfer::Mls)))
+                .chain(ORDERS.iter().map(|&o| (o, Transfer::FlipMomentum)))
             {
                 if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
                     // Classic MPM's cell-crossing instability: see the hard-case test

@@ -1262,6 +1262,35 @@ fn mls_needs_a_b_spline_in_2d_or_3d() {
     );
 }
 
+/// The momentum approach goes with every shape function in plane strain and 3D; in the
+/// axisymmetric form (whose hoop term it does not weigh) the definition is `InvalidTransfer`.
+#[test]
+fn momentum_approach_is_plane_strain_or_3d() {
+    for shape in SHAPES {
+        for dimension in [
+            Dimension::Plane2D,
+            Dimension::ThreeD,
+            Dimension::Axisymmetric2D,
+        ] {
+            let mut def = WorldDef {
+                dimension,
+                shape,
+                transfer: Transfer::FlipMomentum,
+                cells: [20, 20, 20],
+                ..WorldDef::DEFAULT
+            };
+            let want = if dimension == Dimension::Axisymmetric2D {
+                def.origin.x = -(shape.margin_cells() as Real) * def.cell_size;
+                Err(mpm_gimp::Error::InvalidTransfer)
+            } else {
+                Ok(())
+            };
+            let got = memory_requirements(&def).map(|_| ());
+            assert_eq!(got, want, "{shape:?} {dimension:?}");
+        }
+    }
+}
+
 /// PIC damping alone (eq 44): with beta < 1 and no other damping the inversion error
 /// `v_p - v_gp` is multiplied by beta every step (eq 45), so a velocity pattern the grid cannot
 /// represent decays as `beta^n`. The pattern: `v_y = v0 (-1)^i` on the columns i of a block at

@@ -106,6 +106,8 @@ struct Method {
     mls: bool,
     /// FLIP moves the particle with its own new velocity (seeds/003).
     particle_velocity: bool,
+    /// The momentum approach ([`weights`]).
+    momentum: bool,
     beta: f64,
     h: f64,
     origin: [f64; 3],
@@ -346,12 +348,81 @@ fn affine(m: &Method, p: &Particle, st: &Stencil, dx: &[f64; 3]) -> [f64; 3] {
     c
 }
 
+/// The gradient weights of a particle's stencil, `(node, weight)`: the shape function's `G_ip`
+/// or, in the momentum approach, the mass-weighted `B_ip = A_p^-T (m_i / m_gp)(G_ip - S_ip g_p)`
+/// with `m_gp = sum S_ip m_i`, `g_p = sum G_ip m_i / m_gp`, `A_p = sum (x_i - x_p) (x) (m_i /
+/// m_gp)(G_ip - S_ip g_p)` (the gradient of the mass-weighted velocity field, exact for affine
+/// fields), unless `det A_p <= 0.1`, where the particle keeps `G_ip`. The masses `m_i` are
+/// the grid's, folded at the walls and mirrored past them.
+fn weights(m: &Method, st: &Stencil, grid: &[Node]) -> Vec<(usize, [f64; 3])> {
+    let plain = st.nodes.iter().map(|&(i, _, g, _)| (i, g)).collect();
+    if !m.momentum {
+        return plain;
+    }
+    let d = m.d;
+    let (mut m_gp, mut sum_g, mut centroid, mut moment) = (0.0, [0.0; 3], [0.0; 3], [[0.0; 3]; 3]);
+    for &(i, s, g, dx) in &st.nodes {
+        let mi = grid[i].m;
+        m_gp += s * mi;
+        for a in 0..d {
+            sum_g[a] += g[a] * mi;
+            centroid[a] += s * mi * dx[a];
+            for b in 0..d {
+                moment[a][b] += dx[a] * g[b] * mi;
+            }
+        }
+    }
+    let gp: [f64; 3] = core::array::from_fn(|a| sum_g[a] / m_gp);
+    let a_p: Mat = core::array::from_fn(|r| {
+        core::array::from_fn(|c| (moment[r][c] - centroid[r] * gp[c]) / m_gp)
+    });
+    let det = if d == 2 {
+        a_p[0][0] * a_p[1][1] - a_p[0][1] * a_p[1][0]
+    } else {
+        (0..3)
+            .map(|c| {
+                a_p[0][c]
+                    * (a_p[1][(c + 1) % 3] * a_p[2][(c + 2) % 3]
+                        - a_p[1][(c + 2) % 3] * a_p[2][(c + 1) % 3])
+            })
+            .sum()
+    };
+    // NaN-safe, as the kernel's: a NaN determinant keeps G_ip.
+    if det.partial_cmp(&0.1) != Some(core::cmp::Ordering::Greater) {
+        return plain;
+    }
+    let inv_t = inverse_transpose(d, &a_p);
+    st.nodes
+        .iter()
+        .map(|&(i, s, g, _)| {
+            let b: [f64; 3] = core::array::from_fn(|a| {
+                if a < d {
+                    grid[i].m / m_gp * (g[a] - s * gp[a])
+                } else {
+                    0.0
+                }
+            });
+            (
+                i,
+                core::array::from_fn(|c| (0..d).map(|a| inv_t[c][a] * b[a]).sum()),
+            )
+        })
+        .collect()
+}
+
+/// Each node past a wall plane takes its image's mass (the momentum approach's weights read
+/// the mirror image of the material there).
+fn mirror_masses(m: &Method, grid: &mut [Node]) {
+    for_each_wall_image(m, true, |ghost, image, _| grid[ghost].m = grid[image].m);
+}
+
 /// Particle to grid (eqs 20, 22, 23, 25): mass and momentum (`momentum`), internal and particle
-/// forces (`force`).
+/// forces (`force`; in the momentum approach with its gradient weights, [`weights`]).
 fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force: bool) {
     for p in ps {
         let st = stencil(m, &p.x, &p.lp);
-        for (&(i, s, g, dx), &t) in st.nodes.iter().zip(&st.hoop) {
+        let b = weights(m, &st, grid);
+        for ((&(i, s, _, dx), &t), &(_, g)) in st.nodes.iter().zip(&st.hoop).zip(&b) {
             let c = affine(m, p, &st, &dx);
             let n = &mut grid[i];
             if force && m.axisymmetric {
@@ -893,12 +964,13 @@ fn update_stress(
     m: &Method,
     p: &mut Particle,
     st: &Stencil,
+    grid: &[Node],
     vel: impl Fn(usize) -> [f64; 3],
     dt: f64,
 ) {
     let d = m.d;
     let mut l = [[0.0; 3]; 3];
-    for &(i, _, g, _) in &st.nodes {
+    for (i, g) in weights(m, st, grid) {
         let v = vel(i);
         for a in 0..d {
             for b in 0..d {
@@ -1098,7 +1170,27 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
         }
         if fused_stress {
             let updated = |i: usize| core::array::from_fn(|a| grid[i].v[a] + grid[i].a[a] * dt);
-            update_stress(m, p, &st, updated, dt);
+            update_stress(m, p, &st, grid, updated, dt);
+        }
+        // The grid velocity and acceleration the particle moves with: the mass-weighted ones in
+        // the momentum approach (eq 90).
+        let (mut v_move, mut a_move) = (v_gp, a_gp);
+        if m.momentum {
+            let m_gp: f64 = st.nodes.iter().map(|&(i, s, ..)| s * grid[i].m).sum();
+            for a in 0..m.d {
+                v_move[a] = st
+                    .nodes
+                    .iter()
+                    .map(|&(i, s, ..)| s * grid[i].m * grid[i].v[a])
+                    .sum::<f64>()
+                    / m_gp;
+                a_move[a] = st
+                    .nodes
+                    .iter()
+                    .map(|&(i, s, ..)| s * grid[i].m * grid[i].a[a])
+                    .sum::<f64>()
+                    / m_gp;
+            }
         }
         for a in 0..m.d {
             let damp = match m.damping {
@@ -1118,7 +1210,7 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
                 p.x[a] += if m.particle_velocity {
                     v * dt
                 } else {
-                    (v_gp[a] + 0.5 * a_gp[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt
+                    (v_move[a] + 0.5 * a_move[a] * dt - 0.5 * inversion) * dt - 0.5 * damp * dt * dt
                 };
                 p.v[a] = v;
             }
@@ -1179,6 +1271,29 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
         transport(m, ps, f, dt);
     }
     let mut grid = vec![Node::default(); m.nodes[0] * m.nodes[1] * m.nodes[2]];
+    if m.momentum {
+        // The momentum approach: the force with the complete masses' weights.
+        scatter(m, ps, &mut grid, true, false);
+        grid_velocity(m, &mut grid);
+        mirror_masses(m, &mut grid);
+        if m.order == UpdateOrder::Usf {
+            for n in grid.iter_mut() {
+                n.remap = n.v;
+            }
+            constrain(m, &mut grid, |n| &mut n.remap);
+            for p in ps.iter_mut() {
+                let st = stencil(m, &p.x, &p.lp);
+                update_stress(m, p, &st, &grid, |i| grid[i].remap, dt);
+            }
+        }
+        scatter(m, ps, &mut grid, false, true);
+        tractions(m, ps, &mut grid);
+        grid_acceleration(m, &mut grid, dt);
+        if m.order != UpdateOrder::Musl {
+            return particles(m, ps, &grid, dt, m.order == UpdateOrder::Usl);
+        }
+        return musl_particles_and_stress(m, ps, &mut grid, dt);
+    }
     match m.order {
         UpdateOrder::Usl => {
             scatter(m, ps, &mut grid, true, true);
@@ -1197,7 +1312,7 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
             constrain(m, &mut grid, |n| &mut n.remap);
             for p in ps.iter_mut() {
                 let st = stencil(m, &p.x, &p.lp);
-                update_stress(m, p, &st, |i| grid[i].remap, dt);
+                update_stress(m, p, &st, &grid, |i| grid[i].remap, dt);
             }
             scatter(m, ps, &mut grid, false, true);
             tractions(m, ps, &mut grid);
@@ -1209,32 +1324,38 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
             tractions(m, ps, &mut grid);
             grid_velocity(m, &mut grid);
             grid_acceleration(m, &mut grid, dt);
-            let start: Vec<[f64; 3]> = ps.iter().map(|p| p.x).collect();
-            particles(m, ps, &grid, dt, false);
-            // Re-map the new momenta with the stencils of the start of the step, then the
-            // stress from the re-mapped velocities. APIC with linear weights re-maps no affine
-            // momentum: its new C_p is the gradient of the re-mapped velocities.
-            for (p, x0) in ps.iter().zip(&start) {
-                let st = stencil(m, x0, &p.lp);
-                for &(i, s, _, dx) in &st.nodes {
-                    let c = if gradient_affine(m) {
-                        [0.0; 3]
-                    } else {
-                        affine(m, p, &st, &dx)
-                    };
-                    for a in 0..m.d {
-                        grid[i].remap[a] += s * p.m * (p.v[a] + c[a]);
-                    }
-                }
-            }
-            fold_wall_images(m, &mut grid, |n| &mut n.remap);
-            divide_by_mass(m, &mut grid, |n| &mut n.remap, [0.0; 3]);
-            constrain(m, &mut grid, |n| &mut n.remap);
-            for (p, x0) in ps.iter_mut().zip(&start) {
-                let st = stencil(m, x0, &p.lp);
-                update_stress(m, p, &st, |i| grid[i].remap, dt);
+            musl_particles_and_stress(m, ps, &mut grid, dt);
+        }
+    }
+}
+
+/// MUSL after the grid update: the particle update, the re-map of the new momenta and the
+/// stress from the re-mapped velocities.
+fn musl_particles_and_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node], dt: f64) {
+    let start: Vec<[f64; 3]> = ps.iter().map(|p| p.x).collect();
+    particles(m, ps, grid, dt, false);
+    // Re-map the new momenta with the stencils of the start of the step, then the stress from
+    // the re-mapped velocities. APIC with linear weights re-maps no affine momentum: its new
+    // C_p is the gradient of the re-mapped velocities.
+    for (p, x0) in ps.iter().zip(&start) {
+        let st = stencil(m, x0, &p.lp);
+        for &(i, s, _, dx) in &st.nodes {
+            let c = if gradient_affine(m) {
+                [0.0; 3]
+            } else {
+                affine(m, p, &st, &dx)
+            };
+            for a in 0..m.d {
+                grid[i].remap[a] += s * p.m * (p.v[a] + c[a]);
             }
         }
+    }
+    fold_wall_images(m, grid, |n| &mut n.remap);
+    divide_by_mass(m, grid, |n| &mut n.remap, [0.0; 3]);
+    constrain(m, grid, |n| &mut n.remap);
+    for (p, x0) in ps.iter_mut().zip(&start) {
+        let st = stencil(m, x0, &p.lp);
+        update_stress(m, p, &st, grid, |i| grid[i].remap, dt);
     }
 }
 
@@ -1277,6 +1398,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         apic: def.transfer.is_affine(),
         mls: def.transfer == Transfer::Mls,
         particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
+        momentum: def.transfer == Transfer::FlipMomentum,
         beta: def.flip_beta as f64,
         h: def.cell_size as f64,
         origin: [
@@ -1907,6 +2029,124 @@ fn flip_with_the_particle_velocity_steps_as_the_reference_does() {
                     }
                     for simd in INSTANCES {
                         let transfer = Transfer::FlipParticleVelocity;
+                        let material = soft_neo_hookean();
+                        check(dim, shape, order, transfer, &material, simd, scene);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The momentum approach's gradient weights ([`weights`]), for particles anywhere in a cell and
+/// nodal masses drawn at random (uniform, or 0.01 to 1 times uniform), every shape function, 2D
+/// and 3D: they sum to zero over the nodes (translation-invariant; momentum conserved) and,
+/// where a particle takes them (`det A_p > 0.1`), reproduce the identity, `sum_i (x_i - x_p)
+/// (x) B_ip = I` (exact for every affine field; angular momentum conserved). With uniform masses
+/// they are the shape function's `G_ip`. Tolerances: 1e-12 of the largest `|G_ip|`, and 1e-12
+/// for the identity (f64 round-off of sums of 9 to 64 terms); a transposed `A_p` or a missing
+/// centroid term is off by order 1.
+#[test]
+fn momentum_weights_sum_to_zero_and_reproduce_affine_fields() {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            let def = WorldDef {
+                shape,
+                transfer: Transfer::FlipMomentum,
+                ..free_space(dim, 16, 1.0 / 16.0)
+            };
+            let mut buf = buffer_for(&def);
+            let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let material = soft_neo_hookean();
+            moving_block(&def, &mut world, &material, |_| [0.0; 3]);
+            let (m, _) = read(&world, &material);
+            let d = m.d;
+            let mut grid = vec![Node::default(); m.nodes[0] * m.nodes[1] * m.nodes[2]];
+            let (mut taken, mut trials) = (0, 0);
+            for trial in 0..400 {
+                let spread = trial % 2 == 1;
+                for n in grid.iter_mut() {
+                    n.m = if spread { 0.01 + 0.99 * uniform() } else { 1.0 };
+                }
+                let x: [f64; 3] =
+                    core::array::from_fn(|a| if a < d { 0.4 + 0.2 * uniform() } else { 0.0 });
+                let st = stencil(&m, &x, &[m.lp; 3]);
+                let b = weights(&m, &st, &grid);
+                let g_max = st
+                    .nodes
+                    .iter()
+                    .flat_map(|n| n.2)
+                    .fold(0.0f64, |g, c| g.max(c.abs()));
+                // B_ip has the units of G_ip (1/m); (x_i - x_p) (x) B_ip is dimensionless.
+                let tol = 1e-12 * g_max;
+                let mut sum = [0.0; 3];
+                let mut moment = [[0.0; 3]; 3];
+                for (&(_, _, g, dx), &(_, w)) in st.nodes.iter().zip(&b) {
+                    for a in 0..d {
+                        sum[a] += w[a];
+                        for c in 0..d {
+                            moment[a][c] += dx[a] * w[c];
+                        }
+                        if !spread {
+                            assert!(
+                                (w[a] - g[a]).abs() < tol,
+                                "{dim:?} {shape:?}: uniform masses, B {w:?} G {g:?}"
+                            );
+                        }
+                    }
+                }
+                let is_g = st.nodes.iter().zip(&b).all(|(n, w)| n.2 == w.1);
+                trials += 1;
+                if !is_g || !spread {
+                    taken += 1;
+                    for a in 0..d {
+                        assert!(
+                            sum[a].abs() < tol / m.h,
+                            "{dim:?} {shape:?}: sum of B_ip {sum:?}"
+                        );
+                        for c in 0..d {
+                            let want = if a == c { 1.0 } else { 0.0 };
+                            assert!(
+                                (moment[a][c] - want).abs() < 1e-12,
+                                "{dim:?} {shape:?}: sum (x_i - x_p) B_ip = {moment:?}"
+                            );
+                        }
+                    }
+                }
+            }
+            // Random masses in 1..100 times each other keep A_p well conditioned for the
+            // smooth families: most particles take the weights.
+            assert!(
+                taken * 2 > trials,
+                "{dim:?} {shape:?}: {taken} of {trials} took them"
+            );
+        }
+    }
+}
+
+/// The momentum approach (seeds/000 section 5.2, [`weights`]) with every shape function and
+/// order, in 2D and 3D, free, against walls (where its weights read the masses mirrored past
+/// the wall planes) and with the declared effects, in every instance of the passes this CPU
+/// runs, agrees with the reference step to round-off.
+#[test]
+fn momentum_approach_steps_as_the_reference_does() {
+    let mut scenes = vec![Scene::Free, Scene::Walls];
+    if cfg!(feature = "effects") {
+        scenes.push(Scene::Effects);
+    }
+    for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+        for shape in SHAPES {
+            for order in ORDERS {
+                for &scene in &scenes {
+                    for simd in INSTANCES {
+                        let transfer = Transfer::FlipMomentum;
                         let material = soft_neo_hookean();
                         check(dim, shape, order, transfer, &material, simd, scene);
                     }

@@ -525,7 +525,7 @@ static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d)
 static void effects_def_misuse(void) {
     static const uint32_t bad_flag[] = {2u, 0x80000000u, 0xFFFFFFFFu};
     static const uint32_t bad_kind[] = {3u, 0x80000000u, 0xFFFFFFFFu};
-    static const uint32_t bad_transfer[] = {4u, 0x80000000u, 0xFFFFFFFFu};
+    static const uint32_t bad_transfer[] = {5u, 0x80000000u, 0xFFFFFFFFu};
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     const char *label[3] = {"NaN", "+inf", "-inf"};
     MpmWorldDef d, damped = g_def2, fed, zoned, heated = g_def2, diffused = g_def2;
@@ -556,7 +556,7 @@ static void effects_def_misuse(void) {
         char name[96];
         const uint32_t v = bad_flag[k];
         d = g_def2;
-        d.transfer = bad_transfer[k]; /* 2 and 3 are FLIP_PARTICLE_VELOCITY and MLS */
+        d.transfer = bad_transfer[k]; /* 2, 3 and 4 are FLIP_PARTICLE_VELOCITY, MLS, FLIP_MOMENTUM */
         snprintf(name, sizeof name, "init: transfer %u", (unsigned)bad_transfer[k]);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         d = g_def2;
@@ -857,6 +857,9 @@ static void axisymmetric_def_misuse(void) {
               d.shape = MPM_SHAPE_CUBIC_BSPLINE);
     GOOD_AXIS("init: axisymmetric cpGIMP, origin.x -1 cell", d.shape = MPM_SHAPE_CP_GIMP);
     GOOD_AXIS("init: axisymmetric APIC", d.transfer = MPM_TRANSFER_APIC);
+    d = a;
+    d.transfer = MPM_TRANSFER_FLIP_MOMENTUM;
+    init_refused("init: axisymmetric FLIP momentum", MPM_STATUS_INVALID_TRANSFER, &d);
     GOOD_AXIS("init: axisymmetric without effects", d.effects = g_def2.effects);
 #undef GOOD_AXIS
     d = a;
