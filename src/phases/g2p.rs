@@ -694,6 +694,13 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, moving);
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
+        // The grid velocity and acceleration the particles move with (eq 51, or eq 90 in the
+        // momentum approach), chosen once per chunk.
+        let (v_moves, a_moves) = if ctx.momentum {
+            (&*v_move, &*a_move)
+        } else {
+            (v_gp, a_gp)
+        };
         // FLIP with PIC damping (or APIC) and the position update, then the walls and open
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
@@ -713,11 +720,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                 let (vn, dx) = if apic {
                     update::apic(&step, v_gp, a_gp, d)
                 } else {
-                    let moves_with = if ctx.momentum {
-                        (ld(&v_move[a]), ld(&a_move[a]))
-                    } else {
-                        (v_gp, a_gp)
-                    };
+                    let moves_with = (ld(&v_moves[a]), ld(&a_moves[a]));
                     update::flip(&step, v_p, (v_gp, a_gp), moves_with, d)
                 };
                 let (xn, xn_low) = update::advance(ld(&x[a]), ld(&x_low[a]), dx);
