@@ -1277,14 +1277,7 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
         grid_velocity(m, &mut grid);
         mirror_masses(m, &mut grid);
         if m.order == UpdateOrder::Usf {
-            for n in grid.iter_mut() {
-                n.remap = n.v;
-            }
-            constrain(m, &mut grid, |n| &mut n.remap);
-            for p in ps.iter_mut() {
-                let st = stencil(m, &p.x, &p.lp);
-                update_stress(m, p, &st, &grid, |i| grid[i].remap, dt);
-            }
+            lagged_stress(m, ps, &mut grid, dt);
         }
         scatter(m, ps, &mut grid, false, true);
         tractions(m, ps, &mut grid);
@@ -1305,15 +1298,7 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
         UpdateOrder::Usf => {
             scatter(m, ps, &mut grid, true, false);
             grid_velocity(m, &mut grid);
-            // The stress from the lagged velocity with the walls applied.
-            for n in grid.iter_mut() {
-                n.remap = n.v;
-            }
-            constrain(m, &mut grid, |n| &mut n.remap);
-            for p in ps.iter_mut() {
-                let st = stencil(m, &p.x, &p.lp);
-                update_stress(m, p, &st, &grid, |i| grid[i].remap, dt);
-            }
+            lagged_stress(m, ps, &mut grid, dt);
             scatter(m, ps, &mut grid, false, true);
             tractions(m, ps, &mut grid);
             grid_acceleration(m, &mut grid, dt);
@@ -1326,6 +1311,18 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
             grid_acceleration(m, &mut grid, dt);
             musl_particles_and_stress(m, ps, &mut grid, dt);
         }
+    }
+}
+
+/// USF's stress update: from the lagged velocity with the walls applied.
+fn lagged_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node], dt: f64) {
+    for n in grid.iter_mut() {
+        n.remap = n.v;
+    }
+    constrain(m, grid, |n| &mut n.remap);
+    for p in ps.iter_mut() {
+        let st = stencil(m, &p.x, &p.lp);
+        update_stress(m, p, &st, grid, |i| grid[i].remap, dt);
     }
 }
 
