@@ -743,7 +743,8 @@ typedef struct MpmDiagnostics {
   double angular_momentum[3];
   // Centre of mass, m.
   double center_of_mass[3];
-  // Kinetic energy, J.
+  // Kinetic energy, J; with APIC and MLS-MPM it includes each particle's affine velocity
+  // field, as the angular momentum does.
   double kinetic;
   // Strain energy, J.
   double strain;

@@ -90,7 +90,8 @@ pub struct MpmDiagnostics {
     pub angular_momentum: [f64; 3],
     /// Centre of mass, m.
     pub center_of_mass: [f64; 3],
-    /// Kinetic energy, J.
+    /// Kinetic energy, J; with APIC and MLS-MPM it includes each particle's affine velocity
+    /// field, as the angular momentum does.
     pub kinetic: f64,
     /// Strain energy, J.
     pub strain: f64,

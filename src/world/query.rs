@@ -3,12 +3,17 @@
 
 use super::add::material_record;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
-use crate::def::{MaterialDef, ShapeFunction, WorldDef};
+use crate::def::{Dimension, MaterialDef, ShapeFunction, WorldDef};
+use crate::grid::Geom;
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
     eigenstrain_part, elastic_part, energy_density, model_of, particle_stress, Deformation, Params,
 };
 use crate::particles::{ParticleStatus, ACTIVE};
+use crate::shape::{
+    domain_stretch, Axisymmetric, CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D,
+    Stencils,
+};
 use crate::simd::Simd;
 use crate::{Error, Real};
 use core::cmp::Ordering;
@@ -493,7 +498,92 @@ impl<'a> WorldRef<'a> {
                 out.center_of_mass[a] = first_moment[a] / out.mass;
             }
         }
+        if def.transfer.is_affine() {
+            out.kinetic += self.affine_kinetic(&def);
+        }
         out
+    }
+
+    /// The kinetic energy of the APIC (and MLS-MPM) particles' affine velocity fields:
+    /// `sum_p m_p tr(C_p D_p C_p^T) / 2 = sum_p m_p tr(B_p D_p^-1 B_p^T) / 2`, with `D_p` (diagonal
+    /// for tensor-product weights) from the stencil the next transfer takes, at the particle's
+    /// position and (cpGIMP) with the domain its deformation gives. It is what the transfer
+    /// carries to the grid beside `m_p v_p^2 / 2`: `sum_i S_ip m_p |v_p + C_p (x_i - x_p)|^2 /
+    /// 2`, the moments summing to zero. Linear weights keep `C_p` itself (the gradient form).
+    fn affine_kinetic(&self, def: &WorldDef) -> f64 {
+        let ppc = def.particles_per_cell;
+        macro_rules! by_shape {
+            ($d:literal, $wrap:expr) => {
+                match def.shape {
+                    ShapeFunction::Linear => {
+                        self.affine_kinetic_in::<$d, 2, _>($wrap(Linear, def), def)
+                    }
+                    ShapeFunction::Gimp => {
+                        self.affine_kinetic_in::<$d, 3, _>($wrap(Gimp::new(ppc), def), def)
+                    }
+                    ShapeFunction::CpGimp => {
+                        self.affine_kinetic_in::<$d, 3, _>($wrap(CpGimp::new(ppc), def), def)
+                    }
+                    ShapeFunction::QuadraticBspline => {
+                        self.affine_kinetic_in::<$d, 3, _>($wrap(QuadraticBspline, def), def)
+                    }
+                    ShapeFunction::CubicBspline => {
+                        self.affine_kinetic_in::<$d, 4, _>($wrap(CubicBspline, def), def)
+                    }
+                }
+            };
+        }
+        fn plain<S>(shape: S, _: &WorldDef) -> S {
+            shape
+        }
+        fn axi<S>(inner: S, def: &WorldDef) -> Axisymmetric<S> {
+            let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
+            Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
+        }
+        match def.dimension {
+            Dimension::Plane2D => by_shape!(2, plain),
+            Dimension::Axisymmetric2D => by_shape!(2, axi),
+            Dimension::ThreeD => by_shape!(3, plain),
+        }
+    }
+
+    /// [`WorldRef::affine_kinetic`] with the dimension and shape function fixed.
+    fn affine_kinetic_in<const D: usize, const K: usize, S: Shape1D<K>>(
+        &self,
+        shape: S,
+        def: &WorldDef,
+    ) -> f64 {
+        let view = self.particles();
+        let geom = Geom::<D>::new(def);
+        let mut st = Stencils::<D, K, 4>::default();
+        let mut kinetic = 0.0f64;
+        for i in 0..view.count {
+            if view.status[i] != ACTIVE {
+                continue;
+            }
+            // One particle in every lane of a four-lane stencil set.
+            let s: [[Real; 4]; D] =
+                core::array::from_fn(|a| [(view.position[a][i] - geom.origin[a]) * geom.inv_h; 4]);
+            let h = &view.displacement_gradient;
+            let stretch = domain_stretch::<D>(|a, b| h[a][b][i]).map(|e| [e; 4]);
+            let (nodes, stride) = (geom.nodes, geom.stride);
+            st.compute(&shape, &s, Some(&stretch), nodes, stride, geom.inv_h, true);
+            let m = view.mass[i] as f64;
+            for c in 0..D {
+                let inv_d = st.inverse_moments(c)[0] as f64;
+                // C_p D_p with linear weights (D_p = 1 / inv_d, 0 on a node); B_p D_p^-1.
+                let weight = match (S::GRADIENT_AFFINE, inv_d > 0.0) {
+                    (true, true) => 1.0 / inv_d,
+                    (true, false) => 0.0,
+                    (false, _) => inv_d,
+                };
+                for a in 0..D {
+                    let b = view.affine[a][c][i] as f64;
+                    kinetic += 0.5 * m * b * b * weight;
+                }
+            }
+        }
+        kinetic
     }
 }
 

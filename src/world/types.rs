@@ -104,7 +104,9 @@ pub struct Diagnostics {
     pub angular_momentum: [f64; 3],
     /// Centre of mass, m.
     pub center_of_mass: [f64; 3],
-    /// Kinetic energy `sum m v^2 / 2`, J.
+    /// Kinetic energy `sum m v^2 / 2`, J. With APIC and MLS-MPM it includes each particle's
+    /// affine velocity field, `m_p tr(B_p D_p^-1 B_p^T) / 2`: what the transfer carries to the
+    /// grid beside `m_p v_p^2 / 2`.
     pub kinetic: f64,
     /// Strain energy `sum V0 W(F)`, J.
     pub strain: f64,
