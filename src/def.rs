@@ -183,8 +183,13 @@ pub enum Transfer {
     /// with the particle's share of each nodal force, which conserves momentum). Plane strain
     /// and 3D, every shape function; the axisymmetric form is
     /// [`crate::Error::InvalidTransfer`]. Same columns as [`Transfer::Flip`]; its force and
-    /// gradient passes are plain loops, several times the cost of the velocity approach's
+    /// gradient passes are plain loops, 8 to 10 times the cost of the velocity approach's
     /// (benches/PERFORMANCE.md). See `phases/momentum.rs` for why eq 67 as printed is not used.
+    ///
+    /// For dynamics, not for stresses at rest next to a free or loaded face: the conjugate
+    /// force does not balance a uniform stress there particle by particle. A plane-strain
+    /// block pulled by a traction settles to the load's mean stress (within 0.1 %), but with
+    /// particles by its faces up to 28 % off (uGIMP; 0.2 % with [`Transfer::Flip`]).
     FlipMomentum = 4,
 }
 
