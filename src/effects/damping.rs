@@ -18,7 +18,8 @@ use crate::{Error, Real, Vec3};
 /// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
 /// Nosé-Hoover-style controller): once per substep,
 /// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`, where KE and M are
-/// the kinetic energy and mass of the active particles. The evolving alpha adds to the grid
+/// the kinetic energy (with APIC's affine part, as [`crate::Diagnostics::kinetic`]) and mass
+/// of the active particles. The evolving alpha adds to the grid
 /// damping `alpha_g` and is kept in the world (a snapshot carries it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Feedback {

@@ -384,7 +384,9 @@ impl<'a> WorldRef<'a> {
         }
     }
 
-    /// Kinetic energy (J) and mass (kg) of the active particles, in f64.
+    /// Kinetic energy (J) and mass (kg) of the active particles, in f64; with APIC and MLS-MPM
+    /// the energy includes the particles' affine velocity fields, as
+    /// [`Diagnostics::kinetic`] does.
     pub(crate) fn kinetic_energy_and_mass(&self) -> (f64, f64) {
         let view = self.particles();
         let d = self.layout().d;
@@ -398,6 +400,10 @@ impl<'a> WorldRef<'a> {
                 kinetic += 0.5 * m * v2;
                 mass += m;
             }
+        }
+        let def = self.def();
+        if def.transfer.is_affine() {
+            kinetic += self.affine_kinetic(&def);
         }
         (kinetic, mass)
     }

@@ -1253,12 +1253,26 @@ fn half_widths(m: &Method, p: &Particle) -> [f64; 3] {
 
 /// One substep of length `dt` in the method's update order.
 fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
-    if let (Some(t), Some(rates)) = (m.thermostat.as_mut(), m.damping.as_mut()) {
+    if m.thermostat.is_some() && m.damping.is_some() {
         let mass: f64 = ps.iter().map(|p| p.m).sum();
+        // With APIC, the kinetic energy the transfer carries, affine fields included.
         let kinetic: f64 = ps
             .iter()
-            .map(|p| 0.5 * p.m * (0..m.d).map(|a| p.v[a] * p.v[a]).sum::<f64>())
+            .map(|p| {
+                let st = stencil(m, &p.x, &half_widths(m, p));
+                st.nodes
+                    .iter()
+                    .map(|&(_, s, _, dx)| {
+                        let c = affine(m, p, &st, &dx);
+                        let v2: f64 = (0..m.d).map(|a| (p.v[a] + c[a]).powi(2)).sum();
+                        0.5 * s * p.m * v2
+                    })
+                    .sum::<f64>()
+            })
             .sum();
+        let (Some(t), Some(rates)) = (m.thermostat.as_mut(), m.damping.as_mut()) else {
+            unreachable!("both checked above");
+        };
         let alpha = t.alpha + 2.0 * t.gain * (kinetic - t.target) * dt / mass;
         assert!(
             alpha > 0.0 && alpha < t.max_alpha,
