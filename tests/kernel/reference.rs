@@ -376,17 +376,7 @@ fn weights(m: &Method, st: &Stencil, grid: &[Node]) -> Vec<(usize, [f64; 3])> {
     let a_p: Mat = core::array::from_fn(|r| {
         core::array::from_fn(|c| (moment[r][c] - centroid[r] * gp[c]) / m_gp)
     });
-    let det = if d == 2 {
-        a_p[0][0] * a_p[1][1] - a_p[0][1] * a_p[1][0]
-    } else {
-        (0..3)
-            .map(|c| {
-                a_p[0][c]
-                    * (a_p[1][(c + 1) % 3] * a_p[2][(c + 2) % 3]
-                        - a_p[1][(c + 2) % 3] * a_p[2][(c + 1) % 3])
-            })
-            .sum()
-    };
+    let det = determinant(d, &a_p);
     // NaN-safe, as the kernel's: a NaN determinant keeps G_ip.
     if det.partial_cmp(&0.1) != Some(core::cmp::Ordering::Greater) {
         return plain;
@@ -1125,6 +1115,17 @@ fn inverse_transpose(d: usize, a: &Mat) -> Mat {
     out
 }
 
+/// `det a` of the leading `d x d` block (d = 2 or 3).
+fn determinant(d: usize, a: &Mat) -> f64 {
+    if d == 2 {
+        a[0][0] * a[1][1] - a[0][1] * a[1][0]
+    } else {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    }
+}
+
 fn matmul(d: usize, x: &Mat, y: &Mat) -> Mat {
     let mut z = [[0.0; 3]; 3];
     for r in 0..d {
@@ -1142,10 +1143,7 @@ fn jacobian_minus_one(d: usize, h: &Mat) -> f64 {
     if d == 2 {
         h[0][0] + h[1][1] + minor(0, 1)
     } else {
-        let det = h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1])
-            - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0])
-            + h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
-        h[0][0] + h[1][1] + h[2][2] + minor(0, 1) + minor(0, 2) + minor(1, 2) + det
+        h[0][0] + h[1][1] + h[2][2] + minor(0, 1) + minor(0, 2) + minor(1, 2) + determinant(3, h)
     }
 }
 
@@ -1251,25 +1249,27 @@ fn half_widths(m: &Method, p: &Particle) -> [f64; 3] {
     })
 }
 
+/// The kinetic energy particle `p` carries to the grid, `sum_i S_ip m_p |v_p + C_p (x_i -
+/// x_p)|^2 / 2` (its affine field included with APIC), with the stencil of its domain at the
+/// start of a substep.
+fn carried_kinetic_energy(m: &Method, p: &Particle) -> f64 {
+    let st = stencil(m, &p.x, &half_widths(m, p));
+    st.nodes
+        .iter()
+        .map(|&(_, s, _, dx)| {
+            let c = affine(m, p, &st, &dx);
+            let v2: f64 = (0..m.d).map(|a| (p.v[a] + c[a]).powi(2)).sum();
+            0.5 * s * p.m * v2
+        })
+        .sum()
+}
+
 /// One substep of length `dt` in the method's update order.
 fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
     if m.thermostat.is_some() && m.damping.is_some() {
         let mass: f64 = ps.iter().map(|p| p.m).sum();
         // With APIC, the kinetic energy the transfer carries, affine fields included.
-        let kinetic: f64 = ps
-            .iter()
-            .map(|p| {
-                let st = stencil(m, &p.x, &half_widths(m, p));
-                st.nodes
-                    .iter()
-                    .map(|&(_, s, _, dx)| {
-                        let c = affine(m, p, &st, &dx);
-                        let v2: f64 = (0..m.d).map(|a| (p.v[a] + c[a]).powi(2)).sum();
-                        0.5 * s * p.m * v2
-                    })
-                    .sum::<f64>()
-            })
-            .sum();
+        let kinetic: f64 = ps.iter().map(|p| carried_kinetic_energy(m, p)).sum();
         let (Some(t), Some(rates)) = (m.thermostat.as_mut(), m.damping.as_mut()) else {
             unreachable!("both checked above");
         };
@@ -2104,12 +2104,7 @@ fn affine_kinetic_energy_is_what_the_transfer_carries() {
                 let (m, ps) = read(&world, &material);
                 let (mut carried, mut plain) = (0.0, 0.0);
                 for p in &ps {
-                    let st = stencil(&m, &p.x, &half_widths(&m, p));
-                    for &(_, s, _, dx) in &st.nodes {
-                        let c = affine(&m, p, &st, &dx);
-                        let v2: f64 = (0..m.d).map(|a| (p.v[a] + c[a]).powi(2)).sum();
-                        carried += 0.5 * s * p.m * v2;
-                    }
+                    carried += carried_kinetic_energy(&m, p);
                     plain += 0.5 * p.m * (0..m.d).map(|a| p.v[a] * p.v[a]).sum::<f64>();
                 }
                 let reported = world.diagnostics().kinetic;
