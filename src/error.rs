@@ -32,8 +32,11 @@ pub enum Error {
     InvalidParticlesPerCell = 11,
     /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
-    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
-    /// <= 0, conductivity or diffusivity < 0, or not finite.
+    /// A material parameter out of its documented range ([`crate::MaterialDef`]: Young's
+    /// modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity <= 0,
+    /// conductivity or diffusivity < 0, not finite, ...), or values each in range whose derived
+    /// moduli (the Lame parameters, the wave speed) overflow: Young's modulus near the largest
+    /// Real, a density near the smallest.
     InvalidMaterial = 13,
     /// The material table is full.
     MaterialCapacityExceeded = 14,
@@ -77,8 +80,12 @@ pub enum Error {
     /// The buffer holds a world of this build whose state is not valid ([`crate::World::open`]
     /// checks it): a time, minimum particle mass or thermostat alpha not finite or out of
     /// range; a particle with a mass or volume not finite or <= 0, an unknown status or
-    /// material; an active particle with a position outside the admissible region, a value not
-    /// finite or an inverted F; a material or traction record out of range.
+    /// material; a particle with a position outside the admissible region, a low part of the
+    /// position past one unit in its last place, a value not finite, a speed or damping rate
+    /// past what the world resolves ([`crate::Resolvable`]), a plastic history out of its
+    /// model's range (`J_p <= 0` or, active, hardened past the resolved wave speed, for snow;
+    /// < 0 for von Mises and Drucker-Prager; not 0 for a model without one) or an inverted F;
+    /// a material or traction record out of range.
     InvalidState = 29,
     /// A limit of the definition out of range: [`max_substeps`](crate::WorldDef::max_substeps)
     /// outside `1..=MAX_SUBSTEPS`, or [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
@@ -95,6 +102,11 @@ pub enum Error {
     InvalidTransfer = 32,
     /// A traction id at or past the number of tractions ([`crate::World::remove_tractions`]).
     UnknownTraction = 33,
+    /// A value whose own stable time step would be shorter than
+    /// [`MIN_STABLE_DT`](crate::MIN_STABLE_DT) (see [`crate::Resolvable`]): a material's wave
+    /// speed, thermal diffusivity, diffusivity or kinematic viscosity, the definition's damping
+    /// rates (summed), or a per-particle damping rate. Nothing was added or set.
+    StableStepTooShort = 34,
 }
 
 impl Error {
@@ -122,7 +134,7 @@ impl Error {
             Error::InvalidParticlesPerCell => c"particles per cell must be in 1..=8",
             Error::NonFiniteDefinition => c"origin and gravity must be finite",
             Error::InvalidMaterial => {
-                c"material needs E > 0, -1 < nu < 0.5, density > 0, C_p > 0, k >= 0, D >= 0, all finite"
+                c"material parameter out of its documented range, or derived moduli that overflow"
             }
             Error::MaterialCapacityExceeded => c"material table is full",
             Error::ParticleCapacityExceeded => c"particles do not fit in the remaining capacity",
@@ -159,6 +171,9 @@ impl Error {
                 c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"
             }
             Error::UnknownTraction => c"traction id at or past the number of tractions",
+            Error::StableStepTooShort => {
+                c"a wave speed, diffusivity or damping rate needs a stable step below 1e-15 s"
+            }
             Error::InvalidTransfer => {
                 c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric)"
             }
@@ -166,7 +181,7 @@ impl Error {
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 33] = [
+    pub const ALL: [Error; 34] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -200,6 +215,7 @@ impl Error {
         Error::InvalidDeformation,
         Error::InvalidTransfer,
         Error::UnknownTraction,
+        Error::StableStepTooShort,
     ];
 }
 

@@ -591,6 +591,14 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
         return Err(Error::InvalidTransfer);
     }
     def.effects.validate(def.axes())?;
+    // Damping is explicit (`v (1 - alpha dt)`): a rate the step resolves only below
+    // MIN_STABLE_DT is refused here rather than clamped in every step.
+    if let Some(damping) = def.effects.damping {
+        // A sum of finite rates: never NaN.
+        if damping.definition_rate() > def.resolvable().rate {
+            return Err(Error::StableStepTooShort);
+        }
+    }
     // A build without the effect instances cannot step a world that declares one.
     if !cfg!(feature = "effects")
         && (def.effects != crate::Effects::NONE

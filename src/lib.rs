@@ -83,8 +83,8 @@ mod storage;
 mod world;
 
 pub use def::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, ShapeFunction, Transfer, UpdateOrder,
-    WorldDef,
+    Boundary, Dimension, Face, MaterialDef, MaterialModel, Resolvable, ShapeFunction, Transfer,
+    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MIN_STABLE_DT,
 };
 pub use effects::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,

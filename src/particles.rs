@@ -61,7 +61,7 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     /// First `stress_components(D)` used; the rest are empty.
     pub tau: [&'a mut [Real]; 6],
     /// The low part of the position, m: `x + x_low` is the position to twice `Real`'s
-    /// precision, `|x_low| <= ulp(x) / 2`. The particle update adds each step's displacement
+    /// precision, `|x_low| <= ulp(x)` (`ulp(x) / 2` once a step moved it less than `|x|`). The particle update adds each step's displacement
     /// to the pair without rounding error ([`crate::phases::update::advance`]), so that an
     /// increment smaller than the last bit of `x` still moves the particle (in f32, a
     /// coordinate of 10 m has a last bit of 1 um: a slow particle far from the origin would

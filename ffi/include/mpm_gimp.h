@@ -16,10 +16,18 @@
  * such a call either, and are invalid after it.
  *
  * Errors: every call returns an MpmStatus; anything but MPM_STATUS_OK means the call wrote no
- * output and changed nothing. Input arrays and outputs must not lie in the world's memory
- * (MPM_STATUS_OVERLAPPING_MEMORY). Calls on a world check its header in constant time;
- * mpm_world_open also checks the whole state of memory that came from elsewhere (a file, a
- * network): MPM_STATUS_INVALID_STATE.
+ * output and changed nothing. Input arrays (the particle data of mpm_world_add_particles, the
+ * values of the per-particle setters) and outputs (every *_out pointer, every copy-out buffer)
+ * that share a byte with the world's memory are refused: MPM_STATUS_OVERLAPPING_MEMORY. Input
+ * structs passed by pointer (MpmWorldDef, MpmMaterialDef, MpmParticleArrays itself) are
+ * copied before the call changes anything, so one that lies in the world's memory is
+ * accepted and read as it was when the call began. Calls on a world check its header in
+ * constant time; mpm_world_open also checks the whole state of memory that came from
+ * elsewhere (a file, a network), each value against the range documented for it:
+ * MPM_STATUS_INVALID_STATE. Derived values: a material whose parameters are each in range
+ * but whose derived moduli overflow the real type is MPM_STATUS_INVALID_MATERIAL; a
+ * material, damping rate or particle speed that a step above MPM_MIN_STABLE_DT cannot
+ * resolve is MPM_STATUS_STABLE_STEP_TOO_SHORT.
  */
 
 #ifndef MPM_GIMP_H
@@ -44,6 +52,13 @@
 
 // Most points an `MpmSchedule` holds.
 #define MPM_SCHEDULE_POINTS 8
+
+// The shortest stable time step a world accepts, s (`mpm_gimp::MIN_STABLE_DT`): a value
+// whose own stable step would be shorter is `MPM_STATUS_STABLE_STEP_TOO_SHORT`.
+#define MPM_MIN_STABLE_DT 1.0e-15
+
+// The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
+#define MPM_MAX_HARDENING_COEFFICIENT 100.0
 
 // Most zones an `MpmDamping` holds.
 #define MPM_DAMPING_ZONES 4
@@ -94,9 +109,11 @@ enum MpmStatus
   MPM_STATUS_INVALID_PARTICLES_PER_CELL = 11,
   // Origin or gravity not finite (on the axes the dimension uses).
   MPM_STATUS_NON_FINITE_DEFINITION = 12,
-  // Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
-  // <= 0, conductivity or diffusivity < 0, or any of these or the thermal expansion,
-  // reference temperature, swelling or reference concentration not finite.
+  // A material parameter out of the range `MpmMaterialDef` documents for it (Young's modulus
+  // <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity <= 0, conductivity
+  // or diffusivity < 0, a value not finite, ...), or parameters each in range whose derived
+  // moduli overflow the real type: the Lame parameters or the wave speed of a Young's
+  // modulus near the largest real, or of a density near the smallest.
   MPM_STATUS_INVALID_MATERIAL = 13,
   // The material table is full.
   MPM_STATUS_MATERIAL_CAPACITY_EXCEEDED = 14,
@@ -142,7 +159,11 @@ enum MpmStatus
   // time, minimum particle mass or thermostat alpha not finite or out of range; a particle
   // with a mass or volume not finite or <= 0, an unknown status or material id; an active
   // particle outside the grid's admissible region, with a value not finite or an inverted F;
-  // a material or traction record out of range. Calls on a world pointer (every other
+  // a low part of a position past one unit in its last place; a speed or per-particle
+  // damping rate past what the world resolves (MPM_STATUS_STABLE_STEP_TOO_SHORT's bounds);
+  // a plastic history out of its model's range (snow: `J_p <= 0`, or an active particle
+  // hardened past the wave speed the world resolves; von Mises, Drucker-Prager: < 0; a
+  // model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
   // call) check only the header, in constant time.
   MPM_STATUS_INVALID_STATE = 29,
   // A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
@@ -158,6 +179,13 @@ enum MpmStatus
   MPM_STATUS_INVALID_TRANSFER = 32,
   // A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
   MPM_STATUS_UNKNOWN_TRACTION = 33,
+  // A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`):
+  // a material's wave speed `c > cfl h / 1e-15` (`mpm_world_add_material`), its thermal
+  // diffusivity, diffusivity or kinematic viscosity above `cfl h^2 / (2 d 1e-15)` where it
+  // acts, the definition's damping rates summed above `cfl / 1e-15` (`mpm_world_init`,
+  // `mpm_memory_requirements`), or a per-particle damping rate above half of what that sum
+  // leaves (`mpm_world_set_particle_damping`). Nothing was added or set.
+  MPM_STATUS_STABLE_STEP_TOO_SHORT = 34,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -650,7 +678,8 @@ typedef struct MpmMaterialDef {
   mpm_real critical_compression;
   // Critical stretch theta_s of the snow model, > 0. Default 0.0075.
   mpm_real critical_stretch;
-  // Hardening coefficient xi of the snow model, >= 0. Default 10.
+  // Hardening coefficient xi of the snow model, in [0, `MPM_MAX_HARDENING_COEFFICIENT`]
+  // (100; past it the model's hardening gains energy without bound). Default 10.
   mpm_real hardening_coefficient;
   // Set by `mpm_material_def_default`; do not change.
   uint32_t internal_cookie;
@@ -675,8 +704,9 @@ typedef struct MpmParticlesView {
   MpmDimension dimension;
   // Positions per axis, m, rounded to `mpm_real`.
   const mpm_real *position[3];
-  // What rounding the positions left out, per axis, m (at most half the last bit of the
-  // position): `position + position_low`, summed in double, is the position to twice
+  // What rounding the positions left out, per axis, m (at most one unit in the last place
+  // of the position; half of one once it has moved less than its distance from the origin
+  // in a step; `mpm_world_open` refuses more): `position + position_low`, summed in double, is the position to twice
   // `mpm_real`'s precision. The step moves a particle by this pair, so that a displacement
   // below the last bit of a coordinate is not lost (in float, 1 um at 10 m).
   const mpm_real *position_low[3];
@@ -733,7 +763,7 @@ typedef struct MpmDiagnostics {
   size_t particle_count;
   // Simulated time, s.
   double time;
-  // Successful steps.
+  // Successful steps (it stays at 2^64 - 1 once there: it does not wrap).
   uint64_t step_count;
   // Mass of the active particles, kg.
   double mass;
@@ -788,12 +818,14 @@ typedef struct MpmStepReport {
   // Particles that crossed an open face and left the simulation.
   uint32_t escaped;
   // Particles frozen in this call: their state turned non-finite, their F inverted, or
-  // their volume ran away (see `runaway`). Nonzero means the step went bad somewhere:
+  // they ran away (see `runaway`). Nonzero means the step went bad somewhere:
   // `flags` has `MPM_STEP_FLAG_FROZE`.
   uint32_t frozen;
-  // Of the frozen, those whose volume ratio J left
-  // [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`): the sign
-  // of an unstable scheme or a time step too long for the scene.
+  // Of the frozen, those that ran away: their volume ratio J left
+  // [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`), their speed
+  // passed `cfl h / MPM_MIN_STABLE_DT`, or their hardening (snow) took their wave speed
+  // past what the substep resolves (a Courant number above 1). The sign of an unstable
+  // scheme or a time step too long for the scene.
   uint32_t runaway;
   // `MPM_STEP_FLAG_FROZE` if any particle froze in this call, `MPM_STEP_FLAG_RUNAWAY` if
   // any froze as runaway; 0 for a step that went well.
@@ -1162,7 +1194,10 @@ MpmStatus mpm_world_fill_sphere(struct MpmWorld *world,
                                 struct MpmVec3 velocity,
                                 struct MpmIdRange *ids_out);
 
-// The largest stable time step, s, from the materials' wave speeds and the fastest particle.
+// The largest stable time step, s, from the materials' wave speeds (snow's as hardened), the
+// fastest particle, the damping rates and the diffusivities. Never raised to a floor: what a
+// world accepts keeps it at least `MPM_MIN_STABLE_DT / 2`; a particle speed beyond anything
+// a stable step produces can take it lower (to 0, a step `mpm_world_step` refuses).
 //
 // # Safety
 // `world` is NULL or a world; `dt_out` is NULL or valid.

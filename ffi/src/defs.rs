@@ -214,6 +214,15 @@ pub type MpmScalarFieldValue = u32;
 /// Most points an `MpmSchedule` holds.
 pub const MPM_SCHEDULE_POINTS: usize = 8;
 
+/// The shortest stable time step a world accepts, s (`mpm_gimp::MIN_STABLE_DT`): a value
+/// whose own stable step would be shorter is `MPM_STATUS_STABLE_STEP_TOO_SHORT`.
+pub const MPM_MIN_STABLE_DT: f64 = 1.0e-15;
+const _: () = assert!(MPM_MIN_STABLE_DT == kernel::MIN_STABLE_DT);
+
+/// The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
+pub const MPM_MAX_HARDENING_COEFFICIENT: f64 = 100.0;
+const _: () = assert!(MPM_MAX_HARDENING_COEFFICIENT == kernel::MAX_HARDENING_COEFFICIENT as f64);
+
 const _: () = assert!(MPM_SCHEDULE_POINTS == kernel::SCHEDULE_POINTS);
 
 /// A value that is a function of time (`mpm_gimp::Schedule`): piecewise linear through the
@@ -459,7 +468,8 @@ pub struct MpmMaterialDef {
     pub critical_compression: mpm_real,
     /// Critical stretch theta_s of the snow model, > 0. Default 0.0075.
     pub critical_stretch: mpm_real,
-    /// Hardening coefficient xi of the snow model, >= 0. Default 10.
+    /// Hardening coefficient xi of the snow model, in [0, `MPM_MAX_HARDENING_COEFFICIENT`]
+    /// (100; past it the model's hardening gains energy without bound). Default 10.
     pub hardening_coefficient: mpm_real,
     /// Set by `mpm_material_def_default`; do not change.
     pub internal_cookie: u32,

@@ -19,8 +19,9 @@ pub struct MpmParticlesView {
     pub dimension: crate::MpmDimensionValue,
     /// Positions per axis, m, rounded to `mpm_real`.
     pub position: [*const mpm_real; 3],
-    /// What rounding the positions left out, per axis, m (at most half the last bit of the
-    /// position): `position + position_low`, summed in double, is the position to twice
+    /// What rounding the positions left out, per axis, m (at most one unit in the last place
+    /// of the position; half of one once it has moved less than its distance from the origin
+    /// in a step; `mpm_world_open` refuses more): `position + position_low`, summed in double, is the position to twice
     /// `mpm_real`'s precision. The step moves a particle by this pair, so that a displacement
     /// below the last bit of a coordinate is not lost (in float, 1 um at 10 m).
     pub position_low: [*const mpm_real; 3],
@@ -79,7 +80,7 @@ pub struct MpmDiagnostics {
     pub particle_count: usize,
     /// Simulated time, s.
     pub time: f64,
-    /// Successful steps.
+    /// Successful steps (it stays at 2^64 - 1 once there: it does not wrap).
     pub step_count: u64,
     /// Mass of the active particles, kg.
     pub mass: f64,

@@ -37,9 +37,11 @@ pub enum MpmStatus {
     InvalidParticlesPerCell = 11,
     /// Origin or gravity not finite (on the axes the dimension uses).
     NonFiniteDefinition = 12,
-    /// Young's modulus <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity
-    /// <= 0, conductivity or diffusivity < 0, or any of these or the thermal expansion,
-    /// reference temperature, swelling or reference concentration not finite.
+    /// A material parameter out of the range `MpmMaterialDef` documents for it (Young's modulus
+    /// <= 0, Poisson's ratio outside (-1, 0.5), density <= 0, heat capacity <= 0, conductivity
+    /// or diffusivity < 0, a value not finite, ...), or parameters each in range whose derived
+    /// moduli overflow the real type: the Lame parameters or the wave speed of a Young's
+    /// modulus near the largest real, or of a density near the smallest.
     InvalidMaterial = 13,
     /// The material table is full.
     MaterialCapacityExceeded = 14,
@@ -85,7 +87,11 @@ pub enum MpmStatus {
     /// time, minimum particle mass or thermostat alpha not finite or out of range; a particle
     /// with a mass or volume not finite or <= 0, an unknown status or material id; an active
     /// particle outside the grid's admissible region, with a value not finite or an inverted F;
-    /// a material or traction record out of range. Calls on a world pointer (every other
+    /// a low part of a position past one unit in its last place; a speed or per-particle
+    /// damping rate past what the world resolves (MPM_STATUS_STABLE_STEP_TOO_SHORT's bounds);
+    /// a plastic history out of its model's range (snow: `J_p <= 0`, or an active particle
+    /// hardened past the wave speed the world resolves; von Mises, Drucker-Prager: < 0; a
+    /// model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
     /// call) check only the header, in constant time.
     InvalidState = 29,
     /// A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
@@ -101,6 +107,13 @@ pub enum MpmStatus {
     InvalidTransfer = 32,
     /// A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
     UnknownTraction = 33,
+    /// A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`):
+    /// a material's wave speed `c > cfl h / 1e-15` (`mpm_world_add_material`), its thermal
+    /// diffusivity, diffusivity or kinematic viscosity above `cfl h^2 / (2 d 1e-15)` where it
+    /// acts, the definition's damping rates summed above `cfl / 1e-15` (`mpm_world_init`,
+    /// `mpm_memory_requirements`), or a per-particle damping rate above half of what that sum
+    /// leaves (`mpm_world_set_particle_damping`). Nothing was added or set.
+    StableStepTooShort = 34,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -161,13 +174,14 @@ impl From<Error> for MpmStatus {
             Error::InvalidDeformation => MpmStatus::InvalidDeformation,
             Error::InvalidTransfer => MpmStatus::InvalidTransfer,
             Error::UnknownTraction => MpmStatus::UnknownTraction,
+            Error::StableStepTooShort => MpmStatus::StableStepTooShort,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 40] = [
+    pub const ALL: [MpmStatus; 41] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -202,6 +216,7 @@ impl MpmStatus {
         MpmStatus::InvalidDeformation,
         MpmStatus::InvalidTransfer,
         MpmStatus::UnknownTraction,
+        MpmStatus::StableStepTooShort,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

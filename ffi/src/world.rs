@@ -64,12 +64,14 @@ pub struct MpmStepReport {
     /// Particles that crossed an open face and left the simulation.
     pub escaped: u32,
     /// Particles frozen in this call: their state turned non-finite, their F inverted, or
-    /// their volume ran away (see `runaway`). Nonzero means the step went bad somewhere:
+    /// they ran away (see `runaway`). Nonzero means the step went bad somewhere:
     /// `flags` has `MPM_STEP_FLAG_FROZE`.
     pub frozen: u32,
-    /// Of the frozen, those whose volume ratio J left
-    /// [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`): the sign
-    /// of an unstable scheme or a time step too long for the scene.
+    /// Of the frozen, those that ran away: their volume ratio J left
+    /// [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`), their speed
+    /// passed `cfl h / MPM_MIN_STABLE_DT`, or their hardening (snow) took their wave speed
+    /// past what the substep resolves (a Courant number above 1). The sign of an unstable
+    /// scheme or a time step too long for the scene.
     pub runaway: u32,
     /// `MPM_STEP_FLAG_FROZE` if any particle froze in this call, `MPM_STEP_FLAG_RUNAWAY` if
     /// any froze as runaway; 0 for a step that went well.
@@ -521,7 +523,10 @@ pub unsafe extern "C" fn mpm_world_fill_sphere(
     }
 }
 
-/// The largest stable time step, s, from the materials' wave speeds and the fastest particle.
+/// The largest stable time step, s, from the materials' wave speeds (snow's as hardened), the
+/// fastest particle, the damping rates and the diffusivities. Never raised to a floor: what a
+/// world accepts keeps it at least `MPM_MIN_STABLE_DT / 2`; a particle speed beyond anything
+/// a stable step produces can take it lower (to 0, a step `mpm_world_step` refuses).
 ///
 /// # Safety
 /// `world` is NULL or a world; `dt_out` is NULL or valid.

@@ -2070,3 +2070,37 @@ fn hostile_from_c_strict() {
 fn hostile_from_c_sanitized() {
     check_hostile("hostile-sanitized", &strict_and_sanitized());
 }
+
+// ---------------------------------------------------------------------------------------------
+// Values in range
+// ---------------------------------------------------------------------------------------------
+
+/// The checks `tests/c/ranges.c` runs, as written.
+const RANGES_FLOOR: usize = 40;
+
+/// Expectation: with strict warnings, a snapshot whose low part of a position is not finite
+/// or more than one unit in the last place of the position, or whose plastic history is out
+/// of its model's range (snow with `J_p <= 0` or hardened past any resolved step, a negative
+/// von Mises or Drucker-Prager history, a history on a model without one), is
+/// `MPM_STATUS_INVALID_STATE` without a write, while one within range opens and steps; snow
+/// with xi = 10, 100 and 1000 dropped on a stick floor for 300 frames never has more energy
+/// than it started with (5 % for round-off), and what froze is counted as runaway; damping
+/// rates, viscosities, wave speeds, per-particle rates and particle speeds that no step above
+/// `MPM_MIN_STABLE_DT` resolves are `MPM_STATUS_STABLE_STEP_TOO_SHORT`, moduli that overflow
+/// `MPM_STATUS_INVALID_MATERIAL`, and a world just inside the bounds steps at its stable step
+/// with nothing frozen. The program ends with "all N ranges checks passed".
+#[test]
+fn ranges_from_c_strict() {
+    check_program("ranges", "ranges", common::STRICT, RANGES_FLOOR);
+}
+
+/// Expectation: the same program under AddressSanitizer and UndefinedBehaviorSanitizer.
+#[test]
+fn ranges_from_c_sanitized() {
+    check_program(
+        "ranges",
+        "ranges-sanitized",
+        &strict_and_sanitized(),
+        RANGES_FLOOR,
+    );
+}

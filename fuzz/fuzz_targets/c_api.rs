@@ -81,6 +81,21 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
+/// A byte copy of world `w` opens.
+fn reopens(w: *const MpmWorld) {
+    let mut n = 0usize;
+    // SAFETY: `w` is a world this target initialised, in memory it still owns.
+    assert_eq!(unsafe { mpm_world_bytes(w, &mut n) }, MpmStatus::Ok);
+    let mut copy = Memory { bytes: Vec::new() };
+    let p = copy.aligned(n, 64);
+    // SAFETY: the world spans `n` bytes, and `p` has room for `n` bytes in other memory.
+    unsafe { core::ptr::copy_nonoverlapping(w as *const u8, p, n) };
+    let mut opened = core::ptr::null_mut();
+    // SAFETY: `p` has `n` bytes; `opened` is valid.
+    let s = unsafe { mpm_world_open(p.cast(), n, &mut opened) };
+    assert_eq!(s, MpmStatus::Ok, "a state the interface produced does not open");
+}
+
 /// The hash of the world's bytes (every column and the header).
 fn world_hash(w: *const MpmWorld) -> u64 {
     let mut n = 0usize;
@@ -90,8 +105,11 @@ fn world_hash(w: *const MpmWorld) -> u64 {
     fnv1a(unsafe { core::slice::from_raw_parts(w as *const u8, n) })
 }
 
-/// Every particle value finite and every position inside the grid box.
+/// Every particle value finite and every position inside the grid box, and a byte copy of
+/// the world opens (`mpm_world_open` checks every value against its range: every state the
+/// interface produces must pass).
 fn check_state(w: *const MpmWorld) {
+    reopens(w);
     let mut def = mpm_world_def_default_f32();
     let mut view = core::mem::MaybeUninit::<MpmParticlesView>::uninit();
     // SAFETY: `w` is a world; the outputs are valid.
@@ -167,10 +185,13 @@ fn check_state(w: *const MpmWorld) {
     }
 }
 
-/// A snapshot of `world` with up to 8 bytes anywhere in it overwritten, opened from `memory`:
-/// `mpm_world_open` must refuse it (a damaged header is `NOT_A_WORLD`, a damaged state
-/// `INVALID_STATE`) or open a world whose every value is finite and inside the grid, which
-/// then steps (or refuses a dt past its substep limit) and stays so.
+/// A snapshot of `world` damaged, opened from `memory`: up to 8 bytes anywhere in it
+/// overwritten, or (one time in two) one value of one particle column (any column the view
+/// names: position and its low part, velocity, mass, volume, H, stress, the effects' columns,
+/// the plastic history) set to a value at or past the edge of its range. `mpm_world_open`
+/// must refuse it (a damaged header is `NOT_A_WORLD`, a damaged state `INVALID_STATE`) or
+/// open a world whose every value is finite and inside the grid, which then steps (or
+/// refuses a dt past its substep limit) and stays so.
 fn corrupted_snapshot(inp: &mut Input<'_>, world: *const MpmWorld, memory: &mut Memory) {
     let mut n = 0usize;
     // SAFETY: `world` is a world this target initialised, in memory it still owns.
@@ -178,10 +199,21 @@ fn corrupted_snapshot(inp: &mut Input<'_>, world: *const MpmWorld, memory: &mut 
     let p = memory.aligned(n, 64);
     // SAFETY: the world spans `n` bytes, and `p` has room for `n` bytes in other memory.
     unsafe { core::ptr::copy_nonoverlapping(world as *const u8, p, n) };
-    for _ in 0..1 + inp.byte() % 8 {
-        let at = inp.u32_below(n as u32) as usize;
-        // SAFETY: `at < n`.
-        unsafe { *p.add(at) = inp.byte() };
+    let column = if inp.byte() % 2 == 0 {
+        value_in_column(inp, world)
+    } else {
+        None
+    };
+    if let Some((offset, value)) = column {
+        // SAFETY: `offset` is that of a value of a particle column, inside the world's `n`
+        // bytes; the copy has the world's alignment.
+        unsafe { p.add(offset).cast::<mpm_real>().write(value) };
+    } else {
+        for _ in 0..1 + inp.byte() % 8 {
+            let at = inp.u32_below(n as u32) as usize;
+            // SAFETY: `at < n`.
+            unsafe { *p.add(at) = inp.byte() };
+        }
     }
     let mut copy = core::ptr::null_mut();
     // SAFETY: `p` has `n` bytes; `copy` is valid.
@@ -210,6 +242,52 @@ fn corrupted_snapshot(inp: &mut Input<'_>, world: *const MpmWorld, memory: &mut 
         MpmStatus::NotAWorld | MpmStatus::InvalidState => {}
         other => panic!("open answered {other:?} for a damaged snapshot"),
     }
+}
+
+/// The offset in `world` of one value of one of its particle Real columns, and a value to put
+/// there at or past the edge of a range (non-finite, huge, negative, a multiple of the
+/// value's last place, `J_p = 0`); `None` for a world without particles.
+fn value_in_column(inp: &mut Input<'_>, world: *const MpmWorld) -> Option<(usize, mpm_real)> {
+    let mut view = core::mem::MaybeUninit::<MpmParticlesView>::uninit();
+    // SAFETY: `world` is a world; the output is valid.
+    assert_eq!(
+        unsafe { mpm_world_particles(world, view.as_mut_ptr()) },
+        MpmStatus::Ok
+    );
+    // SAFETY: written by the successful call above.
+    let v = unsafe { view.assume_init() };
+    if v.count == 0 {
+        return None;
+    }
+    let mut columns: Vec<*const mpm_real> = vec![v.mass, v.volume0, v.hoop, v.plastic];
+    for group in [&v.position[..], &v.position_low, &v.velocity, &v.force, &v.damping] {
+        columns.extend_from_slice(group);
+    }
+    columns.extend_from_slice(&v.displacement_gradient);
+    columns.extend_from_slice(&v.stress);
+    columns.extend_from_slice(&v.affine);
+    columns.extend_from_slice(&[v.temperature, v.concentration]);
+    columns.retain(|c| !c.is_null());
+    let column = columns[inp.u32_below(columns.len() as u32) as usize];
+    let i = inp.u32_below(v.count as u32) as usize;
+    // SAFETY: every column the view names holds `count` values.
+    let old = unsafe { *column.add(i) };
+    let ulp = |x: mpm_real| x.abs().next_up() - x.abs();
+    let value = match inp.byte() % 12 {
+        0 => mpm_real::NAN,
+        1 => mpm_real::INFINITY,
+        2 => -mpm_real::MAX,
+        3 => 1.0e30,
+        4 => -1.0,
+        5 => -2.0,
+        6 => -1.0e-3,
+        7 => 0.25,
+        8 => old + 4.0 * ulp(old),
+        9 => ulp(old) / 2.0,
+        10 => 0.0,
+        _ => inp.real(),
+    };
+    Some((column as usize - world as usize + i * core::mem::size_of::<mpm_real>(), value))
 }
 
 /// A schedule of up to 9 points (one more than allowed), mostly with increasing times.

@@ -172,10 +172,21 @@ impl Damping {
         self.grid_on_force || self.zone_count > 0
     }
 
-    /// The largest rate the zones give any node, 1/s (the sum of their rates: zones may
-    /// overlap).
-    pub(crate) fn zones_max(&self) -> Real {
-        self.used_zones().iter().map(|z| z.rate).sum()
+    /// The largest damping rate the definition gives any particle, 1/s, in f64: the grid and
+    /// particle schedules' maxima and the zones' summed rates (zones may overlap; the
+    /// thermostat's alpha adapts
+    /// to the step and the per-particle rates come on top).
+    pub(crate) fn definition_rate(&self) -> f64 {
+        let zones: f64 = self.used_zones().iter().map(|z| z.rate as f64).sum();
+        self.grid.max_value() as f64 + self.particle.max_value() as f64 + zones
+    }
+
+    /// The largest per-particle rate ([`crate::World::set_particle_damping`]) a world of the
+    /// definition `def` resolves, 1/s: half of what the definition's rates leave of
+    /// [`crate::Resolvable::rate`], so that a particle's two rates and the definition's stay
+    /// within it.
+    pub(crate) fn particle_rate_limit(&self, def: &crate::WorldDef) -> f64 {
+        0.5 * (def.resolvable().rate - self.definition_rate())
     }
 }
 
@@ -320,18 +331,31 @@ impl World<'_> {
 
     /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
     /// particles `first..first + n`, added to the global damping for those particles (eq 107).
-    /// Needs [`crate::Damping::per_particle`].
+    /// Needs [`crate::Damping::per_particle`]. A rate the step cannot resolve (above half of
+    /// what the definition's rates leave of [`crate::Resolvable::rate`]) is
+    /// [`Error::StableStepTooShort`].
     pub fn set_particle_damping(
         &mut self,
         first: u32,
         alpha_g: &[Real],
         alpha_p: &[Real],
     ) -> Result<(), Error> {
-        let layout = Layout::of(&self.def());
+        let def = self.def();
+        let layout = Layout::of(&def);
         let group = (layout.damping.count > 0).then_some(layout.damping.first);
+        let limit = def
+            .effects
+            .damping
+            .map_or(0.0, |d| d.particle_rate_limit(&def));
         let columns = &[alpha_g, alpha_p];
         self.write_particle_columns(&layout, group, first, columns, Error::InvalidEffect, |v| {
-            v >= 0.0
+            if v < 0.0 {
+                Err(Error::InvalidEffect)
+            } else if v as f64 > limit {
+                Err(Error::StableStepTooShort)
+            } else {
+                Ok(())
+            }
         })
     }
 }

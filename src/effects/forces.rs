@@ -27,7 +27,7 @@ impl World<'_> {
             first,
             columns,
             Error::NonFiniteInput,
-            |_| true,
+            |_| Ok(()),
         )
     }
     /// Adds one traction per particle of `particles`, each loading the `face` of that

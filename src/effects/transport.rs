@@ -87,7 +87,7 @@ impl World<'_> {
             first,
             &[values],
             Error::NonFiniteInput,
-            |_| true,
+            |_| Ok(()),
         )
     }
 }

@@ -18,7 +18,7 @@ mod fluid;
 mod linear_elastic;
 mod neo_hookean;
 mod principal;
-mod snow;
+pub(crate) mod snow;
 mod von_mises;
 
 use crate::layout::MaterialRecord;

@@ -7,6 +7,7 @@
 
 use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Params, Stress};
+use crate::layout::MaterialRecord;
 use crate::math::exp_m1;
 use crate::pack::Num;
 use crate::Real;
@@ -15,6 +16,13 @@ use crate::Real;
 #[inline(always)]
 pub(crate) fn hardening<T: Num>(p: &Params, plastic: T) -> T {
     (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
+}
+
+/// The wave speed of snow of record `r` hardened by its plastic history `plastic`, m/s, in
+/// f64 (the stable step and the state check read it).
+pub(crate) fn hardened_wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
+    let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
+    r.wave_speed as f64 * libm::sqrt(k)
 }
 
 /// Snow.

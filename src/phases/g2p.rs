@@ -654,12 +654,13 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
-    let (step, faces, zero, none) = unsafe {
+    let (step, faces, zero, none, speed2_limit) = unsafe {
         (
             update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity),
             core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
             Wide::<I>::splat(0.0),
             WideMask::<I>::splat(false),
+            Wide::<I>::splat(ctx.speed2_limit),
         )
     };
     for start in (0..count).step_by(W) {
@@ -705,10 +706,11 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
+        let mut fast = Lanes::NONE;
         for q in (0..W).step_by(I::N) {
             // SAFETY: this instance runs only on a CPU that supports it.
             let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, q) };
-            let mut sum = zero;
+            let (mut sum, mut speed2) = (zero, zero);
             let (mut open, mut wall) = (none, none);
             for a in 0..D {
                 let (v_p, v_gp, a_gp) = (ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
@@ -725,6 +727,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                 };
                 let (xn, xn_low) = update::advance(ld(&x[a]), ld(&x_low[a]), dx);
                 sum = sum + (vn + xn);
+                speed2 = speed2 + vn * vn;
                 let at = update::walls(&faces[a], xn, xn_low, vn);
                 (open, wall) = (open | at.open, wall | at.wall);
                 at.x.store(&mut x_new[a], q);
@@ -739,15 +742,19 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                 }
             }
             finite = finite | sum.is_finite().lanes(q);
+            fast = fast | speed2.gt(speed2_limit).lanes(q);
             escaped = escaped | open.lanes(q);
             stopped = stopped | wall.lanes(q);
         }
-        let moved = live & finite;
+        // A lane faster than any stable step above the floor resolves runs away.
+        let too_fast = live & finite & fast;
+        let moved = (live & finite).minus(too_fast);
         let (ok, runaway) = if fused_stress {
             update_stress::<I, D, K, S, W>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             (moved, Lanes::NONE)
         };
+        let runaway = runaway | too_fast;
         if apic && fused_stress && S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, l, ok);
         }

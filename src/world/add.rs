@@ -19,6 +19,9 @@ impl<'a> World<'a> {
         if m.model.plastic() && !def.effects.plasticity {
             return Err(Error::EffectNotDeclared);
         }
+        if !material_resolvable(&record, &def) {
+            return Err(Error::StableStepTooShort);
+        }
         let id = self.material_count();
         if id >= def.material_capacity as usize {
             return Err(Error::MaterialCapacityExceeded);
@@ -73,6 +76,9 @@ impl<'a> World<'a> {
             }
             if m <= 0.0 || vol <= 0.0 {
                 return Err(Error::NonPositiveMassOrVolume);
+            }
+            if !speed_resolvable(&def, v) {
+                return Err(Error::StableStepTooShort);
             }
             if b.material[i] >= materials {
                 return Err(Error::UnknownMaterial);
@@ -191,8 +197,8 @@ impl<'a> World<'a> {
     /// length n) into the consecutive particle Real columns from `group` for particles
     /// `first..first + n`, after checking, in this order, that the group is reserved
     /// (`EffectNotDeclared`), that the lengths agree (`LengthMismatch`), that the particles
-    /// exist (`UnknownParticle`) and that every value is finite and passes `valid` (else
-    /// `invalid`). Nothing is written unless every check passes.
+    /// exist (`UnknownParticle`), that every value is finite (else `invalid`) and that `check`
+    /// accepts it (else its error). Nothing is written unless every check passes.
     pub(crate) fn write_particle_columns(
         &mut self,
         layout: &Layout,
@@ -200,7 +206,7 @@ impl<'a> World<'a> {
         first: u32,
         columns: &[&[Real]],
         invalid: Error,
-        valid: fn(Real) -> bool,
+        check: impl Fn(Real) -> Result<(), Error>,
     ) -> Result<(), Error> {
         let group = group.ok_or(Error::EffectNotDeclared)?;
         let n = columns.first().map_or(0, |c| c.len());
@@ -208,11 +214,11 @@ impl<'a> World<'a> {
             return Err(Error::LengthMismatch);
         }
         let range = self.particle_range(first, n)?;
-        if columns
-            .iter()
-            .any(|c| c.iter().any(|&v| !v.is_finite() || !valid(v)))
-        {
-            return Err(invalid);
+        for &v in columns.iter().flat_map(|c| c.iter()) {
+            if !v.is_finite() {
+                return Err(invalid);
+            }
+            check(v)?;
         }
         for (k, values) in columns.iter().enumerate() {
             let col = self.real_col_mut(layout, group + k, range.end);
@@ -318,7 +324,8 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         && m.critical_stretch.is_finite()
         && m.critical_stretch > 0.0
         && m.hardening_coefficient.is_finite()
-        && m.hardening_coefficient >= 0.0;
+        && m.hardening_coefficient >= 0.0
+        && m.hardening_coefficient <= crate::MAX_HARDENING_COEFFICIENT;
     if !ok {
         return Err(Error::InvalidMaterial);
     }
@@ -357,6 +364,42 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         log_compression: libm::log1p(-(m.critical_compression as f64)) as Real,
         log_stretch: libm::log1p(m.critical_stretch as f64) as Real,
     })
+}
+
+/// The largest diffusivity of material `rec` that a step of a world of `def` integrates
+/// explicitly, m^2/s: its thermal diffusivity `k / (rho C_p)` with heat conduction declared,
+/// its diffusivity D with diffusion declared, and its kinematic viscosity `eta / rho0`
+/// (viscosity diffuses momentum); the stable step keeps `dt <= h^2 / (2 d kappa)`.
+pub(crate) fn explicit_diffusivity(rec: &MaterialRecord, def: &WorldDef) -> f64 {
+    let fx = &def.effects;
+    let rho = rec.density as f64;
+    let thermal = if fx.heat.is_some() {
+        rec.conductivity as f64 / (rho * rec.heat_capacity as f64)
+    } else {
+        0.0
+    };
+    let solvent = if fx.diffusion.is_some() {
+        rec.diffusivity as f64
+    } else {
+        0.0
+    };
+    thermal.max(solvent).max(rec.viscosity as f64 / rho)
+}
+
+/// Whether a world of `def` resolves a particle moving at `v` (m/s, the axes it has) in a
+/// stable step of at least [`crate::MIN_STABLE_DT`] ([`crate::Resolvable::speed`]).
+pub(crate) fn speed_resolvable(def: &WorldDef, v: [Real; 3]) -> bool {
+    let v2: f64 = v[..def.axes()].iter().map(|&c| c as f64 * c as f64).sum();
+    let limit = def.resolvable().speed;
+    v2 <= limit * limit
+}
+
+/// Whether a world of `def` resolves material `rec` in a stable step of at least
+/// [`crate::MIN_STABLE_DT`]: its wave speed (unhardened) and its diffusivities
+/// ([`crate::Resolvable`]).
+pub(crate) fn material_resolvable(rec: &MaterialRecord, def: &WorldDef) -> bool {
+    let limits = def.resolvable();
+    rec.wave_speed as f64 <= limits.speed && explicit_diffusivity(rec, def) <= limits.diffusivity
 }
 
 /// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` of a friction angle in

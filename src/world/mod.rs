@@ -147,7 +147,7 @@ impl<'a> World<'a> {
         self.read().time()
     }
 
-    /// Number of `step` calls that succeeded.
+    /// Number of `step` calls that succeeded (saturates at `u64::MAX`).
     pub fn step_count(&self) -> u64 {
         self.read().step_count()
     }

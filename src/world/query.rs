@@ -1,7 +1,7 @@
 //! Reading a world in place: [`WorldRef`] and its queries (the state check, the stable time
 //! step, the particle view, the diagnostics), on a shared borrow of the bytes.
 
-use super::add::material_record;
+use super::add::{explicit_diffusivity, material_record, material_resolvable, speed_resolvable};
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
 use crate::def::{Dimension, MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
@@ -82,6 +82,9 @@ impl<'a> WorldRef<'a> {
             if model_of(rec).plastic() && !def.effects.plasticity {
                 return invalid;
             }
+            if !material_resolvable(rec, &def) {
+                return invalid;
+            }
         }
         let trac_start = layout.tractions_offset;
         let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
@@ -110,20 +113,47 @@ impl<'a> WorldRef<'a> {
             .chain((0..crate::layout::stress_components(d)).map(|k| col::tau(d, k)))
             .chain(groups.iter().flat_map(|g| g.first..g.first + g.count))
             .map(real);
+        let records = self.materials(&layout);
+        let rate_limit = def
+            .effects
+            .damping
+            .map_or(0.0, |dm| dm.particle_rate_limit(&def));
+        let speed_limit = def.resolvable().speed;
         let mut min_mass = f64::INFINITY;
         for i in 0..n {
             let (m, vol) = (v.mass[i], v.volume0[i]);
             min_mass = min_mass.min(m as f64);
             let x: [Real; 3] = core::array::from_fn(|a| if a < d { v.position[a][i] } else { 0.0 });
+            let vel: [Real; 3] =
+                core::array::from_fn(|a| if a < d { v.velocity[a][i] } else { 0.0 });
+            // The low part of the position is what the last rounding of `x` left out: at most
+            // one unit in its last place (half of one where the step moved it less than its
+            // distance from the origin).
+            let low_ok = |a: usize| {
+                let (x, low) = (v.position[a][i].abs(), v.position_low[a][i]);
+                low.is_finite() && low.abs() <= x.next_up() - x
+            };
+            let history_ok = match (records.get(v.material[i] as usize), v.plastic.get(i)) {
+                (Some(rec), Some(&p)) => {
+                    let active = v.status[i] == ACTIVE;
+                    history_in_range(rec, p, active.then_some(speed_limit))
+                }
+                _ => true,
+            };
             let sound = ParticleStatus::from_code(v.status[i]).is_some()
                 && (v.material[i] as usize) < materials
                 && m.is_finite()
                 && m > 0.0
                 && vol.is_finite()
                 && vol > 0.0
-                && (0..d).all(|a| v.velocity[a][i].is_finite())
+                && vel[..d].iter().all(|c| c.is_finite())
+                && speed_resolvable(&def, vel)
+                && (0..d).all(low_ok)
                 && columns.clone().all(|c| c[i].is_finite())
-                && v.damping.iter().all(|c| c.get(i).is_none_or(|&x| x >= 0.0))
+                && v.damping
+                    .iter()
+                    .all(|c| c.get(i).is_none_or(|&x| x >= 0.0 && x as f64 <= rate_limit))
+                && history_ok
                 && v.hoop.get(i).is_none_or(|&x| x > -1.0)
                 && v.jacobian_minus_one(i).partial_cmp(&-1.0) == Some(Ordering::Greater)
                 && geom.holds(x);
@@ -166,7 +196,8 @@ impl<'a> WorldRef<'a> {
         self.header().time
     }
 
-    /// Number of `step` calls that succeeded.
+    /// Number of `step` calls that succeeded (it stays at `u64::MAX` once there: it does not
+    /// wrap).
     pub fn step_count(&self) -> u64 {
         self.header().step_count
     }
@@ -235,7 +266,9 @@ impl<'a> WorldRef<'a> {
     /// dilatational wave speed of the materials, `|v|_max` the fastest active particle; shorter
     /// where damping (`alpha dt <= cfl`, the thermostat's alpha excepted: it is clamped to what
     /// the substep allows), conduction or diffusion (`dt <= h^2 / (2 d kappa)`) need it.
-    /// Infinite when nothing moves and there is no material.
+    /// Infinite when nothing moves and there is no material. Never raised to a floor: what a
+    /// world accepts keeps it at least [`crate::MIN_STABLE_DT`] / 2 (see
+    /// [`crate::Resolvable`]).
     pub fn stable_dt(&self) -> Real {
         self.stable_dt_with_simd(Simd::Detect)
     }
@@ -267,8 +300,8 @@ impl<'a> WorldRef<'a> {
                     continue;
                 };
                 if status[i] == ACTIVE {
-                    let k = libm::exp(-(r.hardening_coefficient as f64) * plastic[i] as f64);
-                    c_max = c_max.max((r.wave_speed as f64 * libm::sqrt(k)) as Real);
+                    let c = crate::material::snow::hardened_wave_speed(r, plastic[i]);
+                    c_max = c_max.max(c as Real);
                 }
             }
         }
@@ -287,38 +320,21 @@ impl<'a> WorldRef<'a> {
         // them: the step clamps it to the room this leaves (`World::update_feedback`).
         let other_damping = def.effects.damping.map_or(0.0, |dm| {
             let local = |k: usize| view_max(self.particles().damping[k], status);
-            let zones = dm.zones_max() as f64;
-            dm.grid.max_value() as f64
-                + dm.particle.max_value() as f64
-                + zones
-                + local(0)
-                + local(1)
+            dm.definition_rate() + local(0) + local(1)
         });
-        // Conduction, diffusion and viscosity are explicit too: `dt <= h^2 / (2 d kappa)` with
-        // kappa the largest thermal diffusivity `k / (rho C_p)`, diffusivity D of a declared
-        // field or kinematic viscosity `eta / rho0`.
-        let fx = &def.effects;
-        let kappa = self.materials(&layout).iter().fold(0.0f64, |m, r| {
-            let thermal = if fx.heat.is_some() {
-                r.conductivity as f64 / (r.density as f64 * r.heat_capacity as f64)
-            } else {
-                0.0
-            };
-            let solvent = if fx.diffusion.is_some() {
-                r.diffusivity as f64
-            } else {
-                0.0
-            };
-            // Viscosity diffuses momentum: its kinematic viscosity eta / rho0.
-            let viscous = r.viscosity as f64 / r.density as f64;
-            m.max(thermal).max(solvent).max(viscous)
-        });
+        // Conduction, diffusion and viscosity are explicit too: `dt <= h^2 / (2 d kappa)`.
+        let kappa = materials
+            .iter()
+            .fold(0.0f64, |m, r| m.max(explicit_diffusivity(r, &def)));
         let h = def.cell_size as f64;
         let conduction = h * h / (2.0 * d as f64 * kappa);
-        // Never 0: a step below the smallest positive Real is not a step.
+        // Not clamped: a longer step than this would not be stable. What a world accepts
+        // (materials, rates, particle speeds, each within `Resolvable`) keeps it at least
+        // MIN_STABLE_DT / 2; only a particle speed no stable step produces takes it lower,
+        // to 0 past the smallest Real (a step that `step` refuses).
         let dt = def.cfl as f64 * (h / speed).min(1.0 / other_damping).min(conduction);
         let stable_dt = if dt.is_finite() {
-            (dt as Real).max(Real::MIN_POSITIVE)
+            dt as Real
         } else {
             Real::INFINITY
         };
@@ -326,6 +342,27 @@ impl<'a> WorldRef<'a> {
             stable_dt,
             other_damping,
         }
+    }
+
+    /// Whether some material stiffens with its plastic history (snow with `xi > 0`), so that
+    /// its wave speed can outgrow a substep chosen before.
+    pub(super) fn materials_harden(&self) -> bool {
+        self.materials(&self.layout()).iter().any(hardens)
+    }
+
+    /// Whether particle `i` is active, of a material that hardens, with a hardened wave speed
+    /// above `limit` (m/s).
+    pub(super) fn hardened_past(&self, layout: &Layout, i: usize, limit: f64) -> bool {
+        let n = self.particle_count();
+        if layout.plastic.count == 0 || self.u32_col(layout, col::STATUS, n)[i] != ACTIVE {
+            return false;
+        }
+        let id = self.u32_col(layout, col::MATERIAL, n)[i] as usize;
+        let plastic = self.real_col(layout, layout.plastic.first, n)[i];
+        self.materials(layout).get(id).is_some_and(|r| {
+            let c = crate::material::snow::hardened_wave_speed(r, plastic);
+            hardens(r) && (c.is_nan() || c > limit)
+        })
     }
 
     /// Borrowed view of every particle column.
@@ -621,6 +658,30 @@ fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> R
         .sum()
 }
 
+/// Whether material `rec` stiffens with its plastic history (snow with `xi > 0`).
+fn hardens(rec: &MaterialRecord) -> bool {
+    model_of(rec) == crate::MaterialModel::Snow && rec.hardening_coefficient > 0.0
+}
+
+/// Whether `plastic` is a plastic history a particle of material `rec` can carry: an
+/// equivalent plastic strain or an accumulated plastic shear >= 0 (von Mises,
+/// Drucker-Prager), `J_p - 1 > -1` (snow; for an active particle, with a hardened wave speed
+/// at most `speed_limit`, m/s, what the world resolves), and 0 for a model without a history
+/// (the value adding gives, which it never changes).
+fn history_in_range(rec: &MaterialRecord, plastic: Real, speed_limit: Option<f64>) -> bool {
+    use crate::MaterialModel as M;
+    match model_of(rec) {
+        M::VonMises | M::DruckerPrager => plastic >= 0.0,
+        M::Snow => {
+            plastic > -1.0
+                && speed_limit.is_none_or(|limit| {
+                    crate::material::snow::hardened_wave_speed(rec, plastic) <= limit
+                })
+        }
+        _ => plastic == 0.0,
+    }
+}
+
 /// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the
 /// thermostat's that any particle can see (1/s), whose room the thermostat's alpha must stay
 /// within.
@@ -767,5 +828,30 @@ mod tests {
         }
         copy.as_mut_bytes().copy_from_slice(&snapshot);
         assert!(World::open(copy.as_mut_bytes()).is_ok());
+    }
+
+    /// The step count saturates: a world at `u64::MAX` steps stays there after another step
+    /// (a snapshot may carry any count).
+    #[test]
+    fn step_count_does_not_wrap() {
+        let def = WorldDef {
+            cells: [16, 16, 1],
+            cell_size: 0.1,
+            particle_capacity: 256,
+            ..WorldDef::DEFAULT
+        };
+        let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
+        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
+        w.fill_box(
+            Vec3::new(0.4, 0.4, 0.0),
+            Vec3::new(0.8, 0.8, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .unwrap();
+        w.header_mut().step_count = u64::MAX;
+        w.step(1.0e-3).unwrap();
+        assert_eq!(w.step_count(), u64::MAX);
     }
 }

@@ -129,6 +129,9 @@ impl<'a> World<'a> {
             });
         }
         let rec = self.material(material).ok_or(Error::UnknownMaterial)?;
+        if !super::add::speed_resolvable(&def, [velocity.x, velocity.y, velocity.z]) {
+            return Err(Error::StableStepTooShort);
+        }
         let geom = GeomAny::new(&def);
         let spacing = def.cell_size / def.particles_per_cell as Real;
         let mut volume = 1.0;

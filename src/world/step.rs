@@ -9,7 +9,7 @@ use crate::effects::damping::NodalDamping;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
-use crate::particles::ParticleCols;
+use crate::particles::{ParticleCols, FROZEN};
 use crate::phases::lanes::width;
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::{grid_update, p2g, Ctx, Isa};
@@ -29,8 +29,14 @@ pub const MAX_SUBSTEPS: u32 = 1 << 20;
 const NODAL_MASS_CUTOFF: Real = Real::EPSILON * Real::EPSILON;
 
 impl<'a> World<'a> {
-    /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated once at
-    /// the start of the call) is taken in equal substeps that are each stable.
+    /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated at the
+    /// start of the call) is taken in equal substeps that are each stable. In a world whose
+    /// material hardens (snow, with plasticity declared) the stable step is evaluated again
+    /// before each substep, and where the hardening has outgrown the substep the rest of the
+    /// step is split again into shorter equal substeps, within
+    /// [`WorldDef::max_substeps`] in all; a particle whose hardened wave speed even the
+    /// shortest substep the limit allows cannot resolve (a Courant number above 1) freezes
+    /// and is reported as runaway.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
         self.step_with_simd(dt, Simd::Detect)
     }
@@ -51,33 +57,95 @@ impl<'a> World<'a> {
         if !within {
             return Err(Error::SubstepLimit);
         }
-        let substeps = substeps as u32;
-        let sub_dt = dt / substeps as Real;
-        // The thermostat's alpha is kept to what a substep of this length integrates stably
-        // besides the other damping (`alpha dt <= cfl`, as `stable_dt` keeps the other
-        // damping): it adapts to the substep and never sets its length, whatever its gain.
-        let feedback_room = (def.cfl as f64 / sub_dt as f64 - limits.other_damping).max(0.0);
-        let mut report = StepReport {
-            substeps,
-            substep_dt: sub_dt,
-            ..StepReport::default()
+        let mut plan = Plan {
+            count: substeps as u32,
+            dt: dt / substeps,
+            first: 0,
+            start: 0.0,
+            other_damping: limits.other_damping,
         };
+        let mut report = StepReport::default();
         let fx = def.effects;
+        let hardening = fx.plasticity && self.read().materials_harden();
         let time0 = self.time();
-        for k in 0..substeps {
-            let time = time0 + k as f64 * sub_dt as f64;
+        let mut k = 0;
+        while k < plan.count {
+            if hardening && k > 0 {
+                self.replan(&mut plan, k, dt, simd, &mut report);
+            }
+            let time = time0 + plan.start + (k - plan.first) as f64 * plan.dt as f64;
             if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
-                self.update_feedback(&feedback, time, sub_dt, feedback_room);
+                // The thermostat's alpha is kept to what a substep of this length integrates
+                // stably besides the other damping (`alpha dt <= cfl`, as `stable_dt` keeps
+                // the other damping): it adapts to the substep and never sets its length,
+                // whatever its gain.
+                let room = (def.cfl as f64 / plan.dt as f64 - plan.other_damping).max(0.0);
+                self.update_feedback(&feedback, time, plan.dt, room);
             }
             let mut substep = Substep {
                 report: &mut report,
             };
-            self.dispatch(sub_dt, time, &mut substep, simd);
+            self.dispatch(plan.dt, time, &mut substep, simd);
+            k += 1;
         }
+        report.substeps = plan.count;
+        report.substep_dt = plan.dt;
         let h = self.header_mut();
         h.time += dt as f64;
-        h.step_count += 1;
+        h.step_count = h.step_count.saturating_add(1);
         Ok(report)
+    }
+
+    /// Before substep `k` of a step of `dt` in a world whose material hardens: where the stable
+    /// step has fallen below the planned substep, splits the rest of the step into equal
+    /// substeps again, at most what [`WorldDef::max_substeps`] leaves; if even those are
+    /// longer than the stable step, freezes the particles whose hardened wave speed they do
+    /// not resolve (a Courant number above 1), as runaway.
+    fn replan(&mut self, plan: &mut Plan, k: u32, dt: Real, simd: Simd, report: &mut StepReport) {
+        let limits = self.read().time_step_limits(simd);
+        if limits.stable_dt >= plan.dt {
+            return;
+        }
+        let start = plan.start + (k - plan.first) as f64 * plan.dt as f64;
+        let rest = dt as f64 - start;
+        let room = self.def().max_substeps - k;
+        // NaN-safe: a stable step of 0 asks for infinitely many, clamped to the room.
+        let need = libm::ceil(rest / limits.stable_dt as f64).clamp(1.0, room as f64) as u32;
+        *plan = Plan {
+            count: k + need,
+            dt: (rest / need as f64) as Real,
+            first: k,
+            start,
+            other_damping: limits.other_damping,
+        };
+        if limits.stable_dt < plan.dt {
+            let limit = self.def().cell_size as f64 / plan.dt as f64;
+            self.freeze_hardened(limit, report);
+        }
+    }
+
+    /// Freezes every active particle whose material hardens and whose hardened wave speed is
+    /// above `limit` (m/s), as the step freezes a runaway particle: its velocity zeroed, its
+    /// other state kept, and reported.
+    fn freeze_hardened(&mut self, limit: f64, report: &mut StepReport) {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let n = self.particle_count();
+        // 64 particles at a time: which to freeze, read from the world, then written.
+        for from in (0..n).step_by(64) {
+            let to = (from + 64).min(n);
+            let w = self.read();
+            let freeze = (from..to).fold(0u64, |bits, i| {
+                bits | ((w.hardened_past(&layout, i, limit) as u64) << (i - from))
+            });
+            for i in (from..to).filter(|i| freeze >> (i - from) & 1 == 1) {
+                self.u32_col_mut(&layout, crate::layout::col::STATUS, n)[i] = FROZEN;
+                for a in 0..layout.d {
+                    self.real_col_mut(&layout, crate::layout::col::v(layout.d, a), n)[i] = 0.0;
+                }
+                report.note_frozen(i as u32, true);
+            }
+        }
     }
 
     /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
@@ -209,6 +277,10 @@ impl<'a> World<'a> {
             half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
             exp_terms: def.exp_terms,
             jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
+            speed2_limit: {
+                let speed = def.resolvable().speed;
+                (speed * speed).min(Real::MAX as f64) as Real
+            },
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
@@ -239,6 +311,17 @@ impl<'a> World<'a> {
         self.dispatch(dt, time, &mut run, Simd::Detect);
         Ok(run.report)
     }
+}
+
+/// The substeps of a step: `count` in all, those from `first` on of length `dt`, the first of
+/// them starting `start` seconds into the step; the damping rates besides the thermostat's
+/// that the last stable step allowed for.
+struct Plan {
+    count: u32,
+    dt: Real,
+    first: u32,
+    start: f64,
+    other_damping: f64,
 }
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile

@@ -22,12 +22,14 @@ pub struct StepReport {
     /// Particles that crossed an open face and left the simulation.
     pub escaped: u32,
     /// Particles frozen in this call: their state turned non-finite, their F inverted, or
-    /// their volume ran away. Nonzero means the step went bad somewhere
+    /// they ran away (see `runaway`). Nonzero means the step went bad somewhere
     /// ([`StepReport::went_bad`]).
     pub frozen: u32,
-    /// Of the frozen, those frozen because their volume ratio `J` left
-    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`WorldDef::max_volume_ratio`]): the sign
-    /// of an unstable scheme or a time step too long for the scene.
+    /// Of the frozen, those that ran away: their volume ratio `J` left
+    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`WorldDef::max_volume_ratio`]), their
+    /// speed passed [`crate::Resolvable::speed`], or their hardening (snow) took their wave
+    /// speed past what the substep resolves (a Courant number above 1). The sign of an
+    /// unstable scheme or a time step too long for the scene.
     pub runaway: u32,
     /// The ids of the first frozen particles (up to 8), for diagnosis.
     pub first_frozen: heapless::Vec<u32, 8>,
@@ -131,8 +133,9 @@ pub struct ParticlesView<'w> {
     pub dimension: Dimension,
     /// Positions per axis, m, rounded to `Real`.
     pub position: [&'w [Real]; 3],
-    /// What rounding the positions to `Real` left out, per axis, m (at most half the last bit
-    /// of the position): `position + position_low`, summed in f64, is the position to twice
+    /// What rounding the positions to `Real` left out, per axis, m (at most one unit in the
+    /// last place of the position; half of one once it has moved less than its distance from
+    /// the origin in a step): `position + position_low`, summed in f64, is the position to twice
     /// `Real`'s precision. The step moves particles by this pair, so that a displacement
     /// smaller than the last bit of a coordinate is not lost; in f32, a displacement read as
     /// `position` after minus before is exact to that last bit (1 um at 10 m), and to far

@@ -139,15 +139,16 @@ fn open_refuses_every_damaged_particle_state() {
 #[test]
 fn fills_validate_what_adding_validates() {
     // (cell size, density, expected): 50 m sub-cells (2500 m^2) of a density a tenth of the
-    // largest Real overflow the mass; sub-cells the size of the smallest normal Real have a
-    // volume (its square or cube) that underflows to 0, in f32 and f64 alike.
+    // largest Real overflow the mass; sub-cells whose square (and cube) underflow to 0 (1e-23
+    // m in f32, 1e-163 m in f64) leave a volume of 0. The modulus is the smallest normal Real,
+    // so that the wave speed is one such cells resolve above MIN_STABLE_DT.
+    #[cfg(not(feature = "f64"))]
+    const TINY: Real = 1.0e-23;
+    #[cfg(feature = "f64")]
+    const TINY: Real = 1.0e-163;
     let cases = [
         (100.0, Real::MAX / 10.0, Error::NonFiniteInput),
-        (
-            2.0 * Real::MIN_POSITIVE,
-            MaterialDef::DEFAULT.density,
-            Error::NonPositiveMassOrVolume,
-        ),
+        (TINY, 1.0e9, Error::NonPositiveMassOrVolume),
     ];
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
         for (h, density, expected) in cases {
@@ -158,6 +159,7 @@ fn fills_validate_what_adding_validates() {
             let m = w
                 .add_material(&MaterialDef {
                     density,
+                    youngs_modulus: Real::MIN_POSITIVE,
                     ..MaterialDef::DEFAULT
                 })
                 .expect("a valid material");

@@ -1164,6 +1164,7 @@ static void material_misuse(void) {
     BAD_MAT("material: critical_stretch 0", critical_stretch, R(0.0));
     BAD_MAT("material: critical_stretch +inf", critical_stretch, R(INFINITY));
     BAD_MAT("material: hardening_coefficient -1", hardening_coefficient, R(-1.0));
+    BAD_MAT("material: hardening_coefficient past 100", hardening_coefficient, R(100.5));
 #undef BAD_MAT
     /* A cohesion needs a friction angle (the apex of the yield surface is c cot(phi)). */
     m = mpm_material_def_default();
@@ -2375,6 +2376,7 @@ static void status_strings(void) {
         MPM_STATUS_INVALID_DEFORMATION,
         MPM_STATUS_INVALID_TRANSFER,
         MPM_STATUS_UNKNOWN_TRACTION,
+        MPM_STATUS_STABLE_STEP_TOO_SHORT,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
