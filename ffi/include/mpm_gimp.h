@@ -57,9 +57,6 @@
 // whose own stable step would be shorter is `MPM_STATUS_STABLE_STEP_TOO_SHORT`.
 #define MPM_MIN_STABLE_DT 1.0e-15
 
-// The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
-#define MPM_MAX_HARDENING_COEFFICIENT 100.0
-
 // Most zones an `MpmDamping` holds.
 #define MPM_DAMPING_ZONES 4
 
@@ -835,6 +832,9 @@ typedef struct MpmStepReport {
   // Ids of the first frozen particles.
   uint32_t first_frozen[8];
 } MpmStepReport;
+
+// The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
+#define MPM_MAX_HARDENING_COEFFICIENT 100.0
 
 #ifdef __cplusplus
 extern "C" {

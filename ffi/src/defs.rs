@@ -220,8 +220,8 @@ pub const MPM_MIN_STABLE_DT: f64 = 1.0e-15;
 const _: () = assert!(MPM_MIN_STABLE_DT == kernel::MIN_STABLE_DT);
 
 /// The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
-pub const MPM_MAX_HARDENING_COEFFICIENT: f64 = 100.0;
-const _: () = assert!(MPM_MAX_HARDENING_COEFFICIENT == kernel::MAX_HARDENING_COEFFICIENT as f64);
+pub const MPM_MAX_HARDENING_COEFFICIENT: mpm_real = 100.0;
+const _: () = assert!(MPM_MAX_HARDENING_COEFFICIENT == kernel::MAX_HARDENING_COEFFICIENT);
 
 const _: () = assert!(MPM_SCHEDULE_POINTS == kernel::SCHEDULE_POINTS);
 
