@@ -12,7 +12,9 @@
 //! Timing (`benches/common/timing.rs`, shared with the accuracy report): 3 warm-up steps, then `--runs` runs (default 7, at least 5) of `--steps` steps each
 //! (default 10). Every step uses `dt = world.stable_dt()`, so it is exactly one substep; only the
 //! `step` call is timed (the `stable_dt` evaluation that picks `dt` is not). Reported:
-//! `elapsed_ns / (steps * particles)` for each run and their median.
+//! `elapsed_ns / (steps * particles)` for each run and their median, and `state_hash`, the
+//! FNV-1a hash of the world's state bytes after every step taken (the same for the same
+//! options and binary on every instruction set: a refactor that keeps it keeps the results).
 //!
 //! Options: `--dim 2|3`, `--shape linear|gimp|quadratic|cubic`,
 //! `--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow`, `--order usf|usl|musl`, `--runs N`, `--steps S`,
@@ -303,6 +305,15 @@ pub fn main() {
     let (runs, med, med_ref, wall) = (timing.runs, timing.median, timing.reference, timing.wall);
     let mut sorted = runs.clone();
     sorted.sort_by(f64::total_cmp);
+    // FNV-1a over the world's state after every step taken (warm-up and timed): the same
+    // options give the same hash on every instruction set and run.
+    let state_hash = world
+        .read()
+        .state_bytes()
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+        });
 
     let cells = block[..axes]
         .iter()
@@ -317,7 +328,7 @@ pub fn main() {
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
 \"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
-\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\"}}",
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"state_hash\":\"{:016x}\"}}",
         o.dim,
         particles,
         cells,
@@ -332,7 +343,8 @@ pub fn main() {
         med / med_ref,
         o.effect.name(),
         bytes_per_particle,
-        o.particle_order.name()
+        o.particle_order.name(),
+        state_hash
     );
     eprintln!(
         "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \

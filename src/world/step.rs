@@ -352,10 +352,20 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
 }
 
-/// One substep: the phase order of seeds/000 section 5.1 for the chosen update order. This is
-/// the only place the order of the phases is written down. The update order, the transfer and
-/// the declared effects are values of the context ([`Ctx`]): one compiled substep serves them
-/// all, and the passes skip an undeclared effect's work once per chunk of lanes.
+/// One substep: the phase order of seeds/000 section 5.1 for the chosen update order, the
+/// momentum approach (section 5.2, [`crate::phases::momentum`]) a branch of it. This is the
+/// only place the order of the phases is written down:
+///
+/// ```text
+/// USL : scatter(m, p, f) -> v -> tractions -> a -> particles(x, v, stress)
+/// MUSL: scatter(m, p, f) -> v -> tractions -> a -> particles(x, v; remap p) -> v' -> stress
+/// USF : scatter(m, p) -> v -> v with walls -> stress -> scatter(f) -> tractions -> a -> particles
+/// momentum approach: m and p first, masses mirrored at the walls, its own force pass
+/// ```
+///
+/// The update order, the transfer and the declared effects are values of the context
+/// ([`Ctx`]): one compiled substep serves them all, and the passes skip an undeclared effect's
+/// work once per chunk of lanes.
 struct Substep<'r> {
     report: &'r mut StepReport,
 }
@@ -378,79 +388,41 @@ impl Kernel for Substep<'_> {
             }
         }
         grid_update::reset(ctx, g);
-        let adds = |mode| Adds::of(mode, ctx);
+        let (usf, musl) = (
+            ctx.order == UpdateOrder::Usf,
+            ctx.order == UpdateOrder::Musl,
+        );
+        // The masses and momenta, and with them the force unless USF's stress or the momentum
+        // approach's weights need the nodal velocities (or masses) first.
+        let with_force = !(usf || ctx.momentum);
+        let first = if with_force {
+            Mode::All
+        } else {
+            Mode::MassMomentum
+        };
+        p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(first, ctx));
+        grid_update::velocity(ctx, g);
         if ctx.momentum {
-            return momentum_approach::<I, D, K, S, W>(s, ctx, p, count, g, report);
+            // The momentum approach's weights read the masses past the walls as mirrored.
+            crate::phases::momentum::mirror_masses(ctx, g);
         }
-        match ctx.order {
-            UpdateOrder::Usf => {
-                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::MassMomentum));
-                grid_update::velocity(ctx, g);
-                grid_update::constrained_velocity(ctx, g);
-                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
-                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::Force));
-                crate::effects::forces::tractions(s, ctx, p, count, g);
-                grid_update::acceleration(ctx, g);
-                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
-            }
-            UpdateOrder::Usl => {
-                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
-                crate::effects::forces::tractions(s, ctx, p, count, g);
-                grid_update::velocity(ctx, g);
-                grid_update::acceleration(ctx, g);
-                // Also updates the stress (see g2p::particles).
-                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
-            }
-            UpdateOrder::Musl => {
-                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, adds(Mode::All));
-                crate::effects::forces::tractions(s, ctx, p, count, g);
-                grid_update::velocity(ctx, g);
-                grid_update::acceleration(ctx, g);
-                // Also scatters the new momenta to the remap columns (see g2p::particles).
-                I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
-                grid_update::remap_velocity(ctx, g);
-                I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
-            }
-        }
-    }
-}
-
-/// One substep in the momentum approach ([`crate::phases::momentum`]): the masses and momenta
-/// first, then (with the masses complete and mirrored at the walls) the internal force with
-/// the particles' mass-weighted gradient weights; the particle and stress passes take that
-/// gradient and the mass-weighted position update.
-fn momentum_approach<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-    s: &S,
-    ctx: &Ctx<'_, D>,
-    p: &mut ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-    report: &mut StepReport,
-) {
-    use crate::phases::momentum::{forces, mirror_masses};
-    p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::MassMomentum, ctx));
-    grid_update::velocity(ctx, g);
-    mirror_masses(ctx, g);
-    match ctx.order {
-        UpdateOrder::Usf => {
+        if usf {
+            // USF: the stress from the velocities the walls leave, before the force.
             grid_update::constrained_velocity(ctx, g);
             I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
-            forces::<I, D, K, S, W>(s, ctx, p, count, g);
-            crate::effects::forces::tractions(s, ctx, p, count, g);
-            grid_update::acceleration(ctx, g);
-            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
         }
-        UpdateOrder::Usl => {
-            forces::<I, D, K, S, W>(s, ctx, p, count, g);
-            crate::effects::forces::tractions(s, ctx, p, count, g);
-            grid_update::acceleration(ctx, g);
-            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        if ctx.momentum {
+            crate::phases::momentum::forces::<I, D, K, S, W>(s, ctx, p, count, g);
+        } else if !with_force {
+            p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
         }
-        UpdateOrder::Musl => {
-            forces::<I, D, K, S, W>(s, ctx, p, count, g);
-            crate::effects::forces::tractions(s, ctx, p, count, g);
-            grid_update::acceleration(ctx, g);
-            I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        crate::effects::forces::tractions(s, ctx, p, count, g);
+        grid_update::acceleration(ctx, g);
+        // USL also updates the stress here, MUSL scatters the new momenta to the remap
+        // columns (see g2p::particles).
+        I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        if musl {
+            // MUSL: the stress from the re-mapped velocities.
             grid_update::remap_velocity(ctx, g);
             I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
         }
