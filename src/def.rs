@@ -15,7 +15,7 @@ pub enum Dimension {
     /// Two dimensions, plane strain: quantities are per unit thickness along z, and
     /// `F_zz = 1`, so the stress keeps a `tau_zz` component.
     Plane2D = 2,
-    /// Two dimensions, axisymmetric (seeds/000 section 7): x is the radius r and y the axis z.
+    /// Two dimensions, axisymmetric (E65-E72): x is the radius r and y the axis z.
     /// Masses, volumes, forces and energies are per radian (a particle of cross-section `A_p`
     /// at radius `r_p` has volume `A_p r_p`), the weights are r-weighted, and the radial force
     /// has the hoop term. The axis `r = 0` must be the lower x face's wall plane:
@@ -40,7 +40,7 @@ impl Dimension {
     }
 }
 
-/// Grid shape function used for `S_ip` and `G_ip` (seeds/000 eqs 16-17, seeds/003).
+/// Grid shape function used for `S_ip` and `G_ip` (E4-E11).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum ShapeFunction {
@@ -135,13 +135,13 @@ impl UpdateOrder {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum Transfer {
-    /// FLIP blended with PIC by [`WorldDef::flip_beta`] (seeds/000 eqs 44-45, 51-52). The
+    /// FLIP blended with PIC by [`WorldDef::flip_beta`] (E22-E26). The
     /// particle moves by the grid's velocity and acceleration at its place, `x_p += (v_gp +
-    /// a_gp dt / 2) dt` less the PIC and damping terms (eq 51). The velocity update takes the
+    /// a_gp dt / 2) dt` less the PIC and damping terms (E26). The velocity update takes the
     /// acceleration at the start of the step, so the scheme is first order in time: on the
     /// vibrating bar its time error halves with the step.
     Flip = 0,
-    /// APIC (seeds/001): the particle takes the grid velocity (PIC) plus an affine matrix
+    /// APIC (E78-E80): the particle takes the grid velocity (PIC) plus an affine matrix
     /// `C_p = B_p D_p^-1`, with `B_p = sum_i S_ip v_i (x_i - x_p)^T` and
     /// `D_p = sum_i S_ip (x_i - x_p)(x_i - x_p)^T` evaluated per particle, so the transfer
     /// conserves angular momentum with every shape function (the shortcut
@@ -150,19 +150,19 @@ pub enum Transfer {
     /// Reserves D x D columns for `C_p`.
     Apic = 1,
     /// FLIP blended with PIC as [`Transfer::Flip`], the particle moving with its own new
-    /// velocity, `x_p += v_p(n+1) dt` (seeds/003's update; symplectic Euler on the particles,
+    /// velocity, `x_p += v_p(n+1) dt` (E27; symplectic Euler on the particles,
     /// as APIC moves them). On the vibrating bar its time error is a hundredth of
     /// [`Transfer::Flip`]'s, about APIC's. But with `flip_beta` near 1 the particles then
-    /// follow the noise of the FLIP velocity, which eq 51's grid velocity filters out: on the
+    /// follow the noise of the FLIP velocity, which E26's grid velocity filters out: on the
     /// accuracy report's manufactured large deformation it does not converge (errors of 0.26
     /// to 0.87 of the amplitude with the default blend, against 0.01 to 0.03 with
     /// [`Transfer::Flip`]; with cpGIMP and `flip_beta` 0.5 or 0 it is 0.013 to 0.027, as
     /// accurate as [`Transfer::Flip`]). For vibration and waves, not for large flows. Same
     /// columns and cost as [`Transfer::Flip`].
     FlipParticleVelocity = 2,
-    /// MLS-MPM (seeds/001): APIC's transfer, and every gradient of the momentum equation the
+    /// MLS-MPM (E82-E84): APIC's transfer, and every gradient of the momentum equation the
     /// MLS gradient `D_p^-1 S_ip (x_i - x_p)` in place of the shape function's `G_ip`: the
-    /// nodal force is `f_i = -sum_p D_p^-1 S_ip V0 P F^T (x_i - x_p)` (`D_p^-1 = 4 / h^2`
+    /// nodal force is `f_i = -sum_p D_p^-1 S_ip V0 P F^T (x_i - x_p)` (E83, `D_p^-1 = 4 / h^2`
     /// with the quadratic B-spline, `3 / h^2` with the cubic), and the velocity gradient that
     /// updates F is `C_p` itself (`dF = exp(C_p dt)`). It is not the gradient of `S_ip` (it
     /// equals it for an affine velocity field only), but the force is then the exact
@@ -172,19 +172,19 @@ pub enum Transfer {
     /// Heat and diffusion keep the shape functions' gradients. Reserves the columns of `C_p`
     /// as [`Transfer::Apic`] does.
     Mls = 3,
-    /// FLIP in seeds/000's momentum approach (section 5.2): the particle reads the grid
+    /// FLIP in Nairn's momentum approach (E73-E77): the particle reads the grid
     /// through the nodes' momenta over the grid's mass at the particle, `m_gp = sum_i S_ip
     /// m_i`, so a node that carries a sliver of mass weighs in with that sliver. The
-    /// velocity gradient is that of the mass-weighted velocity field (eq 67 where the mass is
+    /// velocity gradient is that of the mass-weighted velocity field (E74; E73 where the mass is
     /// uniform, and invariant under translation and exact for rigid rotation everywhere), the
-    /// internal force its work conjugate (energy, momentum and angular momentum pass between
+    /// internal force its work conjugate (E75; energy, momentum and angular momentum pass between
     /// particles and grid unchanged), and the particle moves with the mass-weighted grid
-    /// velocity (eq 90). The particle velocity takes [`Transfer::Flip`]'s update (eq 91 read
+    /// velocity (E76). The particle velocity takes [`Transfer::Flip`]'s update (E77: read
     /// with the particle's share of each nodal force, which conserves momentum). Plane strain
     /// and 3D, every shape function; the axisymmetric form is
     /// [`crate::Error::InvalidTransfer`]. Same columns as [`Transfer::Flip`]; its force and
     /// gradient passes are plain loops, 8 to 10 times the cost of the velocity approach's
-    /// (benches/PERFORMANCE.md). See `phases/momentum.rs` for why eq 67 as printed is not used.
+    /// (benches/PERFORMANCE.md). See `phases/momentum.rs` for why E73 is not used.
     ///
     /// For dynamics, not for stresses at rest next to a free or loaded face: the conjugate
     /// force does not balance a uniform stress there particle by particle. A plane-strain
@@ -437,7 +437,7 @@ impl MaterialDef {
         hardening_coefficient: 10.0,
     };
 
-    /// Lamé constants (lambda, mu) for 3D and plane strain; a fluid's are `(K, 0)`.
+    /// Lamé constants (lambda, mu) for 3D and plane strain (E33); a fluid's are `(K, 0)`.
     pub fn lame(&self) -> (Real, Real) {
         if self.model == MaterialModel::Fluid {
             return (self.bulk_modulus, 0.0);
@@ -449,7 +449,7 @@ impl MaterialDef {
         (lambda, mu)
     }
 
-    /// Dilatational (P) wave speed `c = sqrt((K + 4G/3) / rho)`, m/s: the speed the stable
+    /// Dilatational (P) wave speed `c = sqrt((K + 4G/3) / rho)` (E86), m/s: the speed the stable
     /// time step must resolve (a fluid's sound speed `sqrt(K / rho)`).
     pub fn wave_speed(&self) -> Real {
         let (lambda, mu) = self.lame();
@@ -495,7 +495,7 @@ pub struct WorldDef {
     /// Particles per cell per axis `n`: sets the uGIMP particle half-width `l_p = h / (2 n)` and
     /// the spacing of the fill helpers. Default 2, the usual GIMP choice.
     pub particles_per_cell: u32,
-    /// FLIP fraction beta in [0, 1] (seeds/000 eq 44-45): 1 is pure FLIP (no numerical damping),
+    /// FLIP fraction beta in [0, 1] (E22, E23): 1 is pure FLIP (no numerical damping),
     /// 0 is PIC. Default 0.99: a 1 % PIC blend removes the particle-grid velocity noise that pure
     /// FLIP keeps, at a damping rate `(1 - beta) / dt` on that noise only.
     pub flip_beta: Real,
@@ -510,10 +510,10 @@ pub struct WorldDef {
     /// Boundary condition of each face, indexed by [`Face`]. Default all [`Boundary::Slip`]:
     /// frictionless walls keep everything in the box and add no friction.
     pub faces: [Boundary; 6],
-    /// Highest power of `grad v dt` kept in `dF = exp(grad v dt)` (seeds/000 eq 26), 1..=8.
+    /// Highest power of `grad v dt` kept in `dF = exp(grad v dt)` (E31), 1..=8.
     /// Default 2: second order, exact for the time integration's own order and cheap.
     pub exp_terms: u32,
-    /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)`, in (0, 1].
+    /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)` (E88), in (0, 1].
     /// Default 0.5: the usual margin for explicit MPM with FLIP.
     pub cfl: Real,
     /// Most substeps one [`crate::World::step`] call may take, in `1..=`[`crate::MAX_SUBSTEPS`]:

@@ -16,11 +16,11 @@ use crate::Real;
 
 /// Mutable views of every node column, each `nodes` long.
 pub(crate) struct GridCols<'a, const D: usize> {
-    /// Nodal mass m_i (eq 23).
+    /// Nodal mass m_i (E12).
     pub mass: &'a mut [Real],
-    /// Momentum p_i (eq 25) after particle-to-grid; velocity v_i = p_i / m_i after the grid update.
+    /// Momentum p_i (E13) after particle-to-grid; velocity v_i = p_i / m_i after the grid update.
     pub vel: [&'a mut [Real]; D],
-    /// Force f_i (eq 22) after particle-to-grid; acceleration a_i = f_i / m_i + g after the grid update.
+    /// Force f_i (E14) after particle-to-grid; acceleration a_i = f_i / m_i + g after the grid update.
     pub acc: [&'a mut [Real]; D],
     /// The nodal velocity the separate stress pass differentiates, with the walls applied: USF
     /// copies the lagged velocity here; MUSL accumulates the momentum of the updated particle

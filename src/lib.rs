@@ -54,8 +54,10 @@
 //! assert!(world.diagnostics().center_of_mass[1] < 0.45);
 //! ```
 //!
-//! Symbols follow Nairn's GIMP notes (seeds/000): `S_ip`, `G_ip`, `m_i`, `p_i`, `f_i`,
-//! `tau/rho0`, `beta`.
+//! Symbols follow Nairn's GIMP notes: `S_ip`, `G_ip`, `m_i`, `p_i`, `f_i`, `tau/rho0`, `beta`.
+//! Equation numbers in the documentation and comments, written `(E17)` or `eq E17`, refer to
+//! `docs/equations.md` in the repository, which states each equation the code uses with its
+//! source.
 #![no_std]
 #![deny(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]

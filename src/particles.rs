@@ -168,7 +168,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         let v = core::array::from_fn(|_| c.take(rb, n));
         let mass = c.take(rb, n);
         // V0 is read only by the transported scalars (current volume `J V0`); the mechanics
-        // stores stress as tau/rho0 (eq 18) and does not need it.
+        // stores stress as tau/rho0 (E3) and does not need it.
         let vol0 = c.take(rb, n);
         let h = core::array::from_fn(|_| core::array::from_fn(|_| c.take(rb, n)));
         let tau = core::array::from_fn(|i| if i < ns { c.take(rb, n) } else { &mut [][..] });

@@ -530,8 +530,8 @@ pub fn manufactured(scheme: &Scheme, cells: u32) -> Outcome {
         particle_forces: true,
         ..Effects::NONE
     };
-    // dt falls as h^2 (CFL 0.4 at 16 cells, halved with h): the FLIP update of seeds/000
-    // eqs 51-52 is first order in time (it advances positions with the acceleration of the
+    // dt falls as h^2 (CFL 0.4 at 16 cells, halved with h): the FLIP update (E25-E26 of
+    // docs/equations.md) is first order in time (it advances positions with the acceleration of the
     // step before, see the vibrating bar), and with dt ~ h that error would hide the spatial
     // order. (0.4 also leaves room for the stiffening: at F = 0.69 the wave speed is 1.25 c.)
     def.cfl = 0.4 * 16.0 / cells as Real;
@@ -607,8 +607,8 @@ pub fn spinning_disk(scheme: &Scheme, cells: u32) -> Outcome {
     )
 }
 
-/// Problem 4: the sin mode of heat conduction between two faces held at 0 (seeds/000
-/// section 8).
+/// Problem 4: the sin mode of heat conduction between two faces held at 0 (E54-E64 of
+/// docs/equations.md).
 pub fn heat_mode(scheme: &Scheme, cells: u32) -> Outcome {
     let length = 1.0;
     let kappa = 0.1;

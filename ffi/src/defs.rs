@@ -89,7 +89,7 @@ pub enum MpmTransfer {
     /// (`mpm_gimp::Transfer::Mls`). The quadratic and cubic B-splines, 2D and 3D only
     /// (otherwise `MPM_STATUS_INVALID_TRANSFER`). Reserves the columns APIC does.
     Mls = 3,
-    /// FLIP in the momentum approach (seeds/000 section 5.2,
+    /// FLIP in the momentum approach (E73-E77 of docs/equations.md,
     /// `mpm_gimp::Transfer::FlipMomentum`): the velocity gradient of the mass-weighted grid
     /// velocity field, exact for affine fields, with its work-conjugate internal force, and the
     /// particles moving with the mass-weighted grid velocity. Plane strain and 3D only
@@ -271,13 +271,14 @@ pub struct MpmDamping {
     /// 1: reserve per-particle alpha_g and alpha_p columns, added to the global values and set
     /// with `mpm_world_set_particle_damping`; 0: none.
     pub per_particle: u32,
-    /// 1: the grid damping (and the thermostat's alpha) acts on the nodal force (seeds/000 eqs
-    /// 58-65), so that the walls act on momenta already damped; 0 (default): in the particle
-    /// update (eqs 46-57).
+    /// 1: the grid damping (and the thermostat's alpha) acts on the nodal force (E49 of
+    /// docs/equations.md), so that the walls act on momenta already damped; 0 (default): in
+    /// the particle update (E24, E48).
     pub grid_on_force: u32,
     /// How many of `zones` are used, 0..=`MPM_DAMPING_ZONES`.
     pub zone_count: u32,
-    /// Zones of space where the nodes are damped (eqs 104-106), each adding its rate.
+    /// Zones of space where the nodes are damped (E50-E51 of docs/equations.md), each adding
+    /// its rate.
     pub zones: [MpmDampingZone; MPM_DAMPING_ZONES],
 }
 

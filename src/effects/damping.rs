@@ -1,8 +1,8 @@
-//! Damping (seeds/000 sections 5.1.2 and 5.3): the declaration, the damping acceleration the
-//! particle update subtracts (eq 47, with eq 107's per-particle rates), the nodal damping the
-//! grid update subtracts (eqs 58-60 and 104-105: the grid rate on the force, and the zones of
-//! space that damp) and the thermostat that adds to the grid rate before each substep. The
-//! per-particle rates are set with [`crate::World::set_particle_damping`].
+//! Damping (E48-E53): the declaration, the damping acceleration the particle update
+//! subtracts (E24, with the per-particle rates of E53), the nodal damping the grid update
+//! subtracts (E49-E51: the grid rate on the force, and the zones of space that damp) and the
+//! thermostat that adds to the grid rate before each substep (E52). The per-particle rates
+//! are set with [`crate::World::set_particle_damping`].
 
 use super::Schedule;
 use crate::def::Face;
@@ -16,7 +16,7 @@ use crate::world::World;
 use crate::{Error, Real, Vec3};
 
 /// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
-/// Nosé-Hoover-style controller): once per substep,
+/// Nosé-Hoover-style controller; E52): once per substep,
 /// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`, where KE and M are
 /// the kinetic energy (with APIC's affine part, as [`crate::Diagnostics::kinetic`]) and mass
 /// of the active particles. The evolving alpha adds to the grid
@@ -32,8 +32,8 @@ pub struct Feedback {
     pub max_alpha: Real,
 }
 
-/// Damping of seeds/000 sections 5.1.2 and 5.3, on top of the PIC damping that
-/// [`crate::WorldDef::flip_beta`] sets (eqs 41-52).
+/// Damping (E48-E53), on top of the PIC damping that [`crate::WorldDef::flip_beta`] sets
+/// (E22-E26).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Damping {
     /// Grid damping `alpha_g'(t)`, 1/s, >= 0: damps the velocity extrapolated from the grid.
@@ -43,20 +43,20 @@ pub struct Damping {
     /// A thermostat that adds to the grid damping, if any.
     pub feedback: Option<Feedback>,
     /// Reserve two per-particle columns, `alpha_g(x_p)` and `alpha_p(x_p)` in 1/s, added to the
-    /// global values for that particle: position-dependent damping as eq 107 writes it (the
+    /// global values for that particle: position-dependent damping as E53 writes it (the
     /// host sets them with [`crate::World::set_particle_damping`], for example from each
     /// particle's position). They act in the particle update whatever `grid_on_force` says.
     pub per_particle: bool,
     /// Where the grid damping `alpha_g'(t)` (and the thermostat's alpha) acts. `false` (the
-    /// default): in the particle update, on the velocity extrapolated from the grid (eqs
-    /// 46-57). `true`: on the nodal force, `f_i - alpha_g' p_i` (eqs 58-65), so that the nodal
+    /// default): in the particle update, on the velocity extrapolated from the grid (E24,
+    /// E48). `true`: on the nodal force, `f_i - alpha_g' p_i` (E49), so that the nodal
     /// momenta the walls act on are already damped; the particle update keeps the PIC
     /// damping and `alpha_p'`. The two agree for a resolved motion away from walls; at a wall
     /// the force form damps only what the wall leaves free (the wall's fixed components take
     /// the wall's value, damped or not), where the particle form also damps the velocity the
     /// wall has taken out of the nodes.
     pub grid_on_force: bool,
-    /// Zones of space where the grid damps, on the nodal force (eqs 104-106): a node at `x_i`
+    /// Zones of space where the grid damps, on the nodal force (E50-E51): a node at `x_i`
     /// takes the rate `alpha_g(x_i)`, the sum of [`DampingZone::rate_at`] over the first
     /// `zone_count` zones, besides the grid rate. An absorbing layer at a boundary, a region
     /// to calm. Boxes rather than a nodal field the host fills: they are part of the
@@ -72,7 +72,7 @@ pub struct Damping {
 /// Most zones of [`Damping::zones`].
 pub const DAMPING_ZONES: usize = 4;
 
-/// A box of space where the grid damps (seeds/000 eqs 104-106), for
+/// A box of space where the grid damps (E50-E51), for
 /// [`Damping::zones`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DampingZone {
@@ -98,8 +98,8 @@ impl DampingZone {
         ramp: None,
     };
 
-    /// The zone's rate at `x` (m, the world's axes), 1/s: 0 outside the box (seeds/000's
-    /// `alpha_g(t, x_i)` of eq 105 for one zone).
+    /// The zone's rate at `x` (m, the world's axes), 1/s: 0 outside the box (E51: the
+    /// `alpha_g(t, x_i)` of E50 for one zone).
     pub fn rate_at(&self, x: &[Real]) -> Real {
         let inside = x
             .iter()
@@ -131,7 +131,7 @@ impl DampingZone {
 }
 
 /// A graded zone's rate at coordinate `c` of its grading axis, the box spanning `lo..hi` on
-/// it: `rate s^2`, `s` the distance from the face opposite the one the rate rises toward
+/// it (E51): `rate s^2`, `s` the distance from the face opposite the one the rate rises toward
 /// (`toward_max`: the high face) over the box's width.
 #[inline]
 fn graded(rate: Real, c: Real, lo: Real, hi: Real, toward_max: bool) -> Real {
@@ -207,8 +207,8 @@ impl Damping {
     }
 }
 
-/// The damping acceleration `d = alpha_g v_gp + alpha_p v_p` (seeds/000 eq 47; eq 107 with
-/// each rate the substep's global value plus the particle's own).
+/// The damping acceleration `d = alpha_g v_gp + alpha_p v_p` (E24; E53 with each rate the
+/// substep's global value plus the particle's own).
 #[inline(always)]
 pub(crate) fn acceleration<I: Compare>(
     v_gp: Wide<I>,
@@ -219,8 +219,8 @@ pub(crate) fn acceleration<I: Compare>(
     v_gp * alpha_g + v_p * alpha_p
 }
 
-/// The nodal damping of a substep (eqs 58-60 and 104-105): the grid rate when it acts on the
-/// force, and the zones.
+/// The nodal damping of a substep (E49-E51): the grid rate when it acts on the force, and
+/// the zones.
 #[derive(Clone, Copy)]
 pub(crate) struct NodalDamping {
     /// `alpha_g'(t)` and the thermostat's alpha when they act on the force, else 0; 1/s.
@@ -294,7 +294,7 @@ impl LineRates {
 }
 
 /// The damping rates of the chunk at `start`, lane by lane: the substep's global values plus
-/// each particle's own (eq 107; empty columns, when per-particle damping is not declared, load
+/// each particle's own (E53; empty columns, when per-particle damping is not declared, load
 /// as zeros).
 #[inline(always)]
 pub(crate) fn lane_rates<const D: usize, const W: usize>(
@@ -312,7 +312,7 @@ pub(crate) fn lane_rates<const D: usize, const W: usize>(
 }
 
 impl World<'_> {
-    /// The thermostat (NairnMPM's feedback damping): `alpha += 2 gain (KE - target) dt / M`,
+    /// The thermostat (NairnMPM's feedback damping, E52): `alpha += 2 gain (KE - target) dt / M`,
     /// clamped to `[0, min(max_alpha, room)]`, from the active particles' kinetic energy and
     /// mass; `room` is the largest alpha the substep integrates stably. The stored alpha stays
     /// finite: a rate that is not a number (no finite energy to compare) leaves it as it was.
@@ -330,7 +330,7 @@ impl World<'_> {
     }
 
     /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
-    /// particles `first..first + n`, added to the global damping for those particles (eq 107).
+    /// particles `first..first + n`, added to the global damping for those particles (E53).
     /// Needs [`crate::Damping::per_particle`]. A rate the step cannot resolve (above half of
     /// what the definition's rates leave of [`crate::Resolvable::rate`]) is
     /// [`Error::StableStepTooShort`].

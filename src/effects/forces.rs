@@ -1,4 +1,4 @@
-//! Particle forces, tractions and a body force (seeds/000 eqs 13, 20-22, 121): the
+//! Particle forces, tractions and a body force (E14-E16, E72): the
 //! per-particle forces and the tractions a host sets, and the traction pass, which integrates
 //! each traction over its deformed face ([`Face`]). The particle forces enter the nodal force
 //! in the scatter's rows (`S_ip F_p`, [`crate::phases::p2g`]); the body force is added to
@@ -37,7 +37,7 @@ impl World<'_> {
     /// `2 l_p = h / n` around the particle, carried along by its deformation: what
     /// [`World::add_surface_tractions`] loads with the face's normal and area `(2 l_p)^(D-1)`.
     /// All or nothing. Needs [`crate::Effects::traction_capacity`]. The tractions are
-    /// integrated each substep into `f_iT` (eq 21) while their particle is active.
+    /// integrated each substep into `f_iT` (E15, E16) while their particle is active.
     pub fn add_tractions(
         &mut self,
         particles: Range<u32>,
@@ -170,7 +170,7 @@ impl World<'_> {
 }
 
 /// Adds the tractions of the table to the nodal force, `f_iT = int N_i T dS` over each loaded
-/// face (eq 21; eq 121 axisymmetric, where `dS = r dL` per radian).
+/// face (E15; E72 axisymmetric, where `dS = r dL` per radian).
 ///
 /// The face ([`Face::of`]) is integrated by Gauss points, two along each of its sides. For the
 /// families whose weights integrate over a particle domain (uGIMP, cpGIMP), `N_i` is the grid's
@@ -182,7 +182,7 @@ impl World<'_> {
 /// the face reaches nodes past the particle's own stencil, whose mass from it is zero or
 /// vanishing: a force there is an acceleration without bound, which froze a 3D quadratic
 /// B-spline block under USL. For them the face's resultant is spread with the particle's
-/// weights, `f_iT = S_ip sum_q T dS_q`: exact resultant, point of application moved by
+/// weights, `f_iT = S_ip sum_q T dS_q` (E16): exact resultant, point of application moved by
 /// `l_p` from the face to the particle.
 pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
     shape: &S,

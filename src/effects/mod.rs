@@ -1,13 +1,13 @@
-//! The optional effects of seeds/000 a scene declares in [`crate::WorldDef::effects`]
+//! The optional effects a scene declares in [`crate::WorldDef::effects`]
 //! ([`Effects`]). An effect that is not declared reserves no column and runs no loop. Each
 //! effect is one module: its declaration, its per-particle data, and its terms in the step.
-//! - [`damping`]: grid and particle damping, per-particle rates and the thermostat (sections
-//!   5.1.2 and 5.3, eqs 46-52 and 107).
-//! - [`forces`]: particle forces, tractions and a body force (eqs 13, 20-22).
-//! - [`transport`]: heat conduction (section 8) and diffusion (section 9); their pass, a
-//!   phase of the substep of its own, is [`crate::phases::transport`].
+//! - [`damping`]: grid and particle damping, per-particle rates and the thermostat
+//!   (E48-E53).
+//! - [`forces`]: particle forces, tractions and a body force (E14-E16).
+//! - [`transport`]: heat conduction and diffusion (E54-E64); their pass, a phase of the
+//!   substep of its own, is [`crate::phases::transport`].
 //!
-//! (The APIC transfer of seeds/001 is a method choice, [`crate::Transfer`], with the other
+//! (The APIC transfer, E78-E80, is a method choice, [`crate::Transfer`], with the other
 //! method switches in [`crate::def`].)
 
 pub mod damping;
@@ -121,16 +121,16 @@ pub struct Effects {
     /// Damping, if declared.
     pub damping: Option<Damping>,
     /// Reserve a per-particle external force column `F_p`, N (per unit thickness in plane
-    /// strain), added to the nodal force as `S_ip F_p` (eq 20). Set with
+    /// strain), added to the nodal force as `S_ip F_p` (E14). Set with
     /// [`crate::World::set_particle_forces`].
     pub particle_forces: bool,
     /// Most tractions the world holds (0: none). A traction loads one face of one particle's
-    /// domain; its resultant enters `f_iT` (eq 21) spread with the particle's weights (see
+    /// domain; its resultant enters `f_iT` (E16) spread with the particle's weights (see
     /// [`crate::World::add_tractions`] and the traction pass for why not with `N_i` on the
     /// face).
     pub traction_capacity: u32,
     /// A uniform body force per unit mass besides gravity, m/s^2, scaled by
-    /// `body_force_scale(t)`: added to every node as `m_i b(t)` (eq 22). Unlike gravity it is
+    /// `body_force_scale(t)`: added to every node as `m_i b(t)` (E14). Unlike gravity it is
     /// not counted in the potential energy of [`crate::Diagnostics`].
     pub body_force: Vec3,
     /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
@@ -139,11 +139,11 @@ pub struct Effects {
     /// them, the first unless [`crate::World::set_traction_schedule`] chose another. Default
     /// the constant 1 for all. No point means a factor of 0.
     pub traction_schedules: [Schedule; TRACTION_SCHEDULES],
-    /// Heat conduction (seeds/000 section 8), if declared: a temperature column (K) on the
+    /// Heat conduction (E54-E64), if declared: a temperature column (K) on the
     /// particles, conducted with each material's [`crate::MaterialDef::conductivity`] and
     /// [`crate::MaterialDef::heat_capacity`].
     pub heat: Option<Transport>,
-    /// Diffusion (seeds/000 section 9), if declared: a concentration-potential column
+    /// Diffusion (E54-E64), if declared: a concentration-potential column
     /// (dimensionless, c / c_sat) on the particles, diffused with each material's
     /// [`crate::MaterialDef::diffusivity`].
     pub diffusion: Option<Transport>,

@@ -1,4 +1,4 @@
-//! Heat conduction (seeds/000 section 8) and diffusion (section 9): the declaration of a
+//! Heat conduction and diffusion (E54-E64): the declaration of a
 //! transported scalar and its boundary conditions, and the setters of its per-particle values
 //! and sources. The pass that moves the scalars through the grid is
 //! [`crate::phases::transport`].
@@ -11,17 +11,17 @@ use crate::{Error, Real};
 /// face of the grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ScalarBoundary {
-    /// No flow across the face (the natural condition of eq 125).
+    /// No flow across the face (the natural condition of E55).
     Insulated,
     /// The value held fixed on the face: the nodes from the grid face to the wall plane (as the
     /// walls of [`crate::Boundary`]) take it.
     Fixed(Real),
     /// A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
-    /// concentration potential), applied on the wall plane's nodes (eqs 136, 149).
+    /// concentration potential), applied on the wall plane's nodes (E60).
     Flux(Real),
 }
 
-/// A transported scalar field (heat conduction, seeds/000 section 8, or diffusion, section 9):
+/// A transported scalar field (heat conduction or diffusion, E54-E64):
 /// its boundary conditions and whether particles carry a source.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transport {

@@ -1,10 +1,11 @@
-//! Sand: Drucker-Prager plasticity on Hencky elasticity, with the return mapping of Klar et
-//! al. 2016 ("Drucker-Prager elastoplasticity for sand animation", section 7.3) extended by a
-//! cohesion. In the principal log strains `eps` of the trial `F_e`, with `n` axes, trace `tr`
-//! and deviator `e`, the Kirchhoff stress has the deviator `2 mu e` and trace `(2 mu + n lambda)
-//! tr`. The yield condition is `|dev tau| + alpha (tr tau - n p_t) <= 0` with `alpha =
-//! sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` (phi the friction angle) and the apex at the mean
-//! tension `p_t = c cot(phi)` (c the cohesion; 0 for dry sand). Then:
+//! Sand: Drucker-Prager plasticity (E40, E41) on Hencky elasticity (E37), with the return
+//! mapping of Klar et al. 2016 ("Drucker-Prager elastoplasticity for sand animation", section
+//! 7.3) extended by a cohesion. In the principal log strains `eps` of the trial `F_e`, with
+//! `n` axes, trace `tr` and deviator `e`, the Kirchhoff stress has the deviator `2 mu e` and
+//! trace `(2 mu + n lambda) tr`. The yield condition is
+//! `|dev tau| + alpha (tr tau - n p_t) <= 0` with `alpha = sqrt(2/3) 2 sin(phi) / (3 -
+//! sin(phi))` (phi the friction angle) and the apex at the mean tension `p_t = c cot(phi)`
+//! (c the cohesion; 0 for dry sand). Then:
 //! - past the apex (`tr tau >= n p_t`, the material pulled apart): `F_e` returns to the apex,
 //!   an isotropic stretch carrying the tension `p_t` (no stress for dry sand);
 //! - else `dgamma = |e| + alpha (2 mu + n lambda) / (2 mu) (tr - tr_t)` and, where it is

@@ -1,7 +1,8 @@
-//! Fixed-corotated elasticity (Stomakhin et al. 2012): with the polar decomposition `F = R S`,
-//! `W = mu |F - R|^2 + lambda/2 (J - 1)^2` and `tau = 2 mu (F - R) F^T + lambda (J - 1) J I`.
-//! A rotation (`F = R`) is stress-free exactly; unlike the corotated linear model it stays well
-//! posed at large stretch, and unlike neo-Hookean its stress stays finite as `J -> 0`.
+//! Fixed-corotated elasticity (Stomakhin et al. 2012; E36): with the polar decomposition
+//! `F = R S`, `W = mu |F - R|^2 + lambda/2 (J - 1)^2` and
+//! `tau = 2 mu (F - R) F^T + lambda (J - 1) J I`. A rotation (`F = R`) is stress-free exactly;
+//! unlike the corotated linear model it stays well posed at large stretch, and unlike
+//! neo-Hookean its stress stays finite as `J -> 0`.
 //!
 //! Written in `H = F - I` and `Q = R - I`: `F - R = H - Q`. In 2D the out-of-plane axis is
 //! principal (R turns in the plane only): `(F - R)_zz = hzz`.

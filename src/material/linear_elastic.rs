@@ -1,6 +1,7 @@
-//! Isotropic linear elasticity (small strain) in the corotated frame: `F = R U`, `e = U - I`,
-//! `sigma_rot = lambda tr(e) I + 2 mu e`, `tau = J R sigma_rot R^T`. For small strain and no
-//! rotation this is classic linear elasticity; a rigid rotation gives exactly zero strain.
+//! Isotropic linear elasticity (small strain) in the corotated frame (E34): `F = R U`,
+//! `e = U - I`, `sigma_rot = lambda tr(e) I + 2 mu e`, `tau = J R sigma_rot R^T`. For small
+//! strain and no rotation this is classic linear elasticity; a rigid rotation gives exactly
+//! zero strain.
 //! In 2D the out-of-plane axis is a principal direction (R turns in the plane only), so
 //! `e_zz = F_zz - 1`: 0 in plane strain (`sigma_zz = lambda tr(e)`), the hoop strain when
 //! axisymmetric.

@@ -1,16 +1,17 @@
 //! Constitutive models: the displacement gradient `H = F - I` and `J - 1` in, Kirchhoff stress
-//! over initial density `tau / rho0` out (seeds/000 eq 18), plus the strain energy per unit
+//! over initial density `tau / rho0` out (E3), plus the strain energy per unit
 //! initial volume for energy checks. The elastic models (corotated linear, neo-Hookean,
 //! fixed-corotated) are that alone; the fluid and the plastic models (von Mises, Drucker-Prager,
 //! snow) first change the deformation each step ([`Model::inelastic`]) and keep `F_e` in `H`.
-//! Any material may add a Newtonian viscous stress ([`add_viscous_lanes`]).
+//! Any material may add a Newtonian viscous stress (E46, [`add_viscous_lanes`]).
 //!
 //! In 2D the out-of-plane stretch is given separately ([`Deformation::hzz`]: 0 in plane strain,
 //! `F_thetatheta - 1` in the axisymmetric form) and the out-of-plane stress is returned
 //! separately as `zz` (`tau_thetatheta` when axisymmetric).
 //!
 //! An isotropic eigenstrain (thermal expansion, swelling: `F_0 = (1 + d) I`) is taken out of the
-//! deformation before the model sees it ([`elastic_part`]), so the models know nothing of it.
+//! deformation before the model sees it (E47, [`elastic_part`]), so the models know nothing of
+//! it.
 
 mod drucker_prager;
 mod fixed_corotated;
@@ -66,12 +67,12 @@ impl<const D: usize, T: Num> Deformation<D, T> {
     }
 }
 
-/// The elastic part `F_e = F / (1 + d)` of a deformation carrying the isotropic eigenstrain
-/// `F_0 = (1 + d) I` (thermal expansion `d = alpha (T - T_0)`, swelling `d = beta (c - c_0)`),
-/// and the factor `J / J_e = (1 + d)^3` that turns the Kirchhoff stress of `F_e` into that of
-/// `F` (`tau = J sigma`). Written in `H` and `d` so that small strains keep their precision:
-/// `H_e = (H - d I) / (1 + d)`. In 2D the out-of-plane axis carries the eigenstrain too (a
-/// clamped plane-strain block heated is stressed along z).
+/// The elastic part `F_e = F / (1 + d)` (E47) of a deformation carrying the isotropic
+/// eigenstrain `F_0 = (1 + d) I` (thermal expansion `d = alpha (T - T_0)`, swelling
+/// `d = beta (c - c_0)`), and the factor `J / J_e = (1 + d)^3` that turns the Kirchhoff stress
+/// of `F_e` into that of `F` (`tau = J sigma`). Written in `H` and `d` so that small strains
+/// keep their precision: `H_e = (H - d I) / (1 + d)`. In 2D the out-of-plane axis carries the
+/// eigenstrain too (a clamped plane-strain block heated is stressed along z).
 #[inline(always)]
 pub(crate) fn elastic_part<const D: usize, T: Num>(
     f: &Deformation<D, T>,
@@ -159,7 +160,7 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
     MaterialModel::from_code(r.model as u32).unwrap_or(MaterialModel::NeoHookean)
 }
 
-/// A constitutive model (seeds/000 eq 18): the deformation in, Kirchhoff stress out; an
+/// A constitutive model (E3, E33-E46): the deformation in, Kirchhoff stress out; an
 /// inelastic model (a fluid, plasticity) also changes the deformation each step before its
 /// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait,
 /// one arm of [`MaterialModel`] (and of the C enum) and of [`by_model!`], and its tests.
@@ -378,7 +379,7 @@ pub(crate) fn particle_inelastic<const D: usize>(
     by_model!(model_of(r), M => M::inelastic(&Params::of(r), f, hoop))
 }
 
-/// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0`:
+/// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0` (E46):
 /// `tau_visc = J sigma_visc`, `sigma_visc = eta (L + L^T - 2/3 tr(L) I)` with `L = grad v`
 /// (`l[a][b][lane]`) and, in 2D, the out-of-plane rate `lzz` (`v_r / r` axisymmetric, 0 in
 /// plane strain), which enters the trace and `zz`. Lanes of materials without viscosity, or of

@@ -1,4 +1,4 @@
-//! Compressible neo-Hookean: `W = mu/2 (tr B - 3) - mu ln J + lambda/2 (ln J)^2`,
+//! Compressible neo-Hookean (E35): `W = mu/2 (tr B - 3) - mu ln J + lambda/2 (ln J)^2`,
 //! `tau = mu (B - I) + lambda ln(J) I` with `B = F F^T` (2D: `B_zz = F_zz^2`, 1 in plane
 //! strain).
 //!

@@ -1,5 +1,6 @@
-//! Principal logarithmic strains of a deformation and a change of them: what the Hencky models
-//! ([`super::von_mises`], [`super::drucker_prager`]) and snow's clamp ([`super::snow`]) work in.
+//! Principal logarithmic strains of a deformation and a change of them (E37, E38): what the
+//! Hencky models ([`super::von_mises`], [`super::drucker_prager`]) and snow's clamp
+//! ([`super::snow`]) work in.
 //!
 //! With `F = V S R` (left stretch `V`, rotation `R`), `b = F F^T = V^2` has the eigenvectors
 //! `n_i` and eigenvalues `s_i^2`; the principal log strains are `eps_i = ln s_i`. A return

@@ -1,7 +1,8 @@
-//! Snow (Stomakhin et al. 2013, "A material point method for snow simulation"): fixed-corotated
-//! elasticity of `F_e` ([`super::fixed_corotated`]) with the moduli hardened by `exp(xi (1 -
-//! J_p))`, and a return that clamps the singular values of the trial `F_e` to `[1 - theta_c,
-//! 1 + theta_s]` (critical compression and stretch), the clamped part going to `F_p`. The
+//! Snow (Stomakhin et al. 2013, "A material point method for snow simulation"; E42, E43):
+//! fixed-corotated elasticity of `F_e` ([`super::fixed_corotated`]) with the moduli hardened
+//! by `exp(xi (1 - J_p))`, and a return that clamps the singular values of the trial `F_e`
+//! to `[1 - theta_c, 1 + theta_s]` (critical compression and stretch), the clamped part
+//! going to `F_p`. The
 //! history is `J_p - 1`: `J_p` gains the trial's volume the clamp removes, `J_p' = J_p J_e /
 //! J_e'`. The clamp acts on the principal log strains (singular values `exp(eps_i)`).
 
@@ -18,8 +19,8 @@ pub(crate) fn hardening<T: Num>(p: &Params, plastic: T) -> T {
     (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
 }
 
-/// The wave speed of snow of record `r` hardened by its plastic history `plastic`, m/s, in
-/// f64 (the stable step and the state check read it).
+/// The wave speed of snow of record `r` hardened by its plastic history `plastic` (E86), m/s,
+/// in f64 (the stable step and the state check read it).
 pub(crate) fn hardened_wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
     let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
     r.wave_speed as f64 * libm::sqrt(k)

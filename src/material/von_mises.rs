@@ -1,10 +1,11 @@
-//! Metal: J2 (von Mises) plasticity with linear isotropic hardening on Hencky elasticity,
-//! `F = F_e F_p`. The stored deformation is `F_e`; the history is the equivalent plastic strain
-//! `eps_p`. The return (Simo and Hughes 1998, section 9.2) is the radial return in principal
-//! logarithmic strains of the trial `F_e`: with the deviatoric strain `e` (norm `|e|`), the
-//! deviatoric Kirchhoff stress is `2 mu e`, and where `f = 2 mu |e| - sqrt(2/3) (sigma_y + H
-//! eps_p) > 0` the plastic multiplier `dgamma = f / (2 mu + 2 H / 3)` takes `e` back to the
-//! yield surface along itself, `eps_p += sqrt(2/3) dgamma`. The flow is isochoric: `J_p = 1`.
+//! Metal: J2 (von Mises) plasticity with linear isotropic hardening (E39) on Hencky elasticity
+//! (E37), `F = F_e F_p`. The stored deformation is `F_e`; the history is the equivalent
+//! plastic strain `eps_p`. The return (Simo and Hughes 1998, section 9.2) is the radial return
+//! in principal logarithmic strains of the trial `F_e`: with the deviatoric strain `e` (norm
+//! `|e|`), the deviatoric Kirchhoff stress is `2 mu e`, and where `f = 2 mu |e| - sqrt(2/3)
+//! (sigma_y + H eps_p) > 0` the plastic multiplier `dgamma = f / (2 mu + 2 H / 3)` takes `e`
+//! back to the yield surface along itself, `eps_p += sqrt(2/3) dgamma`. The flow is
+//! isochoric: `J_p = 1`.
 //! Under uniaxial stress this is `sigma = sigma_y + H eps_p` in Kirchhoff stress and
 //! logarithmic strain (`sigma_y` the initial yield stress, H the hardening modulus).
 //!

@@ -1,17 +1,17 @@
-//! Grid to particle (seeds/000 section 5.1).
+//! Grid to particle (E21-E32).
 //!
-//! Particle update: from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i`, FLIP with PIC
-//! damping and the second-order position update (eqs 51-52), or APIC (seeds/001: the grid's
+//! Particle update: from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i` (E21), FLIP with PIC
+//! damping and the second-order position update (E25, E26), or APIC (E78, E80: the grid's
 //! velocity, and the moment matrix `B_p` gathered with it, [`gather_chunk`]), less the damping
 //! acceleration when damping is declared, then the walls: the equations are
 //! [`super::update`]'s, on the lane type [`super::wide::Wide`].
 //!
-//! Stress update: `grad v = sum v_i (x) G_ip` (eq 27), `dF = exp(grad v dt)` to the configured
-//! number of terms (eq 26), `F <- dF F` (kept as `H = F - I`), `J = det F`, and `tau/rho0`
-//! from the material. Axisymmetric, the hoop rate `v_r / r = sum v_r,i T_ip` (seeds/000 eq
-//! 113) stretches `F_thetatheta` the same way. With thermal expansion or swelling declared,
-//! the material sees `F` without the particle's isotropic eigenstrain
-//! ([`crate::material::elastic_part`]).
+//! Stress update: `grad v = sum v_i (x) G_ip` (E29), `dF = exp(grad v dt)` to the configured
+//! number of terms (E31), `F <- dF F` (kept as `H = F - I`), `J = det F` (E32), and `tau/rho0`
+//! from the material. Axisymmetric, the hoop rate `v_r / r = sum v_r,i T_ip` (E70) stretches
+//! `F_thetatheta` the same way. With thermal expansion or swelling declared, the material
+//! sees `F` without the particle's isotropic eigenstrain (E47,
+//! [`crate::material::elastic_part`]).
 //!
 //! A particle that reaches a stick or slip wall is put back on the wall plane with its outward
 //! velocity zeroed (counted as stopped); one that crosses an open face is marked escaped. A
@@ -115,7 +115,7 @@ unsafe fn read_row<I: Rows, const W: usize>(
 
 /// Gathers, for every lane of a chunk, `v_gp` and `a_gp` (when `VEL`), the velocity gradient
 /// (per `GRAD`; with the hoop rate `sum u_r,i T_ip` axisymmetric) and, with `MOMENTS` (APIC,
-/// with `VEL`), the moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` into
+/// with `VEL`), the moment matrix `B_p = sum_i (v_i + a_i dt) (x) S_ip (x_i - x_p)` (E78) into
 /// `affine` (not for a family that keeps the gradient form, [`Shape1D::GRADIENT_AFFINE`]:
 /// see `commit_gradient_affine`).
 ///
@@ -123,7 +123,7 @@ unsafe fn read_row<I: Rows, const W: usize>(
 /// those lanes is read as one vector per node ([`Rows::rows`]), summed along x with the x
 /// weights (`X = sum_i w_i u_i`, `DX = sum_i dw_i u_i`, the moments or hoop factors in place
 /// of `w` where needed), and the sums weighted by the row's factors into sums held in
-/// registers (seeds/000 eqs 16-17, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and
+/// registers (E6, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and
 /// `G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k)`).
 #[inline(always)]
 pub(crate) fn gather_chunk<
@@ -234,18 +234,18 @@ pub(crate) fn gather_chunk<
                     } else {
                         zero
                     };
-                    // grad v = sum u_i (x) G_ip (eq 27), G_ip = (dwx_i r_0, wx_i r_1, ...).
+                    // grad v = sum u_i (x) G_ip (E29), G_ip = (dwx_i r_0, wx_i r_1, ...).
                     if gradient {
                         l[a][0] = l[a][0] + r[0] * sum_x::<I, K>(&dwx, &nu);
                         for b in 1..D {
                             l[a][b] = l[a][b] + r[b] * su;
                         }
                         if S::AXISYMMETRIC && a == 0 {
-                            // v_r / r = sum_i u_r,i T_ip, T_ip = t_i wy_j.
+                            // v_r / r = sum_i u_r,i T_ip (E70), T_ip = t_i wy_j.
                             hoop = hoop + r[0] * sum_x::<I, K>(&tx, &nu);
                         }
                     }
-                    // B_p = sum u_i (x) S_ip (x_i - x_p) (seeds/001).
+                    // B_p = sum u_i (x) S_ip (x_i - x_p) (E78).
                     if moments {
                         b_p[a][0] = b_p[a][0] + r[0] * sum_x::<I, K>(&ex, &nu);
                         for b in 1..D {
@@ -276,8 +276,8 @@ pub(crate) fn gather_chunk<
 }
 
 /// APIC for a family that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`], linear):
-/// `C_p` is the velocity gradient the stress update just used, committed for the lanes in
-/// `ok`. That gradient comes from the lagged (USF), re-mapped (MUSL) or updated (USL) nodal
+/// `C_p` is the velocity gradient the stress update just used (E81), committed for the lanes
+/// in `ok`. That gradient comes from the lagged (USF), re-mapped (MUSL) or updated (USL) nodal
 /// velocities; the updated ones are unbounded at a node that carries a sliver of a particle's
 /// mass (linear weights' cell-crossing instability, see [`crate::UpdateOrder::Usl`]), which
 /// would enter the next transfer through `C_p`, so USF and MUSL keep linear APIC stable where
@@ -345,7 +345,7 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
 ) -> (Lanes<W>, Lanes<W>) {
     let l = &gathered.l;
     let StressScratch { h_old, h, tau } = scratch;
-    // dF = exp(L dt) (eq 26), kept as Q = dF - I, and H <- H + Q + Q H (F <- dF F), on as
+    // dF = exp(L dt) (E31), kept as Q = dF - I, and H <- H + Q + Q H (F <- dF F, E32), on as
     // many lanes at once as the instance's vectors hold.
     let n = ctx.exp_terms.clamp(1, 8) as usize;
     for r in 0..D {
@@ -520,9 +520,9 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     (ok, runaway)
 }
 
-/// The isotropic eigenstrain `d` of each lane (`F_0 = (1 + d) I`): `alpha (T - T_0)` with heat
-/// conduction plus `beta (c - c_0)` with diffusion, from the grid values at the particles
-/// (seeds/000 section 8 advises features to read `T_g->p`) and each lane's material; `None`
+/// The isotropic eigenstrain `d` of each lane (`F_0 = (1 + d) I`, E47): `alpha (T - T_0)` with
+/// heat conduction plus `beta (c - c_0)` with diffusion, from the grid values at the particles
+/// (E63: features read the grid's value, not the particle's) and each lane's material; `None`
 /// when no declared field has a material that expands or swells.
 #[inline(always)]
 fn eigenstrain<const D: usize, const W: usize>(
@@ -608,7 +608,7 @@ fn stress_lane_by_lane<const D: usize, const W: usize>(
 /// Particle update: velocity and position from the grid. With USL it also updates the stress
 /// from `v_i + a_i dt` in the same pass. With MUSL it also keeps the positions of the start of
 /// the step in the `x_start` columns, for the stress pass, and scatters the new momenta to the
-/// remap columns with the stencils already computed (the pass reads only `vel` and `acc`, so
+/// remap columns (E30) with the stencils already computed (the pass reads only `vel` and `acc`, so
 /// the remap columns are free to fill; particles contribute as in the scatter pass:
 /// [`scatter_chunk`]). Declared damping adds the damping of the module docs; APIC replaces
 /// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
@@ -647,7 +647,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut scratch = StressScratch::new();
     // The momentum approach: the mass-weighted grid velocity and acceleration each lane moves
-    // with (eq 90).
+    // with (E76).
     let (mut v_move, mut a_move) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     // MUSL: what the re-map scatters (it reads no stress).
     let mut products = Products::zero();
@@ -695,7 +695,7 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
             gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, moving);
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
-        // The grid velocity and acceleration the particles move with (eq 51, or eq 90 in the
+        // The grid velocity and acceleration the particles move with (E26, or E76 in the
         // momentum approach), chosen once per chunk.
         let (v_moves, a_moves) = if ctx.momentum {
             (&*v_move, &*a_move)

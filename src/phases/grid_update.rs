@@ -1,4 +1,4 @@
-//! Grid update (seeds/000 eqs 24, 28): nodal velocity `v_i = p_i / m_i`, acceleration
+//! Grid update (E17-E20): nodal velocity `v_i = p_i / m_i`, acceleration
 //! `a_i = f_i / m_i + g`, so that `p_i(n+1) = p_i + (f_i + m_i g) dt` is `m_i (v_i + a_i dt)`;
 //! then each face's boundary condition on both.
 
@@ -61,7 +61,7 @@ fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], 
     }
 }
 
-/// Momentum to velocity `v_i = p_i / m_i` (eq 28). The walls are not applied here: they act
+/// Momentum to velocity `v_i = p_i / m_i` (E18). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
 pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     ctx.geom
@@ -71,9 +71,9 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>
     mirror_vector(ctx, &mut g.vel, false);
 }
 
-/// Force to acceleration `a_i = f_i / m_i + g` (eqs 22, 24), then the walls on the updated
+/// Force to acceleration `a_i = f_i / m_i + g` (E19), then the walls on the updated
 /// velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
-/// the wall's reaction `-v_i / dt`. The particle update then sees the wall stop the material
+/// the wall's reaction `-v_i / dt` (E20). The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     mirror_vector(ctx, &mut g.acc, true);
@@ -93,7 +93,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
     mirror_vector(ctx, &mut g.acc, false);
 }
 
-/// Nodal damping (eqs 60 and 105): `a_i -= alpha_g(t, x_i) v_i`, with the rate of the grid
+/// Nodal damping (E49, E50): `a_i -= alpha_g(t, x_i) v_i`, with the rate of the grid
 /// (when it acts on the force) and of the zones at the node. Before the walls: at a wall the
 /// fixed components then take the wall's value, damped or not.
 fn damp_nodes<const D: usize>(ctx: &Ctx<'_, D>, nodal: &NodalDamping, g: &mut GridCols<'_, D>) {

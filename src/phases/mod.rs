@@ -1,4 +1,4 @@
-//! The phases of one explicit step (seeds/000 section 5.1), one file each. The order in which
+//! The phases of one explicit step (E12-E32), one file each. The order in which
 //! a step calls them lives in [`crate::world`] and only there.
 //!
 //! Every phase is generic over the dimension `D`, the stencil width `K` and the shape family
@@ -57,7 +57,7 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub dt: Real,
     /// Where the stress update sits in the substep.
     pub order: crate::UpdateOrder,
-    /// APIC (seeds/001) in place of FLIP.
+    /// APIC (E78-E80) in place of FLIP.
     pub apic: bool,
     /// MLS-MPM (with `apic`): the momentum passes' gradients are the MLS gradient
     /// ([`crate::shape::Stencils::use_mls_gradient`]).

@@ -1,14 +1,14 @@
-//! The momentum approach (seeds/000 section 5.2, [`crate::Transfer::FlipMomentum`]): the
+//! The momentum approach (E73-E77, [`crate::Transfer::FlipMomentum`]): the
 //! particle reads the grid through its nodes' momenta over the mass the grid has at the
 //! particle, `m_gp = sum_i S_ip m_i`, never through a velocity `p_i / m_i` alone, so that a
 //! node that carries a sliver of mass (and a velocity as large as its force over that sliver)
 //! weighs in with that sliver.
 //!
-//! Eq 67 as printed, `grad v = sum_i G_ip (x) p_i / m_gp`, is the derivative of the momentum
-//! field, not of the velocity: where the mass varies (every free surface) a translating body
-//! strains. The step takes the gradient of the mass-weighted velocity field
-//! `v(x) = sum S_i(x) p_i / sum S_i(x) m_i` at the particle, which is eq 67 where the mass is
-//! uniform and is invariant under a translation everywhere, made exact for every affine
+//! The notes' gradient (E73), `grad v = sum_i G_ip (x) p_i / m_gp`, is the derivative of the
+//! momentum field, not of the velocity: where the mass varies (every free surface) a
+//! translating body strains. The step takes the gradient of the mass-weighted velocity field
+//! `v(x) = sum S_i(x) p_i / sum S_i(x) m_i` at the particle (E74), which is E73 where the mass
+//! is uniform and is invariant under a translation everywhere, made exact for every affine
 //! velocity field (rigid rotations included) by the particle's moment matrix:
 //!
 //! - `b_ip = (m_i / m_gp) (G_ip - S_ip g_p)`, `g_p = sum_i G_ip m_i / m_gp`, which sums to zero
@@ -17,23 +17,24 @@
 //! - the particle's gradient weights `B_ip = A_p^-T b_ip`, so `grad v = sum_i v_i (x) B_ip`.
 //!
 //! The internal force is the work conjugate of that gradient, `f_i = -sum_p m_p (tau_p / rho0)
-//! B_ip` (eq 23 with `B_ip` for `G_ip`): the stress power `sum_p V_p sigma_p : grad v_p` is then
-//! exactly `-sum_i f_i . v_i` (in continuous time no energy is made or lost between particles
-//! and grid), the internal forces sum to zero (`sum_i B_ip = 0`: momentum is conserved) and
-//! exert no torque (`sum_i x_i (x) B_ip = I`). A particle whose `A_p` is ill-conditioned (det below [`MIN_DET`]: its stencil's mass
-//! lies on one side of it, as for a lone particle on a node with linear shapes) takes `G_ip`,
-//! the velocity approach's weights, for both its gradient and its force, so the pair stays
-//! conjugate. The particles move with the mass-weighted grid velocity and acceleration
-//! (eq 90); their velocities take the velocity approach's update (eq 52), which is eq 91 with
-//! the particle's share `m_p S_ip / m_i` of each nodal force: the reading under which the
-//! particle momenta sum to the grid's.
+//! B_ip` (E75: E14 with `B_ip` for `G_ip`): the stress power `sum_p V_p sigma_p : grad v_p` is
+//! then exactly `-sum_i f_i . v_i` (in continuous time no energy is made or lost between
+//! particles and grid), the internal forces sum to zero (`sum_i B_ip = 0`: momentum is
+//! conserved) and exert no torque (`sum_i x_i (x) B_ip = I`). A particle whose `A_p` is
+//! ill-conditioned (det below [`MIN_DET`]: its stencil's mass lies on one side of it, as for a
+//! lone particle on a node with linear shapes) takes `G_ip`, the velocity approach's weights,
+//! for both its gradient and its force, so the pair stays conjugate. The particles move with
+//! the mass-weighted grid velocity and acceleration (E76); their velocities take the velocity
+//! approach's update (E25), which is E77: the notes' momentum update read with the particle's
+//! share `m_p S_ip / m_i` of each nodal force, the reading under which the particle momenta
+//! sum to the grid's.
 //!
 //! The price of the conjugate force: `sum_p V_p B_ip` is not the integral of `grad N_i` over
 //! the body where the mass varies, so a uniform stress no longer balances a surface load node
 //! by node. A plane-strain block pulled by a traction settled to the load's mean stress within
 //! 0.1 %, but with particles by its faces up to 28 % off (uGIMP; 0.2 % with the velocity
 //! approach), and a column under gravity with the quadratic B-spline 6 layers' weight off
-//! (0.3 with the velocity approach). Eq 23's force `G_ip` with this gradient keeps those at rest
+//! (0.3 with the velocity approach). E14's force `G_ip` with this gradient keeps those at rest
 //! (measured 0.1 % and 0.2 layers), but is not the gradient's conjugate, and a free block
 //! spinning with pure FLIP gained 77 to 110 times its energy in a quarter turn (uGIMP, linear).
 //! The approach is for dynamics.
@@ -218,7 +219,7 @@ impl<const D: usize, const K: usize> Weighted<D, K> {
     }
 
     /// Adds the particle's forces to the nodes' force columns `acc`: the internal force `-B_ip
-    /// . tau` for `tau` its Kirchhoff stress times its mass over rho0 (eq 23), and `S_ip F_p`.
+    /// . tau` for `tau` its Kirchhoff stress times its mass over rho0 (E75), and `S_ip F_p`.
     fn scatter_force(
         &self,
         ctx: &Ctx<'_, D>,
@@ -268,7 +269,7 @@ fn read(col: &[Real], node: usize) -> Real {
 }
 
 /// The internal force of every active particle with its gradient weights, `f_i -= m_p
-/// (tau_p / rho0) B_ip` (eq 23), and its particle force `S_ip F_p` when declared (eq 20), into
+/// (tau_p / rho0) B_ip` (E75), and its particle force `S_ip F_p` when declared (E14), into
 /// the force columns; run after the nodal masses are complete (folded at the walls, see
 /// [`mirror_masses`]).
 pub(crate) fn forces<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
@@ -320,7 +321,7 @@ pub(crate) enum Differentiate {
 /// For the live lanes of a chunk at positions `x`: the velocity gradient `sum_i u_i (x) B_ip`
 /// of the velocity `which` says into `l` (nothing for [`Differentiate::Nothing`]) and, when
 /// `moving` is given, the mass-weighted grid velocity and acceleration the particle moves with,
-/// `sum_i S_ip m_i v_i / m_gp` and `sum_i S_ip m_i a_i / m_gp` (eq 90).
+/// `sum_i S_ip m_i v_i / m_gp` and `sum_i S_ip m_i a_i / m_gp` (E76).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn gather<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,

@@ -1,9 +1,9 @@
-//! Particle to grid (seeds/000 eqs 22, 23, 25): nodal mass `m_i = sum S_ip m_p`, momentum
+//! Particle to grid (E12-E14): nodal mass `m_i = sum S_ip m_p`, momentum
 //! `p_i = sum S_ip m_p v_p` and internal force `f_i = -sum m_p (tau_p/rho0) . G_ip`. Gravity
-//! and the body force enter in the grid update as `m_i b` (eq 22).
+//! and the body force enter in the grid update as `m_i b` (E14, E19).
 //!
-//! Declared effects add, in the same pass: the particle force `S_ip F_p` (eq 20) and the APIC
-//! affine momentum `S_ip m_p C_p (x_i - x_p)` (seeds/001). Tractions (eq 21) are a pass of
+//! Declared effects add, in the same pass: the particle force `S_ip F_p` (E14) and the APIC
+//! affine momentum `S_ip m_p C_p (x_i - x_p)` (E79). Tractions (E15, E16) are a pass of
 //! their own over the traction table ([`tractions`]).
 //!
 //! A chunk of particles is scattered by [`scatter_chunk`], in one of two forms that add the
@@ -566,7 +566,7 @@ struct XFactors<T, const D: usize> {
     mom: [[T; D]; D],
     /// Force on a node: f_a = -m sum_b tau_ab G_b + S F_a; `force[a][b]` = -m tau_ab times
     /// dwx (b = 0) or wx (b >= 1), plus F_a wx in b = 0. Axisymmetric, the radial force also
-    /// has the hoop term -m tau_thetatheta T_ip (eq 120), T_ip = t_i w_z: in b = 0 with t.
+    /// has the hoop term -m tau_thetatheta T_ip (E71), T_ip = t_i w_z: in b = 0 with t.
     force: [[T; D]; D],
 }
 
@@ -838,7 +838,7 @@ impl<I: Rows, const D: usize> RowSink<BlockRow<I>> for BlockSums<I, D> {
 /// Gives `sink` each stencil row `(j, k)` in turn with the row's values (per [`slot`])
 /// summed over the `N` particles whose x factors are `x`, in their order, the first one's
 /// written ([`YFactors::add_row`]); `pick` reads their factors along the other axes from the
-/// stencils' lane arrays. Separable form (seeds/000 eqs 16-17): node (i, j, k) has
+/// stencils' lane arrays. Separable form (E6): node (i, j, k) has
 /// S = wx_i wy_j wz_k and G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k); the x
 /// factors are multiplied by the y factors once per j, and each row (j, k) costs one multiply
 /// by wz_k per quantity, plus one by dwz_k for the force (3D).

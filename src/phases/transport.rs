@@ -1,26 +1,27 @@
-//! Heat conduction and diffusion (seeds/000 sections 8 and 9): a scalar on the particles moved
+//! Heat conduction and diffusion (E54-E64): a scalar on the particles moved
 //! through the grid as momentum is, one substep at a time, with the particles where the substep
 //! starts. One code path for both fields; they differ only in what a particle's capacity and
 //! conductance are:
 //!
 //! | field | value `phi_p` | capacity `c_p` | conductance `kappa_p` | source `s_p` |
 //! |---|---|---|---|---|
-//! | heat | temperature T, K | thermal mass `m_p C_p`, J/K (eq 133) | conductivity k, W/(m K) | W/m^3 |
-//! | diffusion | concentration potential mu | current volume `V_p = J V0`, m^3 (eq 146) | diffusivity D, m^2/s | 1/s |
+//! | heat | temperature T, K | thermal mass `m_p C_p`, J/K (E56) | conductivity k, W/(m K) | W/m^3 |
+//! | diffusion | concentration potential mu | current volume `V_p = J V0`, m^3 (E56) | diffusivity D, m^2/s | 1/s |
 //!
 //! 1. scatter: nodal capacity `c_i = sum S_ip c_p` and momentum `p_i = sum S_ip c_p phi_p`
-//!    (eqs 133, 146; eq 138 writes the nodal thermal mass with `m_p`, where the thermal mass
-//!    `m_p C_p` of eq 133 is meant), then `phi_i = p_i / c_i` with the fixed faces applied;
+//!    (E56; Nairn's notes write the nodal thermal mass with `m_p`, where the thermal mass
+//!    `m_p C_p` is meant), then `phi_i = p_i / c_i` with the fixed faces applied (E57);
 //! 2. flow: `Q_i = sum V_p (q_p . G_ip + s_p S_ip)` with `q_p = -kappa_p sum phi_i G_ip`
-//!    (eqs 135, 137, 148, 150), plus the flux faces' inflow (eqs 136, 149), then the rate
-//!    `a_i = Q_i / c_i` (eqs 140, 152); on a fixed face the nodes hold the fixed value, so their
+//!    (E58, E59), plus the flux faces' inflow (E60), then the rate
+//!    `a_i = Q_i / c_i` (E61); on a fixed face the nodes hold the fixed value, so their
 //!    rate is 0 and the flow into them leaves the domain;
-//! 3. update: `phi_p += dt sum S_ip a_i`, always FLIP (eqs 141, 153: PIC would conduct even
+//! 3. update: `phi_p += dt sum S_ip a_i`, always FLIP (E62: PIC would conduct even
 //!    with zero conductivity), and the grid's value at the particle
-//!    `phi_g->p = sum S_ip (phi_i + a_i dt)` (eq 144), which features that depend on the field
-//!    read (section 8.2).
+//!    `phi_g->p = sum S_ip (phi_i + a_i dt)` (E63), which features that depend on the field
+//!    read.
 //!
-//! A fixed face (the seed leaves its treatment open) acts on the particles as on the grid:
+//! A fixed face (E64; the notes leave its treatment open) acts on the particles as on the
+//! grid:
 //! - past the wall plane the field is the material's odd image about the fixed value: the
 //!   particles' contributions to nodes past the plane go to their images with value
 //!   `2 phi_f - phi` (so a node near the face averages both sides), those nodes take
@@ -201,7 +202,7 @@ fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
 }
 
 /// After the scatter of capacity `c_i` and momentum `p_i` (`cols` = [c, p, value, rate]): the
-/// nodal values `phi_i = p_i / c_i` (eqs 139, 151), with the axis mirror, the fixed faces and
+/// nodal values `phi_i = p_i / c_i` (E57), with the axis mirror, the fixed faces and
 /// their odd images.
 fn nodal_values<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4], t: &Transport) {
     let (geom, bx, cutoff) = (&ctx.geom, &ctx.active, ctx.mass_cutoff);
@@ -249,7 +250,7 @@ fn nodal_values<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4], t
 }
 
 /// After the scatter of the flow `Q_i` (`cols` = [c, p, value, rate]): the flux faces'
-/// inflow, the rates `a_i = Q_i / c_i` (eqs 140, 152) with the fixed faces and their images,
+/// inflow, the rates `a_i = Q_i / c_i` (E61) with the fixed faces and their images,
 /// and, when a face is fixed, its nodes marked with 1 in the momentum column (free since the
 /// values were formed) for the particle update. Returns whether a face is fixed.
 fn nodal_rates<const D: usize>(

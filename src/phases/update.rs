@@ -2,10 +2,10 @@
 //! [`super::g2p::particles`] computes for each vector of a chunk's lanes, from the velocity
 //! `v_gp = sum S_ip v_i` and acceleration `a_gp = sum S_ip a_i` it gathered.
 //!
-//! - [`damping`]: the damping acceleration (seeds/000 eqs 47 and 107).
-//! - [`flip`]: FLIP with PIC damping and the position update (eqs 51-52, or seeds/003's).
-//! - [`apic`]: the APIC update (seeds/001).
-//! - [`advance`]: the position plus the step's displacement, without rounding error.
+//! - [`damping`]: the damping acceleration (E24, E53).
+//! - [`flip`]: FLIP with PIC damping and the position update (E25-E26, or E27).
+//! - [`apic`]: the APIC update (E80).
+//! - [`advance`]: the position plus the step's displacement, without rounding error (E28).
 //! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
 //!   with its outward velocity zeroed, or escapes through an open face.
 
@@ -49,14 +49,14 @@ impl<I: Compare> Step<I> {
     }
 }
 
-/// FLIP with PIC damping (seeds/000 eq 52) and the position update of eq 51, less the damping
-/// acceleration `d` when damping is declared (eqs 46-49):
+/// FLIP with PIC damping (E25) and the position update of E26, less the damping
+/// acceleration `d` when damping is declared (E24):
 /// - `v(n+1) = v_p + a_gp dt - (1 - beta)(v_p - v_gp) - d dt`
 /// - `x(n+1) = x_p + dx`, `dx = (v_m + a_m dt / 2 - (1 - beta)(v_p - v_gp) / 2) dt - d dt^2 / 2`,
-///   or with `particle_velocity` the particle's own new velocity, `dx = v(n+1) dt` (seeds/003).
+///   or with `particle_velocity` the particle's own new velocity, `dx = v(n+1) dt` (E27).
 ///
 /// `(v_m, a_m)`, the grid velocity and acceleration the particle moves with, are `(v_gp,
-/// a_gp)` in the velocity approach and the mass-weighted ones in the momentum approach (eq 90,
+/// a_gp)` in the velocity approach and the mass-weighted ones in the momentum approach (E76,
 /// [`super::momentum`]). Returns the new velocity and the displacement `dx` (see [`advance`]).
 #[inline(always)]
 pub(crate) fn flip<I: Compare>(
@@ -82,7 +82,7 @@ pub(crate) fn flip<I: Compare>(
     }
 }
 
-/// APIC (seeds/001): the particle takes the grid's velocity, `v(n+1) = v_gp + a_gp dt - d dt`,
+/// APIC (E80): the particle takes the grid's velocity, `v(n+1) = v_gp + a_gp dt - d dt`,
 /// and moves with it, `x(n+1) = x_p + dx`, `dx = v(n+1) dt`. Returns the new velocity and the
 /// displacement `dx` (see [`advance`]).
 #[inline(always)]
@@ -99,11 +99,12 @@ pub(crate) fn apic<I: Compare>(
     (v, v * k.dt)
 }
 
-/// The position `x + x_low` moved by `dx`, kept as a new pair `(x, x_low)`: `x` the sum rounded
-/// to `Real`, `x_low` what that rounding left out (Dekker's fast two-sum, exact when `|x|` is at
-/// least the step's displacement `|dx + x_low|`, so that `x + x_low` is the exact sum of the old
-/// pair and `dx`, to the rounding of `dx + x_low`; nearer the origin than one step's
-/// displacement, the last bit of `x` is finer than anywhere the particle could come from).
+/// The position `x + x_low` moved by `dx`, kept as a new pair `(x, x_low)` (E28): `x` the sum
+/// rounded to `Real`, `x_low` what that rounding left out (Dekker's fast two-sum, exact when
+/// `|x|` is at least the step's displacement `|dx + x_low|`, so that `x + x_low` is the exact
+/// sum of the old pair and `dx`, to the rounding of `dx + x_low`; nearer the origin than one
+/// step's displacement, the last bit of `x` is finer than anywhere the particle could come
+/// from).
 /// Written as `x += dx`, a displacement below half the last bit of `x` was lost every step: a
 /// slow particle far from the origin never moved.
 #[inline(always)]

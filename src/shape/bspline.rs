@@ -1,4 +1,4 @@
-//! Quadratic and cubic B-splines (seeds/003), `xi` in cell units.
+//! Quadratic and cubic B-splines (E10, E11), `xi` in cell units.
 //! - Quadratic: `3/4 - xi^2` for `|xi| <= 1/2`; `(3/2 - |xi|)^2 / 2` for `1/2 <= |xi| <= 3/2`. 3 nodes.
 //! - Cubic: `|xi|^3 / 2 - xi^2 + 2/3` for `|xi| < 1`; `(2 - |xi|)^3 / 6` for `1 <= |xi| < 2`. 4 nodes.
 

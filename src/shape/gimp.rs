@@ -1,11 +1,12 @@
 //! uGIMP (Bardenhagen and Kober 2004): the linear hat integrated over an undeformed particle
 //! domain of half-width `l = l_p / h = 1 / (2 n)` (cell units), `n` particles per cell per axis.
-//! Three nodes per axis. Closed form (xi in cell units):
+//! Three nodes per axis. Closed form (E8; xi in cell units):
 //! - `|xi| < l`: `S = 1 - (xi^2 + l^2) / (2 l)`, `dS = -xi / l`
 //! - `l <= |xi| <= 1 - l`: `S = 1 - |xi|`, `dS = -sign(xi)`
 //! - `1 - l < |xi| < 1 + l`: `S = (1 + l - |xi|)^2 / (4 l)`, `dS = -sign(xi) (1 + l - |xi|) / (2 l)`
 //!
-//! cpGIMP ([`CpGimp`]) is the same closed form with each particle's own half-width per axis.
+//! cpGIMP ([`CpGimp`]) is the same closed form with each particle's own half-width per axis
+//! (E9).
 
 use super::Shape1D;
 use crate::Real;
@@ -46,7 +47,7 @@ impl Gimp {
 impl Gimp {
     /// First moment `M = 1/(2l) int_{-l}^{l} N(xi + u) u du` of the hat over the domain (cell
     /// units) and the mean of the hat at the domain's ends, for a particle at offset `xi` from
-    /// the node. With `a = |xi|` and `c = 1 - a`:
+    /// the node (E69). With `a = |xi|` and `c = 1 - a`:
     /// - `a < l`: `M = xi^3 / (6 l) - xi l / 2`
     /// - `l <= a <= 1 - l`: `M = -sign(xi) l^2 / 3`
     /// - `1 - l < a < 1 + l`: `M = -sign(xi) (l^3 / 3 + c l^2 / 2 - c^3 / 6) / (2 l)`
@@ -171,8 +172,8 @@ impl Shape1D<3> for Gimp {
     }
 }
 
-/// cpGIMP (Wallstedt and Guilkey 2008): uGIMP whose particle domain is convected with the
-/// deformation. A particle's half-width along an axis is the undeformed `l_0 = 1 / (2 n)`
+/// cpGIMP (Wallstedt and Guilkey 2008; E9): uGIMP whose particle domain is convected with
+/// the deformation. A particle's half-width along an axis is the undeformed `l_0 = 1 / (2 n)`
 /// times its domain's stretch there (the deformed extent `sum_b |F_ab|`), kept within
 /// `[l_0 / 10, 1 / 2]` cell units: the upper bound keeps the domain within the 3 nodes of the
 /// stencil (the closed form's range), the lower one keeps the weights' derivatives bounded.

@@ -1,4 +1,4 @@
-//! Classic MPM linear hat functions: `S = 1 - |xi|` for `|xi| < 1` (seeds/003). Two nodes.
+//! Classic MPM linear hat functions: `S = 1 - |xi|` for `|xi| < 1` (E7). Two nodes.
 
 use super::Shape1D;
 use crate::Real;

@@ -3,7 +3,7 @@
 //! Every family is evaluated per axis ([`Shape1D`]) and combined by tensor product
 //! ([`Stencil::for_each_node`], or row by row with [`Stencil::row`]): in 2D and 3D,
 //! `S_ip` is the product of the per-axis values and each component of `G_ip` replaces one factor
-//! by its derivative (seeds/000 eqs 16-17).
+//! by its derivative (E4-E6).
 //!
 //! The hot loops work row by row: the `K` nodes of a stencil row along x are contiguous in every
 //! node column, so a row is one [`ROW`]-wide vector load, add and store, padded with zero
@@ -53,9 +53,9 @@ pub trait Shape1D<const K: usize>: Copy {
     /// rather than as the moment matrix `B_p` (which the next scatter divides by `D_p`): for
     /// weights whose `D_p` vanishes at a node (linear), `B_p / D_p` taken at the new position
     /// is unbounded, while the gradient form, equal to `B_p D_p^-1` at the old one, is not
-    /// (seeds/001 names both forms).
+    /// (E78, E81).
     const GRADIENT_AFFINE: bool = false;
-    /// Whether the first axis is the radius of the axisymmetric form (seeds/000 section 7); set
+    /// Whether the first axis is the radius of the axisymmetric form (E65-E72); set
     /// by [`Axisymmetric`] only, which then gives that axis r-weighted weights and the hoop
     /// factors `T_ip` ([`Stencil::t`]).
     const AXISYMMETRIC: bool = false;
@@ -236,12 +236,13 @@ pub struct Stencil<const D: usize, const K: usize> {
     /// by `e`, so the affine transfer reuses the gradient's row code.
     pub e: [Row4; D],
     /// APIC only (else zero): `1 / D_p[axis][axis]`, 1/m^2, where
-    /// `D_p = sum_i S_ip (x_i - x_p)(x_i - x_p)^T` is diagonal for tensor-product weights (its
-    /// off-diagonal entries are products of first moments, which vanish). Zero where `D_p`
-    /// vanishes (a linear-shape particle exactly on a node, where the first moments vanish too).
+    /// `D_p = sum_i S_ip (x_i - x_p)(x_i - x_p)^T` (E78) is diagonal for tensor-product
+    /// weights (its off-diagonal entries are products of first moments, which vanish). Zero
+    /// where `D_p` vanishes (a linear-shape particle exactly on a node, where the first
+    /// moments vanish too).
     pub inv_d: [Real; D],
     /// Axisymmetric only (else zero): the hoop factors `T_ip` along the radius, `t[k]` for node
-    /// `k` of the first axis, 1/m (seeds/000 eq 116): `T_ip = t[i] w[1][j]`.
+    /// `k` of the first axis, 1/m (E68): `T_ip = t[i] w[1][j]`.
     pub t: Row4,
 }
 
@@ -509,7 +510,7 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         }
     }
 
-    /// MLS-MPM (seeds/001): every derivative factor becomes the moment factor times `D_p^-1`,
+    /// MLS-MPM (E82): every derivative factor becomes the moment factor times `D_p^-1`,
     /// so that the gradient the passes form, node (i, j, k)'s `dwx_i wy_j wz_k` and the others,
     /// is the MLS gradient `D_p^-1 S_ip (x_i - x_p)`. Needs the moments (`affine`) of the
     /// last [`Stencils::compute`].
@@ -688,8 +689,8 @@ fn cartesian_weights<const K: usize, S: Shape1D<K>>(
 
 /// The radial axis of the axisymmetric form for a particle at offset `f` from its first node
 /// and `s` (cell units): the r-weighted weights `S = 1/(A_p r_p) int chi_p N r dA` and their
-/// derivatives (eqs 112, 115; per unit length), and the hoop factors `T = S_cart / r_p` (eq
-/// 116, 1/m), with `r_p` no smaller than [`Shape1D::radius`] allows. For a point family the
+/// derivatives (E66, E67; per unit length), and the hoop factors `T = S_cart / r_p` (E68,
+/// 1/m), with `r_p` no smaller than [`Shape1D::radius`] allows (E69). For a point family the
 /// weights are the Cartesian ones; for a finite domain of half-width `l`,
 /// `S = S_cart + h M / r_p` and `G = G_cart + (N_ends - S_cart) / r_p` (the integral of
 /// `N' r` by parts), with `M` and `N_ends` from [`Shape1D::radial_terms`].
@@ -836,7 +837,7 @@ impl<const D: usize, const K: usize> Stencil<D, K> {
     /// Row `j` along y of layer `k` along z: the flat index of its first node, and the factors
     /// that turn the x weights into the row's weights and gradients. With `r = row(..).1`,
     /// node `row + i` has `S = w[0][i] r[0]`, `G_x = dw[0][i] r[0]` and `G_b = w[0][i] r[b]`
-    /// for `b >= 1` (seeds/000 eqs 16-17: `r[0]` is the y (and z) weight, `r[b]` the same
+    /// for `b >= 1` (E6: `r[0]` is the y (and z) weight, `r[b]` the same
     /// product with axis b's factor differentiated). `row + ROW` is at most two past the last
     /// node, which the node columns' padding covers.
     #[inline(always)]
@@ -1010,7 +1011,7 @@ mod tests {
     /// field `v_r = k r`, `v_z = k' z` gives exactly `dv_r/dr = k`, `v_r / r = k` (the hoop
     /// rate, `sum r_i T_ip = 1`), `dv_z/dz = k'` and no cross terms, which is the patch test of
     /// a uniform radial expansion at any distance from the axis; and for uGIMP the weights
-    /// equal the r-weighted integrals of eqs 112, 115, 116 by quadrature.
+    /// equal the r-weighted integrals of E66-E68 by quadrature.
     fn check_axisymmetric<const K: usize, S: Shape1D<K>>(inner: S, finite: Option<f64>) {
         const N: usize = 14;
         let h: Real = 0.25;

@@ -369,7 +369,7 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
 /// The largest diffusivity of material `rec` that a step of a world of `def` integrates
 /// explicitly, m^2/s: its thermal diffusivity `k / (rho C_p)` with heat conduction declared,
 /// its diffusivity D with diffusion declared, and its kinematic viscosity `eta / rho0`
-/// (viscosity diffuses momentum); the stable step keeps `dt <= h^2 / (2 d kappa)`.
+/// (viscosity diffuses momentum; E87); the stable step keeps `dt <= h^2 / (2 d kappa)` (E88).
 pub(crate) fn explicit_diffusivity(rec: &MaterialRecord, def: &WorldDef) -> f64 {
     let fx = &def.effects;
     let rho = rec.density as f64;
@@ -403,14 +403,14 @@ pub(crate) fn material_resolvable(rec: &MaterialRecord, def: &WorldDef) -> bool 
 }
 
 /// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` of a friction angle in
-/// degrees (Klar et al. 2016, eq 28: the cone that touches the Mohr-Coulomb pyramid).
+/// degrees (E40; Klar et al. 2016, eq 28: the cone that touches the Mohr-Coulomb pyramid).
 fn friction_coefficient(degrees: Real) -> Real {
     let sin = libm::sin(degrees as f64 * core::f64::consts::PI / 180.0);
     (libm::sqrt(2.0 / 3.0) * 2.0 * sin / (3.0 - sin)) as Real
 }
 
 /// The mean tension `c cot(phi)` the Drucker-Prager cone's apex sits at, Pa (0 without a
-/// cohesion).
+/// cohesion; E40).
 fn apex_tension(degrees: Real, cohesion: Real) -> Real {
     if cohesion > 0.0 {
         let phi = degrees as f64 * core::f64::consts::PI / 180.0;

@@ -262,7 +262,7 @@ impl<'a> WorldRef<'a> {
             })
     }
 
-    /// Largest stable time step `cfl h / (c_max + |v|_max)`, s: `c_max` is the fastest
+    /// Largest stable time step `cfl h / (c_max + |v|_max)` (E88), s: `c_max` is the fastest
     /// dilatational wave speed of the materials, `|v|_max` the fastest active particle; shorter
     /// where damping (`alpha dt <= cfl`, the thermostat's alpha excepted: it is clamped to what
     /// the substep allows), conduction or diffusion (`dt <= h^2 / (2 d kappa)`) need it.

@@ -30,7 +30,7 @@ const NODAL_MASS_CUTOFF: Real = Real::EPSILON * Real::EPSILON;
 
 impl<'a> World<'a> {
     /// Advances the world by `dt` seconds. A `dt` above [`World::stable_dt`] (evaluated at the
-    /// start of the call) is taken in equal substeps that are each stable. In a world whose
+    /// start of the call) is taken in equal substeps that are each stable (E89). In a world whose
     /// material hardens (snow, with plasticity declared) the stable step is evaluated again
     /// before each substep, and where the hardening has outgrown the substep the rest of the
     /// step is split again into shorter equal substeps, within
@@ -352,9 +352,9 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
 }
 
-/// One substep: the phase order of seeds/000 section 5.1 for the chosen update order, the
-/// momentum approach (section 5.2, [`crate::phases::momentum`]) a branch of it. This is the
-/// only place the order of the phases is written down:
+/// One substep: the phase order of E12-E32 for the chosen update order, the momentum approach
+/// (E73-E77, [`crate::phases::momentum`]) a branch of it. This is the only place the order of
+/// the phases is written down:
 ///
 /// ```text
 /// USL : scatter(m, p, f) -> v -> tractions -> a -> particles(x, v, stress)

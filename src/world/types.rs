@@ -102,13 +102,13 @@ pub struct Diagnostics {
     /// Angular momentum about the coordinate origin, kg m^2/s (2D: the z component only).
     /// With APIC it includes each particle's affine part `m_p eps : B_p^T` (see
     /// [`ParticlesView::affine`]), which the transfer conserves together with `x_p x m_p v_p`
-    /// (seeds/001).
+    /// (E85).
     pub angular_momentum: [f64; 3],
     /// Centre of mass, m.
     pub center_of_mass: [f64; 3],
     /// Kinetic energy `sum m v^2 / 2`, J. With APIC and MLS-MPM it includes each particle's
-    /// affine velocity field, `m_p tr(B_p D_p^-1 B_p^T) / 2`: what the transfer carries to the
-    /// grid beside `m_p v_p^2 / 2`.
+    /// affine velocity field, `m_p tr(B_p D_p^-1 B_p^T) / 2` (E85): what the transfer carries to
+    /// the grid beside `m_p v_p^2 / 2`.
     pub kinetic: f64,
     /// Strain energy `sum V0 W(F)`, J.
     pub strain: f64,
@@ -168,7 +168,7 @@ pub struct ParticlesView<'w> {
     /// Concentration potential (empty unless diffusion is declared).
     pub concentration: &'w [Real],
     /// The grid's temperature at each particle after the last step, `T_g->p = sum S_ip T_i`,
-    /// K: what a feature that depends on temperature should read (seeds/000 section 8.2), since
+    /// K: what a feature that depends on temperature should read (E63), since
     /// the particles' own values keep any variation within a cell (the FLIP update never
     /// smooths them). Empty unless heat conduction is declared.
     pub grid_temperature: &'w [Real],

@@ -1,5 +1,5 @@
-//! The axisymmetric form (seeds/000 section 7) against exact solutions: the patch test of a
-//! uniform radial expansion, and a solid cylinder under external pressure, whose exact state
+//! The axisymmetric form (E65-E72) against exact solutions: the patch test of a uniform
+//! radial expansion, and a solid cylinder under external pressure, whose exact state
 //! (uniform stress, `sigma_rr = sigma_thetatheta`) exists only if the hoop term is right.
 
 use crate::common::{all_finite, buffer_for, conductor, linear_elastic, load_outer_column, SHAPES};
@@ -163,7 +163,7 @@ fn pressurised(
 /// taken per radian give its level.
 ///
 /// uGIMP and cpGIMP: every particle within 0.5 % of exact, the loaded ones included (measured
-/// 0.16 %: the traction is integrated over the faces on the surface, eq 121; applied at the
+/// 0.16 %: the traction is integrated over the faces on the surface, E72; applied at the
 /// outer particles' centres, `l_p` inside the surface, as before, it put 0.6 % on the
 /// interior). Linear: every particle but the loaded outermost cell's within 1 % (measured
 /// 0.8 %; a point family takes the load at the particle, see `effects::forces::tractions`).
@@ -309,7 +309,7 @@ fn radial_heat_mode_decays_at_the_bessel_rate() {
 /// strain along z), loaded by a pressure `p` on its bore and damped to rest. Exact:
 /// `sigma_rr = A - B / r^2`, `sigma_thetatheta = A + B / r^2`, `sigma_zz = 2 nu A`, with
 /// `A = p a^2 / (b^2 - a^2)` and `B = p a^2 b^2 / (b^2 - a^2)`. The traction is integrated over
-/// the bore faces (eq 121, `dS = r dL` per radian), where the load acts.
+/// the bore faces (E72, `dS = r dL` per radian), where the load acts.
 ///
 /// uGIMP and cpGIMP, `a = 48 h`: the innermost particles' `sigma_rr` and `sigma_thetatheta`
 /// within 2 % of `p` of Lamé's at their radius (measured 1.0 to 1.3 %, f32 and f64), every

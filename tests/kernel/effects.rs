@@ -217,7 +217,7 @@ fn everywhere(rate: Real) -> [DampingZone; DAMPING_ZONES] {
 /// `E0 exp(-alpha n T_d)` (at whole periods the phase repeats). Grid damping damps the grid
 /// velocity and particle damping the particle velocity, which agree for a resolved mode, so
 /// each alone, and half of each together, give the same rate; so does the grid rate on the
-/// nodal force (eq 60) and a zone over the whole bar (eq 105). Tolerance 2 % of the ratio
+/// nodal force (E49) and a zone over the whole bar (E50). Tolerance 2 % of the ratio
 /// (the bound): the bar's own discretisation error in energy is 0.02 % over 5 periods
 /// undamped, and v_gp differs from v_p by O(h^2).
 #[test]
@@ -333,8 +333,8 @@ type LocalDamping<'a> = dyn Fn(&[Real]) -> Real + 'a;
 
 /// A rigidly translating block: `v_gp = v_p = v` and `a_gp = 0`, so grid damping alpha_g and
 /// particle damping alpha_p each give exactly `v (1 - alpha dt)^n` after n substeps of length
-/// dt (eqs 47, 52).
-/// Per-particle damping (eq 107) set on one half of the block damps that half only, and set
+/// dt (E24, E25).
+/// Per-particle damping (E53) set on one half of the block damps that half only, and set
 /// to the same value everywhere it is bit-identical to the global damping. Tolerance 1e-5
 /// relative (f32 round-off of n multiplications).
 #[test]
@@ -431,7 +431,7 @@ fn uniform_damping_of_a_rigid_block_is_exact_and_per_particle_damping_is_local()
     }
 }
 
-/// A zone's rate (eq 105 for one zone): uniform inside the box and 0 outside; graded toward a
+/// A zone's rate (E51): uniform inside the box and 0 outside; graded toward a
 /// face, `rate s^2` with `s` the distance from the opposite face over the box's width, 0 there
 /// and `rate` on the face. Exact values at the faces, the middle and outside (tolerance:
 /// round-off of one division and two products).
@@ -528,15 +528,15 @@ fn invalid_damping_zones_are_refused() {
     assert_eq!(with(good, too_many), Err(mpm_gimp::Error::InvalidEffect));
 }
 
-/// Grid damping on the nodal force next to a stick wall (seeds/000 eqs 58-60). A block rests
+/// Grid damping on the nodal force next to a stick wall (E49). A block rests
 /// on a stick floor, undeformed (no internal force), no gravity, every particle moving along
 /// the floor at `v0`: the nodal velocity is `v0` on every node it reaches, and the floor holds
-/// the nodes of its plane (`a_i = -v_i / dt`). The identity: with pure FLIP (eq 52, beta 1)
+/// the nodes of its plane (`a_i = -v_i / dt`). The identity: with pure FLIP (E25, beta 1)
 /// and the grid rate alpha on the force, each particle's new velocity is its undamped new
 /// velocity times `(1 - alpha dt)`: the wall takes the momentum of its nodes whatever the
 /// damping, and the damping takes only what the wall leaves free; a particle the floor
 /// partly holds is damped only in the part it does not hold. (With the damping in the
-/// particle update, eq 47, the new velocity is `v_undamped - alpha dt v0` instead: the particle
+/// particle update, E24, the new velocity is `v_undamped - alpha dt v0` instead: the particle
 /// update damps again the velocity the wall has already taken out of its nodes; the test checks
 /// that the scene tells the two apart.) uGIMP, whose stencils reach the floor's plane but no
 /// node past it from particles 0.3 cells above it; USL and MUSL (USF updates the stress
@@ -601,7 +601,7 @@ fn grid_damping_on_the_force_leaves_the_stick_walls_reaction_alone() {
     }
 }
 
-/// Zones damp only where they are (eq 105). Two blocks translate rigidly, far enough apart
+/// Zones damp only where they are (E50). Two blocks translate rigidly, far enough apart
 /// that no node is reached from both; a zone covers the second. The first steps bit for bit
 /// as with no damping declared; the second slows exactly as `v0 (1 - alpha dt)^n` (a rigid
 /// translation: every node it reaches has `v_i = v0`, `a_i = -alpha v_i`; tolerance 1e-5
@@ -699,7 +699,7 @@ fn a_damping_zone_damps_only_inside_it() {
     }
 }
 
-/// An absorbing layer (eq 105, a zone graded toward the grid's face). A bar in uniaxial strain
+/// An absorbing layer (E50-E51, a zone graded toward the grid's face). A bar in uniaxial strain
 /// (slip walls above and below, Poisson's ratio 0, so waves travel at `c = sqrt(E / rho)`)
 /// 4 m long between slip end walls, its middle 2 m the interior and 1 m at each end a layer
 /// whose rate rises as the square of the depth to `alpha_max` at the end wall. A velocity
@@ -1072,7 +1072,7 @@ fn spinning(shape: ShapeFunction, transfer: Transfer, dim: Dimension) -> (f64, f
     )
 }
 
-/// APIC conserves angular momentum (seeds/001): the transfer to the grid and back keeps
+/// APIC conserves angular momentum (E85): the transfer to the grid and back keeps
 /// `sum x_p x m_p v_p + m_p eps : B_p^T` exactly when `D_p` is evaluated per particle, and the
 /// symmetric stress exerts no net torque. A spinning elastic disk keeps it within 1e-5
 /// relative over 1000 steps for uGIMP and both B-splines (measured in f64: 2e-15, 3e-15 and
@@ -1115,7 +1115,7 @@ fn apic_spinning_disk_keeps_angular_momentum() {
     }
 }
 
-/// MLS-MPM (seeds/001) conserves angular momentum as APIC does: its transfer is APIC's, and
+/// MLS-MPM (E82-E83) conserves angular momentum as APIC does: its transfer is APIC's, and
 /// its internal force exerts no net torque, since `sum_i x_i x (tau D_p^-1 S_ip (x_i - x_p))`
 /// is `tau D_p^-1 D_p`'s antisymmetric part, zero for a symmetric stress. The spinning disk
 /// of the APIC test, with the quadratic and cubic B-splines: the same bounds (1e-5 relative
@@ -1168,7 +1168,7 @@ fn mls_rigid_rotation_carries_only_the_centrifugal_stress() {
             let mut buf = buffer_for(&def);
             let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
             let mat = spinning_block(&def, &mut w, model);
-            // The energy with the affine part of APIC's velocity field (seeds/001), which the
+            // The energy with the affine part of APIC's velocity field (E85), which the
             // diagnostics include: a particle carries `m_p tr(C_p D_p C_p^T) / 2` besides
             // `m_p v_p^2 / 2`.
             let energy = |w: &World| w.diagnostics().total_energy();
@@ -1273,8 +1273,8 @@ fn momentum_approach_is_plane_strain_or_3d() {
     }
 }
 
-/// PIC damping alone (eq 44): with beta < 1 and no other damping the inversion error
-/// `v_p - v_gp` is multiplied by beta every step (eq 45), so a velocity pattern the grid cannot
+/// PIC damping alone (E22): with beta < 1 and no other damping the inversion error
+/// `v_p - v_gp` is multiplied by beta every step (E23), so a velocity pattern the grid cannot
 /// represent decays as `beta^n`. The pattern: `v_y = v0 (-1)^i` on the columns i of a block at
 /// 2 particles per cell, whose scatter to every node a particle's stencil reaches cancels
 /// exactly (symmetric weights at offsets +-h/4, +-3h/4, ... with alternating signs), so the
@@ -1338,7 +1338,7 @@ fn beta_below_one_alone_decays_the_inversion_error_as_beta_to_the_n() {
     }
 }
 
-/// The kinetic-energy thermostat (NairnMPM's feedback damping) on the vibrating bar. With a
+/// The kinetic-energy thermostat (NairnMPM's feedback damping, E52) on the vibrating bar. With a
 /// target of 0 it drives the bar to rest: the energy falls below 1e-3 of its start within 6
 /// periods (undamped it keeps 99.98 %). With a target KE_t > 0 it brakes only while the kinetic
 /// energy is above the target: alpha rises, the bar slows below the target (a brake-only

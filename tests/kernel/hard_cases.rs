@@ -102,7 +102,7 @@ const EFFECTS: [Fx; 7] = [
                 }),
                 per_particle: true,
                 // And a zone graded toward the floor over the lower half of the grid: nodal
-                // damping (eq 105) besides the particle update's.
+                // damping (E50) besides the particle update's.
                 zones: [DampingZone {
                     min: Vec3::new(-100.0, 0.0, -100.0),
                     max: Vec3::new(100.0, 0.5, 100.0),

@@ -2,7 +2,7 @@
 //! file linked the kernel once each, which made the test build several times slower). Each
 //! module states what it checks; `cargo test --release --test kernel -- <module>::` runs one.
 //! (`tests/simd_override.rs` stays a binary of its own: it switches the process-wide
-//! instruction-set override.)
+//! instruction-set override.) Equation numbers such as `(E17)` refer to `docs/equations.md`.
 
 #[path = "../common/mod.rs"]
 mod common;

@@ -1,21 +1,21 @@
 //! The scalar reference step: one substep of the method as plain loops over particles and
-//! nodes (seeds/000 section 5.1; APIC from seeds/001), in f64, written from the equations and
+//! nodes (E12-E32; APIC E78-E80), in f64, written from the equations and
 //! not from the kernel's code. It is the readable specification of what a step computes, and
 //! the oracle the kernel is checked against: the same state is stepped by the kernel (every
 //! instruction-set instance this CPU has) and by the reference, and every particle column must
 //! agree to round-off.
 //!
-//! What it covers: plane strain 2D, the axisymmetric form (section 7: r-weighted weights
-//! integrated numerically from eqs 112 and 115, the hoop factors of eq 116, the hoop stretch
-//! and the hoop term of the radial force, eq 120) and 3D; linear, uGIMP, cpGIMP, quadratic
+//! What it covers: plane strain 2D, the axisymmetric form (r-weighted weights integrated
+//! numerically from E66 and E67, the hoop factors of E68, the hoop stretch of E70 and the hoop
+//! term of the radial force, E71) and 3D; linear, uGIMP, cpGIMP, quadratic
 //! and cubic B-spline shape functions; USF, USL and MUSL; FLIP (with its PIC fraction, moving
-//! the particles by eq 51 or with their own new velocity as seeds/003 does) and APIC (with
+//! the particles by E26 or with their own new velocity, E27) and APIC (with
 //! linear weights in its gradient form); the neo-Hookean and corotated linear elastic
 //! materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
 //! wall's plane mirroring those inside it, particles stopped at the plane); and of the
-//! declared effects the particle forces (eq 20), tractions (eq 21), a body force, damping
-//! (eqs 46-52 and 107: grid and particle rates, each a global value plus the particle's own),
-//! the damping thermostat, and heat conduction and diffusion (sections 8 and 9, with sources,
+//! declared effects the particle forces (E14), tractions (E15, E16), a body force, damping
+//! (E48-E53: grid and particle rates, each a global value plus the particle's own), the
+//! damping thermostat, and heat conduction and diffusion (E54-E64, with sources,
 //! fixed and flux faces), particles nearer the axis than their half-width included.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
@@ -62,7 +62,7 @@ struct Particle {
     /// The initial volume `V0`, m^3.
     vol0: f64,
     /// The transported scalars (temperature, concentration potential), the grid's value of
-    /// each at the particle (eq 144) and their sources (W/m^3, 1/s).
+    /// each at the particle (E63) and their sources (W/m^3, 1/s).
     phi: [f64; 2],
     phi_grid: [f64; 2],
     source: [f64; 2],
@@ -104,7 +104,7 @@ struct Method {
     apic: bool,
     /// MLS-MPM: APIC with the MLS gradient in the momentum equation ([`stencil_with`]).
     mls: bool,
-    /// FLIP moves the particle with its own new velocity (seeds/003).
+    /// FLIP moves the particle with its own new velocity (E27).
     particle_velocity: bool,
     /// The momentum approach ([`weights`]).
     momentum: bool,
@@ -120,17 +120,17 @@ struct Method {
     margin: usize,
     /// Gravity plus the declared body force.
     gravity: [f64; 3],
-    /// The particles carry forces `F_p` (eq 20).
+    /// The particles carry forces `F_p` (E14).
     forces: bool,
-    /// Damping (eq 47): the substep's global grid and particle rates, 1/s.
+    /// Damping (E24): the substep's global grid and particle rates, 1/s.
     damping: Option<[f64; 2]>,
-    /// The grid rate acts on the nodal force (eq 60) rather than in the particle update.
+    /// The grid rate acts on the nodal force (E49) rather than in the particle update.
     grid_on_force: bool,
-    /// Zones where the nodes are damped (eq 105).
+    /// Zones where the nodes are damped (E50).
     zones: Vec<mpm_gimp::DampingZone>,
     /// The thermostat that adds to the grid rate, with its alpha before the substep.
     thermostat: Option<Thermostat>,
-    /// Tractions (eq 21). The world's table is not readable through the API: the test that
+    /// Tractions (E15, E16). The world's table is not readable through the API: the test that
     /// adds them sets them here.
     tractions: Vec<Traction>,
     /// The tractions' time factors this substep, one per schedule.
@@ -152,7 +152,7 @@ struct Method {
     mass_cutoff: f64,
 }
 
-/// The damping thermostat (NairnMPM's feedback damping): before each substep its alpha
+/// The damping thermostat (NairnMPM's feedback damping, E52): before each substep its alpha
 /// moves by `2 gain (KE - target) dt / M` (KE and M the particles' kinetic energy and mass),
 /// kept within `[0, max_alpha]`, and adds to the grid damping rate.
 #[derive(Clone, Copy)]
@@ -199,7 +199,7 @@ fn weight_1d(m: &Method, xi: f64, l: f64) -> (f64, f64) {
 
 /// A particle's stencil: each node it reaches with its flat index, `S_ip`, `G_ip` and
 /// `x_i - x_p`, the APIC moment `D_p^-1` (diagonal for these tensor-product weights) and, in
-/// the axisymmetric form, each node's hoop factor `T_ip` (eq 116).
+/// the axisymmetric form, each node's hoop factor `T_ip` (E68).
 struct Stencil {
     nodes: Vec<(usize, f64, [f64; 3], [f64; 3])>,
     inv_d: [f64; 3],
@@ -207,7 +207,7 @@ struct Stencil {
 }
 
 /// The axisymmetric form's radial weight and derivative of the node at `x_i` for a particle
-/// at radius `r` whose domain has half-width `l` (uGIMP, cpGIMP): eqs 112 and 115 along r,
+/// at radius `r` whose domain has half-width `l` (uGIMP, cpGIMP): E66 and E67 along r,
 /// `1 / (2 l r) int_{r-l}^{r+l} N_i(u) u du` and the same of `N_i'`, with `N_i` the linear hat
 /// of the node. Written as the Cartesian weight plus its first moment over `r`,
 /// `(int N du + int N (u - r) du / r) / 2l`, and the derivative by parts,
@@ -246,7 +246,7 @@ fn stencil(m: &Method, x: &[f64; 3], lp: &[f64; 3]) -> Stencil {
 }
 
 /// [`stencil`], with MLS-MPM's gradient `D_p^-1 S_ip (x_i - x_p)` in place of `G_ip` when
-/// `mls` (seeds/001; the transported scalars keep `G_ip`).
+/// `mls` (E82; the transported scalars keep `G_ip`).
 fn stencil_with(m: &Method, x: &[f64; 3], lp: &[f64; 3], mls: bool) -> Stencil {
     let d = m.d;
     // Per axis: the nodes within reach (two cells each side covers every family).
@@ -264,7 +264,7 @@ fn stencil_with(m: &Method, x: &[f64; 3], lp: &[f64; 3], mls: bool) -> Stencil {
             let dx = m.origin[a] + i as f64 * m.h - x[a];
             let (mut w, mut dw) = weight_1d(m, -dx, lp[a]);
             // Axisymmetric, along r: the r-weighted weights of a finite domain (a point's are
-            // the Cartesian ones), and the hoop factor T = S_cart / r_p (eq 116).
+            // the Cartesian ones), and the hoop factor T = S_cart / r_p (E68).
             let mut t = 0.0;
             if m.axisymmetric && a == 0 {
                 // A particle nearer the axis than l_p is evaluated as if at r = l_p.
@@ -406,7 +406,7 @@ fn mirror_masses(m: &Method, grid: &mut [Node]) {
     for_each_wall_image(m, true, |ghost, image, _| grid[ghost].m = grid[image].m);
 }
 
-/// Particle to grid (eqs 20, 22, 23, 25): mass and momentum (`momentum`), internal and particle
+/// Particle to grid (E12-E14): mass and momentum (`momentum`), internal and particle
 /// forces (`force`; in the momentum approach with its gradient weights, [`weights`]).
 fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force: bool) {
     for p in ps {
@@ -416,7 +416,7 @@ fn scatter(m: &Method, ps: &[Particle], grid: &mut [Node], momentum: bool, force
             let c = affine(m, p, &st, &dx);
             let n = &mut grid[i];
             if force && m.axisymmetric {
-                // The hoop term of the radial force (eq 120).
+                // The hoop term of the radial force (E71).
                 n.f[0] -= p.m * p.tau[2][2] * t;
             }
             for a in 0..m.d {
@@ -562,7 +562,7 @@ fn divide_by_mass(
     }
 }
 
-/// Grid update (eq 28): `v_i = p_i / m_i` on nodes above the mass cutoff, zero on the others,
+/// Grid update (E18): `v_i = p_i / m_i` on nodes above the mass cutoff, zero on the others,
 /// with the nodes past a wall plane folded onto their images first and reading them after.
 fn grid_velocity(m: &Method, grid: &mut [Node]) {
     for_each_wall_image(m, false, |ghost, image, _| {
@@ -578,7 +578,7 @@ fn grid_velocity(m: &Method, grid: &mut [Node]) {
     read_wall_images(m, grid, |n| &mut n.v);
 }
 
-/// Grid update (eqs 22, 24): `a_i = f_i / m_i + g`, and at the walls the reaction that holds
+/// Grid update (E19): `a_i = f_i / m_i + g`, and at the walls the reaction (E20) that holds
 /// the updated velocity's fixed components at zero, `a_i = -v_i / dt`.
 fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
     fold_wall_images(m, grid, |n| &mut n.f);
@@ -586,7 +586,7 @@ fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
         n.a = n.f;
     }
     divide_by_mass(m, grid, |n| &mut n.a, m.gravity);
-    // Nodal damping (eqs 60, 105), before the walls: `a_i -= alpha_g(x_i) v_i`, the zones'
+    // Nodal damping (E49, E50), before the walls: `a_i -= alpha_g(x_i) v_i`, the zones'
     // rates at the node (in the kernel's precision, as the kernel evaluates them) plus the
     // grid rate when it acts on the force.
     if let Some([grid_rate, _]) = m.damping {
@@ -674,12 +674,12 @@ fn face_area(m: &Method, axis: usize, node: usize) -> f64 {
     area
 }
 
-/// One substep of a transported scalar `f` (0 heat, section 8; 1 diffusion, section 9), with
-/// the particles where the substep starts. The capacity is the thermal mass `m_p C_p` (eq 133)
-/// or the current volume `J V0` (eq 146), the conductance the conductivity or the diffusivity:
+/// One substep of a transported scalar `f` (0 heat, 1 diffusion; E54-E64), with
+/// the particles where the substep starts. The capacity is the thermal mass `m_p C_p` (E56)
+/// or the current volume `J V0` (E56), the conductance the conductivity or the diffusivity:
 /// 1. `c_i = sum S_ip c_p`, `phi_i = sum S_ip c_p phi_p / c_i`, fixed faces' nodes their value;
-/// 2. `Q_i = sum V_p (q_p . G_ip + s_p S_ip)`, `q_p = -kappa sum phi_i G_ip` (eqs 135, 137,
-///    148, 150), the rate `a_i = Q_i / c_i` (eqs 140, 152), 0 on fixed faces' nodes;
+/// 2. `Q_i = sum V_p (q_p . G_ip + s_p S_ip)`, `q_p = -kappa sum phi_i G_ip` (E58,
+///    E59), the rate `a_i = Q_i / c_i` (E61), 0 on fixed faces' nodes;
 /// 3. FLIP: `phi_p += dt sum S_ip a_i`, and the grid's value `sum S_ip (phi_i + a_i dt)` (eqs
 ///    141, 144, 153).
 ///
@@ -758,7 +758,7 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
         }
     }
     for_each_fixed_image(m, &faces, |g, i, _| q[i] -= q[g]);
-    // A flux face's inflow on its wall plane's nodes (eqs 136, 149), each node standing for
+    // A flux face's inflow on its wall plane's nodes (E60), each node standing for
     // its patch of the admissible region's face.
     for (face, bc) in faces.iter().enumerate().take(2 * m.d) {
         if let ScalarBoundary::Flux(flux) = *bc {
@@ -847,7 +847,7 @@ fn for_each_fixed_image(
     }
 }
 
-/// Adds the tractions to the nodal force (eq 21): each loads a plane face of reference normal
+/// Adds the tractions to the nodal force (E15, E16): each loads a plane face of reference normal
 /// `N` and area `A` across `N` at `delta = l_p / max |N_a|` from its particle, a segment along
 /// `(-N_y, N_x)` or a square along two unit tangents, moved by `F`; two Gauss points per side,
 /// each standing for the deformed area `|F t| A / 2` (2D) or `|F t1 x F t2| A / 4` (3D), times
@@ -946,7 +946,7 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
     }
 }
 
-/// Stress update (eqs 26-27) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
+/// Stress update (E29-E32) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
 /// `dF = exp(L dt)` to `exp_terms` terms, `H <- H + Q + Q H` with `Q = dF - I`, and the
 /// neo-Hookean `tau / rho0 = (mu (B - I) + lambda ln J I) / rho0`. APIC with linear weights
 /// keeps `L` as the particle's `C_p`.
@@ -987,7 +987,7 @@ fn update_stress(
     }
     if m.axisymmetric {
         // The hoop stretch: F_thetatheta <- exp(v_r / r dt) F_thetatheta, the rate
-        // v_r / r = sum_i v_r,i T_ip (eqs 113, 116), its exponential by the same series.
+        // v_r / r = sum_i v_r,i T_ip (E70), its exponential by the same series.
         let rate: f64 = st
             .nodes
             .iter()
@@ -1147,10 +1147,10 @@ fn jacobian_minus_one(d: usize, h: &Mat) -> f64 {
     }
 }
 
-/// Grid to particle (eqs 44-45, 51-52; seeds/001 and 003): FLIP with PIC fraction `1 - beta`
-/// and the position update of eq 51 (or `x += v(n+1) dt` when it moves with the particle's
+/// Grid to particle (E21-E27, E80): FLIP with PIC fraction `1 - beta`
+/// and the position update of E26 (or `x += v(n+1) dt` when it moves with the particle's
 /// velocity), or APIC (`v = v_gp + a_gp dt`, `x += v dt`, `B_p` from
-/// `v_i + a_i dt`), less the damping acceleration `d = alpha_g v_gp + alpha_p v_p` (eq 47)
+/// `v_i + a_i dt`), less the damping acceleration `d = alpha_g v_gp + alpha_p v_p` (E24)
 /// times `dt` in the velocity (and `dt^2 / 2` in FLIP's position); with `fused_stress` (USL)
 /// also the stress from `v_i + a_i dt`.
 fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stress: bool) {
@@ -1171,7 +1171,7 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
             update_stress(m, p, &st, grid, updated, dt);
         }
         // The grid velocity and acceleration the particle moves with: the mass-weighted ones in
-        // the momentum approach (eq 90).
+        // the momentum approach (E76).
         let (mut v_move, mut a_move) = (v_gp, a_gp);
         if m.momentum {
             let m_gp: f64 = st.nodes.iter().map(|&(i, s, ..)| s * grid[i].m).sum();
@@ -1612,7 +1612,7 @@ enum Scene {
 }
 
 /// The damping of [`Scene::NodalDamping`]: the grid rate and the thermostat on the nodal
-/// force (eq 60), a particle rate, and zones over the block's left part (uniform) and its
+/// force (E49), a particle rate, and zones over the block's left part (uniform) and its
 /// lower part (graded toward the floor), where the node rates differ from node to node.
 #[cfg(feature = "effects")]
 fn nodal_damping() -> Damping {
@@ -1971,7 +1971,7 @@ fn declared_effects_step_as_the_reference_does() {
     }
 }
 
-/// Nodal damping (seeds/000 eqs 58-65 and 104-106: the grid rate and the thermostat on the
+/// Nodal damping (E49-E52: the grid rate and the thermostat on the
 /// nodal force, zones of space, uniform and graded) next to a stick floor and a slip wall,
 /// with every order and transfer, two shape families, in 2D and 3D, in every instance of the
 /// passes this CPU runs, agrees with the reference step to round-off.
@@ -1993,7 +1993,7 @@ fn nodal_damping_steps_as_the_reference_does() {
     }
 }
 
-/// The axisymmetric form (seeds/000 section 7: r-weighted weights, the hoop stretch and the
+/// The axisymmetric form (E65-E72: r-weighted weights, the hoop stretch and the
 /// hoop term of the radial force) with every shape, order and both materials, FLIP and APIC,
 /// free and with the declared effects (tractions per radian among them), in every instance of
 /// the passes this CPU runs, agrees with the reference step to round-off.
@@ -2016,7 +2016,7 @@ fn axisymmetric_form_steps_as_the_reference_does() {
     }
 }
 
-/// FLIP moving the particles with their own new velocity (seeds/003), in 2D, the axisymmetric
+/// FLIP moving the particles with their own new velocity (E27), in 2D, the axisymmetric
 /// form and 3D, with two shape families and every order, free, against walls and with the
 /// declared effects (damping among them), in every instance of the passes this CPU runs,
 /// agrees with the reference step to round-off. (The update differs from FLIP's only in the
@@ -2216,7 +2216,7 @@ fn momentum_weights_sum_to_zero_and_reproduce_affine_fields() {
     }
 }
 
-/// The momentum approach (seeds/000 section 5.2, [`weights`]) with every shape function and
+/// The momentum approach (E74-E77, [`weights`]) with every shape function and
 /// order, in 2D and 3D, free, against walls (where its weights read the masses mirrored past
 /// the wall planes) and with the declared effects, in every instance of the passes this CPU
 /// runs, agrees with the reference step to round-off.
@@ -2241,7 +2241,7 @@ fn momentum_approach_steps_as_the_reference_does() {
     }
 }
 
-/// MLS-MPM (seeds/001: APIC with the MLS gradient `D_p^-1 S_ip (x_i - x_p)` for the force
+/// MLS-MPM (E82-E83: APIC with the MLS gradient `D_p^-1 S_ip (x_i - x_p)` for the force
 /// and the velocity gradient) with both B-splines, every order, in 2D and 3D, free, against
 /// walls and with the declared effects, in every instance of the passes this CPU runs, agrees
 /// with the reference step to round-off.

@@ -1,4 +1,4 @@
-//! Heat conduction and diffusion (seeds/000 sections 8 and 9) against exact solutions. Each
+//! Heat conduction and diffusion (E54-E64) against exact solutions. Each
 //! test states the exact solution, its tolerance and why.
 
 use crate::common::*;
@@ -116,7 +116,7 @@ fn sin_mode_error(shape: ShapeFunction, cells: u32) -> f64 {
 }
 
 /// Heat: the sin mode decays at the exact rate and the error falls at second order in the cell
-/// size (eq 137 with the FLIP update, eq 141) for linear shapes and uGIMP: halving h from 1/16
+/// size (E58 with the FLIP update, E62) for linear shapes and uGIMP: halving h from 1/16
 /// to 1/32 and to 1/64 of the length cuts the RMS error by at least 3x each time (second order
 /// is 4x; explicit time steps scale as h^2, so time error keeps the order; measured 4.0x); at
 /// 1/64 it is below 0.1 % of the amplitude (measured 0.035 %). (With particles at rest on the
@@ -221,7 +221,7 @@ fn heat_step_change_at_a_fixed_face_converges() {
 /// thickness). The scatter and the FLIP update conserve it exactly (`sum_i G_ip = 0`,
 /// `sum_i S_ip = 1`), so the tolerance is round-off: 1e-5 relative in f32 over the steps.
 /// With zero conductivity and no source the temperatures do not change at all (the FLIP update
-/// of eq 141; a PIC update would smooth them).
+/// of E62; a PIC update would smooth them).
 #[test]
 fn heat_is_conserved_and_sources_and_flux_add_exactly_what_they_put_in() {
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
@@ -308,7 +308,7 @@ fn heat_is_conserved_and_sources_and_flux_add_exactly_what_they_put_in() {
 /// Diffusion of a strip source: a concentration potential of 1 on `|x - x0| < a` and 0 outside,
 /// in a long insulated bar, spreads as
 /// `mu = (erf((a - (x - x0)) / (2 sqrt(D t))) + erf((a + (x - x0)) / (2 sqrt(D t)))) / 2`
-/// (eq 153 with eq 150; the faces are far enough that the insulation does not matter by then).
+/// (E62 with E58; the faces are far enough that the insulation does not matter by then).
 /// At `2 sqrt(D t) = a` and h = a / 8, the grid's value at each particle (`mu_g->p`, what the
 /// seed says features should read) is within 0.005 of it (measured 0.0013 for linear and
 /// uGIMP; the bound leaves room for the O(h^2) error, which at h = a / 8 is of that order). The particles' own FLIP values keep the initial jump within

@@ -144,9 +144,9 @@ fn bar_positions(transfer: Transfer, cfl: f64) -> (Vec<f64>, f64) {
 
 /// The time-stepping error of each transfer on the vibrating bar: the RMS difference of the
 /// particles' positions at CFL 0.4 and 0.2 from those at CFL 0.025 (the same grid, so the
-/// spatial error cancels), over the amplitude. FLIP's update of seeds/000 eq 51 is first order
+/// spatial error cancels), over the amplitude. FLIP's update of E26 is first order
 /// in time (its velocity update takes the acceleration at the start of the step): measured
-/// 6.4e-3 and 3.0e-3. Moving the particles with their own new velocity (seeds/003) leaves
+/// 6.4e-3 and 3.0e-3. Moving the particles with their own new velocity (E27) leaves
 /// 6.6e-5 and 3.2e-5, about APIC's 9.6e-5 and 4.7e-5: a hundredth of FLIP's, though it too
 /// halves with the step. Bounds: FLIP's error halves with the step (ratio 1.7 to 2.6), and
 /// the particle-velocity update's is below 2 % of FLIP's and below 1.5 times APIC's at both
@@ -187,7 +187,7 @@ fn flip_moving_with_the_particle_velocity_has_apics_small_time_error() {
 /// velocity (a weighted mean of equal values) and `sum G_ip = 0`, so only round-off remains:
 /// bound 1e-6 E (f32 round-off of a velocity gradient times dt, summed over 100 steps). The
 /// momentum approach too: its gradient is that of the mass-weighted velocity field, whose
-/// weights sum to zero over the nodes (eq 67 as printed, `sum G_ip (x) p_i / m_gp`, is not:
+/// weights sum to zero over the nodes (E74; the notes' E73, `sum G_ip (x) p_i / m_gp`, is not:
 /// it strained such a block to `|H| = 1.7`).
 #[test]
 fn rigid_translation_creates_no_stress() {
