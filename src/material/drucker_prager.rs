@@ -42,6 +42,11 @@ impl Model for DruckerPrager {
         hencky_energy(p, f)
     }
 
+    /// The accumulated plastic strain never decreases from 0.
+    fn history_in_range(plastic: Real) -> bool {
+        plastic >= 0.0
+    }
+
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
         p: &Params,

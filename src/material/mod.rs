@@ -19,7 +19,7 @@ mod fluid;
 mod linear_elastic;
 mod neo_hookean;
 mod principal;
-pub(crate) mod snow;
+mod snow;
 mod von_mises;
 
 use crate::layout::MaterialRecord;
@@ -199,6 +199,27 @@ pub(crate) trait Model {
 
     /// Strain energy per unit initial volume, J/m^3 (energy checks and diagnostics).
     fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real;
+
+    /// Whether `plastic` is a plastic history this model can leave (what [`World::open`]
+    /// checks a snapshot against): 0 for a model without one, which never changes it.
+    ///
+    /// [`World::open`]: crate::World::open
+    fn history_in_range(plastic: Real) -> bool {
+        plastic == 0.0
+    }
+
+    /// Whether the wave speed of material `r` changes with the plastic history, so that a
+    /// substep chosen for it can be outgrown within a step.
+    fn hardens(_r: &MaterialRecord) -> bool {
+        false
+    }
+
+    /// The dilatational wave speed of a particle of material `r` with plastic history
+    /// `plastic`, m/s, in f64: what the stable step resolves (E86, E88). The material's own unless
+    /// the model [hardens](Model::hardens).
+    fn wave_speed(r: &MaterialRecord, _plastic: Real) -> f64 {
+        r.wave_speed as f64
+    }
 }
 
 /// Evaluates `$e` with `$m` naming the [`Model`] type of `$model` (a [`MaterialModel`]): the
@@ -236,6 +257,21 @@ macro_rules! by_model {
             }
         }
     };
+}
+
+/// [`Model::history_in_range`] of material `r`'s model.
+pub(crate) fn history_in_range(r: &MaterialRecord, plastic: Real) -> bool {
+    by_model!(model_of(r), M => M::history_in_range(plastic))
+}
+
+/// [`Model::hardens`] of material `r`'s model.
+pub(crate) fn hardens(r: &MaterialRecord) -> bool {
+    by_model!(model_of(r), M => M::hardens(r))
+}
+
+/// [`Model::wave_speed`] of material `r`'s model.
+pub(crate) fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
+    by_model!(model_of(r), M => M::wave_speed(r, plastic))
 }
 
 /// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`: one particle, or a pack.

@@ -19,13 +19,6 @@ pub(crate) fn hardening<T: Num>(p: &Params, plastic: T) -> T {
     (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
 }
 
-/// The wave speed of snow of record `r` hardened by its plastic history `plastic` (E86), m/s,
-/// in f64 (the stable step and the state check read it).
-pub(crate) fn hardened_wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
-    let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
-    r.wave_speed as f64 * libm::sqrt(k)
-}
-
 /// Snow.
 pub(crate) struct Snow;
 
@@ -47,6 +40,21 @@ impl Model for Snow {
     fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
         let k = hardening(p, f.plastic);
         fixed_corotated::energy(f, k * p.mu, k * p.lambda)
+    }
+
+    /// `J_p - 1 > -1`: the plastic volume ratio stays positive.
+    fn history_in_range(plastic: Real) -> bool {
+        plastic > -1.0
+    }
+
+    fn hardens(r: &MaterialRecord) -> bool {
+        r.hardening_coefficient > 0.0
+    }
+
+    /// Hardened as the moduli: `c sqrt(exp(xi (1 - J_p)))`.
+    fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
+        let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
+        r.wave_speed as f64 * libm::sqrt(k)
     }
 
     #[inline(always)]

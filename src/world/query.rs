@@ -7,7 +7,8 @@ use crate::def::{Dimension, MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
-    eigenstrain_part, elastic_part, energy_density, model_of, particle_stress, Deformation, Params,
+    eigenstrain_part, elastic_part, energy_density, hardens, model_of, particle_stress, wave_speed,
+    Deformation, Params,
 };
 use crate::particles::{ParticleStatus, ACTIVE};
 use crate::shape::{
@@ -289,19 +290,17 @@ impl<'a> WorldRef<'a> {
         let mut c_max = materials
             .iter()
             .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
-        // Snow's moduli harden by exp(xi (1 - J_p)), its wave speed by the square root of
-        // that: the most compacted active snow particle may be the fastest.
-        let snow = |r: &&MaterialRecord| model_of(r) == crate::MaterialModel::Snow;
-        if layout.plastic.count > 0 && materials.iter().any(|r| snow(&r)) {
+        // A model that hardens (snow) stiffens with its plastic history: the most hardened
+        // active particle may be the fastest.
+        if layout.plastic.count > 0 && materials.iter().any(hardens) {
             let plastic = self.real_col(&layout, layout.plastic.first, n);
             let material = self.u32_col(&layout, col::MATERIAL, n);
             for i in 0..n {
-                let Some(r) = materials.get(material[i] as usize).filter(snow) else {
+                let Some(r) = materials.get(material[i] as usize) else {
                     continue;
                 };
-                if status[i] == ACTIVE {
-                    let c = crate::material::snow::hardened_wave_speed(r, plastic[i]);
-                    c_max = c_max.max(c as Real);
+                if status[i] == ACTIVE && hardens(r) {
+                    c_max = c_max.max(wave_speed(r, plastic[i]) as Real);
                 }
             }
         }
@@ -360,7 +359,7 @@ impl<'a> WorldRef<'a> {
         let id = self.u32_col(layout, col::MATERIAL, n)[i] as usize;
         let plastic = self.real_col(layout, layout.plastic.first, n)[i];
         self.materials(layout).get(id).is_some_and(|r| {
-            let c = crate::material::snow::hardened_wave_speed(r, plastic);
+            let c = wave_speed(r, plastic);
             hardens(r) && (c.is_nan() || c > limit)
         })
     }
@@ -658,28 +657,12 @@ fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> R
         .sum()
 }
 
-/// Whether material `rec` stiffens with its plastic history (snow with `xi > 0`).
-fn hardens(rec: &MaterialRecord) -> bool {
-    model_of(rec) == crate::MaterialModel::Snow && rec.hardening_coefficient > 0.0
-}
-
-/// Whether `plastic` is a plastic history a particle of material `rec` can carry: an
-/// equivalent plastic strain or an accumulated plastic shear >= 0 (von Mises,
-/// Drucker-Prager), `J_p - 1 > -1` (snow; for an active particle, with a hardened wave speed
-/// at most `speed_limit`, m/s, what the world resolves), and 0 for a model without a history
-/// (the value adding gives, which it never changes).
+/// Whether `plastic` is a plastic history a particle of material `rec` can carry
+/// ([`crate::material::history_in_range`]) and, for an active particle (`speed_limit` given,
+/// m/s), one whose wave speed the world resolves.
 fn history_in_range(rec: &MaterialRecord, plastic: Real, speed_limit: Option<f64>) -> bool {
-    use crate::MaterialModel as M;
-    match model_of(rec) {
-        M::VonMises | M::DruckerPrager => plastic >= 0.0,
-        M::Snow => {
-            plastic > -1.0
-                && speed_limit.is_none_or(|limit| {
-                    crate::material::snow::hardened_wave_speed(rec, plastic) <= limit
-                })
-        }
-        _ => plastic == 0.0,
-    }
+    crate::material::history_in_range(rec, plastic)
+        && speed_limit.is_none_or(|limit| wave_speed(rec, plastic) <= limit)
 }
 
 /// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the
