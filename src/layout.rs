@@ -15,7 +15,7 @@
 //! header, so a byte copy of the buffer is a second, independent world.
 
 use crate::def::{Boundary, Dimension, Face, ShapeFunction, Transfer, UpdateOrder, WorldDef};
-use crate::effects::{
+use crate::def::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
     SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
@@ -343,6 +343,16 @@ impl TractionRecord {
 unsafe impl Zeroable for TractionRecord {}
 // SAFETY: as above; Copy and 'static.
 unsafe impl Pod for TractionRecord {}
+
+/// (row, column) of each stored symmetric stress component; in 2D the fourth stored
+/// component is the out-of-plane `zz`.
+pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
+    if d == 2 {
+        &[(0, 0), (1, 1), (0, 1)]
+    } else {
+        &[(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+    }
+}
 
 /// Number of stored stress components (tau/rho0): 2D xx, yy, xy, zz; 3D xx, yy, zz, xy, xz, yz.
 pub(crate) const fn stress_components(d: usize) -> usize {

@@ -86,11 +86,11 @@ mod world;
 
 pub use def::{
     Boundary, Dimension, Face, MaterialDef, MaterialModel, Resolvable, ShapeFunction, Transfer,
-    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MIN_STABLE_DT,
+    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MIN_STABLE_DT,
 };
-pub use effects::{
-    Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
-    SCHEDULE_POINTS, TRACTION_SCHEDULES,
+pub use def::{
+    Damping, DampingZone, Effects, Feedback, ScalarBoundary, ScalarField, Schedule, Transport,
+    DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
@@ -99,8 +99,7 @@ pub use storage::AlignedBuffer;
 #[cfg(feature = "std")]
 pub use storage::HeapBuffer;
 pub use world::{
-    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, ScalarField, StepReport, World,
-    WorldRef, MAX_SUBSTEPS,
+    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, WorldRef,
 };
 
 /// The scalar type of every column, parameter and result: f32, or f64 with the `f64` feature.

@@ -209,3 +209,84 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         }
     }
 }
+
+/// What one call of [`crate::World::step`] did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepReport {
+    /// Substeps taken (>= 1).
+    pub substeps: u32,
+    /// Length of the last substep, s: every substep's, unless a hardening material made the
+    /// step split its rest again into shorter ones ([`crate::World::step`]).
+    pub substep_dt: Real,
+    /// Particle-substeps in which a particle reached a stick or slip wall and was stopped there.
+    pub stopped: u32,
+    /// Particles that crossed an open face and left the simulation.
+    pub escaped: u32,
+    /// Particles frozen in this call: their state turned non-finite, their F inverted, or
+    /// they ran away (see `runaway`). Nonzero means the step went bad somewhere
+    /// ([`StepReport::went_bad`]).
+    pub frozen: u32,
+    /// Of the frozen, those that ran away: their volume ratio `J` left
+    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`crate::WorldDef::max_volume_ratio`]), their
+    /// speed passed [`crate::Resolvable::speed`], or their hardening (snow) took their wave
+    /// speed past what the substep resolves (a Courant number above 1). The sign of an
+    /// unstable scheme or a time step too long for the scene.
+    pub runaway: u32,
+    /// The ids of the first frozen particles (up to 8), for diagnosis.
+    pub first_frozen: heapless::Vec<u32, 8>,
+}
+
+impl StepReport {
+    pub(crate) fn note_frozen(&mut self, id: u32, runaway: bool) {
+        self.frozen += 1;
+        self.runaway += runaway as u32;
+        // A full list only means more than 8 froze; the count says how many.
+        let _ = self.first_frozen.push(id);
+    }
+
+    /// Whether a particle froze in this call (non-finite state, inverted F or runaway volume):
+    /// the flag a host checks after each step. Frozen particles leave the simulation; the
+    /// rest of the world goes on.
+    pub fn went_bad(&self) -> bool {
+        self.frozen > 0
+    }
+}
+
+/// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
+/// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
+/// make the stable step 0, which no step could take, although the true step is representable.
+/// Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then the tail:
+/// the same maximum as a particle-by-particle scan. Run in the step's instruction set
+/// (`phases::isa`).
+#[inline(always)]
+pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
+    let n = status.len();
+    const L: usize = 8;
+    let mut lanes = [0.0f64; L];
+    let full = n - n % L;
+    for from in (0..full).step_by(L) {
+        let mut v2 = [0.0f64; L];
+        for va in v.iter().take(d) {
+            let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
+            for l in 0..L {
+                v2[l] += va[l] as f64 * va[l] as f64;
+            }
+        }
+        let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
+        for l in 0..L {
+            lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
+                v2[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
+    for i in full..n {
+        let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
+        if status[i] == ACTIVE && v2 > v2_max {
+            v2_max = v2;
+        }
+    }
+    v2_max
+}

@@ -19,8 +19,11 @@ mod fluid;
 mod linear_elastic;
 mod neo_hookean;
 mod principal;
+mod record;
 mod snow;
 mod von_mises;
+
+pub(crate) use record::{explicit_diffusivity, material_record, material_resolvable};
 
 use crate::layout::MaterialRecord;
 use crate::pack::{matrix, packs, unpacked, MatOf, Num, Pack};
@@ -291,7 +294,7 @@ pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
 
 /// `tau / rho0` of one particle of material `r` at deformation `f` with the isotropic
 /// eigenstrain `d` ([`elastic_part`]; 0 for none, which changes no bit), in the stored component
-/// order ([`crate::phases::sym_pairs`], then `zz` in 2D); `None` if `f` or the eigenstrain
+/// order ([`crate::layout::sym_pairs`], then `zz` in 2D); `None` if `f` or the eigenstrain
 /// inverts the material.
 #[inline(always)]
 pub(crate) fn particle_stress<const D: usize>(
@@ -306,7 +309,7 @@ pub(crate) fn particle_stress<const D: usize>(
     let (e, scale) = elastic_part(f, d);
     let s = kirchhoff_over_rho0(model_of(r), &Params::of(r), &e);
     let mut tau = [0.0; 6];
-    for (k, &(a, b)) in crate::phases::sym_pairs(D).iter().enumerate() {
+    for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
         tau[k] = s.m[a][b] * scale;
     }
     if D == 2 {
@@ -318,7 +321,7 @@ pub(crate) fn particle_stress<const D: usize>(
 /// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
 /// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D), `jm1[lane]` and the
 /// plastic history `plastic[lane]` in, `tau[k][lane]` out in the stored component order
-/// ([`crate::phases::sym_pairs`], then `zz` in 2D). Lane by lane, or as one pack where the
+/// ([`crate::layout::sym_pairs`], then `zz` in 2D). Lane by lane, or as one pack where the
 /// model asks for it ([`Model::packed`]).
 #[inline(always)]
 pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
@@ -341,7 +344,7 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
                 plastic: Pack(*plastic),
             };
             let s = M::kirchhoff(p, &f);
-            for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+            for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
                 tau[k] = (s.m[r][c] * p.inv_rho0).0;
             }
             if D == 2 {
@@ -356,7 +359,7 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
                     plastic: plastic[ln],
                 };
                 let s = M::kirchhoff(p, &f);
-                for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
                     tau[k][ln] = s.m[r][c] * p.inv_rho0;
                 }
                 if D == 2 {
@@ -439,7 +442,7 @@ pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
             tr += l[a][a][ln];
         }
         let third = tr * (2.0 / 3.0);
-        for (c, &(a, b)) in crate::phases::sym_pairs(D).iter().enumerate() {
+        for (c, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
             let mut s = l[a][b][ln] + l[b][a][ln];
             if a == b {
                 s -= third;
@@ -480,7 +483,7 @@ mod tests {
     /// Parameters with the given Lamé constants and `1 / rho0`, the other models' from the
     /// default material.
     fn params(lambda: Real, mu: Real, inv_rho0: Real) -> Params {
-        let r = crate::world::material_record(&crate::MaterialDef::DEFAULT).unwrap();
+        let r = crate::material::material_record(&crate::MaterialDef::DEFAULT).unwrap();
         Params {
             lambda,
             mu,
@@ -724,7 +727,7 @@ mod tests {
                 }
                 for (ln, f) in each.iter().enumerate() {
                     let s = kirchhoff_over_rho0(model, p, f);
-                    for (k, &(r, c)) in crate::phases::sym_pairs(D).iter().enumerate() {
+                    for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
                         let bits = s.m[r][c].to_bits();
                         assert_eq!(tau[k][ln].to_bits(), bits, "{model:?} {D}D");
                         assert_eq!(packed.m[r][c].0[ln].to_bits(), bits, "{model:?} {D}D pack");

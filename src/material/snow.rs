@@ -103,7 +103,7 @@ mod tests {
             model: MaterialModel::Snow,
             ..MaterialDef::DEFAULT
         };
-        let p = Params::of(&crate::world::material_record(&snow).unwrap());
+        let p = Params::of(&crate::material::material_record(&snow).unwrap());
         let (lo, hi) = (1.0 - snow.critical_compression, 1.0 + snow.critical_stretch);
         let mut state = 7u64;
         let mut next = || {

@@ -92,7 +92,7 @@ mod tests {
             hardening_modulus: 2.0e6,
             ..MaterialDef::DEFAULT
         };
-        let p = Params::of(&crate::world::material_record(&metal).unwrap());
+        let p = Params::of(&crate::material::material_record(&metal).unwrap());
         let mut f = Deformation::<3>::new([[0.0; 3]; 3], 0.0);
         let (mut eps, mut work) = (0.0f64, 0.0f64);
         let mut tau_old = [0.0f64; 3];

@@ -39,9 +39,10 @@ use crate::material::{
 };
 use crate::math::INV;
 use crate::pack::{matrix, packs, unpacked, Pack};
+use crate::particles::StepReport;
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
-use crate::{Real, StepReport};
+use crate::Real;
 
 /// A D x D matrix per lane, `m[a][b][lane]`.
 type LaneMat<const D: usize, const W: usize> = [[Lane<W>; D]; D];

@@ -21,12 +21,13 @@
 use super::lanes::{self, Lane, Lanes};
 use super::{g2p, p2g, rows::Compare, transport, Ctx};
 use crate::def::MaterialModel;
-use crate::effects::Transport;
+use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
 use crate::material::Params;
 use crate::particles::ParticleCols;
+use crate::particles::StepReport;
 use crate::shape::{Shape1D, Stencils};
-use crate::{Real, StepReport};
+use crate::Real;
 
 /// One instance of the passes compiled with more instruction-set features: the type that
 /// implements [`Isa`] and the module of `#[target_feature]` functions it calls (the passes are
@@ -251,5 +252,5 @@ passes! {
 
     /// [`crate::world::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
-        => crate::world::fastest_squared;
+        => crate::particles::fastest_squared;
 }

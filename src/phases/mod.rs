@@ -131,13 +131,3 @@ pub(crate) fn fastest_squared(
 ) -> f64 {
     with_instance!(simd, I => I::fastest_squared(v, status, d))
 }
-
-/// (row, column) of each stored symmetric stress component; in 2D the fourth stored
-/// component is the out-of-plane `zz`.
-pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
-    if d == 2 {
-        &[(0, 0), (1, 1), (0, 1)]
-    } else {
-        &[(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
-    }
-}

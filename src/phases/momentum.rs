@@ -279,7 +279,7 @@ pub(crate) fn forces<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, cons
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    let pairs = super::sym_pairs(D);
+    let pairs = crate::layout::sym_pairs(D);
     let mut st = Stencils::<D, K, W>::default();
     let mut x = Block([[0.0; W]; D]);
     for start in (0..count).step_by(W) {

@@ -14,8 +14,9 @@
 
 use super::lanes::{load_into, Block, Lane, Lanes};
 use super::rows::{self, Rows};
-use super::{sym_pairs, Ctx, Isa};
+use super::{Ctx, Isa};
 use crate::grid::{add_row, rows_fit, GridCols};
+use crate::layout::sym_pairs;
 use crate::particles::ParticleCols;
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::Real;

@@ -42,7 +42,7 @@
 
 use super::lanes::{live_lanes, load, Lane, Lanes};
 use super::{Ctx, Isa};
-use crate::effects::{ScalarBoundary, Transport};
+use crate::def::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::material::Deformation;
 use crate::math::Mat;

@@ -3,17 +3,16 @@
 //! phase order of a step lives in `step.rs` and only there ([`World::step`]).
 
 mod add;
+mod effects;
 mod query;
 mod seed;
 mod step;
 mod types;
 
-#[cfg(test)]
-pub(crate) use add::material_record;
-pub(crate) use query::fastest_squared;
+pub use crate::particles::StepReport;
 pub use query::WorldRef;
-pub use step::{Phase, MAX_SUBSTEPS};
-pub use types::{Diagnostics, ParticleBatch, ParticleDef, ParticlesView, ScalarField, StepReport};
+pub use step::Phase;
+pub use types::{Diagnostics, ParticleBatch, ParticleDef, ParticlesView};
 
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{validate, Header, Layout, TractionRecord, ALIGN};

@@ -1,14 +1,14 @@
 //! Reading a world in place: [`WorldRef`] and its queries (the state check, the stable time
 //! step, the particle view, the diagnostics), on a shared borrow of the bytes.
 
-use super::add::{explicit_diffusivity, material_record, material_resolvable, speed_resolvable};
+use super::add::speed_resolvable;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
 use crate::def::{Dimension, MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
-    eigenstrain_part, elastic_part, energy_density, hardens, model_of, particle_stress, wave_speed,
-    Deformation, Params,
+    eigenstrain_part, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
+    material_resolvable, model_of, particle_stress, wave_speed, Deformation, Params,
 };
 use crate::particles::{ParticleStatus, ACTIVE};
 use crate::shape::{
@@ -679,45 +679,6 @@ fn view_max(col: &[Real], status: &[u32]) -> f64 {
         .zip(status)
         .filter(|(_, &s)| s == ACTIVE)
         .fold(0.0f64, |m, (&v, _)| m.max(v as f64))
-}
-
-/// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
-/// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
-/// make the stable step 0, which no step could take, although the true step is representable.
-/// Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then the tail:
-/// the same maximum as a particle-by-particle scan. Run in the step's instruction set
-/// (`phases::isa`).
-#[inline(always)]
-pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
-    let n = status.len();
-    const L: usize = 8;
-    let mut lanes = [0.0f64; L];
-    let full = n - n % L;
-    for from in (0..full).step_by(L) {
-        let mut v2 = [0.0f64; L];
-        for va in v.iter().take(d) {
-            let va: &[Real; L] = va[from..from + L].try_into().unwrap_or(&[0.0; L]);
-            for l in 0..L {
-                v2[l] += va[l] as f64 * va[l] as f64;
-            }
-        }
-        let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
-        for l in 0..L {
-            lanes[l] = if st[l] == ACTIVE && v2[l] > lanes[l] {
-                v2[l]
-            } else {
-                lanes[l]
-            };
-        }
-    }
-    let mut v2_max = lanes.iter().fold(0.0f64, |m, &x| m.max(x));
-    for i in full..n {
-        let v2: f64 = v.iter().take(d).map(|va| va[i] as f64 * va[i] as f64).sum();
-        if status[i] == ACTIVE && v2 > v2_max {
-            v2_max = v2;
-        }
-    }
-    v2_max
 }
 
 #[cfg(all(test, feature = "std"))]

@@ -18,9 +18,6 @@ use crate::simd::Simd;
 use crate::{Error, Real};
 use core::mem::size_of;
 
-/// The largest [`WorldDef::max_substeps`] a definition may set.
-pub const MAX_SUBSTEPS: u32 = 1 << 20;
-
 /// Nodes lighter than this fraction of the lightest particle are treated as empty: epsilon^2,
 /// which only keeps the division `p_i / m_i` away from denormals. A larger cutoff does harm: a
 /// node that carries a sliver of a particle still has a well-defined velocity (its `p_i / m_i`

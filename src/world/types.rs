@@ -10,57 +10,6 @@ use crate::material::Deformation;
 use crate::math::Mat;
 use crate::{Real, Vec3};
 
-/// What one call of [`World::step`] did.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct StepReport {
-    /// Substeps taken (>= 1).
-    pub substeps: u32,
-    /// Length of each substep, s.
-    pub substep_dt: Real,
-    /// Particle-substeps in which a particle reached a stick or slip wall and was stopped there.
-    pub stopped: u32,
-    /// Particles that crossed an open face and left the simulation.
-    pub escaped: u32,
-    /// Particles frozen in this call: their state turned non-finite, their F inverted, or
-    /// they ran away (see `runaway`). Nonzero means the step went bad somewhere
-    /// ([`StepReport::went_bad`]).
-    pub frozen: u32,
-    /// Of the frozen, those that ran away: their volume ratio `J` left
-    /// `[1 / max_volume_ratio, max_volume_ratio]` ([`WorldDef::max_volume_ratio`]), their
-    /// speed passed [`crate::Resolvable::speed`], or their hardening (snow) took their wave
-    /// speed past what the substep resolves (a Courant number above 1). The sign of an
-    /// unstable scheme or a time step too long for the scene.
-    pub runaway: u32,
-    /// The ids of the first frozen particles (up to 8), for diagnosis.
-    pub first_frozen: heapless::Vec<u32, 8>,
-}
-
-impl StepReport {
-    pub(crate) fn note_frozen(&mut self, id: u32, runaway: bool) {
-        self.frozen += 1;
-        self.runaway += runaway as u32;
-        // A full list only means more than 8 froze; the count says how many.
-        let _ = self.first_frozen.push(id);
-    }
-
-    /// Whether a particle froze in this call (non-finite state, inverted F or runaway volume):
-    /// the flag a host checks after each step. Frozen particles leave the simulation; the
-    /// rest of the world goes on.
-    pub fn went_bad(&self) -> bool {
-        self.frozen > 0
-    }
-}
-
-/// A transported scalar field.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum ScalarField {
-    /// Temperature, K (heat conduction).
-    Temperature = 0,
-    /// Concentration potential `c / c_sat` (diffusion).
-    Concentration = 1,
-}
-
 /// One particle for [`World::add_particle`]. In 2D the z components are ignored.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ParticleDef {

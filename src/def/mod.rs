@@ -5,8 +5,13 @@
 //! (m, kg, s, Pa); any consistent unit system works because the kernel has no built-in constant
 //! other than the default gravity.
 
-use crate::effects::Effects;
+pub(crate) mod effects;
+
 use crate::{Real, Vec3};
+pub use effects::{
+    Damping, DampingZone, Effects, Feedback, ScalarBoundary, ScalarField, Schedule, Transport,
+    DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
+};
 
 /// Spatial dimension and kinematic assumption of a world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -577,6 +582,9 @@ impl WorldDef {
         }
     }
 }
+
+/// The largest [`WorldDef::max_substeps`] a definition may set.
+pub const MAX_SUBSTEPS: u32 = 1 << 20;
 
 /// The largest [`MaterialDef::hardening_coefficient`] snow may have (see there why).
 pub const MAX_HARDENING_COEFFICIENT: Real = 100.0;

@@ -1,0 +1,429 @@
+//! What a scene declares beyond the momentum equation ([`Effects`], in
+//! [`crate::WorldDef::effects`]): damping and its thermostat, particle forces and tractions,
+//! a body force, heat conduction and diffusion, plasticity. Declarations only, checked when a
+//! world is made; the terms they add to a step are [`crate::effects`], the setters of their
+//! per-particle data [`crate::World`]'s.
+
+use super::Face;
+use crate::{Error, Real, Vec3};
+
+/// Most points a [`Schedule`] holds.
+pub const SCHEDULE_POINTS: usize = 8;
+
+/// A value that is a function of time: piecewise linear through up to [`SCHEDULE_POINTS`]
+/// `(time, value)` points, constant before the first point and after the last. No point is the
+/// constant 0; one point is a constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// Number of points used, 0..=[`SCHEDULE_POINTS`].
+    pub points: u32,
+    /// Times of the points, s, strictly increasing; entries past `points` are ignored.
+    pub times: [Real; SCHEDULE_POINTS],
+    /// Values at those times; entries past `points` are ignored.
+    pub values: [Real; SCHEDULE_POINTS],
+}
+
+impl Schedule {
+    /// The constant 0.
+    pub const ZERO: Schedule = Schedule {
+        points: 0,
+        times: [0.0; SCHEDULE_POINTS],
+        values: [0.0; SCHEDULE_POINTS],
+    };
+
+    /// The constant `value`.
+    pub const fn constant(value: Real) -> Schedule {
+        let mut s = Schedule::ZERO;
+        s.points = 1;
+        s.values[0] = value;
+        s
+    }
+
+    /// Piecewise linear through `points` (time, value); [`Error::InvalidEffect`] if there are
+    /// more than [`SCHEDULE_POINTS`], or they are not finite, or the times do not increase.
+    pub fn from_points(points: &[(Real, Real)]) -> Result<Schedule, Error> {
+        if points.len() > SCHEDULE_POINTS {
+            return Err(Error::InvalidEffect);
+        }
+        let mut s = Schedule::ZERO;
+        s.points = points.len() as u32;
+        for (k, &(t, v)) in points.iter().enumerate() {
+            s.times[k] = t;
+            s.values[k] = v;
+        }
+        if !s.is_valid(false) {
+            return Err(Error::InvalidEffect);
+        }
+        Ok(s)
+    }
+
+    /// Whether the used points are finite with increasing times (and, with `non_negative`,
+    /// values >= 0).
+    pub fn is_valid(&self, non_negative: bool) -> bool {
+        let n = self.points as usize;
+        n <= SCHEDULE_POINTS
+            && (0..n).all(|k| {
+                let (t, v) = (self.times[k], self.values[k]);
+                t.is_finite()
+                    && v.is_finite()
+                    && (!non_negative || v >= 0.0)
+                    && (k == 0 || t > self.times[k - 1])
+            })
+    }
+
+    /// The value at time `t`, s.
+    pub fn at(&self, t: f64) -> Real {
+        let n = (self.points as usize).min(SCHEDULE_POINTS);
+        if n == 0 {
+            return 0.0;
+        }
+        let (ts, vs) = (&self.times[..n], &self.values[..n]);
+        if t <= ts[0] as f64 {
+            return vs[0];
+        }
+        for k in 1..n {
+            if t <= ts[k] as f64 {
+                let f = (t - ts[k - 1] as f64) / (ts[k] as f64 - ts[k - 1] as f64);
+                return (vs[k - 1] as f64 + f * (vs[k] as f64 - vs[k - 1] as f64)) as Real;
+            }
+        }
+        vs[n - 1]
+    }
+
+    /// Largest value over all time (0 for no point).
+    pub fn max_value(&self) -> Real {
+        let n = (self.points as usize).min(SCHEDULE_POINTS);
+        self.values[..n].iter().fold(0.0, |m: Real, &v| m.max(v))
+    }
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Schedule::ZERO
+    }
+}
+
+/// What a scene declares beyond the momentum equation. [`Effects::NONE`] is the default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Effects {
+    /// Damping, if declared.
+    pub damping: Option<Damping>,
+    /// Reserve a per-particle external force column `F_p`, N (per unit thickness in plane
+    /// strain), added to the nodal force as `S_ip F_p` (E14). Set with
+    /// [`crate::World::set_particle_forces`].
+    pub particle_forces: bool,
+    /// Most tractions the world holds (0: none). A traction loads one face of one particle's
+    /// domain; its resultant enters `f_iT` (E16) spread with the particle's weights (see
+    /// [`crate::World::add_tractions`] and the traction pass for why not with `N_i` on the
+    /// face).
+    pub traction_capacity: u32,
+    /// A uniform body force per unit mass besides gravity, m/s^2, scaled by
+    /// `body_force_scale(t)`: added to every node as `m_i b(t)` (E14). Unlike gravity it is
+    /// not counted in the potential energy of [`crate::Diagnostics`].
+    pub body_force: Vec3,
+    /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
+    pub body_force_scale: Schedule,
+    /// Time factors of the tractions (a ramp, a load cycle): each traction follows one of
+    /// them, the first unless [`crate::World::set_traction_schedule`] chose another. Default
+    /// the constant 1 for all. No point means a factor of 0.
+    pub traction_schedules: [Schedule; TRACTION_SCHEDULES],
+    /// Heat conduction (E54-E64), if declared: a temperature column (K) on the
+    /// particles, conducted with each material's [`crate::MaterialDef::conductivity`] and
+    /// [`crate::MaterialDef::heat_capacity`].
+    pub heat: Option<Transport>,
+    /// Diffusion (E54-E64), if declared: a concentration-potential column
+    /// (dimensionless, c / c_sat) on the particles, diffused with each material's
+    /// [`crate::MaterialDef::diffusivity`].
+    pub diffusion: Option<Transport>,
+    /// Reserve the plastic history column: one value per particle that the plastic models
+    /// keep ([`crate::MaterialModel::plastic`]: the equivalent plastic strain of
+    /// [`crate::MaterialModel::VonMises`], the accumulated plastic shear of
+    /// [`crate::MaterialModel::DruckerPrager`], `J_p - 1` of [`crate::MaterialModel::Snow`]).
+    /// Those models can be added only when it is declared; a world without it has the memory
+    /// and the step of one without plastic materials.
+    pub plasticity: bool,
+}
+
+/// How many schedules the tractions may follow ([`Effects::traction_schedules`]).
+pub const TRACTION_SCHEDULES: usize = 4;
+
+impl Effects {
+    /// Nothing declared.
+    pub const NONE: Effects = Effects {
+        damping: None,
+        particle_forces: false,
+        traction_capacity: 0,
+        body_force: Vec3::ZERO,
+        body_force_scale: Schedule::ZERO,
+        traction_schedules: [Schedule::constant(1.0); TRACTION_SCHEDULES],
+        heat: None,
+        diffusion: None,
+        plasticity: false,
+    };
+
+    /// Checks every parameter ([`Error::InvalidEffect`] names them all).
+    pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
+        let ok_damping = self.damping.is_none_or(|d| d.is_valid(axes));
+        let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
+            && self.body_force_scale.is_valid(false)
+            && self.traction_schedules.iter().all(|s| s.is_valid(false));
+        let ok_transport = [self.heat, self.diffusion]
+            .iter()
+            .all(|t| t.is_none_or(|t| t.is_valid(axes)));
+        if ok_damping && ok_body && ok_transport && self.traction_capacity <= 1 << 24 {
+            Ok(())
+        } else {
+            Err(Error::InvalidEffect)
+        }
+    }
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Effects::NONE
+    }
+}
+
+/// A kinetic-energy thermostat on the grid damping (NairnMPM's feedback damping, a
+/// Nosé-Hoover-style controller; E52): once per substep,
+/// `alpha += 2 gain (KE - target(t)) dt / M`, clamped to `[0, max_alpha]`, where KE and M are
+/// the kinetic energy (with APIC's affine part, as [`crate::Diagnostics::kinetic`]) and mass
+/// of the active particles. The evolving alpha adds to the grid
+/// damping `alpha_g` and is kept in the world (a snapshot carries it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feedback {
+    /// Gain `1/Q`, 1/m^2, > 0. Sets how fast alpha reacts: an excess kinetic energy per unit
+    /// mass `e` (m^2/s^2) raises alpha by `2 gain e` per second.
+    pub gain: Real,
+    /// Target kinetic energy, J, a function of time (>= 0). 0 drives the scene to rest.
+    pub target: Schedule,
+    /// Largest alpha, 1/s, > 0 (infinity: unbounded).
+    pub max_alpha: Real,
+}
+
+/// Damping (E48-E53), on top of the PIC damping that [`crate::WorldDef::flip_beta`] sets
+/// (E22-E26).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Damping {
+    /// Grid damping `alpha_g'(t)`, 1/s, >= 0: damps the velocity extrapolated from the grid.
+    pub grid: Schedule,
+    /// Particle damping `alpha_p'(t)`, 1/s, >= 0: damps the particle velocity.
+    pub particle: Schedule,
+    /// A thermostat that adds to the grid damping, if any.
+    pub feedback: Option<Feedback>,
+    /// Reserve two per-particle columns, `alpha_g(x_p)` and `alpha_p(x_p)` in 1/s, added to the
+    /// global values for that particle: position-dependent damping as E53 writes it (the
+    /// host sets them with [`crate::World::set_particle_damping`], for example from each
+    /// particle's position). They act in the particle update whatever `grid_on_force` says.
+    pub per_particle: bool,
+    /// Where the grid damping `alpha_g'(t)` (and the thermostat's alpha) acts. `false` (the
+    /// default): in the particle update, on the velocity extrapolated from the grid (E24,
+    /// E48). `true`: on the nodal force, `f_i - alpha_g' p_i` (E49), so that the nodal
+    /// momenta the walls act on are already damped; the particle update keeps the PIC
+    /// damping and `alpha_p'`. The two agree for a resolved motion away from walls; at a wall
+    /// the force form damps only what the wall leaves free (the wall's fixed components take
+    /// the wall's value, damped or not), where the particle form also damps the velocity the
+    /// wall has taken out of the nodes.
+    pub grid_on_force: bool,
+    /// Zones of space where the grid damps, on the nodal force (E50-E51): a node at `x_i`
+    /// takes the rate `alpha_g(x_i)`, the sum of [`DampingZone::rate_at`] over the first
+    /// `zone_count` zones, besides the grid rate. An absorbing layer at a boundary, a region
+    /// to calm. Boxes rather than a nodal field the host fills: they are part of the
+    /// definition (a snapshot and a C host carry them as they are), cost no memory and do not
+    /// depend on the grid's resolution.
+    // A literal length: with the constant there, rustc 1.95 fails on struct-update syntax
+    // inside a closure (an internal compiler error).
+    pub zones: [DampingZone; 4],
+    /// How many of `zones` are used (at most [`DAMPING_ZONES`]).
+    pub zone_count: u32,
+}
+
+/// Most zones of [`Damping::zones`].
+pub const DAMPING_ZONES: usize = 4;
+
+/// A box of space where the grid damps (E50-E51), for
+/// [`Damping::zones`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DampingZone {
+    /// The box's lowest corner, m (z is not read in 2D).
+    pub min: Vec3,
+    /// The box's highest corner, m, above `min` on every axis the world has.
+    pub max: Vec3,
+    /// Rate, 1/s (finite, >= 0): uniform in the box, or its value on face `ramp`.
+    pub rate: Real,
+    /// `None`: the rate is uniform in the box. `Some(face)`: it rises as the square of the
+    /// distance from the box's opposite face, from 0 there to `rate` on `face`: an absorbing
+    /// layer against that face of the grid, graded so that a wave entering it is not
+    /// reflected by a jump in damping (a face of an axis the world has).
+    pub ramp: Option<Face>,
+}
+
+impl DampingZone {
+    /// An empty zone (rate 0): a starting point for struct-update syntax.
+    pub const NONE: DampingZone = DampingZone {
+        min: Vec3::ZERO,
+        max: Vec3::ZERO,
+        rate: 0.0,
+        ramp: None,
+    };
+
+    /// The zone's rate at `x` (m, the world's axes), 1/s: 0 outside the box (E51: the
+    /// `alpha_g(t, x_i)` of E50 for one zone).
+    pub fn rate_at(&self, x: &[Real]) -> Real {
+        let inside = x
+            .iter()
+            .enumerate()
+            .all(|(a, &c)| c >= self.min[a] && c <= self.max[a]);
+        if !inside {
+            return 0.0;
+        }
+        match self.ramp {
+            None => self.rate,
+            Some(face) => {
+                let axis = face as usize / 2;
+                let (lo, hi) = (self.min[axis], self.max[axis]);
+                let c = x.get(axis).copied().unwrap_or(lo);
+                graded(self.rate, c, lo, hi, face as usize % 2 == 1)
+            }
+        }
+    }
+
+    /// Whether the zone is valid in a world of `axes` axes.
+    fn is_valid(&self, axes: usize) -> bool {
+        self.rate.is_finite()
+            && self.rate >= 0.0
+            && (0..axes).all(|a| {
+                self.min[a].is_finite() && self.max[a].is_finite() && self.min[a] < self.max[a]
+            })
+            && self.ramp.is_none_or(|f| (f as usize / 2) < axes)
+    }
+}
+
+/// A graded zone's rate at coordinate `c` of its grading axis, the box spanning `lo..hi` on
+/// it (E51): `rate s^2`, `s` the distance from the face opposite the one the rate rises toward
+/// (`toward_max`: the high face) over the box's width.
+#[inline]
+pub(crate) fn graded(rate: Real, c: Real, lo: Real, hi: Real, toward_max: bool) -> Real {
+    let s = if toward_max {
+        (c - lo) / (hi - lo)
+    } else {
+        (hi - c) / (hi - lo)
+    };
+    rate * s * s
+}
+
+impl Damping {
+    /// No damping: a starting point for struct-update syntax.
+    pub const NONE: Damping = Damping {
+        grid: Schedule::ZERO,
+        particle: Schedule::ZERO,
+        feedback: None,
+        per_particle: false,
+        grid_on_force: false,
+        zones: [DampingZone::NONE; DAMPING_ZONES],
+        zone_count: 0,
+    };
+
+    /// The zones in use.
+    pub fn used_zones(&self) -> &[DampingZone] {
+        &self.zones[..(self.zone_count as usize).min(DAMPING_ZONES)]
+    }
+
+    /// Whether the particle update damps: a particle rate, per-particle rates, or the grid
+    /// rate (or thermostat) where it acts in the particle update.
+    pub(crate) fn on_particles(&self) -> bool {
+        let grid = self.grid.max_value() > 0.0 || self.feedback.is_some();
+        self.particle.max_value() > 0.0 || self.per_particle || (grid && !self.grid_on_force)
+    }
+
+    /// Whether the grid update damps the nodes: the grid rate on the force, or a zone.
+    pub(crate) fn on_nodes(&self) -> bool {
+        self.grid_on_force || self.zone_count > 0
+    }
+
+    /// The largest damping rate the definition gives any particle, 1/s, in f64: the grid and
+    /// particle schedules' maxima and the zones' summed rates (zones may overlap; the
+    /// thermostat's alpha adapts
+    /// to the step and the per-particle rates come on top).
+    pub(crate) fn definition_rate(&self) -> f64 {
+        let zones: f64 = self.used_zones().iter().map(|z| z.rate as f64).sum();
+        self.grid.max_value() as f64 + self.particle.max_value() as f64 + zones
+    }
+
+    /// The largest per-particle rate ([`crate::World::set_particle_damping`]) a world of the
+    /// definition `def` resolves, 1/s: half of what the definition's rates leave of
+    /// [`crate::Resolvable::rate`], so that a particle's two rates and the definition's stay
+    /// within it.
+    pub(crate) fn particle_rate_limit(&self, def: &crate::WorldDef) -> f64 {
+        0.5 * (def.resolvable().rate - self.definition_rate())
+    }
+}
+
+impl Damping {
+    /// Whether every parameter is valid in a world of `axes` axes.
+    pub(crate) fn is_valid(&self, axes: usize) -> bool {
+        self.zone_count as usize <= DAMPING_ZONES
+            && self.used_zones().iter().all(|z| z.is_valid(axes))
+            && self.grid.is_valid(true)
+            && self.particle.is_valid(true)
+            && self.feedback.is_none_or(|f| {
+                f.gain.is_finite()
+                    && f.gain > 0.0
+                    && f.target.is_valid(true)
+                    && f.max_alpha > 0.0
+                    && !f.max_alpha.is_nan()
+            })
+    }
+}
+
+/// Boundary condition of a transported scalar (temperature or concentration potential) on one
+/// face of the grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScalarBoundary {
+    /// No flow across the face (the natural condition of E55).
+    Insulated,
+    /// The value held fixed on the face: the nodes from the grid face to the wall plane (as the
+    /// walls of [`crate::Boundary`]) take it.
+    Fixed(Real),
+    /// A flow into the domain per unit area of the face (W/m^2 for heat, m/s for the
+    /// concentration potential), applied on the wall plane's nodes (E60).
+    Flux(Real),
+}
+
+/// A transported scalar field (heat conduction or diffusion, E54-E64):
+/// its boundary conditions and whether particles carry a source.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transport {
+    /// Condition of each face, indexed by [`crate::Face`].
+    pub faces: [ScalarBoundary; 6],
+    /// Reserve a per-particle source column (W/m^3 for heat, 1/s for the concentration
+    /// potential), set with [`crate::World::set_particle_sources`].
+    pub sources: bool,
+}
+
+impl Transport {
+    /// Every face insulated, no sources.
+    pub const INSULATED: Transport = Transport {
+        faces: [ScalarBoundary::Insulated; 6],
+        sources: false,
+    };
+
+    /// Whether the faces of the `axes` used have finite values (the z faces of a 2D world are
+    /// not read, like every other z component there).
+    pub(crate) fn is_valid(&self, axes: usize) -> bool {
+        self.faces[..2 * axes].iter().all(|f| match f {
+            ScalarBoundary::Insulated => true,
+            ScalarBoundary::Fixed(v) | ScalarBoundary::Flux(v) => v.is_finite(),
+        })
+    }
+}
+
+/// A transported scalar field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ScalarField {
+    /// Temperature, K (heat conduction).
+    Temperature = 0,
+    /// Concentration potential `c / c_sat` (diffusion).
+    Concentration = 1,
+}

@@ -1,0 +1,259 @@
+//! The setters of the declared effects' per-particle data and state: particle forces and
+//! tractions, per-particle damping rates and the thermostat's update, transported scalars and
+//! their sources. The effects' declarations are [`crate::Effects`]; their terms in the step
+//! [`crate::effects`].
+
+use super::World;
+use crate::def::Feedback;
+use crate::def::ScalarField;
+use crate::layout::{Layout, TractionRecord};
+use crate::{Error, Real, Vec3};
+use core::ops::Range;
+
+impl World<'_> {
+    /// Sets the external force `F_p` (N; per unit thickness in plane strain) of particles
+    /// `first..first + n`, `n` the length of the slices (z may be empty in 2D). Needs
+    /// [`crate::Effects::particle_forces`]. The force stays until set again.
+    pub fn set_particle_forces(&mut self, first: u32, force: [&[Real]; 3]) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
+        let group = (layout.force.count > 0).then_some(layout.force.first);
+        let columns = &force[..layout.d];
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            columns,
+            Error::NonFiniteInput,
+            |_| Ok(()),
+        )
+    }
+    /// Adds one traction per particle of `particles`, each loading the `face` of that
+    /// particle's domain with the traction `traction` (Pa: force per area of the deformed face,
+    /// per unit thickness in plane strain, per radian axisymmetric); returns the range of their
+    /// traction ids. The face is the side of the undeformed square (cube) of side
+    /// `2 l_p = h / n` around the particle, carried along by its deformation: what
+    /// [`World::add_surface_tractions`] loads with the face's normal and area `(2 l_p)^(D-1)`.
+    /// All or nothing. Needs [`crate::Effects::traction_capacity`]. The tractions are
+    /// integrated each substep into `f_iT` (E15, E16) while their particle is active.
+    pub fn add_tractions(
+        &mut self,
+        particles: Range<u32>,
+        face: crate::Face,
+        traction: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let d = def.axes();
+        if face as usize / 2 >= d {
+            return Err(Error::InvalidEffect);
+        }
+        let mut normal = Vec3::ZERO;
+        normal[face as usize / 2] = if (face as usize).is_multiple_of(2) {
+            -1.0
+        } else {
+            1.0
+        };
+        let side = def.cell_size / def.particles_per_cell as Real;
+        let area = (1..d).fold(1.0, |a, _| a * side);
+        self.add_surface_tractions(particles, normal, area, traction)
+    }
+
+    /// Adds one traction per particle of `particles`, each loading a plane face of outward
+    /// normal `normal` and area `area` (m^2; m per unit thickness in plane strain and
+    /// axisymmetric, the length of the face's trace in the (r, z) plane), both in the
+    /// reference configuration, with the traction `traction` (Pa, per area of the deformed
+    /// face; per radian axisymmetric); returns the range of their traction ids. Any normal in
+    /// the plane (2D; its z is ignored) or in space: a curved surface is loaded by giving each
+    /// particle at it the local normal and its share of the surface's area.
+    ///
+    /// The face is centred where the normal leaves the particle's undeformed domain (the
+    /// square of half-width `l_p` around it), is a segment (2D) or square (3D) across the
+    /// normal, and moves and deforms with the particle's `F`. All or nothing;
+    /// `InvalidEffect` for a normal of zero length or not finite, an area not positive and
+    /// finite, or a traction not finite. Needs [`crate::Effects::traction_capacity`].
+    pub fn add_surface_tractions(
+        &mut self,
+        particles: Range<u32>,
+        normal: Vec3,
+        area: Real,
+        traction: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        if layout.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let d = layout.d;
+        let finite = (0..d).all(|a| traction[a].is_finite() && normal[a].is_finite());
+        let length = crate::math::sqrt((0..d).map(|a| normal[a] * normal[a]).sum());
+        // A normal must have a length whose square is a normal float and that is finite.
+        let normal_ok = length > 1.0e-15 && length.is_finite();
+        if !(finite && normal_ok && area > 0.0 && area.is_finite()) {
+            return Err(Error::InvalidEffect);
+        }
+        if particles.start > particles.end {
+            return Err(Error::UnknownParticle);
+        }
+        let n = (particles.end - particles.start) as usize;
+        self.particle_range(particles.start, n)?;
+        let used = self.header().traction_count as usize;
+        if n > layout.traction_capacity - used {
+            return Err(Error::TractionCapacityExceeded);
+        }
+        let in_plane = |v: Vec3, a: usize| if a < d { v[a] } else { 0.0 };
+        let record = TractionRecord {
+            particle: 0,
+            schedule: 0,
+            traction: core::array::from_fn(|a| if a == 3 { area } else { in_plane(traction, a) }),
+            normal: core::array::from_fn(|a| in_plane(normal, a) / length),
+        };
+        let table = self.traction_records_mut(&layout, used, n);
+        for (rec, particle) in table.iter_mut().zip(particles) {
+            *rec = TractionRecord { particle, ..record };
+        }
+        self.header_mut().traction_count += n as u64;
+        Ok(used as u32..(used + n) as u32)
+    }
+
+    /// Makes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of the
+    /// table) follow the schedule `schedule` of [`crate::Effects::traction_schedules`] (new
+    /// tractions follow the first). All or nothing: `UnknownTraction` if the range is not
+    /// within the table, `InvalidEffect` for a schedule past the list (nothing changes);
+    /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
+    pub fn set_traction_schedule(&mut self, ids: Range<u32>, schedule: u32) -> Result<(), Error> {
+        let (start, end, used) = self.traction_range(ids)?;
+        if schedule as usize >= crate::TRACTION_SCHEDULES {
+            return Err(Error::InvalidEffect);
+        }
+        let layout = Layout::of(&self.def());
+        for rec in &mut self.traction_records_mut(&layout, 0, used)[start..end] {
+            rec.schedule = schedule;
+        }
+        Ok(())
+    }
+
+    /// Removes every traction (the capacity stays).
+    pub fn clear_tractions(&mut self) {
+        self.header_mut().traction_count = 0;
+    }
+
+    /// Removes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of
+    /// the table), so that loads applied together can be taken off together; the tractions
+    /// after them move down by `ids.len()`, in their order, and their room is free again.
+    /// `UnknownTraction` if the range is not within the table (nothing is removed);
+    /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
+    pub fn remove_tractions(&mut self, ids: Range<u32>) -> Result<(), Error> {
+        let (start, end, used) = self.traction_range(ids)?;
+        let layout = Layout::of(&self.def());
+        self.traction_records_mut(&layout, 0, used)
+            .copy_within(end..used, start);
+        self.header_mut().traction_count = (used - (end - start)) as u64;
+        Ok(())
+    }
+
+    /// `ids` as indices of the traction table, `(start, end, used)`, if it lies within the
+    /// `used` entries: `EffectNotDeclared` without [`crate::Effects::traction_capacity`],
+    /// else `UnknownTraction`.
+    fn traction_range(&self, ids: Range<u32>) -> Result<(usize, usize, usize), Error> {
+        if self.def().effects.traction_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let used = self.header().traction_count as usize;
+        let (start, end) = (ids.start as usize, ids.end as usize);
+        if start > end || end > used {
+            return Err(Error::UnknownTraction);
+        }
+        Ok((start, end, used))
+    }
+}
+
+impl World<'_> {
+    /// The thermostat (NairnMPM's feedback damping, E52): `alpha += 2 gain (KE - target) dt / M`,
+    /// clamped to `[0, min(max_alpha, room)]`, from the active particles' kinetic energy and
+    /// mass; `room` is the largest alpha the substep integrates stably. The stored alpha stays
+    /// finite: a rate that is not a number (no finite energy to compare) leaves it as it was.
+    pub(crate) fn update_feedback(&mut self, f: &Feedback, time: f64, dt: Real, room: f64) {
+        let (kinetic, mass) = self.read().kinetic_energy_and_mass();
+        let h = self.header_mut();
+        if mass > 0.0 {
+            let target = f.target.at(time) as f64;
+            let rate = 2.0 * f.gain as f64 * (kinetic - target) / mass;
+            let alpha = h.feedback_alpha + rate * dt as f64;
+            if !alpha.is_nan() {
+                h.feedback_alpha = alpha.clamp(0.0, (f.max_alpha as f64).min(room));
+            }
+        }
+    }
+
+    /// Sets the local grid and particle damping `alpha_g(x_p)`, `alpha_p(x_p)` (1/s, >= 0) of
+    /// particles `first..first + n`, added to the global damping for those particles (E53).
+    /// Needs [`crate::Damping::per_particle`]. A rate the step cannot resolve (above half of
+    /// what the definition's rates leave of [`crate::Resolvable::rate`]) is
+    /// [`Error::StableStepTooShort`].
+    pub fn set_particle_damping(
+        &mut self,
+        first: u32,
+        alpha_g: &[Real],
+        alpha_p: &[Real],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let group = (layout.damping.count > 0).then_some(layout.damping.first);
+        let limit = def
+            .effects
+            .damping
+            .map_or(0.0, |d| d.particle_rate_limit(&def));
+        let columns = &[alpha_g, alpha_p];
+        self.write_particle_columns(&layout, group, first, columns, Error::InvalidEffect, |v| {
+            if v < 0.0 {
+                Err(Error::InvalidEffect)
+            } else if v as f64 > limit {
+                Err(Error::StableStepTooShort)
+            } else {
+                Ok(())
+            }
+        })
+    }
+}
+
+impl World<'_> {
+    /// Sets the value of a transported scalar (temperature, K, or concentration potential) of
+    /// particles `first..first + n`, `n = values.len()`. Needs the field declared
+    /// ([`crate::Effects::heat`], [`crate::Effects::diffusion`]). Values start at 0.
+    pub fn set_particle_scalar(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 0, first, values)
+    }
+    /// Sets the source of a transported scalar (heat: W/m^3; diffusion: 1/s) of particles
+    /// `first..first + n`. Needs the field declared with [`crate::Transport::sources`].
+    pub fn set_particle_sources(
+        &mut self,
+        field: ScalarField,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        self.set_scalar_column(field, 2, first, values)
+    }
+    fn set_scalar_column(
+        &mut self,
+        field: ScalarField,
+        k: usize,
+        first: u32,
+        values: &[Real],
+    ) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
+        let g = layout.scalar[field as usize];
+        let group = (k < g.count).then_some(g.first + k);
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            &[values],
+            Error::NonFiniteInput,
+            |_| Ok(()),
+        )
+    }
+}
