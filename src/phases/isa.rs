@@ -19,7 +19,7 @@
 #![allow(clippy::too_many_arguments)]
 
 use super::lanes::{self, Lane, Lanes};
-use super::{g2p, p2g, rows::Compare, transport, Ctx};
+use super::{g2p, p2g, row_sums, rows::Compare, transport, Ctx};
 use crate::def::MaterialModel;
 use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
@@ -223,7 +223,7 @@ passes! {
         stride: [usize; D],
         g: &mut GridCols<'_, D>,
         adds: p2g::Adds,
-    ) => p2g::scatter_chunk;
+    ) => row_sums::scatter_chunk;
 
     /// [`crate::material::kirchhoff_lanes`]: one chunk's stress from its deformation, a
     /// function of its own per dimension, rather than a copy of every model in each pass that
