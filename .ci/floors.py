@@ -16,6 +16,7 @@ FLOORS = [
     ["phases"],
     ["effects"],
     ["material"],
+    ["simd"],
     ["grid"],
     ["particles"],
     ["storage"],
@@ -24,7 +25,6 @@ FLOORS = [
     ["def"],
     ["math"],
     ["pack"],
-    ["simd"],
     ["error"],
 ]
 LEVEL = {m: len(FLOORS) - i for i, floor in enumerate(FLOORS) for m in floor}

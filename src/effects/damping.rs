@@ -7,10 +7,10 @@
 use crate::def::effects::graded;
 use crate::def::{DampingZone, DAMPING_ZONES};
 use crate::particles::ParticleCols;
-use crate::phases::lanes::{load, Lane};
-use crate::phases::rows::Compare;
-use crate::phases::wide::Wide;
 use crate::phases::Ctx;
+use crate::simd::lanes::{load, Lane};
+use crate::simd::rows::Compare;
+use crate::simd::wide::Wide;
 use crate::Real;
 
 /// The damping acceleration `d = alpha_g v_gp + alpha_p v_p` (E24; E53 with each rate the

@@ -4,7 +4,7 @@
 //! damping and the second-order position update (E25, E26), or APIC (E78, E80: the grid's
 //! velocity, and the moment matrix `B_p` gathered with it, [`gather_chunk`]), less the damping
 //! acceleration when damping is declared, then the walls: the equations are
-//! [`super::update`]'s, on the lane type [`super::wide::Wide`].
+//! [`super::update`]'s, on the lane type [`crate::simd::wide::Wide`].
 //!
 //! Stress update: `grad v = sum v_i (x) G_ip` (E29), `dF = exp(grad v dt)` to the configured
 //! number of terms (E31), `F <- dF F` (kept as `H = F - I`), `J = det F` (E32), and `tau/rho0`
@@ -19,16 +19,13 @@
 //! (leaves `[1 / r, r]`, `r` the definition's `max_volume_ratio`), is frozen: it keeps its
 //! last finite position, F and stress, its velocity is zeroed, and it leaves the grid.
 //!
-//! Particles are processed in chunks of `W` ([`super::lanes::width`]): each particle gathers from its stencil rows into
+//! Particles are processed in chunks of `W` ([`crate::simd::lanes::width`]): each particle gathers from its stencil rows into
 //! the chunk's arrays, then the update and the material run as loops over the chunk's lanes
 //! (no calls, no branches: the compiler vectorises them), and the results are committed with
 //! selects, so a particle that is not updated keeps its state bit for bit.
 
-use super::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
 use super::p2g::{rows, Adds, Mode, Products};
-use super::rows::{self, Rows};
 use super::update;
-use super::wide::{Wide, WideMask};
 use super::{Ctx, Isa};
 use crate::def::UpdateOrder;
 use crate::effects::damping;
@@ -42,6 +39,9 @@ use crate::pack::{matrix, packs, unpacked, Pack};
 use crate::particles::StepReport;
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
+use crate::simd::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
+use crate::simd::rows::{self, Rows};
+use crate::simd::wide::{Wide, WideMask};
 use crate::Real;
 
 /// A D x D matrix per lane, `m[a][b][lane]`.

@@ -18,8 +18,7 @@
 // arguments for the stencils, which every pass already holds apart.
 #![allow(clippy::too_many_arguments)]
 
-use super::lanes::{self, Lane, Lanes};
-use super::{g2p, p2g, row_sums, rows::Compare, transport, Ctx};
+use super::{g2p, p2g, row_sums, transport, Ctx};
 use crate::def::MaterialModel;
 use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
@@ -27,6 +26,11 @@ use crate::material::Params;
 use crate::particles::ParticleCols;
 use crate::particles::StepReport;
 use crate::shape::{Shape1D, Stencils};
+use crate::simd::lanes::{Lane, Lanes};
+use crate::simd::rows::Compare;
+use crate::simd::Baseline;
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+use crate::simd::{Avx2, Avx512};
 use crate::Real;
 
 /// One instance of the passes compiled with more instruction-set features: the type that
@@ -42,9 +46,6 @@ macro_rules! wide {
         )*
     ) => {
         $(#[$tdoc])*
-        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
-        pub(crate) struct $isa;
-
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         impl Isa for $isa {
             const FULL_ROWS: bool = false;
@@ -68,7 +69,7 @@ macro_rules! wide {
                 #[inline(never)]
                 #[target_feature(enable = $features)]
                 pub(super) fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    // The instance, for the passes that take it ([`super::super::rows::Rows`]).
+                    // The instance, for the passes that take it ([`super::crate::simd::rows::Rows`]).
                     #[allow(dead_code)]
                     type I = $isa;
                     $($target)::+::<$($inst,)? $($garg),*>($($arg),*)
@@ -82,7 +83,7 @@ macro_rules! wide {
 /// one (each pass its own function), the AVX2 one and, with the `avx512` feature, the AVX-512
 /// one (each pass compiled in a `#[target_feature]` function, [`wide!`]). Each pass is written
 /// once, here, by its signature; a pass that reads stencil rows lane-major says `[I]` and takes the instance as
-/// its first type argument (its [`super::rows::Rows`]).
+/// its first type argument (its [`crate::simd::rows::Rows`]).
 macro_rules! passes {
     ($(
         $(#[$doc:meta])*
@@ -98,9 +99,6 @@ macro_rules! passes {
             const FULL_ROWS: bool;
         }
 
-        /// The target's baseline instruction set.
-        pub(crate) struct Baseline;
-
         impl Isa for Baseline {
             // The fallback for CPUs without AVX2 (and the instance valgrind and the fuzzer
             // run) is compiled for size.
@@ -109,7 +107,7 @@ macro_rules! passes {
             $(
                 #[inline(never)]
                 fn $name<$($generics)*>($($arg: $ty),*) $(-> $ret)? {
-                    // The instance, for the passes that take it ([`super::rows::Rows`]).
+                    // The instance, for the passes that take it ([`crate::simd::rows::Rows`]).
                     #[allow(dead_code)]
                     type I = Baseline;
                     $($target)::+::<$($inst,)? $($garg),*>($($arg),*)
@@ -211,7 +209,7 @@ passes! {
         affine: bool,
         lanes: bool,
         mls: bool,
-    ) => lanes::stencils;
+    ) => crate::phases::stencils;
 
     /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
     /// particle pass's re-map).

@@ -10,14 +10,11 @@
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
 pub(crate) mod isa;
-pub(crate) mod lanes;
 pub(crate) mod momentum;
 pub(crate) mod p2g;
 pub(crate) mod row_sums;
-pub(crate) mod rows;
 pub(crate) mod transport;
 pub(crate) mod update;
-pub(crate) mod wide;
 
 pub(crate) use isa::Isa;
 
@@ -28,16 +25,16 @@ macro_rules! with_instance {
         match $simd.instance() {
             #[cfg(all(target_arch = "x86_64", feature = "avx512"))]
             $crate::simd::Instance::Avx512 => {
-                type $isa = $crate::phases::isa::Avx512;
+                type $isa = $crate::simd::Avx512;
                 $body
             }
             #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
             $crate::simd::Instance::Avx2 => {
-                type $isa = $crate::phases::isa::Avx2;
+                type $isa = $crate::simd::Avx2;
                 $body
             }
             _ => {
-                type $isa = $crate::phases::isa::Baseline;
+                type $isa = $crate::simd::Baseline;
                 $body
             }
         }
@@ -47,6 +44,9 @@ pub(crate) use with_instance;
 
 use crate::grid::{Geom, NodeBox};
 use crate::layout::{MaterialRecord, TractionRecord};
+use crate::particles::ParticleCols;
+use crate::shape::{Shape1D, Stencils};
+use crate::simd::lanes::{load, Lane};
 use crate::Real;
 
 /// Everything a phase needs that is constant during one substep.
@@ -131,4 +131,51 @@ pub(crate) fn fastest_squared(
     d: usize,
 ) -> f64 {
     with_instance!(simd, I => I::fastest_squared(v, status, d))
+}
+
+/// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
+/// `x[axis][lane]` (with their first moments when `affine`, and each lane's x factors when
+/// `lanes`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
+/// chunk's deformation gradients.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    st: &mut Stencils<D, K, W>,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    x: &[Lane<W>; D],
+    affine: bool,
+    lanes: bool,
+    mls: bool,
+) {
+    let geom = &ctx.geom;
+    let mut s = [[0.0; W]; D];
+    for a in 0..D {
+        for ln in 0..W {
+            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
+        }
+    }
+    // cpGIMP's domain stretches; other families read none, and the chunk loads none.
+    let stretch: Option<[Lane<W>; D]> = if p.stretches() {
+        Some(core::array::from_fn(|a| load(p.stretch[a], start)))
+    } else {
+        None
+    };
+    st.compute::<S>(
+        shape,
+        &s,
+        stretch.as_ref(),
+        geom.nodes,
+        geom.stride,
+        geom.inv_h,
+        affine || mls,
+    );
+    if mls {
+        st.use_mls_gradient();
+    }
+    if lanes {
+        st.fill_lanes::<S>(affine);
+    }
 }

@@ -46,12 +46,12 @@
 //! a node costs a few products whatever the dimension. The force and the gradient take their
 //! weights from one function ([`Weighted`]), so both see the same numbers.
 
-use super::lanes::{live_lanes, load_into, Block, Lane, Lanes};
 use super::{Ctx, Isa};
 use crate::grid::GridCols;
 use crate::math::Mat;
 use crate::particles::ParticleCols;
 use crate::shape::{first_node, Shape1D, Stencil, Stencils};
+use crate::simd::lanes::{live_lanes, load_into, Block, Lane, Lanes};
 use crate::Real;
 
 /// The smallest `det A_p` with which a particle takes the mass-weighted gradient: below it

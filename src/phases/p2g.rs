@@ -8,13 +8,13 @@
 //!
 //! The row-sum engine that adds a chunk's products to the grid is [`super::row_sums`].
 
-use super::lanes::{load_into, Block, Lane};
 use super::row_sums::scatter_chunk;
 use super::{Ctx, Isa};
 use crate::grid::GridCols;
 use crate::layout::sym_pairs;
 use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
+use crate::simd::lanes::{load_into, Block, Lane};
 use crate::Real;
 
 /// What a particle-to-grid pass accumulates.
@@ -213,7 +213,7 @@ pub(crate) fn scatter_rows<
         }
         let mls = ctx.mls;
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
-        let live = super::lanes::live_lanes(p, start, count);
+        let live = crate::simd::lanes::live_lanes(p, start, count);
         products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);
     }

@@ -6,11 +6,11 @@
 //! Both run the one row code ([`for_each_row`]). The equations, what is scattered, are
 //! [`super::p2g`]'s.
 
-use super::lanes::{Lane, Lanes};
 use super::p2g::{apic_rows, Adds, Mode, Products};
-use super::rows::{self, Rows};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
+use crate::simd::lanes::{Lane, Lanes};
+use crate::simd::rows::{self, Rows};
 use crate::Real;
 use core::mem::MaybeUninit;
 use core::ops::{Add, Mul};
@@ -902,8 +902,8 @@ mod tests {
     /// 2D and 3D, linear weights, the cubic B-spline in 3D and the axisymmetric form.
     #[test]
     fn every_instance_scatters_blocks_as_groups_do() {
-        use crate::phases::isa::Avx2;
-        use crate::phases::lanes::width;
+        use crate::simd::lanes::width;
+        use crate::simd::Avx2;
         use crate::simd::{Instance, Simd};
         let gimp = Gimp::new(2);
         let axisymmetric = Axisymmetric::new(gimp, 0.0, 0.5, 0.125);
@@ -917,7 +917,7 @@ mod tests {
         }
         #[cfg(feature = "avx512")]
         if widest == Instance::Avx512 {
-            use crate::phases::isa::Avx512;
+            use crate::simd::Avx512;
             check_modes::<Avx512, 2, 3, _, { width(2) }>(&gimp);
             check_modes::<Avx512, 2, 2, _, { width(2) }>(&Linear);
             check_modes::<Avx512, 2, 3, _, { width(2) }>(&axisymmetric);

@@ -40,7 +40,6 @@
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
 //! field.
 
-use super::lanes::{live_lanes, load, Lane, Lanes};
 use super::{Ctx, Isa};
 use crate::def::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
@@ -48,6 +47,7 @@ use crate::material::Deformation;
 use crate::math::Mat;
 use crate::particles::ParticleCols;
 use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
+use crate::simd::lanes::{live_lanes, load, Lane, Lanes};
 use crate::Real;
 
 /// The order in which a chunk's lanes are scattered to a field's columns: 0, W/2, 1, W/2 + 1,

@@ -9,10 +9,10 @@
 //! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
 //!   with its outward velocity zeroed, or escapes through an open face.
 
-use super::rows::Compare;
-use super::wide::{Wide, WideMask};
 use crate::def::Boundary;
 use crate::grid::Geom;
+use crate::simd::rows::Compare;
+use crate::simd::wide::{Wide, WideMask};
 use crate::Real;
 
 /// The constants of a substep's particle update, made once per pass.

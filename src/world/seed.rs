@@ -306,7 +306,7 @@ type RowSpan<'r> = &'r dyn Fn([i64; 2], [i64; 2]) -> [i64; 2];
 /// The bins whose number of sites is a multiple of 4 come first, the others (the partial bins
 /// at the box's edges) after them: a run of the first kind then starts where a 4-lane block
 /// of the passes' chunks starts (when the fill itself starts there), so that the gathers read
-/// one stencil row for the block's four particles ([`crate::phases::rows::blocks_share`]).
+/// one stencil row for the block's four particles ([`crate::simd::rows::blocks_share`]).
 /// At 2 sites per cell per axis that is every bin inside the box (4 sites in 2D, 8 in 3D) and,
 /// in 3D, those on its faces (4).
 struct BinnedSites<'r> {

@@ -319,17 +319,17 @@ macro_rules! by_four {
     };
 }
 
-impl Rows for super::isa::Baseline {
+impl Rows for super::Baseline {
     by_four!();
 }
 
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
-impl Rows for super::isa::Avx2 {
+impl Rows for super::Avx2 {
     by_four!();
 }
 
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
-impl Rows for super::isa::Avx512 {
+impl Rows for super::Avx512 {
     by_four!();
 }
 
@@ -391,17 +391,17 @@ macro_rules! by_four_compare {
     };
 }
 
-impl Compare for super::isa::Baseline {
+impl Compare for super::Baseline {
     by_four_compare!();
 }
 
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
-impl Compare for super::isa::Avx2 {
+impl Compare for super::Avx2 {
     by_four_compare!();
 }
 
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", feature = "f64"))]
-impl Compare for super::isa::Avx512 {
+impl Compare for super::Avx512 {
     by_four_compare!();
 }
 
@@ -409,7 +409,7 @@ impl Compare for super::isa::Avx512 {
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd", not(feature = "f64")))]
 mod x86 {
     use super::*;
-    use crate::phases::isa::{Avx2, Avx512};
+    use crate::simd::{Avx2, Avx512};
     use core::arch::x86_64::*;
 
     /// Eight lanes in a 256-bit register. Only [`Rows`] for [`Avx2`] makes one (its field is
@@ -744,7 +744,7 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::phases::lanes::width;
+    use crate::simd::lanes::width;
 
     /// Reads the rows of every lane of a chunk with instance `I` and checks them against the
     /// column; where the lanes share their bases four by four, also with the shared read.
@@ -770,16 +770,16 @@ mod tests {
 
     /// [`check`] for every instance the CPU supports.
     fn check_all<const W: usize>(col: &[Real], base: &[u32; W], off: usize) {
-        check::<super::super::isa::Baseline, W>(col, base, off);
+        check::<super::super::Baseline, W>(col, base, off);
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         {
             use crate::simd::{Instance, Simd};
             if Simd::Detect.instance() >= Instance::Avx2 {
-                check::<super::super::isa::Avx2, W>(col, base, off);
+                check::<super::super::Avx2, W>(col, base, off);
             }
             #[cfg(feature = "avx512")]
             if Simd::Detect.instance() == Instance::Avx512 {
-                check::<super::super::isa::Avx512, W>(col, base, off);
+                check::<super::super::Avx512, W>(col, base, off);
             }
         }
     }
@@ -865,16 +865,16 @@ mod tests {
 
     /// [`check_compare`] on chunks of `W` for every instance the CPU supports.
     fn compare_all<const W: usize>() {
-        check_compare::<super::super::isa::Baseline, W>();
+        check_compare::<super::super::Baseline, W>();
         #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         {
             use crate::simd::{Instance, Simd};
             if Simd::Detect.instance() >= Instance::Avx2 {
-                check_compare::<super::super::isa::Avx2, W>();
+                check_compare::<super::super::Avx2, W>();
             }
             #[cfg(feature = "avx512")]
             if Simd::Detect.instance() == Instance::Avx512 {
-                check_compare::<super::super::isa::Avx512, W>();
+                check_compare::<super::super::Avx512, W>();
             }
         }
     }

@@ -4,9 +4,8 @@
 //! The particle passes work chunk by chunk with these; what the scatter and the gathers share
 //! lives here, so the phases do not import each other for it.
 
-use super::Ctx;
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::shape::{Row4, Shape1D, Stencils};
+use crate::shape::Row4;
 use crate::Real;
 
 /// Particles per chunk in a `D`-dimensional world: a multiple of 4 (the vector code works
@@ -77,7 +76,7 @@ impl<const W: usize> Lanes<W> {
         Lanes::at(q, mask.bitmask())
     }
 
-    /// Lanes `q..q + n` from `bits`, bit `i` for lane `q + i` (a [`crate::phases::rows::Compare`]
+    /// Lanes `q..q + n` from `bits`, bit `i` for lane `q + i` (a [`crate::simd::rows::Compare`]
     /// mask's bits; `q` a multiple of the vectors' lane count `n`, below `W`).
     #[inline(always)]
     pub fn at(q: usize, bits: u32) -> Self {
@@ -257,51 +256,4 @@ pub(crate) fn live_lanes<const D: usize, const W: usize>(
 ) -> Lanes<W> {
     let n = W.min(count.saturating_sub(start));
     Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
-}
-
-/// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at
-/// `x[axis][lane]` (with their first moments when `affine`, and each lane's x factors when
-/// `lanes`: see [`Stencils::fill_lanes`]). A family whose domain stretches (cpGIMP) also reads the
-/// chunk's deformation gradients.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-    st: &mut Stencils<D, K, W>,
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    start: usize,
-    x: &[Lane<W>; D],
-    affine: bool,
-    lanes: bool,
-    mls: bool,
-) {
-    let geom = &ctx.geom;
-    let mut s = [[0.0; W]; D];
-    for a in 0..D {
-        for ln in 0..W {
-            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
-        }
-    }
-    // cpGIMP's domain stretches; other families read none, and the chunk loads none.
-    let stretch: Option<[Lane<W>; D]> = if p.stretches() {
-        Some(core::array::from_fn(|a| load(p.stretch[a], start)))
-    } else {
-        None
-    };
-    st.compute::<S>(
-        shape,
-        &s,
-        stretch.as_ref(),
-        geom.nodes,
-        geom.stride,
-        geom.inv_h,
-        affine || mls,
-    );
-    if mls {
-        st.use_mls_gradient();
-    }
-    if lanes {
-        st.fill_lanes::<S>(affine);
-    }
 }

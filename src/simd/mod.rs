@@ -12,7 +12,7 @@
 //!   (benches/PERFORMANCE.md).
 //!
 //! The gathers' arithmetic is written once on each instance's own vector type
-//! (`phases::rows::Rows`: 4, 8 or 16 lanes); everything else is the same source.
+//! (`simd::rows::Rows`: 4, 8 or 16 lanes); everything else is the same source.
 //!
 //! FMA is deliberately not enabled, and the kernel never calls `mul_add`: every instance rounds
 //! every operation the same way, so a step gives bit-identical results on any path (tested), and
@@ -21,6 +21,26 @@
 //! Process-wide caps: [`use_baseline_only`] (for tools that cannot decode the wider
 //! instructions) and [`use_avx2_at_most`] (for hosts on CPUs that lower their clock while
 //! 512-bit instructions run, which slows the host's other code too).
+//!
+//! Besides the choice: the instruction sets as types ([`Baseline`], `Avx2`, `Avx512`), and the
+//! lane machinery every pass shares: [`lanes`] (chunks and lane sets), [`rows`] (each
+//! instance's vectors, row reads and compares), [`wide`] (the lane type with operators).
+
+pub(crate) mod lanes;
+pub(crate) mod rows;
+pub(crate) mod wide;
+
+/// The target's baseline instruction set.
+pub(crate) struct Baseline;
+
+/// AVX and AVX2 (x86-64). Chosen only when the CPU supports them ([`Instance::Avx2`]).
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+pub(crate) struct Avx2;
+
+/// AVX-512 F, VL, BW and DQ (x86-64). Chosen only when the CPU supports them
+/// (`Instance::Avx512`).
+#[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+pub(crate) struct Avx512;
 
 /// The instruction-set choice for a step. Not part of the stable API: tests use it to check
 /// that every path gives bit-identical state.
