@@ -22,9 +22,10 @@
 //! instructions) and [`use_avx2_at_most`] (for hosts on CPUs that lower their clock while
 //! 512-bit instructions run, which slows the host's other code too).
 //!
-//! Besides the choice: the instruction sets as types ([`Baseline`], `Avx2`, `Avx512`), and the
-//! lane machinery every pass shares: [`lanes`] (chunks and lane sets), [`rows`] (each
-//! instance's vectors, row reads and compares), [`wide`] (the lane type with operators).
+//! Besides the choice (internal to the crate): the instruction sets as types (`Baseline`,
+//! `Avx2`, `Avx512`), and the lane machinery every pass shares: `lanes` (chunks and lane
+//! sets), `rows` (each instance's vectors, row reads and compares), `wide` (the lane type
+//! with operators).
 
 pub(crate) mod lanes;
 pub(crate) mod rows;
