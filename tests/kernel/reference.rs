@@ -10,22 +10,31 @@
 //! term of the radial force, E71) and 3D; linear, uGIMP, cpGIMP, quadratic
 //! and cubic B-spline shape functions; USF, USL and MUSL; FLIP (with its PIC fraction, moving
 //! the particles by E26 or with their own new velocity, E27) and APIC (with
-//! linear weights in its gradient form); the neo-Hookean and corotated linear elastic
-//! materials; gravity; stick and slip walls (the wall nodes' reaction, the nodes past a
-//! wall's plane mirroring those inside it, particles stopped at the plane); and of the
-//! declared effects the particle forces (E14), tractions (E15, E16), a body force, damping
-//! (E48-E53: grid and particle rates, each a global value plus the particle's own), the
-//! damping thermostat, and heat conduction and diffusion (E54-E64, with sources,
-//! fixed and flux faces), particles nearer the axis than their half-width included.
+//! linear weights in its gradient form); every material model (corotated linear elastic,
+//! neo-Hookean, fixed-corotated, the weakly compressible fluid, von Mises, Drucker-Prager and
+//! snow, with their returns and plastic history: [`material`]), the Newtonian viscosity and the
+//! isotropic eigenstrain of thermal expansion and swelling; gravity; stick and slip walls (the
+//! wall nodes' reaction, the nodes past a wall's plane mirroring those inside it, particles
+//! stopped at the plane); and of the declared effects the particle forces (E14), tractions
+//! (E15, E16), a body force, damping (E48-E53: grid and particle rates, each a global
+//! value plus the particle's own), the damping thermostat, and heat conduction and diffusion
+//! (E54-E64, with sources, fixed and flux faces), particles nearer the axis than their
+//! half-width included.
+//!
+//! Where the kernel departs from it (snow's volume ratio `J_e J_p` in the viscous stress and the
+//! transported volume; sand's and snow's returns under an eigenstrain) the reference keeps the
+//! method as documented and the tests that show the difference are ignored, with the reason.
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
 //! `64 eps (max |before| + max |change| + terms)` over the particles, `eps` the kernel's
-//! machine epsilon, `terms` the size of the terms of the stencil sums that cancel (see
-//! `check`; for corotated linear elasticity also the reference's own f64 round-off in the
-//! stress, `64 eps_f64 c^2 |F|`, and what it moves). The bound is of the size of the step's change times
-//! `64 eps`, so a wrong term of the update (a factor, a sign, a missing contribution) fails it
-//! by orders of magnitude.
+//! machine epsilon, `terms` the size of the terms of the stencil sums that cancel and of the
+//! differences a column is computed from (see `check`: the viscous stress carries the velocity
+//! gradient's round-off times `eta / rho0`, a return the strain's, an eigenstrain `alpha (T -
+//! T_0)` that of `alpha T` times the stiffness; for corotated linear elasticity also the
+//! reference's own f64 round-off in the stress, `64 eps_f64 c^2 |F|`, and what it moves). The
+//! bound is of the size of the step's change times `64 eps`, so a wrong term of the update (a
+//! factor, a sign, a missing contribution) fails it by orders of magnitude.
 
 // Index loops over axes read as the equations' sums do.
 #![allow(clippy::needless_range_loop)]
@@ -69,6 +78,9 @@ struct Particle {
     /// The particle domain's half-width per axis for uGIMP and cpGIMP, m (cpGIMP: frozen for
     /// the substep from the deformation at its start).
     lp: [f64; 3],
+    /// The plastic history (`Effects::plasticity`): von Mises' equivalent plastic strain,
+    /// Drucker-Prager's accumulated plastic shear, snow's `J_p - 1`.
+    plastic: f64,
 }
 
 /// One traction: the particle, the unit normal and area of the loaded face in the reference
@@ -144,12 +156,38 @@ struct Method {
     exp_terms: usize,
     /// uGIMP's particle half-width `h / (2 n)`.
     lp: f64,
-    /// Corotated linear elasticity (else neo-Hookean).
-    linear_elastic: bool,
+    /// The material and its constants.
+    material: Material,
+    /// The particles carry the plastic history column (`Effects::plasticity`).
+    plasticity: bool,
+    mass_cutoff: f64,
+}
+
+/// The block's material: its model and constants, in f64 from the definition (E3
+/// and the models' papers, cited where each is stated).
+struct Material {
+    model: MaterialModel,
+    /// Lame's constants, Pa (a fluid's: its bulk modulus K and 0).
     mu: f64,
     lambda: f64,
     rho0: f64,
-    mass_cutoff: f64,
+    /// Newtonian viscosity eta, Pa s.
+    viscosity: f64,
+    /// Tait's exponent gamma (fluid).
+    gamma: f64,
+    /// Von Mises: the initial yield stress and the linear hardening modulus, Pa.
+    yield_stress: f64,
+    hardening: f64,
+    /// Drucker-Prager: the friction angle phi (radians) and the cohesion c, Pa.
+    friction_angle: f64,
+    cohesion: f64,
+    /// Snow: critical compression and stretch theta_c, theta_s, hardening coefficient xi.
+    theta_c: f64,
+    theta_s: f64,
+    xi: f64,
+    /// The eigenstrain: thermal expansion alpha (1/K) about T_0, swelling beta about c_0.
+    expansion: [f64; 2],
+    stress_free: [f64; 2],
 }
 
 /// The damping thermostat (NairnMPM's feedback damping, E52): before each substep its alpha
@@ -693,15 +731,7 @@ fn transport(m: &Method, ps: &mut [Particle], f: usize, dt: f64) {
         return;
     };
     let n = m.nodes[0] * m.nodes[1] * m.nodes[2];
-    let volume = |p: &Particle| {
-        let j2 = jacobian_minus_one(m.d, &p.h);
-        let jm1 = if m.d == 2 {
-            j2 + p.hzz + j2 * p.hzz
-        } else {
-            j2
-        };
-        (1.0 + jm1) * p.vol0
-    };
+    let volume = |p: &Particle| volume_ratio(m, p) * p.vol0;
     let capacity = |p: &Particle| {
         if f == 0 {
             p.m * m.heat_capacity
@@ -947,9 +977,8 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
 }
 
 /// Stress update (E29-E32) from the nodal velocities `vel`: `L = sum v_i (x) G_ip`,
-/// `dF = exp(L dt)` to `exp_terms` terms, `H <- H + Q + Q H` with `Q = dF - I`, and the
-/// neo-Hookean `tau / rho0 = (mu (B - I) + lambda ln J I) / rho0`. APIC with linear weights
-/// keeps `L` as the particle's `C_p`.
+/// `dF = exp(L dt)` to `exp_terms` terms, `H <- H + Q + Q H` with `Q = dF - I`, then the
+/// material ([`material`]). APIC with linear weights keeps `L` as the particle's `C_p`.
 fn update_stress(
     m: &Method,
     p: &mut Particle,
@@ -985,51 +1014,380 @@ fn update_stress(
             p.h[r][c] += q[r][c] + qh[r][c];
         }
     }
+    // The out-of-plane rate: 0 in plane strain, v_r / r axisymmetric.
+    let mut lzz = 0.0;
     if m.axisymmetric {
         // The hoop stretch: F_thetatheta <- exp(v_r / r dt) F_thetatheta, the rate
         // v_r / r = sum_i v_r,i T_ip (E70), its exponential by the same series.
-        let rate: f64 = st
+        lzz = st
             .nodes
             .iter()
             .zip(&st.hoop)
             .map(|(&(i, ..), &t)| vel(i)[0] * t)
             .sum();
-        let a = rate * dt;
+        let a = lzz * dt;
         let mut q = a / n as f64;
         for k in (1..n).rev() {
             q = (a + a * q) / k as f64;
         }
         p.hzz += q + q * p.hzz;
     }
-    if m.linear_elastic {
-        p.tau = corotated_linear_elastic(m, &p.h, p.hzz);
-        return;
-    }
-    // J - 1 with the out-of-plane stretch (1 in plane strain).
-    let j2 = jacobian_minus_one(d, &p.h);
-    let jm1 = if d == 2 { j2 + p.hzz + j2 * p.hzz } else { j2 };
-    let ln_j = jm1.ln_1p();
-    let mut tau = [[0.0; 3]; 3];
+    material(m, p, &l, lzz);
+}
+
+/// The material update of a particle whose `F` the step has just moved (E3):
+/// 1. the isotropic eigenstrain `F_0 = (1 + d) I` of the grid's temperature and concentration
+///    at the particle, `d = alpha (T - T_0) + beta (c - c_0)` (declared fields only);
+/// 2. the model's inelastic part ([`inelastic`]) on the elastic part `F_e = F / (1 + d)`, so
+///    that free expansion yields nothing; the stored `F` keeps `F_0`;
+/// 3. the Kirchhoff stress of `F_e` ([`elastic_stress`]) times `J / J_e = (1 + d)^3`
+///    (`tau = J sigma`, `sigma` that of `F_e`);
+/// 4. plus the Newtonian viscous stress `J eta (L + L^T - 2/3 tr L I)`, `tr L` with the
+///    out-of-plane rate `lzz` (the hoop rate `v_r / r`; 0 in plane strain), which is also its
+///    `zz` rate; `J` the particle's volume ratio ([`volume_ratio`]).
+fn material(m: &Method, p: &mut Particle, l: &Mat, lzz: f64) {
+    let (mat, d) = (&m.material, m.d);
+    let eigen = eigenstrain(m, p);
+    inelastic(m, p, eigen);
+    // F_e = F / (1 + d): H_e = (H - d I) / (1 + d), with the out-of-plane axis in 2D.
+    let mut h_e = [[0.0; 3]; 3];
     for a in 0..d {
         for b in 0..d {
-            let hh: f64 = (0..d).map(|k| p.h[a][k] * p.h[b][k]).sum();
-            tau[a][b] = m.mu * (p.h[a][b] + p.h[b][a] + hh) / m.rho0;
+            let dh = if a == b { eigen } else { 0.0 };
+            h_e[a][b] = (p.h[a][b] - dh) / (1.0 + eigen);
         }
-        tau[a][a] += m.lambda * ln_j / m.rho0;
     }
+    let hzz_e = if d == 2 {
+        (p.hzz - eigen) / (1.0 + eigen)
+    } else {
+        0.0
+    };
+    let mut tau = elastic_stress(m, &h_e, hzz_e, p.plastic);
+    let cube = (1.0 + eigen).powi(3);
+    let j = volume_ratio(m, p);
+    let tr_l = (0..d).map(|a| l[a][a]).sum::<f64>() + if d == 2 { lzz } else { 0.0 };
+    for a in 0..3 {
+        for b in 0..3 {
+            tau[a][b] *= cube;
+            let rate = if a < d && b < d {
+                l[a][b] + l[b][a]
+            } else if a == 2 && b == 2 {
+                2.0 * lzz
+            } else {
+                continue;
+            };
+            let trace = if a == b { 2.0 / 3.0 * tr_l } else { 0.0 };
+            tau[a][b] += j * mat.viscosity * (rate - trace);
+        }
+    }
+    p.tau = tau.map(|row| row.map(|t| t / mat.rho0));
+}
+
+/// The isotropic eigenstrain `d` of a particle: thermal expansion `alpha (T - T_0)` where heat
+/// conduction is declared plus swelling `beta (c - c_0)` where diffusion is, at the grid's
+/// values at the particle (`T_g->p`, E63).
+fn eigenstrain(m: &Method, p: &Particle) -> f64 {
+    (0..2)
+        .filter(|&f| m.transport[f].is_some())
+        .map(|f| m.material.expansion[f] * (p.phi_grid[f] - m.material.stress_free[f]))
+        .sum()
+}
+
+/// `J - 1 = det F - 1` of `H` with the out-of-plane stretch `hzz` in 2D.
+fn jm1_of(d: usize, h: &Mat, hzz: f64) -> f64 {
+    let j2 = jacobian_minus_one(d, h);
     if d == 2 {
-        // B_zz - 1 = F_zz^2 - 1: 0 in plane strain, the hoop's when axisymmetric.
-        tau[2][2] = (m.mu * p.hzz * (2.0 + p.hzz) + m.lambda * ln_j) / m.rho0;
+        j2 + hzz + j2 * hzz
+    } else {
+        j2
     }
-    p.tau = tau;
+}
+
+/// A particle's volume ratio `J = V / V0`: `det F` of the stored `F`, and for snow times the
+/// plastic `J_p` its history holds (`F = F_e F_p`, the stored F being `F_e`). The fluid keeps
+/// its volume in `F = J^(1/n) I`, von Mises flows without changing volume, and Drucker-Prager's
+/// history is a shear, not a volume: their `det F` is the volume ratio.
+fn volume_ratio(m: &Method, p: &Particle) -> f64 {
+    let j = 1.0 + jm1_of(m.d, &p.h, p.hzz);
+    if m.material.model == MaterialModel::Snow {
+        j * (1.0 + p.plastic)
+    } else {
+        j
+    }
+}
+
+/// The Kirchhoff stress `tau` (Pa, symmetric; `[2][2]` the out-of-plane `zz` in 2D) of the
+/// elastic deformation `H = F - I` with the out-of-plane stretch `hzz` (2D) and the plastic
+/// history `plastic`, for each model:
+/// - neo-Hookean: `mu (B - I) + lambda ln J I`, `B = F F^T`;
+/// - corotated linear elastic: [`corotated_linear_elastic`];
+/// - fixed-corotated (Stomakhin et al. 2012): `2 mu (F - R) F^T + lambda (J - 1) J I`; with
+///   `F = V R`, `(F - R) F^T = (V - I) V`, so in `V`'s principal stretches `s_i`: `tau_i = 2 mu
+///   (s_i - 1) s_i + lambda (J - 1) J`;
+/// - snow (Stomakhin et al. 2013): the fixed-corotated stress with `mu` and `lambda` times
+///   `exp(xi (1 - J_p))`;
+/// - von Mises and Drucker-Prager: Hencky elasticity in the principal log strains `eps_i`,
+///   `tau_i = 2 mu eps_i + lambda tr eps`;
+/// - the fluid (Tait): `tau = -p J I`, `p = K / gamma (J^-gamma - 1)`.
+fn elastic_stress(m: &Method, h: &Mat, hzz: f64, plastic: f64) -> Mat {
+    let (mat, d) = (&m.material, m.d);
+    let jm1 = jm1_of(d, h, hzz);
+    let j = 1.0 + jm1;
+    let (mu, lambda) = (mat.mu, mat.lambda);
+    match mat.model {
+        MaterialModel::NeoHookean => {
+            let mut tau = [[0.0; 3]; 3];
+            for a in 0..d {
+                for b in 0..d {
+                    // B - I = H + H^T + H H^T.
+                    let hh: f64 = (0..d).map(|k| h[a][k] * h[b][k]).sum();
+                    tau[a][b] = mu * (h[a][b] + h[b][a] + hh);
+                }
+                tau[a][a] += lambda * jm1.ln_1p();
+            }
+            if d == 2 {
+                // B_zz - 1 = F_zz^2 - 1: 0 in plane strain, the hoop's when axisymmetric.
+                tau[2][2] = mu * hzz * (2.0 + hzz) + lambda * jm1.ln_1p();
+            }
+            tau
+        }
+        MaterialModel::LinearElastic => corotated_linear_elastic(m, h, hzz),
+        MaterialModel::FixedCorotated | MaterialModel::Snow => {
+            let k = if mat.model == MaterialModel::Snow {
+                (-mat.xi * plastic).exp()
+            } else {
+                1.0
+            };
+            let pr = principal(d, h, hzz);
+            let t = pr.eps.map(|e| {
+                let s_m1 = e.exp_m1();
+                2.0 * k * mu * s_m1 * (1.0 + s_m1) + k * lambda * jm1 * j
+            });
+            pr.tensor(d, &t)
+        }
+        MaterialModel::VonMises | MaterialModel::DruckerPrager => {
+            let pr = principal(d, h, hzz);
+            let tr: f64 = pr.eps.iter().sum();
+            pr.tensor(d, &pr.eps.map(|e| 2.0 * mu * e + lambda * tr))
+        }
+        MaterialModel::Fluid => {
+            // -p J = K / gamma (J - J^(1 - gamma)) = K / gamma ((J - 1) - (J^(1 - gamma) - 1)).
+            let g = mat.gamma;
+            let t = lambda / g * (jm1 - ((1.0 - g) * jm1.ln_1p()).exp_m1());
+            core::array::from_fn(|a| core::array::from_fn(|b| if a == b { t } else { 0.0 }))
+        }
+    }
+}
+
+/// The inelastic part of the model on a particle whose stored `F` carries the eigenstrain
+/// `eigen` (`F = (1 + eigen) F_e`): the return acts on `F_e`'s principal log strains, the
+/// stored `F` takes the same change (`F' = M F` with `M = sum_i exp(delta_i) n_i n_i^T`), and
+/// the history follows. The return acts on the principal strains of the `n` axes that flow: all
+/// three in 3D and axisymmetric, the two in-plane ones in plane strain (where `F_zz = 1` stays,
+/// and the deviator and trace are taken over the two). The returns:
+/// - fluid: `F = J^(1/n) I`, `J` kept (only `J` matters; no shear accumulates);
+/// - von Mises (Simo and Hughes 1998, 9.2): the radial return of the deviator `e` (norm `|e|`)
+///   where `f = 2 mu |e| - sqrt(2/3) (sigma_y + H eps_p) > 0`: `dgamma = f / (2 mu + 2 H / 3)`,
+///   `e` shortened by `dgamma` along itself, `eps_p += sqrt(2/3) dgamma`;
+/// - Drucker-Prager (Klar et al. 2016, 7.3, with a cohesion): with `alpha = sqrt(2/3) 2
+///   sin(phi) / (3 - sin(phi))`, `k = 2 mu + n lambda` and the apex's strain trace `tr_t = n c
+///   cot(phi) / k`: past the apex (`tr eps >= tr_t`) every strain goes to `tr_t / n` and the
+///   history gains `|e|`; else `dgamma = |e| + alpha k / (2 mu) (tr eps - tr_t)` and where it is
+///   positive `e` shortens by it along itself and the history gains it;
+/// - snow (Stomakhin et al. 2013): each principal stretch clamped to `[1 - theta_c, 1 +
+///   theta_s]`, and `J_p` gains the volume the clamp takes: `J_p' = J_p exp(-sum delta_i)`.
+fn inelastic(m: &Method, p: &mut Particle, eigen: f64) {
+    let (mat, d) = (&m.material, m.d);
+    let n = if d == 3 || m.axisymmetric { 3 } else { 2 };
+    if mat.model == MaterialModel::Fluid {
+        let e = (jm1_of(d, &p.h, p.hzz).ln_1p() / n as f64).exp_m1();
+        for a in 0..d {
+            for b in 0..d {
+                p.h[a][b] = if a == b { e } else { 0.0 };
+            }
+        }
+        if m.axisymmetric {
+            p.hzz = e;
+        }
+        return;
+    }
+    if !mat.model.plastic() {
+        return;
+    }
+    let pr = principal(d, &p.h, p.hzz);
+    // F_e's strains: F / (1 + eigen) takes ln(1 + eigen) from each.
+    let eps: [f64; 3] = core::array::from_fn(|i| pr.eps[i] - eigen.ln_1p());
+    let tr: f64 = eps[..n].iter().sum();
+    let dev: [f64; 3] = core::array::from_fn(|i| if i < n { eps[i] - tr / n as f64 } else { 0.0 });
+    let norm = dev.iter().map(|e| e * e).sum::<f64>().sqrt();
+    let along = |dgamma: f64| dev.map(|e| if norm > 0.0 { -dgamma * e / norm } else { 0.0 });
+    let (mu, lambda) = (mat.mu, mat.lambda);
+    let delta = match mat.model {
+        MaterialModel::VonMises => {
+            let radius = (2.0f64 / 3.0).sqrt() * (mat.yield_stress + mat.hardening * p.plastic);
+            let dgamma =
+                (2.0 * mu * norm - radius).max(0.0) / (2.0 * mu + 2.0 / 3.0 * mat.hardening);
+            p.plastic += (2.0f64 / 3.0).sqrt() * dgamma;
+            along(dgamma)
+        }
+        MaterialModel::DruckerPrager => {
+            let sin = mat.friction_angle.sin();
+            let alpha = (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 - sin);
+            let k = 2.0 * mu + n as f64 * lambda;
+            let apex_tension = if mat.cohesion > 0.0 {
+                mat.cohesion / mat.friction_angle.tan()
+            } else {
+                0.0
+            };
+            let tr_apex = n as f64 * apex_tension / k;
+            if tr >= tr_apex {
+                p.plastic += norm;
+                core::array::from_fn(|i| {
+                    if i < n {
+                        tr_apex / n as f64 - eps[i]
+                    } else {
+                        0.0
+                    }
+                })
+            } else {
+                let dgamma = (norm + alpha * k / (2.0 * mu) * (tr - tr_apex)).max(0.0);
+                p.plastic += dgamma;
+                along(dgamma)
+            }
+        }
+        _ => {
+            let (lo, hi) = ((-mat.theta_c).ln_1p(), mat.theta_s.ln_1p());
+            let delta: [f64; 3] = core::array::from_fn(|i| {
+                if i < n {
+                    eps[i].clamp(lo, hi) - eps[i]
+                } else {
+                    0.0
+                }
+            });
+            // J_p' - 1 = (1 + J_p - 1) exp(-sum delta) - 1.
+            let removed: f64 = delta.iter().sum();
+            p.plastic += (1.0 + p.plastic) * (-removed).exp_m1();
+            delta
+        }
+    };
+    (p.h, p.hzz) = pr.strained(d, &p.h, p.hzz, &delta);
+}
+
+/// The principal directions and logarithmic strains of a deformation: with `F = V R`, the
+/// eigenvectors `n_i` (columns of `n`) of `b = F F^T = V^2` and `eps_i = ln s_i` of its
+/// eigenvalues `s_i^2`; in 2D the out-of-plane axis is principal with `eps_2 = ln(1 + hzz)`.
+struct Principal {
+    n: Mat,
+    eps: [f64; 3],
+}
+
+/// The principal strains of `H = F - I` (and `hzz` in 2D), from `b - I = H + H^T + H H^T` so
+/// that small strains keep their digits.
+fn principal(d: usize, h: &Mat, hzz: f64) -> Principal {
+    let bm1: Mat = core::array::from_fn(|a| {
+        core::array::from_fn(|b| {
+            if a < d && b < d {
+                h[a][b] + h[b][a] + (0..d).map(|k| h[a][k] * h[b][k]).sum::<f64>()
+            } else {
+                0.0
+            }
+        })
+    });
+    let (lam, n) = jacobi(d, &bm1);
+    let mut eps = lam.map(|l| 0.5 * l.ln_1p());
+    if d == 2 {
+        eps[2] = hzz.ln_1p();
+    }
+    Principal { n, eps }
+}
+
+impl Principal {
+    /// `sum_i t_i n_i n_i^T`, with `t_2` out of plane in 2D.
+    fn tensor(&self, d: usize, t: &[f64; 3]) -> Mat {
+        let mut out = [[0.0; 3]; 3];
+        for a in 0..d {
+            for b in 0..d {
+                out[a][b] = (0..d).map(|i| self.n[a][i] * self.n[b][i] * t[i]).sum();
+            }
+        }
+        if d == 2 {
+            out[2][2] = t[2];
+        }
+        out
+    }
+
+    /// `H` and `hzz` of `F' = M F`, `M = sum_i exp(delta_i) n_i n_i^T`: the strains changed
+    /// by `delta` along the same directions. In `H`: `H' = H + (M - I)(I + H)`.
+    fn strained(&self, d: usize, h: &Mat, hzz: f64, delta: &[f64; 3]) -> (Mat, f64) {
+        let m_minus_i = self.tensor(d, &delta.map(f64::exp_m1));
+        let mut out = *h;
+        for a in 0..d {
+            for b in 0..d {
+                out[a][b] +=
+                    m_minus_i[a][b] + (0..d).map(|k| m_minus_i[a][k] * h[k][b]).sum::<f64>();
+            }
+        }
+        let hzz = if d == 2 {
+            hzz + (1.0 + hzz) * m_minus_i[2][2]
+        } else {
+            hzz
+        };
+        (out, hzz)
+    }
+}
+
+/// The eigenvalues and unit eigenvectors (the columns of the second) of the symmetric leading
+/// `d x d` block of `a`, by cyclic Jacobi rotations (Golub and Van Loan 8.5): each rotation in
+/// the `(p, q)` plane zeroes `a_pq`, until none is left above the diagonal's round-off (the
+/// convergence is quadratic: three or four sweeps).
+fn jacobi(d: usize, a: &Mat) -> ([f64; 3], Mat) {
+    let mut a = *a;
+    let mut v: Mat = core::array::from_fn(|r| core::array::from_fn(|c| (r == c) as u8 as f64));
+    for _ in 0..10 {
+        let mut rotated = false;
+        for p in 0..d {
+            for q in p + 1..d {
+                // Done with the pair once a_pq is far below the diagonal's round-off.
+                if a[p][q].abs() <= 1e-20 * (a[p][p].abs() + a[q][q].abs()) {
+                    continue;
+                }
+                rotated = true;
+                // tan of the angle, the smaller root of t^2 + 2 theta t - 1 = 0.
+                let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                let t = theta.signum() / (theta.abs() + theta.hypot(1.0));
+                let c = 1.0 / t.hypot(1.0);
+                let s = t * c;
+                // A <- J^T A J, V <- V J.
+                for k in 0..d {
+                    let (akp, akq) = (a[k][p], a[k][q]);
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for k in 0..d {
+                    let (apk, aqk) = (a[p][k], a[q][k]);
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p], row[q]);
+                    row[p] = c * vp - s * vq;
+                    row[q] = s * vp + c * vq;
+                }
+            }
+        }
+        if !rotated {
+            break;
+        }
+    }
+    (core::array::from_fn(|i| a[i][i]), v)
 }
 
 /// Corotated linear elasticity: `F = R U` (polar decomposition), `e = U - I`,
-/// `tau / rho0 = J R (lambda tr(e) I + 2 mu e) R^T / rho0`; in 2D R turns in the plane and
-/// the out-of-plane strain is `e_zz = hzz` (0 in plane strain, the hoop strain when
-/// axisymmetric), `tau_zz = J (lambda tr(e) + 2 mu e_zz)`.
+/// `tau = J R (lambda tr(e) I + 2 mu e) R^T`; in 2D R turns in the plane and the out-of-plane
+/// strain is `e_zz = hzz` (0 in plane strain, the hoop strain when axisymmetric), `tau_zz = J
+/// (lambda tr(e) + 2 mu e_zz)`.
 fn corotated_linear_elastic(m: &Method, h: &Mat, hzz: f64) -> Mat {
-    let d = m.d;
+    let (d, mat) = (m.d, &m.material);
     let mut f = *h;
     for a in 0..d {
         f[a][a] += 1.0;
@@ -1068,21 +1426,20 @@ fn corotated_linear_elastic(m: &Method, h: &Mat, hzz: f64) -> Mat {
     let mut sigma = [[0.0; 3]; 3];
     for a in 0..d {
         for b in 0..d {
-            sigma[a][b] = 2.0 * m.mu * e[a][b];
+            sigma[a][b] = 2.0 * mat.mu * e[a][b];
         }
-        sigma[a][a] += m.lambda * tr;
+        sigma[a][a] += mat.lambda * tr;
     }
-    let j2 = jacobian_minus_one(d, h);
-    let j = 1.0 + if d == 2 { j2 + hzz + j2 * hzz } else { j2 };
+    let j = 1.0 + jm1_of(d, h, hzz);
     let rotated = matmul(d, &matmul(d, &r, &sigma), &rt);
     let mut tau = [[0.0; 3]; 3];
     for a in 0..d {
         for b in 0..d {
-            tau[a][b] = j * rotated[a][b] / m.rho0;
+            tau[a][b] = j * rotated[a][b];
         }
     }
     if d == 2 {
-        tau[2][2] = j * (m.lambda * tr + 2.0 * m.mu * hzz) / m.rho0;
+        tau[2][2] = j * (mat.lambda * tr + 2.0 * mat.mu * hzz);
     }
     tau
 }
@@ -1390,6 +1747,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
     let v = world.particles();
     let e = material.youngs_modulus as f64;
     let nu = material.poisson_ratio as f64;
+    let fluid = material.model == MaterialModel::Fluid;
     let min_mass = v.mass.iter().fold(f64::INFINITY, |a, &m| a.min(m as f64));
     let fx = &def.effects;
     let body = fx.body_force * fx.body_force_scale.at(world.time());
@@ -1442,10 +1800,32 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         diffusivity: material.diffusivity as f64,
         exp_terms: def.exp_terms as usize,
         lp: def.cell_size as f64 / (2.0 * def.particles_per_cell as f64),
-        linear_elastic: material.model == MaterialModel::LinearElastic,
-        mu: e / (2.0 * (1.0 + nu)),
-        lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
-        rho0: material.density as f64,
+        material: Material {
+            model: material.model,
+            mu: if fluid { 0.0 } else { e / (2.0 * (1.0 + nu)) },
+            lambda: if fluid {
+                material.bulk_modulus as f64
+            } else {
+                e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+            },
+            rho0: material.density as f64,
+            viscosity: material.viscosity as f64,
+            gamma: material.pressure_exponent as f64,
+            yield_stress: material.yield_stress as f64,
+            hardening: material.hardening_modulus as f64,
+            friction_angle: (material.friction_angle as f64).to_radians(),
+            cohesion: material.cohesion as f64,
+            theta_c: material.critical_compression as f64,
+            theta_s: material.critical_stretch as f64,
+            xi: material.hardening_coefficient as f64,
+            expansion: [material.thermal_expansion, material.swelling].map(|x| x as f64),
+            stress_free: [
+                material.reference_temperature,
+                material.reference_concentration,
+            ]
+            .map(|x| x as f64),
+        },
+        plasticity: fx.plasticity,
         mass_cutoff: (Real::EPSILON as f64).powi(2) * min_mass,
     };
     let ns = if d == 2 { 4 } else { 6 };
@@ -1477,6 +1857,9 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
                 p.hzz = v.hoop[i] as f64;
             }
             p.vol0 = v.volume0[i] as f64;
+            if !v.plastic.is_empty() {
+                p.plastic = v.plastic[i] as f64;
+            }
             for (f, (value, grid)) in [
                 (v.temperature, v.grid_temperature),
                 (v.concentration, v.grid_concentration),
@@ -1523,6 +1906,12 @@ fn columns(m: &Method, ps: &[Particle]) -> Vec<(String, Vec<f64>)> {
     }
     if m.axisymmetric {
         out.push(("hoop".to_string(), ps.iter().map(|p| p.hzz).collect()));
+    }
+    if m.plasticity {
+        out.push((
+            "plastic".to_string(),
+            ps.iter().map(|p| p.plastic).collect(),
+        ));
     }
     for f in 0..2 {
         if m.transport[f].is_some() {
@@ -1644,6 +2033,37 @@ fn nodal_damping() -> Damping {
     }
 }
 
+/// Gives the first `n` particles (the block of [`moving_block`]) a displacement gradient that
+/// varies across the block, entries up to 2 % (and a hoop stretch in the axisymmetric form):
+/// stretched in parts and compressed in others, sheared throughout, so that the returns of the
+/// inelastic models act on some particles in the checked step and not on others.
+fn prestrain(world: &mut World, n: usize) {
+    let d = world.def().axes();
+    let v = world.particles();
+    let mut h: [[Vec<Real>; 3]; 3] = Default::default();
+    for i in 0..n {
+        let u: [Real; 3] = core::array::from_fn(|a| {
+            if a < d {
+                (v.position[a][i] - 0.5) / 0.15
+            } else {
+                0.0
+            }
+        });
+        let field = [
+            [u[0], 0.6 * u[1] - 0.3 * u[2], 0.2 * u[2]],
+            [0.3 * u[0] + 0.4 * u[1], 0.8 * u[1] - 0.5 * u[0], 0.4 * u[0]],
+            [0.5 * u[1], -0.3 * u[0], 0.6 * u[2] + 0.4 * u[0]],
+        ];
+        for a in 0..3 {
+            for b in 0..3 {
+                h[a][b].push(0.02 * field[a][b]);
+            }
+        }
+    }
+    let rows: [[&[Real]; 3]; 3] = core::array::from_fn(|a| core::array::from_fn(|b| &h[a][b][..]));
+    world.set_displacement_gradient(0, rows).unwrap();
+}
+
 /// Steps a deforming, rotating block (after a few kernel steps, so it carries stress) once
 /// with the kernel in instance `simd` and once with the reference, and checks every column.
 fn check(
@@ -1669,11 +2089,18 @@ fn check(
         transfer,
         flip_beta: 0.95,
         gravity: mpm_gimp::Vec3::new(0.3, -9.81, 0.2),
+        // The block's 1000 particles and a few: a buffer of free space's capacity took most
+        // of a check's time to clear.
+        particle_capacity: 1100,
         ..free_space(dim, 16, 1.0 / 16.0)
     };
+    def.effects.plasticity = material.model.plastic();
     #[cfg(feature = "effects")]
     if scene == Scene::Effects {
-        def.effects = declared_effects();
+        def.effects = Effects {
+            plasticity: material.model.plastic(),
+            ..declared_effects()
+        };
     }
     #[cfg(feature = "effects")]
     if scene == Scene::NodalDamping {
@@ -1714,6 +2141,13 @@ fn check(
             0.2 * dz - 0.1 * dx,
         ]
     });
+    // The inelastic models' block starts strained, so that their history builds over the first
+    // steps, and is strained again before the checked step, so that their returns act in it.
+    let returns = material.model.plastic() || material.model == MaterialModel::Fluid;
+    let block = n;
+    if returns {
+        prestrain(&mut world, block);
+    }
     // Not with the declared effects: with this column (a twentieth of the others' mass, so the
     // nodes only it reaches hold a twentieth of the heat capacity) the f64 temperatures differ
     // from the reference's by 9e-10 K, past the check's 5e-12 K bound (f32 passes). Not yet
@@ -1846,6 +2280,9 @@ fn check(
     for _ in 0..4 {
         world.step_with_simd(dt, simd).unwrap();
     }
+    if returns {
+        prestrain(&mut world, block);
+    }
     let dt = world.stable_dt();
     let (mut method, mut ps) = read(&world, material);
     method.tractions = traction_list;
@@ -1869,19 +2306,39 @@ fn check(
     // The sums over a stencil cancel (the gradients sum to zero): their round-off is that of
     // their terms, `|v_i| |G_ip| dt` for the velocity gradient's increment, `|tau| |G| dt` for
     // the velocity change, `|v_i| h` for `B_p`; the stress carries the material's `c^2 = (lambda
-    // + 2 mu) / rho0` times the increment's.
+    // + 2 mu) / rho0` times the increment's (snow's hardened by its largest `exp(-xi (J_p -
+    // 1))`), and the viscous stress `eta / rho0` times the velocity gradient's.
     let (v_max, tau_max, h) = (largest('v'), largest('t'), method.h);
     let r_min = ps.iter().fold(f64::INFINITY, |r, p| r.min(p.x[0]));
-    let c2 = (method.lambda + 2.0 * method.mu) / method.rho0;
+    let mat = &method.material;
+    let hardened = if mat.model == MaterialModel::Snow {
+        ps.iter()
+            .fold(1.0f64, |k, p| k.max((-mat.xi * p.plastic).exp()))
+    } else {
+        1.0
+    };
+    let c2 = hardened * (mat.lambda + 2.0 * mat.mu) / mat.rho0;
+    let viscous = mat.viscosity / mat.rho0;
+    // The eigenstrain `alpha (T - T_0)` is a difference of operands `alpha T` (and `beta c`):
+    // the strain carries their round-off, and the stress that times `c^2`.
+    let eigen: f64 = (0..2)
+        .filter(|&f| method.transport[f].is_some())
+        .map(|f| {
+            let field = ps.iter().fold(0.0f64, |m, p| m.max(p.phi_grid[f].abs()));
+            (mat.expansion[f] * field).abs()
+        })
+        .sum();
     let dt = dt as f64;
     for ((name, old), ((_, r), (_, k))) in before.iter().zip(reference.iter().zip(&kernel)) {
         let size = max(&mut old.iter().copied());
         let change = max(&mut old.iter().zip(r).map(|(o, n)| n - o));
         let worst = max(&mut r.iter().zip(k).map(|(r, k)| r - k));
         let terms = match name.as_bytes()[0] {
-            b'v' => tau_max * dt / h,
-            b'H' => v_max * dt / h,
-            b't' => c2 * v_max * dt / h,
+            b'v' => (tau_max + c2 * eigen) * dt / h,
+            b'H' => v_max * dt / h + eigen,
+            b't' => (c2 * dt + viscous) * v_max / h + c2 * eigen,
+            // A return turns the strain's round-off into plastic strain.
+            b'p' => largest('H') + v_max * dt / h + eigen,
             // B_p sums v_i (x_i - x_p); C_p in its gradient form sums v_i G_ip.
             b'B' if gradient_affine(&method) => v_max / h,
             b'B' => v_max * h,
@@ -1893,7 +2350,7 @@ fn check(
         // `U - I` with U's entries near 1 (the kernel works in `R - I` and `H`), so the stress
         // it gives carries about `eps_f64 c^2 |F|` (which matters in f64 alone), and the
         // velocity and position that force moves carry it times `dt / h` and `dt^2 / h`.
-        let own_tau = if method.linear_elastic {
+        let own_tau = if mat.model == MaterialModel::LinearElastic {
             64.0 * f64::EPSILON * c2 * (1.0 + largest('H'))
         } else {
             0.0
@@ -1912,9 +2369,16 @@ fn check(
              size {size:e}, change {change:e})",
             material.model
         );
+        // The fluid's F is `J^(1/n) I`, its stress without viscosity a pressure.
+        let ij = &name.as_bytes()[name.len() - 2..];
+        let off_diagonal = ij[0] != ij[1];
+        let isotropic = mat.model == MaterialModel::Fluid
+            && (name.starts_with('H') || (name.starts_with('t') && mat.viscosity == 0.0));
         assert!(
-            change > 0.0 || name.starts_with('B'),
-            "column {name} did not change"
+            change > 0.0 || name.starts_with('B') || (isotropic && off_diagonal),
+            "{dim:?} {shape:?} {order:?} {transfer:?} {:?} {simd:?} ({scene:?}): column {name} \
+             did not change",
+            material.model
         );
     }
 }
@@ -2284,4 +2748,219 @@ fn walls_act_as_the_reference_does() {
             }
         }
     }
+}
+
+/// The five models added to the first two, and all seven.
+const NEW_MODELS: [MaterialModel; 5] = [
+    MaterialModel::FixedCorotated,
+    MaterialModel::Fluid,
+    MaterialModel::VonMises,
+    MaterialModel::DruckerPrager,
+    MaterialModel::Snow,
+];
+const MODELS: [MaterialModel; 7] = [
+    MaterialModel::LinearElastic,
+    MaterialModel::NeoHookean,
+    MaterialModel::FixedCorotated,
+    MaterialModel::Fluid,
+    MaterialModel::VonMises,
+    MaterialModel::DruckerPrager,
+    MaterialModel::Snow,
+];
+
+/// The soft block's material with `model`: the plastic models yield where [`prestrain`] strains
+/// the block past 0.3 % (von Mises at 300 Pa, hardening at 10 kPa; sand of 30 degrees with a
+/// cohesion of 200 Pa; snow at 1 % compression and the usual 0.75 % stretch, xi = 10), and the
+/// fluid has the default bulk modulus, 1e5 Pa.
+fn model_material(model: MaterialModel) -> MaterialDef {
+    MaterialDef {
+        model,
+        yield_stress: 300.0,
+        hardening_modulus: 1.0e4,
+        cohesion: 200.0,
+        critical_compression: 0.01,
+        ..soft_neo_hookean()
+    }
+}
+
+/// The dimension forms this build steps: the axisymmetric form comes with `effects`, as do the
+/// plastic models (their history column) and APIC.
+fn dims() -> Vec<Dimension> {
+    let mut dims = vec![Dimension::Plane2D, Dimension::ThreeD];
+    if cfg!(feature = "effects") {
+        dims.insert(1, Dimension::Axisymmetric2D);
+    }
+    dims
+}
+
+/// Fixed-corotated elasticity, the fluid, von Mises, Drucker-Prager and snow, their returns
+/// acting on parts of a prestrained block ([`prestrain`]), in 2D, the axisymmetric form and
+/// 3D, with every shape function, every order (each shape with two), FLIP and APIC, in every
+/// instance of the passes this CPU runs, agree with the reference step to round-off, their
+/// plastic history column included (which must change in the step: the returns act).
+#[test]
+fn every_model_steps_as_the_reference_does() {
+    for model in NEW_MODELS {
+        if model.plastic() && !cfg!(feature = "effects") {
+            continue;
+        }
+        let material = model_material(model);
+        for dim in dims() {
+            for (k, shape) in SHAPES.into_iter().enumerate() {
+                for (t, transfer) in [Transfer::Flip, Transfer::Apic].into_iter().enumerate() {
+                    if transfer == Transfer::Apic && !cfg!(feature = "effects") {
+                        continue;
+                    }
+                    let order = ORDERS[(k + t) % 3];
+                    for simd in INSTANCES {
+                        check(dim, shape, order, transfer, &material, simd, Scene::Free);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Checks each of `models` with a Newtonian viscosity of 50 Pa s (a tenth to a twentieth of
+/// the block's stress), in 2D, the axisymmetric form and 3D, every order (each with its own
+/// shape family), FLIP and APIC, in every instance of the passes this CPU runs. The stress's
+/// bound adds the velocity gradient's round-off times `eta / rho0` (the viscous stress is
+/// `eta` times a sum over the stencil that cancels, as the elastic increment is `c^2 dt`
+/// times it).
+fn check_viscosity(models: &[MaterialModel]) {
+    let shapes = [
+        ShapeFunction::Gimp,
+        ShapeFunction::QuadraticBspline,
+        ShapeFunction::CubicBspline,
+    ];
+    for (k, &model) in models.iter().enumerate() {
+        if model.plastic() && !cfg!(feature = "effects") {
+            continue;
+        }
+        let material = MaterialDef {
+            viscosity: 50.0,
+            ..model_material(model)
+        };
+        for dim in dims() {
+            for (o, order) in ORDERS.into_iter().enumerate() {
+                let transfer = if (k + o) % 2 == 1 && cfg!(feature = "effects") {
+                    Transfer::Apic
+                } else {
+                    Transfer::Flip
+                };
+                for simd in INSTANCES {
+                    check(
+                        dim,
+                        shapes[o],
+                        order,
+                        transfer,
+                        &material,
+                        simd,
+                        Scene::Free,
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The Newtonian viscosity on the six models other than snow agrees with the reference step to
+/// round-off ([`check_viscosity`]).
+#[test]
+fn viscosity_on_every_model_steps_as_the_reference_does() {
+    check_viscosity(&MODELS[..6]);
+}
+
+/// Snow's viscous stress, `J eta (L + L^T - 2/3 tr L I)` with its volume ratio `J = J_e J_p`
+/// ([`volume_ratio`]; the particles view documents snow's volume ratio as `J_e J_p`), agrees
+/// with the reference step to round-off ([`check_viscosity`]).
+///
+/// Ignored: the kernel takes `J_e` alone (`add_viscous_lanes` is given the stored `F_e`'s `J -
+/// 1`), so snow's viscous stress is `1 / J_p` of its Cauchy value: here `v0` differs by 1e-4
+/// m/s against a bound of 3e-6. With `J_e` in the reference every check passes.
+#[test]
+#[ignore = "the kernel's viscous stress of snow takes J_e, not J_e J_p"]
+fn viscosity_on_snow_steps_as_the_reference_does() {
+    check_viscosity(&[MaterialModel::Snow]);
+}
+
+/// Checks each of `models` with the isotropic eigenstrain of thermal expansion (1e-4 /K about
+/// 300 K) and swelling (0.01 per unit concentration about 0.4), from temperatures and
+/// concentrations that vary by particle (eigenstrains of some 1e-3), with a fixed-temperature
+/// floor and a flux face (the walls' scene) and with heat sources (the declared effects), in
+/// 2D, the axisymmetric form (with the effects) and 3D, every order with its own shape family,
+/// in every instance of the passes this CPU runs. The bounds add the eigenstrain's operands,
+/// `alpha |T| + beta |c|`, to the strains' terms and that times `c^2` to the stress's: the
+/// kernel's grid temperature is allowed `64 eps |T|` like any column, and `alpha` times it
+/// moves the stress by `c^2` times as much (in f64 the fluid's pressure uses 0.64 of the bound
+/// so widened, and would exceed the unwidened one eightfold).
+#[cfg(feature = "effects")]
+fn check_eigenstrain(models: &[MaterialModel]) {
+    let shapes = [
+        ShapeFunction::CpGimp,
+        ShapeFunction::Linear,
+        ShapeFunction::QuadraticBspline,
+    ];
+    for &model in models {
+        let material = MaterialDef {
+            thermal_expansion: 1.0e-4,
+            reference_temperature: 300.0,
+            swelling: 0.01,
+            reference_concentration: 0.4,
+            ..model_material(model)
+        };
+        for (dim, scene) in [
+            (Dimension::Plane2D, Scene::Walls),
+            (Dimension::Plane2D, Scene::Effects),
+            (Dimension::Axisymmetric2D, Scene::Effects),
+            (Dimension::ThreeD, Scene::Walls),
+            (Dimension::ThreeD, Scene::Effects),
+        ] {
+            for (o, order) in ORDERS.into_iter().enumerate() {
+                for simd in INSTANCES {
+                    check(
+                        dim,
+                        shapes[o],
+                        order,
+                        Transfer::Flip,
+                        &material,
+                        simd,
+                        scene,
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The isotropic eigenstrain on the corotated linear, neo-Hookean and fixed-corotated solids,
+/// the fluid and von Mises agrees with the reference step to round-off ([`check_eigenstrain`]).
+/// (Von Mises returns the deviator, which an isotropic eigenstrain does not change, so for it
+/// the order of the return and the eigenstrain does not matter; see the next test.)
+#[cfg(feature = "effects")]
+#[test]
+fn eigenstrain_on_every_model_steps_as_the_reference_does() {
+    check_eigenstrain(&MODELS[..5]);
+}
+
+/// The isotropic eigenstrain on Drucker-Prager and snow agrees with the reference step to
+/// round-off ([`check_eigenstrain`]): their returns act on the elastic part `F / (1 + d)`, so
+/// that a free thermal expansion neither yields nor stresses ([`material`]), and snow's
+/// transported volume is `J_e J_p V0` ([`volume_ratio`]).
+///
+/// Ignored: the kernel returns `F` with the eigenstrain still in it (`update_stress` runs the
+/// inelastic part before `elastic_part`), so sand's apex and cone tests read `tr eps + n ln(1 +
+/// d)` and snow's clamp the stretches times `1 + d`: a heated dry sand is taken to the apex and
+/// its expansion erased, leaving the compression `(1 + d)^3 tau(F / (1 + d))`, and a cooled one
+/// keeps stresses past its cone. (Through the API: a free plane-strain block of dry sand heated
+/// to `d = 2e-3` flies apart at 1.6 m/s under a constant pressure `3 K ln(1 + d)` = 500 Pa,
+/// where a neo-Hookean one expands by 0.3 % and stays; snow heated past `theta_s` flies apart
+/// too.) Here `v0` differs by 3e-3 m/s against a bound of 3e-6. The kernel also takes snow's
+/// current volume in heat conduction and diffusion as `J_e V0` (`transport::current_volume`).
+/// With both as the kernel has them every check passes.
+#[cfg(feature = "effects")]
+#[test]
+#[ignore = "the kernel's sand and snow returns act on F with its eigenstrain in it"]
+fn eigenstrain_on_sand_and_snow_steps_as_the_reference_does() {
+    check_eigenstrain(&[MaterialModel::DruckerPrager, MaterialModel::Snow]);
 }
