@@ -23,6 +23,7 @@ pub(crate) struct Fluid;
 
 impl Model for Fluid {
     const INELASTIC: bool = true;
+    const ON_ELASTIC_PART: bool = false;
 
     /// As a pack: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
     /// loop over lanes ran 4 times as long (measured, von Mises 3D).

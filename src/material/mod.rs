@@ -101,6 +101,30 @@ pub(crate) fn elastic_part<const D: usize, T: Num>(
     (e, cube)
 }
 
+/// The deformation `F = (1 + d) F_e` of the elastic part `e` carrying the isotropic
+/// eigenstrain `d` back: the inverse of [`elastic_part`], `H = (1 + d) H_e + d I`.
+#[inline(always)]
+pub(crate) fn with_eigenstrain<const D: usize, T: Num>(
+    e: &Deformation<D, T>,
+    d: T,
+) -> Deformation<D, T> {
+    let scale = d + 1.0;
+    let mut h = e.h;
+    for (a, row) in h.iter_mut().enumerate() {
+        for v in row.iter_mut() {
+            *v *= scale;
+        }
+        row[a] += d;
+    }
+    let cube_m1 = d * ((d + 3.0) * d + 3.0);
+    Deformation {
+        h,
+        hzz: e.hzz * scale + d,
+        jm1: e.jm1 * (cube_m1 + 1.0) + cube_m1,
+        plastic: e.plastic,
+    }
+}
+
 /// The part of the isotropic eigenstrain `d` (`F_0 = (1 + d) I`) of a particle of material
 /// `r` that transported field `field` gives at the grid value `value` there: thermal expansion
 /// `alpha (T - T_0)` for heat (0), swelling `beta (c - c_0)` for diffusion (1).
@@ -171,6 +195,14 @@ pub(crate) trait Model {
     /// Whether [`Model::inelastic`] changes anything (false: the step skips it).
     const INELASTIC: bool = false;
 
+    /// Whether, under an eigenstrain `d`, [`Model::inelastic`] acts on the elastic part
+    /// `F / (1 + d)` (E47), which then takes the eigenstrain back: a return mapping, whose
+    /// yield reads the elastic strain (a free expansion neither yields nor flows). False for a
+    /// projection that keeps `J` (the fluid's), which acts on `F` itself: in plane strain the
+    /// eigenstrain's out-of-plane part is not in the stored `F`, and the elastic part's
+    /// projection would change the volume.
+    const ON_ELASTIC_PART: bool = true;
+
     /// The deformation after this step's inelastic part: the trial state (`F_e` updated by
     /// `dF`) in, the elastic state and history the stress is taken from out (a plastic
     /// return mapping; a fluid's projection to `J^(1/3) I`). `hoop`: the out-of-plane
@@ -215,6 +247,13 @@ pub(crate) trait Model {
     /// substep chosen for it can be outgrown within a step.
     fn hardens(_r: &MaterialRecord) -> bool {
         false
+    }
+
+    /// The volume ratio `J - 1` of a particle (current volume over initial, less 1) from the
+    /// `J - 1` of its stored deformation and its plastic history: the stored one unless the
+    /// model keeps part of the volume change in its history.
+    fn volume_ratio_minus_one(jm1: Real, _plastic: Real) -> Real {
+        jm1
     }
 
     /// The dilatational wave speed of a particle of material `r` with plastic history
@@ -267,9 +306,19 @@ pub(crate) fn history_in_range(r: &MaterialRecord, plastic: Real) -> bool {
     by_model!(model_of(r), M => M::history_in_range(plastic))
 }
 
+/// [`Model::ON_ELASTIC_PART`] of `model`.
+pub(crate) fn on_elastic_part(model: MaterialModel) -> bool {
+    by_model!(model, M => M::ON_ELASTIC_PART)
+}
+
 /// [`Model::hardens`] of material `r`'s model.
 pub(crate) fn hardens(r: &MaterialRecord) -> bool {
     by_model!(model_of(r), M => M::hardens(r))
+}
+
+/// [`Model::volume_ratio_minus_one`] of material `r`'s model.
+pub(crate) fn volume_ratio_minus_one(r: &MaterialRecord, jm1: Real, plastic: Real) -> Real {
+    by_model!(model_of(r), M => M::volume_ratio_minus_one(jm1, plastic))
 }
 
 /// [`Model::wave_speed`] of material `r`'s model.
@@ -430,13 +479,14 @@ pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
     l: &[[[Real; W]; D]; D],
     lzz: &[Real; W],
     jm1: &[Real; W],
+    plastic: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
     for ln in 0..W {
-        let k = materials
-            .get(ids[ln] as usize)
-            .map_or(0.0, |r| r.viscosity / r.density);
-        let k = k * (jm1[ln] + 1.0);
+        // `J eta / rho0` with the particle's whole volume ratio (snow's `J_e J_p`).
+        let k = materials.get(ids[ln] as usize).map_or(0.0, |r| {
+            r.viscosity / r.density * (1.0 + volume_ratio_minus_one(r, jm1[ln], plastic[ln]))
+        });
         let mut tr = if D == 2 { lzz[ln] } else { 0.0 };
         for a in 0..D {
             tr += l[a][a][ln];

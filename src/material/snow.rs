@@ -47,6 +47,11 @@ impl Model for Snow {
         plastic > -1.0
     }
 
+    /// `J_e J_p - 1`: the history holds the plastic volume change.
+    fn volume_ratio_minus_one(jm1: Real, plastic: Real) -> Real {
+        jm1 + plastic + jm1 * plastic
+    }
+
     fn hardens(r: &MaterialRecord) -> bool {
         r.hardening_coefficient > 0.0
     }

@@ -31,8 +31,8 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::material::{
-    add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, particle_inelastic,
-    particle_stress, Deformation, Params,
+    add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, on_elastic_part,
+    particle_inelastic, particle_stress, with_eigenstrain, Deformation, Params,
 };
 use crate::math::INV;
 use crate::pack::{matrix, packs, unpacked, Pack};
@@ -421,17 +421,39 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
     let ok = if let Some(rec) = uniform {
         let (model, params) = (model_of(rec), Params::of(rec));
         // The inelastic part first (a return mapping, a fluid's projection): the stress is
-        // that of the state it leaves.
+        // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
+        // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
+        // expansion neither yields nor flows.
         if inelastic(model) {
+            let f = Deformation {
+                h: *packs(h),
+                hzz: Pack(hzz),
+                jm1: Pack(jm1),
+                plastic: Pack(plastic),
+            };
+            let (mut e, d) = match &eigen {
+                Some(d) if on_elastic_part(model) => (elastic_part(&f, Pack(*d)).0, Some(Pack(*d))),
+                _ => (f, None),
+            };
+            let mut eh = *unpacked(&e.h);
+            let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
+            let axi = S::AXISYMMETRIC;
             I::inelastic::<D, W>(
                 model,
                 &params,
-                h,
-                &mut hzz,
-                &mut jm1,
+                &mut eh,
+                &mut ezz,
+                &mut ejm1,
                 &mut plastic,
-                S::AXISYMMETRIC,
+                axi,
             );
+            (e.h, e.hzz, e.jm1, e.plastic) = (*packs(&eh), Pack(ezz), Pack(ejm1), Pack(plastic));
+            let back = match d {
+                Some(d) => with_eigenstrain(&e, d),
+                None => e,
+            };
+            *h = *unpacked(&back.h);
+            (hzz, jm1) = (back.hzz.0, back.jm1.0);
         }
         let mut admissible = Lanes::ALL;
         match &eigen {
@@ -477,7 +499,7 @@ fn update_stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W:
         } else {
             &zero
         };
-        add_viscous_lanes(ctx.materials, &ids, l, lzz, &jm1, tau);
+        add_viscous_lanes(ctx.materials, &ids, l, lzz, &jm1, &plastic, tau);
     }
     // The runaway bound: an updated lane whose volume ratio left the band freezes (the
     // inverted and NaN lanes failed above).
@@ -584,7 +606,14 @@ fn stress_lane_by_lane<const D: usize, const W: usize>(
             jm1: f.jm1[ln],
             plastic: f.plastic[ln],
         };
-        let one = particle_inelastic(rec, &one, hoop);
+        // The return on the elastic part, as the chunk path does (E47).
+        let one = match eigen {
+            Some(d) if on_elastic_part(model_of(rec)) => {
+                let e = elastic_part(&one, d[ln]).0;
+                with_eigenstrain(&particle_inelastic(rec, &e, hoop), d[ln])
+            }
+            _ => particle_inelastic(rec, &one, hoop),
+        };
         for r in 0..D {
             for c in 0..D {
                 f.h[r][c][ln] = one.h[r][c];

@@ -43,7 +43,8 @@
 use super::{Ctx, Isa};
 use crate::def::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
-use crate::material::Deformation;
+use crate::layout::MaterialRecord;
+use crate::material::{volume_ratio_minus_one, Deformation};
 use crate::math::Mat;
 use crate::particles::ParticleCols;
 use crate::shape::{LaneStencil, Row4, Shape1D, Stencil, Stencils};
@@ -129,7 +130,10 @@ pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, con
             }
             let i = start + ln;
             let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
-            let volume = current_volume(p, i);
+            let Some(rec) = ctx.materials.get(p.material[i] as usize) else {
+                continue;
+            };
+            let volume = current_volume(rec, p, i);
             let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
             let lane = st.lane(ln);
             // SAFETY: as in pass 1.
@@ -431,7 +435,7 @@ fn capacity_and_conductance<const D: usize>(
     if f == HEAT {
         (p.mass[i] * rec.heat_capacity, rec.conductivity)
     } else {
-        (current_volume(p, i), rec.diffusivity)
+        (current_volume(rec, p, i), rec.diffusivity)
     }
 }
 
@@ -472,12 +476,15 @@ fn face_area<const D: usize>(
     area
 }
 
-/// `J V0` of particle `i` (with `F_thetatheta` when axisymmetric).
+/// `J V0` of particle `i` of material `rec` (with `F_thetatheta` when axisymmetric, and the
+/// volume change a model keeps in its history: snow's `J_p`).
 #[inline(always)]
-fn current_volume<const D: usize>(p: &ParticleCols<'_, D>, i: usize) -> Real {
+fn current_volume<const D: usize>(rec: &MaterialRecord, p: &ParticleCols<'_, D>, i: usize) -> Real {
     let h: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]));
     let hoop = p.hoop.get(i).copied().unwrap_or(0.0);
-    (1.0 + Deformation::new(h, hoop).jm1) * p.vol0[i]
+    let plastic = p.plastic.get(i).copied().unwrap_or(0.0);
+    let jm1 = volume_ratio_minus_one(rec, Deformation::new(h, hoop).jm1, plastic);
+    (1.0 + jm1) * p.vol0[i]
 }
 
 /// Calls `f(ghost, image, value)` for every node past the wall plane of each fixed face, with

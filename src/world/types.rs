@@ -143,8 +143,9 @@ pub struct ParticlesView<'w> {
 }
 
 impl ParticlesView<'_> {
-    /// `J - 1 = det F - 1` of particle `i` (with `F_thetatheta` when axisymmetric), computed
-    /// from H without cancellation.
+    /// `J - 1 = det F - 1` of particle `i`'s stored `F` (with `F_thetatheta` when
+    /// axisymmetric), computed from H without cancellation. The plastic models store the
+    /// elastic part `F_e`: snow's whole volume ratio is `J_e J_p`, `J_p - 1` its history.
     pub fn jacobian_minus_one(&self, i: usize) -> Real {
         if self.dimension == Dimension::ThreeD {
             self.deformation::<3>(i).jm1
@@ -164,7 +165,8 @@ impl ParticlesView<'_> {
         )
     }
 
-    /// `J = det F` of particle `i` (current volume over initial volume).
+    /// `J = det F` of particle `i`'s stored `F` (current volume over initial volume, but for
+    /// snow's `J_p`: see [`ParticlesView::jacobian_minus_one`]).
     pub fn jacobian(&self, i: usize) -> Real {
         1.0 + self.jacobian_minus_one(i)
     }

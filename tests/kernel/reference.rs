@@ -21,10 +21,6 @@
 //! (E54-E64, with sources, fixed and flux faces), particles nearer the axis than their
 //! half-width included.
 //!
-//! Where the kernel departs from it (snow's volume ratio `J_e J_p` in the viscous stress and the
-//! transported volume; sand's and snow's returns under an eigenstrain) the reference keeps the
-//! method as documented and the tests that show the difference are ignored, with the reason.
-//!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
 //! `64 eps (max |before| + max |change| + terms)` over the particles, `eps` the kernel's
@@ -2872,14 +2868,8 @@ fn viscosity_on_every_model_steps_as_the_reference_does() {
 }
 
 /// Snow's viscous stress, `J eta (L + L^T - 2/3 tr L I)` with its volume ratio `J = J_e J_p`
-/// ([`volume_ratio`]; the particles view documents snow's volume ratio as `J_e J_p`), agrees
-/// with the reference step to round-off ([`check_viscosity`]).
-///
-/// Ignored: the kernel takes `J_e` alone (`add_viscous_lanes` is given the stored `F_e`'s `J -
-/// 1`), so snow's viscous stress is `1 / J_p` of its Cauchy value: here `v0` differs by 1e-4
-/// m/s against a bound of 3e-6. With `J_e` in the reference every check passes.
+/// ([`volume_ratio`]), agrees with the reference step to round-off ([`check_viscosity`]).
 #[test]
-#[ignore = "the kernel's viscous stress of snow takes J_e, not J_e J_p"]
 fn viscosity_on_snow_steps_as_the_reference_does() {
     check_viscosity(&[MaterialModel::Snow]);
 }
@@ -2947,20 +2937,8 @@ fn eigenstrain_on_every_model_steps_as_the_reference_does() {
 /// round-off ([`check_eigenstrain`]): their returns act on the elastic part `F / (1 + d)`, so
 /// that a free thermal expansion neither yields nor stresses ([`material`]), and snow's
 /// transported volume is `J_e J_p V0` ([`volume_ratio`]).
-///
-/// Ignored: the kernel returns `F` with the eigenstrain still in it (`update_stress` runs the
-/// inelastic part before `elastic_part`), so sand's apex and cone tests read `tr eps + n ln(1 +
-/// d)` and snow's clamp the stretches times `1 + d`: a heated dry sand is taken to the apex and
-/// its expansion erased, leaving the compression `(1 + d)^3 tau(F / (1 + d))`, and a cooled one
-/// keeps stresses past its cone. (Through the API: a free plane-strain block of dry sand heated
-/// to `d = 2e-3` flies apart at 1.6 m/s under a constant pressure `3 K ln(1 + d)` = 500 Pa,
-/// where a neo-Hookean one expands by 0.3 % and stays; snow heated past `theta_s` flies apart
-/// too.) Here `v0` differs by 3e-3 m/s against a bound of 3e-6. The kernel also takes snow's
-/// current volume in heat conduction and diffusion as `J_e V0` (`transport::current_volume`).
-/// With both as the kernel has them every check passes.
 #[cfg(feature = "effects")]
 #[test]
-#[ignore = "the kernel's sand and snow returns act on F with its eigenstrain in it"]
 fn eigenstrain_on_sand_and_snow_steps_as_the_reference_does() {
     check_eigenstrain(&[MaterialModel::DruckerPrager, MaterialModel::Snow]);
 }
