@@ -18,7 +18,7 @@
 // arguments for the stencils, which every pass already holds apart.
 #![allow(clippy::too_many_arguments)]
 
-use super::{g2p, p2g, row_sums, transport, Ctx};
+use super::{g2p, p2g, row_sums, stress, transport, Ctx};
 use crate::def::MaterialModel;
 use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
@@ -163,7 +163,7 @@ passes! {
         count: usize,
         g: &GridCols<'_, D>,
         report: &mut StepReport,
-    ) => g2p::stress;
+    ) => stress::stress;
 
     /// [`transport::substep`] (heat conduction or diffusion, one field).
     fn transport [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (

@@ -1,0 +1,442 @@
+//! The stress update (E29-E32): `grad v = sum v_i (x) G_ip` (E29), `dF = exp(grad v dt)` to
+//! the configured number of terms (E31), `F <- dF F` (kept as `H = F - I`), `J = det F`
+//! (E32), the material's inelastic part and `tau/rho0`, and the viscous stress. Axisymmetric,
+//! the hoop rate `v_r / r = sum v_r,i T_ip` (E70) stretches `F_thetatheta` the same way. With
+//! thermal expansion or swelling declared, the material sees `F` without the particle's
+//! isotropic eigenstrain (E47, [`crate::material::elastic_part`]).
+//!
+//! [`update_stress`] updates a chunk; USL runs it inside the particle pass
+//! ([`super::g2p::particles`]), USF and MUSL in a pass of its own ([`stress`]). A particle whose
+//! new state is not finite, whose F inverts, or whose volume ratio `J` leaves `[1 / r, r]` (`r`
+//! the definition's `max_volume_ratio`) is frozen.
+
+use super::g2p::{commit_gradient_affine, Gathered, Grad, LaneMat};
+use super::{Ctx, Isa};
+use crate::def::UpdateOrder;
+use crate::grid::GridCols;
+use crate::material::{
+    add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, on_elastic_part,
+    particle_inelastic, particle_stress, with_eigenstrain, Deformation, Params,
+};
+use crate::math::INV;
+use crate::pack::{matrix, packs, unpacked, Pack};
+use crate::particles::StepReport;
+use crate::particles::{ParticleCols, FROZEN};
+use crate::shape::{Shape1D, Stencils};
+use crate::simd::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
+use crate::simd::rows::{self, Rows};
+use crate::simd::wide::Wide;
+
+/// The lane matrices of a stress update, kept by the pass across chunks (see
+/// `lanes::load_into`): built per chunk, `exp(grad v dt)`'s copies of whole matrices went
+/// through the stack, and 256-bit loads that straddled two earlier stores there waited for
+/// them (store forwarding fails for such loads).
+#[repr(C, align(64))]
+pub(crate) struct StressScratch<const D: usize, const W: usize> {
+    h_old: LaneMat<D, W>,
+    h: LaneMat<D, W>,
+    tau: [Lane<W>; 6],
+}
+
+impl<const D: usize, const W: usize> StressScratch<D, W> {
+    pub(crate) fn new() -> Self {
+        StressScratch {
+            h_old: [[[0.0; W]; D]; D],
+            h: [[[0.0; W]; D]; D],
+            tau: [[0.0; W]; 6],
+        }
+    }
+}
+
+/// [`crate::math::exp_series_minus_identity`] on the instance's vectors.
+///
+/// # Safety
+/// The CPU supports the instance `I` (as for [`Wide::splat`]).
+#[inline(always)]
+unsafe fn exp_minus_identity<I: Rows, const D: usize>(
+    a: &[[Wide<I>; D]; D],
+    n: usize,
+) -> [[Wide<I>; D]; D] {
+    // SAFETY: as required of the caller.
+    crate::math::exp_series_minus_identity(a, n, |k| unsafe { Wide::<I>::splat(INV[k]) })
+}
+
+/// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
+/// per lane whether the update succeeded, and the lanes that failed because their volume ran
+/// away (`J - 1` outside [`Ctx::jm1_band`], F not inverted); a lane that fails (non-finite
+/// result, inverted F or runaway) keeps its H and stress.
+#[inline(always)]
+pub(crate) fn update_stress<
+    I: Isa,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    start: usize,
+    update: Lanes<W>,
+    gathered: &Gathered<D, W>,
+    scratch: &mut StressScratch<D, W>,
+) -> (Lanes<W>, Lanes<W>) {
+    let l = &gathered.l;
+    let StressScratch { h_old, h, tau } = scratch;
+    // dF = exp(L dt) (E31), kept as Q = dF - I, and H <- H + Q + Q H (F <- dF F, E32), on as
+    // many lanes at once as the instance's vectors hold.
+    let n = ctx.exp_terms.clamp(1, 8) as usize;
+    for r in 0..D {
+        for c in 0..D {
+            load_into(&mut h_old[r][c], p.h[r][c], start);
+        }
+    }
+    // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it.
+    let (zero, dt) = unsafe { (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt)) };
+    for at in (0..W).step_by(I::N) {
+        let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
+        let mut a = [[zero; D]; D];
+        for r in 0..D {
+            for c in 0..D {
+                a[r][c] = ld(&l[r][c]) * dt;
+            }
+        }
+        let q = unsafe { exp_minus_identity::<I, D>(&a, n) };
+        for r in 0..D {
+            for c in 0..D {
+                let mut v = ld(&h_old[r][c]);
+                for m in 0..D {
+                    v = v + q[r][m] * ld(&h_old[m][c]);
+                }
+                (v + q[r][c]).store(&mut h[r][c], at);
+            }
+        }
+    }
+    // Axisymmetric: F_thetatheta <- exp(v_r / r dt) F_thetatheta, by the same series, kept
+    // as `F_thetatheta - 1` (the out-of-plane `hzz` the materials read; 0 in plane strain).
+    let mut hzz = [0.0; W];
+    if S::AXISYMMETRIC {
+        let old: Lane<W> = load(p.hoop, start);
+        for at in (0..W).step_by(I::N) {
+            // SAFETY: as above.
+            let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
+            let q = unsafe { exp_minus_identity::<I, 1>(&[[ld(&gathered.hoop) * dt]], n) }[0][0];
+            let old = ld(&old);
+            (old + q + q * old).store(&mut hzz, at);
+        }
+    }
+    // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
+    let mut jm1 = Deformation::new(*packs(h), Pack(hzz)).jm1.0;
+    // The plastic history, when declared (the plastic models read and change it).
+    let mut plastic: Lane<W> = if ctx.plastic {
+        load(p.plastic, start)
+    } else {
+        [0.0; W]
+    };
+    // Material: the model's chunk path when every lane shares one material (the common case,
+    // vectorised); otherwise lane by lane.
+    // Without `Option` combinators: their closures were left out of line (a profile showed
+    // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
+    // The ids stay u32 here and are widened only where a lane's record is looked up (widening
+    // all sixteen up front cost 2 instructions per 2D particle-step).
+    let ids = load(p.material, start);
+    let mut uniform = None;
+    if let Some(l0) = update.first() {
+        let id = ids[l0];
+        // Compared four lanes at a time (`Lanes::equal`, exact: ids are below the material
+        // capacity, at most 2^16; one lane at a time it held 6 % of the stress pass's samples).
+        let same = update.minus(Lanes::equal(&ids, id)).is_empty();
+        if let Some(r) = ctx.materials.get(id as usize) {
+            if same {
+                uniform = Some(r);
+            }
+        }
+    }
+    let ns = crate::layout::stress_components(D);
+    // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
+    let eigen = eigenstrain(ctx, p, start, &ids);
+    let ok = if let Some(rec) = uniform {
+        let (model, params) = (model_of(rec), Params::of(rec));
+        // The inelastic part first (a return mapping, a fluid's projection): the stress is
+        // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
+        // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
+        // expansion neither yields nor flows.
+        if inelastic(model) {
+            let f = Deformation {
+                h: *packs(h),
+                hzz: Pack(hzz),
+                jm1: Pack(jm1),
+                plastic: Pack(plastic),
+            };
+            let (mut e, d) = match &eigen {
+                Some(d) if on_elastic_part(model) => (elastic_part(&f, Pack(*d)).0, Some(Pack(*d))),
+                _ => (f, None),
+            };
+            let mut eh = *unpacked(&e.h);
+            let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
+            let axi = S::AXISYMMETRIC;
+            I::inelastic::<D, W>(
+                model,
+                &params,
+                &mut eh,
+                &mut ezz,
+                &mut ejm1,
+                &mut plastic,
+                axi,
+            );
+            (e.h, e.hzz, e.jm1, e.plastic) = (*packs(&eh), Pack(ezz), Pack(ejm1), Pack(plastic));
+            let back = match d {
+                Some(d) => with_eigenstrain(&e, d),
+                None => e,
+            };
+            *h = *unpacked(&back.h);
+            (hzz, jm1) = (back.hzz.0, back.jm1.0);
+        }
+        let mut admissible = Lanes::ALL;
+        match &eigen {
+            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, &plastic, tau),
+            Some(d) => {
+                let f = Deformation {
+                    h: *packs(h),
+                    hzz: Pack(hzz),
+                    jm1: Pack(jm1),
+                    plastic: Pack(plastic),
+                };
+                let (e, cube) = elastic_part(&f, Pack(*d));
+                let he = *unpacked(&e.h);
+                // The eigenstrain must not invert the material either.
+                admissible = rows::above::<I, W>(d, -1.0);
+                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, &plastic, tau);
+                for row in tau.iter_mut() {
+                    *row = (Pack(*row) * cube).0;
+                }
+            }
+        }
+        admissible & update & rows::above::<I, W>(&jm1, -1.0)
+    } else {
+        stress_lane_by_lane(
+            ctx.materials,
+            &ids,
+            LaneDeformation {
+                h,
+                hzz: &mut hzz,
+                jm1: &mut jm1,
+                plastic: &mut plastic,
+            },
+            S::AXISYMMETRIC,
+            eigen.as_ref(),
+            update,
+            tau,
+        )
+    };
+    if ctx.viscous {
+        let zero = [0.0; W];
+        let lzz = if S::AXISYMMETRIC {
+            &gathered.hoop
+        } else {
+            &zero
+        };
+        add_viscous_lanes(ctx.materials, &ids, l, lzz, &jm1, &plastic, tau);
+    }
+    // The runaway bound: an updated lane whose volume ratio left the band freezes (the
+    // inverted and NaN lanes failed above).
+    let [lo, hi] = ctx.jm1_band;
+    let runaway = ok.minus(rows::above::<I, W>(&jm1, lo) & rows::below::<I, W>(&jm1, hi));
+    let ok = ok.minus(runaway);
+    // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
+    // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
+    let mut sum = [0.0; W];
+    for ln in 0..W {
+        sum[ln] = jm1[ln] + hzz[ln];
+        for k in 0..ns {
+            sum[ln] += tau[k][ln];
+        }
+        for r in 0..D {
+            for c in 0..D {
+                sum[ln] += h[r][c][ln];
+            }
+        }
+    }
+    if ctx.plastic {
+        for ln in 0..W {
+            sum[ln] += plastic[ln];
+        }
+    }
+    let ok = ok & rows::finite::<I, W>(&sum);
+    for r in 0..D {
+        for c in 0..D {
+            commit(p.h[r][c], start, &h[r][c], ok);
+        }
+    }
+    for k in 0..ns {
+        commit(p.tau[k], start, &tau[k], ok);
+    }
+    if S::AXISYMMETRIC {
+        commit(p.hoop, start, &hzz, ok);
+    }
+    if ctx.plastic {
+        commit(p.plastic, start, &plastic, ok);
+    }
+    (ok, runaway)
+}
+
+/// The isotropic eigenstrain `d` of each lane (`F_0 = (1 + d) I`, E47): `alpha (T - T_0)` with
+/// heat conduction plus `beta (c - c_0)` with diffusion, from the grid values at the particles
+/// (E63: features read the grid's value, not the particle's) and each lane's material; `None`
+/// when no declared field has a material that expands or swells.
+#[inline(always)]
+fn eigenstrain<const D: usize, const W: usize>(
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    ids: &[u32; W],
+) -> Option<Lane<W>> {
+    if !ctx.eigenstrain.iter().any(|&e| e) {
+        return None;
+    }
+    let mut d = [0.0; W];
+    for (f, &on) in ctx.eigenstrain.iter().enumerate() {
+        if !on {
+            continue;
+        }
+        let value: Lane<W> = load(p.scalar[f][1], start);
+        for ln in 0..W {
+            if let Some(r) = ctx.materials.get(ids[ln] as usize) {
+                d[ln] += eigenstrain_part(r, f, value[ln]);
+            }
+        }
+    }
+    Some(d)
+}
+
+/// A chunk's deformation lane arrays, borrowed for the lane-by-lane material update.
+struct LaneDeformation<'a, const D: usize, const W: usize> {
+    h: &'a mut [[Lane<W>; D]; D],
+    hzz: &'a mut Lane<W>,
+    jm1: &'a mut Lane<W>,
+    plastic: &'a mut Lane<W>,
+}
+
+/// The material update of the lanes in `update` of a chunk whose lanes do not share one
+/// material, one lane at a time: the inelastic part ([`particle_inelastic`]) on `f` in place,
+/// then the stress ([`particle_stress`]); returns the lanes it updated (not those inverted or
+/// of an unknown material). A function of its own per dimension, not inlined into every pass
+/// form: chunks that mix materials are few, and each inlined copy cost build time and size.
+#[inline(never)]
+fn stress_lane_by_lane<const D: usize, const W: usize>(
+    materials: &[crate::layout::MaterialRecord],
+    ids: &[u32; W],
+    f: LaneDeformation<'_, D, W>,
+    hoop: bool,
+    eigen: Option<&Lane<W>>,
+    update: Lanes<W>,
+    tau: &mut [Lane<W>; 6],
+) -> Lanes<W> {
+    let mut ok = Lanes::NONE;
+    for ln in update.iter() {
+        let Some(rec) = materials.get(ids[ln] as usize) else {
+            continue;
+        };
+        let one = Deformation::<D> {
+            h: matrix(|r, c| f.h[r][c][ln]),
+            hzz: f.hzz[ln],
+            jm1: f.jm1[ln],
+            plastic: f.plastic[ln],
+        };
+        // The return on the elastic part, as the chunk path does (E47).
+        let one = match eigen {
+            Some(d) if on_elastic_part(model_of(rec)) => {
+                let e = elastic_part(&one, d[ln]).0;
+                with_eigenstrain(&particle_inelastic(rec, &e, hoop), d[ln])
+            }
+            _ => particle_inelastic(rec, &one, hoop),
+        };
+        for r in 0..D {
+            for c in 0..D {
+                f.h[r][c][ln] = one.h[r][c];
+            }
+        }
+        (f.hzz[ln], f.jm1[ln], f.plastic[ln]) = (one.hzz, one.jm1, one.plastic);
+        let d = eigen.map_or(0.0, |d| d[ln]);
+        if let Some(s) = particle_stress(rec, &one, d) {
+            for (row, &v) in tau
+                .iter_mut()
+                .zip(&s)
+                .take(crate::layout::stress_components(D))
+            {
+                row[ln] = v;
+            }
+            ok = ok | Lanes::one(ln);
+        }
+    }
+    ok
+}
+
+/// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),
+/// from the wall-constrained velocity in the `remap` columns. With MUSL (after the particle
+/// pass has moved the particles) it takes the stencils at the positions of the start of the
+/// step, kept in the `x_start` columns, and puts a particle it freezes back there.
+#[inline(always)]
+pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &mut ParticleCols<'_, D>,
+    count: usize,
+    g: &GridCols<'_, D>,
+    report: &mut StepReport,
+) {
+    if !g.lengths_consistent() || g.remap.iter().any(|c| c.len() != g.len()) {
+        return; // Unreachable by construction; the unchecked row access relies on it.
+    }
+    let mut st = Stencils::<D, K, W>::default();
+    let mut gathered = Gathered::zero();
+    // The moment matrices this pass does not gather.
+    let mut unused_affine = [[[0.0; W]; D]; D];
+    let mut x = Block([[0.0; W]; D]);
+    let mut scratch = StressScratch::new();
+    let from_start = ctx.order == UpdateOrder::Musl;
+    for start in (0..count).step_by(W) {
+        let live = live_lanes(p, start, count);
+        // The stencils at the positions of the start of the step (MUSL: the particle pass has
+        // moved the particles).
+        for a in 0..D {
+            load_into(
+                &mut x[a],
+                if from_start { &*p.x_start[a] } else { &*p.x[a] },
+                start,
+            );
+        }
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, ctx.mls);
+        const REMAP: u8 = Grad::Remap as u8;
+        I::gather::<D, K, S, W, false, REMAP, false>(
+            ctx,
+            g,
+            &st,
+            &mut unused_affine,
+            &mut gathered,
+        );
+        if ctx.momentum {
+            use super::momentum::{gather, Differentiate};
+            let (which, l) = (Differentiate::Remap, &mut gathered.l);
+            gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, None);
+        }
+        let (ok, runaway) =
+            update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);
+        if S::GRADIENT_AFFINE {
+            commit_gradient_affine(p, start, &gathered.l, ok);
+        }
+        for ln in live.minus(ok).iter() {
+            let i = start + ln;
+            for a in 0..D {
+                p.v[a][i] = 0.0;
+                if from_start {
+                    // Back to the position of the start of the step, as for any frozen
+                    // particle (to the last bit of x: the low part is not kept).
+                    p.x[a][i] = p.x_start[a][i];
+                    p.x_low[a][i] = 0.0;
+                }
+            }
+            p.status[i] = FROZEN;
+            report.note_frozen(i as u32, runaway.has(ln));
+        }
+    }
+}
