@@ -1,13 +1,12 @@
-//! Damping (E48-E53): the declaration, the damping acceleration the particle update
-//! subtracts (E24, with the per-particle rates of E53), the nodal damping the grid update
-//! subtracts (E49-E51: the grid rate on the force, and the zones of space that damp) and the
-//! thermostat that adds to the grid rate before each substep (E52). The per-particle rates
-//! are set with [`crate::World::set_particle_damping`].
+//! Damping's terms (E48-E53): the damping acceleration the particle update subtracts (E24,
+//! with the per-particle rates of E53) and the nodal damping the grid update subtracts
+//! (E49-E51: the grid rate on the force, and the zones of space that damp). The declaration
+//! is [`crate::Damping`]; the thermostat's update and the per-particle rates' setter are
+//! [`crate::World`]'s.
 
 use crate::def::effects::graded;
 use crate::def::{DampingZone, DAMPING_ZONES};
 use crate::particles::ParticleCols;
-use crate::phases::Ctx;
 use crate::simd::lanes::{load, Lane};
 use crate::simd::rows::Compare;
 use crate::simd::wide::Wide;
@@ -99,12 +98,13 @@ impl LineRates {
     }
 }
 
-/// The damping rates of the chunk at `start`, lane by lane: the substep's global values plus
+/// The damping rates of the chunk at `start`, lane by lane: the substep's global values
+/// `(alpha_g, alpha_p)` plus
 /// each particle's own (E53; empty columns, when per-particle damping is not declared, load
 /// as zeros).
 #[inline(always)]
 pub(crate) fn lane_rates<const D: usize, const W: usize>(
-    ctx: &Ctx<'_, D>,
+    (global_g, global_p): (Real, Real),
     p: &ParticleCols<'_, D>,
     start: usize,
     alpha_g: &mut Lane<W>,
@@ -112,7 +112,7 @@ pub(crate) fn lane_rates<const D: usize, const W: usize>(
 ) {
     let (lg, lp): (Lane<W>, Lane<W>) = (load(p.damping[0], start), load(p.damping[1], start));
     for ln in 0..W {
-        alpha_g[ln] = ctx.alpha_g + lg[ln];
-        alpha_p[ln] = ctx.alpha_p + lp[ln];
+        alpha_g[ln] = global_g + lg[ln];
+        alpha_p[ln] = global_p + lp[ln];
     }
 }

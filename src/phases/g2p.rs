@@ -355,7 +355,13 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         }
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false, ctx.mls);
         if damp {
-            damping::lane_rates(ctx, p, start, &mut alpha_g, &mut alpha_p);
+            damping::lane_rates(
+                (ctx.alpha_g, ctx.alpha_p),
+                p,
+                start,
+                &mut alpha_g,
+                &mut alpha_p,
+            );
         }
         // One gather per (order, transfer), chosen per chunk.
         const NONE: u8 = Grad::None as u8;

@@ -14,6 +14,7 @@ pub(crate) mod momentum;
 pub(crate) mod p2g;
 pub(crate) mod row_sums;
 pub(crate) mod stress;
+pub(crate) mod tractions;
 pub(crate) mod transport;
 pub(crate) mod update;
 

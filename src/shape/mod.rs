@@ -83,7 +83,7 @@ pub trait Shape1D<const K: usize>: Copy {
     /// Half-width of the particle domain the weights integrate over, cell units, along an axis
     /// stretched by `stretch` (1 undeformed): `l_p / h` for uGIMP, cpGIMP's stretched and
     /// clamped half-width, 0 for a point family (linear, B-splines). The tractions' face
-    /// integral keeps its points inside this domain (`effects::forces::tractions`).
+    /// integral keeps its points inside this domain (`phases::tractions::tractions`).
     #[inline(always)]
     fn domain_half_width(&self, _stretch: Real) -> Real {
         0.0

@@ -413,7 +413,7 @@ impl Kernel for Substep<'_> {
         } else if !with_force {
             p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
         }
-        crate::effects::forces::tractions(s, ctx, p, count, g);
+        crate::phases::tractions::tractions(s, ctx, p, count, g);
         grid_update::acceleration(ctx, g);
         // USL also updates the stress here, MUSL scatters the new momenta to the remap
         // columns (see g2p::particles).

@@ -1,13 +1,12 @@
-//! Particle forces, tractions and a body force (E14-E16, E72): the
-//! per-particle forces and the tractions a host sets, and the traction pass, which integrates
-//! each traction over its deformed face ([`Face`]). The particle forces enter the nodal force
-//! in the scatter's rows (`S_ip F_p`, [`crate::phases::p2g`]); the body force is added to
-//! gravity for the substep ([`crate::Effects::body_force`]).
+//! The tractions' pass (E15-E16, E72): each traction a host set, integrated over its
+//! particle's deformed face ([`Face`]), into the nodal force. (Particle forces enter the nodal
+//! force in the scatter's rows, `S_ip F_p`, [`super::p2g`]; the body force is added to gravity
+//! for the substep, [`crate::Effects::body_force`].)
 
+use super::Ctx;
 use crate::grid::GridCols;
 use crate::layout::TractionRecord;
 use crate::particles::{ParticleCols, ACTIVE};
-use crate::phases::Ctx;
 use crate::shape::{first_node, Shape1D, Stencil};
 use crate::Real;
 
