@@ -228,7 +228,8 @@ pub struct StepReport {
     pub frozen: u32,
     /// Of the frozen, those that ran away: their volume ratio `J` left
     /// `[1 / max_volume_ratio, max_volume_ratio]` ([`crate::WorldDef::max_volume_ratio`]), their
-    /// speed passed [`crate::Resolvable::speed`], or their hardening (snow) took their wave
+    /// speed (the sum of its components' magnitudes) passed
+    /// [`crate::Resolvable::speed`], or their hardening (snow) took their wave
     /// speed past what the substep resolves (a Courant number above 1). The sign of an
     /// unstable scheme or a time step too long for the scene.
     pub runaway: u32,

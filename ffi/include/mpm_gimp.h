@@ -821,9 +821,9 @@ typedef struct MpmStepReport {
   uint32_t frozen;
   // Of the frozen, those that ran away: their volume ratio J left
   // [1 / max_volume_ratio, max_volume_ratio] (`MpmWorldDef::max_volume_ratio`), their speed
-  // passed `cfl h / MPM_MIN_STABLE_DT`, or their hardening (snow) took their wave speed
-  // past what the substep resolves (a Courant number above 1). The sign of an unstable
-  // scheme or a time step too long for the scene.
+  // (the sum of its components' magnitudes) passed `cfl h / MPM_MIN_STABLE_DT`, or their
+  // hardening (snow) took their wave speed past what the substep resolves (a Courant
+  // number above 1). The sign of an unstable scheme or a time step too long for the scene.
   uint32_t runaway;
   // `MPM_STEP_FLAG_FROZE` if any particle froze in this call, `MPM_STEP_FLAG_RUNAWAY` if
   // any froze as runaway; 0 for a step that went well.

@@ -337,13 +337,13 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass. SAFETY: this instance
     // runs only on a CPU that supports it.
-    let (step, faces, zero, none, speed2_limit) = unsafe {
+    let (step, faces, zero, none, speed_scale) = unsafe {
         (
             update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity),
             core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
             Wide::<I>::splat(0.0),
             WideMask::<I>::splat(false),
-            Wide::<I>::splat(ctx.speed2_limit),
+            Wide::<I>::splat(ctx.speed_scale),
         )
     };
     for start in (0..count).step_by(W) {
@@ -395,11 +395,10 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         // faces as selects, on as many lanes at once as the instance's vectors hold (the
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
-        let mut fast = Lanes::NONE;
         for q in (0..W).step_by(I::N) {
             // SAFETY: this instance runs only on a CPU that supports it.
             let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, q) };
-            let (mut sum, mut speed2) = (zero, zero);
+            let mut sum = zero;
             let (mut open, mut wall) = (none, none);
             for a in 0..D {
                 let (v_p, v_gp, a_gp) = (ld(&v[a]), ld(&v_gp[a]), ld(&a_gp[a]));
@@ -415,8 +414,10 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                     update::flip(&step, v_p, (v_gp, a_gp), moves_with, d)
                 };
                 let (xn, xn_low) = update::advance(ld(&x[a]), ld(&x_low[a]), dx);
-                sum = sum + (vn + xn);
-                speed2 = speed2 + vn * vn;
+                // The speed scaled so that it overflows past `Resolvable::speed`: the one
+                // finiteness test below then also freezes a lane whose speed (the sum of its
+                // components' magnitudes) no stable step above the floor resolves.
+                sum = sum + (vn * speed_scale + xn);
                 let at = update::walls(&faces[a], xn, xn_low, vn);
                 (open, wall) = (open | at.open, wall | at.wall);
                 at.x.store(&mut x_new[a], q);
@@ -431,19 +432,15 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
                 }
             }
             finite = finite | sum.is_finite().lanes(q);
-            fast = fast | speed2.gt(speed2_limit).lanes(q);
             escaped = escaped | open.lanes(q);
             stopped = stopped | wall.lanes(q);
         }
-        // A lane faster than any stable step above the floor resolves runs away.
-        let too_fast = live & finite & fast;
-        let moved = (live & finite).minus(too_fast);
+        let moved = live & finite;
         let (ok, runaway) = if fused_stress {
             update_stress::<I, D, K, S, W>(ctx, p, start, moved, &gathered, &mut scratch)
         } else {
             (moved, Lanes::NONE)
         };
-        let runaway = runaway | too_fast;
         if apic && fused_stress && S::GRADIENT_AFFINE {
             commit_gradient_affine(p, start, l, ok);
         }
@@ -470,7 +467,10 @@ pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, c
         }
         for ln in frozen.iter() {
             p.status[start + ln] = FROZEN;
-            report.note_frozen((start + ln) as u32, runaway.has(ln));
+            // Past the speed bound (its scaled sum overflowed): a runaway too.
+            let speed: f64 = (0..D).map(|a| v_new[a][ln].abs() as f64).sum();
+            let fast = speed * ctx.speed_scale as f64 >= Real::MAX as f64;
+            report.note_frozen((start + ln) as u32, runaway.has(ln) || fast);
         }
         let escaped = ok & escaped;
         for ln in escaped.iter() {

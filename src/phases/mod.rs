@@ -90,10 +90,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// The runaway band of `J - 1`, `[1 / r - 1, r - 1]` with `r` the definition's
     /// `max_volume_ratio`: a particle whose `J - 1` leaves it in a stress update freezes.
     pub jm1_band: [Real; 2],
-    /// The runaway bound on a particle's squared speed, m^2/s^2: `Resolvable::speed` squared
-    /// (at most the largest Real). A particle faster than any speed a stable step of
-    /// `MIN_STABLE_DT` resolves freezes.
-    pub speed2_limit: Real,
+    /// The largest Real over `Resolvable::speed` (s/m): a speed times it overflows where it
+    /// passes what a stable step of `MIN_STABLE_DT` resolves, and the particle freezes.
+    pub speed_scale: Real,
     /// Nodes lighter than this are treated as empty (velocity and acceleration zero).
     pub mass_cutoff: Real,
     pub materials: &'m [MaterialRecord],

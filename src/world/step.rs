@@ -274,10 +274,7 @@ impl<'a> World<'a> {
             half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
             exp_terms: def.exp_terms,
             jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
-            speed2_limit: {
-                let speed = def.resolvable().speed;
-                (speed * speed).min(Real::MAX as f64) as Real
-            },
+            speed_scale: (Real::MAX as f64 / def.resolvable().speed) as Real,
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
