@@ -154,6 +154,82 @@ const _: () = assert!(
         && <QuadraticBspline as Shape1D<3>>::LEAD == <ThreeNode as Shape1D<3>>::LEAD
 );
 
+/// A shape family as it is, for [`with_form!`]'s plane strain and 3D forms.
+pub(crate) fn plain<S>(shape: S, _: &crate::WorldDef) -> S {
+    shape
+}
+
+/// A shape family in the axisymmetric form of definition `def`, for [`with_form!`].
+#[cfg(feature = "effects")]
+pub(crate) fn axisymmetric<S>(inner: S, def: &crate::WorldDef) -> Axisymmetric<S> {
+    let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
+    Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
+}
+
+/// [`with_form!`] with the dimension's axes `$d` and the form's wrapper `$wrap` chosen.
+macro_rules! with_family {
+    ($def:ident, $d:literal, $wrap:path, $shape:ident => $body:expr) => {
+        match $def.shape {
+            $crate::ShapeFunction::Linear => {
+                const D: usize = $d;
+                const K: usize = 2;
+                let $shape = $wrap($crate::shape::Linear, $def);
+                $body
+            }
+            $crate::ShapeFunction::Gimp => {
+                const D: usize = $d;
+                const K: usize = 3;
+                let family = $crate::shape::Gimp::new($def.particles_per_cell);
+                let $shape = $wrap($crate::shape::ThreeNode::Gimp(family), $def);
+                $body
+            }
+            $crate::ShapeFunction::QuadraticBspline => {
+                const D: usize = $d;
+                const K: usize = 3;
+                let family = $crate::shape::QuadraticBspline;
+                let $shape = $wrap($crate::shape::ThreeNode::QuadraticBspline(family), $def);
+                $body
+            }
+            $crate::ShapeFunction::CpGimp => {
+                const D: usize = $d;
+                const K: usize = 3;
+                let family = $crate::shape::CpGimp::new($def.particles_per_cell);
+                let $shape = $wrap($crate::shape::ThreeNode::CpGimp(family), $def);
+                $body
+            }
+            $crate::ShapeFunction::CubicBspline => {
+                const D: usize = $d;
+                const K: usize = 4;
+                let $shape = $wrap($crate::shape::CubicBspline, $def);
+                $body
+            }
+        }
+    };
+}
+pub(crate) use with_family;
+
+/// Evaluates `$body` in the compiled form of the definition `$def` (a `&WorldDef`): with the
+/// const items `D` (the dimension's axes) and `K` (the stencil width), and `$shape` the shape
+/// the step uses (the family, the three-node families as one [`ThreeNode`], wrapped in
+/// [`Axisymmetric`] for the r-z form). The one place that maps a definition to a form.
+macro_rules! with_form {
+    ($def:expr, $shape:ident => $body:expr) => {{
+        let def: &$crate::WorldDef = $def;
+        match def.dimension {
+            $crate::Dimension::ThreeD => {
+                $crate::shape::with_family!(def, 3, $crate::shape::plain, $shape => $body)
+            }
+            #[cfg(feature = "effects")]
+            $crate::Dimension::Axisymmetric2D => {
+                $crate::shape::with_family!(def, 2, $crate::shape::axisymmetric, $shape => $body)
+            }
+            // Without the effects, a definition in the axisymmetric form is refused.
+            _ => $crate::shape::with_family!(def, 2, $crate::shape::plain, $shape => $body),
+        }
+    }};
+}
+pub(crate) use with_form;
+
 /// Evaluates `$e` with `$s` bound to the family a [`ThreeNode`] holds.
 macro_rules! three_node {
     ($shape:expr, $s:ident => $e:expr) => {

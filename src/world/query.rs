@@ -3,7 +3,7 @@
 
 use super::add::speed_resolvable;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
-use crate::def::{Dimension, MaterialDef, ShapeFunction, WorldDef};
+use crate::def::{MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
@@ -11,10 +11,7 @@ use crate::material::{
     material_resolvable, model_of, particle_stress, wave_speed, Deformation, Params,
 };
 use crate::particles::{ParticleStatus, ACTIVE};
-use crate::shape::{
-    domain_stretch, Axisymmetric, CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D,
-    Stencils,
-};
+use crate::shape::{domain_stretch, Shape1D, Stencils};
 use crate::simd::Simd;
 use crate::{Error, Real};
 use core::cmp::Ordering;
@@ -553,40 +550,7 @@ impl<'a> WorldRef<'a> {
     /// carries to the grid beside `m_p v_p^2 / 2`: `sum_i S_ip m_p |v_p + C_p (x_i - x_p)|^2 /
     /// 2`, the moments summing to zero. Linear weights keep `C_p` itself (the gradient form).
     fn affine_kinetic(&self, def: &WorldDef) -> f64 {
-        let ppc = def.particles_per_cell;
-        macro_rules! by_shape {
-            ($d:literal, $wrap:expr) => {
-                match def.shape {
-                    ShapeFunction::Linear => {
-                        self.affine_kinetic_in::<$d, 2, _>($wrap(Linear, def), def)
-                    }
-                    ShapeFunction::Gimp => {
-                        self.affine_kinetic_in::<$d, 3, _>($wrap(Gimp::new(ppc), def), def)
-                    }
-                    ShapeFunction::CpGimp => {
-                        self.affine_kinetic_in::<$d, 3, _>($wrap(CpGimp::new(ppc), def), def)
-                    }
-                    ShapeFunction::QuadraticBspline => {
-                        self.affine_kinetic_in::<$d, 3, _>($wrap(QuadraticBspline, def), def)
-                    }
-                    ShapeFunction::CubicBspline => {
-                        self.affine_kinetic_in::<$d, 4, _>($wrap(CubicBspline, def), def)
-                    }
-                }
-            };
-        }
-        fn plain<S>(shape: S, _: &WorldDef) -> S {
-            shape
-        }
-        fn axi<S>(inner: S, def: &WorldDef) -> Axisymmetric<S> {
-            let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
-            Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
-        }
-        match def.dimension {
-            Dimension::Plane2D => by_shape!(2, plain),
-            Dimension::Axisymmetric2D => by_shape!(2, axi),
-            Dimension::ThreeD => by_shape!(3, plain),
-        }
+        crate::shape::with_form!(def, shape => self.affine_kinetic_in::<D, K, _>(shape, def))
     }
 
     /// [`WorldRef::affine_kinetic`] with the dimension and shape function fixed.

@@ -2,9 +2,7 @@
 //! shape function, and `Substep`, the only place the phase order of a substep is written.
 
 use super::{StepReport, World};
-#[cfg(feature = "effects")]
-use crate::def::Dimension;
-use crate::def::{ShapeFunction, Transfer, UpdateOrder, WorldDef};
+use crate::def::{Transfer, UpdateOrder, WorldDef};
 use crate::effects::damping::NodalDamping;
 use crate::grid::{Geom, GridCols};
 use crate::layout::{Layout, MaterialRecord, TractionRecord};
@@ -12,7 +10,7 @@ use crate::math::ceil;
 use crate::particles::{ParticleCols, FROZEN};
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::{grid_update, p2g, Ctx, Isa};
-use crate::shape::{CpGimp, CubicBspline, Gimp, Linear, QuadraticBspline, Shape1D, ThreeNode};
+use crate::shape::Shape1D;
 use crate::simd::lanes::width;
 use crate::simd::Simd;
 use crate::{Error, Real};
@@ -150,57 +148,10 @@ impl<'a> World<'a> {
     fn dispatch(&mut self, dt: Real, time: f64, kernel: &mut impl Kernel, simd: Simd) {
         let def = self.def();
         let layout = Layout::of(&def);
-        let ppc = def.particles_per_cell;
         let run = (dt, time);
-        // One run of the family `$family` in dimension `$d`, its stencil width `$k` fixed with
-        // it and the chunk width with the dimension; `$wrap` turns the family into the shape
-        // the step uses.
-        macro_rules! run_family {
-            ($d:literal, $k:literal, $family:expr, $wrap:expr) => {
-                self.run::<$d, $k, _, { width($d) }>(
-                    $wrap($family, &def),
-                    run,
-                    &def,
-                    &layout,
-                    kernel,
-                    simd,
-                )
-            };
-        }
-        macro_rules! by_shape {
-            ($d:literal, $wrap:expr) => {
-                match def.shape {
-                    ShapeFunction::Linear => run_family!($d, 2, Linear, $wrap),
-                    ShapeFunction::Gimp => {
-                        run_family!($d, 3, ThreeNode::Gimp(Gimp::new(ppc)), $wrap)
-                    }
-                    ShapeFunction::QuadraticBspline => {
-                        run_family!($d, 3, ThreeNode::QuadraticBspline(QuadraticBspline), $wrap)
-                    }
-                    ShapeFunction::CubicBspline => run_family!($d, 4, CubicBspline, $wrap),
-                    ShapeFunction::CpGimp => {
-                        run_family!($d, 3, ThreeNode::CpGimp(CpGimp::new(ppc)), $wrap)
-                    }
-                }
-            };
-        }
-        // The family as it is, or wrapped in the axisymmetric form.
-        fn plain<S>(shape: S, _: &WorldDef) -> S {
-            shape
-        }
-        #[cfg(feature = "effects")]
-        if def.dimension == Dimension::Axisymmetric2D {
-            fn axi<S>(inner: S, def: &WorldDef) -> crate::shape::Axisymmetric<S> {
-                let half_width = def.cell_size / (2 * def.particles_per_cell) as Real;
-                crate::shape::Axisymmetric::new(inner, def.origin.x, def.cell_size, half_width)
-            }
-            return by_shape!(2, axi);
-        }
-        if def.axes() == 2 {
-            by_shape!(2, plain)
-        } else {
-            by_shape!(3, plain)
-        }
+        crate::shape::with_form!(&def, shape => {
+            self.run::<D, K, _, { width(D) }>(shape, run, &def, &layout, kernel, simd)
+        })
     }
 
     /// Carves the columns and the step context of a substep of length `dt` starting at `time`,
