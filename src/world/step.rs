@@ -270,7 +270,7 @@ struct Plan {
 }
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile
-/// time; [`World::dispatch`] picks the instance once per call. `I` is the instruction set each
+/// time; `World::dispatch` picks the form once per call. `I` is the instruction set each
 /// pass runs in: a body calls every pass as `I::run(|| pass(..))`.
 trait Kernel {
     fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
