@@ -89,8 +89,7 @@ pub(crate) fn elastic_part<const D: usize, T: Num>(
             *v *= inv;
         }
     }
-    // (1 + d)^3 - 1 without cancellation.
-    let cube_m1 = d * ((d + 3.0) * d + 3.0);
+    let cube_m1 = cube_minus_one(d);
     let cube = cube_m1 + 1.0;
     let e = Deformation {
         h,
@@ -99,6 +98,12 @@ pub(crate) fn elastic_part<const D: usize, T: Num>(
         plastic: f.plastic,
     };
     (e, cube)
+}
+
+/// `(1 + d)^3 - 1` without cancellation: the volume change of the eigenstrain `d`.
+#[inline(always)]
+fn cube_minus_one<T: Num>(d: T) -> T {
+    d * ((d + 3.0) * d + 3.0)
 }
 
 /// The deformation `F = (1 + d) F_e` of the elastic part `e` carrying the isotropic
@@ -116,7 +121,7 @@ pub(crate) fn with_eigenstrain<const D: usize, T: Num>(
         }
         row[a] += d;
     }
-    let cube_m1 = d * ((d + 3.0) * d + 3.0);
+    let cube_m1 = cube_minus_one(d);
     Deformation {
         h,
         hzz: e.hzz * scale + d,

@@ -197,7 +197,7 @@ passes! {
         out: &mut g2p::Gathered<D, W>,
     ) => g2p::gather_chunk;
 
-    /// [`lanes::stencils`]: one chunk's stencils (every pass computes them; one function
+    /// [`super::stencils`]: one chunk's stencils (every pass computes them; one function
     /// rather than a copy of the three families' code in each pass).
     fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
         st: &mut Stencils<D, K, W>,

@@ -161,35 +161,34 @@ pub(crate) fn update_stress<
         // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
         // expansion neither yields nor flows.
         if inelastic(model) {
-            let f = Deformation {
-                h: *packs(h),
-                hzz: Pack(hzz),
-                jm1: Pack(jm1),
-                plastic: Pack(plastic),
-            };
-            let (mut e, d) = match &eigen {
-                Some(d) if on_elastic_part(model) => (elastic_part(&f, Pack(*d)).0, Some(Pack(*d))),
-                _ => (f, None),
-            };
-            let mut eh = *unpacked(&e.h);
-            let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
             let axi = S::AXISYMMETRIC;
-            I::inelastic::<D, W>(
-                model,
-                &params,
-                &mut eh,
-                &mut ezz,
-                &mut ejm1,
-                &mut plastic,
-                axi,
-            );
-            (e.h, e.hzz, e.jm1, e.plastic) = (*packs(&eh), Pack(ezz), Pack(ejm1), Pack(plastic));
-            let back = match d {
-                Some(d) => with_eigenstrain(&e, d),
-                None => e,
-            };
-            *h = *unpacked(&back.h);
-            (hzz, jm1) = (back.hzz.0, back.jm1.0);
+            match &eigen {
+                Some(d) if on_elastic_part(model) => {
+                    let f = Deformation {
+                        h: *packs(h),
+                        hzz: Pack(hzz),
+                        jm1: Pack(jm1),
+                        plastic: Pack(plastic),
+                    };
+                    let (mut e, d) = (elastic_part(&f, Pack(*d)).0, Pack(*d));
+                    let mut eh = *unpacked(&e.h);
+                    let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
+                    I::inelastic::<D, W>(
+                        model,
+                        &params,
+                        &mut eh,
+                        &mut ezz,
+                        &mut ejm1,
+                        &mut plastic,
+                        axi,
+                    );
+                    (e.h, e.hzz, e.jm1) = (*packs(&eh), Pack(ezz), Pack(ejm1));
+                    let back = with_eigenstrain(&e, d);
+                    *h = *unpacked(&back.h);
+                    (hzz, jm1) = (back.hzz.0, back.jm1.0);
+                }
+                _ => I::inelastic::<D, W>(model, &params, h, &mut hzz, &mut jm1, &mut plastic, axi),
+            }
         }
         let mut admissible = Lanes::ALL;
         match &eigen {

@@ -650,6 +650,15 @@ mod tests {
     use super::*;
     use crate::{HeapBuffer, MaterialDef, Vec3};
 
+    /// A world of `def` in `mem` with one block of the default material, 0.4 m to 0.8 m.
+    fn block_world<'a>(def: &WorldDef, mem: &'a mut [u8]) -> World<'a> {
+        let mut w = World::init(def, mem).unwrap();
+        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
+        let (lo, hi) = (Vec3::new(0.4, 0.4, 0.0), Vec3::new(0.8, 0.8, 0.0));
+        w.fill_box(lo, hi, m, Vec3::ZERO).unwrap();
+        w
+    }
+
     /// `open` checks the header's state and the tables as well as the particles: each edit
     /// of a snapshot that no call produces is `InvalidState` (a particle count raised over
     /// empty slots, a time, minimum mass or thermostat alpha out of range, a material record
@@ -679,15 +688,7 @@ mod tests {
         };
         let layout = Layout::of(&def);
         let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
-        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
-        w.fill_box(
-            Vec3::new(0.4, 0.4, 0.0),
-            Vec3::new(0.8, 0.8, 0.0),
-            m,
-            Vec3::ZERO,
-        )
-        .unwrap();
+        let mut w = block_world(&def, buf.as_mut_bytes());
         w.add_tractions(0..2, Face::XMax, Vec3::new(1.0, 0.0, 0.0))
             .unwrap();
         let snapshot = w.as_bytes().to_vec();
@@ -749,15 +750,7 @@ mod tests {
             ..WorldDef::DEFAULT
         };
         let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
-        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
-        let m = w.add_material(&MaterialDef::DEFAULT).unwrap();
-        w.fill_box(
-            Vec3::new(0.4, 0.4, 0.0),
-            Vec3::new(0.8, 0.8, 0.0),
-            m,
-            Vec3::ZERO,
-        )
-        .unwrap();
+        let mut w = block_world(&def, buf.as_mut_bytes());
         w.header_mut().step_count = u64::MAX;
         w.step(1.0e-3).unwrap();
         assert_eq!(w.step_count(), u64::MAX);

@@ -197,6 +197,18 @@ static inline MpmVec3 v3(double x, double y, double z) {
     return v;
 }
 
+/* The programs' 2D grid: 20 x 20 cells of 0.05 m (GIMP: particles admitted in
+ * [0.05, 0.95]), with room for `particles` particles and `materials` materials. */
+static inline MpmWorldDef grid_2d(uint32_t particles, uint32_t materials) {
+    MpmWorldDef d = mpm_world_def_default();
+    d.cells[0] = 20;
+    d.cells[1] = 20;
+    d.cell_size = R(0.05);
+    d.particle_capacity = particles;
+    d.material_capacity = materials;
+    return d;
+}
+
 /* Declares every effect in a 2D definition: APIC, damping (a constant grid schedule, a
  * thermostat, per-particle columns), particle forces, 8 tractions, a body force, heat
  * conduction (a fixed floor, a flux face) and diffusion, both with sources. */

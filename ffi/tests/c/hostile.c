@@ -218,15 +218,7 @@ static void guards_reset(void) {
 /* ---- scenes --------------------------------------------------------------------------- */
 
 /* 2D: 20 x 20 cells of 0.05 m (GIMP: particles admitted in [0.05, 0.95]). */
-static MpmWorldDef def_2d(uint32_t capacity) {
-    MpmWorldDef d = mpm_world_def_default();
-    d.cells[0] = 20;
-    d.cells[1] = 20;
-    d.cell_size = R(0.05);
-    d.particle_capacity = capacity;
-    d.material_capacity = 2;
-    return d;
-}
+static MpmWorldDef def_2d(uint32_t capacity) { return grid_2d(capacity, 2); }
 
 /* The 2D definition with every effect declared (as misuse.c's def_2d_effects): APIC, damping
  * (a constant grid schedule, a thermostat, per-particle columns), particle forces, 8

@@ -67,15 +67,7 @@ static Block block_new(size_t bytes, size_t align, size_t slack) {
 
 /* 2D: 20 x 20 cells of 0.05 m (GIMP: particles admitted in [0.05, 0.95]), 64 particles, 2
  * materials. */
-static MpmWorldDef def_2d(void) {
-    MpmWorldDef d = mpm_world_def_default();
-    d.cells[0] = 20;
-    d.cells[1] = 20;
-    d.cell_size = R(0.05);
-    d.particle_capacity = 64;
-    d.material_capacity = 2;
-    return d;
-}
+static MpmWorldDef def_2d(void) { return grid_2d(64, 2); }
 
 /* 3D: 8 x 8 x 8 cells of 0.05 m (admitted in [0.05, 0.35] per axis), 32 particles. */
 static MpmWorldDef def_3d(void) {

@@ -135,15 +135,7 @@ static void refused(const char *name, MpmStatus want, MpmStatus got, const MpmWo
     pass(name, got);
 }
 
-static MpmWorldDef def_2d(void) {
-    MpmWorldDef d = mpm_world_def_default();
-    d.cells[0] = 20;
-    d.cells[1] = 20;
-    d.cell_size = R(0.05);
-    d.particle_capacity = 1024;
-    d.material_capacity = 4;
-    return d;
-}
+static MpmWorldDef def_2d(void) { return grid_2d(1024, 4); }
 
 static MpmIdRange fill(const char *name, MpmWorld *w, uint32_t material, double x0, double y0,
                        double x1, double y1, double vy) {
