@@ -318,6 +318,17 @@ pub enum MaterialModel {
 }
 
 impl MaterialModel {
+    /// Every model, in the order of their numbers.
+    pub const ALL: [MaterialModel; 7] = [
+        MaterialModel::LinearElastic,
+        MaterialModel::NeoHookean,
+        MaterialModel::FixedCorotated,
+        MaterialModel::Fluid,
+        MaterialModel::VonMises,
+        MaterialModel::DruckerPrager,
+        MaterialModel::Snow,
+    ];
+
     /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
     /// number becomes the enum without undefined behaviour.
     pub const fn from_code(code: u32) -> Option<MaterialModel> {
@@ -682,18 +693,6 @@ mod tests {
             Tr::from_code,
         );
         use MaterialModel as Mm;
-        check(
-            &[
-                Mm::LinearElastic,
-                Mm::NeoHookean,
-                Mm::FixedCorotated,
-                Mm::Fluid,
-                Mm::VonMises,
-                Mm::DruckerPrager,
-                Mm::Snow,
-            ],
-            |v| v as u32,
-            Mm::from_code,
-        );
+        check(&Mm::ALL, |v| v as u32, Mm::from_code);
     }
 }

@@ -607,15 +607,7 @@ fn snow_clamps_its_stretches_and_hardens_as_exp_xi_one_minus_jp() {
 }
 
 /// Every model, the elastic ones too.
-const ALL_MODELS: [MaterialModel; 7] = [
-    MaterialModel::LinearElastic,
-    MaterialModel::NeoHookean,
-    MaterialModel::FixedCorotated,
-    MaterialModel::Fluid,
-    MaterialModel::VonMises,
-    MaterialModel::DruckerPrager,
-    MaterialModel::Snow,
-];
+const ALL_MODELS: [MaterialModel; 7] = MaterialModel::ALL;
 
 /// Finite everywhere, mass exact, nothing frozen (unless `may_freeze`), and kinetic plus strain
 /// energy below its start plus what gravity released by more than 1 % (every model conserves
