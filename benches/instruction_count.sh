@@ -35,7 +35,7 @@ count() {
     n=$(echo "$annotated" | grep -E "$1( \[.*)?\$" | head -1 | awk '{gsub(",", "", $1); print $1}')
     echo $(( ${n:-0} / per_step ))
 }
-isa='(isa::avx2|isa::avx512|isa::Baseline as mpm_gimp::phases::isa::Isa>)'
+isa='(passes::avx2|passes::avx512|Baseline as mpm_gimp::world::passes::Passes>)'
 echo "$* (${simd} instance): $(count 'World::step_with_simd') instructions per particle-step;" \
     "scatter $(count "${isa}::scatter"), particle pass $(count "${isa}::particles")," \
     "stress pass $(count "${isa}::stress")"

@@ -138,7 +138,7 @@ pub(crate) struct NodeBox<const D: usize> {
 }
 
 /// [`NodeBox::of_particles`] as a free function, for the instruction-set instances of
-/// `phases::isa`.
+/// `world::passes`.
 #[inline(always)]
 pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
     geom: &Geom<D>,

@@ -258,7 +258,7 @@ impl StepReport {
 /// make the stable step 0, which no step could take, although the true step is representable.
 /// Lane-wise maxima over chunks of 8 particles (loops the compiler vectorises), then the tail:
 /// the same maximum as a particle-by-particle scan. Run in the step's instruction set
-/// (`phases::isa`).
+/// (`world::passes`).
 #[inline(always)]
 pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
     let n = status.len();

@@ -23,7 +23,7 @@
 use super::p2g::{rows, Adds, Mode, Products};
 use super::stress::{update_stress, StressScratch};
 use super::update;
-use super::{Ctx, Isa};
+use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
@@ -296,7 +296,13 @@ pub(crate) fn commit_gradient_affine<const D: usize, const W: usize>(
 /// [`scatter_chunk`]). Declared damping adds the damping of the module docs; APIC replaces
 /// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
-pub(crate) fn particles<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn particles<
+    I: Kernels,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,

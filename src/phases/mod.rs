@@ -2,14 +2,14 @@
 //! a step calls them lives in [`crate::world`] and only there.
 //!
 //! Every phase is generic over the dimension `D`, the stencil width `K` and the shape family
-//! `S` (and compiled once per instruction set, [`isa`]); the world dispatches once per substep
+//! `S` (and compiled once per instruction set: [`kernels`] and `world::passes`); the world dispatches once per substep
 //! to the monomorphised instance. Everything else a substep is configured with (update order,
 //! transfer, damping, forces, transported scalars) is a value of [`Ctx`] that the passes test
 //! once per chunk of lanes, never per particle.
 
 pub(crate) mod g2p;
 pub(crate) mod grid_update;
-pub(crate) mod isa;
+pub(crate) mod kernels;
 pub(crate) mod momentum;
 pub(crate) mod p2g;
 pub(crate) mod row_sums;
@@ -18,31 +18,7 @@ pub(crate) mod tractions;
 pub(crate) mod transport;
 pub(crate) mod update;
 
-pub(crate) use isa::Isa;
-
-/// Evaluates `$body` with `$isa` naming the instance of the passes that `$simd` (a
-/// [`crate::simd::Simd`]) picks on this CPU: the one place that maps the choice to a type.
-macro_rules! with_instance {
-    ($simd:expr, $isa:ident => $body:expr) => {
-        match $simd.instance() {
-            #[cfg(all(target_arch = "x86_64", feature = "avx512"))]
-            $crate::simd::Instance::Avx512 => {
-                type $isa = $crate::simd::Avx512;
-                $body
-            }
-            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
-            $crate::simd::Instance::Avx2 => {
-                type $isa = $crate::simd::Avx2;
-                $body
-            }
-            _ => {
-                type $isa = $crate::simd::Baseline;
-                $body
-            }
-        }
-    };
-}
-pub(crate) use with_instance;
+pub(crate) use kernels::Kernels;
 
 use crate::grid::{Geom, NodeBox};
 use crate::layout::{MaterialRecord, TractionRecord};
@@ -109,29 +85,6 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub plastic: bool,
     /// Some material has a viscosity: the stress update adds the viscous stress.
     pub viscous: bool,
-}
-
-/// The node box of a substep ([`NodeBox::of_particles`]), scanned in the instruction set
-/// `simd`.
-pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
-    simd: crate::simd::Simd,
-    geom: &Geom<D>,
-    x: &[&[Real]; D],
-    status: &[u32],
-    count: usize,
-) -> NodeBox<D> {
-    with_instance!(simd, I => I::node_box::<D, K, S>(geom, x, status, count))
-}
-
-/// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),
-/// scanned in the instruction set `simd`.
-pub(crate) fn fastest_squared(
-    simd: crate::simd::Simd,
-    v: &[&[Real]; 3],
-    status: &[u32],
-    d: usize,
-) -> f64 {
-    with_instance!(simd, I => I::fastest_squared(v, status, d))
 }
 
 /// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at

@@ -46,7 +46,7 @@
 //! a node costs a few products whatever the dimension. The force and the gradient take their
 //! weights from one function ([`Weighted`]), so both see the same numbers.
 
-use super::{Ctx, Isa};
+use super::{Ctx, Kernels};
 use crate::grid::GridCols;
 use crate::math::Mat;
 use crate::particles::ParticleCols;
@@ -272,7 +272,7 @@ fn read(col: &[Real], node: usize) -> Real {
 /// (tau_p / rho0) B_ip` (E75), and its particle force `S_ip F_p` when declared (E14), into
 /// the force columns; run after the nodal masses are complete (folded at the walls, see
 /// [`mirror_masses`]).
-pub(crate) fn forces<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &ParticleCols<'_, D>,

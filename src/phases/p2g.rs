@@ -9,7 +9,7 @@
 //! The row-sum engine that adds a chunk's products to the grid is [`super::row_sums`].
 
 use super::row_sums::scatter_chunk;
-use super::{Ctx, Isa};
+use super::{Ctx, Kernels};
 use crate::grid::GridCols;
 use crate::layout::sym_pairs;
 use crate::particles::ParticleCols;
@@ -104,64 +104,10 @@ impl Adds {
     }
 }
 
-/// Scatters the active particles `0..count` to the grid, accumulating what `adds` says, in
-/// the instance `I`: picks the scatter function compiled for the row configuration ([`rows`]).
-///
-/// An instance has five per form, one per configuration, except one compiled for size
-/// ([`Isa::FULL_ROWS`], the baseline), which has two: every scatter but USF's force scatter
-/// runs the full row configuration (mass, momentum with APIC's affine part, force), what it
-/// does not add entering as products left zero ([`Products::set`]): finite factors times
-/// zero. Those zeros change no bit of the grid: x + 0 is x for every x but -0, and a column
-/// they reach holds its reset +0 plus sums, which are -0 only if every term is, so it ends the
-/// same either way. USF's force scatter keeps its own rows: it runs after the grid velocities
-/// are formed, and a zero added to a velocity of -0 would make it +0. Every instance on full
-/// rows would have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long
-/// in 3D (benches/PERFORMANCE.md).
-///
-/// The re-map scatter (MUSL) is part of the particle pass (`g2p::particles`), which scatters
-/// chunk by chunk.
-pub(crate) fn scatter<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    count: usize,
-    g: &mut GridCols<'_, D>,
-    adds: Adds,
-) {
-    use Mode::*;
-    // Branches on the constant alone, so that an instance compiles only the functions it
-    // calls.
-    if I::FULL_ROWS {
-        if adds.mode == Force {
-            I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
-        } else {
-            I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds)
-        }
-        return;
-    }
-    match (adds.mode, adds.apic) {
-        (All, false) => {
-            I::scatter::<D, K, S, W, { rows(All, false) }>(shape, ctx, p, count, g, adds)
-        }
-        (All, true) => I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds),
-        (MassMomentum, false) => {
-            I::scatter::<D, K, S, W, { rows(MassMomentum, false) }>(shape, ctx, p, count, g, adds)
-        }
-        (MassMomentum, true) => {
-            I::scatter::<D, K, S, W, { rows(MassMomentum, true) }>(shape, ctx, p, count, g, adds)
-        }
-        // A force scatter carries no momentum (`Adds::of`).
-        (Force, _) => {
-            I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
-        }
-        (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
-    }
-}
-
 /// The scatter pass with the row configuration `MODE` ([`rows`]).
 #[inline(always)]
 pub(crate) fn scatter_rows<
-    I: Isa,
+    I: Kernels,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,

@@ -11,7 +11,7 @@
 //! the definition's `max_volume_ratio`) is frozen.
 
 use super::g2p::{commit_gradient_affine, Gathered, Grad, LaneMat};
-use super::{Ctx, Isa};
+use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
@@ -67,7 +67,7 @@ unsafe fn exp_minus_identity<I: Rows, const D: usize>(
 /// result, inverted F or runaway) keeps its H and stress.
 #[inline(always)]
 pub(crate) fn update_stress<
-    I: Isa,
+    I: Kernels,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -375,7 +375,7 @@ fn stress_lane_by_lane<const D: usize, const W: usize>(
 /// pass has moved the particles) it takes the stencils at the positions of the start of the
 /// step, kept in the `x_start` columns, and puts a particle it freezes back there.
 #[inline(always)]
-pub(crate) fn stress<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn stress<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,

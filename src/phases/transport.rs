@@ -40,7 +40,7 @@
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
 //! field.
 
-use super::{Ctx, Isa};
+use super::{Ctx, Kernels};
 use crate::def::{ScalarBoundary, Transport};
 use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::layout::MaterialRecord;
@@ -72,9 +72,9 @@ const fn scatter_order<const W: usize>() -> [usize; W] {
 const HEAT: usize = crate::ScalarField::Temperature as usize;
 
 /// One substep of field `f` (HEAT or DIFFUSION) with its definition `t` (inlined into each
-/// instruction set's instance, [`super::isa`]).
+/// instruction set's instance, `world::passes`).
 #[inline(always)]
-pub(crate) fn substep<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn substep<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
@@ -325,7 +325,7 @@ fn nodal_rates<const D: usize>(
 /// particles below `count` whose every stencil row fits in node columns of length `len`
 /// (always, by construction; the unchecked row accesses rely on it).
 #[inline(always)]
-fn chunk_stencils<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,

@@ -25,11 +25,15 @@
 //! Besides the choice (internal to the crate): the instruction sets as types (`Baseline`,
 //! `Avx2`, `Avx512`), and the lane machinery every pass shares: `lanes` (chunks and lane
 //! sets), `rows` (each instance's vectors, row reads and compares), `wide` (the lane type
-//! with operators).
+//! with operators), `instances` (the instruction-set trait and the tables compiled per
+//! instance).
 
+pub(crate) mod instances;
 pub(crate) mod lanes;
 pub(crate) mod rows;
 pub(crate) mod wide;
+
+pub(crate) use instances::{instances, with_instance, Isa};
 
 /// The target's baseline instruction set.
 pub(crate) struct Baseline;

@@ -5,7 +5,7 @@
 //! their sums held in registers, instead of weighting each particle's 4-wide rows and
 //! transposing the sums back into lanes.
 //!
-//! Each instance of the passes ([`crate::phases::isa`]) has its own [`Rows`]: the lanes' rows
+//! Each instance of the passes ([`super::Isa`]) has its own [`Rows`]: the lanes' rows
 //! are loaded as 4-wide vectors and transposed four lanes at a time, in the 128-bit blocks of
 //! 256-bit (AVX2) or 512-bit (AVX-512) registers where the instance has them. Every
 //! implementation computes the same operations on the same values in the same order, so

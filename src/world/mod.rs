@@ -4,6 +4,7 @@
 
 mod add;
 mod effects;
+mod passes;
 mod query;
 mod seed;
 mod step;

@@ -308,7 +308,7 @@ impl<'a> WorldRef<'a> {
                 &[]
             }
         });
-        let v2_max = crate::phases::fastest_squared(simd, &v, &status[..n], d);
+        let v2_max = super::passes::fastest_squared(simd, &v, &status[..n], d);
         let speed = c_max as f64 + libm::sqrt(v2_max);
         // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
         // most the Courant number, with alpha the largest damping any particle can see (the

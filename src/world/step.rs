@@ -1,6 +1,7 @@
 //! Stepping: [`World::step`], the dispatch to the compiled instance of the dimension and
 //! shape function, and `Substep`, the only place the phase order of a substep is written.
 
+use super::passes::{self, Passes};
 use super::{StepReport, World};
 use crate::def::{Transfer, UpdateOrder, WorldDef};
 use crate::effects::damping::NodalDamping;
@@ -9,7 +10,7 @@ use crate::layout::{Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
 use crate::particles::{ParticleCols, FROZEN};
 use crate::phases::p2g::{Adds, Mode};
-use crate::phases::{grid_update, p2g, Ctx, Isa};
+use crate::phases::{grid_update, Ctx};
 use crate::shape::Shape1D;
 use crate::simd::lanes::width;
 use crate::simd::Simd;
@@ -199,7 +200,7 @@ impl<'a> World<'a> {
             None => (0.0, 0.0, None),
         };
         let geom = Geom::<D>::new(def);
-        let active = crate::phases::node_box::<D, K, S>(
+        let active = passes::node_box::<D, K, S>(
             simd,
             &geom,
             &p.x.each_ref().map(|c| &**c),
@@ -271,9 +272,9 @@ struct Plan {
 
 /// A computation on the world's columns with the dimension and shape function fixed at compile
 /// time; `World::dispatch` picks the form once per call. `I` is the instruction set each
-/// pass runs in: a body calls every pass as `I::run(|| pass(..))`.
+/// pass runs in: a body calls every pass through it ([`Passes`]).
 trait Kernel {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    fn body<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -294,7 +295,7 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    crate::phases::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
+    crate::simd::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
 }
 
 /// One substep: the phase order of E12-E32 for the chosen update order, the momentum approach
@@ -316,7 +317,7 @@ struct Substep<'r> {
 }
 
 impl Kernel for Substep<'_> {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    fn body<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -345,7 +346,7 @@ impl Kernel for Substep<'_> {
         } else {
             Mode::MassMomentum
         };
-        p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(first, ctx));
+        passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(first, ctx));
         grid_update::velocity(ctx, g);
         if ctx.momentum {
             // The momentum approach's weights read the masses past the walls as mirrored.
@@ -359,7 +360,7 @@ impl Kernel for Substep<'_> {
         if ctx.momentum {
             crate::phases::momentum::forces::<I, D, K, S, W>(s, ctx, p, count, g);
         } else if !with_force {
-            p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
+            passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
         }
         crate::phases::tractions::tractions(s, ctx, p, count, g);
         grid_update::acceleration(ctx, g);
@@ -394,7 +395,7 @@ struct PhaseRun {
 }
 
 impl Kernel for PhaseRun {
-    fn body<I: Isa, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    fn body<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
@@ -419,7 +420,7 @@ impl Kernel for PhaseRun {
             Phase::ParticleToGrid => {
                 p.freeze_domain_stretch(count);
                 grid_update::reset(ctx, g);
-                p2g::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
+                passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
             }
             Phase::GridUpdate => {
                 grid_update::velocity(ctx, g);

@@ -1,0 +1,87 @@
+//! The chunk kernels a pass calls out of line, compiled once per instance
+//! ([`crate::simd::instances!`]): each is called once per chunk, a function of its own so that a
+//! pass does not hold a copy of each kind it may run (and the optimiser's time stays in
+//! proportion to the functions' sizes). The passes are generic over [`Kernels`]; the substep
+//! calls the passes through the table of the floor above (`world::passes`).
+
+// A kernel takes the chunk's arrays: eight arguments for the stencils, which every pass
+// already holds apart.
+#![allow(clippy::too_many_arguments)]
+
+use super::{g2p, p2g, row_sums, Ctx};
+use crate::def::MaterialModel;
+use crate::grid::GridCols;
+use crate::material::Params;
+use crate::particles::ParticleCols;
+use crate::shape::{Shape1D, Stencils};
+use crate::simd::lanes::{Lane, Lanes};
+use crate::simd::Isa;
+
+crate::simd::instances! {
+    /// The chunk kernels of one instance; a pass generic over it calls them as `I::gather(..)`.
+    trait Kernels: Isa;
+
+    /// [`g2p::gather_chunk`]: one chunk's gather, a function of its own, so that a pass does
+    /// not hold a copy of each of the gather's kinds it may run.
+    fn gather [
+        const D: usize, const K: usize, S: Shape1D<K>, const W: usize,
+        const VEL: bool, const GRAD: u8, const MOMENTS: bool
+    ] [I] [D, K, S, W, VEL, GRAD, MOMENTS] (
+        ctx: &Ctx<'_, D>,
+        g: &GridCols<'_, D>,
+        st: &Stencils<D, K, W>,
+        affine: &mut [[Lane<W>; D]; D],
+        out: &mut g2p::Gathered<D, W>,
+    ) => g2p::gather_chunk;
+
+    /// [`super::stencils`]: one chunk's stencils (every pass computes them; one function
+    /// rather than a copy of the three families' code in each pass).
+    fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
+        st: &mut Stencils<D, K, W>,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &ParticleCols<'_, D>,
+        start: usize,
+        x: &[Lane<W>; D],
+        affine: bool,
+        lanes: bool,
+        mls: bool,
+    ) => crate::phases::stencils;
+
+    /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
+    /// particle pass's re-map).
+    fn scatter_chunk [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8]
+        [I] [D, K, S, W, MODE] (
+        st: &mut Stencils<D, K, W>,
+        pr: &p2g::Products<D, W>,
+        live: Lanes<W>,
+        stride: [usize; D],
+        g: &mut GridCols<'_, D>,
+        adds: p2g::Adds,
+    ) => row_sums::scatter_chunk;
+
+    /// [`crate::material::kirchhoff_lanes`]: one chunk's stress from its deformation, a
+    /// function of its own per dimension, rather than a copy of every model in each pass that
+    /// updates the stress (it made the C host 0.36 MB larger).
+    fn kirchhoff [const D: usize, const W: usize] [] [D, W] (
+        model: MaterialModel,
+        params: &Params,
+        h: &[[Lane<W>; D]; D],
+        hzz: &Lane<W>,
+        jm1: &Lane<W>,
+        plastic: &Lane<W>,
+        tau: &mut [Lane<W>; 6],
+    ) => crate::material::kirchhoff_lanes;
+
+    /// [`crate::material::inelastic_lanes`]: the inelastic part of one chunk's material
+    /// update (return mapping, projection), a function of its own as the stress is.
+    fn inelastic [const D: usize, const W: usize] [] [D, W] (
+        model: MaterialModel,
+        params: &Params,
+        h: &mut [[Lane<W>; D]; D],
+        hzz: &mut Lane<W>,
+        jm1: &mut Lane<W>,
+        plastic: &mut Lane<W>,
+        hoop: bool,
+    ) => crate::material::inelastic_lanes;
+}
