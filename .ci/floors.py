@@ -24,7 +24,7 @@ FLOORS = [
     ["shape"],
     ["def"],
     ["math"],
-    ["pack"],
+    ["num"],
     ["error"],
 ]
 LEVEL = {m: len(FLOORS) - i for i, floor in enumerate(FLOORS) for m in floor}

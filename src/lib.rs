@@ -75,7 +75,7 @@ mod grid;
 mod layout;
 mod material;
 pub mod math;
-mod pack;
+mod num;
 mod particles;
 mod phases;
 pub mod shape;

@@ -1,42 +1,12 @@
 //! Scalar functions (libm-backed, so the kernel stays `no_std`) and small dense matrices
 //! generic over the dimension `D` (2 or 3), stored row-major as `[[Real; D]; D]`.
 
-use crate::pack::{matrix, MatOf, Num};
+pub use crate::num::sqrt;
+use crate::num::{matrix, MatOf, Num, Truth};
 use crate::Real;
 
 /// A `D x D` matrix, row-major: `m[a][b]` is row a, column b.
 pub type Mat<const D: usize> = [[Real; D]; D];
-
-/// Square root, correctly rounded. On x86-64 through the SSE2 intrinsic, which the compiler
-/// knows as a square root: it vectorises loops over lanes and takes the VEX form inside AVX
-/// code. libm's `sqrtss` is inline assembly, which does neither, and in legacy encoding it
-/// also waits for the register's previous value (the corotated model's lane loop took 3 times
-/// as long with it).
-#[inline(always)]
-pub fn sqrt(x: Real) -> Real {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use core::arch::x86_64::*;
-        // SAFETY: SSE and SSE2 are part of x86-64 itself: every x86-64 CPU has them.
-        #[cfg(not(feature = "f64"))]
-        unsafe {
-            _mm_cvtss_f32(_mm_sqrt_ss(_mm_set_ss(x)))
-        }
-        // SAFETY: as above.
-        #[cfg(feature = "f64")]
-        unsafe {
-            _mm_cvtsd_f64(_mm_sqrt_pd(_mm_set_sd(x)))
-        }
-    }
-    #[cfg(all(not(target_arch = "x86_64"), not(feature = "f64")))]
-    {
-        libm::sqrtf(x)
-    }
-    #[cfg(all(not(target_arch = "x86_64"), feature = "f64"))]
-    {
-        libm::sqrt(x)
-    }
-}
 
 /// Natural logarithm.
 #[inline(always)]
@@ -290,7 +260,7 @@ pub(crate) const INV: [Real; 9] = [
 ];
 
 /// `Q = R - I`, where R is the rotation of the polar decomposition `F = R U` of `F = I + h`
-/// (det F > 0), for one matrix (`T = Real`) or a pack of them (each lane gets the bits it
+/// (det F > 0), for one matrix (`T = Real`) or a vector of them (each lane gets the bits it
 /// would get alone). Working with `R - I` keeps small rotations at full precision.
 ///
 /// 2D: closed form from the angle. 3D: Newton's iteration `R <- (R + R^-T) / 2` written for
@@ -317,57 +287,40 @@ pub fn polar_rotation_minus_identity<T: Num, const D: usize>(h: &MatOf<T, D>) ->
             _ => cos_m1,
         });
     }
-    T::polar_newton(h)
-}
-
-/// The 3D iteration of [`polar_rotation_minus_identity`] for `W` matrices at once,
-/// `h[a][b][lane]`: rounds of a loop over lanes (which the compiler vectorises, the whole
-/// Newton step in its body); a lane stops at round-off, at a non-positive determinant or after
-/// a fixed number of rounds (so the cost is bounded), and the rounds go on until every lane
-/// has stopped. Each lane's operations are those of one matrix alone, in the same order.
-#[inline(always)]
-pub(crate) fn polar_newton_lanes<const D: usize, const W: usize>(
-    h: &[[[Real; W]; D]; D],
-) -> [[[Real; W]; D]; D] {
-    let mut q = *h;
+    // 3D: a lane goes on while the last round stepped and did not converge.
+    let inf = T::splat(Real::INFINITY);
     let tol = Real::EPSILON * 4.0;
-    let mut going = [true; W];
+    let mut q = *h;
+    let mut going = zero.ge(zero);
     for _ in 0..32 {
-        for ln in 0..W {
-            let mut r = [[0.0; D]; D];
-            let mut qt = [[0.0; D]; D];
-            for i in 0..D {
-                for j in 0..D {
-                    r[i][j] = q[i][j][ln];
-                    qt[j][i] = q[i][j][ln];
-                }
-                r[i][i] += 1.0;
-            }
-            let d = det(&r);
-            let valid = d.is_finite() && d > 0.0;
-            let corr = mul(&inverse_transpose(&r), &qt);
-            let mut change: Real = 0.0;
-            let mut size: Real = 0.0;
-            let mut next = [[0.0; D]; D];
-            for i in 0..D {
-                for j in 0..D {
-                    next[i][j] = 0.5 * (q[i][j][ln] - corr[i][j]);
-                    let diff = next[i][j] - q[i][j][ln];
-                    change += diff * diff;
-                    size += next[i][j] * next[i][j];
-                }
-            }
-            let step = going[ln] && valid;
-            for i in 0..D {
-                for j in 0..D {
-                    q[i][j][ln] = if step { next[i][j] } else { q[i][j][ln] };
-                }
-            }
-            // Not `change > ...`: a NaN change goes on.
-            let converged = change <= tol * tol * (1.0 + size);
-            going[ln] = step && !converged;
+        let mut r = q;
+        for (i, row) in r.iter_mut().enumerate() {
+            row[i] = row[i] + 1.0;
         }
-        if !going.iter().any(|&g| g) {
+        let qt: MatOf<T, D> = matrix(|i, j| q[j][i]);
+        let d = det(&r);
+        let valid = d.gt(zero) & inf.gt(d);
+        let corr = mul(&inverse_transpose(&r), &qt);
+        let (mut change, mut size) = (zero, zero);
+        let mut next = q;
+        for i in 0..D {
+            for j in 0..D {
+                next[i][j] = (q[i][j] - corr[i][j]) * 0.5;
+                let diff = next[i][j] - q[i][j];
+                change += diff * diff;
+                size += next[i][j] * next[i][j];
+            }
+        }
+        let step = going & valid;
+        for i in 0..D {
+            for j in 0..D {
+                q[i][j] = T::select(step, next[i][j], q[i][j]);
+            }
+        }
+        // Not `change > ...`: a NaN change goes on.
+        let converged = ((size + 1.0) * (tol * tol)).ge(change);
+        going = step.and_not(converged);
+        if !going.any() {
             break;
         }
     }

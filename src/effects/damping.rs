@@ -103,7 +103,7 @@ impl LineRates {
 /// each particle's own (E53; empty columns, when per-particle damping is not declared, load
 /// as zeros).
 #[inline(always)]
-pub(crate) fn lane_rates<const D: usize, const W: usize>(
+pub(crate) fn lane_rates<I: Compare, const D: usize, const W: usize>(
     (global_g, global_p): (Real, Real),
     p: &ParticleCols<'_, D>,
     start: usize,
@@ -111,8 +111,8 @@ pub(crate) fn lane_rates<const D: usize, const W: usize>(
     alpha_p: &mut Lane<W>,
 ) {
     let (lg, lp): (Lane<W>, Lane<W>) = (load(p.damping[0], start), load(p.damping[1], start));
-    for ln in 0..W {
-        alpha_g[ln] = global_g + lg[ln];
-        alpha_p[ln] = global_p + lp[ln];
+    for at in (0..W).step_by(I::N) {
+        (Wide::<I>::load(&lg, at) + global_g).store(alpha_g, at);
+        (Wide::<I>::load(&lp, at) + global_p).store(alpha_p, at);
     }
 }

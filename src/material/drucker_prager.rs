@@ -17,7 +17,7 @@
 
 use super::principal::{hencky_energy, plastic_axes, Principal, Split};
 use super::{Deformation, Model, Params, Stress};
-use crate::pack::Num;
+use crate::num::Num;
 use crate::Real;
 
 /// Drucker-Prager plasticity.

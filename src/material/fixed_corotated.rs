@@ -10,7 +10,7 @@
 
 use super::{Deformation, Model, Params, Stress};
 use crate::math::polar_rotation_minus_identity;
-use crate::pack::{matrix, MatOf, Num};
+use crate::num::{matrix, MatOf, Num};
 use crate::Real;
 
 /// The fixed-corotated Kirchhoff stress of `f` with the moduli `mu`, `lambda` (per lane).

@@ -9,7 +9,7 @@
 
 use super::{Deformation, Model, Params, Stress};
 use crate::math::{exp_m1, ln_1p, ln_1p_fast};
-use crate::pack::{matrix, Num};
+use crate::num::{matrix, Num};
 use crate::Real;
 
 /// `ln J` from `J - 1 > -1`, branch-free.

@@ -10,7 +10,7 @@
 
 use super::{Deformation, Model, Params, Stress};
 use crate::math::{mul, polar_rotation_minus_identity};
-use crate::pack::{matrix, MatOf, Num};
+use crate::num::{matrix, MatOf, Num};
 use crate::Real;
 
 /// Small strain `e = sym(R^T F) - I` of the corotated frame, and `Q = R - I`.

@@ -26,7 +26,9 @@ mod von_mises;
 pub(crate) use record::{explicit_diffusivity, material_record, material_resolvable};
 
 use crate::layout::MaterialRecord;
-use crate::pack::{matrix, packs, unpacked, MatOf, Num, Pack};
+use crate::num::{matrix, MatOf, Num};
+use crate::simd::rows::Compare;
+use crate::simd::wide::Wide;
 use crate::{MaterialModel, Real};
 
 /// Stress as a D x D matrix plus the plane-strain `zz` component (0 in 3D), of one particle
@@ -311,11 +313,6 @@ pub(crate) fn history_in_range(r: &MaterialRecord, plastic: Real) -> bool {
     by_model!(model_of(r), M => M::history_in_range(plastic))
 }
 
-/// [`Model::ON_ELASTIC_PART`] of `model`.
-pub(crate) fn on_elastic_part(model: MaterialModel) -> bool {
-    by_model!(model, M => M::ON_ELASTIC_PART)
-}
-
 /// [`Model::hardens`] of material `r`'s model.
 pub(crate) fn hardens(r: &MaterialRecord) -> bool {
     by_model!(model_of(r), M => M::hardens(r))
@@ -372,70 +369,30 @@ pub(crate) fn particle_stress<const D: usize>(
     Some(tau)
 }
 
-/// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
-/// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D), `jm1[lane]` and the
-/// plastic history `plastic[lane]` in, `tau[k][lane]` out in the stored component order
-/// ([`crate::layout::sym_pairs`], then `zz` in 2D). Lane by lane, or as one pack where the
-/// model asks for it ([`Model::packed`]).
-#[inline(always)]
-pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
-    model: MaterialModel,
-    p: &Params,
-    h: &[[[Real; W]; D]; D],
-    hzz: &[Real; W],
-    jm1: &[Real; W],
-    plastic: &[Real; W],
-    tau: &mut [[Real; W]; 6],
-) {
-    // The whole model inside its arm: a stress matrix of packs carried out of the `match` was
-    // copied through `memcpy`.
-    by_model!(model, M => {
-        if M::packed(D) {
-            let f = Deformation::<D, Pack<W>> {
-                h: *packs(h),
-                hzz: Pack(*hzz),
-                jm1: Pack(*jm1),
-                plastic: Pack(*plastic),
-            };
-            let s = M::kirchhoff(p, &f);
-            for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
-                tau[k] = (s.m[r][c] * p.inv_rho0).0;
-            }
-            if D == 2 {
-                tau[3] = (s.zz * p.inv_rho0).0;
-            }
-        } else {
-            for ln in 0..W {
-                let f = Deformation::<D> {
-                    h: matrix(|a, b| h[a][b][ln]),
-                    hzz: hzz[ln],
-                    jm1: jm1[ln],
-                    plastic: plastic[ln],
-                };
-                let s = M::kirchhoff(p, &f);
-                for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
-                    tau[k][ln] = s.m[r][c] * p.inv_rho0;
-                }
-                if D == 2 {
-                    tau[3][ln] = s.zz * p.inv_rho0;
-                }
-            }
-        }
-    })
+/// A chunk's deformation as lane arrays (borrowed within one chunk's update), `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D),
+/// `jm1[lane]` and the plastic history `plastic[lane]`, which the material update changes in
+/// place.
+pub(crate) struct LaneDeformation<'a, const D: usize, const W: usize> {
+    pub h: &'a mut [[[Real; W]; D]; D],
+    pub hzz: &'a mut [Real; W],
+    pub jm1: &'a mut [Real; W],
+    pub plastic: &'a mut [Real; W],
 }
 
-/// Whether the model has an inelastic part ([`Model::INELASTIC`]).
+/// The material update of the `W` particles of a chunk that share the material `model`: the
+/// inelastic part ([`Model::inelastic`]: a return mapping, a fluid's projection) on the lanes'
+/// deformation in place, then `tau / rho0` (`tau[k][lane]` out in the stored component order,
+/// [`crate::layout::sym_pairs`], then `zz` in 2D). With the isotropic eigenstrain `eigen[lane]`
+/// (E47), both act on the elastic part `F / (1 + d)` where the model asks for it
+/// ([`Model::ON_ELASTIC_PART`]), and the stress is scaled back by `(1 + d)^3`. `hoop`:
+/// axisymmetric.
+///
+/// On the instance's vectors ([`Wide`], [`crate::simd::rows::Rows::N`] lanes at a time) where the model asks for
+/// it ([`Model::packed`]), else lane by lane on [`Real`] in a loop the compiler vectorises.
+/// Each lane gets the bits of the one-particle path ([`particle_stress`]).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn inelastic(model: MaterialModel) -> bool {
-    by_model!(model, M => M::INELASTIC)
-}
-
-/// The inelastic part of the material update ([`Model::inelastic`]) of the `W` particles of a
-/// chunk that share the material `model`, on the chunk's lane arrays in place, as one pack
-/// (its return mappings are written without branches, and their logarithms and exponentials
-/// are calls that a loop over lanes would not vectorise around). `hoop`: axisymmetric.
-#[inline(always)]
-pub(crate) fn inelastic_lanes<const D: usize, const W: usize>(
+pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
     model: MaterialModel,
     p: &Params,
     h: &mut [[[Real; W]; D]; D],
@@ -443,33 +400,169 @@ pub(crate) fn inelastic_lanes<const D: usize, const W: usize>(
     jm1: &mut [Real; W],
     plastic: &mut [Real; W],
     hoop: bool,
+    eigen: Option<&[Real; W]>,
+    tau: &mut [[Real; W]; 6],
 ) {
+    // The arrays come as parameters of their own: the compiler knows them apart only so (in
+    // a struct of references the lane loop did not vectorise: the step took 1.4 times as
+    // long).
+    let mut f = LaneDeformation {
+        h,
+        hzz,
+        jm1,
+        plastic,
+    };
+    // The whole model inside its arm: a stress matrix carried out of the `match` was copied
+    // through `memcpy`.
     by_model!(model, M => {
-        if M::INELASTIC {
-            let f = Deformation::<D, Pack<W>> {
-                h: *packs(h),
-                hzz: Pack(*hzz),
-                jm1: Pack(*jm1),
-                plastic: Pack(*plastic),
-            };
-            let g = M::inelastic(p, &f, hoop);
-            *h = *unpacked(&g.h);
-            *hzz = g.hzz.0;
-            *jm1 = g.jm1.0;
-            *plastic = g.plastic.0;
+        if M::packed(D) {
+            for at in (0..W).step_by(I::N) {
+                let ld = |c: &[Real; W]| Wide::<I>::load(c, at);
+                let lanes = Deformation::<D, Wide<I>> {
+                    h: matrix(|a, b| ld(&f.h[a][b])),
+                    hzz: ld(f.hzz),
+                    jm1: ld(f.jm1),
+                    plastic: ld(f.plastic),
+                };
+                let d = eigen.map(ld);
+                let g = update::<M, D, Wide<I>>(p, &lanes, hoop, d);
+                for a in 0..D {
+                    for b in 0..D {
+                        g.f.h[a][b].store(&mut f.h[a][b], at);
+                    }
+                }
+                g.f.hzz.store(f.hzz, at);
+                g.f.jm1.store(f.jm1, at);
+                g.f.plastic.store(f.plastic, at);
+                for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
+                    g.tau.m[r][c].store(&mut tau[k], at);
+                }
+                if D == 2 {
+                    g.tau.zz.store(&mut tau[3], at);
+                }
+            }
+        } else {
+            // Two loops rather than a test of the eigenstrain per lane, so that each is
+            // branch-free and vectorises.
+            match eigen {
+                None => {
+                    for ln in 0..W {
+                        lane_update::<M, D, W>(p, &mut f, hoop, None, tau, ln);
+                    }
+                }
+                Some(d) => {
+                    for ln in 0..W {
+                        lane_update::<M, D, W>(p, &mut f, hoop, Some(d[ln]), tau, ln);
+                    }
+                }
+            }
         }
     })
 }
 
-/// The inelastic part of the material update of one particle of material `r`
-/// ([`Model::inelastic`]); `hoop`: axisymmetric.
+/// [`update`] of lane `ln` of a chunk, on [`Real`], in place.
 #[inline(always)]
-pub(crate) fn particle_inelastic<const D: usize>(
+fn lane_update<M: Model, const D: usize, const W: usize>(
+    p: &Params,
+    f: &mut LaneDeformation<'_, D, W>,
+    hoop: bool,
+    d: Option<Real>,
+    tau: &mut [[Real; W]; 6],
+    ln: usize,
+) {
+    let one = Deformation::<D> {
+        h: matrix(|a, b| f.h[a][b][ln]),
+        hzz: f.hzz[ln],
+        jm1: f.jm1[ln],
+        plastic: f.plastic[ln],
+    };
+    let g = update::<M, D, Real>(p, &one, hoop, d);
+    if M::INELASTIC {
+        for a in 0..D {
+            for b in 0..D {
+                f.h[a][b][ln] = g.f.h[a][b];
+            }
+        }
+        (f.hzz[ln], f.jm1[ln], f.plastic[ln]) = (g.f.hzz, g.f.jm1, g.f.plastic);
+    }
+    for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
+        tau[k][ln] = g.tau.m[r][c];
+    }
+    if D == 2 {
+        tau[3][ln] = g.tau.zz;
+    }
+}
+
+/// A material update's result: the deformation after the inelastic part and `tau / rho0`.
+struct Updated<const D: usize, T> {
+    f: Deformation<D, T>,
+    tau: Stress<D, T>,
+}
+
+/// The material update of one particle or one vector of particles of model `M` (see
+/// [`chunk_lanes`]): the inelastic part, on the elastic part under an eigenstrain `d` where
+/// the model acts on it, then `tau / rho0`, of the elastic part under an eigenstrain, scaled
+/// back by `(1 + d)^3`.
+#[inline(always)]
+fn update<M: Model, const D: usize, T: Num>(
+    p: &Params,
+    f: &Deformation<D, T>,
+    hoop: bool,
+    d: Option<T>,
+) -> Updated<D, T> {
+    let f = match d {
+        _ if !M::INELASTIC => *f,
+        Some(d) if M::ON_ELASTIC_PART => {
+            with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+        }
+        _ => M::inelastic(p, f, hoop),
+    };
+    let inv_rho0 = T::splat(p.inv_rho0);
+    let (e, scale) = match d {
+        Some(d) => elastic_part(&f, d),
+        None => (f, T::splat(1.0)),
+    };
+    let mut tau = M::kirchhoff(p, &e);
+    // Indexed loops: a flattening iterator was left as a loop the lane loop did not vectorise
+    // around.
+    let over_rho0 = |v: T| match d {
+        Some(_) => v * inv_rho0 * scale,
+        None => v * inv_rho0,
+    };
+    for a in 0..D {
+        for b in 0..D {
+            tau.m[a][b] = over_rho0(tau.m[a][b]);
+        }
+    }
+    tau.zz = over_rho0(tau.zz);
+    Updated { f, tau }
+}
+
+/// The material update of one particle of material `r` (the inelastic part, then the stress;
+/// see [`chunk_lanes`], whose lanes get the same bits) with the isotropic eigenstrain `d`:
+/// what a chunk whose lanes mix materials runs lane by lane. The deformation after the
+/// inelastic part, and `tau / rho0` in the stored component order unless the deformation or
+/// the eigenstrain inverts the material.
+pub(crate) fn particle_update<const D: usize>(
     r: &MaterialRecord,
     f: &Deformation<D>,
     hoop: bool,
-) -> Deformation<D> {
-    by_model!(model_of(r), M => M::inelastic(&Params::of(r), f, hoop))
+    d: Option<Real>,
+) -> (Deformation<D>, Option<[Real; 6]>) {
+    let g = by_model!(model_of(r), M => update::<M, D, Real>(&Params::of(r), f, hoop, d));
+    // NaN-safe: a NaN is not > -1.
+    let admissible = g.f.jm1 > -1.0 && d.is_none_or(|d| d > -1.0);
+    let tau = admissible.then(|| {
+        let mut tau = [0.0; 6];
+        for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
+            tau[k] = g.tau.m[a][b];
+        }
+        if D == 2 {
+            tau[3] = g.tau.zz;
+        }
+        tau
+    });
+    (g.f, tau)
 }
 
 /// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0` (E46):
@@ -524,17 +617,6 @@ mod tests {
     use super::*;
     use crate::math::Mat;
 
-    /// Every model.
-    const ALL: [MaterialModel; 7] = [
-        MaterialModel::LinearElastic,
-        MaterialModel::NeoHookean,
-        MaterialModel::FixedCorotated,
-        MaterialModel::Fluid,
-        MaterialModel::VonMises,
-        MaterialModel::DruckerPrager,
-        MaterialModel::Snow,
-    ];
-
     /// Parameters with the given Lamé constants and `1 / rho0`, the other models' from the
     /// default material.
     fn params(lambda: Real, mu: Real, inv_rho0: Real) -> Params {
@@ -566,7 +648,7 @@ mod tests {
     #[test]
     fn rigid_rotation_gives_zero_stress_and_energy() {
         let p = params(5.0e5, 4.0e5, 1.0e-3);
-        for model in ALL {
+        for model in MaterialModel::ALL {
             for k in 0..64 {
                 let angle = -3.0 + 6.0 * k as Real / 63.0;
                 for axis in 0..3 {
@@ -601,7 +683,10 @@ mod tests {
         let p = params(5.0e5, 4.0e5, 1.0);
         let eps = 1.0e-4;
         let f = Deformation::<3>::new([[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]], 0.0);
-        for model in ALL.into_iter().filter(|&m| m != MaterialModel::Fluid) {
+        for model in MaterialModel::ALL
+            .into_iter()
+            .filter(|&m| m != MaterialModel::Fluid)
+        {
             let s = kirchhoff_over_rho0(model, &p, &f);
             let xx = (p.lambda + 2.0 * p.mu) * eps;
             let yy = p.lambda * eps;
@@ -629,7 +714,7 @@ mod tests {
             ];
             let (f2, f3) = (Deformation::new(h2, hzz), Deformation::new(h3, 0.0));
             assert!((f2.jm1 - f3.jm1).abs() <= 4.0 * Real::EPSILON * (1.0 + f3.jm1.abs()));
-            for model in ALL {
+            for model in MaterialModel::ALL {
                 let (s2, s3) = (
                     kirchhoff_over_rho0(model, &p, &f2),
                     kirchhoff_over_rho0(model, &p, &f3),
@@ -668,7 +753,7 @@ mod tests {
             assert!(
                 (k2 - cube).abs() < 8.0 * Real::EPSILON && (k3 - cube).abs() < 8.0 * Real::EPSILON
             );
-            for model in ALL {
+            for model in MaterialModel::ALL {
                 let bound = 16.0 * Real::EPSILON * 1300.0;
                 let s2 = kirchhoff_over_rho0(model, &p, &e2);
                 let s3 = kirchhoff_over_rho0(model, &p, &e3);
@@ -682,14 +767,34 @@ mod tests {
         }
     }
 
-    /// Every model's chunk path, and its formula on a pack whichever path the chunk takes,
-    /// gives each lane the bits of the one-particle path ([`kirchhoff_lanes`] and
-    /// [`kirchhoff_over_rho0`] on a [`Pack`] against it on a [`Real`]), over random
-    /// deformations from small strain to large stretch and rotation, in 2D (with an
-    /// out-of-plane stretch) and 3D.
+    /// Every model's chunk path ([`chunk_lanes`]), and its update on the instance's vectors
+    /// whichever path the chunk takes, gives each lane the bits of the one-particle path (the
+    /// inelastic part, on the elastic part under an eigenstrain, then [`kirchhoff_over_rho0`]
+    /// of the elastic part scaled by `(1 + d)^3`), in every instance the CPU supports, over
+    /// random deformations from small strain to large stretch and rotation and lanes that take
+    /// each branch of the polar decomposition, in 2D (with an out-of-plane stretch, plane and
+    /// axisymmetric) and 3D, with and without an eigenstrain.
     #[test]
     fn every_model_gives_a_chunk_the_bits_of_one_particle() {
-        const W: usize = 16;
+        every_instance::<{ crate::simd::lanes::width(2) }>();
+        every_instance::<{ crate::simd::lanes::width(3) }>();
+    }
+
+    fn every_instance<const W: usize>() {
+        check_instance::<crate::simd::Baseline, W>();
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+        {
+            use crate::simd::{Instance, Simd};
+            if Simd::Detect.instance() >= Instance::Avx2 {
+                check_instance::<crate::simd::Avx2, W>();
+            }
+            if Simd::Detect.instance() >= Instance::Avx512 {
+                check_instance::<crate::simd::Avx512, W>();
+            }
+        }
+    }
+
+    fn check_instance<I: Compare, const W: usize>() {
         let p = params(5.0e5, 4.0e5, 1.0e-3);
         let mut state = 12345u64;
         let mut next = |scale: Real| {
@@ -698,105 +803,140 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             scale * (((state >> 40) as f64 / (1u64 << 24) as f64) as Real - 0.5)
         };
-        fn check<const D: usize>(
-            p: &Params,
-            model: MaterialModel,
-            next: &mut impl FnMut(Real) -> Real,
-        ) {
-            // Random deformations, and lanes that take each branch of the corotated model's
-            // polar decomposition: no deformation, a half turn (F = -I in 2D), turns past a
-            // quarter, an inverted F (3D: the iteration stops at once).
-            let (c, s) = (libm::cos(3.0) as Real, libm::sin(3.0) as Real);
-            let special: [Mat<D>; 4] = [
-                [[0.0; D]; D],
-                core::array::from_fn(|r| core::array::from_fn(|c| if r == c { -2.0 } else { 0.0 })),
-                core::array::from_fn(|r| {
-                    core::array::from_fn(|k| match (r, k) {
-                        (0, 0) | (1, 1) => c - 1.0,
-                        (0, 1) => -s,
-                        (1, 0) => s,
-                        _ => 0.0,
-                    })
-                }),
-                core::array::from_fn(|r| {
-                    core::array::from_fn(|k| match (r, k) {
-                        (0, 0) => -1.5,
-                        (0, 1) => 0.3,
-                        (1, 0) => 2.0,
-                        _ => 0.0,
-                    })
-                }),
-            ];
-            for scale in [1.0e-5, 1.0e-2, 0.6, 0.0] {
-                let mut h = [[[0.0; W]; D]; D];
-                let (mut hzz, mut jm1) = ([0.0; W], [0.0; W]);
-                let mut each = [Deformation::<D>::new([[0.0; D]; D], 0.0); W];
-                for ln in 0..W {
-                    let m: Mat<D> = if scale == 0.0 {
-                        special[ln % special.len()]
-                    } else {
-                        core::array::from_fn(|_| core::array::from_fn(|_| next(scale)))
-                    };
-                    let zz = if D == 2 { next(scale) } else { 0.0 };
-                    each[ln] = Deformation::new(m, zz);
-                    for r in 0..D {
-                        for c in 0..D {
-                            h[r][c][ln] = m[r][c];
-                        }
-                    }
-                    (hzz[ln], jm1[ln]) = (zz, each[ln].jm1);
-                }
-                let mut tau = [[0.0; W]; 6];
-                let mut plastic = [0.0; W];
-                for (ln, f) in each.iter_mut().enumerate() {
-                    f.plastic = next(0.2);
-                    plastic[ln] = f.plastic;
-                }
-                kirchhoff_lanes(model, p, &h, &hzz, &jm1, &plastic, &mut tau);
-                let f = Deformation {
-                    h: *packs(&h),
-                    hzz: Pack(hzz),
-                    jm1: Pack(jm1),
-                    plastic: Pack(plastic),
+        for model in MaterialModel::ALL {
+            check::<I, 2, W>(&p, model, &mut next);
+            check::<I, 3, W>(&p, model, &mut next);
+        }
+    }
+
+    /// One particle's material update: the path of the reference step and of a chunk whose
+    /// lanes mix materials.
+    fn one_particle<const D: usize>(
+        p: &Params,
+        model: MaterialModel,
+        f: &Deformation<D>,
+        hoop: bool,
+        d: Option<Real>,
+    ) -> (Deformation<D>, Stress<D>) {
+        let g = by_model!(model, M => match d {
+            _ if !M::INELASTIC => *f,
+            Some(d) if M::ON_ELASTIC_PART => {
+                with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+            }
+            _ => M::inelastic(p, f, hoop),
+        });
+        let (e, scale) = elastic_part(&g, d.unwrap_or(0.0));
+        let mut s = kirchhoff_over_rho0(model, p, &e);
+        for v in s.m.iter_mut().flatten() {
+            *v *= scale;
+        }
+        s.zz *= scale;
+        (g, s)
+    }
+
+    fn check<I: Compare, const D: usize, const W: usize>(
+        p: &Params,
+        model: MaterialModel,
+        next: &mut impl FnMut(Real) -> Real,
+    ) {
+        // Lanes that take each branch of the corotated model's polar decomposition: no
+        // deformation, a half turn (F = -I in 2D), turns past a quarter, an inverted F (3D:
+        // the iteration stops at once).
+        let (c, s) = (libm::cos(3.0) as Real, libm::sin(3.0) as Real);
+        let special: [Mat<D>; 4] = [
+            [[0.0; D]; D],
+            core::array::from_fn(|r| core::array::from_fn(|c| if r == c { -2.0 } else { 0.0 })),
+            core::array::from_fn(|r| {
+                core::array::from_fn(|k| match (r, k) {
+                    (0, 0) | (1, 1) => c - 1.0,
+                    (0, 1) => -s,
+                    (1, 0) => s,
+                    _ => 0.0,
+                })
+            }),
+            core::array::from_fn(|r| {
+                core::array::from_fn(|k| match (r, k) {
+                    (0, 0) => -1.5,
+                    (0, 1) => 0.3,
+                    (1, 0) => 2.0,
+                    _ => 0.0,
+                })
+            }),
+        ];
+        for scale in [1.0e-5, 1.0e-2, 0.6, 0.0] {
+            let mut h = [[[0.0; W]; D]; D];
+            let (mut hzz, mut jm1, mut plastic, mut d) = ([0.0; W], [0.0; W], [0.0; W], [0.0; W]);
+            let mut each = [Deformation::<D>::new([[0.0; D]; D], 0.0); W];
+            for ln in 0..W {
+                let m: Mat<D> = if scale == 0.0 {
+                    special[ln % special.len()]
+                } else {
+                    core::array::from_fn(|_| core::array::from_fn(|_| next(scale)))
                 };
-                let packed = kirchhoff_over_rho0(model, p, &f);
-                // The inelastic part: the chunk's pack against one particle at a time.
-                for hoop in [false, true] {
+                let zz = if D == 2 { next(scale) } else { 0.0 };
+                each[ln] = Deformation::new(m, zz);
+                // A history in the range of the snow model's (J_p > 0) and the others'.
+                each[ln].plastic = next(0.2).abs();
+                for r in 0..D {
+                    for c in 0..D {
+                        h[r][c][ln] = m[r][c];
+                    }
+                }
+                (hzz[ln], jm1[ln], plastic[ln]) = (zz, each[ln].jm1, each[ln].plastic);
+                d[ln] = next(0.2);
+            }
+            for hoop in [false, true] {
+                for eigen in [None, Some(&d)] {
                     let (mut h2, mut hzz2, mut jm12, mut pl2) = (h, hzz, jm1, plastic);
-                    inelastic_lanes(model, p, &mut h2, &mut hzz2, &mut jm12, &mut pl2, hoop);
+                    let mut tau = [[0.0; W]; 6];
+                    let (h2r, hzz2r, jm12r, pl2r) = (&mut h2, &mut hzz2, &mut jm12, &mut pl2);
+                    chunk_lanes::<I, D, W>(
+                        model, p, h2r, hzz2r, jm12r, pl2r, hoop, eigen, &mut tau,
+                    );
                     for (ln, f) in each.iter().enumerate() {
-                        let g = by_model!(model, M => M::inelastic(p, f, hoop));
+                        let dl = eigen.map(|d| d[ln]);
+                        let (g, s) = one_particle(p, model, f, hoop, dl);
+                        // The update on the instance's vectors, whichever path the model takes.
+                        let at = ln - ln % I::N;
+                        let ld = |c: &[Real; W]| Wide::<I>::load(c, at);
+                        let v = Deformation::<D, Wide<I>> {
+                            h: matrix(|a, b| ld(&h[a][b])),
+                            hzz: ld(&hzz),
+                            jm1: ld(&jm1),
+                            plastic: ld(&plastic),
+                        };
+                        let w = by_model!(model, M => update::<M, D, Wide<I>>(
+                            p, &v, hoop, eigen.map(ld)
+                        ));
+                        let lane = |x: Wide<I>| {
+                            let mut out = [0.0; W];
+                            x.store(&mut out, at);
+                            out[ln]
+                        };
+                        let same = |a: Real, b: Real, what: &str| {
+                            assert_eq!(a.to_bits(), b.to_bits(), "{model:?} {D}D {what} {a} {b}")
+                        };
                         for r in 0..D {
                             for c in 0..D {
-                                assert_eq!(
-                                    h2[r][c][ln].to_bits(),
-                                    g.h[r][c].to_bits(),
-                                    "{model:?}"
-                                );
+                                same(h2[r][c][ln], g.h[r][c], "h");
+                                same(lane(w.f.h[r][c]), g.h[r][c], "h vector");
                             }
                         }
-                        assert_eq!(hzz2[ln].to_bits(), g.hzz.to_bits(), "{model:?}");
-                        assert_eq!(jm12[ln].to_bits(), g.jm1.to_bits(), "{model:?}");
-                        assert_eq!(pl2[ln].to_bits(), g.plastic.to_bits(), "{model:?}");
-                    }
-                }
-                for (ln, f) in each.iter().enumerate() {
-                    let s = kirchhoff_over_rho0(model, p, f);
-                    for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
-                        let bits = s.m[r][c].to_bits();
-                        assert_eq!(tau[k][ln].to_bits(), bits, "{model:?} {D}D");
-                        assert_eq!(packed.m[r][c].0[ln].to_bits(), bits, "{model:?} {D}D pack");
-                    }
-                    if D == 2 {
-                        assert_eq!(tau[3][ln].to_bits(), s.zz.to_bits(), "{model:?} zz");
-                        assert_eq!(packed.zz.0[ln].to_bits(), s.zz.to_bits(), "{model:?} zz");
+                        same(hzz2[ln], g.hzz, "hzz");
+                        same(jm12[ln], g.jm1, "jm1");
+                        same(pl2[ln], g.plastic, "plastic");
+                        same(lane(w.f.plastic), g.plastic, "plastic vector");
+                        for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
+                            same(tau[k][ln], s.m[r][c], "tau");
+                            same(lane(w.tau.m[r][c]), s.m[r][c], "tau vector");
+                        }
+                        if D == 2 {
+                            same(tau[3][ln], s.zz, "zz");
+                            same(lane(w.tau.zz), s.zz, "zz vector");
+                        }
                     }
                 }
             }
-        }
-        for model in ALL {
-            check::<2>(&p, model, &mut next);
-            check::<3>(&p, model, &mut next);
         }
     }
 }

@@ -8,7 +8,7 @@
 
 use super::{Deformation, Model, Params, Stress};
 use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p};
-use crate::pack::{matrix, Num};
+use crate::num::{matrix, Num};
 use crate::Real;
 
 /// `ln J` from `J - 1` for the stress: the branch-free log, so that a pack of particles

@@ -16,7 +16,7 @@
 
 use super::Deformation;
 use crate::math::{exp_m1, ln_1p_fast};
-use crate::pack::{matrix, MatOf, Num};
+use crate::num::{matrix, MatOf, Num};
 use crate::Real;
 
 /// Sweeps of cyclic Jacobi rotations in 3D: convergence is quadratic, and four sweeps

@@ -10,7 +10,7 @@ use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Params, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::exp_m1;
-use crate::pack::Num;
+use crate::num::Num;
 use crate::Real;
 
 /// The hardening factor `exp(xi (1 - J_p)) = exp(-xi plastic)` of a particle.

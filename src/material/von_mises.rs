@@ -14,7 +14,7 @@
 
 use super::principal::{abs, hencky_energy, plastic_axes, Principal, Split};
 use super::{Deformation, Model, Params, Stress};
-use crate::pack::Num;
+use crate::num::Num;
 use crate::Real;
 
 /// `sqrt(2/3)`.

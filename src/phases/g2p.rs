@@ -31,7 +31,7 @@ use crate::particles::StepReport;
 use crate::particles::{ParticleCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::simd::lanes::{commit, live_lanes, load_into, Block, Lane, Lanes};
-use crate::simd::rows::{self, Rows};
+use crate::simd::rows::{self, Compare};
 use crate::simd::wide::{Wide, WideMask};
 use crate::Real;
 
@@ -80,10 +80,10 @@ impl<const D: usize, const W: usize> Gathered<D, W> {
 /// The sum along x of a stencil row's nodes `n` weighted by `w` (weights, derivatives, moments
 /// or hoop factors), in node order.
 #[inline(always)]
-fn sum_x<I: Rows, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<I> {
+fn sum_x<I: Compare, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<I> {
     let mut s = w[0] * n[0];
     for i in 1..K {
-        s = s + w[i] * n[i];
+        s += w[i] * n[i];
     }
     s
 }
@@ -93,7 +93,7 @@ fn sum_x<I: Rows, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<
 /// # Safety
 /// As for [`rows::read`].
 #[inline(always)]
-unsafe fn read_row<I: Rows, const W: usize>(
+unsafe fn read_row<I: Compare, const W: usize>(
     col: &[Real],
     base: &[u32; W],
     at: usize,
@@ -119,7 +119,7 @@ unsafe fn read_row<I: Rows, const W: usize>(
 /// `G = (dwx_i wy_j wz_k, wx_i dwy_j wz_k, wx_i wy_j dwz_k)`).
 #[inline(always)]
 pub(crate) fn gather_chunk<
-    I: Rows,
+    I: Compare,
     const D: usize,
     const K: usize,
     S: Shape1D<K>,
@@ -147,24 +147,22 @@ pub(crate) fn gather_chunk<
     }
     // Lanes sharing their first node four by four (a stencil-bin fill) read one row per four.
     let shared = rows::blocks_share(base);
-    // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it;
-    // `fit` checked every lane's rows above, and every column read has g.len() entries.
-    let (zero, dt) = unsafe { (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt)) };
+    // SAFETY (every unsafe block below): `fit` checked every lane's rows above, and every
+    // column read has g.len() entries.
+    let (zero, dt) = (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt));
     for at in (0..W).step_by(I::N) {
         // The x factors of each node: weights, derivatives, moments (APIC), hoop factors.
         let (mut wx, mut dwx, mut ex, mut tx) = ([zero; K], [zero; K], [zero; K], [zero; K]);
         for i in 0..K {
-            unsafe {
-                wx[i] = Wide::load(&st.weights(0)[i], at);
-                if gradient {
-                    dwx[i] = Wide::load(&st.derivatives(0)[i], at);
-                }
-                if moments {
-                    ex[i] = Wide::load(&st.moments(0)[i], at);
-                }
-                if S::AXISYMMETRIC && gradient {
-                    tx[i] = Wide::load(&st.hoop_factors()[i], at);
-                }
+            wx[i] = Wide::load(&st.weights(0)[i], at);
+            if gradient {
+                dwx[i] = Wide::load(&st.derivatives(0)[i], at);
+            }
+            if moments {
+                ex[i] = Wide::load(&st.moments(0)[i], at);
+            }
+            if S::AXISYMMETRIC && gradient {
+                tx[i] = Wide::load(&st.hoop_factors()[i], at);
             }
         }
         let (mut v_gp, mut a_gp) = ([zero; D], [zero; D]);
@@ -176,28 +174,26 @@ pub(crate) fn gather_chunk<
                 // The row's factors: r[0] = wy_j wz_k (S and G_x), r[b] the same with axis
                 // b's factor differentiated (G_b), re[b] with the moment on axis b (APIC).
                 let (mut r, mut re) = ([zero; D], [zero; D]);
-                unsafe {
-                    let (wy, dwy) = (
-                        Wide::load(&st.weights(1)[j], at),
-                        Wide::load(&st.derivatives(1)[j], at),
-                    );
-                    let ey = if moments {
-                        Wide::load(&st.moments(1)[j], at)
-                    } else {
-                        zero
-                    };
-                    if D == 3 {
-                        let wz = Wide::load(&st.weights(D - 1)[k], at);
-                        r[0] = wy * wz;
-                        r[1] = dwy * wz;
-                        r[D - 1] = wy * Wide::load(&st.derivatives(D - 1)[k], at);
-                        if moments {
-                            re[1] = ey * wz;
-                            re[D - 1] = wy * Wide::load(&st.moments(D - 1)[k], at);
-                        }
-                    } else {
-                        (r[0], r[1], re[1]) = (wy, dwy, ey);
+                let (wy, dwy) = (
+                    Wide::load(&st.weights(1)[j], at),
+                    Wide::load(&st.derivatives(1)[j], at),
+                );
+                let ey = if moments {
+                    Wide::load(&st.moments(1)[j], at)
+                } else {
+                    zero
+                };
+                if D == 3 {
+                    let wz = Wide::load(&st.weights(D - 1)[k], at);
+                    r[0] = wy * wz;
+                    r[1] = dwy * wz;
+                    r[D - 1] = wy * Wide::load(&st.derivatives(D - 1)[k], at);
+                    if moments {
+                        re[1] = ey * wz;
+                        re[D - 1] = wy * Wide::load(&st.moments(D - 1)[k], at);
                     }
+                } else {
+                    (r[0], r[1], re[1]) = (wy, dwy, ey);
                 }
                 for a in 0..D {
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
@@ -218,8 +214,8 @@ pub(crate) fn gather_chunk<
                     }
                     // v_gp = sum S_ip v_i, a_gp = sum S_ip a_i, S_ip = wx_i r_0.
                     if vel {
-                        v_gp[a] = v_gp[a] + r[0] * sum_x::<I, K>(&wx, &nv);
-                        a_gp[a] = a_gp[a] + r[0] * sum_x::<I, K>(&wx, &na);
+                        v_gp[a] += r[0] * sum_x::<I, K>(&wx, &nv);
+                        a_gp[a] += r[0] * sum_x::<I, K>(&wx, &na);
                     }
                     let su = if gradient || moments {
                         sum_x::<I, K>(&wx, &nu)
@@ -228,20 +224,20 @@ pub(crate) fn gather_chunk<
                     };
                     // grad v = sum u_i (x) G_ip (E29), G_ip = (dwx_i r_0, wx_i r_1, ...).
                     if gradient {
-                        l[a][0] = l[a][0] + r[0] * sum_x::<I, K>(&dwx, &nu);
+                        l[a][0] += r[0] * sum_x::<I, K>(&dwx, &nu);
                         for b in 1..D {
-                            l[a][b] = l[a][b] + r[b] * su;
+                            l[a][b] += r[b] * su;
                         }
                         if S::AXISYMMETRIC && a == 0 {
                             // v_r / r = sum_i u_r,i T_ip (E70), T_ip = t_i wy_j.
-                            hoop = hoop + r[0] * sum_x::<I, K>(&tx, &nu);
+                            hoop += r[0] * sum_x::<I, K>(&tx, &nu);
                         }
                     }
                     // B_p = sum u_i (x) S_ip (x_i - x_p) (E78).
                     if moments {
-                        b_p[a][0] = b_p[a][0] + r[0] * sum_x::<I, K>(&ex, &nu);
+                        b_p[a][0] += r[0] * sum_x::<I, K>(&ex, &nu);
                         for b in 1..D {
-                            b_p[a][b] = b_p[a][b] + re[b] * su;
+                            b_p[a][b] += re[b] * su;
                         }
                     }
                 }
@@ -341,17 +337,11 @@ pub(crate) fn particles<
     // MUSL: what the re-map scatters (it reads no stress).
     let mut products = Products::zero();
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
-    // The constants of the update and the walls, made once per pass. SAFETY: this instance
-    // runs only on a CPU that supports it.
-    let (step, faces, zero, none, speed_scale) = unsafe {
-        (
-            update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity),
-            core::array::from_fn::<_, D, _>(|a| update::Faces::<I>::of(geom, a)),
-            Wide::<I>::splat(0.0),
-            WideMask::<I>::splat(false),
-            Wide::<I>::splat(ctx.speed_scale),
-        )
-    };
+    // The constants of the update and the walls, made once per pass.
+    let step = update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity);
+    let faces: [_; D] = core::array::from_fn(|a| update::Faces::<I>::of(geom, a));
+    let (zero, none) = (Wide::<I>::splat(0.0), WideMask::<I>::splat(false));
+    let speed_scale = Wide::<I>::splat(ctx.speed_scale);
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
         for a in 0..D {
@@ -361,7 +351,7 @@ pub(crate) fn particles<
         }
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false, ctx.mls);
         if damp {
-            damping::lane_rates(
+            damping::lane_rates::<I, D, W>(
                 (ctx.alpha_g, ctx.alpha_p),
                 p,
                 start,
@@ -402,8 +392,7 @@ pub(crate) fn particles<
         // auto-vectoriser left the selects scalar, 13 instructions per lane and axis).
         let (mut finite, mut stopped, mut escaped) = (Lanes::NONE, Lanes::NONE, Lanes::NONE);
         for q in (0..W).step_by(I::N) {
-            // SAFETY: this instance runs only on a CPU that supports it.
-            let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, q) };
+            let ld = |c: &Lane<W>| Wide::<I>::load(c, q);
             let mut sum = zero;
             let (mut open, mut wall) = (none, none);
             for a in 0..D {
@@ -423,7 +412,7 @@ pub(crate) fn particles<
                 // The speed scaled so that it overflows past `Resolvable::speed`: the one
                 // finiteness test below then also freezes a lane whose speed (the sum of its
                 // components' magnitudes) no stable step above the floor resolves.
-                sum = sum + (vn * speed_scale + xn);
+                sum += vn * speed_scale + xn;
                 let at = update::walls(&faces[a], xn, xn_low, vn);
                 (open, wall) = (open | at.open, wall | at.wall);
                 at.x.store(&mut x_new[a], q);
@@ -433,7 +422,7 @@ pub(crate) fn particles<
             if apic {
                 for r in 0..D {
                     for c in 0..D {
-                        sum = sum + ld(&affine[r][c]);
+                        sum += ld(&affine[r][c]);
                     }
                 }
             }
@@ -495,7 +484,7 @@ pub(crate) fn particles<
                 forces: false,
                 apic,
             };
-            products.set::<K, S>(&st, &mass, &v_new, &no_tau, &no_force, &affine, adds);
+            products.set::<I, K, S>(&st, &mass, &v_new, &no_tau, &no_force, &affine, adds);
             let (stride, pr) = (geom.stride, &products);
             if apic {
                 const REMAP: u8 = rows(Mode::Remap, true);

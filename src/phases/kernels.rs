@@ -36,7 +36,7 @@ crate::simd::instances! {
 
     /// [`super::stencils`]: one chunk's stencils (every pass computes them; one function
     /// rather than a copy of the three families' code in each pass).
-    fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [] [D, K, S, W] (
+    fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         st: &mut Stencils<D, K, W>,
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -60,22 +60,11 @@ crate::simd::instances! {
         adds: p2g::Adds,
     ) => row_sums::scatter_chunk;
 
-    /// [`crate::material::kirchhoff_lanes`]: one chunk's stress from its deformation, a
-    /// function of its own per dimension, rather than a copy of every model in each pass that
-    /// updates the stress (it made the C host 0.36 MB larger).
-    fn kirchhoff [const D: usize, const W: usize] [] [D, W] (
-        model: MaterialModel,
-        params: &Params,
-        h: &[[Lane<W>; D]; D],
-        hzz: &Lane<W>,
-        jm1: &Lane<W>,
-        plastic: &Lane<W>,
-        tau: &mut [Lane<W>; 6],
-    ) => crate::material::kirchhoff_lanes;
-
-    /// [`crate::material::inelastic_lanes`]: the inelastic part of one chunk's material
-    /// update (return mapping, projection), a function of its own as the stress is.
-    fn inelastic [const D: usize, const W: usize] [] [D, W] (
+    /// [`crate::material::chunk_lanes`]: one chunk's material update (the inelastic part,
+    /// then the stress) when its lanes share one material, a function of its own per
+    /// dimension, rather than a copy of every model in each pass that updates the stress (it
+    /// made the C host 0.36 MB larger).
+    fn material [const D: usize, const W: usize] [I] [D, W] (
         model: MaterialModel,
         params: &Params,
         h: &mut [[Lane<W>; D]; D],
@@ -83,5 +72,7 @@ crate::simd::instances! {
         jm1: &mut Lane<W>,
         plastic: &mut Lane<W>,
         hoop: bool,
-    ) => crate::material::inelastic_lanes;
+        eigen: Option<&Lane<W>>,
+        tau: &mut [Lane<W>; 6],
+    ) => crate::material::chunk_lanes;
 }

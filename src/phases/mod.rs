@@ -25,6 +25,8 @@ use crate::layout::{MaterialRecord, TractionRecord};
 use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{load, Lane};
+use crate::simd::rows::Compare;
+use crate::simd::wide::Wide;
 use crate::Real;
 
 /// Everything a phase needs that is constant during one substep.
@@ -93,7 +95,13 @@ pub(crate) struct Ctx<'m, const D: usize> {
 /// chunk's deformation gradients.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn stencils<
+    I: Compare,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -105,10 +113,11 @@ pub(crate) fn stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: u
     mls: bool,
 ) {
     let geom = &ctx.geom;
+    // The positions in cell units from the grid's origin.
     let mut s = [[0.0; W]; D];
-    for a in 0..D {
-        for ln in 0..W {
-            s[a][ln] = (x[a][ln] - geom.origin[a]) * geom.inv_h;
+    for at in (0..W).step_by(I::N) {
+        for a in 0..D {
+            ((Wide::<I>::load(&x[a], at) - geom.origin[a]) * geom.inv_h).store(&mut s[a], at);
         }
     }
     // cpGIMP's domain stretches; other families read none, and the chunk loads none.

@@ -12,10 +12,12 @@ use super::row_sums::scatter_chunk;
 use super::{Ctx, Kernels};
 use crate::grid::GridCols;
 use crate::layout::sym_pairs;
+use crate::num::Num;
 use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{load_into, Block, Lane};
-use crate::Real;
+use crate::simd::rows::Compare;
+use crate::simd::wide::Wide;
 
 /// What a particle-to-grid pass accumulates.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
@@ -160,7 +162,7 @@ pub(crate) fn scatter_rows<
         let mls = ctx.mls;
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
         let live = crate::simd::lanes::live_lanes(p, start, count);
-        products.set::<K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
+        products.set::<I, K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);
     }
 }
@@ -203,7 +205,7 @@ impl<const D: usize, const W: usize> Products<D, W> {
     /// stencils' `D_p^-1`), for a scatter that `adds`.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    pub fn set<const K: usize, S: Shape1D<K>>(
+    pub fn set<I: Compare, const K: usize, S: Shape1D<K>>(
         &mut self,
         st: &Stencils<D, K, W>,
         mass: &Lane<W>,
@@ -217,37 +219,35 @@ impl<const D: usize, const W: usize> Products<D, W> {
         if adds.mode.mass() {
             self.m = *mass;
         }
-        if adds.mode.momentum() {
-            for a in 0..D {
-                for ln in 0..W {
-                    self.mv[a][ln] = mass[ln] * v[a][ln];
-                }
-                if adds.apic {
-                    for b in 0..D {
-                        let inv_d = st.inverse_moments(b);
-                        for ln in 0..W {
-                            let c = affine_velocity::<K, S>(affine[a][b][ln], inv_d[ln]);
-                            self.mc[a][b][ln] = mass[ln] * c;
+        if adds.mode.force() && adds.forces {
+            self.f = *force;
+        }
+        let (momentum, force) = (adds.mode.momentum(), adds.mode.force());
+        for at in (0..W).step_by(I::N) {
+            let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+            let m = ld(mass);
+            if momentum {
+                for a in 0..D {
+                    (m * ld(&v[a])).store(&mut self.mv[a], at);
+                    if adds.apic {
+                        for b in 0..D {
+                            let inv_d = ld(st.inverse_moments(b));
+                            let c = affine_velocity::<K, S, _>(ld(&affine[a][b]), inv_d);
+                            (m * c).store(&mut self.mc[a][b], at);
                         }
                     }
                 }
             }
-        }
-        if adds.mode.force() {
-            for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
-                for ln in 0..W {
-                    let t = -mass[ln] * tau[k][ln];
-                    self.mt[a][b][ln] = t;
-                    self.mt[b][a][ln] = t;
+            if force {
+                // The internal force's `-m_p tau_p / rho0` (E14), symmetric.
+                for (k, &(a, b)) in sym_pairs(D).iter().enumerate() {
+                    let t = -m * ld(&tau[k]);
+                    t.store(&mut self.mt[a][b], at);
+                    t.store(&mut self.mt[b][a], at);
                 }
-            }
-            if S::AXISYMMETRIC {
-                for ln in 0..W {
-                    self.mh[ln] = -mass[ln] * tau[3][ln];
+                if S::AXISYMMETRIC {
+                    (-m * ld(&tau[3])).store(&mut self.mh, at);
                 }
-            }
-            if adds.forces {
-                self.f = *force;
             }
         }
     }
@@ -257,7 +257,7 @@ impl<const D: usize, const W: usize> Products<D, W> {
 /// `1 / D_p[b][b]`: the stored `B_p` divided by `D_p`, or the stored `C_p` itself for a family
 /// that keeps the gradient form ([`Shape1D::GRADIENT_AFFINE`]).
 #[inline(always)]
-pub(crate) fn affine_velocity<const K: usize, S: Shape1D<K>>(stored: Real, inv_d: Real) -> Real {
+pub(crate) fn affine_velocity<const K: usize, S: Shape1D<K>, T: Num>(stored: T, inv_d: T) -> T {
     if S::GRADIENT_AFFINE {
         stored
     } else {

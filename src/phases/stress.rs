@@ -15,16 +15,16 @@ use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
-    add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, on_elastic_part,
-    particle_inelastic, particle_stress, with_eigenstrain, Deformation, Params,
+    add_viscous_lanes, eigenstrain_part, model_of, particle_update, Deformation, LaneDeformation,
+    Params,
 };
 use crate::math::INV;
-use crate::pack::{matrix, packs, unpacked, Pack};
+use crate::num::matrix;
 use crate::particles::StepReport;
 use crate::particles::{ParticleCols, FROZEN};
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
-use crate::simd::rows::{self, Rows};
+use crate::simd::rows::{self, Compare};
 use crate::simd::wide::Wide;
 
 /// The lane matrices of a stress update, kept by the pass across chunks (see
@@ -49,16 +49,12 @@ impl<const D: usize, const W: usize> StressScratch<D, W> {
 }
 
 /// [`crate::math::exp_series_minus_identity`] on the instance's vectors.
-///
-/// # Safety
-/// The CPU supports the instance `I` (as for [`Wide::splat`]).
 #[inline(always)]
-unsafe fn exp_minus_identity<I: Rows, const D: usize>(
+fn exp_minus_identity<I: Compare, const D: usize>(
     a: &[[Wide<I>; D]; D],
     n: usize,
 ) -> [[Wide<I>; D]; D] {
-    // SAFETY: as required of the caller.
-    crate::math::exp_series_minus_identity(a, n, |k| unsafe { Wide::<I>::splat(INV[k]) })
+    crate::math::exp_series_minus_identity(a, n, |k| Wide::<I>::splat(INV[k]))
 }
 
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
@@ -90,22 +86,21 @@ pub(crate) fn update_stress<
             load_into(&mut h_old[r][c], p.h[r][c], start);
         }
     }
-    // SAFETY (every unsafe block below): this instance runs only on a CPU that supports it.
-    let (zero, dt) = unsafe { (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt)) };
+    let (zero, dt) = (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt));
     for at in (0..W).step_by(I::N) {
-        let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
+        let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
         let mut a = [[zero; D]; D];
         for r in 0..D {
             for c in 0..D {
                 a[r][c] = ld(&l[r][c]) * dt;
             }
         }
-        let q = unsafe { exp_minus_identity::<I, D>(&a, n) };
+        let q = exp_minus_identity::<I, D>(&a, n);
         for r in 0..D {
             for c in 0..D {
                 let mut v = ld(&h_old[r][c]);
                 for m in 0..D {
-                    v = v + q[r][m] * ld(&h_old[m][c]);
+                    v += q[r][m] * ld(&h_old[m][c]);
                 }
                 (v + q[r][c]).store(&mut h[r][c], at);
             }
@@ -117,15 +112,19 @@ pub(crate) fn update_stress<
     if S::AXISYMMETRIC {
         let old: Lane<W> = load(p.hoop, start);
         for at in (0..W).step_by(I::N) {
-            // SAFETY: as above.
-            let ld = |c: &Lane<W>| unsafe { Wide::<I>::load(c, at) };
-            let q = unsafe { exp_minus_identity::<I, 1>(&[[ld(&gathered.hoop) * dt]], n) }[0][0];
+            let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+            let q = exp_minus_identity::<I, 1>(&[[ld(&gathered.hoop) * dt]], n)[0][0];
             let old = ld(&old);
             (old + q + q * old).store(&mut hzz, at);
         }
     }
     // J - 1 = tr H + principal minors (+ det H in 3D), without forming I + H; times F_zz in 2D.
-    let mut jm1 = Deformation::new(*packs(h), Pack(hzz)).jm1.0;
+    let mut jm1 = [0.0; W];
+    for at in (0..W).step_by(I::N) {
+        let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+        let f = Deformation::<D, Wide<I>>::new(matrix(|r, c| ld(&h[r][c])), ld(&hzz));
+        f.jm1.store(&mut jm1, at);
+    }
     // The plastic history, when declared (the plastic models read and change it).
     let mut plastic: Lane<W> = if ctx.plastic {
         load(p.plastic, start)
@@ -160,57 +159,15 @@ pub(crate) fn update_stress<
         // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
         // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
         // expansion neither yields nor flows.
-        if inelastic(model) {
-            let axi = S::AXISYMMETRIC;
-            match &eigen {
-                Some(d) if on_elastic_part(model) => {
-                    let f = Deformation {
-                        h: *packs(h),
-                        hzz: Pack(hzz),
-                        jm1: Pack(jm1),
-                        plastic: Pack(plastic),
-                    };
-                    let (mut e, d) = (elastic_part(&f, Pack(*d)).0, Pack(*d));
-                    let mut eh = *unpacked(&e.h);
-                    let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
-                    I::inelastic::<D, W>(
-                        model,
-                        &params,
-                        &mut eh,
-                        &mut ezz,
-                        &mut ejm1,
-                        &mut plastic,
-                        axi,
-                    );
-                    (e.h, e.hzz, e.jm1) = (*packs(&eh), Pack(ezz), Pack(ejm1));
-                    let back = with_eigenstrain(&e, d);
-                    *h = *unpacked(&back.h);
-                    (hzz, jm1) = (back.hzz.0, back.jm1.0);
-                }
-                _ => I::inelastic::<D, W>(model, &params, h, &mut hzz, &mut jm1, &mut plastic, axi),
-            }
-        }
-        let mut admissible = Lanes::ALL;
-        match &eigen {
-            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, &plastic, tau),
-            Some(d) => {
-                let f = Deformation {
-                    h: *packs(h),
-                    hzz: Pack(hzz),
-                    jm1: Pack(jm1),
-                    plastic: Pack(plastic),
-                };
-                let (e, cube) = elastic_part(&f, Pack(*d));
-                let he = *unpacked(&e.h);
-                // The eigenstrain must not invert the material either.
-                admissible = rows::above::<I, W>(d, -1.0);
-                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, &plastic, tau);
-                for row in tau.iter_mut() {
-                    *row = (Pack(*row) * cube).0;
-                }
-            }
-        }
-        admissible & update & rows::above::<I, W>(&jm1, -1.0)
+        let (axi, eigen) = (S::AXISYMMETRIC, eigen.as_ref());
+        let (hzz, jm1, plastic) = (&mut hzz, &mut jm1, &mut plastic);
+        I::material::<D, W>(model, &params, h, hzz, jm1, plastic, axi, eigen, tau);
+        // The eigenstrain must not invert the material either.
+        let admissible = match &eigen {
+            Some(d) => rows::above::<I, W>(d, -1.0),
+            None => Lanes::ALL,
+        };
+        admissible & update & rows::above::<I, W>(jm1, -1.0)
     } else {
         stress_lane_by_lane(
             ctx.materials,
@@ -243,24 +200,24 @@ pub(crate) fn update_stress<
     let ok = ok.minus(runaway);
     // One finiteness test per lane: a sum is finite only if every term is (an overflowing sum
     // of finite values is a false alarm that freezes a particle already at 1e38: acceptable).
-    let mut sum = [0.0; W];
-    for ln in 0..W {
-        sum[ln] = jm1[ln] + hzz[ln];
-        for k in 0..ns {
-            sum[ln] += tau[k][ln];
+    let mut finite = Lanes::NONE;
+    for at in (0..W).step_by(I::N) {
+        let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+        let mut sum = ld(&jm1) + ld(&hzz);
+        for t in &tau[..ns] {
+            sum += ld(t);
         }
         for r in 0..D {
             for c in 0..D {
-                sum[ln] += h[r][c][ln];
+                sum += ld(&h[r][c]);
             }
         }
-    }
-    if ctx.plastic {
-        for ln in 0..W {
-            sum[ln] += plastic[ln];
+        if ctx.plastic {
+            sum += ld(&plastic);
         }
+        finite = finite | sum.is_finite().lanes(at);
     }
-    let ok = ok & rows::finite::<I, W>(&sum);
+    let ok = ok & finite;
     for r in 0..D {
         for c in 0..D {
             commit(p.h[r][c], start, &h[r][c], ok);
@@ -307,17 +264,9 @@ fn eigenstrain<const D: usize, const W: usize>(
     Some(d)
 }
 
-/// A chunk's deformation lane arrays, borrowed for the lane-by-lane material update.
-struct LaneDeformation<'a, const D: usize, const W: usize> {
-    h: &'a mut [[Lane<W>; D]; D],
-    hzz: &'a mut Lane<W>,
-    jm1: &'a mut Lane<W>,
-    plastic: &'a mut Lane<W>,
-}
-
 /// The material update of the lanes in `update` of a chunk whose lanes do not share one
-/// material, one lane at a time: the inelastic part ([`particle_inelastic`]) on `f` in place,
-/// then the stress ([`particle_stress`]); returns the lanes it updated (not those inverted or
+/// material, one lane at a time ([`particle_update`]: the inelastic part on `f` in place, then
+/// the stress); returns the lanes it updated (not those inverted or
 /// of an unknown material). A function of its own per dimension, not inlined into every pass
 /// form: chunks that mix materials are few, and each inlined copy cost build time and size.
 #[inline(never)]
@@ -341,22 +290,14 @@ fn stress_lane_by_lane<const D: usize, const W: usize>(
             jm1: f.jm1[ln],
             plastic: f.plastic[ln],
         };
-        // The return on the elastic part, as the chunk path does (E47).
-        let one = match eigen {
-            Some(d) if on_elastic_part(model_of(rec)) => {
-                let e = elastic_part(&one, d[ln]).0;
-                with_eigenstrain(&particle_inelastic(rec, &e, hoop), d[ln])
-            }
-            _ => particle_inelastic(rec, &one, hoop),
-        };
+        let (one, stress) = particle_update(rec, &one, hoop, eigen.map(|d| d[ln]));
         for r in 0..D {
             for c in 0..D {
                 f.h[r][c][ln] = one.h[r][c];
             }
         }
         (f.hzz[ln], f.jm1[ln], f.plastic[ln]) = (one.hzz, one.jm1, one.plastic);
-        let d = eigen.map_or(0.0, |d| d[ln]);
-        if let Some(s) = particle_stress(rec, &one, d) {
+        if let Some(s) = stress {
             for (row, &v) in tau
                 .iter_mut()
                 .zip(&s)

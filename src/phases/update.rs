@@ -11,6 +11,7 @@
 
 use crate::def::Boundary;
 use crate::grid::Geom;
+use crate::num::{Num, Truth};
 use crate::simd::rows::Compare;
 use crate::simd::wide::{Wide, WideMask};
 use crate::Real;
@@ -31,20 +32,14 @@ pub(crate) struct Step<I: Compare> {
 impl<I: Compare> Step<I> {
     /// The constants of a substep of length `dt` with FLIP fraction `beta`, FLIP moving the
     /// particles with their own velocity if `particle_velocity`.
-    ///
-    /// # Safety
-    /// The CPU supports the instance `I` ([`Wide::splat`]).
     #[inline(always)]
-    pub unsafe fn new(dt: Real, beta: Real, particle_velocity: bool) -> Self {
-        // SAFETY: as required of the caller.
-        unsafe {
-            Step {
-                dt: Wide::splat(dt),
-                half: Wide::splat(0.5),
-                half_dt2: Wide::splat(0.5 * dt * dt),
-                pic: Wide::splat(1.0 - beta),
-                particle_velocity,
-            }
+    pub fn new(dt: Real, beta: Real, particle_velocity: bool) -> Self {
+        Step {
+            dt: Wide::splat(dt),
+            half: Wide::splat(0.5),
+            half_dt2: Wide::splat(0.5 * dt * dt),
+            pic: Wide::splat(1.0 - beta),
+            particle_velocity,
         }
     }
 }
@@ -94,7 +89,7 @@ pub(crate) fn apic<I: Compare>(
 ) -> (Wide<I>, Wide<I>) {
     let mut v = v_gp + a_gp * k.dt;
     if let Some(d) = d {
-        v = v - d * k.dt;
+        v -= d * k.dt;
     }
     (v, v * k.dt)
 }
@@ -130,24 +125,18 @@ pub(crate) struct Faces<I: Compare> {
 
 impl<I: Compare> Faces<I> {
     /// The faces of `axis` of the grid `geom`.
-    ///
-    /// # Safety
-    /// As for [`Step::new`].
     #[inline(always)]
-    pub unsafe fn of<const D: usize>(geom: &Geom<D>, axis: usize) -> Self {
+    pub fn of<const D: usize>(geom: &Geom<D>, axis: usize) -> Self {
         let open = |side: usize| geom.faces[axis][side] == Boundary::Open;
-        // SAFETY: as required of the caller.
-        unsafe {
-            Faces {
-                zero: Wide::splat(0.0),
-                origin: Wide::splat(geom.origin[axis]),
-                inv_h: Wide::splat(geom.inv_h),
-                lo: Wide::splat(geom.lo[axis]),
-                hi: Wide::splat(geom.hi[axis]),
-                lo_x: Wide::splat(geom.origin[axis] + geom.lo[axis] * geom.h),
-                hi_x: Wide::splat(geom.origin[axis] + geom.hi[axis] * geom.h),
-                open: [WideMask::splat(open(0)), WideMask::splat(open(1))],
-            }
+        Faces {
+            zero: Wide::splat(0.0),
+            origin: Wide::splat(geom.origin[axis]),
+            inv_h: Wide::splat(geom.inv_h),
+            lo: Wide::splat(geom.lo[axis]),
+            hi: Wide::splat(geom.hi[axis]),
+            lo_x: Wide::splat(geom.origin[axis] + geom.lo[axis] * geom.h),
+            hi_x: Wide::splat(geom.origin[axis] + geom.hi[axis] * geom.h),
+            open: [WideMask::splat(open(0)), WideMask::splat(open(1))],
         }
     }
 }

@@ -133,6 +133,17 @@ pub(crate) trait Compare: Rows {
 
     fn sub(a: Self::V, b: Self::V) -> Self::V;
 
+    fn div(a: Self::V, b: Self::V) -> Self::V;
+
+    /// `-a` (the sign flipped, as the scalar negation does).
+    fn neg(a: Self::V) -> Self::V;
+
+    /// Square root per lane, correctly rounded (as [`crate::num::sqrt`]).
+    fn sqrt(a: Self::V) -> Self::V;
+
+    /// `a >= b` per lane.
+    fn ge(a: Self::V, b: Self::V) -> Self::M;
+
     /// `a < b` per lane.
     fn lt(a: Self::V, b: Self::V) -> Self::M;
 
@@ -188,18 +199,6 @@ fn compared<I: Compare, const W: usize, const ABOVE: bool>(
         let v = unsafe { I::load(values, q) };
         let m = if ABOVE { I::gt(v, b) } else { I::lt(v, b) };
         set = set | Lanes::at(q, I::bits(m));
-    }
-    set
-}
-
-/// The lanes of a chunk whose value is finite, [`Rows::N`] lanes per test.
-#[inline(always)]
-pub(crate) fn finite<I: Compare, const W: usize>(values: &[Real; W]) -> Lanes<W> {
-    let mut set = Lanes::NONE;
-    for q in (0..W).step_by(I::N) {
-        // SAFETY: this instance runs only on a CPU that supports it.
-        let v = unsafe { I::load(values, q) };
-        set = set | Lanes::at(q, I::bits(I::finite(v)));
     }
     set
 }
@@ -342,6 +341,27 @@ macro_rules! by_four_compare {
         #[inline(always)]
         fn sub(a: Row4, b: Row4) -> Row4 {
             a - b
+        }
+
+        #[inline(always)]
+        fn div(a: Row4, b: Row4) -> Row4 {
+            a / b
+        }
+
+        #[inline(always)]
+        fn neg(a: Row4) -> Row4 {
+            -a
+        }
+
+        #[inline(always)]
+        fn sqrt(a: Row4) -> Row4 {
+            use crate::num::sqrt;
+            Row4::new(sqrt(a.x), sqrt(a.y), sqrt(a.z), sqrt(a.w))
+        }
+
+        #[inline(always)]
+        fn ge(a: Row4, b: Row4) -> Mask4 {
+            a.cmpge(b)
         }
 
         #[inline(always)]
@@ -618,6 +638,30 @@ mod x86 {
         }
 
         #[inline(always)]
+        fn div(a: Y, b: Y) -> Y {
+            // SAFETY: as for sub.
+            Y(unsafe { _mm256_div_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn neg(a: Y) -> Y {
+            // SAFETY: as for sub.
+            Y(unsafe { _mm256_xor_ps(a.0, _mm256_set1_ps(-0.0)) })
+        }
+
+        #[inline(always)]
+        fn sqrt(a: Y) -> Y {
+            // SAFETY: as for sub.
+            Y(unsafe { _mm256_sqrt_ps(a.0) })
+        }
+
+        #[inline(always)]
+        fn ge(a: Y, b: Y) -> YM {
+            // SAFETY: as for sub.
+            YM(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(a.0, b.0) })
+        }
+
+        #[inline(always)]
         fn lt(a: Y, b: Y) -> YM {
             // SAFETY: as for sub.
             YM(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(a.0, b.0) })
@@ -685,6 +729,30 @@ mod x86 {
         fn sub(a: Z, b: Z) -> Z {
             // SAFETY: a vector of this instance exists only where the CPU supports it.
             Z(unsafe { _mm512_sub_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn div(a: Z, b: Z) -> Z {
+            // SAFETY: as for sub.
+            Z(unsafe { _mm512_div_ps(a.0, b.0) })
+        }
+
+        #[inline(always)]
+        fn neg(a: Z) -> Z {
+            // SAFETY: as for sub (AVX-512 DQ has the float xor).
+            Z(unsafe { _mm512_xor_ps(a.0, _mm512_set1_ps(-0.0)) })
+        }
+
+        #[inline(always)]
+        fn sqrt(a: Z) -> Z {
+            // SAFETY: as for sub.
+            Z(unsafe { _mm512_sqrt_ps(a.0) })
+        }
+
+        #[inline(always)]
+        fn ge(a: Z, b: Z) -> ZM {
+            // SAFETY: as for sub.
+            ZM(unsafe { _mm512_cmp_ps_mask::<_CMP_GE_OQ>(a.0, b.0) })
         }
 
         #[inline(always)]
@@ -829,6 +897,11 @@ mod tests {
             I::store(I::select(I::lt(va, vb), va, vb), &mut picked, at);
             let mut diff = [0.0; W];
             I::store(I::sub(va, vb), &mut diff, at);
+            let (mut quot, mut neg, mut root) = ([0.0; W], [0.0; W], [0.0; W]);
+            I::store(I::div(va, vb), &mut quot, at);
+            I::store(I::neg(va), &mut neg, at);
+            I::store(I::sqrt(va), &mut root, at);
+            let ge = I::bits(I::ge(va, vb));
             for q in 0..I::N {
                 let (x, y) = (a[at + q], b[at + q]);
                 assert_eq!(lt >> q & 1 == 1, x < y, "lt lane {q}: {x} {y}");
@@ -837,6 +910,16 @@ mod tests {
                 let min = if x < y { x } else { y };
                 assert_eq!(picked[at + q].to_bits(), min.to_bits(), "select lane {q}");
                 assert_eq!(diff[at + q].to_bits(), (x - y).to_bits(), "sub lane {q}");
+                assert_eq!(ge >> q & 1 == 1, x >= y, "ge lane {q}: {x} {y}");
+                assert_eq!(neg[at + q].to_bits(), (-x).to_bits(), "neg lane {q}");
+                // Every NaN is a NaN; the bits of a NaN result may differ by instance.
+                let same =
+                    |u: Real, v: Real| u.to_bits() == v.to_bits() || u.is_nan() && v.is_nan();
+                assert!(same(quot[at + q], x / y), "div lane {q}: {x} {y}");
+                assert!(
+                    same(root[at + q], crate::num::sqrt(x)),
+                    "sqrt lane {q}: {x}"
+                );
             }
             let full = if I::N == 32 {
                 u32::MAX
@@ -852,11 +935,11 @@ mod tests {
         }
         let expect_above = Lanes::from_fn(|ln| a[ln] > 0.5);
         assert_eq!(above::<I, W>(&a, 0.5), expect_above);
-        assert_eq!(finite::<I, W>(&a), Lanes::from_fn(|ln| a[ln].is_finite()));
     }
 
-    /// Every instance the CPU supports compares, selects and combines masks as the scalar
-    /// operations do, NaN and infinities included.
+    /// Every instance the CPU supports subtracts, divides, negates, takes square roots,
+    /// compares, selects and combines masks as the scalar operations do, NaN and infinities
+    /// included.
     #[test]
     fn every_instance_compares_as_scalars_do() {
         compare_all::<{ width(2) }>();

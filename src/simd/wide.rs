@@ -1,15 +1,26 @@
 //! [`Wide`]: the lanes of one vector of the instance that runs ([`Rows::N`] particles at once),
-//! with arithmetic operators, so that an equation on it reads as the seed documents write it
-//! (`v + a * dt - inversion`), and [`WideMask`], the truth values its comparisons give.
+//! the one lane type of the passes: the [`Num`] the materials are written on, with the full
+//! set of operators (`+ - * /`, negation, `+=`, a [`Real`] operand), comparisons and selects,
+//! so that an equation on it reads as docs/equations.md writes it (`v + a * dt - inversion`);
+//! and [`WideMask`], the truth values its comparisons give.
 //!
 //! Each operator is one vector instruction of the instance (`#[inline(always)]`, so it is
 //! compiled with the instance's features); the values and their order are those of the
-//! expression as written, so every instance computes the same bits.
+//! expression as written, so every instance computes the same bits, and the bits of the same
+//! expression on one [`Real`].
+//!
+//! Making a `Wide` from reals ([`Wide::splat`], [`Wide::load`], [`Num::splat`]) runs the
+//! instance's instructions, and is safe for the reason every function generic over an
+//! instance is: it runs only inside the passes of an instance the CPU supports
+//! (`crate::simd::Simd::instance` chose it; the tables of `crate::simd::instances!` are the
+//! only way in). The unsafe operations of the instances' vectors ([`Rows`]) stay in this
+//! floor.
 
 use super::lanes::Lanes;
 use super::rows::{Compare, Rows};
+use crate::num::{Num, Truth};
 use crate::Real;
-use core::ops::{Add, BitAnd, BitOr, Mul, Sub};
+use core::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
 /// [`Rows::N`] reals, one per lane, of the instance `I`.
 #[repr(transparent)]
@@ -26,22 +37,17 @@ impl<I: Rows> Copy for Wide<I> {}
 
 impl<I: Rows> Wide<I> {
     /// Every lane `x`.
-    ///
-    /// # Safety
-    /// The CPU supports the instance `I` ([`Rows::splat`]).
     #[inline(always)]
-    pub unsafe fn splat(x: Real) -> Self {
-        // SAFETY: as required of the caller.
+    pub fn splat(x: Real) -> Self {
+        // SAFETY: a function generic over an instance runs only inside the passes of an
+        // instance the CPU supports (module docs).
         Wide(unsafe { I::splat(x) })
     }
 
     /// Lanes `at..at + N` of a chunk's lane array.
-    ///
-    /// # Safety
-    /// As for [`Wide::splat`].
     #[inline(always)]
-    pub unsafe fn load<const W: usize>(lanes: &[Real; W], at: usize) -> Self {
-        // SAFETY: as required of the caller.
+    pub fn load<const W: usize>(lanes: &[Real; W], at: usize) -> Self {
+        // SAFETY: as for splat.
         Wide(unsafe { I::load(lanes, at) })
     }
 
@@ -52,27 +58,103 @@ impl<I: Rows> Wide<I> {
     }
 }
 
-impl<I: Rows> Add for Wide<I> {
+/// `Wide op Wide`, `Wide op Real` and `Wide op= Wide` for one operator.
+macro_rules! wide_op {
+    ($tr:ident, $f:ident, $assign:ident, $fa:ident, $op:tt, $via:ident) => {
+        impl<I: Compare> $tr for Wide<I> {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, b: Self) -> Self {
+                Wide(I::$via(self.0, b.0))
+            }
+        }
+        impl<I: Compare> $tr<Real> for Wide<I> {
+            type Output = Self;
+            #[inline(always)]
+            fn $f(self, b: Real) -> Self {
+                self $op <Self as Num>::splat(b)
+            }
+        }
+        impl<I: Compare> $assign for Wide<I> {
+            #[inline(always)]
+            fn $fa(&mut self, b: Self) {
+                *self = *self $op b;
+            }
+        }
+    };
+}
+
+wide_op!(Add, add, AddAssign, add_assign, +, add);
+wide_op!(Sub, sub, SubAssign, sub_assign, -, sub);
+wide_op!(Mul, mul, MulAssign, mul_assign, *, mul);
+
+impl<I: Compare> Div for Wide<I> {
     type Output = Self;
     #[inline(always)]
-    fn add(self, b: Self) -> Self {
-        Wide(I::add(self.0, b.0))
+    fn div(self, b: Self) -> Self {
+        Wide(I::div(self.0, b.0))
     }
 }
 
-impl<I: Rows> Mul for Wide<I> {
+impl<I: Compare> Neg for Wide<I> {
     type Output = Self;
     #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        Wide(I::mul(self.0, b.0))
+    fn neg(self) -> Self {
+        Wide(I::neg(self.0))
     }
 }
 
-impl<I: Compare> Sub for Wide<I> {
-    type Output = Self;
+impl<I: Compare> Num for Wide<I> {
+    type Mask = WideMask<I>;
+
     #[inline(always)]
-    fn sub(self, b: Self) -> Self {
-        Wide(I::sub(self.0, b.0))
+    fn splat(x: Real) -> Self {
+        Wide::splat(x)
+    }
+
+    /// Each lane through `f` in a loop over the vector's lanes (which the compiler vectorises
+    /// where `f` has no branches).
+    #[inline(always)]
+    fn map(self, f: impl Fn(Real) -> Real) -> Self {
+        const { assert!(I::N <= 16) };
+        let mut lanes = [0.0; 16];
+        self.store(&mut lanes, 0);
+        for v in lanes.iter_mut().take(I::N) {
+            *v = f(*v);
+        }
+        Wide::load(&lanes, 0)
+    }
+
+    #[inline(always)]
+    fn ge(self, b: Self) -> WideMask<I> {
+        WideMask(I::ge(self.0, b.0))
+    }
+
+    #[inline(always)]
+    fn gt(self, b: Self) -> WideMask<I> {
+        WideMask(I::gt(self.0, b.0))
+    }
+
+    #[inline(always)]
+    fn select(m: WideMask<I>, a: Self, b: Self) -> Self {
+        m.select(a, b)
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Wide(I::sqrt(self.0))
+    }
+}
+
+impl<I: Compare> Truth for WideMask<I> {
+    #[inline(always)]
+    fn and_not(self, b: Self) -> Self {
+        WideMask(I::and_not(self.0, b.0))
+    }
+
+    #[inline(always)]
+    fn any(self) -> bool {
+        I::bits(self.0) != 0
     }
 }
 
@@ -95,12 +177,6 @@ impl<I: Compare> Wide<I> {
         WideMask(I::lt(self.0, b.0))
     }
 
-    /// `self > b` per lane.
-    #[inline(always)]
-    pub fn gt(self, b: Self) -> WideMask<I> {
-        WideMask(I::gt(self.0, b.0))
-    }
-
     /// Whether each lane is finite.
     #[inline(always)]
     pub fn is_finite(self) -> WideMask<I> {
@@ -110,12 +186,9 @@ impl<I: Compare> Wide<I> {
 
 impl<I: Compare> WideMask<I> {
     /// Every lane `b`.
-    ///
-    /// # Safety
-    /// As for [`Wide::splat`].
     #[inline(always)]
-    pub unsafe fn splat(b: bool) -> Self {
-        // SAFETY: as required of the caller.
+    pub fn splat(b: bool) -> Self {
+        // SAFETY: as for [`Wide::splat`].
         WideMask(unsafe { I::splat_mask(b) })
     }
 
@@ -123,12 +196,6 @@ impl<I: Compare> WideMask<I> {
     #[inline(always)]
     pub fn select(self, a: Wide<I>, b: Wide<I>) -> Wide<I> {
         Wide(I::select(self.0, a.0, b.0))
-    }
-
-    /// The mask and not `b`.
-    #[inline(always)]
-    pub fn and_not(self, b: Self) -> Self {
-        WideMask(I::and_not(self.0, b.0))
     }
 
     /// The lanes `q..q + N` of a chunk where the mask holds (`q` a multiple of `N`).

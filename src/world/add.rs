@@ -139,7 +139,7 @@ impl<'a> World<'a> {
         let range = self.particle_range(first, n)?;
         let band = [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0];
         let deformation = |i: usize| {
-            let m = crate::pack::matrix(|a, b| h[a][b][i]);
+            let m = crate::num::matrix(|a, b| h[a][b][i]);
             Deformation::<D>::new(m, if axisymmetric { h[2][2][i] } else { 0.0 })
         };
         // Checked in blocks, then written in blocks: a block's stresses are computed from
