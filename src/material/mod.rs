@@ -142,45 +142,23 @@ pub(crate) fn eigenstrain_part(r: &MaterialRecord, field: usize, value: Real) ->
     }
 }
 
-/// Parameters the models need, taken from a material record once per step.
+/// Lamé's lambda and mu (E33): all the elastic models (corotated linear, neo-Hookean,
+/// fixed-corotated) read of a material record.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Params {
-    /// Lamé's lambda (a fluid's bulk modulus K), Pa.
+pub(crate) struct Lame {
+    /// Lamé's lambda, Pa.
     pub lambda: Real,
+    /// The shear modulus mu, Pa.
     pub mu: Real,
-    pub inv_rho0: Real,
-    /// Tait's exponent gamma (fluid).
-    pub pressure_exponent: Real,
-    /// Initial yield stress and hardening modulus, Pa (von Mises).
-    pub yield_stress: Real,
-    pub hardening_modulus: Real,
-    /// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` and the apex's mean
-    /// tension `c cot(phi)`, Pa.
-    pub friction: Real,
-    pub apex_tension: Real,
-    /// Snow: `ln(1 - theta_c)`, `ln(1 + theta_s)` and xi.
-    pub log_compression: Real,
-    pub log_stretch: Real,
-    pub hardening_coefficient: Real,
 }
 
-impl Params {
-    /// The parameters of a record: copies (what is derived was derived when the material was
-    /// added), so that a chunk's stress update pays nothing for models it does not run.
+impl Lame {
+    /// The Lamé constants of record `r`, as [`Model::params`] takes them.
     #[inline(always)]
-    pub fn of(r: &MaterialRecord) -> Params {
-        Params {
+    pub fn of(r: &MaterialRecord) -> Lame {
+        Lame {
             lambda: r.lambda,
             mu: r.mu,
-            inv_rho0: 1.0 / r.density,
-            pressure_exponent: r.pressure_exponent,
-            yield_stress: r.yield_stress,
-            hardening_modulus: r.hardening_modulus,
-            friction: r.friction_coefficient,
-            apex_tension: r.apex_tension,
-            log_compression: r.log_compression,
-            log_stretch: r.log_stretch,
-            hardening_coefficient: r.hardening_coefficient,
         }
     }
 }
@@ -194,9 +172,18 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
 
 /// A constitutive model (E3, E33-E46): the deformation in, Kirchhoff stress out; an
 /// inelastic model (a fluid, plasticity) also changes the deformation each step before its
-/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait,
-/// one arm of [`MaterialModel`] (and of the C enum) and of [`by_model!`], and its tests.
+/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait
+/// (with its parameters' struct), one arm of [`MaterialModel`] (and of the C enum) and of
+/// [`by_model!`], and its tests.
 pub(crate) trait Model {
+    /// The parameters the model reads: its own fields of a material record, no more.
+    type Params: Copy;
+
+    /// The parameters of material `r`: copies of its fields (what is derived was derived once
+    /// when the material was added, in [`material_record`]), so that a chunk's stress update
+    /// pays nothing for fields its model does not read.
+    fn params(r: &MaterialRecord) -> Self::Params;
+
     /// Whether [`Model::inelastic`] changes anything (false: the step skips it).
     const INELASTIC: bool = false;
 
@@ -215,7 +202,7 @@ pub(crate) trait Model {
     /// Written on [`Num`] without branches, as [`Model::kirchhoff`].
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        _p: &Params,
+        _p: &Self::Params,
         f: &Deformation<D, T>,
         _hoop: bool,
     ) -> Deformation<D, T> {
@@ -226,7 +213,7 @@ pub(crate) trait Model {
     /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of a pack
     /// of particles sharing this material (`T = Pack<W>`, a chunk's stress update). Lanes of
     /// a pack that are not updated may hold any value; their results are not used.
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T>;
+    fn kirchhoff<const D: usize, T: Num>(p: &Self::Params, f: &Deformation<D, T>) -> Stress<D, T>;
 
     /// Whether a chunk's stress update runs [`Model::kirchhoff`] on one pack of the chunk's
     /// particles in `D` dimensions, rather than lane by lane in a loop the compiler
@@ -238,7 +225,7 @@ pub(crate) trait Model {
     }
 
     /// Strain energy per unit initial volume, J/m^3 (energy checks and diagnostics).
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real;
+    fn energy<const D: usize>(p: &Self::Params, f: &Deformation<D>) -> Real;
 
     /// Whether `plastic` is a plastic history this model can leave (what [`World::open`]
     /// checks a snapshot against): 0 for a model without one, which never changes it.
@@ -331,18 +318,19 @@ pub(crate) fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
     by_model!(model_of(r), M => M::wave_speed(r, plastic))
 }
 
-/// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`: one particle, or a pack.
+/// `tau / rho0` of material `r` at a deformation with `jm1 = det F - 1 > -1`: one particle,
+/// or a pack.
 #[inline(always)]
 pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
-    model: MaterialModel,
-    p: &Params,
+    r: &MaterialRecord,
     f: &Deformation<D, T>,
 ) -> Stress<D, T> {
-    let mut s = by_model!(model, M => M::kirchhoff(p, f));
+    let mut s = by_model!(model_of(r), M => M::kirchhoff(&M::params(r), f));
+    let inv_rho0 = 1.0 / r.density;
     for v in s.m.iter_mut().flatten() {
-        *v *= T::splat(p.inv_rho0);
+        *v *= T::splat(inv_rho0);
     }
-    s.zz *= T::splat(p.inv_rho0);
+    s.zz *= T::splat(inv_rho0);
     s
 }
 
@@ -361,7 +349,7 @@ pub(crate) fn particle_stress<const D: usize>(
         return None;
     }
     let (e, scale) = elastic_part(f, d);
-    let s = kirchhoff_over_rho0(model_of(r), &Params::of(r), &e);
+    let s = kirchhoff_over_rho0(r, &e);
     let mut tau = [0.0; 6];
     for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
         tau[k] = s.m[a][b] * scale;
@@ -372,24 +360,25 @@ pub(crate) fn particle_stress<const D: usize>(
     Some(tau)
 }
 
-/// `tau / rho0` of the `W` particles of a chunk that share the material `model`, from the
+/// `tau / rho0` of the `W` particles of a chunk that share the material `rec`, from the
 /// chunk's lane arrays: `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D), `jm1[lane]` and the
 /// plastic history `plastic[lane]` in, `tau[k][lane]` out in the stored component order
 /// ([`crate::layout::sym_pairs`], then `zz` in 2D). Lane by lane, or as one pack where the
 /// model asks for it ([`Model::packed`]).
 #[inline(always)]
 pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
-    model: MaterialModel,
-    p: &Params,
+    rec: &MaterialRecord,
     h: &[[[Real; W]; D]; D],
     hzz: &[Real; W],
     jm1: &[Real; W],
     plastic: &[Real; W],
     tau: &mut [[Real; W]; 6],
 ) {
+    let (model, inv_rho0) = (model_of(rec), 1.0 / rec.density);
     // The whole model inside its arm: a stress matrix of packs carried out of the `match` was
     // copied through `memcpy`.
     by_model!(model, M => {
+        let p = &M::params(rec);
         if M::packed(D) {
             let f = Deformation::<D, Pack<W>> {
                 h: *packs(h),
@@ -399,10 +388,10 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
             };
             let s = M::kirchhoff(p, &f);
             for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
-                tau[k] = (s.m[r][c] * p.inv_rho0).0;
+                tau[k] = (s.m[r][c] * inv_rho0).0;
             }
             if D == 2 {
-                tau[3] = (s.zz * p.inv_rho0).0;
+                tau[3] = (s.zz * inv_rho0).0;
             }
         } else {
             for ln in 0..W {
@@ -414,10 +403,10 @@ pub(crate) fn kirchhoff_lanes<const D: usize, const W: usize>(
                 };
                 let s = M::kirchhoff(p, &f);
                 for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
-                    tau[k][ln] = s.m[r][c] * p.inv_rho0;
+                    tau[k][ln] = s.m[r][c] * inv_rho0;
                 }
                 if D == 2 {
-                    tau[3][ln] = s.zz * p.inv_rho0;
+                    tau[3][ln] = s.zz * inv_rho0;
                 }
             }
         }
@@ -431,20 +420,21 @@ pub(crate) fn inelastic(model: MaterialModel) -> bool {
 }
 
 /// The inelastic part of the material update ([`Model::inelastic`]) of the `W` particles of a
-/// chunk that share the material `model`, on the chunk's lane arrays in place, as one pack
+/// chunk that share the material `rec`, on the chunk's lane arrays in place, as one pack
 /// (its return mappings are written without branches, and their logarithms and exponentials
 /// are calls that a loop over lanes would not vectorise around). `hoop`: axisymmetric.
 #[inline(always)]
 pub(crate) fn inelastic_lanes<const D: usize, const W: usize>(
-    model: MaterialModel,
-    p: &Params,
+    rec: &MaterialRecord,
     h: &mut [[[Real; W]; D]; D],
     hzz: &mut [Real; W],
     jm1: &mut [Real; W],
     plastic: &mut [Real; W],
     hoop: bool,
 ) {
+    let model = model_of(rec);
     by_model!(model, M => {
+        let p = &M::params(rec);
         if M::INELASTIC {
             let f = Deformation::<D, Pack<W>> {
                 h: *packs(h),
@@ -469,7 +459,7 @@ pub(crate) fn particle_inelastic<const D: usize>(
     f: &Deformation<D>,
     hoop: bool,
 ) -> Deformation<D> {
-    by_model!(model_of(r), M => M::inelastic(&Params::of(r), f, hoop))
+    by_model!(model_of(r), M => M::inelastic(&M::params(r), f, hoop))
 }
 
 /// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0` (E46):
@@ -510,13 +500,9 @@ pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
     }
 }
 
-/// Strain energy per unit initial volume, J/m^3, of a deformation.
-pub(crate) fn energy_density<const D: usize>(
-    model: MaterialModel,
-    p: &Params,
-    f: &Deformation<D>,
-) -> Real {
-    by_model!(model, M => M::energy(p, f))
+/// Strain energy per unit initial volume, J/m^3, of material `r` at a deformation.
+pub(crate) fn energy_density<const D: usize>(r: &MaterialRecord, f: &Deformation<D>) -> Real {
+    by_model!(model_of(r), M => M::energy(&M::params(r), f))
 }
 
 #[cfg(test)]
@@ -535,15 +521,18 @@ mod tests {
         MaterialModel::Snow,
     ];
 
-    /// Parameters with the given Lamé constants and `1 / rho0`, the other models' from the
-    /// default material.
-    fn params(lambda: Real, mu: Real, inv_rho0: Real) -> Params {
+    /// The default material's record as `model`, with the given Lamé constants and initial
+    /// density `rho0`; lambda is also the fluid's bulk modulus K, as in a fluid's own record
+    /// ([`crate::MaterialDef::lame`]).
+    fn record(model: MaterialModel, lambda: Real, mu: Real, rho0: Real) -> MaterialRecord {
         let r = crate::material::material_record(&crate::MaterialDef::DEFAULT).unwrap();
-        Params {
+        MaterialRecord {
+            model: model as u32 as Real,
             lambda,
             mu,
-            inv_rho0,
-            ..Params::of(&r)
+            bulk_modulus: lambda,
+            density: rho0,
+            ..r
         }
     }
 
@@ -565,13 +554,13 @@ mod tests {
     /// in both models, to round-off, for many angles about every axis, in 3D and 2D.
     #[test]
     fn rigid_rotation_gives_zero_stress_and_energy() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for model in ALL {
+            let r = record(model, 5.0e5, 4.0e5, 1.0e3);
             for k in 0..64 {
                 let angle = -3.0 + 6.0 * k as Real / 63.0;
                 for axis in 0..3 {
                     let f = Deformation::new(rotation_minus_identity(angle, axis), 0.0);
-                    let s = kirchhoff_over_rho0(model, &p, &f);
+                    let s = kirchhoff_over_rho0(&r, &f);
                     // tau/rho0 scale of a unit strain is (lambda + 2 mu)/rho0 = 1300; round-off
                     // of order 1e-6 of it is what f32 leaves.
                     let bound = 1.0e-5 * 1300.0;
@@ -580,14 +569,14 @@ mod tests {
                         "{model:?} {angle} {axis}: {:?}",
                         s.m
                     );
-                    assert!(energy_density(model, &p, &f).abs() < 1.0e-5 * 1.3e6);
+                    assert!(energy_density(&r, &f).abs() < 1.0e-5 * 1.3e6);
                 }
                 let (s2, c2) = (
                     libm::sin(angle as f64) as Real,
                     libm::cos(angle as f64) as Real,
                 );
                 let h2: Mat<2> = [[c2 - 1.0, -s2], [s2, c2 - 1.0]];
-                let s = kirchhoff_over_rho0(model, &p, &Deformation::new(h2, 0.0));
+                let s = kirchhoff_over_rho0(&r, &Deformation::new(h2, 0.0));
                 assert!(s.m.iter().flatten().all(|v| v.abs() < 1.0e-5 * 1300.0));
                 assert!(s.zz.abs() < 1.0e-5 * 1300.0);
             }
@@ -598,18 +587,18 @@ mod tests {
     /// `tau_xx = (lambda + 2 mu) eps`, `tau_yy = lambda eps` to first order (relative 2 eps).
     #[test]
     fn small_uniaxial_strain_matches_linear_elasticity() {
-        let p = params(5.0e5, 4.0e5, 1.0);
         let eps = 1.0e-4;
         let f = Deformation::<3>::new([[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]], 0.0);
         for model in ALL.into_iter().filter(|&m| m != MaterialModel::Fluid) {
-            let s = kirchhoff_over_rho0(model, &p, &f);
-            let xx = (p.lambda + 2.0 * p.mu) * eps;
-            let yy = p.lambda * eps;
+            let r = record(model, 5.0e5, 4.0e5, 1.0);
+            let s = kirchhoff_over_rho0(&r, &f);
+            let xx = (r.lambda + 2.0 * r.mu) * eps;
+            let yy = r.lambda * eps;
             assert!((s.m[0][0] - xx).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             assert!((s.m[1][1] - yy).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             // Energy (lambda + 2 mu) eps^2 / 2.
-            let w = energy_density(model, &p, &f);
-            let expect = 0.5 * (p.lambda + 2.0 * p.mu) * eps * eps;
+            let w = energy_density(&r, &f);
+            let expect = 0.5 * (r.lambda + 2.0 * r.mu) * eps * eps;
             assert!((w - expect).abs() < 1e-3 * expect, "{model:?} {w} {expect}");
         }
     }
@@ -619,7 +608,6 @@ mod tests {
     /// both models, at small and large strain.
     #[test]
     fn out_of_plane_stretch_matches_the_3d_model() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for (scale, hzz) in [(1.0e-4, -3.0e-5), (0.2, 0.3), (0.3, -0.4)] {
             let h2: Mat<2> = [[0.5 * scale, -0.3 * scale], [0.2 * scale, -0.4 * scale]];
             let h3: Mat<3> = [
@@ -630,10 +618,8 @@ mod tests {
             let (f2, f3) = (Deformation::new(h2, hzz), Deformation::new(h3, 0.0));
             assert!((f2.jm1 - f3.jm1).abs() <= 4.0 * Real::EPSILON * (1.0 + f3.jm1.abs()));
             for model in ALL {
-                let (s2, s3) = (
-                    kirchhoff_over_rho0(model, &p, &f2),
-                    kirchhoff_over_rho0(model, &p, &f3),
-                );
+                let r = record(model, 5.0e5, 4.0e5, 1.0e3);
+                let (s2, s3) = (kirchhoff_over_rho0(&r, &f2), kirchhoff_over_rho0(&r, &f3));
                 let tol = 1.0e-5 * 1300.0 * scale.max(hzz.abs()).max(1e-3);
                 for (a, b) in [(0, 0), (1, 1), (0, 1)] {
                     assert!(
@@ -642,10 +628,7 @@ mod tests {
                     );
                 }
                 assert!((s2.zz - s3.m[2][2]).abs() < tol, "{model:?} {scale} zz");
-                let (w2, w3) = (
-                    energy_density(model, &p, &f2),
-                    energy_density(model, &p, &f3),
-                );
+                let (w2, w3) = (energy_density(&r, &f2), energy_density(&r, &f3));
                 assert!(
                     (w2 - w3).abs() <= 1.0e-4 * w3.abs() + 1.0e-6,
                     "{model:?} {w2} {w3}"
@@ -658,7 +641,6 @@ mod tests {
     /// out-of-plane stretch too), leaves no elastic part: zero stress and energy, both models.
     #[test]
     fn a_free_eigenstrain_is_stress_free() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for d in [1.0e-4, -2.0e-3, 0.05, -0.3] {
             let f2 = Deformation::<2>::new([[d, 0.0], [0.0, d]], d);
             let f3 = Deformation::<3>::new([[d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d]], 0.0);
@@ -669,15 +651,16 @@ mod tests {
                 (k2 - cube).abs() < 8.0 * Real::EPSILON && (k3 - cube).abs() < 8.0 * Real::EPSILON
             );
             for model in ALL {
+                let r = record(model, 5.0e5, 4.0e5, 1.0e3);
                 let bound = 16.0 * Real::EPSILON * 1300.0;
-                let s2 = kirchhoff_over_rho0(model, &p, &e2);
-                let s3 = kirchhoff_over_rho0(model, &p, &e3);
+                let s2 = kirchhoff_over_rho0(&r, &e2);
+                let s3 = kirchhoff_over_rho0(&r, &e3);
                 assert!(s2.m.iter().flatten().all(|v| v.abs() < bound) && s2.zz.abs() < bound);
                 assert!(
                     s3.m.iter().flatten().all(|v| v.abs() < bound),
                     "{model:?} {d}"
                 );
-                assert!(energy_density(model, &p, &e3).abs() < bound * 1.0e3);
+                assert!(energy_density(&r, &e3).abs() < bound * 1.0e3);
             }
         }
     }
@@ -690,7 +673,6 @@ mod tests {
     #[test]
     fn every_model_gives_a_chunk_the_bits_of_one_particle() {
         const W: usize = 16;
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         let mut state = 12345u64;
         let mut next = |scale: Real| {
             state = state
@@ -698,11 +680,8 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             scale * (((state >> 40) as f64 / (1u64 << 24) as f64) as Real - 0.5)
         };
-        fn check<const D: usize>(
-            p: &Params,
-            model: MaterialModel,
-            next: &mut impl FnMut(Real) -> Real,
-        ) {
+        fn check<const D: usize>(rec: &MaterialRecord, next: &mut impl FnMut(Real) -> Real) {
+            let model = model_of(rec);
             // Random deformations, and lanes that take each branch of the corotated model's
             // polar decomposition: no deformation, a half turn (F = -I in 2D), turns past a
             // quarter, an inverted F (3D: the iteration stops at once).
@@ -752,20 +731,20 @@ mod tests {
                     f.plastic = next(0.2);
                     plastic[ln] = f.plastic;
                 }
-                kirchhoff_lanes(model, p, &h, &hzz, &jm1, &plastic, &mut tau);
+                kirchhoff_lanes(rec, &h, &hzz, &jm1, &plastic, &mut tau);
                 let f = Deformation {
                     h: *packs(&h),
                     hzz: Pack(hzz),
                     jm1: Pack(jm1),
                     plastic: Pack(plastic),
                 };
-                let packed = kirchhoff_over_rho0(model, p, &f);
+                let packed = kirchhoff_over_rho0(rec, &f);
                 // The inelastic part: the chunk's pack against one particle at a time.
                 for hoop in [false, true] {
                     let (mut h2, mut hzz2, mut jm12, mut pl2) = (h, hzz, jm1, plastic);
-                    inelastic_lanes(model, p, &mut h2, &mut hzz2, &mut jm12, &mut pl2, hoop);
+                    inelastic_lanes(rec, &mut h2, &mut hzz2, &mut jm12, &mut pl2, hoop);
                     for (ln, f) in each.iter().enumerate() {
-                        let g = by_model!(model, M => M::inelastic(p, f, hoop));
+                        let g = by_model!(model, M => M::inelastic(&M::params(rec), f, hoop));
                         for r in 0..D {
                             for c in 0..D {
                                 assert_eq!(
@@ -781,7 +760,7 @@ mod tests {
                     }
                 }
                 for (ln, f) in each.iter().enumerate() {
-                    let s = kirchhoff_over_rho0(model, p, f);
+                    let s = kirchhoff_over_rho0(rec, f);
                     for (k, &(r, c)) in crate::layout::sym_pairs(D).iter().enumerate() {
                         let bits = s.m[r][c].to_bits();
                         assert_eq!(tau[k][ln].to_bits(), bits, "{model:?} {D}D");
@@ -795,8 +774,9 @@ mod tests {
             }
         }
         for model in ALL {
-            check::<2>(&p, model, &mut next);
-            check::<3>(&p, model, &mut next);
+            let rec = record(model, 5.0e5, 4.0e5, 1.0e3);
+            check::<2>(&rec, &mut next);
+            check::<3>(&rec, &mut next);
         }
     }
 }

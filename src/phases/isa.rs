@@ -19,10 +19,9 @@
 #![allow(clippy::too_many_arguments)]
 
 use super::{g2p, p2g, row_sums, stress, transport, Ctx};
-use crate::def::MaterialModel;
 use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
-use crate::material::Params;
+use crate::layout::MaterialRecord;
 use crate::particles::ParticleCols;
 use crate::particles::StepReport;
 use crate::shape::{Shape1D, Stencils};
@@ -227,8 +226,7 @@ passes! {
     /// function of its own per dimension, rather than a copy of every model in each pass that
     /// updates the stress (it made the C host 0.36 MB larger).
     fn kirchhoff [const D: usize, const W: usize] [] [D, W] (
-        model: MaterialModel,
-        params: &Params,
+        rec: &MaterialRecord,
         h: &[[Lane<W>; D]; D],
         hzz: &Lane<W>,
         jm1: &Lane<W>,
@@ -239,8 +237,7 @@ passes! {
     /// [`crate::material::inelastic_lanes`]: the inelastic part of one chunk's material
     /// update (return mapping, projection), a function of its own as the stress is.
     fn inelastic [const D: usize, const W: usize] [] [D, W] (
-        model: MaterialModel,
-        params: &Params,
+        rec: &MaterialRecord,
         h: &mut [[Lane<W>; D]; D],
         hzz: &mut Lane<W>,
         jm1: &mut Lane<W>,

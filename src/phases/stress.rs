@@ -16,7 +16,7 @@ use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
     add_viscous_lanes, eigenstrain_part, elastic_part, inelastic, model_of, on_elastic_part,
-    particle_inelastic, particle_stress, with_eigenstrain, Deformation, Params,
+    particle_inelastic, particle_stress, with_eigenstrain, Deformation,
 };
 use crate::math::INV;
 use crate::pack::{matrix, packs, unpacked, Pack};
@@ -155,7 +155,7 @@ pub(crate) fn update_stress<
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
     let ok = if let Some(rec) = uniform {
-        let (model, params) = (model_of(rec), Params::of(rec));
+        let model = model_of(rec);
         // The inelastic part first (a return mapping, a fluid's projection): the stress is
         // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
         // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
@@ -173,26 +173,18 @@ pub(crate) fn update_stress<
                     let (mut e, d) = (elastic_part(&f, Pack(*d)).0, Pack(*d));
                     let mut eh = *unpacked(&e.h);
                     let (mut ezz, mut ejm1) = (e.hzz.0, e.jm1.0);
-                    I::inelastic::<D, W>(
-                        model,
-                        &params,
-                        &mut eh,
-                        &mut ezz,
-                        &mut ejm1,
-                        &mut plastic,
-                        axi,
-                    );
+                    I::inelastic::<D, W>(rec, &mut eh, &mut ezz, &mut ejm1, &mut plastic, axi);
                     (e.h, e.hzz, e.jm1) = (*packs(&eh), Pack(ezz), Pack(ejm1));
                     let back = with_eigenstrain(&e, d);
                     *h = *unpacked(&back.h);
                     (hzz, jm1) = (back.hzz.0, back.jm1.0);
                 }
-                _ => I::inelastic::<D, W>(model, &params, h, &mut hzz, &mut jm1, &mut plastic, axi),
+                _ => I::inelastic::<D, W>(rec, h, &mut hzz, &mut jm1, &mut plastic, axi),
             }
         }
         let mut admissible = Lanes::ALL;
         match &eigen {
-            None => I::kirchhoff::<D, W>(model, &params, h, &hzz, &jm1, &plastic, tau),
+            None => I::kirchhoff::<D, W>(rec, h, &hzz, &jm1, &plastic, tau),
             Some(d) => {
                 let f = Deformation {
                     h: *packs(h),
@@ -204,7 +196,7 @@ pub(crate) fn update_stress<
                 let he = *unpacked(&e.h);
                 // The eigenstrain must not invert the material either.
                 admissible = rows::above::<I, W>(d, -1.0);
-                I::kirchhoff::<D, W>(model, &params, &he, &e.hzz.0, &e.jm1.0, &plastic, tau);
+                I::kirchhoff::<D, W>(rec, &he, &e.hzz.0, &e.jm1.0, &plastic, tau);
                 for row in tau.iter_mut() {
                     *row = (Pack(*row) * cube).0;
                 }
