@@ -286,7 +286,7 @@ pub(crate) struct MaterialRecord {
     pub critical_compression: Real,
     pub critical_stretch: Real,
     pub hardening_coefficient: Real,
-    /// Derived once when the material is added (the step's `Params` copies them): the
+    /// Derived once when the material is added (each model's `Model::params` copies them): the
     /// Drucker-Prager `alpha` and apex tension `c cot(phi)` (Pa), and snow's `ln(1 - theta_c)`
     /// and `ln(1 + theta_s)`.
     pub friction_coefficient: Real,

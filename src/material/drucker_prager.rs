@@ -16,14 +16,41 @@
 //! removes from `F_e` at the apex is not given back.
 
 use super::principal::{hencky_energy, plastic_axes, Principal, Split};
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::num::Num;
 use crate::Real;
+
+/// Drucker-Prager's parameters: Hencky elasticity's Lamé constants (E37) and the yield
+/// cone's (E40), derived from the friction angle and cohesion when the material was added.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct DruckerPragerParams {
+    /// Lamé's lambda, Pa.
+    pub lambda: Real,
+    /// The shear modulus mu, Pa.
+    pub mu: Real,
+    /// `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))`.
+    pub friction: Real,
+    /// The apex's mean tension `p_t = c cot(phi)`, Pa.
+    pub apex_tension: Real,
+}
 
 /// Drucker-Prager plasticity.
 pub(crate) struct DruckerPrager;
 
 impl Model for DruckerPrager {
+    type Params = DruckerPragerParams;
+
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> DruckerPragerParams {
+        DruckerPragerParams {
+            lambda: r.lambda,
+            mu: r.mu,
+            friction: r.friction_coefficient,
+            apex_tension: r.apex_tension,
+        }
+    }
+
     const INELASTIC: bool = true;
 
     /// As a pack: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
@@ -34,12 +61,15 @@ impl Model for DruckerPrager {
     }
 
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(
+        p: &DruckerPragerParams,
+        f: &Deformation<D, T>,
+    ) -> Stress<D, T> {
         Principal::of(f).hencky(T::splat(p.mu), T::splat(p.lambda))
     }
 
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
-        hencky_energy(p, f)
+    fn energy<const D: usize>(p: &DruckerPragerParams, f: &Deformation<D>) -> Real {
+        hencky_energy(p.lambda, p.mu, f)
     }
 
     /// The accumulated plastic strain never decreases from 0.
@@ -49,7 +79,7 @@ impl Model for DruckerPrager {
 
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        p: &Params,
+        p: &DruckerPragerParams,
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {

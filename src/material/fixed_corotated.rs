@@ -8,7 +8,8 @@
 //! principal (R turns in the plane only): `(F - R)_zz = hzz`.
 //! [`super::snow`] is this model with moduli that harden.
 
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Lame, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::math::polar_rotation_minus_identity;
 use crate::num::{matrix, MatOf, Num};
 use crate::Real;
@@ -63,6 +64,13 @@ pub(crate) fn energy<const D: usize>(f: &Deformation<D>, mu: Real, lambda: Real)
 pub(crate) struct FixedCorotated;
 
 impl Model for FixedCorotated {
+    type Params = Lame;
+
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> Lame {
+        Lame::of(r)
+    }
+
     /// As the corotated linear model: the 3D polar iteration vectorises only as a pack.
     #[inline(always)]
     fn packed(d: usize) -> bool {
@@ -70,11 +78,11 @@ impl Model for FixedCorotated {
     }
 
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(p: &Lame, f: &Deformation<D, T>) -> Stress<D, T> {
         stress(f, T::splat(p.mu), T::splat(p.lambda))
     }
 
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    fn energy<const D: usize>(p: &Lame, f: &Deformation<D>) -> Real {
         energy(f, p.mu, p.lambda)
     }
 }

@@ -7,7 +7,8 @@
 //! `F = J^(1/n) I` (n = 3, or 2 in plane strain where `F_zz = 1`): `J` is carried exactly as
 //! the step's `det dF` makes it, and no shear accumulates in F to lose precision.
 
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::math::{exp_m1, ln_1p, ln_1p_fast};
 use crate::num::{matrix, Num};
 use crate::Real;
@@ -18,10 +19,31 @@ fn ln_j<T: Num>(jm1: T) -> T {
     jm1.map(|x| ln_1p_fast(x.max(-1.0 + Real::EPSILON)))
 }
 
+/// The fluid's parameters: Tait's equation of state (E44).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tait {
+    /// The bulk modulus K, Pa.
+    pub bulk_modulus: Real,
+    /// The exponent gamma.
+    pub pressure_exponent: Real,
+}
+
 /// The weakly compressible fluid.
 pub(crate) struct Fluid;
 
 impl Model for Fluid {
+    type Params = Tait;
+
+    /// K read as `bulk_modulus`: the record's `lambda` holds the same bits (a fluid's Lamé
+    /// constants are `(K, 0)`, [`crate::MaterialDef::lame`]; `World::open` checks a stored
+    /// record against its definition's), but names another modulus.
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> Tait {
+        Tait {
+            bulk_modulus: r.bulk_modulus,
+            pressure_exponent: r.pressure_exponent,
+        }
+    }
     const INELASTIC: bool = true;
     const ON_ELASTIC_PART: bool = false;
 
@@ -35,10 +57,10 @@ impl Model for Fluid {
     /// `tau = -p J I = K / gamma (J - J^(1 - gamma)) I`, written as `K / gamma ((J - 1) -
     /// (exp((1 - gamma) ln J) - 1))` so that small compressions keep their precision.
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(p: &Tait, f: &Deformation<D, T>) -> Stress<D, T> {
         let g = p.pressure_exponent;
         let lnj = ln_j(f.jm1);
-        let t = (f.jm1 - (lnj * (1.0 - g)).map(exp_m1)) * (p.lambda / g);
+        let t = (f.jm1 - (lnj * (1.0 - g)).map(exp_m1)) * (p.bulk_modulus / g);
         let zero = T::splat(0.0);
         Stress {
             m: matrix(|a, b| if a == b { t } else { zero }),
@@ -48,19 +70,19 @@ impl Model for Fluid {
 
     /// `W = K / gamma ((J^(1 - gamma) - 1) / (gamma - 1) + J - 1)`, whose derivative in J is
     /// `-p` (`K (J - 1 - ln J)` for gamma = 1).
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    fn energy<const D: usize>(p: &Tait, f: &Deformation<D>) -> Real {
         let g = p.pressure_exponent;
         let lnj = ln_1p(f.jm1);
         if g == 1.0 {
-            return p.lambda * crate::math::x_minus_ln_1p(f.jm1);
+            return p.bulk_modulus * crate::math::x_minus_ln_1p(f.jm1);
         }
-        p.lambda / g * (exp_m1((1.0 - g) * lnj) / (g - 1.0) + f.jm1)
+        p.bulk_modulus / g * (exp_m1((1.0 - g) * lnj) / (g - 1.0) + f.jm1)
     }
 
     /// `F <- J^(1/n) I`, `J` kept.
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        _p: &Params,
+        _p: &Tait,
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {

@@ -8,7 +8,8 @@
 //!
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Lame, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::math::{mul, polar_rotation_minus_identity};
 use crate::num::{matrix, MatOf, Num};
 use crate::Real;
@@ -40,6 +41,13 @@ fn corotated_strain<T: Num, const D: usize>(h: &MatOf<T, D>) -> (MatOf<T, D>, Ma
 pub(crate) struct LinearElastic;
 
 impl Model for LinearElastic {
+    type Params = Lame;
+
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> Lame {
+        Lame::of(r)
+    }
+
     /// The 3D polar decomposition iterates until each particle converges: as a pack, the
     /// iteration runs over the lanes (lane by lane it did not vectorise: 6.6 times the
     /// instructions); the 2D closed form vectorises lane by lane.
@@ -49,7 +57,7 @@ impl Model for LinearElastic {
     }
 
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(p: &Lame, f: &Deformation<D, T>) -> Stress<D, T> {
         let (e, q) = corotated_strain(&f.h);
         // tr(e) with the out-of-plane e_zz, and s = lambda tr(e) I + 2 mu e.
         let mut tr = if D == 2 { f.hzz } else { T::splat(0.0) };
@@ -82,7 +90,7 @@ impl Model for LinearElastic {
         Stress { m, zz }
     }
 
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    fn energy<const D: usize>(p: &Lame, f: &Deformation<D>) -> Real {
         let (e, _) = corotated_strain(&f.h);
         let ezz = if D == 2 { f.hzz } else { 0.0 };
         let mut tr = ezz;

@@ -144,45 +144,23 @@ pub(crate) fn eigenstrain_part(r: &MaterialRecord, field: usize, value: Real) ->
     }
 }
 
-/// Parameters the models need, taken from a material record once per step.
+/// Lamé's lambda and mu (E33): all the elastic models (corotated linear, neo-Hookean,
+/// fixed-corotated) read of a material record.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Params {
-    /// Lamé's lambda (a fluid's bulk modulus K), Pa.
+pub(crate) struct Lame {
+    /// Lamé's lambda, Pa.
     pub lambda: Real,
+    /// The shear modulus mu, Pa.
     pub mu: Real,
-    pub inv_rho0: Real,
-    /// Tait's exponent gamma (fluid).
-    pub pressure_exponent: Real,
-    /// Initial yield stress and hardening modulus, Pa (von Mises).
-    pub yield_stress: Real,
-    pub hardening_modulus: Real,
-    /// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` and the apex's mean
-    /// tension `c cot(phi)`, Pa.
-    pub friction: Real,
-    pub apex_tension: Real,
-    /// Snow: `ln(1 - theta_c)`, `ln(1 + theta_s)` and xi.
-    pub log_compression: Real,
-    pub log_stretch: Real,
-    pub hardening_coefficient: Real,
 }
 
-impl Params {
-    /// The parameters of a record: copies (what is derived was derived when the material was
-    /// added), so that a chunk's stress update pays nothing for models it does not run.
+impl Lame {
+    /// The Lamé constants of record `r`, as [`Model::params`] takes them.
     #[inline(always)]
-    pub fn of(r: &MaterialRecord) -> Params {
-        Params {
+    pub fn of(r: &MaterialRecord) -> Lame {
+        Lame {
             lambda: r.lambda,
             mu: r.mu,
-            inv_rho0: 1.0 / r.density,
-            pressure_exponent: r.pressure_exponent,
-            yield_stress: r.yield_stress,
-            hardening_modulus: r.hardening_modulus,
-            friction: r.friction_coefficient,
-            apex_tension: r.apex_tension,
-            log_compression: r.log_compression,
-            log_stretch: r.log_stretch,
-            hardening_coefficient: r.hardening_coefficient,
         }
     }
 }
@@ -196,9 +174,18 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
 
 /// A constitutive model (E3, E33-E46): the deformation in, Kirchhoff stress out; an
 /// inelastic model (a fluid, plasticity) also changes the deformation each step before its
-/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait,
-/// one arm of [`MaterialModel`] (and of the C enum) and of [`by_model!`], and its tests.
+/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait
+/// (with its parameters' struct), one arm of [`MaterialModel`] (and of the C enum) and of
+/// [`by_model!`], and its tests.
 pub(crate) trait Model {
+    /// The parameters the model reads: its own fields of a material record, no more.
+    type Params: Copy;
+
+    /// The parameters of material `r`: copies of its fields (what is derived was derived once
+    /// when the material was added, in [`material_record`]), so that a chunk's stress update
+    /// pays nothing for fields its model does not read.
+    fn params(r: &MaterialRecord) -> Self::Params;
+
     /// Whether [`Model::inelastic`] changes anything (false: the step skips it).
     const INELASTIC: bool = false;
 
@@ -217,7 +204,7 @@ pub(crate) trait Model {
     /// Written on [`Num`] without branches, as [`Model::kirchhoff`].
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        _p: &Params,
+        _p: &Self::Params,
         f: &Deformation<D, T>,
         _hoop: bool,
     ) -> Deformation<D, T> {
@@ -228,7 +215,7 @@ pub(crate) trait Model {
     /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of a pack
     /// of particles sharing this material (`T = Pack<W>`, a chunk's stress update). Lanes of
     /// a pack that are not updated may hold any value; their results are not used.
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T>;
+    fn kirchhoff<const D: usize, T: Num>(p: &Self::Params, f: &Deformation<D, T>) -> Stress<D, T>;
 
     /// Whether a chunk's stress update runs [`Model::kirchhoff`] on one pack of the chunk's
     /// particles in `D` dimensions, rather than lane by lane in a loop the compiler
@@ -240,7 +227,7 @@ pub(crate) trait Model {
     }
 
     /// Strain energy per unit initial volume, J/m^3 (energy checks and diagnostics).
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real;
+    fn energy<const D: usize>(p: &Self::Params, f: &Deformation<D>) -> Real;
 
     /// Whether `plastic` is a plastic history this model can leave (what [`World::open`]
     /// checks a snapshot against): 0 for a model without one, which never changes it.
@@ -328,18 +315,19 @@ pub(crate) fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
     by_model!(model_of(r), M => M::wave_speed(r, plastic))
 }
 
-/// `tau / rho0` of a deformation with `jm1 = det F - 1 > -1`: one particle, or a pack.
+/// `tau / rho0` of material `r` at a deformation with `jm1 = det F - 1 > -1`: one particle,
+/// or a vector of them.
 #[inline(always)]
 pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
-    model: MaterialModel,
-    p: &Params,
+    r: &MaterialRecord,
     f: &Deformation<D, T>,
 ) -> Stress<D, T> {
-    let mut s = by_model!(model, M => M::kirchhoff(p, f));
+    let mut s = by_model!(model_of(r), M => M::kirchhoff(&M::params(r), f));
+    let inv_rho0 = 1.0 / r.density;
     for v in s.m.iter_mut().flatten() {
-        *v *= T::splat(p.inv_rho0);
+        *v *= T::splat(inv_rho0);
     }
-    s.zz *= T::splat(p.inv_rho0);
+    s.zz *= T::splat(inv_rho0);
     s
 }
 
@@ -358,7 +346,7 @@ pub(crate) fn particle_stress<const D: usize>(
         return None;
     }
     let (e, scale) = elastic_part(f, d);
-    let s = kirchhoff_over_rho0(model_of(r), &Params::of(r), &e);
+    let s = kirchhoff_over_rho0(r, &e);
     let mut tau = [0.0; 6];
     for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
         tau[k] = s.m[a][b] * scale;
@@ -393,8 +381,7 @@ pub(crate) struct LaneDeformation<'a, const D: usize, const W: usize> {
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
-    model: MaterialModel,
-    p: &Params,
+    rec: &MaterialRecord,
     h: &mut [[[Real; W]; D]; D],
     hzz: &mut [Real; W],
     jm1: &mut [Real; W],
@@ -412,9 +399,11 @@ pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
         jm1,
         plastic,
     };
+    let inv_rho0 = 1.0 / rec.density;
     // The whole model inside its arm: a stress matrix carried out of the `match` was copied
     // through `memcpy`.
-    by_model!(model, M => {
+    by_model!(model_of(rec), M => {
+        let p = &M::params(rec);
         if M::packed(D) {
             for at in (0..W).step_by(I::N) {
                 let ld = |c: &[Real; W]| Wide::<I>::load(c, at);
@@ -425,7 +414,7 @@ pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
                     plastic: ld(f.plastic),
                 };
                 let d = eigen.map(ld);
-                let g = update::<M, D, Wide<I>>(p, &lanes, hoop, d);
+                let g = update::<M, D, Wide<I>>(p, inv_rho0, &lanes, hoop, d);
                 for a in 0..D {
                     for b in 0..D {
                         g.f.h[a][b].store(&mut f.h[a][b], at);
@@ -447,12 +436,12 @@ pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
             match eigen {
                 None => {
                     for ln in 0..W {
-                        lane_update::<M, D, W>(p, &mut f, hoop, None, tau, ln);
+                        lane_update::<M, D, W>(p, inv_rho0, &mut f, hoop, None, tau, ln);
                     }
                 }
                 Some(d) => {
                     for ln in 0..W {
-                        lane_update::<M, D, W>(p, &mut f, hoop, Some(d[ln]), tau, ln);
+                        lane_update::<M, D, W>(p, inv_rho0, &mut f, hoop, Some(d[ln]), tau, ln);
                     }
                 }
             }
@@ -463,7 +452,8 @@ pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
 /// [`update`] of lane `ln` of a chunk, on [`Real`], in place.
 #[inline(always)]
 fn lane_update<M: Model, const D: usize, const W: usize>(
-    p: &Params,
+    p: &M::Params,
+    inv_rho0: Real,
     f: &mut LaneDeformation<'_, D, W>,
     hoop: bool,
     d: Option<Real>,
@@ -476,7 +466,7 @@ fn lane_update<M: Model, const D: usize, const W: usize>(
         jm1: f.jm1[ln],
         plastic: f.plastic[ln],
     };
-    let g = update::<M, D, Real>(p, &one, hoop, d);
+    let g = update::<M, D, Real>(p, inv_rho0, &one, hoop, d);
     if M::INELASTIC {
         for a in 0..D {
             for b in 0..D {
@@ -505,7 +495,8 @@ struct Updated<const D: usize, T> {
 /// back by `(1 + d)^3`.
 #[inline(always)]
 fn update<M: Model, const D: usize, T: Num>(
-    p: &Params,
+    p: &M::Params,
+    inv_rho0: Real,
     f: &Deformation<D, T>,
     hoop: bool,
     d: Option<T>,
@@ -517,7 +508,7 @@ fn update<M: Model, const D: usize, T: Num>(
         }
         _ => M::inelastic(p, f, hoop),
     };
-    let inv_rho0 = T::splat(p.inv_rho0);
+    let inv_rho0 = T::splat(inv_rho0);
     let (e, scale) = match d {
         Some(d) => elastic_part(&f, d),
         None => (f, T::splat(1.0)),
@@ -549,7 +540,7 @@ pub(crate) fn particle_update<const D: usize>(
     hoop: bool,
     d: Option<Real>,
 ) -> (Deformation<D>, Option<[Real; 6]>) {
-    let g = by_model!(model_of(r), M => update::<M, D, Real>(&Params::of(r), f, hoop, d));
+    let g = by_model!(model_of(r), M => update::<M, D, Real>(&M::params(r), 1.0 / r.density, f, hoop, d));
     // NaN-safe: a NaN is not > -1.
     let admissible = g.f.jm1 > -1.0 && d.is_none_or(|d| d > -1.0);
     let tau = admissible.then(|| {
@@ -603,13 +594,9 @@ pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
     }
 }
 
-/// Strain energy per unit initial volume, J/m^3, of a deformation.
-pub(crate) fn energy_density<const D: usize>(
-    model: MaterialModel,
-    p: &Params,
-    f: &Deformation<D>,
-) -> Real {
-    by_model!(model, M => M::energy(p, f))
+/// Strain energy per unit initial volume, J/m^3, of material `r` at a deformation.
+pub(crate) fn energy_density<const D: usize>(r: &MaterialRecord, f: &Deformation<D>) -> Real {
+    by_model!(model_of(r), M => M::energy(&M::params(r), f))
 }
 
 #[cfg(test)]
@@ -617,15 +604,18 @@ mod tests {
     use super::*;
     use crate::math::Mat;
 
-    /// Parameters with the given Lamé constants and `1 / rho0`, the other models' from the
-    /// default material.
-    fn params(lambda: Real, mu: Real, inv_rho0: Real) -> Params {
+    /// The default material's record as `model`, with the given Lamé constants and initial
+    /// density `rho0`; lambda is also the fluid's bulk modulus K, as in a fluid's own record
+    /// ([`crate::MaterialDef::lame`]).
+    fn record(model: MaterialModel, lambda: Real, mu: Real, rho0: Real) -> MaterialRecord {
         let r = crate::material::material_record(&crate::MaterialDef::DEFAULT).unwrap();
-        Params {
+        MaterialRecord {
+            model: model as u32 as Real,
             lambda,
             mu,
-            inv_rho0,
-            ..Params::of(&r)
+            bulk_modulus: lambda,
+            density: rho0,
+            ..r
         }
     }
 
@@ -647,13 +637,13 @@ mod tests {
     /// in both models, to round-off, for many angles about every axis, in 3D and 2D.
     #[test]
     fn rigid_rotation_gives_zero_stress_and_energy() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for model in MaterialModel::ALL {
+            let r = record(model, 5.0e5, 4.0e5, 1.0e3);
             for k in 0..64 {
                 let angle = -3.0 + 6.0 * k as Real / 63.0;
                 for axis in 0..3 {
                     let f = Deformation::new(rotation_minus_identity(angle, axis), 0.0);
-                    let s = kirchhoff_over_rho0(model, &p, &f);
+                    let s = kirchhoff_over_rho0(&r, &f);
                     // tau/rho0 scale of a unit strain is (lambda + 2 mu)/rho0 = 1300; round-off
                     // of order 1e-6 of it is what f32 leaves.
                     let bound = 1.0e-5 * 1300.0;
@@ -662,14 +652,14 @@ mod tests {
                         "{model:?} {angle} {axis}: {:?}",
                         s.m
                     );
-                    assert!(energy_density(model, &p, &f).abs() < 1.0e-5 * 1.3e6);
+                    assert!(energy_density(&r, &f).abs() < 1.0e-5 * 1.3e6);
                 }
                 let (s2, c2) = (
                     libm::sin(angle as f64) as Real,
                     libm::cos(angle as f64) as Real,
                 );
                 let h2: Mat<2> = [[c2 - 1.0, -s2], [s2, c2 - 1.0]];
-                let s = kirchhoff_over_rho0(model, &p, &Deformation::new(h2, 0.0));
+                let s = kirchhoff_over_rho0(&r, &Deformation::new(h2, 0.0));
                 assert!(s.m.iter().flatten().all(|v| v.abs() < 1.0e-5 * 1300.0));
                 assert!(s.zz.abs() < 1.0e-5 * 1300.0);
             }
@@ -680,21 +670,21 @@ mod tests {
     /// `tau_xx = (lambda + 2 mu) eps`, `tau_yy = lambda eps` to first order (relative 2 eps).
     #[test]
     fn small_uniaxial_strain_matches_linear_elasticity() {
-        let p = params(5.0e5, 4.0e5, 1.0);
         let eps = 1.0e-4;
         let f = Deformation::<3>::new([[eps, 0.0, 0.0], [0.0; 3], [0.0; 3]], 0.0);
         for model in MaterialModel::ALL
             .into_iter()
             .filter(|&m| m != MaterialModel::Fluid)
         {
-            let s = kirchhoff_over_rho0(model, &p, &f);
-            let xx = (p.lambda + 2.0 * p.mu) * eps;
-            let yy = p.lambda * eps;
+            let r = record(model, 5.0e5, 4.0e5, 1.0);
+            let s = kirchhoff_over_rho0(&r, &f);
+            let xx = (r.lambda + 2.0 * r.mu) * eps;
+            let yy = r.lambda * eps;
             assert!((s.m[0][0] - xx).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             assert!((s.m[1][1] - yy).abs() < 2.0 * eps * xx + 1e-3, "{model:?}");
             // Energy (lambda + 2 mu) eps^2 / 2.
-            let w = energy_density(model, &p, &f);
-            let expect = 0.5 * (p.lambda + 2.0 * p.mu) * eps * eps;
+            let w = energy_density(&r, &f);
+            let expect = 0.5 * (r.lambda + 2.0 * r.mu) * eps * eps;
             assert!((w - expect).abs() < 1e-3 * expect, "{model:?} {w} {expect}");
         }
     }
@@ -704,7 +694,6 @@ mod tests {
     /// both models, at small and large strain.
     #[test]
     fn out_of_plane_stretch_matches_the_3d_model() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for (scale, hzz) in [(1.0e-4, -3.0e-5), (0.2, 0.3), (0.3, -0.4)] {
             let h2: Mat<2> = [[0.5 * scale, -0.3 * scale], [0.2 * scale, -0.4 * scale]];
             let h3: Mat<3> = [
@@ -715,10 +704,8 @@ mod tests {
             let (f2, f3) = (Deformation::new(h2, hzz), Deformation::new(h3, 0.0));
             assert!((f2.jm1 - f3.jm1).abs() <= 4.0 * Real::EPSILON * (1.0 + f3.jm1.abs()));
             for model in MaterialModel::ALL {
-                let (s2, s3) = (
-                    kirchhoff_over_rho0(model, &p, &f2),
-                    kirchhoff_over_rho0(model, &p, &f3),
-                );
+                let r = record(model, 5.0e5, 4.0e5, 1.0e3);
+                let (s2, s3) = (kirchhoff_over_rho0(&r, &f2), kirchhoff_over_rho0(&r, &f3));
                 let tol = 1.0e-5 * 1300.0 * scale.max(hzz.abs()).max(1e-3);
                 for (a, b) in [(0, 0), (1, 1), (0, 1)] {
                     assert!(
@@ -727,10 +714,7 @@ mod tests {
                     );
                 }
                 assert!((s2.zz - s3.m[2][2]).abs() < tol, "{model:?} {scale} zz");
-                let (w2, w3) = (
-                    energy_density(model, &p, &f2),
-                    energy_density(model, &p, &f3),
-                );
+                let (w2, w3) = (energy_density(&r, &f2), energy_density(&r, &f3));
                 assert!(
                     (w2 - w3).abs() <= 1.0e-4 * w3.abs() + 1.0e-6,
                     "{model:?} {w2} {w3}"
@@ -743,7 +727,6 @@ mod tests {
     /// out-of-plane stretch too), leaves no elastic part: zero stress and energy, both models.
     #[test]
     fn a_free_eigenstrain_is_stress_free() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         for d in [1.0e-4, -2.0e-3, 0.05, -0.3] {
             let f2 = Deformation::<2>::new([[d, 0.0], [0.0, d]], d);
             let f3 = Deformation::<3>::new([[d, 0.0, 0.0], [0.0, d, 0.0], [0.0, 0.0, d]], 0.0);
@@ -754,15 +737,16 @@ mod tests {
                 (k2 - cube).abs() < 8.0 * Real::EPSILON && (k3 - cube).abs() < 8.0 * Real::EPSILON
             );
             for model in MaterialModel::ALL {
+                let r = record(model, 5.0e5, 4.0e5, 1.0e3);
                 let bound = 16.0 * Real::EPSILON * 1300.0;
-                let s2 = kirchhoff_over_rho0(model, &p, &e2);
-                let s3 = kirchhoff_over_rho0(model, &p, &e3);
+                let s2 = kirchhoff_over_rho0(&r, &e2);
+                let s3 = kirchhoff_over_rho0(&r, &e3);
                 assert!(s2.m.iter().flatten().all(|v| v.abs() < bound) && s2.zz.abs() < bound);
                 assert!(
                     s3.m.iter().flatten().all(|v| v.abs() < bound),
                     "{model:?} {d}"
                 );
-                assert!(energy_density(model, &p, &e3).abs() < bound * 1.0e3);
+                assert!(energy_density(&r, &e3).abs() < bound * 1.0e3);
             }
         }
     }
@@ -795,7 +779,6 @@ mod tests {
     }
 
     fn check_instance<I: Compare, const W: usize>() {
-        let p = params(5.0e5, 4.0e5, 1.0e-3);
         let mut state = 12345u64;
         let mut next = |scale: Real| {
             state = state
@@ -804,29 +787,32 @@ mod tests {
             scale * (((state >> 40) as f64 / (1u64 << 24) as f64) as Real - 0.5)
         };
         for model in MaterialModel::ALL {
-            check::<I, 2, W>(&p, model, &mut next);
-            check::<I, 3, W>(&p, model, &mut next);
+            let r = record(model, 5.0e5, 4.0e5, 1.0e3);
+            check::<I, 2, W>(&r, &mut next);
+            check::<I, 3, W>(&r, &mut next);
         }
     }
 
     /// One particle's material update: the path of the reference step and of a chunk whose
     /// lanes mix materials.
     fn one_particle<const D: usize>(
-        p: &Params,
-        model: MaterialModel,
+        r: &MaterialRecord,
         f: &Deformation<D>,
         hoop: bool,
         d: Option<Real>,
     ) -> (Deformation<D>, Stress<D>) {
-        let g = by_model!(model, M => match d {
-            _ if !M::INELASTIC => *f,
-            Some(d) if M::ON_ELASTIC_PART => {
-                with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+        let g = by_model!(model_of(r), M => {
+            let p = &M::params(r);
+            match d {
+                _ if !M::INELASTIC => *f,
+                Some(d) if M::ON_ELASTIC_PART => {
+                    with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+                }
+                _ => M::inelastic(p, f, hoop),
             }
-            _ => M::inelastic(p, f, hoop),
         });
         let (e, scale) = elastic_part(&g, d.unwrap_or(0.0));
-        let mut s = kirchhoff_over_rho0(model, p, &e);
+        let mut s = kirchhoff_over_rho0(r, &e);
         for v in s.m.iter_mut().flatten() {
             *v *= scale;
         }
@@ -835,10 +821,10 @@ mod tests {
     }
 
     fn check<I: Compare, const D: usize, const W: usize>(
-        p: &Params,
-        model: MaterialModel,
+        rec: &MaterialRecord,
         next: &mut impl FnMut(Real) -> Real,
     ) {
+        let model = model_of(rec);
         // Lanes that take each branch of the corotated model's polar decomposition: no
         // deformation, a half turn (F = -I in 2D), turns past a quarter, an inverted F (3D:
         // the iteration stops at once).
@@ -890,12 +876,10 @@ mod tests {
                     let (mut h2, mut hzz2, mut jm12, mut pl2) = (h, hzz, jm1, plastic);
                     let mut tau = [[0.0; W]; 6];
                     let (h2r, hzz2r, jm12r, pl2r) = (&mut h2, &mut hzz2, &mut jm12, &mut pl2);
-                    chunk_lanes::<I, D, W>(
-                        model, p, h2r, hzz2r, jm12r, pl2r, hoop, eigen, &mut tau,
-                    );
+                    chunk_lanes::<I, D, W>(rec, h2r, hzz2r, jm12r, pl2r, hoop, eigen, &mut tau);
                     for (ln, f) in each.iter().enumerate() {
                         let dl = eigen.map(|d| d[ln]);
-                        let (g, s) = one_particle(p, model, f, hoop, dl);
+                        let (g, s) = one_particle(rec, f, hoop, dl);
                         // The update on the instance's vectors, whichever path the model takes.
                         let at = ln - ln % I::N;
                         let ld = |c: &[Real; W]| Wide::<I>::load(c, at);
@@ -905,8 +889,9 @@ mod tests {
                             jm1: ld(&jm1),
                             plastic: ld(&plastic),
                         };
+                        let inv_rho0 = 1.0 / rec.density;
                         let w = by_model!(model, M => update::<M, D, Wide<I>>(
-                            p, &v, hoop, eigen.map(ld)
+                            &M::params(rec), inv_rho0, &v, hoop, eigen.map(ld)
                         ));
                         let lane = |x: Wide<I>| {
                             let mut out = [0.0; W];

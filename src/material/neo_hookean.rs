@@ -6,7 +6,8 @@
 //! and `J - 1` from [`crate::math::det_identity_plus_parts`], so small strains keep full
 //! precision in f32.
 
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Lame, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p};
 use crate::num::{matrix, Num};
 use crate::Real;
@@ -22,8 +23,15 @@ fn ln_j(jm1: Real) -> Real {
 pub(crate) struct NeoHookean;
 
 impl Model for NeoHookean {
+    type Params = Lame;
+
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn params(r: &MaterialRecord) -> Lame {
+        Lame::of(r)
+    }
+
+    #[inline(always)]
+    fn kirchhoff<const D: usize, T: Num>(p: &Lame, f: &Deformation<D, T>) -> Stress<D, T> {
         let (h, hzz) = (&f.h, f.hzz);
         let lnj = f.jm1.map(ln_j);
         // tau = mu (H + H^T + H H^T) + lambda ln J I
@@ -52,7 +60,7 @@ impl Model for NeoHookean {
     /// two first-order terms cancel: `tr H - ln J = -rest + (jm1 - ln(1 + jm1))`, `rest` the
     /// higher-order part of `J - 1` (in 2D with the out-of-plane factor: `J - 1 = j2 + hzz + j2 hzz`
     /// with `j2` the in-plane part).
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    fn energy<const D: usize>(p: &Lame, f: &Deformation<D>) -> Real {
         let (h, jm1) = (&f.h, f.jm1);
         let (tr2, rest2) = det_identity_plus_parts(h);
         let (rest, mut hh) = if D == 2 {

@@ -192,11 +192,12 @@ impl<const D: usize, T: Num> Principal<D, T> {
     }
 }
 
-/// Hencky strain energy `mu |eps|^2 + lambda/2 (tr eps)^2` in the principal log strains.
-pub(crate) fn hencky_energy<const D: usize>(p: &super::Params, f: &Deformation<D>) -> Real {
+/// Hencky strain energy `mu |eps|^2 + lambda/2 (tr eps)^2` in the principal log strains, with
+/// the Lamé constants `lambda`, `mu`.
+pub(crate) fn hencky_energy<const D: usize>(lambda: Real, mu: Real, f: &Deformation<D>) -> Real {
     let e = Principal::<D, Real>::of(f).eps;
     let tr = e[0] + e[1] + e[2];
-    p.mu * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) + 0.5 * p.lambda * tr * tr
+    mu * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) + 0.5 * lambda * tr * tr
 }
 
 /// How many principal strains a return acts on: 3 in 3D and axisymmetric, the 2 in-plane ones

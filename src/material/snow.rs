@@ -7,15 +7,32 @@
 //! J_e'`. The clamp acts on the principal log strains (singular values `exp(eps_i)`).
 
 use super::principal::{plastic_axes, Principal};
-use super::{fixed_corotated, Deformation, Model, Params, Stress};
+use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::exp_m1;
 use crate::num::Num;
 use crate::Real;
 
+/// Snow's parameters: the fixed-corotated Lamé constants before hardening (E36, E42) and the
+/// clamp's bounds (E43), derived from the critical compression and stretch when the material
+/// was added.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SnowParams {
+    /// Lamé's lambda at `J_p = 1`, Pa.
+    pub lambda: Real,
+    /// The shear modulus mu at `J_p = 1`, Pa.
+    pub mu: Real,
+    /// `ln(1 - theta_c)`, the least principal log strain of `F_e`.
+    pub log_compression: Real,
+    /// `ln(1 + theta_s)`, the greatest.
+    pub log_stretch: Real,
+    /// The hardening coefficient xi.
+    pub hardening_coefficient: Real,
+}
+
 /// The hardening factor `exp(xi (1 - J_p)) = exp(-xi plastic)` of a particle.
 #[inline(always)]
-pub(crate) fn hardening<T: Num>(p: &Params, plastic: T) -> T {
+pub(crate) fn hardening<T: Num>(p: &SnowParams, plastic: T) -> T {
     (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
 }
 
@@ -23,6 +40,19 @@ pub(crate) fn hardening<T: Num>(p: &Params, plastic: T) -> T {
 pub(crate) struct Snow;
 
 impl Model for Snow {
+    type Params = SnowParams;
+
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> SnowParams {
+        SnowParams {
+            lambda: r.lambda,
+            mu: r.mu,
+            log_compression: r.log_compression,
+            log_stretch: r.log_stretch,
+            hardening_coefficient: r.hardening_coefficient,
+        }
+    }
+
     const INELASTIC: bool = true;
 
     /// As the fixed-corotated model: the 3D polar iteration vectorises only as a pack.
@@ -32,12 +62,12 @@ impl Model for Snow {
     }
 
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(p: &SnowParams, f: &Deformation<D, T>) -> Stress<D, T> {
         let k = hardening(p, f.plastic);
         fixed_corotated::stress(f, k * p.mu, k * p.lambda)
     }
 
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
+    fn energy<const D: usize>(p: &SnowParams, f: &Deformation<D>) -> Real {
         let k = hardening(p, f.plastic);
         fixed_corotated::energy(f, k * p.mu, k * p.lambda)
     }
@@ -64,7 +94,7 @@ impl Model for Snow {
 
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        p: &Params,
+        p: &SnowParams,
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {
@@ -108,7 +138,7 @@ mod tests {
             model: MaterialModel::Snow,
             ..MaterialDef::DEFAULT
         };
-        let p = Params::of(&crate::material::material_record(&snow).unwrap());
+        let p = Snow::params(&crate::material::material_record(&snow).unwrap());
         let (lo, hi) = (1.0 - snow.critical_compression, 1.0 + snow.critical_stretch);
         let mut state = 7u64;
         let mut next = || {

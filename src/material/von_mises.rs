@@ -13,17 +13,44 @@
 //! them (the 2D form; see [`super::principal`]).
 
 use super::principal::{abs, hencky_energy, plastic_axes, Principal, Split};
-use super::{Deformation, Model, Params, Stress};
+use super::{Deformation, Model, Stress};
+use crate::layout::MaterialRecord;
 use crate::num::Num;
 use crate::Real;
 
 /// `sqrt(2/3)`.
 const SQRT_2_3: Real = 0.816_496_580_927_726_f64 as Real;
 
+/// Von Mises' parameters: Hencky elasticity's Lamé constants (E37) and the linear hardening's
+/// (E39).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct VonMisesParams {
+    /// Lamé's lambda, Pa.
+    pub lambda: Real,
+    /// The shear modulus mu, Pa.
+    pub mu: Real,
+    /// The initial yield stress `sigma_y`, Pa.
+    pub yield_stress: Real,
+    /// The hardening modulus H, Pa.
+    pub hardening_modulus: Real,
+}
+
 /// J2 plasticity with linear isotropic hardening.
 pub(crate) struct VonMises;
 
 impl Model for VonMises {
+    type Params = VonMisesParams;
+
+    #[inline(always)]
+    fn params(r: &MaterialRecord) -> VonMisesParams {
+        VonMisesParams {
+            lambda: r.lambda,
+            mu: r.mu,
+            yield_stress: r.yield_stress,
+            hardening_modulus: r.hardening_modulus,
+        }
+    }
+
     const INELASTIC: bool = true;
 
     /// As a pack: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
@@ -34,12 +61,15 @@ impl Model for VonMises {
     }
 
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(p: &Params, f: &Deformation<D, T>) -> Stress<D, T> {
+    fn kirchhoff<const D: usize, T: Num>(
+        p: &VonMisesParams,
+        f: &Deformation<D, T>,
+    ) -> Stress<D, T> {
         Principal::of(f).hencky(T::splat(p.mu), T::splat(p.lambda))
     }
 
-    fn energy<const D: usize>(p: &Params, f: &Deformation<D>) -> Real {
-        hencky_energy(p, f)
+    fn energy<const D: usize>(p: &VonMisesParams, f: &Deformation<D>) -> Real {
+        hencky_energy(p.lambda, p.mu, f)
     }
 
     /// The accumulated plastic strain never decreases from 0.
@@ -49,7 +79,7 @@ impl Model for VonMises {
 
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        p: &Params,
+        p: &VonMisesParams,
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {
@@ -92,7 +122,7 @@ mod tests {
             hardening_modulus: 2.0e6,
             ..MaterialDef::DEFAULT
         };
-        let p = Params::of(&crate::material::material_record(&metal).unwrap());
+        let p = VonMises::params(&crate::material::material_record(&metal).unwrap());
         let mut f = Deformation::<3>::new([[0.0; 3]; 3], 0.0);
         let (mut eps, mut work) = (0.0f64, 0.0f64);
         let mut tau_old = [0.0f64; 3];

@@ -9,9 +9,8 @@
 #![allow(clippy::too_many_arguments)]
 
 use super::{g2p, p2g, row_sums, Ctx};
-use crate::def::MaterialModel;
 use crate::grid::GridCols;
-use crate::material::Params;
+use crate::layout::MaterialRecord;
 use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{Lane, Lanes};
@@ -65,8 +64,7 @@ crate::simd::instances! {
     /// dimension, rather than a copy of every model in each pass that updates the stress (it
     /// made the C host 0.36 MB larger).
     fn material [const D: usize, const W: usize] [I] [D, W] (
-        model: MaterialModel,
-        params: &Params,
+        rec: &MaterialRecord,
         h: &mut [[Lane<W>; D]; D],
         hzz: &mut Lane<W>,
         jm1: &mut Lane<W>,

@@ -15,8 +15,7 @@ use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
 use crate::material::{
-    add_viscous_lanes, eigenstrain_part, model_of, particle_update, Deformation, LaneDeformation,
-    Params,
+    add_viscous_lanes, eigenstrain_part, particle_update, Deformation, LaneDeformation,
 };
 use crate::math::INV;
 use crate::num::matrix;
@@ -154,14 +153,13 @@ pub(crate) fn update_stress<
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
     let ok = if let Some(rec) = uniform {
-        let (model, params) = (model_of(rec), Params::of(rec));
         // The inelastic part first (a return mapping, a fluid's projection): the stress is
         // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
         // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
         // expansion neither yields nor flows.
         let (axi, eigen) = (S::AXISYMMETRIC, eigen.as_ref());
         let (hzz, jm1, plastic) = (&mut hzz, &mut jm1, &mut plastic);
-        I::material::<D, W>(model, &params, h, hzz, jm1, plastic, axi, eigen, tau);
+        I::material::<D, W>(rec, h, hzz, jm1, plastic, axi, eigen, tau);
         // The eigenstrain must not invert the material either.
         let admissible = match &eigen {
             Some(d) => rows::above::<I, W>(d, -1.0),

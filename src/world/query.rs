@@ -8,7 +8,7 @@ use crate::grid::Geom;
 use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
 use crate::material::{
     eigenstrain_part, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
-    material_resolvable, model_of, particle_stress, wave_speed, Deformation, Params,
+    material_resolvable, model_of, particle_stress, wave_speed, Deformation,
 };
 use crate::particles::{ParticleStatus, ACTIVE};
 use crate::shape::{domain_stretch, Shape1D, Stencils};
@@ -514,14 +514,13 @@ impl<'a> WorldRef<'a> {
             if let Some(rec) = materials.get(view.material[i] as usize) {
                 // The elastic part's energy, per volume of the eigenstrained (stress-free)
                 // configuration, (1 + d)^3 V0.
-                let (model, params) = (model_of(rec), Params::of(rec));
                 let eig = eigenstrain_of(rec, &view, i);
                 let (w, scale) = if d == 3 {
                     let (f, k) = elastic_part(&view.deformation::<3>(i), eig);
-                    (energy_density(model, &params, &f), k)
+                    (energy_density(rec, &f), k)
                 } else {
                     let (f, k) = elastic_part(&view.deformation::<2>(i), eig);
-                    (energy_density(model, &params, &f), k)
+                    (energy_density(rec, &f), k)
                 };
                 // An energy density past the largest Real (the step keeps stresses finite, not
                 // energies: an eigenstrain near -1 leaves an elastic part whose energy
