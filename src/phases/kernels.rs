@@ -8,7 +8,7 @@
 // already holds apart.
 #![allow(clippy::too_many_arguments)]
 
-use super::{g2p, p2g, row_sums, Ctx};
+use super::{g2p, p2g, Ctx};
 use crate::grid::GridCols;
 use crate::layout::MaterialRecord;
 use crate::particles::ParticleCols;
@@ -57,7 +57,7 @@ crate::simd::instances! {
         stride: [usize; D],
         g: &mut GridCols<'_, D>,
         adds: p2g::Adds,
-    ) => row_sums::scatter_chunk;
+    ) => crate::simd::row_sums::scatter_chunk;
 
     /// [`crate::material::chunk_lanes`]: one chunk's material update (the inelastic part,
     /// then the stress) when its lanes share one material, a function of its own per

@@ -12,7 +12,6 @@ pub(crate) mod grid_update;
 pub(crate) mod kernels;
 pub(crate) mod momentum;
 pub(crate) mod p2g;
-pub(crate) mod row_sums;
 pub(crate) mod stress;
 pub(crate) mod tractions;
 pub(crate) mod transport;

@@ -30,6 +30,7 @@
 
 pub(crate) mod instances;
 pub(crate) mod lanes;
+pub(crate) mod row_sums;
 pub(crate) mod rows;
 pub(crate) mod wide;
 

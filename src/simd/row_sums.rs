@@ -4,16 +4,123 @@
 //! share their stencil's first node summed in registers) or, where every 4-lane block of the
 //! chunk shares one, the groups of all the blocks of a vector at once ([`scatter_blocks`]).
 //! Both run the one row code ([`for_each_row`]). The equations, what is scattered, are
-//! [`super::p2g`]'s.
+//! `phases::p2g`'s (`Products::set`); here are the modes a scatter is compiled for and the
+//! products it adds.
 
-use super::p2g::{apic_rows, Adds, Mode, Products};
+use super::lanes::{Lane, Lanes};
+use super::rows::{self, Rows};
 use crate::grid::{add_row, rows_fit, GridCols};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
-use crate::simd::lanes::{Lane, Lanes};
-use crate::simd::rows::{self, Rows};
 use crate::Real;
 use core::mem::MaybeUninit;
 use core::ops::{Add, Mul};
+
+/// What a particle-to-grid pass accumulates.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[repr(u8)]
+pub(crate) enum Mode {
+    /// Mass, momentum and internal force (USL, MUSL).
+    All,
+    /// Mass and momentum (first pass of USF).
+    MassMomentum,
+    /// Internal force only (second pass of USF, after the stress update).
+    Force,
+    /// Momentum of the updated particle velocities into the remap columns (MUSL).
+    Remap,
+}
+
+/// The configuration the scatter's row code is compiled for, its const parameter `MODE`: the
+/// [`Mode`] (which grid columns a row adds to, so which sums stay in registers) and, in
+/// [`APIC_BIT`], the transfer (whether a row carries the affine momentum). Tested per row as
+/// values, they made the default step 1.12 to 1.35 times as long (benches/PERFORMANCE.md); a
+/// pass picks the instance once.
+pub(crate) const fn rows(mode: Mode, apic: bool) -> u8 {
+    mode as u8 | if apic { APIC_BIT } else { 0 }
+}
+
+/// The bit of [`rows`] that says APIC.
+pub(crate) const APIC_BIT: u8 = 0x10;
+
+/// Whether the row configuration `m` ([`rows`]) carries the affine momentum.
+#[inline(always)]
+pub(crate) const fn apic_rows(m: u8) -> bool {
+    m & APIC_BIT != 0
+}
+
+impl Mode {
+    /// The mode of the row configuration `m` ([`rows`]).
+    #[inline(always)]
+    pub(crate) const fn of(m: u8) -> Mode {
+        match m & !APIC_BIT {
+            0 => Mode::All,
+            1 => Mode::MassMomentum,
+            2 => Mode::Force,
+            _ => Mode::Remap,
+        }
+    }
+
+    /// Adds the nodal mass (and momentum).
+    #[inline(always)]
+    pub(crate) const fn mass(self) -> bool {
+        matches!(self, Mode::All | Mode::MassMomentum)
+    }
+
+    /// Reads the particles' momenta (the momentum columns or the remap columns).
+    #[inline(always)]
+    pub(crate) const fn momentum(self) -> bool {
+        !matches!(self, Mode::Force)
+    }
+
+    /// Adds the internal (and particle) force.
+    #[inline(always)]
+    pub(crate) const fn force(self) -> bool {
+        matches!(self, Mode::All | Mode::Force)
+    }
+}
+
+/// What a scatter adds: its [`Mode`], and whether the particle forces (`S_ip F_p`; only with
+/// a mode that adds the force) and APIC's affine momentum (only with a mode that adds
+/// momentum) enter. The scatter pass turns the mode and transfer into its row code's
+/// configuration ([`rows`]) once; the particle forces stay a value.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Adds {
+    pub mode: Mode,
+    pub forces: bool,
+    pub apic: bool,
+}
+
+/// What the particles of a chunk scatter, per lane (lane-fastest): the products of their
+/// values that the row code scales the weights by, formed once per chunk. What a mode does not
+/// read stays zero.
+#[repr(C, align(64))]
+pub(crate) struct Products<const D: usize, const W: usize> {
+    /// m_p.
+    pub(crate) m: Lane<W>,
+    /// m_p v_p (modes with momentum).
+    pub(crate) mv: [Lane<W>; D],
+    /// m_p C_p (APIC, modes with momentum).
+    pub(crate) mc: [[Lane<W>; D]; D],
+    /// -m_p tau_p/rho0, symmetric (modes with force).
+    pub(crate) mt: [[Lane<W>; D]; D],
+    /// Axisymmetric: -m_p tau_thetatheta/rho0 (modes with force).
+    pub(crate) mh: Lane<W>,
+    /// The particle force F_p (`FORCE`, modes with force).
+    pub(crate) f: [Lane<W>; D],
+}
+
+impl<const D: usize, const W: usize> Products<D, W> {
+    /// All zero; a pass makes one and sets it per chunk.
+    pub fn zero() -> Self {
+        Products {
+            m: [0.0; W],
+            mv: [[0.0; W]; D],
+            mc: [[[0.0; W]; D]; D],
+            mt: [[[0.0; W]; D]; D],
+            mh: [0.0; W],
+            f: [[0.0; W]; D],
+        }
+    }
+}
 
 /// The grid columns a scatter adds to, numbered for [`YFactors::add_row`]: the mass, then the momentum,
 /// force and remap columns of each axis (room for three axes each).
