@@ -16,7 +16,7 @@ if [ -z "$lib" ]; then
     lib=$(ls -t target/release/deps/libmpm_gimp-*.rlib | head -1)
 fi
 nm -C --defined-only "$lib" 2>/dev/null |
-    sed -nE 's/.* <mpm_gimp::simd::Baseline as [^>]*>::(scatter|particles|stress|transport|stencils|gather|scatter_chunk|kirchhoff)$/baseline \1/p;
-        s/.* mpm_gimp::(world::passes|phases::kernels)::(avx2|avx512)::(scatter|particles|stress|transport|stencils|gather|scatter_chunk|kirchhoff)$/\2 \3/p' |
+    sed -nE 's/.* <mpm_gimp::simd::Baseline as [^>]*>::(scatter|particles|stress|transport|stencils|gather|scatter_chunk|material)$/baseline \1/p;
+        s/.* mpm_gimp::(world::passes|phases::kernels)::(avx2|avx512)::(scatter|particles|stress|transport|stencils|gather|scatter_chunk|material)$/\2 \3/p' |
     sort | uniq -c | awk '{ n[$2] = n[$2] sprintf("  %s %d", $3, $1); t[$2] += $1 }
         END { for (i in n) printf "%-9s%s  (%d in all)\n", i, n[i], t[i] }' | sort

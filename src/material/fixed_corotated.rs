@@ -71,9 +71,9 @@ impl Model for FixedCorotated {
         Lame::of(r)
     }
 
-    /// As the corotated linear model: the 3D polar iteration vectorises only as a pack.
+    /// As the corotated linear model: the 3D polar iteration vectorises only on vectors.
     #[inline(always)]
-    fn packed(d: usize) -> bool {
+    fn on_vectors(d: usize) -> bool {
         d == 3
     }
 

@@ -47,10 +47,10 @@ impl Model for Fluid {
     const INELASTIC: bool = true;
     const ON_ELASTIC_PART: bool = false;
 
-    /// As a pack: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
+    /// On vectors: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
     /// loop over lanes ran 4 times as long (measured, von Mises 3D).
     #[inline(always)]
-    fn packed(_d: usize) -> bool {
+    fn on_vectors(_d: usize) -> bool {
         true
     }
 

@@ -48,11 +48,11 @@ impl Model for LinearElastic {
         Lame::of(r)
     }
 
-    /// The 3D polar decomposition iterates until each particle converges: as a pack, the
+    /// The 3D polar decomposition iterates until each particle converges: on vectors, the
     /// iteration runs over the lanes (lane by lane it did not vectorise: 6.6 times the
     /// instructions); the 2D closed form vectorises lane by lane.
     #[inline(always)]
-    fn packed(d: usize) -> bool {
+    fn on_vectors(d: usize) -> bool {
         d == 3
     }
 

@@ -32,7 +32,7 @@ use crate::simd::wide::Wide;
 use crate::{MaterialModel, Real};
 
 /// Stress as a D x D matrix plus the plane-strain `zz` component (0 in 3D), of one particle
-/// (`T = Real`) or of a pack of them.
+/// (`T = Real`) or of a vector of them ([`Wide`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Stress<const D: usize, T = Real> {
     pub m: MatOf<T, D>,
@@ -41,7 +41,7 @@ pub(crate) struct Stress<const D: usize, T = Real> {
 
 /// The state a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
 /// `F_zz - 1` (2D only; ignored in 3D), `J - 1 = det F - 1` of the whole 3 x 3 `F`, and the
-/// plastic history (0 for models without one), of one particle (`T = Real`) or of a pack of
+/// plastic history (0 for models without one), of one particle (`T = Real`) or of a vector of
 /// them. For the inelastic models F is the elastic part `F_e`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Deformation<const D: usize, T = Real> {
@@ -212,17 +212,17 @@ pub(crate) trait Model {
     }
 
     /// The Kirchhoff stress `tau` (not yet divided by `rho0`) for `jm1 = det F - 1 > -1`,
-    /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of a pack
-    /// of particles sharing this material (`T = Pack<W>`, a chunk's stress update). Lanes of
-    /// a pack that are not updated may hold any value; their results are not used.
+    /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of the
+    /// lanes of one of the instance's vectors (`T = Wide<I>`, a chunk's update). Lanes not
+    /// updated may hold any value; their results are not used.
     fn kirchhoff<const D: usize, T: Num>(p: &Self::Params, f: &Deformation<D, T>) -> Stress<D, T>;
 
-    /// Whether a chunk's stress update runs [`Model::kirchhoff`] on one pack of the chunk's
-    /// particles in `D` dimensions, rather than lane by lane in a loop the compiler
-    /// vectorises. Lane by lane is the faster form for a formula without loops; an iteration
-    /// whose count differs by particle (a polar decomposition) vectorises only as a pack.
+    /// Whether a chunk's update runs the model on the instance's vectors ([`Wide`]) in `D`
+    /// dimensions, rather than lane by lane on [`Real`] in a loop the compiler vectorises.
+    /// Lane by lane is the faster form for a formula without loops or calls; an iteration
+    /// whose count differs by particle (a polar decomposition) vectorises only on vectors.
     #[inline(always)]
-    fn packed(_d: usize) -> bool {
+    fn on_vectors(_d: usize) -> bool {
         false
     }
 
@@ -376,7 +376,7 @@ pub(crate) struct LaneDeformation<'a, const D: usize, const W: usize> {
 /// axisymmetric.
 ///
 /// On the instance's vectors ([`Wide`], [`crate::simd::rows::Rows::N`] lanes at a time) where the model asks for
-/// it ([`Model::packed`]), else lane by lane on [`Real`] in a loop the compiler vectorises.
+/// it ([`Model::on_vectors`]), else lane by lane on [`Real`] in a loop the compiler vectorises.
 /// Each lane gets the bits of the one-particle path ([`particle_stress`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -404,7 +404,7 @@ pub(crate) fn chunk_lanes<I: Compare, const D: usize, const W: usize>(
     // through `memcpy`.
     by_model!(model_of(rec), M => {
         let p = &M::params(rec);
-        if M::packed(D) {
+        if M::on_vectors(D) {
             for at in (0..W).step_by(I::N) {
                 let ld = |c: &[Real; W]| Wide::<I>::load(c, at);
                 let lanes = Deformation::<D, Wide<I>> {

@@ -12,7 +12,7 @@ use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p};
 use crate::num::{matrix, Num};
 use crate::Real;
 
-/// `ln J` from `J - 1` for the stress: the branch-free log, so that a pack of particles
+/// `ln J` from `J - 1` for the stress: the branch-free log, so that the lane-by-lane loop
 /// vectorises.
 #[inline(always)]
 fn ln_j(jm1: Real) -> Real {

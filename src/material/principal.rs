@@ -7,8 +7,8 @@
 //! mapping that changes them to `eps_i + delta_i` along the same directions gives
 //! `F' = M F` with `M = sum_i exp(delta_i) n_i n_i^T`. Everything is written in `H = F - I` and
 //! `b - I = H + H^T + H H^T`, so that small strains keep their precision in f32, and on
-//! [`Num`], with a fixed number of Jacobi rotations and no branch, so that a pack of particles
-//! runs it lane by lane in step.
+//! [`Num`], with a fixed number of Jacobi rotations and no branch, so that the lanes of a vector
+//! run it in step.
 //!
 //! In 2D the out-of-plane axis is always principal: its strain is `ln(1 + hzz)`, the hoop
 //! stretch when axisymmetric, 0 in plane strain, where a return leaves it alone (the 2D form

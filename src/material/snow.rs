@@ -55,9 +55,9 @@ impl Model for Snow {
 
     const INELASTIC: bool = true;
 
-    /// As the fixed-corotated model: the 3D polar iteration vectorises only as a pack.
+    /// As the fixed-corotated model: the 3D polar iteration vectorises only on vectors.
     #[inline(always)]
-    fn packed(d: usize) -> bool {
+    fn on_vectors(d: usize) -> bool {
         d == 3
     }
 

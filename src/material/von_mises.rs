@@ -53,10 +53,10 @@ impl Model for VonMises {
 
     const INELASTIC: bool = true;
 
-    /// As a pack: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
+    /// On vectors: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
     /// loop over lanes ran 4 times as long (measured, von Mises 3D).
     #[inline(always)]
-    fn packed(_d: usize) -> bool {
+    fn on_vectors(_d: usize) -> bool {
         true
     }
 
