@@ -212,21 +212,13 @@ pub(crate) fn inverse_transpose<T: Num, const D: usize>(m: &MatOf<T, D>) -> MatO
 /// `exp(A) - I` to `n` terms (E31: `dF = exp(L dt)` with `A = L dt`), by Horner:
 /// `Q = A / n`, then `Q <- (A + A Q) / k` for `k = n - 1` down to 1 (the division by 1
 /// skipped). The identity is left out so that a small increment keeps its precision. Written
-/// once for any number type with `+` and `*` (a real, or a vector of the particle pass's
-/// instance), `inv(k)` giving `1 / k` in that type; `n` in 1..=8.
+/// once on [`Num`] (a real, or a vector of the particle pass's instance); `n` in 1..=8.
 #[inline(always)]
-pub fn exp_series_minus_identity<T, const D: usize>(
-    a: &[[T; D]; D],
-    n: usize,
-    inv: impl Fn(usize) -> T,
-) -> [[T; D]; D]
-where
-    T: Copy + core::ops::Add<Output = T> + core::ops::Mul<Output = T>,
-{
+pub fn exp_series_minus_identity<T: Num, const D: usize>(a: &MatOf<T, D>, n: usize) -> MatOf<T, D> {
     let mut q = *a;
     for (row, a) in q.iter_mut().zip(a) {
         for (v, &a) in row.iter_mut().zip(a) {
-            *v = a * inv(n);
+            *v = a * INV[n];
         }
     }
     for k in (1..n).rev() {
@@ -234,10 +226,10 @@ where
         for r in 0..D {
             for c in 0..D {
                 for m in 0..D {
-                    next[r][c] = next[r][c] + a[r][m] * q[m][c];
+                    next[r][c] += a[r][m] * q[m][c];
                 }
                 if k > 1 {
-                    next[r][c] = next[r][c] * inv(k);
+                    next[r][c] = next[r][c] * INV[k];
                 }
             }
         }
@@ -334,9 +326,9 @@ mod tests {
     #[test]
     fn exp_series_of_zero_is_zero_and_of_diagonal_matches_scalar_exp() {
         let z: Mat<3> = [[0.0; 3]; 3];
-        assert_eq!(exp_series_minus_identity(&z, 4, |k| INV[k]), z);
+        assert_eq!(exp_series_minus_identity(&z, 4), z);
         let a: Mat<2> = [[0.1, 0.0], [0.0, -0.2]];
-        let e = exp_series_minus_identity(&a, 8, |k| INV[k]);
+        let e = exp_series_minus_identity(&a, 8);
         assert!((e[0][0] - libm::expm1(0.1) as Real).abs() < 1e-6);
         assert!((e[1][1] - libm::expm1(-0.2) as Real).abs() < 1e-6);
     }
@@ -404,7 +396,7 @@ mod tests {
                     }
                 }
             }
-            let got = exp_series_minus_identity(&a, terms as usize, |k| INV[k]);
+            let got = exp_series_minus_identity(&a, terms as usize);
             for i in 0..3 {
                 for j in 0..3 {
                     assert!((got[i][j] - want[i][j]).abs() < 1e-7, "{terms} {i}{j}");

@@ -39,6 +39,21 @@ pub(crate) struct Stress<const D: usize, T = Real> {
     pub zz: T,
 }
 
+impl<const D: usize> Stress<D> {
+    /// The components in the stored order ([`crate::layout::sym_pairs`], then `zz` in 2D).
+    #[inline(always)]
+    pub fn stored(&self) -> [Real; 6] {
+        let mut tau = [0.0; 6];
+        for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
+            tau[k] = self.m[a][b];
+        }
+        if D == 2 {
+            tau[3] = self.zz;
+        }
+        tau
+    }
+}
+
 /// The state a model sees: `H = F - I` in the plane of the D axes, the out-of-plane
 /// `F_zz - 1` (2D only; ignored in 3D), `J - 1 = det F - 1` of the whole 3 x 3 `F`, and the
 /// plastic history (0 for models without one), of one particle (`T = Real`) or of a vector of
@@ -315,22 +330,6 @@ pub(crate) fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
     by_model!(model_of(r), M => M::wave_speed(r, plastic))
 }
 
-/// `tau / rho0` of material `r` at a deformation with `jm1 = det F - 1 > -1`: one particle,
-/// or a vector of them.
-#[inline(always)]
-pub(crate) fn kirchhoff_over_rho0<const D: usize, T: Num>(
-    r: &MaterialRecord,
-    f: &Deformation<D, T>,
-) -> Stress<D, T> {
-    let mut s = by_model!(model_of(r), M => M::kirchhoff(&M::params(r), f));
-    let inv_rho0 = 1.0 / r.density;
-    for v in s.m.iter_mut().flatten() {
-        *v *= T::splat(inv_rho0);
-    }
-    s.zz *= T::splat(inv_rho0);
-    s
-}
-
 /// `tau / rho0` of one particle of material `r` at deformation `f` with the isotropic
 /// eigenstrain `d` ([`elastic_part`]; 0 for none, which changes no bit), in the stored component
 /// order ([`crate::layout::sym_pairs`], then `zz` in 2D); `None` if `f` or the eigenstrain
@@ -345,16 +344,10 @@ pub(crate) fn particle_stress<const D: usize>(
     if !(f.jm1 > -1.0 && d > -1.0) {
         return None;
     }
-    let (e, scale) = elastic_part(f, d);
-    let s = kirchhoff_over_rho0(r, &e);
-    let mut tau = [0.0; 6];
-    for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
-        tau[k] = s.m[a][b] * scale;
-    }
-    if D == 2 {
-        tau[3] = s.zz * scale;
-    }
-    Some(tau)
+    let p = 1.0 / r.density;
+    Some(
+        by_model!(model_of(r), M => stress_of::<M, D, Real>(&M::params(r), p, f, Some(d))).stored(),
+    )
 }
 
 /// A chunk's deformation as lane arrays (borrowed within one chunk's update), `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D),
@@ -508,10 +501,23 @@ fn update<M: Model, const D: usize, T: Num>(
         }
         _ => M::inelastic(p, f, hoop),
     };
+    let tau = stress_of::<M, D, T>(p, inv_rho0, &f, d);
+    Updated { f, tau }
+}
+
+/// `tau / rho0` of model `M` at deformation `f`: with an eigenstrain `d`, the stress of the
+/// elastic part scaled back by `(1 + d)^3` (E47).
+#[inline(always)]
+fn stress_of<M: Model, const D: usize, T: Num>(
+    p: &M::Params,
+    inv_rho0: Real,
+    f: &Deformation<D, T>,
+    d: Option<T>,
+) -> Stress<D, T> {
     let inv_rho0 = T::splat(inv_rho0);
     let (e, scale) = match d {
-        Some(d) => elastic_part(&f, d),
-        None => (f, T::splat(1.0)),
+        Some(d) => elastic_part(f, d),
+        None => (*f, T::splat(1.0)),
     };
     let mut tau = M::kirchhoff(p, &e);
     // Indexed loops: a flattening iterator was left as a loop the lane loop did not vectorise
@@ -526,7 +532,7 @@ fn update<M: Model, const D: usize, T: Num>(
         }
     }
     tau.zz = over_rho0(tau.zz);
-    Updated { f, tau }
+    tau
 }
 
 /// The material update of one particle of material `r` (the inelastic part, then the stress;
@@ -543,17 +549,7 @@ pub(crate) fn particle_update<const D: usize>(
     let g = by_model!(model_of(r), M => update::<M, D, Real>(&M::params(r), 1.0 / r.density, f, hoop, d));
     // NaN-safe: a NaN is not > -1.
     let admissible = g.f.jm1 > -1.0 && d.is_none_or(|d| d > -1.0);
-    let tau = admissible.then(|| {
-        let mut tau = [0.0; 6];
-        for (k, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
-            tau[k] = g.tau.m[a][b];
-        }
-        if D == 2 {
-            tau[3] = g.tau.zz;
-        }
-        tau
-    });
-    (g.f, tau)
+    (g.f, admissible.then(|| g.tau.stored()))
 }
 
 /// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0` (E46):
@@ -603,6 +599,15 @@ pub(crate) fn energy_density<const D: usize>(r: &MaterialRecord, f: &Deformation
 mod tests {
     use super::*;
     use crate::math::Mat;
+
+    /// `tau / rho0` of material `r` at a deformation with `jm1 = det F - 1 > -1`: one particle,
+    /// or a vector of them.
+    fn kirchhoff_over_rho0<const D: usize, T: Num>(
+        r: &MaterialRecord,
+        f: &Deformation<D, T>,
+    ) -> Stress<D, T> {
+        by_model!(model_of(r), M => stress_of::<M, D, T>(&M::params(r), 1.0 / r.density, f, None))
+    }
 
     /// The default material's record as `model`, with the given Lamé constants and initial
     /// density `rho0`; lambda is also the fluid's bulk modulus K, as in a fluid's own record

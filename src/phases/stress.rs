@@ -17,13 +17,13 @@ use crate::grid::GridCols;
 use crate::material::{
     add_viscous_lanes, eigenstrain_part, particle_update, Deformation, LaneDeformation,
 };
-use crate::math::INV;
+use crate::math::exp_series_minus_identity;
 use crate::num::matrix;
 use crate::particles::StepReport;
 use crate::particles::{ParticleCols, FROZEN};
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{commit, live_lanes, load, load_into, Block, Lane, Lanes};
-use crate::simd::rows::{self, Compare};
+use crate::simd::rows;
 use crate::simd::wide::Wide;
 
 /// The lane matrices of a stress update, kept by the pass across chunks (see
@@ -45,15 +45,6 @@ impl<const D: usize, const W: usize> StressScratch<D, W> {
             tau: [[0.0; W]; 6],
         }
     }
-}
-
-/// [`crate::math::exp_series_minus_identity`] on the instance's vectors.
-#[inline(always)]
-fn exp_minus_identity<I: Compare, const D: usize>(
-    a: &[[Wide<I>; D]; D],
-    n: usize,
-) -> [[Wide<I>; D]; D] {
-    crate::math::exp_series_minus_identity(a, n, |k| Wide::<I>::splat(INV[k]))
 }
 
 /// Updates H and tau/rho0 of the lanes in `update` from their velocity gradient `l`. Returns
@@ -94,7 +85,7 @@ pub(crate) fn update_stress<
                 a[r][c] = ld(&l[r][c]) * dt;
             }
         }
-        let q = exp_minus_identity::<I, D>(&a, n);
+        let q = exp_series_minus_identity(&a, n);
         for r in 0..D {
             for c in 0..D {
                 let mut v = ld(&h_old[r][c]);
@@ -112,7 +103,7 @@ pub(crate) fn update_stress<
         let old: Lane<W> = load(p.hoop, start);
         for at in (0..W).step_by(I::N) {
             let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
-            let q = exp_minus_identity::<I, 1>(&[[ld(&gathered.hoop) * dt]], n)[0][0];
+            let q = exp_series_minus_identity(&[[ld(&gathered.hoop) * dt]], n)[0][0];
             let old = ld(&old);
             (old + q + q * old).store(&mut hzz, at);
         }
