@@ -212,7 +212,7 @@ pub(crate) fn inverse_transpose<T: Num, const D: usize>(m: &MatOf<T, D>) -> MatO
 /// `exp(A) - I` to `n` terms (E31: `dF = exp(L dt)` with `A = L dt`), by Horner:
 /// `Q = A / n`, then `Q <- (A + A Q) / k` for `k = n - 1` down to 1 (the division by 1
 /// skipped). The identity is left out so that a small increment keeps its precision. Written
-/// once on [`Num`] (a real, or a vector of the particle pass's instance); `n` in 1..=8.
+/// once on `Num` (a real, or a vector of the particle pass's instance); `n` in 1..=8.
 #[inline(always)]
 pub fn exp_series_minus_identity<T: Num, const D: usize>(a: &MatOf<T, D>, n: usize) -> MatOf<T, D> {
     let mut q = *a;
