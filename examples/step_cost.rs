@@ -336,7 +336,7 @@ pub fn main() {
         material_name(o.material),
         order_name(o.order),
         precision_name(),
-        o.simd.instance().name(),
+        o.simd.instance_for(&world.def()).name(),
         med,
         runs_json,
         med_ref,

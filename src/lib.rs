@@ -9,8 +9,8 @@
 //!   [`memory_requirements`]. A byte copy of [`World::as_bytes`] is a snapshot, and
 //!   [`World::open`] checks one before use.
 //! - Structure of arrays: one contiguous column per scalar component, for particles and nodes;
-//!   the particle passes run on SSE2, AVX2 (`wide-simd`) or AVX-512 (`avx512`), bit for bit
-//!   alike.
+//!   the particle passes run on SSE2, AVX2 or AVX-512 (`wide-simd`, chosen at run time), bit
+//!   for bit alike.
 //! - 2D plane strain, 2D axisymmetric and 3D share one code path ([`Dimension`]); f32 by
 //!   default, f64 with the `f64` feature.
 //! - Shape functions ([`ShapeFunction`]): linear, uGIMP, cpGIMP, quadratic and cubic B-splines.

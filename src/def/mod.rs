@@ -93,6 +93,15 @@ impl ShapeFunction {
         }
     }
 
+    /// The nodes of a particle's stencil along each axis (`shape::Shape1D`'s `K`).
+    pub(crate) const fn stencil_width(self) -> usize {
+        match self {
+            ShapeFunction::Linear => 2,
+            ShapeFunction::CubicBspline => 4,
+            _ => 3,
+        }
+    }
+
     /// Width of the layer of cells, at each face of the grid, that particles may not enter:
     /// the nodes of a particle's stencil must exist. 0 for linear, 1 for the others.
     pub const fn margin_cells(self) -> u32 {

@@ -127,17 +127,23 @@ macro_rules! instances {
 pub(crate) use instances;
 
 /// Evaluates `$body` with `$isa` naming the instance that `$simd` (a [`super::Simd`]) picks
-/// on this CPU: the one place that maps the choice to a type.
+/// on this CPU: the one place that maps the choice to a type. With `form (D, K)` (the
+/// dimension and stencil width of the body's form), a CPU with AVX-512 runs the AVX2
+/// instance where the form has no AVX-512 one ([`super::avx512_form`]): the branch is on a
+/// constant, so the AVX-512 instance of such a form is never compiled.
 macro_rules! with_instance {
     ($simd:expr, $isa:ident => $body:expr) => {
+        $crate::simd::with_instance!($simd, form (2, 3), $isa => $body)
+    };
+    ($simd:expr, form ($d:expr, $k:expr), $isa:ident => $body:expr) => {
         match $simd.instance() {
-            #[cfg(all(target_arch = "x86_64", feature = "avx512"))]
-            $crate::simd::Instance::Avx512 => {
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+            $crate::simd::Instance::Avx512 if const { $crate::simd::avx512_form($d, $k) } => {
                 type $isa = $crate::simd::Avx512;
                 $body
             }
             #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
-            $crate::simd::Instance::Avx2 => {
+            $crate::simd::Instance::Avx2 | $crate::simd::Instance::Avx512 => {
                 type $isa = $crate::simd::Avx2;
                 $body
             }

@@ -85,7 +85,7 @@ impl Instance {
 }
 
 impl Simd {
-    /// The instance this choice runs on this CPU (within the process-wide cap).
+    /// The widest instance this choice runs on this CPU (within the process-wide cap).
     #[inline]
     pub fn instance(self) -> Instance {
         let widest = widest();
@@ -95,6 +95,31 @@ impl Simd {
             Simd::Baseline => Instance::Baseline,
         }
     }
+
+    /// The instance this choice runs a world of `def` in on this CPU: [`Simd::instance`], but
+    /// AVX2 in place of AVX-512 for a form that has no AVX-512 instance ([`avx512_form`]).
+    pub fn instance_for(self, def: &crate::WorldDef) -> Instance {
+        let d = if def.dimension == crate::Dimension::ThreeD {
+            3
+        } else {
+            2
+        };
+        match self.instance() {
+            Instance::Avx512 if !avx512_form(d, def.shape.stencil_width()) => Instance::Avx2,
+            other => other,
+        }
+    }
+}
+
+/// Whether the AVX-512 instance of the particle passes is compiled for the form of dimension
+/// `d` (2 also for the axisymmetric form) and stencils of `k` nodes per axis; where it is not,
+/// a CPU with AVX-512 runs the AVX2 instance. Compiled where it measured faster than AVX2
+/// (benches/PERFORMANCE.md, "AVX-512 where it pays"): in f32 every form (a 2D step 0.72 to
+/// 0.81 times AVX2's, 3D 0.80 to 0.93); in f64, whose vectors hold half the lanes, the 2D
+/// forms of 3 and 4 nodes (0.87 to 0.92) and the 3D cubic (0.91), not the linear forms (1.02
+/// to 1.06) or the 3D 3-node one (0.97).
+pub(crate) const fn avx512_form(d: usize, k: usize) -> bool {
+    cfg!(not(feature = "f64")) || (k >= 3 && (d == 2 || k == 4))
 }
 
 #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
@@ -199,8 +224,7 @@ fn detect() -> Instance {
         return Instance::Baseline;
     }
     let avx512 = (1 << 16) | (1 << 17) | (1 << 30) | (1 << 31);
-    // Only with the `avx512` feature, which compiles that instance.
-    if cfg!(feature = "avx512") && xcr0 & 0b1110_0000 == 0b1110_0000 && ebx & avx512 == avx512 {
+    if xcr0 & 0b1110_0000 == 0b1110_0000 && ebx & avx512 == avx512 {
         Instance::Avx512
     } else {
         Instance::Avx2

@@ -1022,7 +1022,7 @@ mod tests {
             check_modes::<Avx2, 3, 3, _, { width(3) }>(&gimp);
             check_modes::<Avx2, 3, 4, _, { width(3) }>(&CubicBspline);
         }
-        #[cfg(feature = "avx512")]
+        #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
         if widest == Instance::Avx512 {
             use crate::simd::Avx512;
             check_modes::<Avx512, 2, 3, _, { width(2) }>(&gimp);

@@ -845,7 +845,7 @@ mod tests {
             if Simd::Detect.instance() >= Instance::Avx2 {
                 check::<super::super::Avx2, W>(col, base, off);
             }
-            #[cfg(feature = "avx512")]
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
             if Simd::Detect.instance() == Instance::Avx512 {
                 check::<super::super::Avx512, W>(col, base, off);
             }
@@ -955,7 +955,7 @@ mod tests {
             if Simd::Detect.instance() >= Instance::Avx2 {
                 check_compare::<super::super::Avx2, W>();
             }
-            #[cfg(feature = "avx512")]
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
             if Simd::Detect.instance() == Instance::Avx512 {
                 check_compare::<super::super::Avx512, W>();
             }

@@ -144,7 +144,7 @@ pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<
     status: &[u32],
     count: usize,
 ) -> NodeBox<D> {
-    with_instance!(simd, I => I::node_box::<D, K, S>(geom, x, status, count))
+    with_instance!(simd, form (D, K), I => I::node_box::<D, K, S>(geom, x, status, count))
 }
 
 /// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),

@@ -295,7 +295,9 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    crate::simd::with_instance!(simd, I => kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g));
+    crate::simd::with_instance!(simd, form (D, K), I => {
+        kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g)
+    });
 }
 
 /// One substep: the phase order of E12-E32 for the chosen update order, the momentum approach
