@@ -349,7 +349,7 @@ pub(crate) fn particles<
             load_into(&mut x_low[a], p.x_low[a], start);
             load_into(&mut v[a], p.v[a], start);
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false, ctx.mls);
+        super::stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, &x, apic, false, ctx.mls);
         if damp {
             damping::lane_rates::<I, D, W>(
                 (ctx.alpha_g, ctx.alpha_p),

@@ -33,8 +33,10 @@ crate::simd::instances! {
         out: &mut g2p::Gathered<D, W>,
     ) => g2p::gather_chunk;
 
-    /// [`super::stencils`]: one chunk's stencils (every pass computes them; one function
-    /// rather than a copy of the three families' code in each pass).
+    /// [`super::stencils`]: one chunk's stencils, for the transport and momentum passes (one
+    /// function rather than a copy of the three families' code in each). The scatter, particle
+    /// and stress passes inline theirs: called out of line they made the default step 1.03
+    /// to 1.05 times as long (benches/PERFORMANCE.md, "Decisions").
     fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         st: &mut Stencils<D, K, W>,
         shape: &S,

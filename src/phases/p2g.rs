@@ -88,7 +88,7 @@ pub(crate) fn scatter_rows<
             }
         }
         let mls = ctx.mls;
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
+        super::stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
         let live = crate::simd::lanes::live_lanes(p, start, count);
         products.set::<I, K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);

@@ -334,7 +334,7 @@ pub(crate) fn stress<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
                 start,
             );
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, ctx.mls);
+        super::stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, ctx.mls);
         const REMAP: u8 = Grad::Remap as u8;
         I::gather::<D, K, S, W, false, REMAP, false>(
             ctx,
