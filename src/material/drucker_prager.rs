@@ -83,6 +83,16 @@ impl Model for DruckerPrager {
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {
+        Self::inelastic_kirchhoff(p, f, hoop).0
+    }
+
+    /// The return, and the stress from its principal strains.
+    #[inline(always)]
+    fn inelastic_kirchhoff<const D: usize, T: Num>(
+        p: &DruckerPragerParams,
+        f: &Deformation<D, T>,
+        hoop: bool,
+    ) -> (Deformation<D, T>, Stress<D, T>) {
         let n = plastic_axes(D, hoop);
         let nr = n as Real;
         let pr = Principal::of(f);
@@ -108,8 +118,9 @@ impl Model for DruckerPrager {
                 zero
             }
         });
-        let mut g = pr.change(f, &delta);
+        let (mut g, changed) = pr.change(f, &delta);
         g.plastic = f.plastic + T::select(beyond, norm, T::select(flows, dgamma, zero));
-        g
+        let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));
+        (g, tau)
     }
 }

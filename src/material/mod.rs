@@ -226,6 +226,21 @@ pub(crate) trait Model {
         *f
     }
 
+    /// [`Model::inelastic`] and the Kirchhoff stress of its result together. A return that
+    /// works in the principal strains of the trial `F_e` (the plastic models) overrides it to
+    /// take the stress from the same decomposition: one eigen decomposition a particle, not
+    /// two.
+    #[inline(always)]
+    fn inelastic_kirchhoff<const D: usize, T: Num>(
+        p: &Self::Params,
+        f: &Deformation<D, T>,
+        hoop: bool,
+    ) -> (Deformation<D, T>, Stress<D, T>) {
+        let g = Self::inelastic(p, f, hoop);
+        let tau = Self::kirchhoff(p, &g);
+        (g, tau)
+    }
+
     /// The Kirchhoff stress `tau` (not yet divided by `rho0`) for `jm1 = det F - 1 > -1`,
     /// written once on [`Num`]: of one particle (`T = Real`, the reference step) or of the
     /// lanes of one of the instance's vectors (`T = Wide<I>`, a chunk's update). Lanes not
@@ -494,15 +509,36 @@ fn update<M: Model, const D: usize, T: Num>(
     hoop: bool,
     d: Option<T>,
 ) -> Updated<D, T> {
-    let f = match d {
-        _ if !M::INELASTIC => *f,
+    let inv_rho0 = T::splat(inv_rho0);
+    match d {
+        _ if !M::INELASTIC => Updated {
+            f: *f,
+            tau: stress_of::<M, D, T>(p, inv_rho0, f, d),
+        },
+        // The return on the elastic part, whose stress it gives, scaled back (E47).
         Some(d) if M::ON_ELASTIC_PART => {
-            with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+            let (e, scale) = elastic_part(f, d);
+            let (g, tau) = M::inelastic_kirchhoff(p, &e, hoop);
+            Updated {
+                f: with_eigenstrain(&g, d),
+                tau: per_rho0(tau, inv_rho0, Some(scale)),
+            }
         }
-        _ => M::inelastic(p, f, hoop),
-    };
-    let tau = stress_of::<M, D, T>(p, inv_rho0, &f, d);
-    Updated { f, tau }
+        Some(_) => {
+            let g = M::inelastic(p, f, hoop);
+            Updated {
+                f: g,
+                tau: stress_of::<M, D, T>(p, inv_rho0, &g, d),
+            }
+        }
+        None => {
+            let (g, tau) = M::inelastic_kirchhoff(p, f, hoop);
+            Updated {
+                f: g,
+                tau: per_rho0(tau, inv_rho0, None),
+            }
+        }
+    }
 }
 
 /// `tau / rho0` of model `M` at deformation `f`: with an eigenstrain `d`, the stress of the
@@ -510,20 +546,30 @@ fn update<M: Model, const D: usize, T: Num>(
 #[inline(always)]
 fn stress_of<M: Model, const D: usize, T: Num>(
     p: &M::Params,
-    inv_rho0: Real,
+    inv_rho0: T,
     f: &Deformation<D, T>,
     d: Option<T>,
 ) -> Stress<D, T> {
-    let inv_rho0 = T::splat(inv_rho0);
-    let (e, scale) = match d {
-        Some(d) => elastic_part(f, d),
-        None => (*f, T::splat(1.0)),
-    };
-    let mut tau = M::kirchhoff(p, &e);
+    match d {
+        Some(d) => {
+            let (e, scale) = elastic_part(f, d);
+            per_rho0(M::kirchhoff(p, &e), inv_rho0, Some(scale))
+        }
+        None => per_rho0(M::kirchhoff(p, f), inv_rho0, None),
+    }
+}
+
+/// `tau / rho0` from `tau`, times `scale` where given (`(1 + d)^3` under an eigenstrain).
+#[inline(always)]
+fn per_rho0<const D: usize, T: Num>(
+    mut tau: Stress<D, T>,
+    inv_rho0: T,
+    scale: Option<T>,
+) -> Stress<D, T> {
     // Indexed loops: a flattening iterator was left as a loop the lane loop did not vectorise
     // around.
-    let over_rho0 = |v: T| match d {
-        Some(_) => v * inv_rho0 * scale,
+    let over_rho0 = |v: T| match scale {
+        Some(scale) => v * inv_rho0 * scale,
         None => v * inv_rho0,
     };
     for a in 0..D {
@@ -606,7 +652,7 @@ mod tests {
         r: &MaterialRecord,
         f: &Deformation<D, T>,
     ) -> Stress<D, T> {
-        by_model!(model_of(r), M => stress_of::<M, D, T>(&M::params(r), 1.0 / r.density, f, None))
+        by_model!(model_of(r), M => stress_of::<M, D, T>(&M::params(r), T::splat(1.0 / r.density), f, None))
     }
 
     /// The default material's record as `model`, with the given Lamé constants and initial
@@ -806,22 +852,28 @@ mod tests {
         hoop: bool,
         d: Option<Real>,
     ) -> (Deformation<D>, Stress<D>) {
-        let g = by_model!(model_of(r), M => {
+        // The inelastic part (on the elastic part under an eigenstrain, for a return) with the
+        // stress of its result, then tau / rho0 scaled back by (1 + d)^3.
+        let d0 = d.unwrap_or(0.0);
+        let (g, mut s) = by_model!(model_of(r), M => {
             let p = &M::params(r);
             match d {
-                _ if !M::INELASTIC => *f,
+                _ if !M::INELASTIC => (*f, M::kirchhoff(p, &elastic_part(f, d0).0)),
                 Some(d) if M::ON_ELASTIC_PART => {
-                    with_eigenstrain(&M::inelastic(p, &elastic_part(f, d).0, hoop), d)
+                    let (g, tau) = M::inelastic_kirchhoff(p, &elastic_part(f, d).0, hoop);
+                    (with_eigenstrain(&g, d), tau)
                 }
-                _ => M::inelastic(p, f, hoop),
+                None => M::inelastic_kirchhoff(p, f, hoop),
+                Some(_) => {
+                    let g = M::inelastic(p, f, hoop);
+                    (g, M::kirchhoff(p, &elastic_part(&g, d0).0))
+                }
             }
         });
-        let (e, scale) = elastic_part(&g, d.unwrap_or(0.0));
-        let mut s = kirchhoff_over_rho0(r, &e);
-        for v in s.m.iter_mut().flatten() {
-            *v *= scale;
+        let scale = elastic_part(f, d0).1;
+        for v in s.m.iter_mut().flatten().chain([&mut s.zz]) {
+            *v = *v * (1.0 / r.density) * scale;
         }
-        s.zz *= scale;
         (g, s)
     }
 

@@ -82,6 +82,8 @@ pub(crate) fn eigen_symmetric<T: Num, const D: usize>(a: &MatOf<T, D>) -> ([T; D
 pub(crate) struct Principal<const D: usize, T> {
     pub n: MatOf<T, D>,
     pub eps: [T; 3],
+    /// The principal stretches less 1, `exp(eps_i) - 1`.
+    pub s_m1: [T; 3],
 }
 
 /// `ln(1 + x)` for `x > -1`, on any [`Num`].
@@ -104,14 +106,17 @@ impl<const D: usize, T: Num> Principal<D, T> {
             hh
         });
         let (lam, n) = eigen_symmetric(&bm1);
-        let mut eps = [T::splat(0.0); 3];
+        let (mut eps, mut s_m1) = ([T::splat(0.0); 3], [T::splat(0.0); 3]);
         for i in 0..D {
             eps[i] = ln_1p(lam[i]) * 0.5;
+            // s - 1 = (s^2 - 1) / (s + 1), without cancellation.
+            s_m1[i] = lam[i] / ((lam[i] + 1.0).sqrt() + 1.0);
         }
         if D == 2 {
             eps[2] = ln_1p(f.hzz);
+            s_m1[2] = f.hzz;
         }
-        Principal { n, eps }
+        Principal { n, eps, s_m1 }
     }
 
     /// The Kirchhoff stress of Hencky elasticity, `tau = sum_i (2 mu eps_i + lambda tr eps)
@@ -133,9 +138,16 @@ impl<const D: usize, T: Num> Principal<D, T> {
 
     /// `f` with its principal log strains changed by `delta` (`delta[2]` the out-of-plane one in
     /// 2D): `F' = M F`, `M - I = sum_i (exp(delta_i) - 1) n_i n_i^T`, so `H' = H + (M - I)(I +
-    /// H)`; `J - 1` follows.
+    /// H)`; `J - 1` follows. Also the principal strains of the result: the axes are the same
+    /// (`b' = M b M^T`, M sharing b's axes), each log strain moves by its `delta` and each
+    /// stretch is multiplied by `exp(delta_i)`. A return takes the stress from these rather
+    /// than decomposing the new deformation again.
     #[inline(always)]
-    pub fn change(&self, f: &Deformation<D, T>, delta: &[T; 3]) -> Deformation<D, T> {
+    pub fn change(
+        &self,
+        f: &Deformation<D, T>,
+        delta: &[T; 3],
+    ) -> (Deformation<D, T>, Principal<D, T>) {
         let g: [T; 3] = core::array::from_fn(|i| delta[i].map(exp_m1));
         let mm1: MatOf<T, D> = matrix(|a, b| {
             let mut s = T::splat(0.0);
@@ -156,7 +168,36 @@ impl<const D: usize, T: Num> Principal<D, T> {
         } else {
             f.hzz
         };
-        Deformation::with_plastic(h, hzz, f.plastic)
+        let changed = Principal {
+            n: self.n,
+            eps: core::array::from_fn(|i| self.eps[i] + delta[i]),
+            s_m1: core::array::from_fn(|i| self.s_m1[i] + (self.s_m1[i] + 1.0) * g[i]),
+        };
+        (Deformation::with_plastic(h, hzz, f.plastic), changed)
+    }
+}
+
+impl<const D: usize, T: Num> Principal<D, T> {
+    /// The fixed-corotated Kirchhoff stress (E36) in the principal axes of `V` (`F = V R`,
+    /// stretches `s_i = exp(eps_i)`): `(F - R) F^T = (V - I) V`, so `tau = sum_i 2 mu (s_i -
+    /// 1) s_i n_i n_i^T + lambda (J - 1) J I`, with `jm1 = J - 1` of the deformation.
+    #[inline(always)]
+    pub fn corotated(&self, mu: T, lambda: T, jm1: T) -> super::Stress<D, T> {
+        let vol = lambda * jm1 * (jm1 + 1.0);
+        let t: [T; 3] = core::array::from_fn(|i| self.s_m1[i] * (self.s_m1[i] + 1.0) * mu * 2.0);
+        let m = matrix(|a, b| {
+            let mut s = T::splat(0.0);
+            for i in 0..D {
+                s += self.n[a][i] * self.n[b][i] * t[i];
+            }
+            if a == b {
+                s + vol
+            } else {
+                s
+            }
+        });
+        let zz = if D == 2 { t[2] + vol } else { T::splat(0.0) };
+        super::Stress { m, zz }
     }
 }
 
@@ -294,7 +335,7 @@ mod tests {
             assert!((got[i] - want[i]).abs() < 1e-5, "{got:?} {want:?}");
         }
         let delta = [0.01 as Real, -0.02, 0.03];
-        let g = p.change(&def, &delta);
+        let g = p.change(&def, &delta).0;
         for i in 0..3 {
             // Each direction of `p` is still principal with strain eps_i + delta_i.
             let mut bn = [0.0 as Real; 3];

@@ -55,10 +55,11 @@ impl Model for Snow {
 
     const INELASTIC: bool = true;
 
-    /// As the fixed-corotated model: the 3D polar iteration vectorises only on vectors.
+    /// On vectors: its return and stress take logarithms, exponentials and an eigen
+    /// decomposition, which vectorise only there.
     #[inline(always)]
-    fn on_vectors(d: usize) -> bool {
-        d == 3
+    fn on_vectors(_d: usize) -> bool {
+        true
     }
 
     #[inline(always)]
@@ -98,6 +99,17 @@ impl Model for Snow {
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {
+        Self::inelastic_kirchhoff(p, f, hoop).0
+    }
+
+    /// The clamp, and the hardened fixed-corotated stress from its principal strains
+    /// (`Principal::corotated`), not from a polar decomposition of the result.
+    #[inline(always)]
+    fn inelastic_kirchhoff<const D: usize, T: Num>(
+        p: &SnowParams,
+        f: &Deformation<D, T>,
+        hoop: bool,
+    ) -> (Deformation<D, T>, Stress<D, T>) {
         let n = plastic_axes(D, hoop);
         let pr = Principal::of(f);
         let (lo, hi) = (T::splat(p.log_compression), T::splat(p.log_stretch));
@@ -113,10 +125,12 @@ impl Model for Snow {
                 T::splat(0.0)
             }
         });
-        let mut g = pr.change(f, &delta);
+        let (mut g, changed) = pr.change(f, &delta);
         // J_p' = J_p exp(-sum delta): J_p' - 1 = plastic + (1 + plastic) (exp(-sum delta) - 1)
         g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1);
-        g
+        let k = hardening(p, g.plastic);
+        let tau = changed.corotated(k * p.mu, k * p.lambda, g.jm1);
+        (g, tau)
     }
 }
 

@@ -83,6 +83,16 @@ impl Model for VonMises {
         f: &Deformation<D, T>,
         hoop: bool,
     ) -> Deformation<D, T> {
+        Self::inelastic_kirchhoff(p, f, hoop).0
+    }
+
+    /// The return, and the stress from its principal strains.
+    #[inline(always)]
+    fn inelastic_kirchhoff<const D: usize, T: Num>(
+        p: &VonMisesParams,
+        f: &Deformation<D, T>,
+        hoop: bool,
+    ) -> (Deformation<D, T>, Stress<D, T>) {
         let pr = Principal::of(f);
         let Split { dev: e, norm, .. } = pr.split(plastic_axes(D, hoop));
         let yield_radius = (f.plastic * p.hardening_modulus + p.yield_stress) * SQRT_2_3;
@@ -94,9 +104,10 @@ impl Model for VonMises {
         // 0 / 0 away.
         let along = dgamma / (norm + Real::MIN_POSITIVE);
         let delta: [T; 3] = core::array::from_fn(|i| -(e[i] * along));
-        let mut g = pr.change(f, &delta);
+        let (mut g, changed) = pr.change(f, &delta);
         g.plastic = f.plastic + abs(dgamma) * SQRT_2_3;
-        g
+        let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));
+        (g, tau)
     }
 }
 
