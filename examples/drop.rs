@@ -50,7 +50,7 @@ fn main() -> std::io::Result<()> {
                 runaway += report.runaway;
             }
         }
-        // Speeds from rest to the fall's 2.2 m/s at the floor, one colour scale throughout.
+        // Speeds from rest to the fall's 2.7 m/s at the floor, one colour scale throughout.
         pictures.push(render(&world, Colour::Speed, (0.0, 2.5), 200));
         if f % 5 == 0 {
             let d = world.diagnostics();

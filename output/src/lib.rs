@@ -6,7 +6,8 @@
 //!   (ParaView opens it as one time series);
 //! - [`write_csv`]: one frame as CSV, a row per particle, for spreadsheets and scripts;
 //! - [`picture`]: pictures without a window, PNG frames and animated GIFs;
-//! - [`scenes`]: the example scenes, defined once.
+//! - [`scenes`]: the example scenes, defined once;
+//! - [`stiffness`]: the modulus that lets a material run in a chosen number of substeps a frame.
 //!
 //! The columns ([`columns`]): the position (`position + position_low`, in f64), velocity, mass,
 //! initial volume, material, status, `J`, the displacement gradient `H = F - I` (row major),
@@ -25,6 +26,7 @@
 
 pub mod picture;
 pub mod scenes;
+pub mod stiffness;
 
 use mpm_gimp::{Dimension, Real, World};
 use std::fmt::Write as _;

@@ -6,7 +6,8 @@ use mpm_gimp_output::scenes::{find, Scene, ALL};
 
 /// Every registered scene's definition makes a world, its fill adds particles, and its
 /// default run (`frames` frames of `frame_dt`) freezes no particle and keeps every particle
-/// in the box with finite state; its default colouring paints some of them inside its range.
+/// in the box with finite state, in no more substeps a frame on average than the budget its
+/// materials were chosen for; its default colouring paints some of them inside its range.
 #[test]
 fn every_scene_runs_its_default_duration_stably() {
     assert!(ALL.len() >= 5, "{} scenes", ALL.len());
@@ -24,6 +25,15 @@ fn every_scene_runs_its_default_duration_stably() {
             assert_eq!(report.escaped, 0, "{} frame {f}", scene.name);
             substeps += report.substeps;
         }
+        // The budget holds: the stiffest material and the fastest particle fit in it (a frame
+        // where a particle outruns the speed the scene allowed for takes one or two more).
+        assert!(
+            substeps as usize <= scene.substeps as usize * scene.frames,
+            "{}: {substeps} substeps in {} frames, over its budget of {} a frame",
+            scene.name,
+            scene.frames,
+            scene.substeps
+        );
         let v = world.particles();
         let finite = (0..v.count).all(|i| {
             v.status[i] == 0
@@ -50,8 +60,9 @@ fn every_scene_runs_its_default_duration_stably() {
         let p = render(&world, scene.colour, scene.range, 100);
         assert!(p.width == 100 && p.height > 0);
         println!(
-            "{}: {n} particles, {} frames, {substeps} substeps, {:?} {lo:.3e}..{hi:.3e}",
-            scene.name, scene.frames, scene.colour
+            "{}: {n} particles, {} frames, {substeps} substeps (budget {} a frame), {:?} \
+             {lo:.3e}..{hi:.3e}",
+            scene.name, scene.frames, scene.substeps, scene.colour
         );
     }
 }

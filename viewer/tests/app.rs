@@ -162,23 +162,28 @@ fn near(app: &mut App, at: [f64; 2]) -> Vec<usize> {
     near
 }
 
-/// Mean x velocity of particles `ids`.
-fn mean_vx(app: &mut App, ids: &[usize]) -> f64 {
+/// Mean velocity along axis `a` of particles `ids`.
+fn mean_velocity(app: &mut App, ids: &[usize], a: usize) -> f64 {
     let world = app.sim.world();
     let v = world.particles();
-    ids.iter().map(|&i| v.velocity[0][i] as f64).sum::<f64>() / ids.len() as f64
+    ids.iter().map(|&i| v.velocity[a][i] as f64).sum::<f64>() / ids.len() as f64
 }
 
-/// Dragging with the left button from a point of a scene's material to the right at 1.5 m/s
-/// drags the particles that were under the cursor along, at least at half that speed more
-/// than the same frames without the drag give them; the drag ends when the button is released.
+/// Dragging with the left button from a point of a scene's material at 1.5 m/s drags the
+/// particles that were under the cursor along, at least at half that speed more than the same
+/// frames without the drag give them; the drag ends when the button is released.
 #[test]
 fn dragging_pushes_material() {
-    // Free bodies: the falling block, a flying disk.
-    for (name, start) in [("drop", [0.5, 0.55]), ("collide", [0.25, 0.55])] {
+    // Free bodies: the falling block, dragged to the right for 12 frames (it lands 0.28 s in); a
+    // flying disk, dragged up across its flight by a cursor that keeps up with it (1 m/s to
+    // the right) for the 6 frames before it meets the other disk (at 0.11 s). Along its
+    // flight a drag at 1.5 m/s could add no more than 0.5 m/s to its 1 m/s.
+    for (name, start, cursor, axis, frames) in [
+        ("drop", [0.5, 0.55], [1.5, 0.0], 0, 12),
+        ("collide", [0.25, 0.55], [1.0, 1.5], 1, 6),
+    ] {
         let k = ALL.iter().position(|s| s.name == name).unwrap();
         let dt = ALL[k].frame_dt as f64;
-        let frames = 12;
         let mut moved = App::new(k).unwrap();
         let mut still = App::new(k).unwrap();
         let ids = near(&mut moved, start);
@@ -193,10 +198,11 @@ fn dragging_pushes_material() {
             });
             assert!(moved.drag.is_some());
             still.update(&Input::default());
-            at[0] += 1.5 * dt;
+            at[0] += cursor[0] * dt;
+            at[1] += cursor[1] * dt;
         }
-        let pushed = mean_vx(&mut moved, &ids);
-        let free = mean_vx(&mut still, &ids);
+        let pushed = mean_velocity(&mut moved, &ids, axis);
+        let free = mean_velocity(&mut still, &ids, axis);
         println!("{name}: {pushed:.3} m/s pushed, {free:.3} m/s free");
         assert!(
             pushed - free > 0.75,
