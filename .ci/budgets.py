@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""The build's budgets, checked on the release build CI has just made (not a timed test):
+
+- the functions compiled per instance of the particle passes and chunk kernels
+  (`benches/compiled_forms.sh`): what multiplies the build when a type parameter or a form is
+  added, so a new one must raise the budget here, with its measured price in
+  benches/PERFORMANCE.md ("Compiled forms");
+- the size of the kernel's release library (its object code grows with every compiled form);
+- the wall time cargo took for the kernel's library in that build (`--timings`), a ceiling
+  well above its usual time on CI's two shared cores, that catches a form or an inlining
+  that multiplies the build, not the machine's noise.
+
+Run from the repository root after `cargo test --release --workspace --no-run --timings`:
+python3 .ci/budgets.py"""
+import glob
+import json
+import os
+import subprocess
+import sys
+
+# Ceilings. Functions per instance as compiled in the f32 build (146, 146 and 119 at the
+# commit that set them), the library's bytes (11.8 MB then) and the kernel library's wall time
+# in CI's test build (its clean build alone took about 60 s).
+FUNCTIONS = {"avx2": 146, "avx512": 146, "baseline": 119}
+LIBRARY_BYTES = 13_000_000
+KERNEL_BUILD_SECONDS = 240.0
+
+failed = []
+libs = sorted(glob.glob("target/release/deps/libmpm_gimp-*.rlib"), key=os.path.getmtime)
+if not libs:
+    sys.exit("no kernel library in target/release/deps: build first")
+lib = libs[-1]
+
+counts = subprocess.run(
+    ["bash", "benches/compiled_forms.sh", lib], check=True, capture_output=True, text=True
+).stdout
+print(counts, end="")
+for line in counts.splitlines():
+    instance = line.split()[0]
+    total = int(line.rsplit("(", 1)[1].split()[0])
+    ceiling = FUNCTIONS.get(instance)
+    if ceiling is None or total > ceiling:
+        failed.append(f"{instance}: {total} functions, budget {ceiling}")
+for instance in FUNCTIONS:
+    if instance not in counts:
+        print(f"{instance}: not compiled in this build")
+
+size = os.path.getsize(lib)
+print(f"kernel library {size} bytes (budget {LIBRARY_BYTES})")
+if size > LIBRARY_BYTES:
+    failed.append(f"library {size} bytes, budget {LIBRARY_BYTES}")
+
+report = "target/cargo-timings/cargo-timing.html"
+if os.path.exists(report):
+    text = open(report).read()
+    start = text.index("UNIT_DATA = ") + len("UNIT_DATA = ")
+    units, _ = json.JSONDecoder().raw_decode(text[start:])
+    kernel = [
+        u["duration"]
+        for u in units
+        if u["name"] == "mpm-gimp" and u["target"] == "" and u["mode"] == "todo"
+    ]
+    if kernel:
+        seconds = max(kernel)
+        print(f"kernel library built in {seconds:.1f} s (budget {KERNEL_BUILD_SECONDS:.0f} s)")
+        if seconds > KERNEL_BUILD_SECONDS:
+            failed.append(f"kernel build {seconds:.1f} s, budget {KERNEL_BUILD_SECONDS:.0f} s")
+    else:
+        print("the timing report has no kernel library unit (nothing rebuilt)")
+else:
+    print("no timing report: the build time is not checked")
+
+if failed:
+    sys.exit("over budget: " + "; ".join(failed))
