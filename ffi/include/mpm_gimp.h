@@ -193,11 +193,9 @@ enum MpmStatus
   MPM_STATUS_INVALID_ENUM = 66,
   // An output buffer shorter than the data to copy.
   MPM_STATUS_OUTPUT_TOO_SMALL = 67,
-  // The library hit an internal error: a Rust panic caught at the boundary, in builds that
-  // unwind (the test builds, or a host that builds the crate with `panic = "unwind"`). The
-  // release libraries are built with `panic = "abort"`: there a panic aborts the process
-  // and this status is never returned. No panic is known to be reachable; report one as a
-  // bug. The world may be in an intermediate state.
+  // The library hit an internal error: a Rust panic caught at the boundary (in a build
+  // with `panic = "abort"` the process aborts instead). No panic is known to be reachable;
+  // report one as a bug. The world may be in an intermediate state.
   MPM_STATUS_INTERNAL = 68,
   // An input array or an output pointer of the call overlaps the world's memory (its first
   // `mpm_world_bytes` bytes; for `mpm_world_init` and `mpm_world_open`, the world they lay

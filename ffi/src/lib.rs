@@ -13,9 +13,9 @@
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer
 //! followed by its length, every pointer checked for NULL, no input array or output inside the
 //! world's memory (`MPM_STATUS_OVERLAPPING_MEMORY`), nothing written and nothing changed on
-//! failure. No panic crosses the boundary: the libraries are built with `panic = "abort"`,
-//! and every entry point also catches unwinding (where the build unwinds) and answers
-//! `MPM_STATUS_INTERNAL`.
+//! failure. No panic crosses the boundary: every entry point catches unwinding and answers
+//! `MPM_STATUS_INTERNAL` (a host that builds the crate with `panic = "abort"` gets an abort
+//! instead).
 //!
 //! Threads: the library keeps no global state but the instruction-set choice of
 //! `mpm_simd_use_*`. Separate worlds may be used from separate threads at once. On one world,
