@@ -125,6 +125,17 @@ pub fn sqrt(x: Real) -> Real {
     }
 }
 
+/// `f(i)` for each of `N` entries: a plain loop, as [`matrix`] (`array::from_fn` left a
+/// closure of vector arithmetic out of line, compiled without the instance's features).
+#[inline(always)]
+pub fn vector<T: Num, const N: usize>(mut f: impl FnMut(usize) -> T) -> [T; N] {
+    let mut v = [T::splat(0.0); N];
+    for (i, x) in v.iter_mut().enumerate() {
+        *x = f(i);
+    }
+    v
+}
+
 /// A `D x D` matrix of [`Num`]s, row-major.
 pub type MatOf<T, const D: usize> = [[T; D]; D];
 

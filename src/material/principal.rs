@@ -16,7 +16,7 @@
 
 use super::Deformation;
 use crate::math::{exp_m1, ln_1p_fast};
-use crate::num::{matrix, MatOf, Num};
+use crate::num::{matrix, vector, MatOf, Num};
 use crate::Real;
 
 /// Sweeps of cyclic Jacobi rotations in 3D: convergence is quadratic, and four sweeps
@@ -72,7 +72,7 @@ pub(crate) fn eigen_symmetric<T: Num, const D: usize>(a: &MatOf<T, D>) -> ([T; D
             }
         }
     }
-    (core::array::from_fn(|i| a[i][i]), v)
+    (vector(|i| a[i][i]), v)
 }
 
 /// The principal directions and log strains of a deformation: `n[a][i]` is component a of
@@ -124,7 +124,7 @@ impl<const D: usize, T: Num> Principal<D, T> {
     #[inline(always)]
     pub fn hencky(&self, mu: T, lambda: T) -> super::Stress<D, T> {
         let tr = self.eps[0] + self.eps[1] + self.eps[2];
-        let t: [T; 3] = core::array::from_fn(|i| self.eps[i] * mu * 2.0 + lambda * tr);
+        let t: [T; 3] = vector(|i| self.eps[i] * mu * 2.0 + lambda * tr);
         let m = matrix(|a, b| {
             let mut s = T::splat(0.0);
             for i in 0..D {
@@ -143,12 +143,22 @@ impl<const D: usize, T: Num> Principal<D, T> {
     /// stretch is multiplied by `exp(delta_i)`. A return takes the stress from these rather
     /// than decomposing the new deformation again.
     #[inline(always)]
+    ///
+    /// Only the first `n` deltas may be other than zero ([`plastic_axes`]): the others are
+    /// their own `exp - 1`, and the out-of-plane one of plane strain costs no exponential.
     pub fn change(
         &self,
         f: &Deformation<D, T>,
         delta: &[T; 3],
+        n: usize,
     ) -> (Deformation<D, T>, Principal<D, T>) {
-        let g: [T; 3] = core::array::from_fn(|i| delta[i].map(exp_m1));
+        let g: [T; 3] = vector(|i| {
+            if i < n {
+                delta[i].map(exp_m1)
+            } else {
+                delta[i]
+            }
+        });
         let mm1: MatOf<T, D> = matrix(|a, b| {
             let mut s = T::splat(0.0);
             for i in 0..D {
@@ -170,8 +180,8 @@ impl<const D: usize, T: Num> Principal<D, T> {
         };
         let changed = Principal {
             n: self.n,
-            eps: core::array::from_fn(|i| self.eps[i] + delta[i]),
-            s_m1: core::array::from_fn(|i| self.s_m1[i] + (self.s_m1[i] + 1.0) * g[i]),
+            eps: vector(|i| self.eps[i] + delta[i]),
+            s_m1: vector(|i| self.s_m1[i] + (self.s_m1[i] + 1.0) * g[i]),
         };
         (Deformation::with_plastic(h, hzz, f.plastic), changed)
     }
@@ -184,7 +194,7 @@ impl<const D: usize, T: Num> Principal<D, T> {
     #[inline(always)]
     pub fn corotated(&self, mu: T, lambda: T, jm1: T) -> super::Stress<D, T> {
         let vol = lambda * jm1 * (jm1 + 1.0);
-        let t: [T; 3] = core::array::from_fn(|i| self.s_m1[i] * (self.s_m1[i] + 1.0) * mu * 2.0);
+        let t: [T; 3] = vector(|i| self.s_m1[i] * (self.s_m1[i] + 1.0) * mu * 2.0);
         let m = matrix(|a, b| {
             let mut s = T::splat(0.0);
             for i in 0..D {
@@ -221,7 +231,7 @@ impl<const D: usize, T: Num> Principal<D, T> {
             trace += self.eps[i];
         }
         let mean = trace * (1.0 / n as Real);
-        let dev: [T; 3] = core::array::from_fn(|i| {
+        let dev: [T; 3] = vector(|i| {
             if i < n {
                 self.eps[i] - mean
             } else {
@@ -335,7 +345,7 @@ mod tests {
             assert!((got[i] - want[i]).abs() < 1e-5, "{got:?} {want:?}");
         }
         let delta = [0.01 as Real, -0.02, 0.03];
-        let g = p.change(&def, &delta).0;
+        let (g, changed) = p.change(&def, &delta, 3);
         for i in 0..3 {
             // Each direction of `p` is still principal with strain eps_i + delta_i.
             let mut bn = [0.0 as Real; 3];
@@ -353,6 +363,30 @@ mod tests {
             let want = libm::exp(2.0 * (p.eps[i] + delta[i]) as f64) as Real;
             for a in 0..3 {
                 assert!((bn[a] - want * p.n[a][i]).abs() < 1e-5, "{i} {bn:?}");
+            }
+            // The principal strains `change` gives (what a return takes its stress from) are
+            // those of its result: log strain and stretch less 1.
+            let stretch = libm::exp((p.eps[i] + delta[i]) as f64);
+            assert!((changed.eps[i] as f64 - (p.eps[i] + delta[i]) as f64).abs() < 1e-6);
+            assert!((changed.s_m1[i] as f64 - (stretch - 1.0)).abs() < 1e-5 * stretch);
+            assert_eq!(changed.n[i], p.n[i]);
+        }
+        // And the stress from them is the stress of the result decomposed anew.
+        let (mu, lambda) = (1.0e6 as Real, 2.0e6 as Real);
+        let (shared, anew) = (
+            changed.hencky(mu, lambda),
+            Principal::of(&g).hencky(mu, lambda),
+        );
+        // The fixed-corotated stress in principal form is the polar decomposition's (E36).
+        let corotated = changed.corotated(mu, lambda, g.jm1);
+        let polar = super::super::fixed_corotated::stress(&g, mu, lambda);
+        for a in 0..3 {
+            for b in 0..3 {
+                assert!((shared.m[a][b] - anew.m[a][b]).abs() < 1e-5 * mu, "{a}{b}");
+                assert!(
+                    (corotated.m[a][b] - polar.m[a][b]).abs() < 1e-5 * mu,
+                    "{a}{b}"
+                );
             }
         }
     }

@@ -10,7 +10,7 @@ use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::exp_m1;
-use crate::num::Num;
+use crate::num::{vector, Num};
 use crate::Real;
 
 /// Snow's parameters: the fixed-corotated Lamé constants before hardening (E36, E42) and the
@@ -114,7 +114,7 @@ impl Model for Snow {
         let pr = Principal::of(f);
         let (lo, hi) = (T::splat(p.log_compression), T::splat(p.log_stretch));
         let mut removed = T::splat(0.0);
-        let delta: [T; 3] = core::array::from_fn(|i| {
+        let delta: [T; 3] = vector(|i| {
             if i < n {
                 let e = pr.eps[i];
                 let clamped = T::select(e.gt(hi), hi, T::select(lo.gt(e), lo, e));
@@ -125,7 +125,7 @@ impl Model for Snow {
                 T::splat(0.0)
             }
         });
-        let (mut g, changed) = pr.change(f, &delta);
+        let (mut g, changed) = pr.change(f, &delta, n);
         // J_p' = J_p exp(-sum delta): J_p' - 1 = plastic + (1 + plastic) (exp(-sum delta) - 1)
         g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1);
         let k = hardening(p, g.plastic);

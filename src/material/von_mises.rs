@@ -15,7 +15,7 @@
 use super::principal::{abs, hencky_energy, plastic_axes, Principal, Split};
 use super::{Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
-use crate::num::Num;
+use crate::num::{vector, Num};
 use crate::Real;
 
 /// `sqrt(2/3)`.
@@ -94,7 +94,8 @@ impl Model for VonMises {
         hoop: bool,
     ) -> (Deformation<D, T>, Stress<D, T>) {
         let pr = Principal::of(f);
-        let Split { dev: e, norm, .. } = pr.split(plastic_axes(D, hoop));
+        let n = plastic_axes(D, hoop);
+        let Split { dev: e, norm, .. } = pr.split(n);
         let yield_radius = (f.plastic * p.hardening_modulus + p.yield_stress) * SQRT_2_3;
         let excess = norm * (2.0 * p.mu) - yield_radius;
         let zero = T::splat(0.0);
@@ -103,8 +104,8 @@ impl Model for VonMises {
         // e's direction; dgamma is 0 where the norm is (no excess), so the tiny real only keeps
         // 0 / 0 away.
         let along = dgamma / (norm + Real::MIN_POSITIVE);
-        let delta: [T; 3] = core::array::from_fn(|i| -(e[i] * along));
-        let (mut g, changed) = pr.change(f, &delta);
+        let delta: [T; 3] = vector(|i| -(e[i] * along));
+        let (mut g, changed) = pr.change(f, &delta, n);
         g.plastic = f.plastic + abs(dgamma) * SQRT_2_3;
         let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));
         (g, tau)
