@@ -77,18 +77,9 @@ impl Model for DruckerPrager {
         plastic >= 0.0
     }
 
-    #[inline(always)]
-    fn inelastic<const D: usize, T: Num>(
-        p: &DruckerPragerParams,
-        f: &Deformation<D, T>,
-        hoop: bool,
-    ) -> Deformation<D, T> {
-        Self::inelastic_kirchhoff(p, f, hoop).0
-    }
-
     /// The return, and the stress from its principal strains.
     #[inline(always)]
-    fn inelastic_kirchhoff<const D: usize, T: Num>(
+    fn inelastic<const D: usize, T: Num>(
         p: &DruckerPragerParams,
         f: &Deformation<D, T>,
         hoop: bool,

@@ -82,15 +82,16 @@ impl Model for Fluid {
     /// `F <- J^(1/n) I`, `J` kept.
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        _p: &Tait,
+        p: &Tait,
         f: &Deformation<D, T>,
         hoop: bool,
-    ) -> Deformation<D, T> {
+    ) -> (Deformation<D, T>, Stress<D, T>) {
         let n = if D == 3 || hoop { 3.0 } else { 2.0 };
         let e = (ln_j(f.jm1) * (1.0 / n)).map(exp_m1);
         let zero = T::splat(0.0);
         let h = matrix(|a, b| if a == b { e } else { zero });
         let hzz = if D == 2 && hoop { e } else { f.hzz };
-        Deformation::with_plastic(h, hzz, f.plastic)
+        let g = Deformation::with_plastic(h, hzz, f.plastic);
+        (g, Self::kirchhoff(p, &g))
     }
 }

@@ -212,33 +212,21 @@ pub(crate) trait Model {
     /// projection would change the volume.
     const ON_ELASTIC_PART: bool = true;
 
-    /// The deformation after this step's inelastic part: the trial state (`F_e` updated by
-    /// `dF`) in, the elastic state and history the stress is taken from out (a plastic
-    /// return mapping; a fluid's projection to `J^(1/3) I`). `hoop`: the out-of-plane
-    /// stretch of a 2D deformation is free (axisymmetric), not held at 1 (plane strain).
-    /// Written on [`Num`] without branches, as [`Model::kirchhoff`].
+    /// This step's inelastic part and the Kirchhoff stress of its result: the trial state
+    /// (`F_e` updated by `dF`) in, the elastic state and history the stress is taken from out
+    /// (a plastic return mapping; a fluid's projection to `J^(1/3) I`), with its stress. A
+    /// return that works in the principal strains of the trial `F_e` (the plastic models)
+    /// takes the stress from the same decomposition: one eigen decomposition a particle, not
+    /// two. `hoop`: the out-of-plane stretch of a 2D deformation is free (axisymmetric), not
+    /// held at 1 (plane strain). Written on [`Num`] without branches, as [`Model::kirchhoff`].
+    /// By default nothing is inelastic.
     #[inline(always)]
     fn inelastic<const D: usize, T: Num>(
-        _p: &Self::Params,
-        f: &Deformation<D, T>,
-        _hoop: bool,
-    ) -> Deformation<D, T> {
-        *f
-    }
-
-    /// [`Model::inelastic`] and the Kirchhoff stress of its result together. A return that
-    /// works in the principal strains of the trial `F_e` (the plastic models) overrides it to
-    /// take the stress from the same decomposition: one eigen decomposition a particle, not
-    /// two.
-    #[inline(always)]
-    fn inelastic_kirchhoff<const D: usize, T: Num>(
         p: &Self::Params,
         f: &Deformation<D, T>,
-        hoop: bool,
+        _hoop: bool,
     ) -> (Deformation<D, T>, Stress<D, T>) {
-        let g = Self::inelastic(p, f, hoop);
-        let tau = Self::kirchhoff(p, &g);
-        (g, tau)
+        (*f, Self::kirchhoff(p, f))
     }
 
     /// The Kirchhoff stress `tau` (not yet divided by `rho0`) for `jm1 = det F - 1 > -1`,
@@ -518,21 +506,21 @@ fn update<M: Model, const D: usize, T: Num>(
         // The return on the elastic part, whose stress it gives, scaled back (E47).
         Some(d) if M::ON_ELASTIC_PART => {
             let (e, scale) = elastic_part(f, d);
-            let (g, tau) = M::inelastic_kirchhoff(p, &e, hoop);
+            let (g, tau) = M::inelastic(p, &e, hoop);
             Updated {
                 f: with_eigenstrain(&g, d),
                 tau: per_rho0(tau, inv_rho0, Some(scale)),
             }
         }
         Some(_) => {
-            let g = M::inelastic(p, f, hoop);
+            let g = M::inelastic(p, f, hoop).0;
             Updated {
                 f: g,
                 tau: stress_of::<M, D, T>(p, inv_rho0, &g, d),
             }
         }
         None => {
-            let (g, tau) = M::inelastic_kirchhoff(p, f, hoop);
+            let (g, tau) = M::inelastic(p, f, hoop);
             Updated {
                 f: g,
                 tau: per_rho0(tau, inv_rho0, None),
@@ -860,12 +848,12 @@ mod tests {
             match d {
                 _ if !M::INELASTIC => (*f, M::kirchhoff(p, &elastic_part(f, d0).0)),
                 Some(d) if M::ON_ELASTIC_PART => {
-                    let (g, tau) = M::inelastic_kirchhoff(p, &elastic_part(f, d).0, hoop);
+                    let (g, tau) = M::inelastic(p, &elastic_part(f, d).0, hoop);
                     (with_eigenstrain(&g, d), tau)
                 }
-                None => M::inelastic_kirchhoff(p, f, hoop),
+                None => M::inelastic(p, f, hoop),
                 Some(_) => {
-                    let g = M::inelastic(p, f, hoop);
+                    let g = M::inelastic(p, f, hoop).0;
                     (g, M::kirchhoff(p, &elastic_part(&g, d0).0))
                 }
             }

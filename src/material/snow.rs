@@ -93,19 +93,10 @@ impl Model for Snow {
         r.wave_speed as f64 * libm::sqrt(k)
     }
 
-    #[inline(always)]
-    fn inelastic<const D: usize, T: Num>(
-        p: &SnowParams,
-        f: &Deformation<D, T>,
-        hoop: bool,
-    ) -> Deformation<D, T> {
-        Self::inelastic_kirchhoff(p, f, hoop).0
-    }
-
     /// The clamp, and the hardened fixed-corotated stress from its principal strains
     /// (`Principal::corotated`), not from a polar decomposition of the result.
     #[inline(always)]
-    fn inelastic_kirchhoff<const D: usize, T: Num>(
+    fn inelastic<const D: usize, T: Num>(
         p: &SnowParams,
         f: &Deformation<D, T>,
         hoop: bool,
@@ -189,7 +180,7 @@ mod tests {
                 let want = (1.0 + before) * (1.0 + old);
                 assert!((j - want).abs() < 1e-5 * want, "{j} {want}");
             };
-            let g = Snow::inelastic(&p, &f3, false);
+            let g = Snow::inelastic(&p, &f3, false).0;
             let bm1: Mat<3> = core::array::from_fn(|r| {
                 core::array::from_fn(|c| {
                     let mut v = g.h[r][c] + g.h[c][r];
@@ -209,7 +200,7 @@ mod tests {
                 }
             }
             for hoop in [true, false] {
-                let g = Snow::inelastic(&p, &f2, hoop);
+                let g = Snow::inelastic(&p, &f2, hoop).0;
                 let sv = [1.0 + g.h[0][0], 1.0 + g.h[1][1], 1.0 + g.hzz];
                 if !hoop {
                     assert_eq!(g.hzz, f2.hzz, "plane strain keeps F_zz");

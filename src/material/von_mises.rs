@@ -77,18 +77,9 @@ impl Model for VonMises {
         plastic >= 0.0
     }
 
-    #[inline(always)]
-    fn inelastic<const D: usize, T: Num>(
-        p: &VonMisesParams,
-        f: &Deformation<D, T>,
-        hoop: bool,
-    ) -> Deformation<D, T> {
-        Self::inelastic_kirchhoff(p, f, hoop).0
-    }
-
     /// The return, and the stress from its principal strains.
     #[inline(always)]
-    fn inelastic_kirchhoff<const D: usize, T: Num>(
+    fn inelastic<const D: usize, T: Num>(
         p: &VonMisesParams,
         f: &Deformation<D, T>,
         hoop: bool,
@@ -154,7 +145,7 @@ mod tests {
                     0.0,
                 );
                 let trial = Deformation::with_plastic(trial.h, 0.0, f.plastic);
-                f = VonMises::inelastic(&p, &trial, false);
+                f = VonMises::inelastic(&p, &trial, false).0;
                 let s = VonMises::kirchhoff(&p, &f);
                 let tau = [s.m[0][0] as f64, s.m[1][1] as f64, s.m[2][2] as f64];
                 for a in 0..3 {

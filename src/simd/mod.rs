@@ -2,9 +2,9 @@
 //!
 //! The kernel is built for the target's baseline (SSE2 on x86-64), so it runs on every CPU of
 //! the target. On x86-64, with the `wide-simd` feature (on by default), the particle passes are
-//! compiled once more from the same source for AVX2 (twice more, with AVX-512, when the
-//! `avx512` feature is on too) and one instance is chosen at run time, the widest the CPU and
-//! the operating system support:
+//! compiled twice more from the same source, for AVX2 and for AVX-512 (the latter for the
+//! forms where it measured faster, `avx512_form`), and one instance is chosen at run time,
+//! the widest the CPU and the operating system support:
 //! - AVX and AVX2: three-operand instructions, unaligned memory operands and blends, which
 //!   take about a fifth of the instructions out of the hot loops;
 //! - AVX-512 (F, VL, BW and DQ): 16 lanes per register (a 3D chunk's lane loops in one, a 2D
@@ -97,7 +97,7 @@ impl Simd {
     }
 
     /// The instance this choice runs a world of `def` in on this CPU: [`Simd::instance`], but
-    /// AVX2 in place of AVX-512 for a form that has no AVX-512 instance ([`avx512_form`]).
+    /// AVX2 in place of AVX-512 for a form that has no AVX-512 instance (`avx512_form`).
     pub fn instance_for(self, def: &crate::WorldDef) -> Instance {
         let d = if def.dimension == crate::Dimension::ThreeD {
             3
