@@ -137,12 +137,15 @@ macro_rules! with_instance {
     };
     ($simd:expr, form ($d:expr, $k:expr), $isa:ident => $body:expr) => {
         match $simd.instance() {
-            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+            // Not in the crate's own unit-test build, which steps no world: there every pass
+            // of the wide instances compiled again, 194 s of a 2-core build. The integration
+            // tests (tests/kernel) link the library as users do and test every instance.
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd", not(test)))]
             $crate::simd::Instance::Avx512 if const { $crate::simd::avx512_form($d, $k) } => {
                 type $isa = $crate::simd::Avx512;
                 $body
             }
-            #[cfg(all(target_arch = "x86_64", feature = "wide-simd"))]
+            #[cfg(all(target_arch = "x86_64", feature = "wide-simd", not(test)))]
             $crate::simd::Instance::Avx2 | $crate::simd::Instance::Avx512 => {
                 type $isa = $crate::simd::Avx2;
                 $body
