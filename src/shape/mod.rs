@@ -172,34 +172,34 @@ macro_rules! with_family {
         match $def.shape {
             $crate::ShapeFunction::Linear => {
                 const D: usize = $d;
-                const K: usize = 2;
+                const K: usize = $crate::ShapeFunction::Linear.stencil_width();
                 let $shape = $wrap($crate::shape::Linear, $def);
                 $body
             }
             $crate::ShapeFunction::Gimp => {
                 const D: usize = $d;
-                const K: usize = 3;
+                const K: usize = $crate::ShapeFunction::Gimp.stencil_width();
                 let family = $crate::shape::Gimp::new($def.particles_per_cell);
                 let $shape = $wrap($crate::shape::ThreeNode::Gimp(family), $def);
                 $body
             }
             $crate::ShapeFunction::QuadraticBspline => {
                 const D: usize = $d;
-                const K: usize = 3;
+                const K: usize = $crate::ShapeFunction::QuadraticBspline.stencil_width();
                 let family = $crate::shape::QuadraticBspline;
                 let $shape = $wrap($crate::shape::ThreeNode::QuadraticBspline(family), $def);
                 $body
             }
             $crate::ShapeFunction::CpGimp => {
                 const D: usize = $d;
-                const K: usize = 3;
+                const K: usize = $crate::ShapeFunction::CpGimp.stencil_width();
                 let family = $crate::shape::CpGimp::new($def.particles_per_cell);
                 let $shape = $wrap($crate::shape::ThreeNode::CpGimp(family), $def);
                 $body
             }
             $crate::ShapeFunction::CubicBspline => {
                 const D: usize = $d;
-                const K: usize = 4;
+                const K: usize = $crate::ShapeFunction::CubicBspline.stencil_width();
                 let $shape = $wrap($crate::shape::CubicBspline, $def);
                 $body
             }

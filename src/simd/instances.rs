@@ -132,6 +132,8 @@ pub(crate) use instances;
 /// instance where the form has no AVX-512 one ([`super::avx512_form`]): the branch is on a
 /// constant, so the AVX-512 instance of such a form is never compiled.
 macro_rules! with_instance {
+    // A body of no form (a scan of the particles): the AVX-512 instance wherever it is
+    // compiled, as it is for the 2D three-node form in either precision.
     ($simd:expr, $isa:ident => $body:expr) => {
         $crate::simd::with_instance!($simd, form (2, 3), $isa => $body)
     };
