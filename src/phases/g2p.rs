@@ -80,7 +80,7 @@ impl<const D: usize, const W: usize> Gathered<D, W> {
 /// The sum along x of a stencil row's nodes `n` weighted by `w` (weights, derivatives, moments
 /// or hoop factors), in node order.
 #[inline(always)]
-fn sum_x<I: Compare, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<I> {
+pub(crate) fn sum_x<I: Compare, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wide<I> {
     let mut s = w[0] * n[0];
     for i in 1..K {
         s += w[i] * n[i];
@@ -93,7 +93,7 @@ fn sum_x<I: Compare, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; ROW]) -> Wi
 /// # Safety
 /// As for [`rows::read`].
 #[inline(always)]
-unsafe fn read_row<I: Compare, const W: usize>(
+pub(crate) unsafe fn read_row<I: Compare, const W: usize>(
     col: &[Real],
     base: &[u32; W],
     at: usize,
@@ -334,6 +334,7 @@ pub(crate) fn particles<
     // The momentum approach: the mass-weighted grid velocity and acceleration each lane moves
     // with (E76).
     let (mut v_move, mut a_move) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
+    let mut weights = super::momentum::Weights::zero();
     // MUSL: what the re-map scatters (it reads no stress).
     let mut products = Products::zero();
     let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
@@ -363,21 +364,25 @@ pub(crate) fn particles<
         const NONE: u8 = Grad::None as u8;
         const UPDATED: u8 = Grad::Updated as u8;
         let (aff, out) = (&mut *affine, &mut gathered);
-        match (fused_stress, moments) {
-            (false, false) => I::gather::<D, K, S, W, true, NONE, false>(ctx, g, &st, aff, out),
-            (false, true) => I::gather::<D, K, S, W, true, NONE, true>(ctx, g, &st, aff, out),
-            (true, false) => I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, aff, out),
-            (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, aff, out),
-        }
-        if ctx.momentum {
+        if ctx.momentum && !S::AXISYMMETRIC {
             use super::momentum::{gather, Differentiate};
             let which = if fused_stress {
                 Differentiate::Updated
             } else {
                 Differentiate::Nothing
             };
-            let (l, moving) = (&mut gathered.l, Some((&mut *v_move, &mut *a_move)));
-            gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, moving);
+            weights.of::<I, K, S>(ctx, &st, &x, g.mass);
+            let moving = Some((&mut *v_move, &mut *a_move));
+            gather::<I, D, K, W>(ctx, &st, &weights, g, which, out, moving);
+        } else {
+            match (fused_stress, moments) {
+                (false, false) => I::gather::<D, K, S, W, true, NONE, false>(ctx, g, &st, aff, out),
+                (false, true) => I::gather::<D, K, S, W, true, NONE, true>(ctx, g, &st, aff, out),
+                (true, false) => {
+                    I::gather::<D, K, S, W, true, UPDATED, false>(ctx, g, &st, aff, out)
+                }
+                (true, true) => I::gather::<D, K, S, W, true, UPDATED, true>(ctx, g, &st, aff, out),
+            }
         }
         let (v_gp, a_gp, l) = (&gathered.v_gp, &gathered.a_gp, &gathered.l);
         // The grid velocity and acceleration the particles move with (E26, or E76 in the

@@ -39,19 +39,34 @@
 //! spinning with pure FLIP gained 77 to 110 times its energy in a quarter turn (uGIMP, linear).
 //! The approach is for dynamics.
 //!
-//! These passes are plain loops over each chunk's particles (their stencils are the chunk's,
-//! computed as in the other passes), one stencil row at a time: along a row
-//! (x) the sums weigh the nodes' values by the x factors, and the row's sums are then weighted
-//! by the row's factors (`S = wx r_0`, `G = (dwx r_0, wx r_1, ..)`, as in the SIMD passes), so
-//! a node costs a few products whatever the dimension. The force and the gradient take their
-//! weights from one function ([`Weighted`]), so both see the same numbers.
+//! The passes run on the lane type, as the other passes do: a chunk's stencils, then, for as
+//! many lanes at once as the instance's vectors hold, each stencil row's nodal masses (and
+//! velocities) read as one vector per node and summed along x with the x factors, the row's
+//! sums weighted by the row's factors (`S = wx r_0`, `G = (dwx r_0, wx r_1, ..)`, as in
+//! [`super::g2p::gather_chunk`]). What a particle reads the grid with ([`Weights`]: `m_gp`,
+//! `g_p`, `A_p^-T`) is formed once per chunk and pass; a particle that falls back takes
+//! `g_p = 0`, `A_p^-T = I` and no mass factor, so every lane runs the same arithmetic.
+//!
+//! The force (E75) is `f_i = -m_i sum_p (q_p G_ip - (q_p g_p) S_ip)` for the particles with
+//! the mass-weighted gradient, `q_p = m_p (tau_p / rho0) A_p^-1 / m_gp`: the sum is the
+//! scatter's force rows with `q_p` for the stress and `q_p g_p` for the particle force
+//! ([`crate::simd::row_sums`]), into the force columns, which then take the nodal mass as a
+//! factor; the particles that fall back (`-m_p (tau_p / rho0) G_ip`) and the particle forces
+//! are scattered after that.
 
+use super::g2p::{read_row, sum_x, Gathered, LaneMat};
+use super::p2g::{rows, Adds, Mode, Products};
 use super::{Ctx, Kernels};
 use crate::grid::GridCols;
-use crate::math::Mat;
+use crate::layout::sym_pairs;
+use crate::math::{det, inverse_transpose};
+use crate::num::{matrix, Num};
 use crate::particles::ParticleCols;
-use crate::shape::{first_node, Shape1D, Stencil, Stencils};
+use crate::shape::{first_node, row_start, Shape1D, Stencil, Stencils, ROW};
 use crate::simd::lanes::{live_lanes, load_into, Block, Lane, Lanes};
+use crate::simd::row_sums::scatter_chunk;
+use crate::simd::rows::{self, Compare};
+use crate::simd::wide::Wide;
 use crate::Real;
 
 /// The smallest `det A_p` with which a particle takes the mass-weighted gradient: below it
@@ -63,215 +78,167 @@ use crate::Real;
 /// back.
 pub(crate) const MIN_DET: Real = 0.1;
 
-/// One particle's stencil and what its gradient weights `B_ip` are made of, from the nodal
-/// masses it reads.
-pub(crate) struct Weighted<const D: usize, const K: usize> {
-    st: Stencil<D, K>,
-    /// `x_i - x_p` of the stencil's `k`-th node along each axis, m.
-    dx: [[Real; K]; D],
-    /// `m_gp = sum_i S_ip m_i`, kg.
-    m_gp: Real,
-    /// `g_p = sum_i G_ip m_i / m_gp`, 1/m.
-    g: [Real; D],
-    /// `A_p^-T`, when the particle takes the mass-weighted gradient.
-    inv_at: Option<Mat<D>>,
+/// What the particles of a chunk read the grid with (E74), lane-fastest: made by
+/// [`Weights::of`] from the chunk's stencils and the nodal masses.
+pub(crate) struct Weights<const D: usize, const W: usize> {
+    /// `x_i - x_p` of the stencil's `k`-th node along each axis, `dx[axis][k][lane]`, m.
+    dx: [[Lane<W>; ROW]; D],
+    /// `1 / m_gp`, `m_gp = sum_i S_ip m_i` (0 where the grid does not carry the particle).
+    inv_m: Lane<W>,
+    /// `g_p = sum_i G_ip m_i / m_gp` (0 where the particle falls back).
+    g: [Lane<W>; D],
+    /// `1 / m_gp` (1 where the particle falls back).
+    scale: Lane<W>,
+    /// `A_p^-T` (the identity where the particle falls back).
+    inv_at: LaneMat<D, W>,
+    /// 1 where the particle takes the mass-weighted gradient, else 0.
+    weighted: Lane<W>,
+    /// The lanes the grid carries (`m_gp > 0`, not for a NaN): a particle it does not carry
+    /// contributes nothing and reads nothing.
+    carried: Lanes<W>,
+    /// The carried lanes that take the mass-weighted gradient (`det A_p > MIN_DET`).
+    with_weights: Lanes<W>,
 }
 
-/// One stencil row: the flat index of its first node, its factors `r` (`S = wx_i r_0`, `G_0 =
-/// dwx_i r_0`, `G_b = wx_i r_b`) and `x_i - x_p` along the axes past the first (the same
-/// along the row; entry 0 unused).
-struct Row<const D: usize> {
-    start: usize,
-    r: [Real; D],
-    dx: [Real; D],
-}
-
-impl<const D: usize, const K: usize> Weighted<D, K> {
-    /// The stencil `st` of a particle at `x` (m), with the masses `mass` of the grid.
-    pub fn new<S: Shape1D<K>>(
-        ctx: &Ctx<'_, D>,
-        st: Stencil<D, K>,
-        x: [Real; D],
-        mass: &[Real],
-    ) -> Self {
-        let geom = &ctx.geom;
-        let dx: [[Real; K]; D] = core::array::from_fn(|a| {
-            let s = (x[a] - geom.origin[a]) * geom.inv_h;
-            let first = first_node::<K, S>(s, geom.nodes[a]) as Real;
-            core::array::from_fn(|k| (first + k as Real - s) * geom.h)
-        });
-        let mut w = Weighted {
-            st,
-            dx,
-            m_gp: 0.0,
-            g: [0.0; D],
-            inv_at: None,
-        };
-        // m_gp, sum G m, sum S m (x - x_p) and sum (x - x_p) (x) G m, row by row.
-        let (mut m_gp, mut sum_g, mut centroid) = (0.0, [0.0; D], [0.0; D]);
-        let mut moment = [[0.0; D]; D];
-        let (wx, dwx, dx0) = (w.st.w[0], w.st.dw[0], w.dx[0]);
-        w.for_each_row(ctx, |row| {
-            let (mut m0, mut m1, mut m2, mut m3) = (0.0, 0.0, 0.0, 0.0);
-            for i in 0..K {
-                let m = read(mass, row.start + i);
-                m0 += m * wx[i];
-                m1 += m * dwx[i];
-                m2 += m * wx[i] * dx0[i];
-                m3 += m * dwx[i] * dx0[i];
-            }
-            let r = row.r;
-            m_gp += m0 * r[0];
-            sum_g[0] += m1 * r[0];
-            centroid[0] += m2 * r[0];
-            moment[0][0] += m3 * r[0];
-            for b in 1..D {
-                sum_g[b] += m0 * r[b];
-                centroid[b] += m0 * r[0] * row.dx[b];
-                moment[0][b] += m2 * r[b];
-                moment[b][0] += row.dx[b] * m1 * r[0];
-                for c in 1..D {
-                    moment[b][c] += row.dx[b] * m0 * r[c];
-                }
-            }
-        });
-        w.m_gp = m_gp;
-        if !w.carried() {
-            return w;
-        }
-        let inv_m = 1.0 / m_gp;
-        w.g = core::array::from_fn(|a| sum_g[a] * inv_m);
-        let a: Mat<D> = core::array::from_fn(|r| {
-            core::array::from_fn(|c| (moment[r][c] - centroid[r] * w.g[c]) * inv_m)
-        });
-        // NaN-safe: a NaN determinant is not above the bound.
-        if crate::math::det(&a) > MIN_DET {
-            w.inv_at = Some(crate::math::inverse_transpose(&a));
-        }
-        w
-    }
-
-    /// Whether the grid has mass at the particle (`m_gp > 0`; not for a NaN). A particle the
-    /// grid does not carry contributes nothing and reads nothing.
-    pub fn carried(&self) -> bool {
-        self.m_gp > 0.0
-    }
-
-    /// Calls `f` for every row of the stencil.
-    fn for_each_row(&self, ctx: &Ctx<'_, D>, mut f: impl FnMut(Row<D>)) {
-        for k in 0..Stencil::<D, K>::layers() {
-            for j in 0..K {
-                let (start, r) = self.st.row(j, k, ctx.geom.stride);
-                let dx = core::array::from_fn(|a| match a {
-                    0 => 0.0,
-                    1 => self.dx[1][j],
-                    _ => self.dx[a][k],
-                });
-                f(Row { start, r, dx });
-            }
+impl<const D: usize, const W: usize> Weights<D, W> {
+    /// All zero; a pass makes one and fills it per chunk.
+    pub fn zero() -> Self {
+        Weights {
+            dx: [[[0.0; W]; ROW]; D],
+            inv_m: [0.0; W],
+            g: [[0.0; W]; D],
+            scale: [0.0; W],
+            inv_at: [[[0.0; W]; D]; D],
+            weighted: [0.0; W],
+            carried: Lanes::NONE,
+            with_weights: Lanes::NONE,
         }
     }
 
-    /// The gradient `sum_i u_i (x) B_ip` of the nodal field `u` (`u(a, node)` its component
-    /// `a`), and the mass-weighted mean `sum_i S_ip m_i u_i / m_gp`.
-    fn gradient(
-        &self,
+    /// The weights of the particles at `x` with the stencils `st`, from the grid's masses
+    /// `mass`: `m_gp`, `g_p` and `A_p = sum_i (x_i - x_p) (x) b_ip` from the sums `sum S m`,
+    /// `sum G m`, `sum S m (x - x_p)` and `sum (x - x_p) (x) G m`, row by row.
+    #[inline(always)]
+    pub fn of<I: Compare, const K: usize, S: Shape1D<K>>(
+        &mut self,
         ctx: &Ctx<'_, D>,
+        st: &Stencils<D, K, W>,
+        x: &[Lane<W>; D],
         mass: &[Real],
-        u: impl Fn(usize, usize) -> Real,
-    ) -> (Mat<D>, [Real; D]) {
-        let weighted = self.inv_at.is_some();
-        let (wx, dwx) = (self.st.w[0], self.st.dw[0]);
-        // sum w_i u_i (x) G_i and sum S_i w_i u_i, w_i = m_i (mass-weighted) or 1.
-        let (mut sg, mut ss, mut mean) = ([[0.0; D]; D], [0.0; D], [0.0; D]);
-        self.for_each_row(ctx, |row| {
-            for a in 0..D {
-                let (mut p0, mut p1, mut q0) = (0.0, 0.0, 0.0);
-                for i in 0..K {
-                    let node = row.start + i;
-                    let (m, value) = (read(mass, node), u(a, node));
-                    let w = if weighted { m * value } else { value };
-                    p0 += w * wx[i];
-                    p1 += w * dwx[i];
-                    q0 += m * value * wx[i];
-                }
-                sg[a][0] += p1 * row.r[0];
-                for b in 1..D {
-                    sg[a][b] += p0 * row.r[b];
-                }
-                ss[a] += p0 * row.r[0];
-                mean[a] += q0 * row.r[0];
-            }
-        });
-        let inv_m = 1.0 / self.m_gp;
-        let mean = mean.map(|v| v * inv_m);
-        let Some(inv_at) = &self.inv_at else {
-            return (sg, mean);
-        };
-        // L = (sum m u (x) G - (sum S m u) (x) g) / m_gp, times A^-1 on the right.
-        let raw: Mat<D> = core::array::from_fn(|a| {
-            core::array::from_fn(|b| (sg[a][b] - ss[a] * self.g[b]) * inv_m)
-        });
-        let l = core::array::from_fn(|a| {
-            core::array::from_fn(|c| (0..D).map(|b| raw[a][b] * inv_at[c][b]).sum())
-        });
-        (l, mean)
-    }
-
-    /// Adds the particle's forces to the nodes' force columns `acc`: the internal force `-B_ip
-    /// . tau` for `tau` its Kirchhoff stress times its mass over rho0 (E75), and `S_ip F_p`.
-    fn scatter_force(
-        &self,
-        ctx: &Ctx<'_, D>,
-        mass: &[Real],
-        tau: &Mat<D>,
-        force: [Real; D],
-        acc: &mut [&mut [Real]; D],
     ) {
-        // f_i = -m_i (Q (G_i - S_i g)) with Q = tau A^-1 / m_gp (mass-weighted), or -tau G_i:
-        // along a row, -(m_i or 1) (dwx_i c1 + wx_i c2) + wx_i r_0 F.
-        let q: Mat<D> = match &self.inv_at {
-            Some(inv_at) => core::array::from_fn(|a| {
-                core::array::from_fn(|c| {
-                    (0..D).map(|b| tau[a][b] * inv_at[b][c]).sum::<Real>() / self.m_gp
-                })
-            }),
-            None => *tau,
-        };
-        let qg: [Real; D] = match self.inv_at {
-            Some(_) => core::array::from_fn(|a| (0..D).map(|c| q[a][c] * self.g[c]).sum()),
-            None => [0.0; D],
-        };
-        let weighted = self.inv_at.is_some();
-        let (wx, dwx) = (self.st.w[0], self.st.dw[0]);
-        self.for_each_row(ctx, |row| {
-            let r = row.r;
-            let c1: [Real; D] = core::array::from_fn(|a| q[a][0] * r[0]);
-            let c2: [Real; D] = core::array::from_fn(|a| {
-                (1..D).map(|c| q[a][c] * r[c]).sum::<Real>() - r[0] * qg[a]
-            });
+        let geom = &ctx.geom;
+        for a in 0..D {
+            for ln in 0..W {
+                let s = (x[a][ln] - geom.origin[a]) * geom.inv_h;
+                let first = first_node::<K, S>(s, geom.nodes[a]) as Real;
+                for k in 0..K {
+                    self.dx[a][k][ln] = (first + k as Real - s) * geom.h;
+                }
+            }
+        }
+        let (stride, base) = (geom.stride, st.bases());
+        (self.carried, self.with_weights) = (Lanes::NONE, Lanes::NONE);
+        if !rows::fit(base, Stencil::<D, K>::last_row_offset(stride), mass.len()) {
+            return; // Unreachable (first_node clamps); keeps the unchecked row reads sound.
+        }
+        let shared = rows::blocks_share(base);
+        let (zero, one) = (Wide::<I>::splat(0.0), Wide::<I>::splat(1.0));
+        for at in (0..W).step_by(I::N) {
+            let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+            // The x factors: S, G_x, S (x - x_p), G_x (x - x_p) over r_0.
+            let (mut wx, mut dwx, mut wd, mut dwd) = ([zero; K], [zero; K], [zero; K], [zero; K]);
             for i in 0..K {
-                let node = row.start + i;
-                let m = if weighted { read(mass, node) } else { 1.0 };
-                for a in 0..D {
-                    if let Some(f) = acc[a].get_mut(node) {
-                        *f += wx[i] * r[0] * force[a] - m * (dwx[i] * c1[a] + wx[i] * c2[a]);
+                let d = ld(&self.dx[0][i]);
+                (wx[i], dwx[i]) = (ld(&st.weights(0)[i]), ld(&st.derivatives(0)[i]));
+                (wd[i], dwd[i]) = (wx[i] * d, dwx[i] * d);
+            }
+            let (mut m_gp, mut sum_g, mut centroid) = (zero, [zero; D], [zero; D]);
+            let mut moment = [[zero; D]; D];
+            for k in 0..Stencil::<D, K>::layers() {
+                for j in 0..K {
+                    let r = row_factors::<I, D, K, W>(st, j, k, at);
+                    // x_i - x_p along the axes past the first (the same along the row).
+                    let mut dx = [zero; D];
+                    dx[1] = ld(&self.dx[1][j]);
+                    if D == 3 {
+                        dx[D - 1] = ld(&self.dx[D - 1][k]);
+                    }
+                    let off = row_start(0, j, k, stride);
+                    // SAFETY: `fit` checked every lane's rows above.
+                    let n = unsafe { read_row::<I, W>(mass, base, at, off, shared) };
+                    let (m0, m1) = (sum_x::<I, K>(&wx, &n), sum_x::<I, K>(&dwx, &n));
+                    let (m2, m3) = (sum_x::<I, K>(&wd, &n), sum_x::<I, K>(&dwd, &n));
+                    m_gp += m0 * r[0];
+                    sum_g[0] += m1 * r[0];
+                    centroid[0] += m2 * r[0];
+                    moment[0][0] += m3 * r[0];
+                    for b in 1..D {
+                        sum_g[b] += m0 * r[b];
+                        centroid[b] += m0 * r[0] * dx[b];
+                        moment[0][b] += m2 * r[b];
+                        moment[b][0] += dx[b] * m1 * r[0];
+                        for c in 1..D {
+                            moment[b][c] += dx[b] * m0 * r[c];
+                        }
                     }
                 }
             }
-        });
+            // NaN-safe: a NaN mass is not above zero, a NaN determinant not above the bound.
+            let carried = m_gp.gt(zero);
+            let inv_m = carried.select(one / m_gp, zero);
+            let g: [Wide<I>; D] = core::array::from_fn(|a| sum_g[a] * inv_m);
+            let a_p = matrix::<Wide<I>, D>(|r, c| (moment[r][c] - centroid[r] * g[c]) * inv_m);
+            let weighted = det(&a_p).gt(Wide::splat(MIN_DET)) & carried;
+            let inv_at = inverse_transpose(&a_p);
+            inv_m.store(&mut self.inv_m, at);
+            weighted.select(inv_m, one).store(&mut self.scale, at);
+            weighted.select(one, zero).store(&mut self.weighted, at);
+            for r in 0..D {
+                weighted.select(g[r], zero).store(&mut self.g[r], at);
+                for c in 0..D {
+                    let id = if r == c { one } else { zero };
+                    weighted
+                        .select(inv_at[r][c], id)
+                        .store(&mut self.inv_at[r][c], at);
+                }
+            }
+            self.carried = self.carried | carried.lanes(at);
+            self.with_weights = self.with_weights | weighted.lanes(at);
+        }
     }
 }
 
-/// The value of a column at `node`; 0 past its end (never, for a stencil the grid holds).
-fn read(col: &[Real], node: usize) -> Real {
-    col.get(node).copied().unwrap_or(0.0)
+/// The factors `r` of stencil row `j` along y, layer `k` along z, for lanes `at..at + N`
+/// (`S = wx_i r_0`, `G_0 = dwx_i r_0`, `G_b = wx_i r_b`).
+#[inline(always)]
+fn row_factors<I: Compare, const D: usize, const K: usize, const W: usize>(
+    st: &Stencils<D, K, W>,
+    j: usize,
+    k: usize,
+    at: usize,
+) -> [Wide<I>; D] {
+    let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+    let (wy, dwy) = (ld(&st.weights(1)[j]), ld(&st.derivatives(1)[j]));
+    let mut r = [wy; D];
+    if D == 3 {
+        let wz = ld(&st.weights(D - 1)[k]);
+        r[0] = wy * wz;
+        r[1] = dwy * wz;
+        r[D - 1] = wy * ld(&st.derivatives(D - 1)[k]);
+    } else {
+        r[1] = dwy;
+    }
+    r
 }
 
 /// The internal force of every active particle with its gradient weights, `f_i -= m_p
 /// (tau_p / rho0) B_ip` (E75), and its particle force `S_ip F_p` when declared (E14), into
-/// the force columns; run after the nodal masses are complete (folded at the walls, see
-/// [`mirror_masses`]).
+/// the force columns (zero until now: the scatter before it adds no force); run after the
+/// nodal masses are complete (folded at the walls, see [`mirror_masses`]). Two scatters (see
+/// the module docs): the weighted particles' sums, which the nodal masses then multiply, and
+/// the particles that fall back with the particle forces. The force scatter of the momentum
+/// approach ([`super::p2g::scatter_rows`] in [`Mode::Force`] calls it).
+#[inline(always)]
 pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -279,32 +246,130 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
     count: usize,
     g: &mut GridCols<'_, D>,
 ) {
-    let pairs = crate::layout::sym_pairs(D);
     let mut st = Stencils::<D, K, W>::default();
+    let mut w = Weights::zero();
     let mut x = Block([[0.0; W]; D]);
-    for start in (0..count).step_by(W) {
-        let live: Lanes<W> = live_lanes(p, start, count);
-        for a in 0..D {
-            load_into(&mut x[a], p.x[a], start);
+    let (mut mass, mut tau) = (Block([0.0; W]), Block([[0.0; W]; 6]));
+    let mut products = Products::zero();
+    const FORCE: u8 = rows(Mode::Force, false);
+    let stride = ctx.geom.stride;
+    // The second scatter runs where a particle falls back or particle forces are declared.
+    let mut rest = ctx.forces;
+    for second in [false, true] {
+        if second && !rest {
+            return;
         }
-        I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, false);
-        for ln in live.iter() {
-            let i = start + ln;
-            let xp: [Real; D] = core::array::from_fn(|a| x[a][ln]);
-            let w = Weighted::<D, K>::new::<S>(ctx, st.of_lane(ln), xp, g.mass);
-            if !w.carried() {
+        // The first scatter adds, for the weighted particles, the rows' stress -q and
+        // particle force q g_p, q = m_p (tau_p / rho0) A_p^-1 / m_gp; the second the others'
+        // -m_p tau_p / rho0 and every particle's force.
+        let adds = Adds {
+            mode: Mode::Force,
+            forces: !second || ctx.forces,
+            apic: false,
+        };
+        for start in (0..count).step_by(W) {
+            let live = live_lanes(p, start, count);
+            load_chunk(p, start, &mut x, &mut mass, &mut tau);
+            I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, false);
+            w.of::<I, K, S>(ctx, &st, &x, g.mass);
+            let (carried, weighted) = (live & w.carried, live & w.with_weights);
+            rest |= !carried.minus(weighted).is_empty();
+            let lanes = match (second, ctx.forces) {
+                (false, _) => weighted,
+                (true, true) => carried,
+                (true, false) => carried.minus(weighted),
+            };
+            if lanes.is_empty() {
                 continue;
             }
-            let mut tau = [[0.0; D]; D];
-            for (k, &(r, c)) in pairs.iter().enumerate() {
-                let t = read(p.tau[k], i) * read(p.mass, i);
-                (tau[r][c], tau[c][r]) = (t, t);
+            if second && ctx.forces {
+                for a in 0..D {
+                    load_into(&mut products.f[a], p.force[a], start);
+                }
             }
-            let force: [Real; D] =
-                core::array::from_fn(|a| if ctx.forces { read(p.force[a], i) } else { 0.0 });
-            w.scatter_force(ctx, g.mass, &tau, force, &mut g.acc);
+            for at in (0..W).step_by(I::N) {
+                let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+                let t = stress::<I, D, W>(&mass, &tau, at);
+                let (scale, g_p) = (ld(&w.scale), w.g.each_ref().map(ld));
+                let inv_at = w.inv_at.each_ref().map(|r| r.each_ref().map(ld));
+                // q, the identity's t (times 1) where the particle falls back.
+                let q = matrix::<Wide<I>, D>(|a, c| {
+                    let mut s = t[a][0] * inv_at[0][c];
+                    for b in 1..D {
+                        s += t[a][b] * inv_at[b][c];
+                    }
+                    s * scale
+                });
+                let keep = ld(&w.weighted).gt(Wide::splat(0.0));
+                for a in 0..D {
+                    if !second {
+                        let mut qg = q[a][0] * g_p[0];
+                        for c in 1..D {
+                            qg += q[a][c] * g_p[c];
+                        }
+                        qg.store(&mut products.f[a], at);
+                    }
+                    for c in 0..D {
+                        // The second scatter adds no stress for a weighted particle.
+                        let mt = if second {
+                            keep.select(Wide::splat(0.0), -t[a][c])
+                        } else {
+                            -q[a][c]
+                        };
+                        mt.store(&mut products.mt[a][c], at);
+                    }
+                }
+            }
+            scatter_chunk::<I, D, K, S, W, FORCE>(&mut st, &products, lanes, stride, g, adds);
+        }
+        if !second {
+            // f_i = m_i sum_p (..): the nodal mass, a factor of every weighted particle's term.
+            let (m, acc) = (&*g.mass, &mut g.acc);
+            ctx.active.for_each_line(stride, m.len(), |r| {
+                for col in acc.iter_mut() {
+                    if let (Some(f), Some(m)) = (col.get_mut(r.clone()), m.get(r.clone())) {
+                        for (f, &m) in f.iter_mut().zip(m) {
+                            *f *= m;
+                        }
+                    }
+                }
+            });
         }
     }
+}
+
+/// A chunk's positions, masses and stresses `tau / rho0` (the components of [`sym_pairs`]).
+#[inline(always)]
+fn load_chunk<const D: usize, const W: usize>(
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    x: &mut [Lane<W>; D],
+    mass: &mut Lane<W>,
+    tau: &mut [Lane<W>; 6],
+) {
+    for a in 0..D {
+        load_into(&mut x[a], p.x[a], start);
+    }
+    load_into(mass, p.mass, start);
+    for (k, t) in tau.iter_mut().enumerate().take(sym_pairs(D).len()) {
+        load_into(t, p.tau[k], start);
+    }
+}
+
+/// `m_p tau_p / rho0` of lanes `at..at + N`, as a symmetric matrix.
+#[inline(always)]
+fn stress<I: Compare, const D: usize, const W: usize>(
+    mass: &Lane<W>,
+    tau: &[Lane<W>; 6],
+    at: usize,
+) -> [[Wide<I>; D]; D] {
+    let m = Wide::<I>::load(mass, at);
+    let mut t = [[Wide::splat(0.0); D]; D];
+    for (k, &(r, c)) in sym_pairs(D).iter().enumerate() {
+        let v = Wide::<I>::load(&tau[k], at) * m;
+        (t[r][c], t[c][r]) = (v, v);
+    }
+    t
 }
 
 /// Which nodal velocity [`gather`] differentiates.
@@ -318,62 +383,124 @@ pub(crate) enum Differentiate {
     Remap,
 }
 
-/// For the live lanes of a chunk at positions `x`: the velocity gradient `sum_i u_i (x) B_ip`
-/// of the velocity `which` says into `l` (nothing for [`Differentiate::Nothing`]) and, when
-/// `moving` is given, the mass-weighted grid velocity and acceleration the particle moves with,
-/// `sum_i S_ip m_i v_i / m_gp` and `sum_i S_ip m_i a_i / m_gp` (E76).
+/// The momentum approach's gather for a chunk with weights `w`, in place of
+/// [`super::g2p::gather_chunk`]: the velocity gradient `sum_i u_i (x) B_ip` of the velocity
+/// `which` says into `out.l` (nothing for [`Differentiate::Nothing`]) and, when `moving` is
+/// given, `v_gp = sum_i S_ip v_i` and `a_gp = sum_i S_ip a_i` into `out` (the velocity
+/// update's, E21) and the mass-weighted grid velocity and acceleration the particle moves
+/// with, `sum_i S_ip m_i v_i / m_gp` and `sum_i S_ip m_i a_i / m_gp` (E76; zero where the grid
+/// does not carry the particle), into `moving`.
+///
+/// The gradient is `(sum w_i u_i (x) G_ip - (sum S_ip w_i u_i) (x) g_p) A_p^-1 / m_gp`, with
+/// `w_i = m_i`; for a particle that falls back (or that the grid does not carry) `w_i = 1`,
+/// `g_p = 0`, `A_p = I` and no `1 / m_gp` ([`Weights`]), which leaves `sum_i u_i (x) G_ip`.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn gather<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+#[inline(always)]
+pub(crate) fn gather<I: Compare, const D: usize, const K: usize, const W: usize>(
     ctx: &Ctx<'_, D>,
     st: &Stencils<D, K, W>,
-    x: &[Lane<W>; D],
-    live: Lanes<W>,
+    w: &Weights<D, W>,
     g: &GridCols<'_, D>,
     which: Differentiate,
-    l: &mut [[Lane<W>; D]; D],
+    out: &mut Gathered<D, W>,
     mut moving: Option<(&mut [Lane<W>; D], &mut [Lane<W>; D])>,
 ) {
-    for ln in live.iter() {
-        let xp: [Real; D] = core::array::from_fn(|a| x[a][ln]);
-        let w = Weighted::<D, K>::new::<S>(ctx, st.of_lane(ln), xp, g.mass);
-        if !w.carried() {
-            continue;
+    let (stride, base) = (ctx.geom.stride, st.bases());
+    let gradient = which != Differentiate::Nothing;
+    let read_va = which == Differentiate::Updated || moving.is_some();
+    let remap_ok = which != Differentiate::Remap || g.remap.iter().all(|c| c.len() == g.len());
+    if !g.lengths_consistent()
+        || !remap_ok
+        || !rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len())
+    {
+        return; // Unreachable by construction; keeps the unchecked row reads sound.
+    }
+    let shared = rows::blocks_share(base);
+    // SAFETY (every unsafe block below): `fit` checked every lane's rows above, and every
+    // column read has g.len() entries.
+    let (zero, dt) = (Wide::<I>::splat(0.0), Wide::<I>::splat(ctx.dt));
+    for at in (0..W).step_by(I::N) {
+        let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+        let weighted = ld(&w.weighted).gt(zero);
+        let (mut wx, mut dwx) = ([zero; K], [zero; K]);
+        for i in 0..K {
+            (wx[i], dwx[i]) = (ld(&st.weights(0)[i]), ld(&st.derivatives(0)[i]));
         }
-        let field = |col: &[&[Real]; D]| {
-            let col = *col;
-            w.gradient(ctx, g.mass, move |a, node| read(col[a], node))
-        };
-        let (vel, acc) = (
-            g.vel.each_ref().map(|c| &**c),
-            g.acc.each_ref().map(|c| &**c),
-        );
-        // The velocity's and the acceleration's gradients and means, where read.
-        let updated = which == Differentiate::Updated;
-        let (lv, la) = if updated || moving.is_some() {
-            (field(&vel), field(&acc))
-        } else {
-            let none = ([[0.0; D]; D], [0.0; D]);
-            (none, none)
-        };
-        let grad = match which {
-            Differentiate::Remap => Some(field(&g.remap.each_ref().map(|c| &**c)).0),
-            // The gradient of v + a dt, the sum of theirs.
-            Differentiate::Updated => Some(core::array::from_fn(|a| {
-                core::array::from_fn(|b| lv.0[a][b] + la.0[a][b] * ctx.dt)
-            })),
-            Differentiate::Nothing => None,
-        };
-        if let Some(grad) = grad {
+        // sum w_i u_i (x) G_i, sum S_i w_i u_i, and the mass-weighted sums of v and a.
+        let (mut sg, mut ss) = ([[zero; D]; D], [zero; D]);
+        let (mut sv, mut sa) = ([zero; D], [zero; D]);
+        let (mut v_gp, mut a_gp) = ([zero; D], [zero; D]);
+        for k in 0..Stencil::<D, K>::layers() {
+            for j in 0..K {
+                let r = row_factors::<I, D, K, W>(st, j, k, at);
+                let off = row_start(0, j, k, stride);
+                let nm = unsafe { read_row::<I, W>(g.mass, base, at, off, shared) };
+                for a in 0..D {
+                    let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
+                    if read_va {
+                        unsafe {
+                            nv = read_row::<I, W>(g.vel[a], base, at, off, shared);
+                            na = read_row::<I, W>(g.acc[a], base, at, off, shared);
+                        }
+                    }
+                    match which {
+                        Differentiate::Remap => {
+                            nu = unsafe { read_row::<I, W>(g.remap[a], base, at, off, shared) };
+                        }
+                        Differentiate::Updated => {
+                            for i in 0..K {
+                                nu[i] = nv[i] + na[i] * dt;
+                            }
+                        }
+                        Differentiate::Nothing => {}
+                    }
+                    if moving.is_some() {
+                        let (mut mv, mut ma) = ([zero; ROW], [zero; ROW]);
+                        for i in 0..K {
+                            (mv[i], ma[i]) = (nm[i] * nv[i], nm[i] * na[i]);
+                        }
+                        sv[a] += r[0] * sum_x::<I, K>(&wx, &mv);
+                        sa[a] += r[0] * sum_x::<I, K>(&wx, &ma);
+                        v_gp[a] += r[0] * sum_x::<I, K>(&wx, &nv);
+                        a_gp[a] += r[0] * sum_x::<I, K>(&wx, &na);
+                    }
+                    if gradient {
+                        let mut wu = [zero; ROW];
+                        for i in 0..K {
+                            wu[i] = weighted.select(nm[i] * nu[i], nu[i]);
+                        }
+                        let (p0, p1) = (sum_x::<I, K>(&wx, &wu), sum_x::<I, K>(&dwx, &wu));
+                        sg[a][0] += p1 * r[0];
+                        for b in 1..D {
+                            sg[a][b] += p0 * r[b];
+                        }
+                        ss[a] += p0 * r[0];
+                    }
+                }
+            }
+        }
+        if gradient {
+            let (scale, g_p) = (ld(&w.scale), w.g.each_ref().map(ld));
+            let inv_at = w.inv_at.each_ref().map(|r| r.each_ref().map(ld));
             for a in 0..D {
+                let raw: [Wide<I>; D] =
+                    core::array::from_fn(|b| (sg[a][b] - ss[a] * g_p[b]) * scale);
                 for c in 0..D {
-                    l[a][c][ln] = grad[a][c];
+                    let mut v = raw[0] * inv_at[c][0];
+                    for b in 1..D {
+                        v += raw[b] * inv_at[c][b];
+                    }
+                    v.store(&mut out.l[a][c], at);
                 }
             }
         }
         if let Some((v, a_move)) = moving.as_mut() {
+            let inv_m = ld(&w.inv_m);
             for a in 0..D {
-                v[a][ln] = lv.1[a];
-                a_move[a][ln] = la.1[a];
+                (sv[a] * inv_m).store(&mut v[a], at);
+                (sa[a] * inv_m).store(&mut a_move[a], at);
+                v_gp[a].store(&mut out.v_gp[a], at);
+                a_gp[a].store(&mut out.a_gp[a], at);
             }
         }
     }

@@ -54,6 +54,11 @@ pub(crate) fn scatter_rows<
     if !g.lengths_consistent() {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
+    if Mode::of(MODE) == Mode::Force && ctx.momentum && !S::AXISYMMETRIC {
+        // The momentum approach's force (E75) is a scatter of its own (never axisymmetric: the
+        // definition refuses it, and those forms compile none of it).
+        return super::momentum::forces::<I, D, K, S, W>(shape, ctx, p, count, g);
+    }
     let mut st = Stencils::<D, K, W>::default();
     // The chunk's particle values as lane vectors (one copy per column, no per-particle
     // bounds checks), in buffers kept across chunks; what this mode does not read stays zero.

@@ -322,6 +322,7 @@ pub(crate) fn stress<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
     let mut unused_affine = [[[0.0; W]; D]; D];
     let mut x = Block([[0.0; W]; D]);
     let mut scratch = StressScratch::new();
+    let mut weights = super::momentum::Weights::zero();
     let from_start = ctx.order == UpdateOrder::Musl;
     for start in (0..count).step_by(W) {
         let live = live_lanes(p, start, count);
@@ -335,18 +336,15 @@ pub(crate) fn stress<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             );
         }
         super::stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, ctx.mls);
-        const REMAP: u8 = Grad::Remap as u8;
-        I::gather::<D, K, S, W, false, REMAP, false>(
-            ctx,
-            g,
-            &st,
-            &mut unused_affine,
-            &mut gathered,
-        );
-        if ctx.momentum {
+        if ctx.momentum && !S::AXISYMMETRIC {
             use super::momentum::{gather, Differentiate};
-            let (which, l) = (Differentiate::Remap, &mut gathered.l);
-            gather::<D, K, S, W>(ctx, &st, &x, live, g, which, l, None);
+            weights.of::<I, K, S>(ctx, &st, &x, g.mass);
+            let (which, out) = (Differentiate::Remap, &mut gathered);
+            gather::<I, D, K, W>(ctx, &st, &weights, g, which, out, None);
+        } else {
+            const REMAP: u8 = Grad::Remap as u8;
+            let (aff, out) = (&mut unused_affine, &mut gathered);
+            I::gather::<D, K, S, W, false, REMAP, false>(ctx, g, &st, aff, out);
         }
         let (ok, runaway) =
             update_stress::<I, D, K, S, W>(ctx, p, start, live, &gathered, &mut scratch);

@@ -359,9 +359,8 @@ impl Kernel for Substep<'_> {
             grid_update::constrained_velocity(ctx, g);
             I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
         }
-        if ctx.momentum {
-            crate::phases::momentum::forces::<I, D, K, S, W>(s, ctx, p, count, g);
-        } else if !with_force {
+        if !with_force {
+            // The momentum approach's force scatter is its own (E75, `phases::momentum`).
             passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
         }
         crate::phases::tractions::tractions(s, ctx, p, count, g);
