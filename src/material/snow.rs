@@ -10,7 +10,7 @@ use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::exp_m1;
-use crate::num::{vector, Num};
+use crate::num::Num;
 use crate::Real;
 
 /// Snow's parameters: the fixed-corotated Lamé constants before hardening (E36, E42) and the
@@ -105,17 +105,14 @@ impl Model for Snow {
         let pr = Principal::of(f);
         let (lo, hi) = (T::splat(p.log_compression), T::splat(p.log_stretch));
         let mut removed = T::splat(0.0);
-        let delta: [T; 3] = vector(|i| {
-            if i < n {
-                let e = pr.eps[i];
-                let clamped = T::select(e.gt(hi), hi, T::select(lo.gt(e), lo, e));
-                let d = clamped - e;
-                removed += d;
-                d
-            } else {
-                T::splat(0.0)
-            }
-        });
+        // A loop, not `vector` (whose closure this size was left out of line).
+        let mut delta = [T::splat(0.0); 3];
+        for i in 0..n {
+            let e = pr.eps[i];
+            let clamped = T::select(e.gt(hi), hi, T::select(lo.gt(e), lo, e));
+            delta[i] = clamped - e;
+            removed += delta[i];
+        }
         let (mut g, changed) = pr.change(f, &delta, n);
         // J_p' = J_p exp(-sum delta): J_p' - 1 = plastic + (1 + plastic) (exp(-sum delta) - 1)
         g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1);
