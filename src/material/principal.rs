@@ -15,7 +15,7 @@
 //! of the plastic models: their flow is in the plane).
 
 use super::Deformation;
-use crate::math::{exp_m1, ln_1p_fast};
+use crate::math::{exp_m1_fast, ln_1p_fast};
 use crate::num::{matrix, vector, MatOf, Num};
 use crate::Real;
 
@@ -155,7 +155,7 @@ impl<const D: usize, T: Num> Principal<D, T> {
         // A loop, not `vector` (whose closure this size was left out of line).
         let mut g = *delta;
         for (g, d) in g.iter_mut().zip(delta).take(n) {
-            *g = d.map(exp_m1);
+            *g = d.map(exp_m1_fast);
         }
         let mm1: MatOf<T, D> = matrix(|a, b| {
             let mut s = T::splat(0.0);

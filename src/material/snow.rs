@@ -9,7 +9,7 @@
 use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
-use crate::math::exp_m1;
+use crate::math::exp_m1_fast;
 use crate::num::Num;
 use crate::Real;
 
@@ -33,7 +33,7 @@ pub(crate) struct SnowParams {
 /// The hardening factor `exp(xi (1 - J_p)) = exp(-xi plastic)` of a particle.
 #[inline(always)]
 pub(crate) fn hardening<T: Num>(p: &SnowParams, plastic: T) -> T {
-    (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
+    (plastic * -p.hardening_coefficient).map(|x| exp_m1_fast(x) + 1.0)
 }
 
 /// Snow.
@@ -115,7 +115,7 @@ impl Model for Snow {
         }
         let (mut g, changed) = pr.change(f, &delta, n);
         // J_p' = J_p exp(-sum delta): J_p' - 1 = plastic + (1 + plastic) (exp(-sum delta) - 1)
-        g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1);
+        g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1_fast);
         let k = hardening(p, g.plastic);
         let tau = changed.corotated(k * p.mu, k * p.lambda, g.jm1);
         (g, tau)
