@@ -87,7 +87,8 @@ impl Model for Snow {
         r.hardening_coefficient > 0.0
     }
 
-    /// Hardened as the moduli: `c sqrt(exp(xi (1 - J_p)))`.
+    /// Hardened as the moduli: `c sqrt(exp(xi (1 - J_p)))`, falling as `J_p - 1` grows (`xi >
+    /// 0` where it hardens).
     fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
         let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
         r.wave_speed as f64 * libm::sqrt(k)
