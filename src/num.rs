@@ -126,7 +126,10 @@ pub fn sqrt(x: Real) -> Real {
 }
 
 /// `f(i)` for each of `N` entries: a plain loop, as [`matrix`] (`array::from_fn` left a
-/// closure of vector arithmetic out of line, compiled without the instance's features).
+/// closure of vector arithmetic out of line, compiled without the instance's features). `f`
+/// itself is a closure too, and LLVM may leave one out of line where it is larger than a few
+/// operations (a select per entry, a `map`): its vector operations are then calls, one per
+/// operator. A model writes those entries in a loop of its own.
 #[inline(always)]
 pub fn vector<T: Num, const N: usize>(mut f: impl FnMut(usize) -> T) -> [T; N] {
     let mut v = [T::splat(0.0); N];

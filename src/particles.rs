@@ -253,6 +253,42 @@ impl StepReport {
     }
 }
 
+/// The least plastic history of the active particles of material `m` (`status`'s length;
+/// `material` and `plastic` at least as long), `Real::INFINITY` where it has none: the
+/// material's fastest particle where its wave speed falls as the history grows
+/// ([`crate::material::Model::wave_speed`]). A NaN history is passed over, as `max` passes over
+/// a NaN speed. Lane-wise minima over chunks of 16 particles (loops the compiler vectorises),
+/// then the tail: the same minimum as a particle-by-particle scan. Run in the step's
+/// instruction set (`world::passes`).
+#[inline(always)]
+pub(crate) fn least_plastic(plastic: &[Real], material: &[u32], status: &[u32], m: u32) -> Real {
+    let n = status.len();
+    const L: usize = 16;
+    let mut lanes = [Real::INFINITY; L];
+    let full = n - n % L;
+    for from in (0..full).step_by(L) {
+        let p: &[Real; L] = plastic[from..from + L].try_into().unwrap_or(&[0.0; L]);
+        let id: &[u32; L] = material[from..from + L].try_into().unwrap_or(&[0; L]);
+        let st: &[u32; L] = status[from..from + L].try_into().unwrap_or(&[0; L]);
+        for l in 0..L {
+            lanes[l] = if st[l] == ACTIVE && id[l] == m && p[l] < lanes[l] {
+                p[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    let mut least = lanes
+        .iter()
+        .fold(Real::INFINITY, |a, &p| if p < a { p } else { a });
+    for i in full..n {
+        if status[i] == ACTIVE && material[i] == m && plastic[i] < least {
+            least = plastic[i];
+        }
+    }
+    least
+}
+
 /// The largest `|v|^2` of the active particles (`status`'s length; `v[a]` at least as long for
 /// `a < d`), in f64: a speed near f32's range (1e19 m/s and up) would overflow `v^2` in f32 and
 /// make the stable step 0, which no step could take, although the true step is representable.
@@ -290,4 +326,44 @@ pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
         }
     }
     v2_max
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`least_plastic`] finds what a particle-by-particle scan finds, over every length to 48
+    /// (full chunks and tails), with three materials, inactive particles and NaN histories.
+    #[test]
+    fn least_plastic_is_the_least_of_a_scan() {
+        let mut state = 5u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        let mut plastic = [0.0 as Real; 48];
+        let (mut material, mut status) = ([0u32; 48], [ACTIVE; 48]);
+        for i in 0..48 {
+            plastic[i] = match next() % 8 {
+                0 => Real::NAN,
+                k => (next() % 1000) as Real * 1.0e-3 - 0.5 + k as Real * 1.0e-4,
+            };
+            material[i] = next() % 3;
+            status[i] = if next() % 4 == 0 { FROZEN } else { ACTIVE };
+        }
+        for n in 0..=48 {
+            for m in 0..4 {
+                let mut want = Real::INFINITY;
+                for i in 0..n {
+                    if status[i] == ACTIVE && material[i] == m && plastic[i] < want {
+                        want = plastic[i];
+                    }
+                }
+                let got = least_plastic(&plastic, &material, &status[..n], m);
+                assert_eq!(got.to_bits(), want.to_bits(), "{n} {m}");
+            }
+        }
+    }
 }

@@ -18,7 +18,7 @@
 use super::principal::{hencky_energy, plastic_axes, Principal, Split};
 use super::{Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
-use crate::num::{vector, Num};
+use crate::num::Num;
 use crate::Real;
 
 /// Drucker-Prager's parameters: Hencky elasticity's Lamé constants (E37) and the yield
@@ -100,15 +100,13 @@ impl Model for DruckerPrager {
         let dgamma = norm + (tr - tr_apex) * (p.friction * bulk / (2.0 * p.mu));
         let flows = dgamma.gt(zero);
         let along = T::select(flows, dgamma, zero) / (norm + Real::MIN_POSITIVE);
-        let delta: [T; 3] = vector(|i| {
-            if i < n {
-                let cone = -(e[i] * along);
-                let apex = T::splat(tr_apex / nr) - pr.eps[i];
-                T::select(beyond, apex, cone)
-            } else {
-                zero
-            }
-        });
+        // A loop, not `vector` (whose closure this size was left out of line).
+        let mut delta = [zero; 3];
+        for i in 0..n {
+            let cone = -(e[i] * along);
+            let apex = T::splat(tr_apex / nr) - pr.eps[i];
+            delta[i] = T::select(beyond, apex, cone);
+        }
         let (mut g, changed) = pr.change(f, &delta, n);
         g.plastic = f.plastic + T::select(beyond, norm, T::select(flows, dgamma, zero));
         let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));

@@ -9,7 +9,7 @@
 
 use super::{Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
-use crate::math::{exp_m1, ln_1p, ln_1p_fast};
+use crate::math::{exp_m1, exp_m1_fast, ln_1p, ln_1p_fast};
 use crate::num::{matrix, Num};
 use crate::Real;
 
@@ -60,7 +60,7 @@ impl Model for Fluid {
     fn kirchhoff<const D: usize, T: Num>(p: &Tait, f: &Deformation<D, T>) -> Stress<D, T> {
         let g = p.pressure_exponent;
         let lnj = ln_j(f.jm1);
-        let t = (f.jm1 - (lnj * (1.0 - g)).map(exp_m1)) * (p.bulk_modulus / g);
+        let t = (f.jm1 - (lnj * (1.0 - g)).map(exp_m1_fast)) * (p.bulk_modulus / g);
         let zero = T::splat(0.0);
         Stress {
             m: matrix(|a, b| if a == b { t } else { zero }),
@@ -87,7 +87,7 @@ impl Model for Fluid {
         hoop: bool,
     ) -> (Deformation<D, T>, Stress<D, T>) {
         let n = if D == 3 || hoop { 3.0 } else { 2.0 };
-        let e = (ln_j(f.jm1) * (1.0 / n)).map(exp_m1);
+        let e = (ln_j(f.jm1) * (1.0 / n)).map(exp_m1_fast);
         let zero = T::splat(0.0);
         let h = matrix(|a, b| if a == b { e } else { zero });
         let hzz = if D == 2 && hoop { e } else { f.hzz };

@@ -270,7 +270,8 @@ pub(crate) trait Model {
 
     /// The dilatational wave speed of a particle of material `r` with plastic history
     /// `plastic`, m/s, in f64: what the stable step resolves (E86, E88). The material's own unless
-    /// the model [hardens](Model::hardens).
+    /// the model [hardens](Model::hardens); then it must not grow with the history: the stable
+    /// step takes a material's least history (of its active particles) for its fastest.
     fn wave_speed(r: &MaterialRecord, _plastic: Real) -> f64 {
         r.wave_speed as f64
     }

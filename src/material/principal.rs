@@ -15,7 +15,7 @@
 //! of the plastic models: their flow is in the plane).
 
 use super::Deformation;
-use crate::math::{exp_m1, ln_1p_fast};
+use crate::math::{exp_m1_fast, ln_1p_fast};
 use crate::num::{matrix, vector, MatOf, Num};
 use crate::Real;
 
@@ -152,13 +152,11 @@ impl<const D: usize, T: Num> Principal<D, T> {
         delta: &[T; 3],
         n: usize,
     ) -> (Deformation<D, T>, Principal<D, T>) {
-        let g: [T; 3] = vector(|i| {
-            if i < n {
-                delta[i].map(exp_m1)
-            } else {
-                delta[i]
-            }
-        });
+        // A loop, not `vector` (whose closure this size was left out of line).
+        let mut g = *delta;
+        for (g, d) in g.iter_mut().zip(delta).take(n) {
+            *g = d.map(exp_m1_fast);
+        }
         let mm1: MatOf<T, D> = matrix(|a, b| {
             let mut s = T::splat(0.0);
             for i in 0..D {

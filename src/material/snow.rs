@@ -9,8 +9,8 @@
 use super::principal::{plastic_axes, Principal};
 use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
-use crate::math::exp_m1;
-use crate::num::{vector, Num};
+use crate::math::exp_m1_fast;
+use crate::num::Num;
 use crate::Real;
 
 /// Snow's parameters: the fixed-corotated Lamé constants before hardening (E36, E42) and the
@@ -33,7 +33,7 @@ pub(crate) struct SnowParams {
 /// The hardening factor `exp(xi (1 - J_p)) = exp(-xi plastic)` of a particle.
 #[inline(always)]
 pub(crate) fn hardening<T: Num>(p: &SnowParams, plastic: T) -> T {
-    (plastic * -p.hardening_coefficient).map(|x| exp_m1(x) + 1.0)
+    (plastic * -p.hardening_coefficient).map(|x| exp_m1_fast(x) + 1.0)
 }
 
 /// Snow.
@@ -87,7 +87,8 @@ impl Model for Snow {
         r.hardening_coefficient > 0.0
     }
 
-    /// Hardened as the moduli: `c sqrt(exp(xi (1 - J_p)))`.
+    /// Hardened as the moduli: `c sqrt(exp(xi (1 - J_p)))`, falling as `J_p - 1` grows (`xi >
+    /// 0` where it hardens).
     fn wave_speed(r: &MaterialRecord, plastic: Real) -> f64 {
         let k = libm::exp(-(r.hardening_coefficient as f64) * plastic as f64);
         r.wave_speed as f64 * libm::sqrt(k)
@@ -105,20 +106,17 @@ impl Model for Snow {
         let pr = Principal::of(f);
         let (lo, hi) = (T::splat(p.log_compression), T::splat(p.log_stretch));
         let mut removed = T::splat(0.0);
-        let delta: [T; 3] = vector(|i| {
-            if i < n {
-                let e = pr.eps[i];
-                let clamped = T::select(e.gt(hi), hi, T::select(lo.gt(e), lo, e));
-                let d = clamped - e;
-                removed += d;
-                d
-            } else {
-                T::splat(0.0)
-            }
-        });
+        // A loop, not `vector` (whose closure this size was left out of line).
+        let mut delta = [T::splat(0.0); 3];
+        for i in 0..n {
+            let e = pr.eps[i];
+            let clamped = T::select(e.gt(hi), hi, T::select(lo.gt(e), lo, e));
+            delta[i] = clamped - e;
+            removed += delta[i];
+        }
         let (mut g, changed) = pr.change(f, &delta, n);
         // J_p' = J_p exp(-sum delta): J_p' - 1 = plastic + (1 + plastic) (exp(-sum delta) - 1)
-        g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1);
+        g.plastic = f.plastic + (f.plastic + 1.0) * (-removed).map(exp_m1_fast);
         let k = hardening(p, g.plastic);
         let tau = changed.corotated(k * p.mu, k * p.lambda, g.jm1);
         (g, tau)

@@ -79,6 +79,10 @@ crate::simd::instances! {
     /// [`crate::world::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
         => crate::particles::fastest_squared;
+
+    /// [`crate::particles::least_plastic`].
+    fn least_plastic [] [] [] (plastic: &[Real], material: &[u32], status: &[u32], m: u32) -> Real
+        => crate::particles::least_plastic;
 }
 
 /// Scatters the active particles `0..count` to the grid, accumulating what `adds` says, in
@@ -145,6 +149,18 @@ pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<
     count: usize,
 ) -> NodeBox<D> {
     with_instance!(simd, form (D, K), I => I::node_box::<D, K, S>(geom, x, status, count))
+}
+
+/// The least plastic history of the active particles of material `m`
+/// ([`crate::particles::least_plastic`]), scanned in the instruction set `simd`.
+pub(crate) fn least_plastic(
+    simd: Simd,
+    plastic: &[Real],
+    material: &[u32],
+    status: &[u32],
+    m: u32,
+) -> Real {
+    with_instance!(simd, I => I::least_plastic(plastic, material, status, m))
 }
 
 /// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),

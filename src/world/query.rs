@@ -288,16 +288,23 @@ impl<'a> WorldRef<'a> {
             .iter()
             .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
         // A model that hardens (snow) stiffens with its plastic history: the most hardened
-        // active particle may be the fastest.
-        if layout.plastic.count > 0 && materials.iter().any(hardens) {
+        // active particle may be the fastest. Its wave speed falls as the history grows
+        // (`Model::wave_speed`), so a material's fastest particle is the one with the least
+        // history: one vectorised scan per material that hardens, one wave speed each.
+        if layout.plastic.count > 0 {
             let plastic = self.real_col(&layout, layout.plastic.first, n);
             let material = self.u32_col(&layout, col::MATERIAL, n);
-            for i in 0..n {
-                let Some(r) = materials.get(material[i] as usize) else {
-                    continue;
-                };
-                if status[i] == ACTIVE && hardens(r) {
-                    c_max = c_max.max(wave_speed(r, plastic[i]) as Real);
+            for (m, r) in materials.iter().enumerate() {
+                if hardens(r) {
+                    let least = super::passes::least_plastic(
+                        simd,
+                        plastic,
+                        material,
+                        &status[..n],
+                        m as u32,
+                    );
+                    // None active: an infinite history, a wave speed of 0.
+                    c_max = c_max.max(wave_speed(r, least) as Real);
                 }
             }
         }
