@@ -308,7 +308,7 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
 /// USL : scatter(m, p, f) -> v -> tractions -> a -> particles(x, v, stress)
 /// MUSL: scatter(m, p, f) -> v -> tractions -> a -> particles(x, v; remap p) -> v' -> stress
 /// USF : scatter(m, p) -> v -> v with walls -> stress -> scatter(f) -> tractions -> a -> particles
-/// momentum approach: m and p first, masses mirrored at the walls, its own force pass
+/// momentum approach: m and p first, masses mirrored at the walls, then its own scatter(f)
 /// ```
 ///
 /// The update order, the transfer and the declared effects are values of the context
