@@ -88,6 +88,39 @@ pub(crate) fn sum_x<I: Compare, const K: usize>(w: &[Wide<I>; K], n: &[Wide<I>; 
     s
 }
 
+/// The factors `r` of stencil row `j` along y, layer `k` along z, for lanes `at..at + N`:
+/// `r_0 = wy_j wz_k` and, for `b >= 1`, the same with axis b's factor replaced by its
+/// derivative (`G_0 = dwx_i r_0`, `G_b = wx_i r_b`) or, with `moments`, by its first moment
+/// (APIC's `S_ip (x_i - x_p)` along b, `ex_i r_0` and `wx_i r_b`).
+#[inline(always)]
+pub(crate) fn row_factors<I: Compare, const D: usize, const K: usize, const W: usize>(
+    st: &Stencils<D, K, W>,
+    j: usize,
+    k: usize,
+    at: usize,
+    moments: bool,
+) -> [Wide<I>; D] {
+    let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
+    let other = |a: usize| {
+        if moments {
+            st.moments(a)
+        } else {
+            st.derivatives(a)
+        }
+    };
+    let wy = ld(&st.weights(1)[j]);
+    let mut r = [wy; D];
+    if D == 3 {
+        let wz = ld(&st.weights(D - 1)[k]);
+        r[0] = wy * wz;
+        r[1] = ld(&other(1)[j]) * wz;
+        r[D - 1] = wy * ld(&other(D - 1)[k]);
+    } else {
+        r[1] = ld(&other(1)[j]);
+    }
+    r
+}
+
 /// [`rows::read`] as [`Wide`]s.
 ///
 /// # Safety
@@ -173,28 +206,12 @@ pub(crate) fn gather_chunk<
                 let off = crate::shape::row_start(0, j, k, stride);
                 // The row's factors: r[0] = wy_j wz_k (S and G_x), r[b] the same with axis
                 // b's factor differentiated (G_b), re[b] with the moment on axis b (APIC).
-                let (mut r, mut re) = ([zero; D], [zero; D]);
-                let (wy, dwy) = (
-                    Wide::load(&st.weights(1)[j], at),
-                    Wide::load(&st.derivatives(1)[j], at),
-                );
-                let ey = if moments {
-                    Wide::load(&st.moments(1)[j], at)
+                let r = row_factors::<I, D, K, W>(st, j, k, at, false);
+                let re = if moments {
+                    row_factors::<I, D, K, W>(st, j, k, at, true)
                 } else {
-                    zero
+                    [zero; D]
                 };
-                if D == 3 {
-                    let wz = Wide::load(&st.weights(D - 1)[k], at);
-                    r[0] = wy * wz;
-                    r[1] = dwy * wz;
-                    r[D - 1] = wy * Wide::load(&st.derivatives(D - 1)[k], at);
-                    if moments {
-                        re[1] = ey * wz;
-                        re[D - 1] = wy * Wide::load(&st.moments(D - 1)[k], at);
-                    }
-                } else {
-                    (r[0], r[1], re[1]) = (wy, dwy, ey);
-                }
                 for a in 0..D {
                     let (mut nv, mut na, mut nu) = ([zero; ROW], [zero; ROW], [zero; ROW]);
                     if vel || updated {

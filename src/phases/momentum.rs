@@ -54,7 +54,7 @@
 //! factor; the particles that fall back (`-m_p (tau_p / rho0) G_ip`) and the particle forces
 //! are scattered after that.
 
-use super::g2p::{read_row, sum_x, Gathered, LaneMat};
+use super::g2p::{read_row, row_factors, sum_x, Gathered, LaneMat};
 use super::p2g::{rows, Adds, Mode, Products};
 use super::{Ctx, Kernels};
 use crate::grid::GridCols;
@@ -156,7 +156,7 @@ impl<const D: usize, const W: usize> Weights<D, W> {
             let mut moment = [[zero; D]; D];
             for k in 0..Stencil::<D, K>::layers() {
                 for j in 0..K {
-                    let r = row_factors::<I, D, K, W>(st, j, k, at);
+                    let r = row_factors::<I, D, K, W>(st, j, k, at, false);
                     // x_i - x_p along the axes past the first (the same along the row).
                     let mut dx = [zero; D];
                     dx[1] = ld(&self.dx[1][j]);
@@ -206,29 +206,6 @@ impl<const D: usize, const W: usize> Weights<D, W> {
             self.with_weights = self.with_weights | weighted.lanes(at);
         }
     }
-}
-
-/// The factors `r` of stencil row `j` along y, layer `k` along z, for lanes `at..at + N`
-/// (`S = wx_i r_0`, `G_0 = dwx_i r_0`, `G_b = wx_i r_b`).
-#[inline(always)]
-fn row_factors<I: Compare, const D: usize, const K: usize, const W: usize>(
-    st: &Stencils<D, K, W>,
-    j: usize,
-    k: usize,
-    at: usize,
-) -> [Wide<I>; D] {
-    let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
-    let (wy, dwy) = (ld(&st.weights(1)[j]), ld(&st.derivatives(1)[j]));
-    let mut r = [wy; D];
-    if D == 3 {
-        let wz = ld(&st.weights(D - 1)[k]);
-        r[0] = wy * wz;
-        r[1] = dwy * wz;
-        r[D - 1] = wy * ld(&st.derivatives(D - 1)[k]);
-    } else {
-        r[1] = dwy;
-    }
-    r
 }
 
 /// The internal force of every active particle with its gradient weights, `f_i -= m_p
@@ -290,9 +267,19 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             for at in (0..W).step_by(I::N) {
                 let ld = |c: &Lane<W>| Wide::<I>::load(c, at);
                 let t = stress::<I, D, W>(&mass, &tau, at);
+                if second {
+                    // No stress for a weighted particle: the first scatter added its own.
+                    let keep = ld(&w.weighted).gt(Wide::splat(0.0));
+                    for a in 0..D {
+                        for c in 0..D {
+                            let mt = keep.select(Wide::splat(0.0), -t[a][c]);
+                            mt.store(&mut products.mt[a][c], at);
+                        }
+                    }
+                    continue;
+                }
                 let (scale, g_p) = (ld(&w.scale), w.g.each_ref().map(ld));
                 let inv_at = w.inv_at.each_ref().map(|r| r.each_ref().map(ld));
-                // q, the identity's t (times 1) where the particle falls back.
                 let q = matrix::<Wide<I>, D>(|a, c| {
                     let mut s = t[a][0] * inv_at[0][c];
                     for b in 1..D {
@@ -300,23 +287,14 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
                     }
                     s * scale
                 });
-                let keep = ld(&w.weighted).gt(Wide::splat(0.0));
                 for a in 0..D {
-                    if !second {
-                        let mut qg = q[a][0] * g_p[0];
-                        for c in 1..D {
-                            qg += q[a][c] * g_p[c];
-                        }
-                        qg.store(&mut products.f[a], at);
+                    let mut qg = q[a][0] * g_p[0];
+                    for c in 1..D {
+                        qg += q[a][c] * g_p[c];
                     }
+                    qg.store(&mut products.f[a], at);
                     for c in 0..D {
-                        // The second scatter adds no stress for a weighted particle.
-                        let mt = if second {
-                            keep.select(Wide::splat(0.0), -t[a][c])
-                        } else {
-                            -q[a][c]
-                        };
-                        mt.store(&mut products.mt[a][c], at);
+                        (-q[a][c]).store(&mut products.mt[a][c], at);
                     }
                 }
             }
@@ -432,7 +410,7 @@ pub(crate) fn gather<I: Compare, const D: usize, const K: usize, const W: usize>
         let (mut v_gp, mut a_gp) = ([zero; D], [zero; D]);
         for k in 0..Stencil::<D, K>::layers() {
             for j in 0..K {
-                let r = row_factors::<I, D, K, W>(st, j, k, at);
+                let r = row_factors::<I, D, K, W>(st, j, k, at, false);
                 let off = row_start(0, j, k, stride);
                 let nm = unsafe { read_row::<I, W>(g.mass, base, at, off, shared) };
                 for a in 0..D {
