@@ -666,21 +666,6 @@ impl<const D: usize, const K: usize, const W: usize> Stencils<D, K, W> {
         &self.inv_d[axis]
     }
 
-    /// Lane `ln`'s stencil as a [`Stencil`] of its own: its first node, weights and
-    /// derivatives (the first moments, `D_p^-1` and hoop factors left zero).
-    #[inline(always)]
-    pub fn of_lane(&self, ln: usize) -> Stencil<D, K> {
-        let row = |c: &[[Real; W]; ROW]| Row4::new(c[0][ln], c[1][ln], c[2][ln], c[3][ln]);
-        Stencil {
-            base: self.base[ln] as usize,
-            w: core::array::from_fn(|a| row(&self.w[a])),
-            dw: core::array::from_fn(|a| row(&self.dw[a])),
-            e: [Row4::ZERO; D],
-            inv_d: [0.0; D],
-            t: Row4::ZERO,
-        }
-    }
-
     /// The stencil of lane `ln`.
     #[inline(always)]
     pub fn lane(&self, ln: usize) -> LaneStencil<'_, D, K, W> {
