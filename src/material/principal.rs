@@ -142,10 +142,10 @@ impl<const D: usize, T: Num> Principal<D, T> {
     /// (`b' = M b M^T`, M sharing b's axes), each log strain moves by its `delta` and each
     /// stretch is multiplied by `exp(delta_i)`. A return takes the stress from these rather
     /// than decomposing the new deformation again.
-    #[inline(always)]
     ///
     /// Only the first `n` deltas may be other than zero ([`plastic_axes`]): the others are
     /// their own `exp - 1`, and the out-of-plane one of plane strain costs no exponential.
+    #[inline(always)]
     pub fn change(
         &self,
         f: &Deformation<D, T>,
@@ -183,9 +183,7 @@ impl<const D: usize, T: Num> Principal<D, T> {
         };
         (Deformation::with_plastic(h, hzz, f.plastic), changed)
     }
-}
 
-impl<const D: usize, T: Num> Principal<D, T> {
     /// The fixed-corotated Kirchhoff stress (E36) in the principal axes of `V` (`F = V R`,
     /// stretches `s_i = exp(eps_i)`): `(F - R) F^T = (V - I) V`, so `tau = sum_i 2 mu (s_i -
     /// 1) s_i n_i n_i^T + lambda (J - 1) J I`, with `jm1 = J - 1` of the deformation.
