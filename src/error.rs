@@ -88,8 +88,9 @@ pub enum Error {
     /// a material or traction record out of range.
     InvalidState = 29,
     /// A limit of the definition out of range: [`max_substeps`](crate::WorldDef::max_substeps)
-    /// outside `1..=MAX_SUBSTEPS`, or [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
-    /// not > 1.
+    /// outside `1..=MAX_SUBSTEPS`, [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
+    /// not > 1, or [`workers`](crate::WorldDef::workers) outside `1..=MAX_WORKERS` or fewer
+    /// than the task system a step is given has ([`crate::World::step_with_tasks`]).
     InvalidLimit = 30,
     /// A displacement gradient ([`crate::World::set_displacement_gradient`]) not finite,
     /// inverted (`det F <= 0`), with `det F` outside the definition's
@@ -165,7 +166,7 @@ impl Error {
                 c"world state invalid: a value not finite or out of range, or an unknown status or material"
             }
             Error::InvalidLimit => {
-                c"max_substeps must be in 1..=2^20 and max_volume_ratio > 1"
+                c"max_substeps must be in 1..=2^20, max_volume_ratio > 1 and workers in 1..=256 (no fewer than the task system's)"
             }
             Error::InvalidDeformation => {
                 c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"

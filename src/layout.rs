@@ -30,7 +30,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 11;
+const VERSION: u64 = 12;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,6 +95,8 @@ pub(crate) struct Header {
     // The definition's limits (`WorldDef::max_substeps`, `max_volume_ratio`).
     pub max_substeps: u64,
     pub max_volume_ratio: f64,
+    /// `WorldDef::workers`.
+    pub workers: u64,
     // Nodal damping (`Damping::grid_on_force`, `Damping::zones`).
     pub damping_on_force: u64,
     pub damping_zone_count: u64,
@@ -250,7 +252,7 @@ unsafe impl Pod for Header {}
 const _: () = assert!(
     size_of::<Header>()
         == 8 * (37
-            + 13
+            + 14
             + (4 + TRACTION_SCHEDULES) * (1 + 2 * SCHEDULE_POINTS)
             + 2 * 14
             + 2
@@ -398,6 +400,10 @@ pub(crate) struct Layout {
     /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
     /// (USF and MUSL).
     pub grid_columns: usize,
+    /// The parallel step's scratch after the grid: one [`Partial`] per item of a pass,
+    /// [`SLOTS_PER_WORKER`] per worker of [`WorldDef::workers`] (none for one worker).
+    pub scratch_offset: usize,
+    pub scratch_slots: usize,
     pub total: usize,
 }
 
@@ -498,7 +504,13 @@ impl Layout {
         );
         let grid_offset =
             particle_offset + particle_real_columns * real_column_bytes + 2 * u32_column_bytes;
-        let total = grid_offset + grid_columns * node_column_bytes;
+        let scratch_offset = grid_offset + grid_columns * node_column_bytes;
+        let scratch_slots = if def.workers > 1 {
+            SLOTS_PER_WORKER * def.workers as usize
+        } else {
+            0
+        };
+        let total = scratch_offset + scratch_slots * size_of::<Partial>();
         Layout {
             d,
             padded_capacity: cap,
@@ -522,10 +534,39 @@ impl Layout {
             grid_offset,
             node_column_bytes,
             grid_columns,
+            scratch_offset,
+            scratch_slots,
             total,
         }
     }
 }
+
+/// The parallel step's items per worker ([`Layout::scratch_slots`]): the particle passes cut
+/// their chunks into this many ranges per worker (so that a slow range does not hold the
+/// others up), the scatter its grid into this many slabs per worker (two colours, half of
+/// them at a time).
+pub(crate) const SLOTS_PER_WORKER: usize = 4;
+
+/// What one item of a parallel pass leaves for the step to merge, in item order: its part of
+/// the [`crate::StepReport`] (the frozen ids local to the item's first particle). Plain data
+/// in the world's buffer ([`Layout::scratch_slots`] of them).
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C)]
+pub(crate) struct Partial {
+    pub stopped: u32,
+    pub escaped: u32,
+    pub frozen: u32,
+    pub runaway: u32,
+    /// How many of `first_frozen` hold ids.
+    pub first_count: u32,
+    pub first_frozen: [u32; 8],
+    pub _pad: [u32; 3],
+}
+
+// SAFETY: repr(C), u32 fields only (no padding: 16 of them), any bit pattern valid.
+unsafe impl Zeroable for Partial {}
+// SAFETY: as above; Partial is Copy and 'static.
+unsafe impl Pod for Partial {}
 
 /// Largest count of particles or nodes a world may index (u32 ids, and room for padding).
 const MAX_ITEMS: u64 = 1 << 30;
@@ -584,7 +625,8 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     }
     // NaN-safe: a NaN ratio is not greater than 1.
     let ratio_ok = def.max_volume_ratio.partial_cmp(&1.0) == Some(core::cmp::Ordering::Greater);
-    if !(1..=crate::MAX_SUBSTEPS).contains(&def.max_substeps) || !ratio_ok {
+    let workers_ok = (1..=crate::MAX_WORKERS).contains(&def.workers);
+    if !(1..=crate::MAX_SUBSTEPS).contains(&def.max_substeps) || !ratio_ok || !workers_ok {
         return Err(Error::InvalidLimit);
     }
     // MLS-MPM's gradient is the shape function's only where D_p is constant: the B-splines.
@@ -682,6 +724,7 @@ impl Header {
             feedback_alpha: 0.0,
             max_substeps: def.max_substeps as u64,
             max_volume_ratio: def.max_volume_ratio as f64,
+            workers: def.workers as u64,
             damping_on_force: damping.grid_on_force as u64,
             damping_zone_count: damping.zone_count as u64,
             damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
@@ -791,6 +834,7 @@ impl Header {
             cfl: self.cfl as Real,
             max_substeps: small(self.max_substeps)?,
             max_volume_ratio: self.max_volume_ratio as Real,
+            workers: small(self.workers)?,
             effects,
         })
     }

@@ -82,11 +82,12 @@ pub mod shape;
 #[doc(hidden)]
 pub mod simd;
 mod storage;
+pub mod tasks;
 mod world;
 
 pub use def::{
     Boundary, Dimension, Face, MaterialDef, MaterialModel, Resolvable, ShapeFunction, Transfer,
-    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MIN_STABLE_DT,
+    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS, MIN_STABLE_DT,
 };
 pub use def::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, ScalarField, Schedule, Transport,
@@ -96,6 +97,7 @@ pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
 pub use particles::ParticleStatus;
 pub use storage::AlignedBuffer;
+pub use tasks::{Serial, TaskSystem};
 #[cfg(feature = "std")]
 pub use storage::HeapBuffer;
 pub use world::{

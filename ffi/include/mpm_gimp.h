@@ -163,8 +163,9 @@ enum MpmStatus
   // model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
   // call) check only the header, in constant time.
   MPM_STATUS_INVALID_STATE = 29,
-  // A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
-  // `max_volume_ratio` not > 1.
+  // A limit of the definition out of range: `max_substeps` outside 1..=1048576,
+  // `max_volume_ratio` not > 1, or `workers` outside 1..=256 or below a task system's
+  // `worker_count` (`mpm_world_step_tasks`).
   MPM_STATUS_INVALID_LIMIT = 30,
   // `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
   // (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
@@ -620,6 +621,9 @@ typedef struct MpmWorldDef {
   // leaves [1 / max_volume_ratio, max_volume_ratio] in a step is frozen and counted in
   // `MpmStepReport::runaway`. Default 100.
   mpm_real max_volume_ratio;
+  // The most workers a task system may step the world on (`mpm_world_step_tasks`),
+  // 1..=256: the world's memory holds the parallel step's scratch for that many. Default 1.
+  uint32_t workers;
   // The optional effects. Default: none declared.
   struct MpmEffects effects;
   // Set by `mpm_world_def_default`; do not change.

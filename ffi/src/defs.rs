@@ -413,6 +413,9 @@ pub struct MpmWorldDef {
     /// leaves [1 / max_volume_ratio, max_volume_ratio] in a step is frozen and counted in
     /// `MpmStepReport::runaway`. Default 100.
     pub max_volume_ratio: mpm_real,
+    /// The most workers a task system may step the world on (`mpm_world_step_tasks`),
+    /// 1..=256: the world's memory holds the parallel step's scratch for that many. Default 1.
+    pub workers: u32,
     /// The optional effects. Default: none declared.
     pub effects: MpmEffects,
     /// Set by `mpm_world_def_default`; do not change.
@@ -514,6 +517,7 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         cfl: d.cfl,
         max_substeps: d.max_substeps,
         max_volume_ratio: d.max_volume_ratio,
+        workers: d.workers,
         effects: effects_to_c(&d.effects),
         internal_cookie: WORLD_COOKIE,
     }
@@ -770,6 +774,7 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
         cfl: d.cfl,
         max_substeps: d.max_substeps,
         max_volume_ratio: d.max_volume_ratio,
+        workers: d.workers,
         effects,
     })
 }

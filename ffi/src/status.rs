@@ -94,8 +94,9 @@ pub enum MpmStatus {
     /// model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
     /// call) check only the header, in constant time.
     InvalidState = 29,
-    /// A limit of the definition out of range: `max_substeps` outside 1..=1048576, or
-    /// `max_volume_ratio` not > 1.
+    /// A limit of the definition out of range: `max_substeps` outside 1..=1048576,
+    /// `max_volume_ratio` not > 1, or `workers` outside 1..=256 or below a task system's
+    /// `worker_count` (`mpm_world_step_tasks`).
     InvalidLimit = 30,
     /// `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
     /// (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose

@@ -555,6 +555,12 @@ pub struct WorldDef {
     /// (linear shapes with USL) drives `J` past it long before stresses overflow. `INFINITY`
     /// removes the bound (inverted `F` still freezes).
     pub max_volume_ratio: Real,
+    /// The most workers a host's task system may step the world on
+    /// ([`crate::World::step_with_tasks`]), in `1..=`[`crate::MAX_WORKERS`]: the world's
+    /// buffer holds the parallel step's scratch for that many (a few hundred bytes per
+    /// worker; none for 1). Default 1: a host that steps on several cores says how many.
+    /// The results do not depend on it, nor on the workers a step runs on.
+    pub workers: u32,
     /// The optional effects the scene uses. Default [`Effects::NONE`]: a scene pays only for
     /// what it declares.
     pub effects: Effects,
@@ -580,6 +586,7 @@ impl WorldDef {
         cfl: 0.5,
         max_substeps: 1000,
         max_volume_ratio: 100.0,
+        workers: 1,
         effects: Effects::NONE,
     };
 
@@ -605,6 +612,9 @@ impl WorldDef {
 
 /// The largest [`WorldDef::max_substeps`] a definition may set.
 pub const MAX_SUBSTEPS: u32 = 1 << 20;
+
+/// The largest [`WorldDef::workers`] a definition may set.
+pub const MAX_WORKERS: u32 = 256;
 
 /// The largest [`MaterialDef::hardening_coefficient`] snow may have (see there why).
 pub const MAX_HARDENING_COEFFICIENT: Real = 100.0;

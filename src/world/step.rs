@@ -14,6 +14,7 @@ use crate::phases::{grid_update, Ctx};
 use crate::shape::Shape1D;
 use crate::simd::lanes::width;
 use crate::simd::Simd;
+use crate::tasks::{Serial, TaskSystem};
 use crate::{Error, Real};
 use core::mem::size_of;
 
@@ -34,17 +35,44 @@ impl<'a> World<'a> {
     /// shortest substep the limit allows cannot resolve (a Courant number above 1) freezes
     /// and is reported as runaway.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
-        self.step_with_simd(dt, Simd::Detect)
+        self.step_on(dt, Simd::Detect, &Serial)
+    }
+
+    /// [`World::step`] on the host's task system (see [`crate::tasks`]): every pass of the
+    /// step is cut into items the workers share. The state after the step is bit-identical
+    /// to [`World::step`]'s, for any number of workers and however the system spreads the
+    /// items. Fails with [`Error::InvalidLimit`] (changing nothing) where the system has more
+    /// workers than the definition's [`WorldDef::workers`].
+    pub fn step_with_tasks(
+        &mut self,
+        dt: Real,
+        tasks: &dyn TaskSystem,
+    ) -> Result<StepReport, Error> {
+        self.step_on(dt, Simd::Detect, tasks)
     }
 
     /// [`World::step`] with a chosen instruction set (see [`crate::simd`]). Not part of the
     /// stable API: tests use it to show that both paths give bit-identical state.
     #[doc(hidden)]
     pub fn step_with_simd(&mut self, dt: Real, simd: Simd) -> Result<StepReport, Error> {
+        self.step_on(dt, simd, &Serial)
+    }
+
+    /// [`World::step_with_tasks`] with a chosen instruction set. Not part of the stable API.
+    #[doc(hidden)]
+    pub fn step_on(
+        &mut self,
+        dt: Real,
+        simd: Simd,
+        tasks: &dyn TaskSystem,
+    ) -> Result<StepReport, Error> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::InvalidTimeStep);
         }
         let def = self.def();
+        if !(1..=def.workers as usize).contains(&tasks.worker_count()) {
+            return Err(Error::InvalidLimit);
+        }
         let limits = self.read().time_step_limits(simd);
         let ratio = dt / limits.stable_dt;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };

@@ -1,0 +1,132 @@
+//! The host's task system: how a step runs on several cores without owning a thread
+//! (Box2D v3's model). The host hands [`crate::World::step_with_tasks`] a [`TaskSystem`]; the
+//! step cuts each pass into items (ranges of particle chunks, slabs of grid lines) whose
+//! results never depend on how the items are spread over workers: every floating-point sum
+//! is added in the order a single worker adds it (ARCHITECTURE.md, "Threads"). So the state
+//! after a step is bit-identical for any number of workers, and to [`Serial`]'s.
+//!
+//! The unsafe of the parallel step is here, in one primitive: [`Shared`], a region of memory
+//! that items carve disjoint windows of.
+
+use core::marker::PhantomData;
+use core::ops::Range;
+
+/// A task over the items `start..end`, run by worker `worker` (`< worker_count`).
+pub type Task<'t> = dyn Fn(usize, usize, usize) + Sync + 't;
+
+/// A host's task system (Box2D v3's enqueue and finish, as one call).
+///
+/// # Contract
+/// [`TaskSystem::parallel_for`] calls `task(start, end, worker)` on ranges that together
+/// cover `0..items`, each item exactly once, each range at least `min_range` items long
+/// except possibly the last; at most [`TaskSystem::worker_count`] ranges run at once, no two
+/// of them with the same `worker`; it returns once every range has returned. A system may run
+/// everything on the calling thread. The step's results do not depend on how the ranges are
+/// cut nor on which worker runs which.
+pub trait TaskSystem: Sync {
+    /// The workers the system runs tasks on, at least 1.
+    fn worker_count(&self) -> usize;
+
+    /// Runs `task` over `0..items` as the trait's contract says, returning when it is done.
+    fn parallel_for(&self, items: usize, min_range: usize, task: &Task<'_>);
+}
+
+/// The task system of a host without one: everything on the calling thread, one worker.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Serial;
+
+impl TaskSystem for Serial {
+    fn worker_count(&self) -> usize {
+        1
+    }
+
+    fn parallel_for(&self, items: usize, _min_range: usize, task: &Task<'_>) {
+        if items > 0 {
+            task(0, items, 0);
+        }
+    }
+}
+
+/// Runs `item(i)` for every `i` in `0..items` on `tasks`, one item per range at least.
+pub(crate) fn for_each(tasks: &dyn TaskSystem, items: usize, item: &(dyn Fn(usize) + Sync)) {
+    tasks.parallel_for(items, 1, &|start, end, _worker| {
+        for i in start..end {
+            item(i);
+        }
+    });
+}
+
+/// `0..n` cut into `parts` consecutive ranges whose boundaries are multiples of `unit`
+/// (the last ends at `n`), as even as that allows; part `i`.
+pub(crate) fn part(n: usize, parts: usize, unit: usize, i: usize) -> Range<usize> {
+    let units = n.div_ceil(unit);
+    let at = |k: usize| (units * k / parts * unit).min(n);
+    at(i)..at(i + 1)
+}
+
+/// A region of memory (`len` values of `T` from `ptr`) that concurrent items carve disjoint
+/// windows of ([`Shared::window`]), as `split_at_mut` would if the items ran one after another.
+pub(crate) struct Shared<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _borrow: PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: a `Shared` is a `&mut [T]` handed to items that each take a disjoint part of it
+// (the contract of `window`); sending those parts to other threads needs `T: Send`.
+unsafe impl<T: Send> Sync for Shared<'_, T> {}
+// SAFETY: as for Sync.
+unsafe impl<T: Send> Send for Shared<'_, T> {}
+
+impl<'a, T> Shared<'a, T> {
+    /// Shares `region` for the lifetime of the borrow.
+    pub fn new(region: &'a mut [T]) -> Self {
+        Shared {
+            ptr: region.as_mut_ptr(),
+            len: region.len(),
+            _borrow: PhantomData,
+        }
+    }
+
+    /// The length of the region.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// The values `r` of the region (clipped to its end).
+    ///
+    /// # Safety
+    /// No other window that overlaps `r` is alive at the same time (the items of one
+    /// parallel pass take disjoint ranges).
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn window(&self, r: Range<usize>) -> &'a mut [T] {
+        let end = r.end.min(self.len);
+        let start = r.start.min(end);
+        // SAFETY: start <= end <= len keeps the window inside the region, which the borrow
+        // `'a` keeps alive and unaliased outside these windows; the caller keeps windows
+        // disjoint.
+        unsafe { core::slice::from_raw_parts_mut(self.ptr.add(start), end - start) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parts_cover_the_range_in_units() {
+        for n in [0, 1, 31, 32, 33, 1000, 4097] {
+            for parts in 1..=9 {
+                let mut next = 0;
+                for i in 0..parts {
+                    let r = part(n, parts, 32, i);
+                    assert_eq!(r.start, next, "n {n} parts {parts}");
+                    assert!(r.start % 32 == 0 && r.end >= r.start && r.end <= n);
+                    assert!(r.end == n || r.end % 32 == 0);
+                    next = r.end;
+                }
+                assert_eq!(next, n, "n {n} parts {parts}");
+            }
+        }
+    }
+}
