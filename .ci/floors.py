@@ -25,6 +25,7 @@ FLOORS = [
     ["def"],
     ["math"],
     ["num"],
+    ["tasks"],
     ["error"],
 ]
 LEVEL = {m: len(FLOORS) - i for i, floor in enumerate(FLOORS) for m in floor}

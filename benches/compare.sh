@@ -3,12 +3,19 @@
 # round runs every binary once, in turn, so that they see the same load; prints, per binary,
 # the minimum and the median of the per-round medians (ns per particle-step) and, for every BIN
 # after the first, the median of its per-round ratios to the first (the ratio of two runs in the
-# same round cancels most of the machine's slow drifts, which the plain medians do not).
+# same round cancels most of the machine's slow drifts, which the plain medians do not), and
+# last whether every BIN ended in the same `state_hash` (the same results).
 #   bash benches/compare.sh ROUNDS BIN [BIN ...] -- [step_cost options for every BIN]
 # A BIN may carry its own options in one quoted word. E.g.
 #   bash benches/compare.sh 5 ./old_step_cost target/release/examples/step_cost -- --dim 2
 #   bash benches/compare.sh 5 "target/release/examples/step_cost --simd baseline" \
 #       target/release/examples/step_cost -- --dim 3 --order usl
+# Thread counts of one build, the same way (`--threads N` steps on a rayon pool of N threads;
+# the times are wall time and the state hashes must agree); or `--threads N` after `--` for
+# every BIN, e.g. two builds on 2 threads each:
+#   bash benches/compare.sh 5 "target/release/examples/step_cost --threads 1" \
+#       "target/release/examples/step_cost --threads 2" -- --dim 3
+#   bash benches/compare.sh 5 ./old_step_cost target/release/examples/step_cost -- --threads 2
 set -euo pipefail
 rounds=$1
 shift
@@ -23,8 +30,10 @@ trap 'rm -f "$out"' EXIT
 for round in $(seq "$rounds"); do
     for b in "${bins[@]}"; do
         read -ra cmd <<<"$b"
-        v=$("${cmd[@]}" "$@" --runs 5 --steps 10 2>/dev/null | grep -o '"ns_per_particle_step":[0-9.]*' | cut -d: -f2)
-        echo "$b|$v|$round" >>"$out"
+        json=$("${cmd[@]}" "$@" --runs 5 --steps 10 2>/dev/null)
+        v=$(echo "$json" | grep -o '"ns_per_particle_step":[0-9.]*' | cut -d: -f2)
+        h=$(echo "$json" | grep -o '"state_hash":"[0-9a-f]*"' | cut -d'"' -f4)
+        echo "$b|$v|$round|$h" >>"$out"
     done
 done
 for b in "${bins[@]}"; do
@@ -42,3 +51,10 @@ for b in "${bins[@]}"; do
     fi
     echo "$b: min $min median $med ns per particle-step over $n rounds ($(echo $vals | tr '\n' ' '))$ratio"
 done
+hashes=$(cut -d'|' -f4 "$out" | sort -u)
+if [ "$(echo "$hashes" | wc -l)" -eq 1 ]; then
+    echo "state_hash: $hashes for every BIN and round"
+else
+    echo "state_hash differs:"
+    awk -F'|' '{ print "  " $1 ": " $4 }' "$out" | sort -u
+fi

@@ -37,16 +37,29 @@
 //! order of the particles in their columns: as `fill_box` writes them (the sites of each
 //! stencil bin together, which the scatter sums in runs), lattice rows x fastest (a host that
 //! adds its particles row by row), or a fixed random permutation (no runs, no locality).
+//! `--threads N` (default 1, at most `mpm_gimp::MAX_WORKERS`) steps on N workers: N > 1 steps
+//! with `World::step_with_tasks` on a rayon pool of N threads of its own
+//! (`mpm_gimp_rayon::RayonTasks`), the world sized for N workers (`WorldDef::workers`); 1 steps
+//! on the calling thread, as `World::step` does. The times are wall time, so with N threads the
+//! ns per particle-step fall by up to N. The world's header records the workers it is sized
+//! for (and its size, which the parallel step's scratch adds to), so `state_hash` is taken over
+//! the state as a world sized for one worker holds it: the same for every N (the parallel
+//! step's results are bit-identical), and for N = 1 the plain state bytes' hash as before. The
+//! JSON line gives `"threads"`.
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
-use mpm_gimp::{Dimension, MaterialModel, Real, ShapeFunction, UpdateOrder};
+use mpm_gimp::{
+    memory_requirements, Dimension, HeapBuffer, MaterialModel, Real, Serial, ShapeFunction,
+    UpdateOrder, World, WorldDef, MAX_WORKERS,
+};
+use mpm_gimp_rayon::RayonTasks;
 use std::process::exit;
 
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
-[--particle-order fill|rows|shuffled] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
+[--particle-order fill|rows|shuffled] [--threads N (1..=256)] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
 body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)]";
 
 #[path = "../benches/common/scene.rs"]
@@ -68,6 +81,7 @@ struct Options {
     grid_scale: u32,
     shrink: u32,
     particle_order: ParticleOrder,
+    threads: u32,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -89,6 +103,7 @@ fn parse_options() -> Options {
         grid_scale: 1,
         shrink: 1,
         particle_order: ParticleOrder::Fill,
+        threads: 1,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -113,6 +128,7 @@ fn parse_options() -> Options {
             "--grid-scale",
             "--shrink",
             "--particle-order",
+            "--threads",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -204,6 +220,12 @@ fn parse_options() -> Options {
                     None => bad(),
                 }
             }
+            "--threads" => {
+                o.threads = match value.parse::<u32>() {
+                    Ok(n) if (1..=MAX_WORKERS).contains(&n) => n,
+                    _ => bad(),
+                }
+            }
             _ => unreachable!("checked against the known options"),
         }
     }
@@ -259,6 +281,34 @@ fn scene(dim: u32) -> ([u32; 3], [u32; 3], [u32; 3]) {
     }
 }
 
+/// The world's state bytes as a world of the same definition sized for one worker holds them:
+/// the header bytes that depend on `WorldDef::workers` (the count itself and the world's size)
+/// are those of a world of one worker, found where the headers of two new worlds, of one
+/// worker and of the world's workers, differ. A world of one worker: its state bytes as they
+/// are.
+fn state_for_one_worker(world: &World<'_>) -> Vec<u8> {
+    let mut state = world.state_bytes().to_vec();
+    let def = world.def();
+    if def.workers > 1 {
+        let header = |workers: u32| -> Vec<u8> {
+            let def = WorldDef { workers, ..def };
+            let bytes = memory_requirements(&def)
+                .expect("the world's definition")
+                .bytes;
+            let mut storage = HeapBuffer::new(bytes);
+            let world = World::init(&def, storage.as_mut_bytes()).expect("a new world");
+            world.as_bytes()[..World::HEADER_BYTES].to_vec()
+        };
+        let (one, many) = (header(1), header(def.workers));
+        for (k, byte) in state[..World::HEADER_BYTES].iter_mut().enumerate() {
+            if one[k] != many[k] {
+                *byte = one[k];
+            }
+        }
+    }
+    state
+}
+
 pub fn main() {
     let o = parse_options();
     let axes = o.dim as usize;
@@ -289,6 +339,7 @@ pub fn main() {
         block,
         effect: o.effect,
         particle_order: o.particle_order,
+        workers: o.threads,
         ..SceneDef::PLANE_2D
     }) {
         Ok(s) => s,
@@ -300,16 +351,28 @@ pub fn main() {
     let particles = scene.particles;
     let bytes_per_particle = scene.bytes as f64 / particles as f64;
     let mut world = scene.world();
-
-    let timing = time_steps(&mut world, particles, o.runs, o.steps, o.simd);
+    // One thread: the calling thread, as `World::step`; more: a rayon pool of that many, the
+    // steps run on one of its threads (`RayonTasks::install`), as a host with a job system
+    // steps from a job.
+    let timing = if o.threads == 1 {
+        time_steps(&mut world, particles, o.runs, o.steps, o.simd, &Serial)
+    } else {
+        let tasks = match RayonTasks::new(o.threads as usize) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("step_cost: a pool of {} threads: {e}", o.threads);
+                exit(1);
+            }
+        };
+        let w = &mut world;
+        tasks.install(|| time_steps(w, particles, o.runs, o.steps, o.simd, &tasks))
+    };
     let (runs, med, med_ref, wall) = (timing.runs, timing.median, timing.reference, timing.wall);
     let mut sorted = runs.clone();
     sorted.sort_by(f64::total_cmp);
     // FNV-1a over the world's state after every step taken (warm-up and timed): the same
-    // options give the same hash on every instruction set and run.
-    let state_hash = world
-        .read()
-        .state_bytes()
+    // options give the same hash on every instruction set, run and thread count.
+    let state_hash = state_for_one_worker(&world)
         .iter()
         .fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
             (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
@@ -327,7 +390,7 @@ pub fn main() {
         .join(",");
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
-\"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
+\"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"threads\":{},\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
 \"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"state_hash\":\"{:016x}\"}}",
         o.dim,
         particles,
@@ -337,6 +400,7 @@ pub fn main() {
         order_name(o.order),
         precision_name(),
         o.simd.instance_for(&world.def()).name(),
+        o.threads,
         med,
         runs_json,
         med_ref,
@@ -347,7 +411,7 @@ pub fn main() {
         state_hash
     );
     eprintln!(
-        "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}: \
+        "step_cost: {}D, {} particles in a {} cell block (grid {}), {}, {}, {}, {}, {} thread{}: \
 median {:.3} ns per particle-step ({:.3} ms per step) over {} runs of {} steps; \
 runs [{}] ns; min {:.3}, max {:.3}; wall {:.2} s",
         o.dim,
@@ -366,6 +430,8 @@ runs [{}] ns; min {:.3}, max {:.3}; wall {:.2} s",
         material_name(o.material),
         order_name(o.order),
         precision_name(),
+        o.threads,
+        if o.threads == 1 { "" } else { "s" },
         med,
         med * particles as f64 * 1e-6,
         o.runs,

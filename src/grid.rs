@@ -9,9 +9,10 @@
 //! nodes in the layer from the grid face to the wall plane are constrained.
 
 use crate::def::{Boundary, WorldDef};
-use crate::layout::Layout;
+use crate::layout::{Layout, REACH_GROUP};
 use crate::particles::Carver;
 use crate::shape::{Row4, ROW};
+use crate::tasks::Shared;
 use crate::Real;
 
 /// Mutable views of every node column, each `nodes` long.
@@ -30,6 +31,50 @@ pub(crate) struct GridCols<'a, const D: usize> {
     /// (thermal mass `m_T`, or volume), momentum (`m_T T`), value (`T_i`, with the fixed
     /// faces), flow then rate (`Q_i`, then `Q_i / m_T`).
     pub scalar: [[&'a mut [Real]; 4]; 2],
+    /// Entries per column (`nodes + ROW`, or a tile's window); a column not reserved is empty.
+    pub len: usize,
+    /// The nodes these columns hold and whose rows a scatter adds to them.
+    pub tile: Tile,
+    /// A tile's: the grid lines along the slowest axis that each [`crate::layout::REACH_GROUP`]
+    /// particles' stencils may reach ([`reach_lines`]), so that its scatter passes over the
+    /// chunks that reach none of its lines; empty otherwise.
+    pub reach: &'a [[u32; 2]],
+}
+
+/// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
+/// node `first`, and the stencil rows that start at nodes `first..first + rows` are the view's
+/// to add to ([`Tile::ALL`]: the whole grid). A tile of the parallel scatter is a slab of whole
+/// grid lines (rows run along x, so a row never straddles two), its columns `rows + ROW`
+/// long: a row of the slab's last line may reach the first entries of the next line (zeros;
+/// see `phases::p2g`'s scatter for why neighbouring tiles never run at once).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tile {
+    pub first: usize,
+    pub rows: usize,
+}
+
+impl Tile {
+    /// The whole grid: every row whose stencil fits ([`rows_fit`]).
+    pub const ALL: Tile = Tile {
+        first: 0,
+        rows: usize::MAX,
+    };
+
+    /// The tile of the grid lines `lines` along the slowest axis, whose stride is `stride`
+    /// (nodes per line in 2D, per plane in 3D).
+    pub fn of_lines(lines: core::ops::Range<usize>, stride: usize) -> Tile {
+        Tile {
+            first: lines.start * stride,
+            rows: lines.len() * stride,
+        }
+    }
+
+    /// The lines along the slowest axis this tile holds (stride as in [`Tile::of_lines`]);
+    /// `None` for the whole grid.
+    pub fn slab(&self, stride: usize) -> Option<core::ops::Range<usize>> {
+        (*self != Tile::ALL && stride > 0)
+            .then(|| self.first / stride..(self.first + self.rows) / stride)
+    }
 }
 
 /// Whether every row of a stencil whose first node is `base` fits in node columns of length
@@ -72,7 +117,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
     /// Length shared by every node column (nodes plus padding).
     #[inline(always)]
     pub fn len(&self) -> usize {
-        self.mass.len()
+        self.len
     }
 
     /// Whether every column has the length [`GridCols::len`] (the remap columns may be empty).
@@ -80,19 +125,126 @@ impl<'a, const D: usize> GridCols<'a, D> {
     /// check covers every column.
     pub fn lengths_consistent(&self) -> bool {
         let len = self.len();
-        self.vel
-            .iter()
-            .chain(self.acc.iter())
-            .all(|c| c.len() == len)
-            && (self.remap.iter().all(|c| c.len() == len)
-                || self.remap.iter().all(|c| c.is_empty()))
+        let group = |cols: &[&mut [Real]]| {
+            cols.iter().all(|c| c.len() == len) || cols.iter().all(|c| c.is_empty())
+        };
+        let tile_fits = self.tile == Tile::ALL || self.tile.rows.saturating_add(ROW) <= len;
+        self.mass.len() == len
+            && group(&self.vel)
+            && group(&self.acc)
+            && group(&self.remap)
+            && tile_fits
+    }
+
+    /// Whether the stencils of the chunk of `w` particles from `start` may reach the lines
+    /// `slab` ([`GridCols::reach`]; true where the table does not cover them).
+    #[inline(always)]
+    pub fn chunk_reaches(&self, start: usize, w: usize, slab: &core::ops::Range<usize>) -> bool {
+        let groups = start / REACH_GROUP..(start + w).div_ceil(REACH_GROUP);
+        match self.reach.get(groups) {
+            Some(g) => g
+                .iter()
+                .any(|&[lo, hi]| (lo as usize) < slab.end && (hi as usize) >= slab.start),
+            None => true,
+        }
+    }
+
+    /// The node indices these columns hold: entry `k` is node `window().start + k`.
+    pub fn window(&self) -> core::ops::Range<usize> {
+        self.tile.first..self.tile.first + self.len
+    }
+
+    /// No columns at all (length 0): the re-map columns of a particle pass that does not
+    /// re-map (`phases::g2p::particles`).
+    pub fn empty() -> GridCols<'a, D> {
+        let none = || core::array::from_fn(|_| &mut [][..]);
+        GridCols {
+            mass: &mut [][..],
+            vel: none(),
+            acc: none(),
+            remap: none(),
+            scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
+            len: 0,
+            tile: Tile::ALL,
+            reach: &[],
+        }
+    }
+
+    /// The columns but the remap ones (which it leaves empty), and the remap ones alone: what
+    /// the particle pass reads, and the columns MUSL's re-map scatter adds to in the same pass.
+    pub fn split_remap(&mut self) -> (GridCols<'_, D>, GridCols<'_, D>) {
+        let GridCols {
+            mass,
+            vel,
+            acc,
+            remap,
+            scalar,
+            len,
+            tile,
+            reach,
+        } = self;
+        let none = || core::array::from_fn(|_| &mut [][..]);
+        let read = GridCols {
+            mass,
+            vel: vel.each_mut().map(|c| &mut **c),
+            acc: acc.each_mut().map(|c| &mut **c),
+            remap: none(),
+            scalar: scalar.each_mut().map(|f| f.each_mut().map(|c| &mut **c)),
+            len: *len,
+            tile: *tile,
+            reach,
+        };
+        let remap = GridCols {
+            mass: &mut [][..],
+            vel: none(),
+            acc: none(),
+            remap: remap.each_mut().map(|c| &mut **c),
+            scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
+            len: *len,
+            tile: *tile,
+            reach,
+        };
+        (read, remap)
     }
 
     /// Carves the grid region (starting at `layout.grid_offset`) into columns, each `nodes`
     /// plus [`ROW`] entries of padding long (a stencil row may reach two entries past the last
     /// node; the padding only ever receives zero weights).
-    pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
-        let mut c = Carver::new(region);
+    /// The columns of `tile` ([`Tile`]) of the shared grid region: one slab of the parallel
+    /// scatter.
+    ///
+    /// # Safety
+    /// No other view of the region that overlaps the tile's entries (`tile.first..tile.first
+    /// + tile.rows + ROW`) is alive while this one is.
+    pub unsafe fn carve_tile(region: &Shared<'a, u8>, layout: &Layout, tile: Tile) -> Self {
+        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        // SAFETY: as required of the caller.
+        Self::carve_with(
+            unsafe { Carver::window(region, tile.first..end) },
+            layout,
+            tile,
+        )
+    }
+
+    /// The columns of the nodes `nodes` of the shared grid region: one slab of a grid pass
+    /// (a scatter adds nothing to them: their tile holds no row).
+    ///
+    /// # Safety
+    /// No other view of the region that overlaps `nodes` is alive while this one is.
+    pub unsafe fn carve_nodes(
+        region: &Shared<'a, u8>,
+        layout: &Layout,
+        nodes: core::ops::Range<usize>,
+    ) -> Self {
+        let tile = Tile {
+            first: nodes.start,
+            rows: 0,
+        };
+        // SAFETY: as required of the caller.
+        Self::carve_with(unsafe { Carver::window(region, nodes) }, layout, tile)
+    }
+
+    fn carve_with(mut c: Carver<'a>, layout: &Layout, tile: Tile) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
         let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
@@ -110,18 +262,21 @@ impl<'a, const D: usize> GridCols<'a, D> {
             })
         });
         GridCols {
+            len: mass.len(),
             mass,
             vel,
             acc,
             remap,
             scalar,
+            tile,
+            reach: &[],
         }
     }
 }
 
 /// The nodes a substep touches: the box `lo[a] <= index along a < hi[a]` that holds the
 /// stencil of every active particle (empty without one), computed from the positions where
-/// the substep starts ([`NodeBox::of_particles`]). The grid passes work on it alone, so a
+/// the substep starts ([`NodeBox::first_nodes`], [`NodeBox::of_first_nodes`]). The grid passes work on it alone, so a
 /// grid larger than the material costs nothing per node it does not reach: a 32^3-cell block
 /// in a 64^3 grid touches one node in six.
 ///
@@ -137,78 +292,141 @@ pub(crate) struct NodeBox<const D: usize> {
     pub tail: usize,
 }
 
-/// [`NodeBox::of_particles`] as a free function, for the instruction-set instances of
-/// `world::passes`.
+/// [`NodeBox::first_nodes`] as a free function, for the instruction-set instances of
+/// `world::passes`, and with it (where `reach` is not empty) the [`reach_lines`] of the same
+/// particles.
 #[inline(always)]
-pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
+pub(crate) fn first_nodes<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
     geom: &Geom<D>,
     x: &[&[Real]; D],
     status: &[u32],
     count: usize,
-) -> NodeBox<D> {
-    NodeBox::of_particles::<K, S>(geom, x, status, count)
+    reach: &mut [[u32; 2]],
+) -> ([i32; D], [i32; D]) {
+    if !reach.is_empty() {
+        reach_lines::<D, K, S>(geom, x[D - 1], status, count, reach);
+    }
+    NodeBox::first_nodes::<K, S>(geom, x, status, count)
+}
+
+/// The smallest and largest position of the active particles among `x` (`status` as long),
+/// in cell units from `origin` (`(x - origin) * inv_h`, as the stencils take them), a NaN
+/// counted as the lowest (the stencil clamps it there); `(INFINITY, NEG_INFINITY)` without
+/// one. Lane-wise minima and maxima over chunks of 16 (loops the compiler vectorises), the
+/// lanes reduced at the end.
+#[inline(always)]
+fn extremes(x: &[Real], status: &[u32], origin: Real, inv_h: Real) -> (Real, Real) {
+    const L: usize = 16;
+    let (mut mn, mut mx) = ([Real::INFINITY; L], [Real::NEG_INFINITY; L]);
+    let mut lane = |ln: usize, xi: Real, st: u32| {
+        let s = (xi - origin) * inv_h;
+        let s = if s.is_nan() { Real::NEG_INFINITY } else { s };
+        let active = st == crate::particles::ACTIVE;
+        let (l, h) = if active {
+            (s, s)
+        } else {
+            (Real::INFINITY, Real::NEG_INFINITY)
+        };
+        mn[ln] = if l < mn[ln] { l } else { mn[ln] };
+        mx[ln] = if h > mx[ln] { h } else { mx[ln] };
+    };
+    let (xs, sts) = (x.chunks_exact(L), status.chunks_exact(L));
+    let (x_rest, st_rest) = (xs.remainder(), sts.remainder());
+    for (xs, sts) in xs.zip(sts) {
+        for ln in 0..L {
+            lane(ln, xs[ln], sts[ln]);
+        }
+    }
+    for (ln, (&xi, &st)) in x_rest.iter().zip(st_rest).enumerate() {
+        lane(ln, xi, st);
+    }
+    let lo = mn
+        .iter()
+        .fold(Real::INFINITY, |m, &v| if v < m { v } else { m });
+    let hi = mx
+        .iter()
+        .fold(Real::NEG_INFINITY, |m, &v| if v > m { v } else { m });
+    (lo, hi)
+}
+
+/// For each [`REACH_GROUP`] particles of `0..count` (the slices' first particle starts a
+/// group), the grid lines along the slowest axis their stencils may reach, into `out` (one
+/// entry per group): from the lowest active first node to the highest plus `K - 1`
+/// ([`crate::shape::first_node`], as the stencils clamp it, a NaN position included),
+/// `[u32::MAX, 0]` without an active particle. `x` holds the
+/// positions along the slowest axis.
+#[inline(always)]
+pub(crate) fn reach_lines<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
+    geom: &Geom<D>,
+    x: &[Real],
+    status: &[u32],
+    count: usize,
+    out: &mut [[u32; 2]],
+) {
+    let a = D - 1;
+    let (o, inv_h, nodes) = (geom.origin[a], geom.inv_h, geom.nodes[a]);
+    let count = count.min(x.len()).min(status.len());
+    for (g, out) in out.iter_mut().enumerate() {
+        let from = (g * REACH_GROUP).min(count);
+        let to = (from + REACH_GROUP).min(count);
+        let (lo, hi) = extremes(&x[from..to], &status[from..to], o, inv_h);
+        *out = if lo <= hi {
+            // The first node is monotonic in the position (a clamped floor).
+            let first = |s: Real| crate::shape::first_node::<K, S>(s, nodes);
+            lines::<K>(first(lo), first(hi))
+        } else {
+            [u32::MAX, 0]
+        };
+    }
+}
+
+/// The first and last line the stencils of a group whose first nodes run from `lo` to `hi`
+/// reach; `[u32::MAX, 0]` for none (`lo > hi`). Exact: the positions are taken to cell units
+/// as the stencils take them (`(x - origin) * inv_h`, the same operations), so the first
+/// nodes are theirs (a line of margin on either side took 1.1 times as many chunks per tile
+/// in 3D).
+fn lines<const K: usize>(lo: i32, hi: i32) -> [u32; 2] {
+    if lo <= hi {
+        [lo.max(0) as u32, (hi.max(0) as usize + K - 1) as u32]
+    } else {
+        [u32::MAX, 0]
+    }
 }
 
 impl<const D: usize> NodeBox<D> {
-    /// The box of the stencils of the active particles `0..count` (first nodes as the
-    /// stencils clamp them, [`crate::shape::first_node`], for any position), widened to the
-    /// nodes before the axis and their images in the axisymmetric form.
+    /// The smallest and largest first node per axis of the active particles `0..count` (as
+    /// the stencils clamp them, [`crate::shape::first_node`], for any position; `i32::MAX`
+    /// and `i32::MIN` without one): a part of the particles each, they merge by
+    /// `min` and `max` into the whole's, which [`NodeBox::of_first_nodes`] turns into the box.
     #[inline(always)]
-    pub fn of_particles<const K: usize, S: crate::shape::Shape1D<K>>(
+    pub fn first_nodes<const K: usize, S: crate::shape::Shape1D<K>>(
         geom: &Geom<D>,
         x: &[&[Real]; D],
         status: &[u32],
         count: usize,
-    ) -> Self {
+    ) -> ([i32; D], [i32; D]) {
         let count = x
             .iter()
             .map(|c| c.len())
             .fold(count.min(status.len()), usize::min);
         // The first node is monotonic in the position (a clamped floor), so the box follows from
-        // the smallest and largest position per axis, a NaN counted as the lowest (the stencil
-        // clamps it there). Lane-wise minima and maxima over chunks vectorise; the lanes are
-        // reduced at the end.
-        const L: usize = 16;
+        // the smallest and largest active position per axis.
         let mut lo = [i32::MAX; D];
         let mut hi = [i32::MIN; D];
         for a in 0..D {
-            let (col, status) = (&x[a][..count], &status[..count]);
-            let mut mn = [Real::INFINITY; L];
-            let mut mx = [Real::NEG_INFINITY; L];
-            let (o, inv_h) = (geom.origin[a], geom.inv_h);
-            let mut lane = |ln: usize, xi: Real, st: u32| {
-                let s = (xi - o) * inv_h;
-                let s = if s.is_nan() { Real::NEG_INFINITY } else { s };
-                let active = st == crate::particles::ACTIVE;
-                let (l, h) = if active {
-                    (s, s)
-                } else {
-                    (Real::INFINITY, Real::NEG_INFINITY)
-                };
-                mn[ln] = if l < mn[ln] { l } else { mn[ln] };
-                mx[ln] = if h > mx[ln] { h } else { mx[ln] };
-            };
-            let (xs, sts) = (col.chunks_exact(L), status.chunks_exact(L));
-            let (x_rest, st_rest) = (xs.remainder(), sts.remainder());
-            for (xs, sts) in xs.zip(sts) {
-                for ln in 0..L {
-                    lane(ln, xs[ln], sts[ln]);
-                }
-            }
-            for (ln, (&xi, &st)) in x_rest.iter().zip(st_rest).enumerate() {
-                lane(ln, xi, st);
-            }
-            let mn = mn
-                .iter()
-                .fold(Real::INFINITY, |m, &v| if v < m { v } else { m });
-            let mx = mx
-                .iter()
-                .fold(Real::NEG_INFINITY, |m, &v| if v > m { v } else { m });
+            let (mn, mx) = extremes(&x[a][..count], &status[..count], geom.origin[a], geom.inv_h);
             if mn <= mx {
                 lo[a] = crate::shape::first_node::<K, S>(mn, geom.nodes[a]);
                 hi[a] = crate::shape::first_node::<K, S>(mx, geom.nodes[a]);
             }
         }
+        (lo, hi)
+    }
+
+    /// The box of the stencils whose first nodes per axis run from `lo` to `hi`
+    /// ([`NodeBox::first_nodes`]), widened to the nodes before the axis and their images in
+    /// the axisymmetric form, and to the images of the nodes past a wall plane.
+    pub fn of_first_nodes<const K: usize>(geom: &Geom<D>, lo: [i32; D], hi: [i32; D]) -> Self {
         if lo[0] > hi[0] {
             // No active particle.
             return NodeBox {
@@ -255,6 +473,24 @@ impl<const D: usize> NodeBox<D> {
         mut f: impl FnMut(core::ops::Range<usize>),
     ) {
         self.lines(stride, len, &mut f);
+    }
+
+    /// [`NodeBox::for_each_line`] on the entries `window` of the columns alone, passed as
+    /// ranges from `window.start` (the columns of a slab of the grid start there): the slabs
+    /// of a partition of `0..len` visit every entry `for_each_line` visits, once.
+    pub fn for_each_line_in(
+        &self,
+        stride: [usize; D],
+        window: core::ops::Range<usize>,
+        mut f: impl FnMut(core::ops::Range<usize>),
+    ) {
+        let first = window.start;
+        self.lines(stride, window.end, &mut |r| {
+            let start = r.start.max(first);
+            if start < r.end {
+                f(start - first..r.end - first);
+            }
+        });
     }
 
     /// [`NodeBox::for_each_line`], one copy per dimension: the loop takes its closure by

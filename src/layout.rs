@@ -404,6 +404,10 @@ pub(crate) struct Layout {
     /// [`SLOTS_PER_WORKER`] per worker of [`WorldDef::workers`] (none for one worker).
     pub scratch_offset: usize,
     pub scratch_slots: usize,
+    /// After the slots: per [`REACH_GROUP`] particles, the first and last grid line along the
+    /// slowest axis their stencils may reach (the scatter's tiles take the chunks that reach
+    /// them).
+    pub reach_groups: usize,
     pub total: usize,
 }
 
@@ -510,7 +514,16 @@ impl Layout {
         } else {
             0
         };
-        let total = scratch_offset + scratch_slots * size_of::<Partial>();
+        // And the grid lines each 16 particles' stencils reach along the slowest axis, for the
+        // scatter's tiles.
+        let reach_groups = if scratch_slots > 0 {
+            cap.div_ceil(REACH_GROUP)
+        } else {
+            0
+        };
+        let total = scratch_offset
+            + scratch_slots * size_of::<Partial>()
+            + reach_groups * size_of::<[u32; 2]>();
         Layout {
             d,
             padded_capacity: cap,
@@ -536,10 +549,17 @@ impl Layout {
             grid_columns,
             scratch_offset,
             scratch_slots,
+            reach_groups,
             total,
         }
     }
 }
+
+/// Particles per entry of the reach table ([`Layout::reach_groups`]): a multiple of every
+/// chunk width. Particles in fill order (bins along x) span one line of cells per 256 in the
+/// default scenes, so a tile takes few chunks it does not need; per 16 the table took 5 % of
+/// the 2D step to fill (benches/PERFORMANCE.md, "Threads").
+pub(crate) const REACH_GROUP: usize = 256;
 
 /// The parallel step's items per worker ([`Layout::scratch_slots`]): the particle passes cut
 /// their chunks into this many ranges per worker (so that a slow range does not hold the

@@ -97,9 +97,9 @@ pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
 pub use particles::ParticleStatus;
 pub use storage::AlignedBuffer;
-pub use tasks::{Serial, TaskSystem};
 #[cfg(feature = "std")]
 pub use storage::HeapBuffer;
+pub use tasks::{Serial, TaskSystem};
 pub use world::{
     Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, WorldRef,
 };

@@ -15,7 +15,9 @@
 //! instantiate.
 
 use crate::layout::{stress_components, Layout};
+use crate::tasks::Shared;
 use crate::Real;
+use core::ops::Range;
 
 /// Life state of a particle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -90,24 +92,41 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub status: &'a mut [u32],
 }
 
-/// Hands out consecutive column slices of a byte region.
+/// Hands out consecutive column slices of a byte region, each cut to a window of its values
+/// (all of them, or the part of each column one item of a parallel pass works on).
 pub(crate) struct Carver<'a> {
-    rest: &'a mut [u8],
+    region: Shared<'a, u8>,
+    at: usize,
+    window: Range<usize>,
 }
 
 impl<'a> Carver<'a> {
-    pub fn new(region: &'a mut [u8]) -> Self {
-        Carver { rest: region }
+    /// A carver of the values `window` of each column of `region`.
+    ///
+    /// # Safety
+    /// No other slice of `region` that overlaps these windows is alive while the columns
+    /// carved are (the items of a parallel pass take disjoint windows).
+    pub unsafe fn window(region: &Shared<'a, u8>, window: Range<usize>) -> Self {
+        Carver {
+            region: region.clone(),
+            at: 0,
+            window,
+        }
     }
 
-    /// The next `bytes` bytes viewed as `len` values of `T` (`bytes` >= len * size_of T).
+    /// The next `bytes` bytes viewed as `len` values of `T` (`bytes` >= len * size_of T), cut
+    /// to the carver's window.
     pub fn take<T: bytemuck::Pod>(&mut self, bytes: usize, len: usize) -> &'a mut [T] {
-        let rest = core::mem::take(&mut self.rest);
-        let (col, rest) = rest.split_at_mut(bytes);
-        self.rest = rest;
+        let (at, size) = (self.at, core::mem::size_of::<T>());
+        self.at += bytes;
+        let (start, end) = (self.window.start.min(len), self.window.end.min(len));
+        // SAFETY: every column is its own `bytes` of the region, so the windows of distinct
+        // columns are disjoint; `Carver::window`'s caller keeps the windows of concurrent
+        // carvers apart.
+        let col = unsafe { self.region.window(at + start * size..at + end * size) };
         // Columns start on 64-byte boundaries of a 64-byte aligned buffer (checked at init and
-        // open), so this cast never fails.
-        bytemuck::cast_slice_mut(&mut col[..len * core::mem::size_of::<T>()])
+        // open) and windows on a value's boundary, so this cast never fails.
+        bytemuck::cast_slice_mut(col)
     }
 }
 
@@ -147,9 +166,21 @@ impl<const D: usize> ParticleCols<'_, D> {
 }
 
 impl<'a, const D: usize> ParticleCols<'a, D> {
-    /// Carves the particle region (starting at `layout.particle_offset`) into columns.
-    pub fn carve(region: &'a mut [u8], layout: &Layout) -> Self {
-        let mut c = Carver::new(region);
+    /// The particles `window` of the shared particle region: the columns one item of a
+    /// parallel pass works on, particle `window.start` their first value.
+    ///
+    /// # Safety
+    /// No other view of the region that overlaps these particles is alive while this one is.
+    pub unsafe fn carve_window(
+        region: &Shared<'a, u8>,
+        layout: &Layout,
+        window: Range<usize>,
+    ) -> Self {
+        // SAFETY: as required of the caller.
+        Self::carve_with(unsafe { Carver::window(region, window) }, layout)
+    }
+
+    fn carve_with(mut c: Carver<'a>, layout: &Layout) -> Self {
         let (rb, ub, n) = (
             layout.real_column_bytes,
             layout.u32_column_bytes,
@@ -243,6 +274,35 @@ impl StepReport {
         self.runaway += runaway as u32;
         // A full list only means more than 8 froze; the count says how many.
         let _ = self.first_frozen.push(id);
+    }
+
+    /// This report as a parallel item's part of one ([`crate::layout::Partial`]).
+    pub(crate) fn to_partial(&self) -> crate::layout::Partial {
+        let mut first_frozen = [0; 8];
+        first_frozen[..self.first_frozen.len()].copy_from_slice(&self.first_frozen);
+        crate::layout::Partial {
+            stopped: self.stopped,
+            escaped: self.escaped,
+            frozen: self.frozen,
+            runaway: self.runaway,
+            first_count: self.first_frozen.len() as u32,
+            first_frozen,
+            _pad: [0; 3],
+        }
+    }
+
+    /// Adds a parallel item's part, whose particle 0 is particle `first`: the items merged
+    /// in particle order give the report one worker gives.
+    pub(crate) fn merge(&mut self, part: &crate::layout::Partial, first: u32) {
+        self.stopped += part.stopped;
+        self.escaped += part.escaped;
+        self.frozen += part.frozen;
+        self.runaway += part.runaway;
+        let n = (part.first_count as usize).min(part.first_frozen.len());
+        for &id in &part.first_frozen[..n] {
+            // A full list only means more than 8 froze; the count says how many.
+            let _ = self.first_frozen.push(first + id);
+        }
     }
 
     /// Whether a particle froze in this call (non-finite state, inverted F or runaway volume):

@@ -1,12 +1,14 @@
 //! The host's task system: how a step runs on several cores without owning a thread
-//! (Box2D v3's model). The host hands [`crate::World::step_with_tasks`] a [`TaskSystem`]; the
-//! step cuts each pass into items (ranges of particle chunks, slabs of grid lines) whose
-//! results never depend on how the items are spread over workers: every floating-point sum
-//! is added in the order a single worker adds it (ARCHITECTURE.md, "Threads"). So the state
-//! after a step is bit-identical for any number of workers, and to [`Serial`]'s.
+//! (Box2D v3's model). The host hands [`crate::World::step_with_tasks`] a [`TaskSystem`] (and
+//! sizes [`crate::WorldDef::workers`] for it); the step cuts each pass into items (ranges of
+//! particle chunks, slabs of grid lines) whose results never depend on how the items are
+//! spread over workers: every floating-point sum is added in the order a single worker adds
+//! it (ARCHITECTURE.md, "Threads"). So the state after a step is bit-identical for any number
+//! of workers, and to [`Serial`]'s. Rust hosts with rayon have the `mpm-gimp-rayon` crate; C
+//! hosts pass their callbacks to `mpm_world_step_tasks`.
 //!
-//! The unsafe of the parallel step is here, in one primitive: [`Shared`], a region of memory
-//! that items carve disjoint windows of.
+//! The unsafe of the parallel step is here, in one primitive: a region of memory that the
+//! items of a pass carve disjoint windows of (`Shared`).
 
 use core::marker::PhantomData;
 use core::ops::Range;
@@ -16,14 +18,15 @@ pub type Task<'t> = dyn Fn(usize, usize, usize) + Sync + 't;
 
 /// A host's task system (Box2D v3's enqueue and finish, as one call).
 ///
-/// # Contract
-/// [`TaskSystem::parallel_for`] calls `task(start, end, worker)` on ranges that together
+/// # Safety
+/// The step's memory safety rests on this contract (each item's view of the world is its
+/// own): [`TaskSystem::parallel_for`] calls `task(start, end, worker)` on ranges that together
 /// cover `0..items`, each item exactly once, each range at least `min_range` items long
 /// except possibly the last; at most [`TaskSystem::worker_count`] ranges run at once, no two
 /// of them with the same `worker`; it returns once every range has returned. A system may run
 /// everything on the calling thread. The step's results do not depend on how the ranges are
 /// cut nor on which worker runs which.
-pub trait TaskSystem: Sync {
+pub unsafe trait TaskSystem: Sync {
     /// The workers the system runs tasks on, at least 1.
     fn worker_count(&self) -> usize;
 
@@ -35,7 +38,8 @@ pub trait TaskSystem: Sync {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Serial;
 
-impl TaskSystem for Serial {
+// SAFETY: one range, `0..items`, on the calling thread, returning when it has run.
+unsafe impl TaskSystem for Serial {
     fn worker_count(&self) -> usize {
         1
     }
@@ -56,6 +60,34 @@ pub(crate) fn for_each(tasks: &dyn TaskSystem, items: usize, item: &(dyn Fn(usiz
     });
 }
 
+/// The most ranges a reduction ([`reduce`]) cuts its values into.
+pub(crate) const MAX_PARTS: usize = 64;
+
+/// `item` of `0..n` cut into at most `parts` ranges of whole `unit`s (at most [`MAX_PARTS`]),
+/// the results folded in range order with `fold` from `init`: one worker's fold for an
+/// associative `fold`, whatever runs where.
+pub(crate) fn reduce<T: Copy + Send>(
+    tasks: &dyn TaskSystem,
+    (n, parts, unit): (usize, usize, usize),
+    init: T,
+    item: &(dyn Fn(Range<usize>) -> T + Sync),
+    fold: impl Fn(T, T) -> T,
+) -> T {
+    let parts = parts.min(MAX_PARTS).min(n.div_ceil(unit.max(1)));
+    if parts < 2 {
+        return fold(init, item(0..n));
+    }
+    let mut results = [init; MAX_PARTS];
+    let slots = Shared::new(&mut results[..parts]);
+    for_each(tasks, parts, &|i| {
+        // SAFETY: item i alone writes slot i.
+        if let Some(slot) = unsafe { slots.window(i..i + 1) }.first_mut() {
+            *slot = item(part(n, parts, unit, i));
+        }
+    });
+    results[..parts].iter().fold(init, |acc, &r| fold(acc, r))
+}
+
 /// `0..n` cut into `parts` consecutive ranges whose boundaries are multiples of `unit`
 /// (the last ends at `n`), as even as that allows; part `i`.
 pub(crate) fn part(n: usize, parts: usize, unit: usize, i: usize) -> Range<usize> {
@@ -72,6 +104,12 @@ pub(crate) struct Shared<'a, T> {
     _borrow: PhantomData<&'a mut [T]>,
 }
 
+impl<T> Clone for Shared<'_, T> {
+    fn clone(&self) -> Self {
+        Shared { ..*self }
+    }
+}
+
 // SAFETY: a `Shared` is a `&mut [T]` handed to items that each take a disjoint part of it
 // (the contract of `window`); sending those parts to other threads needs `T: Send`.
 unsafe impl<T: Send> Sync for Shared<'_, T> {}
@@ -86,11 +124,6 @@ impl<'a, T> Shared<'a, T> {
             len: region.len(),
             _borrow: PhantomData,
         }
-    }
-
-    /// The length of the region.
-    pub fn len(&self) -> usize {
-        self.len
     }
 
     /// The values `r` of the region (clipped to its end).
@@ -121,8 +154,8 @@ mod tests {
                 for i in 0..parts {
                     let r = part(n, parts, 32, i);
                     assert_eq!(r.start, next, "n {n} parts {parts}");
-                    assert!(r.start % 32 == 0 && r.end >= r.start && r.end <= n);
-                    assert!(r.end == n || r.end % 32 == 0);
+                    assert!(r.start.is_multiple_of(32) && r.end >= r.start && r.end <= n);
+                    assert!(r.end == n || r.end.is_multiple_of(32));
                     next = r.end;
                 }
                 assert_eq!(next, n, "n {n} parts {parts}");

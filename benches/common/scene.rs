@@ -297,6 +297,8 @@ pub struct SceneDef {
     pub transfer: Transfer,
     pub flip_beta: Real,
     pub exp_terms: u32,
+    /// The most workers a task system may step the world on (`WorldDef::workers`).
+    pub workers: u32,
 }
 
 impl SceneDef {
@@ -315,6 +317,7 @@ impl SceneDef {
         transfer: WorldDef::DEFAULT.transfer,
         flip_beta: WorldDef::DEFAULT.flip_beta,
         exp_terms: WorldDef::DEFAULT.exp_terms,
+        workers: 1,
     };
 }
 
@@ -349,6 +352,7 @@ impl Scene {
             transfer: s.transfer,
             flip_beta: s.flip_beta,
             exp_terms: s.exp_terms,
+            workers: s.workers,
             ..WorldDef::DEFAULT
         };
         s.effect.declare(&mut def, expected)?;

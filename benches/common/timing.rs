@@ -3,7 +3,7 @@
 //! the same runs, the same reference workload, so their nanoseconds per particle-step compare.
 
 use mpm_gimp::simd::Simd;
-use mpm_gimp::World;
+use mpm_gimp::{TaskSystem, World};
 use std::time::{Duration, Instant};
 
 /// Warm-up steps before the timed runs.
@@ -21,20 +21,23 @@ pub struct Timing {
     pub wall: Duration,
 }
 
-/// Times `world.step(world.stable_dt())`: `WARMUP_STEPS` untimed steps, then `runs` runs of
-/// `steps` steps; only the `step` call is timed. Each step must take exactly one substep and
-/// freeze no particle (the scene is at rest but for a gentle motion).
+/// Times `world.step(world.stable_dt())` on the instance `simd` and the task system `tasks`
+/// (`&mpm_gimp::Serial`: the calling thread, as `World::step`): `WARMUP_STEPS` untimed steps,
+/// then `runs` runs of `steps` steps; only the `step` call is timed, in wall time (on several
+/// workers too). Each step must take exactly one substep and freeze no particle (the scene is
+/// at rest but for a gentle motion).
 pub fn time_steps(
     world: &mut World<'_>,
     particles: u32,
     runs: u32,
     steps: u32,
     simd: Simd,
+    tasks: &dyn TaskSystem,
 ) -> Timing {
     let step = |world: &mut World<'_>| -> Duration {
         let dt = world.stable_dt();
         let t0 = Instant::now();
-        let report = world.step_with_simd(dt, simd);
+        let report = world.step_on(dt, simd, tasks);
         let elapsed = t0.elapsed();
         let report = report.expect("stable dt is a valid time step");
         assert_eq!(report.substeps, 1, "dt = stable_dt() must take one substep");

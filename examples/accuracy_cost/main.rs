@@ -168,6 +168,7 @@ fn costs() -> Vec<Cost> {
                 COST_RUNS,
                 COST_STEPS,
                 mpm_gimp::simd::Simd::Detect,
+                &mpm_gimp::Serial,
             );
             eprintln!(
                 "accuracy_cost: cost {} {} {}: {:.2} ns per particle-step (reference {:.3})",

@@ -12,6 +12,19 @@
 //! An isotropic eigenstrain (thermal expansion, swelling: `F_0 = (1 + d) I`) is taken out of the
 //! deformation before the model sees it (E47, [`elastic_part`]), so the models know nothing of
 //! it.
+//!
+//! # Adding a material
+//!
+//! A model with its own parameters touches, and nothing else should:
+//! 1. `src/material/<model>.rs`: its parameters' struct (or `Lame`), the `Model` impl (`params`
+//!    from the record, stress, inelastic part, energy; wave speed and history range where they
+//!    differ from the defaults; a return's stress from its own decomposition) and its tests;
+//! 2. one arm of `by_model!` (`material/mod.rs`) and of `MaterialModel` with its fields and
+//!    defaults in `MaterialDef` (`def/mod.rs`); `MaterialRecord` (`layout.rs`) and its checks
+//!    and derived values (`material/record.rs`);
+//! 3. `ffi/src/defs.rs`: the C enum arm and `MpmMaterialDef` fields (header regenerated); the C
+//!    tests `layout.c` and `misuse.c`; the fuzz target;
+//! 4. the model in `tests/kernel/reference.rs`.
 
 mod drucker_prager;
 mod fixed_corotated;

@@ -301,12 +301,13 @@ pub(crate) fn commit_gradient_affine<const D: usize, const W: usize>(
     }
 }
 
-/// Particle update: velocity and position from the grid. With USL it also updates the stress
-/// from `v_i + a_i dt` in the same pass. With MUSL it also keeps the positions of the start of
-/// the step in the `x_start` columns, for the stress pass, and scatters the new momenta to the
-/// remap columns (E30) with the stencils already computed (the pass reads only `vel` and `acc`, so
-/// the remap columns are free to fill; particles contribute as in the scatter pass:
-/// [`scatter_chunk`]). Declared damping adds the damping of the module docs; APIC replaces
+/// Particle update: velocity and position from the grid `g`. With USL it also updates the
+/// stress from `v_i + a_i dt` in the same pass. With MUSL it also keeps the positions of the
+/// start of the step in the `x_start` columns, for the stress pass, and, where `remap` holds
+/// the remap columns ([`GridCols::split_remap`]), scatters the new momenta to them (E30) with
+/// the stencils already computed (particles contribute as in the scatter pass:
+/// [`scatter_chunk`]); the parallel step gives it none and scatters them in a pass of its own
+/// (`p2g::scatter_rows` in [`Mode::Remap`]), which adds the same values in the same order. Declared damping adds the damping of the module docs; APIC replaces
 /// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
 pub(crate) fn particles<
@@ -320,13 +321,15 @@ pub(crate) fn particles<
     ctx: &Ctx<'_, D>,
     p: &mut ParticleCols<'_, D>,
     count: usize,
-    g: &mut GridCols<'_, D>,
+    g: &GridCols<'_, D>,
+    remap: &mut GridCols<'_, D>,
     report: &mut StepReport,
 ) {
     let geom = &ctx.geom;
     let dt = ctx.dt;
     let fused_stress = ctx.order == UpdateOrder::Usl;
     let keep_start = ctx.order == UpdateOrder::Musl;
+    let fused_remap = keep_start && !remap.remap[0].is_empty();
     let (damp, apic) = (ctx.damp, ctx.apic);
     // APIC's moment matrices, gathered (a family that keeps the gradient form takes the stress
     // update's gradient instead).
@@ -495,7 +498,7 @@ pub(crate) fn particles<
         }
         report.escaped += escaped.count();
         report.stopped += (ok & stopped).minus(escaped).count();
-        if keep_start {
+        if fused_remap {
             let active = live_lanes(p, start, count);
             load_into(&mut mass, p.mass, start);
             // An active lane was committed: its velocity is v_new. The B_p of a family that
@@ -510,10 +513,10 @@ pub(crate) fn particles<
             let (stride, pr) = (geom.stride, &products);
             if apic {
                 const REMAP: u8 = rows(Mode::Remap, true);
-                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, remap, adds);
             } else {
                 const REMAP: u8 = rows(Mode::Remap, false);
-                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, g, adds);
+                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, remap, adds);
             }
         }
     }

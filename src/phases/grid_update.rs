@@ -1,17 +1,35 @@
 //! Grid update (E17-E20): nodal velocity `v_i = p_i / m_i`, acceleration
 //! `a_i = f_i / m_i + g`, so that `p_i(n+1) = p_i + (f_i + m_i g) dt` is `m_i (v_i + a_i dt)`;
 //! then each face's boundary condition on both.
+//!
+//! The node-by-node parts run on slabs of the grid ([`Nodes::each_slab`], in parallel where
+//! the step has several workers: a node's new value depends on that node alone); the walls,
+//! which fold nodes onto their images across lines, on the whole grid.
 
 use super::Ctx;
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
 use crate::Real;
 
+/// The node columns of a substep, as the grid passes take them: whole, or in slabs of whole
+/// lines that partition the node box's entries (each slab's columns start at its first
+/// entry, [`GridCols::window`]).
+pub(crate) trait Nodes<const D: usize> {
+    /// The whole grid.
+    fn whole(&mut self) -> GridCols<'_, D>;
+    /// Runs `f` on each slab, in any order or at once.
+    fn each_slab(&mut self, f: &(dyn Fn(&mut GridCols<'_, D>) + Sync));
+}
+
 /// Zeroes every nodal column the step accumulates into, on the nodes of the substep
 /// ([`crate::grid::NodeBox`]).
-pub(crate) fn reset<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    let len = g.len();
-    ctx.active.for_each_line(ctx.geom.stride, len, |r| {
+pub(crate) fn reset<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
+    nodes.each_slab(&|g| zero_all(ctx, g));
+}
+
+fn zero_all<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    let window = g.window();
+    ctx.active.for_each_line_in(ctx.geom.stride, window, |r| {
         zero(g.mass, r.clone());
         for a in 0..D {
             zero(g.vel[a], r.clone());
@@ -34,21 +52,26 @@ fn divide_by_mass<const D: usize>(
     mass: &[Real],
     cols: &mut [&mut [Real]; D],
     add: [Real; D],
+    window: core::ops::Range<usize>,
 ) {
-    let len = mass.len();
-    ctx.active.for_each_line(ctx.geom.stride, len, |r| {
+    let cutoff = ctx.mass_cutoff;
+    ctx.active.for_each_line_in(ctx.geom.stride, window, |r| {
         for (a, col) in cols.iter_mut().enumerate() {
             if let (Some(col), Some(mass)) = (col.get_mut(r.clone()), mass.get(r.clone())) {
-                for (c, &m) in col.iter_mut().zip(mass) {
-                    *c = if m > ctx.mass_cutoff {
-                        *c / m + add[a]
-                    } else {
-                        0.0
-                    };
-                }
+                divide_line(col, mass, cutoff, add[a]);
             }
         }
     });
+}
+
+/// One line of [`divide_by_mass`]: a function of its own, whose slices the compiler knows
+/// apart, so that the loop vectorises (inlined into the closure of a grid pass, it stayed
+/// scalar, and the grid passes took five times as long).
+#[inline(never)]
+fn divide_line(col: &mut [Real], mass: &[Real], cutoff: Real, add: Real) {
+    for (c, &m) in col.iter_mut().zip(mass) {
+        *c = if m > cutoff { *c / m + add } else { 0.0 };
+    }
 }
 
 /// Folds the nodes past the wall planes onto their images, or reads the images back into them
@@ -63,24 +86,34 @@ fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], 
 
 /// Momentum to velocity `v_i = p_i / m_i` (E18). The walls are not applied here: they act
 /// on the updated velocity through the acceleration (see [`acceleration`]).
-pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.geom
-        .fold_wall_images::<1, true>(&mut [&mut *g.mass], &ctx.active);
-    mirror_vector(ctx, &mut g.vel, true);
-    divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D]);
-    mirror_vector(ctx, &mut g.vel, false);
+pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
+    {
+        let g = &mut nodes.whole();
+        ctx.geom
+            .fold_wall_images::<1, true>(&mut [&mut *g.mass], &ctx.active);
+        mirror_vector(ctx, &mut g.vel, true);
+    }
+    nodes.each_slab(&|g| {
+        let window = g.window();
+        divide_by_mass(ctx, g.mass, &mut g.vel, [0.0; D], window)
+    });
+    mirror_vector(ctx, &mut nodes.whole().vel, false);
 }
 
 /// Force to acceleration `a_i = f_i / m_i + g` (E19), then the walls on the updated
 /// velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
 /// the wall's reaction `-v_i / dt` (E20). The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
-pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    mirror_vector(ctx, &mut g.acc, true);
-    divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity);
-    if let Some(nodal) = &ctx.nodal_damping {
-        damp_nodes(ctx, nodal, g);
-    }
+pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
+    mirror_vector(ctx, &mut nodes.whole().acc, true);
+    nodes.each_slab(&|g| {
+        let window = g.window();
+        divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity, window);
+        if let Some(nodal) = &ctx.nodal_damping {
+            damp_nodes(ctx, nodal, g);
+        }
+    });
+    let g = &mut nodes.whole();
     let inv_dt = 1.0 / ctx.dt;
     ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
@@ -99,8 +132,12 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_
 fn damp_nodes<const D: usize>(ctx: &Ctx<'_, D>, nodal: &NodalDamping, g: &mut GridCols<'_, D>) {
     let geom = &ctx.geom;
     let n = geom.nodes[0];
-    ctx.active.for_each_line(geom.stride, g.len(), |r| {
+    // Node indices: the slab's entry `k` is node `offset + k`.
+    let window = g.window();
+    let offset = window.start;
+    ctx.active.for_each_line_in(geom.stride, window, |r| {
         // A range may run past the end of its grid line: one line at a time.
+        let r = r.start + offset..r.end + offset;
         let mut start = r.start;
         while start < r.end {
             let first = start % n;
@@ -119,8 +156,9 @@ fn damp_nodes<const D: usize>(ctx: &Ctx<'_, D>, nodal: &NodalDamping, g: &mut Gr
                     }
                 }
                 for a in 0..D {
+                    let local = from - offset..to - offset;
                     let (Some(acc), Some(vel)) =
-                        (g.acc[a].get_mut(from..to), g.vel[a].get(from..to))
+                        (g.acc[a].get_mut(local.clone()), g.vel[a].get(local))
                     else {
                         return; // Unreachable: every line lies within the columns.
                     };
@@ -135,24 +173,30 @@ fn damp_nodes<const D: usize>(ctx: &Ctx<'_, D>, nodal: &NodalDamping, g: &mut Gr
 }
 
 /// MUSL: re-mapped momentum to velocity, with the walls (it is an updated velocity).
-pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    mirror_vector(ctx, &mut g.remap, true);
-    divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D]);
-    constrain_remap(ctx, g);
+pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
+    mirror_vector(ctx, &mut nodes.whole().remap, true);
+    nodes.each_slab(&|g| {
+        let window = g.window();
+        divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D], window)
+    });
+    constrain_remap(ctx, &mut nodes.whole());
 }
 
 /// USF: the lagged velocity with the walls applied, for the stress update; the unconstrained
 /// one stays in `vel` for the particle update and the wall reaction.
-pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    ctx.active.for_each_line(ctx.geom.stride, g.len(), |r| {
-        for a in 0..D {
-            if let (Some(to), Some(from)) = (g.remap[a].get_mut(r.clone()), g.vel[a].get(r.clone()))
-            {
-                to.copy_from_slice(from);
+pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
+    nodes.each_slab(&|g| {
+        let (window, remap, vel) = (g.window(), &mut g.remap, &g.vel);
+        ctx.active.for_each_line_in(ctx.geom.stride, window, |r| {
+            for a in 0..D {
+                if let (Some(to), Some(from)) = (remap[a].get_mut(r.clone()), vel[a].get(r.clone()))
+                {
+                    to.copy_from_slice(from);
+                }
             }
-        }
+        });
     });
-    constrain_remap(ctx, g);
+    constrain_remap(ctx, &mut nodes.whole());
 }
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {

@@ -69,9 +69,23 @@ pub(crate) fn scatter_rows<
     let mut f_ext = Block([[0.0; W]; D]);
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut products = Products::zero();
+    // MUSL's re-map scatter (the parallel step's; the serial one's is the particle pass's)
+    // weighs the new momenta with the stencils where the substep started. A family that keeps
+    // the gradient form re-maps no affine part: its C_p is taken from this re-map.
+    let remap = adds.mode == Mode::Remap;
+    let positions = if remap { &p.x_start } else { &p.x };
+    let load_affine = adds.apic && !(remap && S::GRADIENT_AFFINE);
+    // A tile of the parallel scatter takes the chunks whose rows reach its slab (and adds
+    // their rows in the slab alone, `row_sums`).
+    let slab = g.tile.slab(ctx.geom.stride[D - 1]);
     for start in (0..count).step_by(W) {
+        if let Some(slab) = &slab {
+            if !g.chunk_reaches(start, W, slab) {
+                continue;
+            }
+        }
         for a in 0..D {
-            load_into(&mut x[a], p.x[a], start);
+            load_into(&mut x[a], positions[a], start);
             load_into(&mut v[a], p.v[a], start);
             if adds.forces {
                 load_into(&mut f_ext[a], p.force[a], start);
@@ -85,7 +99,7 @@ pub(crate) fn scatter_rows<
                 load_into(&mut tau[k], p.tau[k], start);
             }
         }
-        if adds.apic {
+        if load_affine {
             for (a, row) in affine.iter_mut().enumerate() {
                 for (b, lanes) in row.iter_mut().enumerate() {
                     load_into(lanes, p.affine[a][b], start);
@@ -96,7 +110,20 @@ pub(crate) fn scatter_rows<
         super::stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, &x, adds.apic, false, mls);
         let live = crate::simd::lanes::live_lanes(p, start, count);
         products.set::<I, K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
-        scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, ctx.geom.stride, g, adds);
+        let stride = ctx.geom.stride;
+        if remap {
+            // The particle pass's re-map kernel: no scatter function of its own per form.
+            const APIC: u8 = rows(Mode::Remap, true);
+            const PLAIN: u8 = rows(Mode::Remap, false);
+            let pr = &products;
+            if adds.apic {
+                I::scatter_chunk::<D, K, S, W, APIC>(&mut st, pr, live, stride, g, adds);
+            } else {
+                I::scatter_chunk::<D, K, S, W, PLAIN>(&mut st, pr, live, stride, g, adds);
+            }
+        } else {
+            scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, stride, g, adds);
+        }
     }
 }
 

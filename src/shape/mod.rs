@@ -43,7 +43,7 @@ type Mat4 = glam::Mat4;
 type Mat4 = glam::DMat4;
 
 /// One family of 1D shape functions with `K` nodes of support.
-pub trait Shape1D<const K: usize>: Copy {
+pub trait Shape1D<const K: usize>: Copy + Sync {
     /// The first node of the stencil of a particle at `s` (cell units) is
     /// `floor(s + SHIFT) - LEAD`, before clamping to the grid.
     const SHIFT: Real;

@@ -9,7 +9,7 @@
 
 use super::lanes::{Lane, Lanes};
 use super::rows::{self, Rows};
-use crate::grid::{add_row, rows_fit, GridCols};
+use crate::grid::{add_row, rows_fit, GridCols, Tile};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::Real;
 use core::mem::MaybeUninit;
@@ -172,11 +172,8 @@ impl<'a, 'g, const D: usize> Direct<'a, 'g, D> {
         base: usize,
         stride: [usize; D],
     ) -> Option<Self> {
-        rows_fit(base, Stencil::<D, K>::last_row_offset(stride), g.len()).then_some(Direct {
-            g,
-            base,
-            stride,
-        })
+        let fits = g.tile != Tile::ALL || rows_fit(base, last_row::<D, K>(stride), g.len());
+        fits.then_some(Direct { g, base, stride })
     }
 }
 
@@ -185,9 +182,31 @@ impl<const D: usize> Direct<'_, '_, D> {
     #[inline(always)]
     fn add<const K: usize>(&mut self, j: usize, k: usize, c: usize, v: Row4) {
         let row = crate::shape::row_start(self.base, j, k, self.stride);
-        // SAFETY: `new` checked the stencil's rows (j, k < K) against the grid, and every
-        // column has g.len() entries.
-        unsafe { add_row(column(self.g, c), row, v) };
+        // SAFETY: `new` checked the stencil's rows (j, k < K) against the whole grid, or the
+        // columns are a tile's.
+        unsafe { add_own_row(self.g, c, row, v) };
+    }
+}
+
+/// The offset of a `K`-node stencil's last row from its first node.
+#[inline(always)]
+fn last_row<const D: usize, const K: usize>(stride: [usize; D]) -> usize {
+    Stencil::<D, K>::last_row_offset(stride)
+}
+
+/// Adds `v` to the row of slot `c` (a [`slot`]) that starts at node `row`, if the row is the
+/// columns' to add to ([`Tile`]: every row for the whole grid, the rows of its slab for a tile
+/// of the parallel scatter, which adds each row in the order the whole grid's scatter does).
+///
+/// # Safety
+/// For the whole grid ([`Tile::ALL`]), `row + ROW <= g.len()` ([`rows_fit`]); a tile's columns
+/// hold `tile.rows + ROW` entries and every column has g.len() ([`GridCols::lengths_consistent`]).
+#[inline(always)]
+unsafe fn add_own_row<const D: usize>(g: &mut GridCols<'_, D>, c: usize, row: usize, v: Row4) {
+    let at = row.wrapping_sub(g.tile.first);
+    if at < g.tile.rows {
+        // SAFETY: as required of the caller: at + ROW <= g.len() either way.
+        unsafe { add_row(column(g, c), at, v) }
     }
 }
 
@@ -220,9 +239,8 @@ pub(crate) fn scatter_chunk<
     adds: Adds,
 ) {
     let base = st.bases();
-    let blocks = live == Lanes::ALL
-        && rows::blocks_share(base)
-        && rows::fit(base, Stencil::<D, K>::last_row_offset(stride), g.len());
+    let fits = g.tile != Tile::ALL || rows::fit(base, last_row::<D, K>(stride), g.len());
+    let blocks = live == Lanes::ALL && rows::blocks_share(base) && fits;
     if blocks && D == 2 && I::N >= 8 {
         scatter_blocks::<I, D, K, S, W, MODE>(st, pr, stride, g, adds);
     } else if blocks && D == 3 && I::Narrow::N == 8 {
@@ -726,7 +744,8 @@ fn scatter_group<
 /// particles of each block as [`scatter_group`] sums a group's, and the blocks' sums are added
 /// to the grid block after block, as it adds them: the same values, added in the same order.
 ///
-/// The caller checked that every lane's rows fit the grid ([`rows::fit`]).
+/// The caller checked that every lane's rows fit the grid ([`rows::fit`]), or `g` is a tile's
+/// columns ([`add_own_row`]).
 #[inline(always)]
 fn scatter_blocks<
     I: Rows,
@@ -796,8 +815,9 @@ fn scatter_blocks<
 /// `first`, in the order [`scatter_group`] adds a group's rows and columns.
 ///
 /// # Safety
-/// Every lane's rows fit the grid; `sums` holds every row (`j < K`, `k < layers`) with the
-/// slots `MODE` fills ([`for_each_row`] gave it them).
+/// Every lane's rows fit the grid, or `g` is a tile's columns ([`add_own_row`]); `sums` holds
+/// every row (`j < K`, `k < layers`) with the slots `MODE` fills ([`for_each_row`] gave it
+/// them).
 #[inline(always)]
 unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, const B: usize>(
     sums: &BlockSums<I, D>,
@@ -810,11 +830,10 @@ unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, con
             for c in 0..slot::COUNT {
                 if slot_used::<D, MODE>(c) {
                     let row = crate::shape::row_start(first, j, k, stride);
-                    // SAFETY: as required of the caller, and every column has g.len()
-                    // entries.
+                    // SAFETY: as required of the caller.
                     unsafe {
                         let v = sums.sums[j * K + k][c].assume_init();
-                        add_row(column(g, c), row, I::block(v, B));
+                        add_own_row(g, c, row, I::block(v, B));
                     }
                 }
             }
@@ -865,6 +884,9 @@ mod tests {
             acc: core::array::from_fn(|_| acc.next().expect("three axes")),
             remap: core::array::from_fn(|_| remap.next().expect("three axes")),
             scalar: Default::default(),
+            len: LEN,
+            tile: crate::grid::Tile::ALL,
+            reach: &[],
         }
     }
 

@@ -4,6 +4,7 @@
 
 mod add;
 mod effects;
+mod parallel;
 mod passes;
 mod query;
 mod seed;

@@ -13,13 +13,16 @@
 
 use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
+use crate::layout::{CHUNK, REACH_GROUP, SLOTS_PER_WORKER};
 use crate::particles::{ParticleCols, StepReport};
 use crate::phases::kernels::Kernels;
 use crate::phases::p2g::{self, rows, Adds, Mode};
 use crate::phases::{g2p, stress, transport, Ctx};
 use crate::shape::Shape1D;
 use crate::simd::{with_instance, Simd};
+use crate::tasks::{self, Shared, TaskSystem};
 use crate::Real;
+use core::ops::Range;
 
 crate::simd::instances! {
     /// The passes of one instance; a substep generic over it calls them as `I::particles(..)`.
@@ -43,7 +46,8 @@ crate::simd::instances! {
         ctx: &Ctx<'_, D>,
         p: &mut ParticleCols<'_, D>,
         count: usize,
-        g: &mut GridCols<'_, D>,
+        g: &GridCols<'_, D>,
+        remap: &mut GridCols<'_, D>,
         report: &mut StepReport,
     ) => g2p::particles;
 
@@ -68,13 +72,14 @@ crate::simd::instances! {
         t: &Transport,
     ) => transport::substep;
 
-    /// [`NodeBox::of_particles`] ([`crate::grid::node_box`]).
-    fn node_box [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (
+    /// [`NodeBox::first_nodes`] and the reach table ([`crate::grid::first_nodes`]).
+    fn first_nodes [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (
         geom: &Geom<D>,
         x: &[&[Real]; D],
         status: &[u32],
         count: usize,
-    ) -> NodeBox<D> => crate::grid::node_box;
+        reach: &mut [[u32; 2]],
+    ) -> ([i32; D], [i32; D]) => crate::grid::first_nodes;
 
     /// [`crate::world::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
@@ -112,6 +117,12 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
     use Mode::*;
     // Branches on the constant alone, so that an instance compiles only the functions it
     // calls.
+    // The re-map scatter calls its chunk kernel from any scatter function (`p2g::scatter_rows`).
+    let adds_rows = if adds.mode == Remap {
+        Adds { mode: All, ..adds }
+    } else {
+        adds
+    };
     if I::FULL_ROWS {
         if adds.mode == Force {
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
@@ -120,7 +131,7 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
         }
         return;
     }
-    match (adds.mode, adds.apic) {
+    match (adds_rows.mode, adds_rows.apic) {
         (All, false) => {
             I::scatter::<D, K, S, W, { rows(All, false) }>(shape, ctx, p, count, g, adds)
         }
@@ -135,36 +146,100 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
         (Force, _) => {
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
         }
-        (Remap, _) => debug_assert!(false, "the re-map scatter is the particle pass's"),
+        (Remap, _) => {}
     }
 }
 
-/// The node box of a substep ([`NodeBox::of_particles`]), scanned in the instruction set
-/// `simd`.
+/// How the scans of the particles below are cut for a task system: `(particles, ranges,
+/// unit)` for [`tasks::reduce`], four ranges per worker (at most the definition's `workers`).
+pub(crate) struct Scan<'t> {
+    pub tasks: &'t dyn TaskSystem,
+    pub workers: usize,
+}
+
+impl Scan<'_> {
+    fn cut(&self, n: usize) -> (usize, usize, usize) {
+        (n, SLOTS_PER_WORKER * self.workers, CHUNK)
+    }
+}
+
+/// The node box of a substep ([`NodeBox::of_first_nodes`]), scanned in the instruction set
+/// `simd` on `scan`'s task system: the ranges' first nodes merge by `min` and `max`, so the
+/// box is one worker's.
 pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
     simd: Simd,
+    scan: &Scan<'_>,
     geom: &Geom<D>,
     x: &[&[Real]; D],
     status: &[u32],
     count: usize,
+    reach: Option<&Shared<'_, [u32; 2]>>,
 ) -> NodeBox<D> {
-    with_instance!(simd, form (D, K), I => I::node_box::<D, K, S>(geom, x, status, count))
+    let count = x
+        .iter()
+        .fold(count.min(status.len()), |n, c| n.min(c.len()));
+    let range = |r: Range<usize>| {
+        let x = x.each_ref().map(|c| &c[r.clone()]);
+        let status = &status[r.clone()];
+        // The ranges are whole groups.
+        let groups = r.start / REACH_GROUP..r.end.div_ceil(REACH_GROUP);
+        // SAFETY: the ranges of distinct items are disjoint, and so are their groups.
+        let out = reach.map_or(&mut [][..], |t| unsafe { t.window(groups) });
+        let n = r.len();
+        with_instance!(simd, form (D, K), I => I::first_nodes::<D, K, S>(geom, &x, status, n, out))
+    };
+    let none = ([i32::MAX; D], [i32::MIN; D]);
+    // Whole groups of the reach table per range.
+    let (n, parts, _) = scan.cut(count);
+    let cut = (n, parts, REACH_GROUP);
+    let (lo, hi) = tasks::reduce(scan.tasks, cut, none, &range, |a, b| {
+        (
+            core::array::from_fn(|k| a.0[k].min(b.0[k])),
+            core::array::from_fn(|k| a.1[k].max(b.1[k])),
+        )
+    });
+    NodeBox::of_first_nodes::<K>(geom, lo, hi)
 }
 
 /// The least plastic history of the active particles of material `m`
-/// ([`crate::particles::least_plastic`]), scanned in the instruction set `simd`.
+/// ([`crate::particles::least_plastic`]), scanned in the instruction set `simd` on `scan`'s
+/// task system (a minimum: the same for any cut).
 pub(crate) fn least_plastic(
     simd: Simd,
+    scan: &Scan<'_>,
     plastic: &[Real],
     material: &[u32],
     status: &[u32],
     m: u32,
 ) -> Real {
-    with_instance!(simd, I => I::least_plastic(plastic, material, status, m))
+    let range = |r: Range<usize>| {
+        let (p, mat, st) = (&plastic[r.clone()], &material[r.clone()], &status[r]);
+        with_instance!(simd, I => I::least_plastic(p, mat, st, m))
+    };
+    let n = status.len().min(plastic.len()).min(material.len());
+    tasks::reduce(scan.tasks, scan.cut(n), Real::INFINITY, &range, |a, b| {
+        if b < a {
+            b
+        } else {
+            a
+        }
+    })
 }
 
 /// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),
-/// scanned in the instruction set `simd`.
-pub(crate) fn fastest_squared(simd: Simd, v: &[&[Real]; 3], status: &[u32], d: usize) -> f64 {
-    with_instance!(simd, I => I::fastest_squared(v, status, d))
+/// scanned in the instruction set `simd` on `scan`'s task system (a maximum: the same for any
+/// cut).
+pub(crate) fn fastest_squared(
+    simd: Simd,
+    scan: &Scan<'_>,
+    v: &[&[Real]; 3],
+    status: &[u32],
+    d: usize,
+) -> f64 {
+    let n = v.iter().take(d).fold(status.len(), |n, c| n.min(c.len()));
+    let range = |r: Range<usize>| {
+        let v = v.each_ref().map(|c| c.get(r.clone()).unwrap_or(&[]));
+        with_instance!(simd, I => I::fastest_squared(&v, &status[r], d))
+    };
+    tasks::reduce(scan.tasks, scan.cut(n), 0.0, &range, f64::max)
 }

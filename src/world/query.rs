@@ -273,11 +273,20 @@ impl<'a> WorldRef<'a> {
 
     /// [`WorldRef::stable_dt`], its scan of the particles run in the instruction set `simd`.
     pub(crate) fn stable_dt_with_simd(&self, simd: Simd) -> Real {
-        self.time_step_limits(simd).stable_dt
+        let scan = super::passes::Scan {
+            tasks: &crate::tasks::Serial,
+            workers: 1,
+        };
+        self.time_step_limits(simd, &scan).stable_dt
     }
 
-    /// The stable time step and the damping besides the thermostat that it allows for.
-    pub(super) fn time_step_limits(&self, simd: Simd) -> TimeStepLimits {
+    /// The stable time step and the damping besides the thermostat that it allows for, the
+    /// particles scanned on `scan`'s task system.
+    pub(super) fn time_step_limits(
+        &self,
+        simd: Simd,
+        scan: &super::passes::Scan<'_>,
+    ) -> TimeStepLimits {
         let layout = self.layout();
         let def = self.def();
         let n = self.particle_count();
@@ -298,6 +307,7 @@ impl<'a> WorldRef<'a> {
                 if hardens(r) {
                     let least = super::passes::least_plastic(
                         simd,
+                        scan,
                         plastic,
                         material,
                         &status[..n],
@@ -315,7 +325,7 @@ impl<'a> WorldRef<'a> {
                 &[]
             }
         });
-        let v2_max = super::passes::fastest_squared(simd, &v, &status[..n], d);
+        let v2_max = super::passes::fastest_squared(simd, scan, &v, &status[..n], d);
         let speed = c_max as f64 + libm::sqrt(v2_max);
         // Damping is integrated explicitly, `v (1 - alpha dt)`: the step keeps `alpha dt` at
         // most the Courant number, with alpha the largest damping any particle can see (the

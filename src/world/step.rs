@@ -1,14 +1,15 @@
 //! Stepping: [`World::step`], the dispatch to the compiled instance of the dimension and
 //! shape function, and `Substep`, the only place the phase order of a substep is written.
 
-use super::passes::{self, Passes};
+use super::parallel::{Columns, GridPasses};
+use super::passes::{Passes, Scan};
 use super::{StepReport, World};
 use crate::def::{Transfer, UpdateOrder, WorldDef};
 use crate::effects::damping::NodalDamping;
-use crate::grid::{Geom, GridCols};
+use crate::grid::Geom;
 use crate::layout::{Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
-use crate::particles::{ParticleCols, FROZEN};
+use crate::particles::FROZEN;
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::{grid_update, Ctx};
 use crate::shape::Shape1D;
@@ -73,7 +74,11 @@ impl<'a> World<'a> {
         if !(1..=def.workers as usize).contains(&tasks.worker_count()) {
             return Err(Error::InvalidLimit);
         }
-        let limits = self.read().time_step_limits(simd);
+        let scan = Scan {
+            tasks,
+            workers: tasks.worker_count(),
+        };
+        let limits = self.read().time_step_limits(simd, &scan);
         let ratio = dt / limits.stable_dt;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
         // NaN-safe: a NaN ratio fails `<=`.
@@ -95,7 +100,7 @@ impl<'a> World<'a> {
         let mut k = 0;
         while k < plan.count {
             if hardening && k > 0 {
-                self.replan(&mut plan, k, dt, simd, &mut report);
+                self.replan(&mut plan, k, dt, (simd, &scan), &mut report);
             }
             let time = time0 + plan.start + (k - plan.first) as f64 * plan.dt as f64;
             if let Some(feedback) = fx.damping.and_then(|d| d.feedback) {
@@ -109,7 +114,7 @@ impl<'a> World<'a> {
             let mut substep = Substep {
                 report: &mut report,
             };
-            self.dispatch(plan.dt, time, &mut substep, simd);
+            self.dispatch((plan.dt, time), &mut substep, simd, tasks);
             k += 1;
         }
         report.substeps = plan.count;
@@ -125,8 +130,15 @@ impl<'a> World<'a> {
     /// substeps again, at most what [`WorldDef::max_substeps`] leaves; if even those are
     /// longer than the stable step, freezes the particles whose hardened wave speed they do
     /// not resolve (a Courant number above 1), as runaway.
-    fn replan(&mut self, plan: &mut Plan, k: u32, dt: Real, simd: Simd, report: &mut StepReport) {
-        let limits = self.read().time_step_limits(simd);
+    fn replan(
+        &mut self,
+        plan: &mut Plan,
+        k: u32,
+        dt: Real,
+        (simd, scan): (Simd, &Scan<'_>),
+        report: &mut StepReport,
+    ) {
+        let limits = self.read().time_step_limits(simd, scan);
         if limits.stable_dt >= plan.dt {
             return;
         }
@@ -174,10 +186,16 @@ impl<'a> World<'a> {
 
     /// Runs `kernel` once on the world's columns, dispatching once on (dimension, shape
     /// function) to the monomorphised instance, with the instruction set `simd` picks.
-    fn dispatch(&mut self, dt: Real, time: f64, kernel: &mut impl Kernel, simd: Simd) {
+    fn dispatch(
+        &mut self,
+        (dt, time): (Real, f64),
+        kernel: &mut impl Kernel,
+        simd: Simd,
+        tasks: &dyn TaskSystem,
+    ) {
         let def = self.def();
         let layout = Layout::of(&def);
-        let run = (dt, time);
+        let run = (dt, time, tasks);
         crate::shape::with_form!(&def, shape => {
             self.run::<D, K, _, { width(D) }>(shape, run, &def, &layout, kernel, simd)
         })
@@ -188,7 +206,7 @@ impl<'a> World<'a> {
     fn run<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         shape: S,
-        (dt, time): (Real, f64),
+        (dt, time, tasks): (Real, f64, &dyn TaskSystem),
         def: &WorldDef,
         layout: &Layout,
         kernel: &mut impl Kernel,
@@ -200,7 +218,8 @@ impl<'a> World<'a> {
         let n_tractions = self.header().traction_count as usize;
         let feedback_alpha = self.header().feedback_alpha as Real;
         let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
-        let (pbytes, gbytes) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
+        let (pbytes, rest) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
+        let (gbytes, scratch) = rest.split_at_mut(layout.scratch_offset - layout.grid_offset);
         let mat_start = layout.materials_offset;
         let materials: &[MaterialRecord] = bytemuck::cast_slice(
             &head[mat_start..mat_start + n_materials * size_of::<MaterialRecord>()],
@@ -209,8 +228,7 @@ impl<'a> World<'a> {
         let tractions: &[TractionRecord] = bytemuck::cast_slice(
             &head[trac_start..trac_start + n_tractions * size_of::<TractionRecord>()],
         );
-        let mut p = ParticleCols::<D>::carve(pbytes, layout);
-        let mut g = GridCols::<D>::carve(gbytes, layout);
+        let mut cols = Columns::<D>::new(pbytes, gbytes, scratch, layout, tasks);
         let fx = &def.effects;
         let body = fx.body_force * fx.body_force_scale.at(time);
         // The grid rate (thermostat included) acts in the particle update or on the force.
@@ -228,13 +246,7 @@ impl<'a> World<'a> {
             None => (0.0, 0.0, None),
         };
         let geom = Geom::<D>::new(def);
-        let active = passes::node_box::<D, K, S>(
-            simd,
-            &geom,
-            &p.x.each_ref().map(|c| &**c),
-            p.status,
-            count,
-        );
+        let active = cols.node_box::<K, S>(simd, &geom, count);
         let ctx = Ctx {
             geom,
             active,
@@ -267,7 +279,7 @@ impl<'a> World<'a> {
             plastic: fx.plasticity,
             viscous: materials.iter().any(|m| m.viscosity != 0.0),
         };
-        run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut p, count, &mut g);
+        run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut cols, count);
     }
 
     /// Runs one phase of a USL step on the current state, for benchmarks that time the phases
@@ -282,7 +294,7 @@ impl<'a> World<'a> {
             report: StepReport::default(),
         };
         let time = self.time();
-        self.dispatch(dt, time, &mut run, Simd::Detect);
+        self.dispatch((dt, time), &mut run, Simd::Detect, &Serial);
         Ok(run.report)
     }
 }
@@ -306,9 +318,8 @@ trait Kernel {
         &mut self,
         shape: &S,
         ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
+        cols: &mut Columns<'_, D>,
         count: usize,
-        g: &mut GridCols<'_, D>,
     );
 }
 
@@ -319,12 +330,11 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     simd: Simd,
     shape: &S,
     ctx: &Ctx<'_, D>,
-    p: &mut ParticleCols<'_, D>,
+    cols: &mut Columns<'_, D>,
     count: usize,
-    g: &mut GridCols<'_, D>,
 ) {
     crate::simd::with_instance!(simd, form (D, K), I => {
-        kernel.body::<I, D, K, S, W>(shape, ctx, p, count, g)
+        kernel.body::<I, D, K, S, W>(shape, ctx, cols, count)
     });
 }
 
@@ -351,19 +361,21 @@ impl Kernel for Substep<'_> {
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
+        cols: &mut Columns<'_, D>,
         count: usize,
-        g: &mut GridCols<'_, D>,
     ) {
         let report = &mut *self.report;
-        p.freeze_domain_stretch(count);
-        // Heat and diffusion first, with the particles where the substep starts.
-        for (f, t) in ctx.transport.iter().enumerate() {
-            if let Some(t) = t {
-                I::transport::<D, K, S, W>(s, ctx, p, count, g, f, t);
+        {
+            let (mut p, mut g) = cols.full();
+            p.freeze_domain_stretch(count);
+            // Heat and diffusion first, with the particles where the substep starts.
+            for (f, t) in ctx.transport.iter().enumerate() {
+                if let Some(t) = t {
+                    I::transport::<D, K, S, W>(s, ctx, &mut p, count, &mut g, f, t);
+                }
             }
         }
-        grid_update::reset(ctx, g);
+        grid_update::reset(ctx, &mut GridPasses { cols, ctx });
         let (usf, musl) = (
             ctx.order == UpdateOrder::Usf,
             ctx.order == UpdateOrder::Musl,
@@ -376,30 +388,33 @@ impl Kernel for Substep<'_> {
         } else {
             Mode::MassMomentum
         };
-        passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(first, ctx));
-        grid_update::velocity(ctx, g);
+        cols.scatter::<I, K, S, W>(s, ctx, count, Adds::of(first, ctx));
+        grid_update::velocity(ctx, &mut GridPasses { cols, ctx });
         if ctx.momentum {
             // The momentum approach's weights read the masses past the walls as mirrored.
-            crate::phases::momentum::mirror_masses(ctx, g);
+            crate::phases::momentum::mirror_masses(ctx, &mut cols.grid());
         }
         if usf {
             // USF: the stress from the velocities the walls leave, before the force.
-            grid_update::constrained_velocity(ctx, g);
-            I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+            grid_update::constrained_velocity(ctx, &mut GridPasses { cols, ctx });
+            cols.stress::<I, K, S, W>(s, ctx, count, report);
         }
         if !with_force {
             // The momentum approach's force scatter is its own (E75, `phases::momentum`).
-            passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::Force, ctx));
+            cols.scatter::<I, K, S, W>(s, ctx, count, Adds::of(Mode::Force, ctx));
         }
-        crate::phases::tractions::tractions(s, ctx, p, count, g);
-        grid_update::acceleration(ctx, g);
+        {
+            let (p, mut g) = cols.full();
+            crate::phases::tractions::tractions(s, ctx, &p, count, &mut g);
+        }
+        grid_update::acceleration(ctx, &mut GridPasses { cols, ctx });
         // USL also updates the stress here, MUSL scatters the new momenta to the remap
         // columns (see g2p::particles).
-        I::particles::<D, K, S, W>(s, ctx, p, count, g, report);
+        cols.particles::<I, K, S, W>(s, ctx, count, report);
         if musl {
             // MUSL: the stress from the re-mapped velocities.
-            grid_update::remap_velocity(ctx, g);
-            I::stress::<D, K, S, W>(s, ctx, p, count, g, report);
+            grid_update::remap_velocity(ctx, &mut GridPasses { cols, ctx });
+            cols.stress::<I, K, S, W>(s, ctx, count, report);
         }
     }
 }
@@ -428,9 +443,8 @@ impl Kernel for PhaseRun {
         &mut self,
         s: &S,
         ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
+        cols: &mut Columns<'_, D>,
         count: usize,
-        g: &mut GridCols<'_, D>,
     ) {
         // A plain USL substep: FLIP, no damping, no particle forces.
         let ctx = &Ctx {
@@ -445,20 +459,17 @@ impl Kernel for PhaseRun {
             ..*ctx
         };
         match self.phase {
-            Phase::ResetGrid => grid_update::reset(ctx, g),
+            Phase::ResetGrid => grid_update::reset(ctx, &mut GridPasses { cols, ctx }),
             Phase::ParticleToGrid => {
-                p.freeze_domain_stretch(count);
-                grid_update::reset(ctx, g);
-                passes::scatter::<I, D, K, S, W>(s, ctx, p, count, g, Adds::of(Mode::All, ctx));
+                cols.full().0.freeze_domain_stretch(count);
+                grid_update::reset(ctx, &mut GridPasses { cols, ctx });
+                cols.scatter::<I, K, S, W>(s, ctx, count, Adds::of(Mode::All, ctx));
             }
             Phase::GridUpdate => {
-                grid_update::velocity(ctx, g);
-                grid_update::acceleration(ctx, g);
+                grid_update::velocity(ctx, &mut GridPasses { cols, ctx });
+                grid_update::acceleration(ctx, &mut GridPasses { cols, ctx });
             }
-            Phase::GridToParticle => {
-                let report = &mut self.report;
-                I::particles::<D, K, S, W>(s, ctx, p, count, g, report)
-            }
+            Phase::GridToParticle => cols.particles::<I, K, S, W>(s, ctx, count, &mut self.report),
         }
     }
 }

@@ -268,6 +268,23 @@ struct AllocRun {
 
 /// Builds, fills, steps (with substeps), reads back, snapshots and reopens one small world,
 /// with both buffers allocated beforehand.
+/// A task system of 4 workers that runs the ranges one after another on the calling thread,
+/// one item each: the parallel step's code paths, counted by the allocator of this thread.
+struct InOrder;
+
+// SAFETY: every item once, one at a time, before returning.
+unsafe impl mpm_gimp::TaskSystem for InOrder {
+    fn worker_count(&self) -> usize {
+        4
+    }
+
+    fn parallel_for(&self, items: usize, _min_range: usize, task: &mpm_gimp::tasks::Task<'_>) {
+        for i in 0..items {
+            task(i, i + 1, i % 4);
+        }
+    }
+}
+
 fn allocation_free_run(def: &WorldDef, buf: &mut HeapBuffer, copy: &mut HeapBuffer) -> AllocRun {
     let d3 = def.axes() == 3;
     // Batch columns on the stack.
@@ -332,9 +349,16 @@ fn allocation_free_run(def: &WorldDef, buf: &mut HeapBuffer, copy: &mut HeapBuff
         Some(Error::InvalidRegion)
     );
     let mut substeps = [0; 3];
-    for s in substeps.iter_mut() {
+    for (k, s) in substeps.iter_mut().enumerate() {
         let dt = 3.5 * world.stable_dt();
-        *s = world.step(dt).expect("step").substeps;
+        // The last step on a task system: the parallel passes' scratch is the world's.
+        *s = if k == 2 {
+            world.step_with_tasks(dt, &InOrder)
+        } else {
+            world.step(dt)
+        }
+        .expect("step")
+        .substeps;
     }
     let view = world.particles();
     let mut checksum = FNV_OFFSET;
@@ -390,6 +414,7 @@ fn init_add_fill_step_read_snapshot_make_no_heap_allocation() {
                     cell_size: 0.1,
                     particle_capacity: 512,
                     material_capacity: 2,
+                    workers: 4,
                     ..WorldDef::DEFAULT
                 };
                 def.faces[Face::YMin as usize] = Boundary::Stick;

@@ -28,6 +28,7 @@ mod precision;
 mod reference;
 mod reliability;
 mod robustness;
+mod threads;
 #[cfg(feature = "effects")]
 mod transport;
 mod verification;

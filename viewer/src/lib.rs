@@ -3,17 +3,22 @@
 //!
 //! - [`Sim`]: one scene of the registry ([`mpm_gimp_output::scenes::ALL`]) in a world of its
 //!   own, its definition copied with particle forces declared so the mouse can push it; it
-//!   steps a frame at a time, timing each step.
+//!   steps a frame at a time on every core ([`tasks`]), timing each step.
 //! - [`App`]: the viewer: the chosen scene and colour, pause and single step, the mouse drag,
 //!   and [`App::draw`], which draws the panel (scene menu, live figures, help) and the picture
 //!   into a [`Frame`].
 
 pub mod text;
 
-use mpm_gimp::{Dimension, Error, HeapBuffer, Real, StepReport, World, WorldDef};
+use mpm_gimp::{
+    Dimension, Error, HeapBuffer, Real, Serial, StepReport, TaskSystem, World, WorldDef,
+    MAX_WORKERS,
+};
 use mpm_gimp_output::picture::{self, Colour, Picture};
 use mpm_gimp_output::scenes::{Scene, ALL};
+use mpm_gimp_rayon::RayonTasks;
 use std::collections::VecDeque;
+use std::sync::OnceLock;
 use std::time::Instant;
 
 /// Window width, pixels.
@@ -116,6 +121,39 @@ impl Frame {
     }
 }
 
+/// The rayon pool every scene steps on, made on first use: one thread per core the process
+/// may use ([`std::thread::available_parallelism`], at most [`MAX_WORKERS`]), shared by the
+/// scenes; none (the calling thread alone) if the cores are unknown or the pool cannot be
+/// made. The results are the same either way.
+fn pool() -> Option<&'static RayonTasks> {
+    static POOL: OnceLock<Option<RayonTasks>> = OnceLock::new();
+    POOL.get_or_init(|| {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let threads = cores.min(MAX_WORKERS as usize);
+        (threads > 1)
+            .then(|| RayonTasks::new(threads).ok())
+            .flatten()
+    })
+    .as_ref()
+}
+
+/// The task system every scene steps on ([`pool`], or [`Serial`] without one).
+pub fn tasks() -> &'static dyn TaskSystem {
+    match pool() {
+        Some(pool) => pool,
+        None => &Serial,
+    }
+}
+
+/// Steps `world` by `dt` on [`tasks`], from a thread of the pool (`RayonTasks::install`: the
+/// passes then start on the pool's own threads).
+fn step_on_every_core(world: &mut World<'_>, dt: Real) -> Result<StepReport, Error> {
+    match pool() {
+        Some(pool) => pool.install(|| world.step_with_tasks(dt, pool)),
+        None => world.step(dt),
+    }
+}
+
 /// Where the picture of a world of `def` sits in the window: its top left corner, size and
 /// pixels per metre.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -208,7 +246,8 @@ pub const DRAG_SPEED: f64 = 4.0;
 pub struct Sim {
     /// The scene of the registry.
     pub scene: &'static Scene,
-    /// The scene's definition with particle forces declared (the drag's force column).
+    /// The scene's definition with particle forces declared (the drag's force column) and
+    /// sized for the workers of [`tasks`].
     pub def: WorldDef,
     storage: HeapBuffer,
     forces: [Vec<Real>; 3],
@@ -228,6 +267,7 @@ impl Sim {
     pub fn new(scene: &'static Scene) -> Result<Sim, Error> {
         let mut def = (scene.def)();
         def.effects.particle_forces = true;
+        def.workers = tasks().worker_count() as u32;
         let mut sim = Sim {
             scene,
             def,
@@ -258,7 +298,7 @@ impl Sim {
         World::reopen(self.storage.as_mut_bytes()).expect("the viewer's own world")
     }
 
-    /// Steps one frame of the scene, timing the steps. While the mouse pushes, the frame is
+    /// Steps one frame of the scene on [`tasks`], timing the steps. While the mouse pushes, the frame is
     /// stepped in [`DRAG_CALLS`] calls, the drag's forces set anew before each (a force the
     /// step holds constant changes a particle's velocity by less than half its difference from
     /// the cursor's at most, see [`DRAG_TIME`]). The report sums the calls' substeps and counts.
@@ -273,7 +313,7 @@ impl Sim {
             let mut world = World::reopen(self.storage.as_mut_bytes())?;
             let n = world.particle_count();
             let start = Instant::now();
-            let report = world.step(dt)?;
+            let report = step_on_every_core(&mut world, dt)?;
             ns += start.elapsed().as_nanos() as f64;
             particle_steps += n as f64 * report.substeps as f64;
             total.substeps += report.substeps;
@@ -297,8 +337,8 @@ impl Sim {
         Ok(&self.last)
     }
 
-    /// The median wall time of the last frames' steps per particle and substep, ns (`None`
-    /// before the first step).
+    /// The median wall time of the last frames' steps per particle and substep, ns, on all the
+    /// workers of [`tasks`] (`None` before the first step).
     pub fn ns_per_particle_step(&self) -> Option<f64> {
         let mut t: Vec<f64> = self.timings.iter().copied().collect();
         if t.is_empty() {
@@ -605,7 +645,8 @@ impl App {
             TEXT,
             &format!("t {time:.3} s  frame {}", self.frames),
         );
-        line(frame, TEXT, &format!("particles {n}"));
+        let threads = tasks().worker_count();
+        line(frame, TEXT, &format!("particles {n}  threads {threads}"));
         line(
             frame,
             TEXT,

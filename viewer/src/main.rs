@@ -4,7 +4,8 @@
 //! up/down, or a click on the menu) choose a scene; space pauses and runs; n or . steps one
 //! frame; r resets; c cycles the colouring, s p t m choose speed, stress (pressure),
 //! temperature, material; dragging with the left button on the picture pushes material;
-//! esc or q quits.
+//! esc or q quits. The scenes step on every core (a rayon pool of one thread per core, see
+//! `mpm_gimp_viewer::tasks`); the panel shows the thread count.
 //!
 //! Options: `--scene NAME` starts on that scene; `--frames N` runs N frames and exits;
 //! `--screenshot FILE.png` (with `--frames`) then writes what the window shows as PNG;
