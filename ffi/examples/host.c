@@ -1,7 +1,11 @@
 /*
  * A C99 host of libmpm_gimp: an elastic block dropped on a sticky floor in a 1 m x 1 m box,
  * stepped for one second in a fixed 60 Hz frame loop. The world lives in a static array this
- * program owns; the library never allocates.
+ * program owns; the library never allocates. The steps run on the host's task system, a pool
+ * of worker threads (a mutex and two condition variables around a queue of ranges), to which
+ * mpm_world_step_tasks hands each parallel pass of a step as a task over a range of items. A
+ * host with no threads of its own steps with mpm_world_step instead; the results are the
+ * same, bit for bit.
  *
  * Build against the single-precision static library (from the repository root):
  *   cargo build --release -p mpm-gimp-ffi
@@ -17,6 +21,10 @@
  * Energies are per metre of thickness (the 2D world is plane strain). On failure the failing
  * call and mpm_status_string() go to stderr and the exit status is 1.
  */
+/* pthreads under -std=c99. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,6 +47,123 @@
 #define ARENA_BYTES ((size_t)256 * 1024)
 #define ARENA_ALIGN_ROOM 256
 static unsigned char arena[ARENA_BYTES + ARENA_ALIGN_ROOM];
+
+/* ---- the worker pool: the host's task system ------------------------------------------ */
+
+#define WORKERS 4
+
+/* One range of a task: items start .. end. */
+typedef struct Job {
+    MpmTaskCallback *task;
+    void *context;
+    uint32_t start, end;
+} Job;
+
+typedef struct Pool Pool;
+
+typedef struct Worker {
+    Pool *pool;
+    uint32_t index; /* the worker index every range this thread runs gets */
+    pthread_t thread;
+} Worker;
+
+struct Pool {
+    pthread_mutex_t lock;
+    pthread_cond_t work; /* jobs were queued, or the pool stops */
+    pthread_cond_t idle; /* the last job of the task has returned */
+    Job jobs[WORKERS];   /* one task at a time: at most one range per worker */
+    int queued;          /* jobs not yet taken */
+    int pending;         /* jobs not yet returned */
+    int stop;
+    Worker workers[WORKERS];
+};
+
+static void *worker_main(void *arg)
+{
+    Worker *self = (Worker *)arg;
+    Pool *pool = self->pool;
+    pthread_mutex_lock(&pool->lock);
+    for (;;) {
+        while (pool->queued == 0 && !pool->stop) pthread_cond_wait(&pool->work, &pool->lock);
+        if (pool->queued == 0) break; /* stopping */
+        Job job = pool->jobs[--pool->queued];
+        pthread_mutex_unlock(&pool->lock);
+        job.task(job.start, job.end, self->index, job.context);
+        pthread_mutex_lock(&pool->lock);
+        if (--pool->pending == 0) pthread_cond_signal(&pool->idle);
+    }
+    pthread_mutex_unlock(&pool->lock);
+    return NULL;
+}
+
+/* MpmEnqueueTaskCallback: cuts the items into at most WORKERS ranges of at least min_range
+ * items and queues them; a task too small to share runs here, on the calling thread. */
+static void *pool_enqueue(MpmTaskCallback *task, uint32_t item_count, uint32_t min_range,
+                          void *task_context, void *user_context)
+{
+    Pool *pool = (Pool *)user_context;
+    uint32_t ranges = item_count / (min_range > 0 ? min_range : 1);
+    if (ranges > WORKERS) ranges = WORKERS;
+    if (ranges <= 1) {
+        task(0, item_count, 0, task_context);
+        return NULL;
+    }
+    pthread_mutex_lock(&pool->lock);
+    for (uint32_t i = 0; i < ranges; ++i) {
+        Job job;
+        job.task = task;
+        job.context = task_context;
+        job.start = (uint32_t)((uint64_t)item_count * i / ranges);
+        job.end = (uint32_t)((uint64_t)item_count * (i + 1) / ranges);
+        pool->jobs[pool->queued++] = job;
+    }
+    pool->pending = (int)ranges;
+    pthread_cond_broadcast(&pool->work);
+    pthread_mutex_unlock(&pool->lock);
+    return pool;
+}
+
+/* MpmFinishTaskCallback: waits until every range has returned. The mutex makes what the
+ * workers wrote visible here. */
+static void pool_finish(void *user_task, void *user_context)
+{
+    Pool *pool = (Pool *)user_task;
+    (void)user_context;
+    pthread_mutex_lock(&pool->lock);
+    while (pool->pending > 0) pthread_cond_wait(&pool->idle, &pool->lock);
+    pthread_mutex_unlock(&pool->lock);
+}
+
+/* Starts the pool's threads (pool zeroed). */
+static void pool_start(Pool *pool)
+{
+    pthread_mutex_init(&pool->lock, NULL);
+    pthread_cond_init(&pool->work, NULL);
+    pthread_cond_init(&pool->idle, NULL);
+    for (uint32_t i = 0; i < WORKERS; ++i) {
+        pool->workers[i].pool = pool;
+        pool->workers[i].index = i;
+        if (pthread_create(&pool->workers[i].thread, NULL, worker_main, &pool->workers[i]) != 0) {
+            fprintf(stderr, "host: pthread_create failed\n");
+            exit(EXIT_FAILURE);
+        }
+    }
+}
+
+/* Stops the threads once the queue is empty and waits for them. */
+static void pool_stop(Pool *pool)
+{
+    pthread_mutex_lock(&pool->lock);
+    pool->stop = 1;
+    pthread_cond_broadcast(&pool->work);
+    pthread_mutex_unlock(&pool->lock);
+    for (int i = 0; i < WORKERS; ++i) pthread_join(pool->workers[i].thread, NULL);
+    pthread_cond_destroy(&pool->idle);
+    pthread_cond_destroy(&pool->work);
+    pthread_mutex_destroy(&pool->lock);
+}
+
+/* ---- the simulation -------------------------------------------------------------------- */
 
 /* Positions copied out at the end: x, y per particle. */
 static mpm_real positions[2 * PARTICLE_CAPACITY];
@@ -91,6 +216,8 @@ int main(void)
     def.particle_capacity = PARTICLE_CAPACITY;
     def.material_capacity = 1;
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    /* The world's memory holds scratch for this many workers. */
+    def.workers = WORKERS;
 
     MpmMemoryRequirements req;
     check(mpm_memory_requirements(&def, &req), "mpm_memory_requirements");
@@ -119,18 +246,27 @@ int main(void)
                              vec2(0, 0), &ids),
           "mpm_world_fill_box");
 
+    static Pool pool;
+    pool_start(&pool);
+    MpmTaskSystem tasks;
+    tasks.enqueue_task = pool_enqueue;
+    tasks.finish_task = pool_finish;
+    tasks.user_context = &pool;
+    tasks.worker_count = WORKERS;
+
     /* The kernel splits each frame into equal substeps no longer than the stable one. */
     const mpm_real frame_dt = (mpm_real)(1.0 / FRAMES);
     unsigned long substeps = 0, frozen = 0, escaped = 0;
     report(world);
     for (int frame = 1; frame <= FRAMES; ++frame) {
         MpmStepReport step;
-        check(mpm_world_step(world, frame_dt, &step), "mpm_world_step");
+        check(mpm_world_step_tasks(world, frame_dt, &tasks, &step), "mpm_world_step_tasks");
         substeps += step.substeps;
         frozen += step.frozen;
         escaped += step.escaped;
         if (frame % REPORT_EVERY == 0 || frame == FRAMES) report(world);
     }
+    pool_stop(&pool);
 
     size_t written = 0;
     check(mpm_world_copy_positions(world, positions, sizeof positions / sizeof positions[0],

@@ -1,7 +1,8 @@
 /*
  * A C++17 host of libmpm_gimp: the scene of host.c (an elastic block dropped on a sticky floor
  * in a 1 m x 1 m box, one second at 60 frames per second) with the world's memory from the
- * system allocator, owned by an RAII wrapper. Same output format as host.c.
+ * system allocator, owned by an RAII wrapper, stepped on a pool of std::threads (the host's
+ * task system, as in host.c). Same output format as host.c.
  *
  * Build against the single-precision static library (from the repository root):
  *   cargo build --release -p mpm-gimp-ffi
@@ -11,14 +12,17 @@
  * add -DMPM_GIMP_F64.
  */
 #include <algorithm>
+#include <condition_variable>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <mutex>
 #include <new>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "mpm_gimp.h"
@@ -45,6 +49,102 @@ void check(MpmStatus status, const char* call) {
 constexpr MpmVec3 vec2(double x, double y) {
     return MpmVec3{static_cast<mpm_real>(x), static_cast<mpm_real>(y), mpm_real{0}};
 }
+
+// A fixed pool of worker threads: the host's task system (MpmTaskSystem). Each task is cut
+// into at most one range per worker, which the threads take from a queue; finish waits until
+// every range has returned.
+class ThreadPool {
+public:
+    explicit ThreadPool(std::uint32_t workers) : workers_(workers) {
+        for (std::uint32_t i = 0; i < workers; ++i) threads_.emplace_back([this, i] { run(i); });
+    }
+    ~ThreadPool() {
+        {
+            // Notified under the lock, here and in enqueue: helgrind calls a notify without
+            // it dubious.
+            std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+            work_.notify_all();
+        }
+        for (std::thread& t : threads_) t.join();
+    }
+    ThreadPool(const ThreadPool&) = delete;
+    ThreadPool& operator=(const ThreadPool&) = delete;
+
+    MpmTaskSystem task_system() {
+        MpmTaskSystem tasks{};
+        tasks.enqueue_task = enqueue;
+        tasks.finish_task = finish;
+        tasks.user_context = this;
+        tasks.worker_count = workers_;
+        return tasks;
+    }
+
+private:
+    struct Job {
+        MpmTaskCallback* task;
+        void* context;
+        std::uint32_t start, end;
+    };
+
+    // The thread of worker `index`: runs every range it takes with that worker index.
+    void run(std::uint32_t index) {
+        std::unique_lock<std::mutex> lock(mutex_);
+        for (;;) {
+            work_.wait(lock, [this] { return !jobs_.empty() || stop_; });
+            if (jobs_.empty()) return;  // stopping
+            const Job job = jobs_.back();
+            jobs_.pop_back();
+            lock.unlock();
+            job.task(job.start, job.end, index, job.context);
+            lock.lock();
+            if (--pending_ == 0) idle_.notify_one();
+        }
+    }
+
+    // MpmEnqueueTaskCallback: at most one range per worker, each of at least min_range items;
+    // a task too small to share runs on the calling thread.
+    static void* enqueue(MpmTaskCallback* task, std::uint32_t item_count, std::uint32_t min_range,
+                         void* task_context, void* user_context) {
+        auto* pool = static_cast<ThreadPool*>(user_context);
+        const std::uint32_t ranges =
+            std::min(pool->workers_, item_count / std::max<std::uint32_t>(min_range, 1));
+        if (ranges <= 1) {
+            task(0, item_count, 0, task_context);
+            return nullptr;
+        }
+        {
+            std::lock_guard<std::mutex> lock(pool->mutex_);
+            for (std::uint32_t i = 0; i < ranges; ++i) {
+                const auto cut = [&](std::uint32_t k) {
+                    return static_cast<std::uint32_t>(std::uint64_t{item_count} * k / ranges);
+                };
+                pool->jobs_.push_back(Job{task, task_context, cut(i), cut(i + 1)});
+            }
+            pool->pending_ = ranges;
+            pool->work_.notify_all();
+        }
+        return pool;
+    }
+
+    // MpmFinishTaskCallback: waits until every range has returned.
+    static void finish(void* user_task, void* /*user_context*/) {
+        auto* pool = static_cast<ThreadPool*>(user_task);
+        std::unique_lock<std::mutex> lock(pool->mutex_);
+        pool->idle_.wait(lock, [pool] { return pool->pending_ == 0; });
+    }
+
+    const std::uint32_t workers_;
+    std::mutex mutex_;
+    std::condition_variable work_;  // jobs were queued, or the pool stops
+    std::condition_variable idle_;  // the last range of the task has returned
+    std::vector<Job> jobs_;
+    std::uint32_t pending_ = 0;  // ranges not yet returned
+    bool stop_ = false;
+    std::vector<std::thread> threads_;
+};
+
+constexpr std::uint32_t kWorkers = 4;
 
 // Frees memory from the aligned operator new with the same alignment.
 struct AlignedDelete {
@@ -80,9 +180,10 @@ public:
         return ids;
     }
 
-    MpmStepReport step(mpm_real dt) {
+    // A step on the host's task system (mpm_world_step without one).
+    MpmStepReport step(mpm_real dt, const MpmTaskSystem& tasks) {
         MpmStepReport report{};
-        check(mpm_world_step(world_, dt, &report), "mpm_world_step");
+        check(mpm_world_step_tasks(world_, dt, &tasks, &report), "mpm_world_step_tasks");
         return report;
     }
 
@@ -134,6 +235,7 @@ int run() {
     def.particle_capacity = kParticleCapacity;
     def.material_capacity = 1;
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
+    def.workers = kWorkers;  // the world's memory holds scratch for this many
     World world(def);
 
     MpmMaterialDef rubber = mpm_material_def_default();
@@ -144,9 +246,11 @@ int run() {
     // The kernel splits each frame into equal substeps no longer than the stable one.
     const auto frame_dt = static_cast<mpm_real>(1.0 / kFrames);
     unsigned long substeps = 0, frozen = 0, escaped = 0;
+    ThreadPool pool(kWorkers);
+    const MpmTaskSystem tasks = pool.task_system();
     report(world);
     for (int frame = 1; frame <= kFrames; ++frame) {
-        const MpmStepReport step = world.step(frame_dt);
+        const MpmStepReport step = world.step(frame_dt, tasks);
         substeps += step.substeps;
         frozen += step.frozen;
         escaped += step.escaped;

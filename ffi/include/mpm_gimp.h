@@ -13,7 +13,8 @@
  * separate threads at the same time. On one world, calls that take a const MpmWorld * may
  * run at the same time as each other, but never while a call that takes an MpmWorld * (add,
  * seed, set, step) runs on it; the pointers of an MpmParticlesView must not be read during
- * such a call either, and are invalid after it.
+ * such a call either, and are invalid after it. The library starts no thread of its own:
+ * mpm_world_step_tasks runs one step on the host's threads, through its MpmTaskSystem.
  *
  * Errors: every call returns an MpmStatus; anything but MPM_STATUS_OK means the call wrote no
  * output and changed nothing. Input arrays (the particle data of mpm_world_add_particles, the
@@ -164,8 +165,8 @@ enum MpmStatus
   // call) check only the header, in constant time.
   MPM_STATUS_INVALID_STATE = 29,
   // A limit of the definition out of range: `max_substeps` outside 1..=1048576,
-  // `max_volume_ratio` not > 1, or `workers` outside 1..=256 or below a task system's
-  // `worker_count` (`mpm_world_step_tasks`).
+  // `max_volume_ratio` not > 1, or `workers` outside 1..=256; or a task system's
+  // `worker_count` of 0 or above the definition's `workers` (`mpm_world_step_tasks`).
   MPM_STATUS_INVALID_LIMIT = 30,
   // `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
   // (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
@@ -204,6 +205,13 @@ enum MpmStatus
   // passing a column of the particle view back as input, or copying out into the world.
   // Nothing is read from the arrays and nothing is written.
   MPM_STATUS_OVERLAPPING_MEMORY = 69,
+  // `mpm_world_step_tasks`: the host's task system broke the contract of
+  // `MpmEnqueueTaskCallback`: it called the task with a range outside the items, a worker
+  // index at or past `worker_count`, two ranges at once on one worker or two overlapping
+  // ranges at once (such ranges were not run), left items out or ran some twice, or its
+  // finish returned while a range still ran. The report is not written; the world may be in
+  // an intermediate state (restore a snapshot).
+  MPM_STATUS_TASK_CONTRACT = 70,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmStatus;
@@ -836,6 +844,56 @@ typedef struct MpmStepReport {
   uint32_t first_frozen[8];
 } MpmStepReport;
 
+// A task the library hands the host: runs the items `start .. end` (`start < end <=
+// item_count`) on worker `worker` (`< worker_count`) and returns when they are done.
+// `task_context` is the value `MpmEnqueueTaskCallback` received with the task, passed back
+// unchanged. The host may call it from any thread, with its ranges in any order, only between
+// the call of `enqueue_task` that received it and the return of the matching `finish_task` (or
+// of `enqueue_task`, when that returned NULL).
+typedef void MpmTaskCallback(uint32_t start, uint32_t end, uint32_t worker, void *task_context);
+
+// The host's side of one parallel loop: run `task` over the items `0 .. item_count`
+// (`item_count >= 1`), with `task_context`, in ranges on its workers, and return a handle
+// that `MpmFinishTaskCallback` takes, or NULL after running the whole loop itself before
+// returning (a host may run everything serially on the calling thread: `task(0, item_count,
+// 0, task_context)`). `user_context` is `MpmTaskSystem::user_context`.
+//
+// Contract: the ranges together cover every item exactly once; each is at least `min_range`
+// items long, except possibly the last (items are cheap below that; the library does not
+// check it); at most `worker_count` ranges run at once, each with its own worker index below
+// `worker_count` (ranges that run one after another may share one). How the items are cut and
+// spread does not change the results. The library refuses to run a range outside the items,
+// with a worker index out of range or in use, or overlapping a range that runs, and the step
+// then answers `MPM_STATUS_TASK_CONTRACT`. The callbacks must return normally (no `longjmp`,
+// no C++ exception).
+typedef void *MpmEnqueueTaskCallback(MpmTaskCallback *task,
+                                     uint32_t item_count,
+                                     uint32_t min_range,
+                                     void *task_context,
+                                     void *user_context);
+
+// Waits until every range of the task whose handle `enqueue_task` returned (`user_task`, never
+// NULL) has returned, and makes what the ranges wrote visible to the calling thread (a mutex
+// or a condition variable does). Called once per non-NULL handle, on the thread that enqueued
+// the task.
+typedef void MpmFinishTaskCallback(void *user_task, void *user_context);
+
+// A host's task system: `mpm_world_step_tasks` runs the parallel parts of a step on it. The
+// library calls `enqueue_task` and `finish_task` only from the thread that called
+// `mpm_world_step_tasks`, finishing each task before it enqueues the next, and never keeps
+// the struct or its pointers past the call. A host without threads of its own steps with
+// `mpm_world_step`.
+typedef struct MpmTaskSystem {
+  // Starts a task on the workers (not NULL).
+  MpmEnqueueTaskCallback *enqueue_task;
+  // Waits for a task that `enqueue_task` returned a handle of (not NULL).
+  MpmFinishTaskCallback *finish_task;
+  // Passed to both callbacks unchanged; the library never reads it.
+  void *user_context;
+  // The workers the system runs ranges on: 1 to the world definition's `workers`.
+  uint32_t worker_count;
+} MpmTaskSystem;
+
 // The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
 #define MPM_MAX_HARDENING_COEFFICIENT 100.0
 
@@ -1225,6 +1283,26 @@ void mpm_simd_use_baseline_only(void);
 // run (some Intel server parts), which would slow the host's own code too. Results do not
 // change, only speed. Irreversible for the process.
 void mpm_simd_use_avx2_at_most(void);
+
+// `mpm_world_step` on the host's task system: the step's parallel parts run as tasks on
+// `tasks`, with the same results, bit for bit, for any `worker_count` and however the host
+// cuts and spreads the ranges. `tasks->worker_count` must lie in 1..=the definition's
+// `workers` (`MPM_STATUS_INVALID_LIMIT`); NULL `tasks` or a NULL callback is
+// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins.
+//
+// A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
+// `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
+// broke it were not run, and the world may be in an intermediate state.
+//
+// # Safety
+// `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and
+// its callbacks keep the contracts of `MpmEnqueueTaskCallback` and `MpmFinishTaskCallback`
+// that the library cannot check (a `task_context` passed back unchanged, no call of the task
+// after its finish returned).
+MpmStatus mpm_world_step_tasks(struct MpmWorld *world,
+                               mpm_real dt,
+                               const struct MpmTaskSystem *tasks,
+                               struct MpmStepReport *report_out);
 
 #ifdef __cplusplus
 }  // extern "C"

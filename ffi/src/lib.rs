@@ -9,6 +9,7 @@
 //! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
 //!   thermostat's alpha, temperatures, concentrations and their sources.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
+//! - [`tasks`]: the host's task system (`MpmTaskSystem`) and `mpm_world_step_tasks`.
 //!
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer
 //! followed by its length, every pointer checked for NULL, no input array or output inside the
@@ -21,7 +22,8 @@
 //! `mpm_simd_use_*`. Separate worlds may be used from separate threads at once. On one world,
 //! calls that take a `const MpmWorld *` may run at the same time as each other, never at the
 //! same time as a call that takes an `MpmWorld *` (add, seed, set, step), and the pointers of
-//! a particle view may not be read while such a call runs.
+//! a particle view may not be read while such a call runs. The library starts no thread:
+//! `mpm_world_step_tasks` runs one step on the host's threads, through its `MpmTaskSystem`.
 //!
 //! A world lives in memory the host owns: `mpm_world_init` lays it out there and hands back
 //! the same address as an `MpmWorld *`. The library keeps no state of its own and never
@@ -38,11 +40,14 @@ pub mod effects;
 pub mod read;
 pub mod status;
 pub mod world;
+// After world: the header declares the task system after the world's calls.
+pub mod tasks;
 
 pub use defs::*;
 pub use effects::*;
 pub use read::*;
 pub use status::*;
+pub use tasks::*;
 pub use world::*;
 
 /// The scalar type of every real value: `float` (or `double` for the `f64` build, where the

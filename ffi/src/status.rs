@@ -95,8 +95,8 @@ pub enum MpmStatus {
     /// call) check only the header, in constant time.
     InvalidState = 29,
     /// A limit of the definition out of range: `max_substeps` outside 1..=1048576,
-    /// `max_volume_ratio` not > 1, or `workers` outside 1..=256 or below a task system's
-    /// `worker_count` (`mpm_world_step_tasks`).
+    /// `max_volume_ratio` not > 1, or `workers` outside 1..=256; or a task system's
+    /// `worker_count` of 0 or above the definition's `workers` (`mpm_world_step_tasks`).
     InvalidLimit = 30,
     /// `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
     /// (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
@@ -135,6 +135,13 @@ pub enum MpmStatus {
     /// passing a column of the particle view back as input, or copying out into the world.
     /// Nothing is read from the arrays and nothing is written.
     OverlappingMemory = 69,
+    /// `mpm_world_step_tasks`: the host's task system broke the contract of
+    /// `MpmEnqueueTaskCallback`: it called the task with a range outside the items, a worker
+    /// index at or past `worker_count`, two ranges at once on one worker or two overlapping
+    /// ranges at once (such ranges were not run), left items out or ran some twice, or its
+    /// finish returned while a range still ran. The report is not written; the world may be in
+    /// an intermediate state (restore a snapshot).
+    TaskContract = 70,
 }
 
 impl From<Error> for MpmStatus {
@@ -180,7 +187,7 @@ impl From<Error> for MpmStatus {
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 41] = [
+    pub const ALL: [MpmStatus; 42] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -222,6 +229,7 @@ impl MpmStatus {
         MpmStatus::OutputTooSmall,
         MpmStatus::Internal,
         MpmStatus::OverlappingMemory,
+        MpmStatus::TaskContract,
     ];
 
     /// The description `mpm_status_string` returns, NUL-terminated: the kernel's own for its
@@ -238,6 +246,9 @@ impl MpmStatus {
             MpmStatus::Internal => c"internal error (caught panic): please report",
             MpmStatus::OverlappingMemory => {
                 c"an input array or output pointer overlaps the world's memory"
+            }
+            MpmStatus::TaskContract => {
+                c"the host's task system broke its contract (a range out of bounds, overlapping or on a busy worker, items left out, or an early finish)"
             }
             kernel => Error::ALL
                 .iter()

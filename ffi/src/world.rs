@@ -5,7 +5,7 @@ use crate::defs::{material_def_from_c, vec3, world_def_from_c, world_def_to_c, M
 use crate::status::MpmStatus;
 use crate::{apart, guard, mpm_real, non_null, MpmVec3, MpmWorldDef};
 use core::ffi::c_void;
-use kernel::{memory_requirements, ParticleBatch, World, WorldRef};
+use kernel::{memory_requirements, ParticleBatch, StepReport, World, WorldRef};
 
 /// A world. Opaque: it is the memory the host passed to `mpm_world_init` (the pointer is that
 /// memory's address), and it lives as long as the host keeps that memory.
@@ -566,25 +566,28 @@ pub unsafe extern "C" fn mpm_world_step(
         let mut w = unsafe { world_at(world) }?;
         apart(w.as_bytes(), report_out, 1)?;
         let r = w.step(dt)?;
-        let mut first_frozen = [0u32; 8];
-        first_frozen[..r.first_frozen.len()].copy_from_slice(&r.first_frozen);
-        let flag = |on: bool, bit: u32| if on { bit } else { 0 };
-        let out = MpmStepReport {
-            substeps: r.substeps,
-            substep_dt: r.substep_dt,
-            stopped: r.stopped,
-            escaped: r.escaped,
-            frozen: r.frozen,
-            runaway: r.runaway,
-            flags: flag(r.went_bad(), MPM_STEP_FLAG_FROZE)
-                | flag(r.runaway > 0, MPM_STEP_FLAG_RUNAWAY),
-            first_frozen_count: r.first_frozen.len() as u32,
-            first_frozen,
-        };
         // SAFETY: checked non-NULL.
-        unsafe { put(report_out, out) };
+        unsafe { put(report_out, step_report(&r)) };
         Ok(())
     })
+}
+
+/// The C form of a step's report.
+pub(crate) fn step_report(r: &StepReport) -> MpmStepReport {
+    let mut first_frozen = [0u32; 8];
+    first_frozen[..r.first_frozen.len()].copy_from_slice(&r.first_frozen);
+    let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+    MpmStepReport {
+        substeps: r.substeps,
+        substep_dt: r.substep_dt,
+        stopped: r.stopped,
+        escaped: r.escaped,
+        frozen: r.frozen,
+        runaway: r.runaway,
+        flags: flag(r.went_bad(), MPM_STEP_FLAG_FROZE) | flag(r.runaway > 0, MPM_STEP_FLAG_RUNAWAY),
+        first_frozen_count: r.first_frozen.len() as u32,
+        first_frozen,
+    }
 }
 
 /// Makes every later step of this process use the baseline (SSE2) instance of the particle

@@ -13,6 +13,8 @@
 //! - same state: two scenes stepped through the C interface leave the same bytes, columns,
 //!   diagnostics and step reports as the same scenes stepped through the Rust kernel API
 //!   (`tests/c/same_state.c` against [`rust_same_state`]);
+//! - tasks: `mpm_world_step_tasks` on pools of worker threads leaves the state `mpm_world_step`
+//!   leaves, and refuses misuse and hosts that break its contract (`tests/c/tasks.c`);
 //! - and, in Rust through the rlib: the default definitions and the status strings agree with
 //!   the kernel's.
 
@@ -175,6 +177,7 @@ fn rust_layout() -> String {
         cfl,
         max_substeps,
         max_volume_ratio,
+        workers,
         effects,
         internal_cookie,
     }));
@@ -255,6 +258,12 @@ fn rust_layout() -> String {
         flags,
         first_frozen_count,
         first_frozen,
+    }));
+    lines.extend(struct_lines!(MpmTaskSystem {
+        enqueue_task,
+        finish_task,
+        user_context,
+        worker_count,
     }));
     let mut text = lines.join("\n");
     text.push('\n');
@@ -1256,6 +1265,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(wd.cfl, k.cfl);
     assert_eq!(wd.max_substeps, k.max_substeps);
     assert_eq!(wd.max_volume_ratio, k.max_volume_ratio);
+    assert_eq!(wd.workers, k.workers);
     // Effects::NONE: nothing declared, every value zero.
     assert_eq!(k.effects, Effects::NONE);
     let zero = MpmSchedule {
@@ -2102,5 +2112,40 @@ fn ranges_from_c_sanitized() {
         "ranges-sanitized",
         &strict_and_sanitized(),
         RANGES_FLOOR,
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// The host's task system
+// ---------------------------------------------------------------------------------------------
+
+/// The checks `tests/c/tasks.c` runs, as written.
+const TASKS_FLOOR: usize = 65;
+
+/// Expectation: with strict warnings, three scenes (2D, 2D with every effect declared, 3D)
+/// stepped with `mpm_world_step_tasks` on a host that runs each task on the calling thread
+/// and on pools of 1, 2, 3, 4, 7, 8 and 16 worker threads (one range per worker, or ranges of
+/// `min_range` items taken by whichever thread is free) have, after every frame, the particle
+/// columns, diagnostics and step report of `mpm_world_step`, bit for bit; a NULL world, task
+/// system, callback or report is `MPM_STATUS_NULL_POINTER`, a `worker_count` of 0, past the
+/// definition's `workers` or `UINT32_MAX` is `MPM_STATUS_INVALID_LIMIT`, a bad dt, a dt past
+/// `max_substeps`, a report inside the world and a non-world have their statuses, each without
+/// a change, a report or a callback; a host that runs ranges past the items, with a worker
+/// index past `worker_count`, leaves an item out or runs one twice gets
+/// `MPM_STATUS_TASK_CONTRACT` without a report whenever the step hands it a task. The program
+/// ends with "all N tasks checks passed".
+#[test]
+fn tasks_from_c_strict() {
+    check_program("tasks", "tasks", common::STRICT, TASKS_FLOOR);
+}
+
+/// Expectation: the same program under AddressSanitizer and UndefinedBehaviorSanitizer.
+#[test]
+fn tasks_from_c_sanitized() {
+    check_program(
+        "tasks",
+        "tasks-sanitized",
+        &strict_and_sanitized(),
+        TASKS_FLOOR,
     );
 }

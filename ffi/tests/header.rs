@@ -23,7 +23,51 @@ fn generate() -> String {
         .generate()
         .expect("cbindgen generates the header")
         .write(&mut out);
-    String::from_utf8(out).expect("the header is UTF-8")
+    function_types(&String::from_utf8(out).expect("the header is UTF-8"))
+}
+
+/// The callback types the header declares as function types, used through pointers, as Box2D
+/// v3 declares its task callbacks (`typedef void MpmTaskCallback(...);` and
+/// `MpmTaskCallback *task`), so that a host's callback is declared with the type's own name.
+/// cbindgen writes a Rust `fn` type as a pointer typedef (`typedef void (*MpmTaskCallback)(...)`
+/// and `MpmTaskCallback task`): the same type in C, which [`function_types`] respells.
+const FUNCTION_TYPES: [&str; 3] = [
+    "MpmTaskCallback",
+    "MpmEnqueueTaskCallback",
+    "MpmFinishTaskCallback",
+];
+
+/// `header` with each of [`FUNCTION_TYPES`] declared as a function type and used as a pointer
+/// to it, outside comments; the arguments of a typedef that runs over several lines stay
+/// aligned under its first.
+fn function_types(header: &str) -> String {
+    let mut out = String::with_capacity(header.len() + 64);
+    // Columns the continuation lines of the typedef being rewritten move left by.
+    let mut shift = 0;
+    for line in header.lines() {
+        let mut l = line.to_string();
+        if !l.trim_start().starts_with("//") {
+            if shift > 0 {
+                l = l.replacen(&" ".repeat(shift), "", 1);
+            }
+            if l.ends_with(';') {
+                shift = 0;
+            }
+            for name in FUNCTION_TYPES {
+                let pointer = format!("(*{name})(");
+                if l.contains(&pointer) {
+                    l = l.replace(&pointer, &format!("{name}("));
+                    if !l.ends_with(';') {
+                        shift = "(*)".len();
+                    }
+                }
+                l = l.replace(&format!("{name} "), &format!("{name} *"));
+            }
+        }
+        out.push_str(&l);
+        out.push('\n');
+    }
+    out
 }
 
 #[test]

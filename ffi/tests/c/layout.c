@@ -48,6 +48,7 @@ PROBE(MpmMemoryRequirements)
 PROBE(MpmParticleArrays)
 PROBE(MpmIdRange)
 PROBE(MpmStepReport)
+PROBE(MpmTaskSystem)
 
 #define ALIGN_OF(T) offsetof(struct probe_##T, t)
 
@@ -156,6 +157,7 @@ int main(void) {
     FIELD(MpmWorldDef, cfl);
     FIELD(MpmWorldDef, max_substeps);
     FIELD(MpmWorldDef, max_volume_ratio);
+    FIELD(MpmWorldDef, workers);
     FIELD(MpmWorldDef, effects);
     FIELD(MpmWorldDef, internal_cookie);
 
@@ -242,6 +244,12 @@ int main(void) {
     FIELD(MpmStepReport, flags);
     FIELD(MpmStepReport, first_frozen_count);
     FIELD(MpmStepReport, first_frozen);
+
+    TYPE(MpmTaskSystem);
+    FIELD(MpmTaskSystem, enqueue_task);
+    FIELD(MpmTaskSystem, finish_task);
+    FIELD(MpmTaskSystem, user_context);
+    FIELD(MpmTaskSystem, worker_count);
 
     return 0;
 }

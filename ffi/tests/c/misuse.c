@@ -2375,6 +2375,7 @@ static void status_strings(void) {
         MPM_STATUS_OUTPUT_TOO_SMALL,
         MPM_STATUS_INTERNAL,
         MPM_STATUS_OVERLAPPING_MEMORY,
+        MPM_STATUS_TASK_CONTRACT,
     };
     const size_t n_known = sizeof known / sizeof known[0];
     size_t i, j;
