@@ -20,9 +20,10 @@ import sys
 
 # Ceilings. Functions per instance as compiled in the f32 build (146, 146 and 119 at the
 # commit that set them), the library's bytes (11.8 MB then) and the kernel library's wall time
-# in CI's test build (its clean build alone took about 60 s).
+# in CI's test build (its clean build alone took about 60 s). The library's ceiling rose to
+# 13.2 MB with the parallel step (13.03 MB: its tiles, slabs and scans per form).
 FUNCTIONS = {"avx2": 146, "avx512": 146, "baseline": 119}
-LIBRARY_BYTES = 13_000_000
+LIBRARY_BYTES = 13_200_000
 KERNEL_BUILD_SECONDS = 240.0
 
 failed = []

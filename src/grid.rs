@@ -39,6 +39,9 @@ pub(crate) struct GridCols<'a, const D: usize> {
     /// particles' stencils may reach ([`reach_lines`]), so that its scatter passes over the
     /// chunks that reach none of its lines; empty otherwise.
     pub reach: &'a [[u32; 2]],
+    /// A force scatter's tile ([`GridCols::carve_force_tile`]): the whole mass column, read
+    /// only (its `mass` is then empty); empty otherwise.
+    pub masses: &'a [Real],
 }
 
 /// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
@@ -129,7 +132,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             cols.iter().all(|c| c.len() == len) || cols.iter().all(|c| c.is_empty())
         };
         let tile_fits = self.tile == Tile::ALL || self.tile.rows.saturating_add(ROW) <= len;
-        self.mass.len() == len
+        (self.mass.len() == len || (self.mass.is_empty() && !self.masses.is_empty()))
             && group(&self.vel)
             && group(&self.acc)
             && group(&self.remap)
@@ -146,6 +149,16 @@ impl<'a, const D: usize> GridCols<'a, D> {
                 .iter()
                 .any(|&[lo, hi]| (lo as usize) < slab.end && (hi as usize) >= slab.start),
             None => true,
+        }
+    }
+
+    /// The nodal masses by node index: the whole mass column (a force scatter's tile reads
+    /// it whole, [`GridCols::masses`]; else this view's, which must hold the whole grid).
+    pub fn all_masses(&self) -> &[Real] {
+        if self.masses.is_empty() {
+            self.mass
+        } else {
+            self.masses
         }
     }
 
@@ -167,6 +180,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: 0,
             tile: Tile::ALL,
             reach: &[],
+            masses: &[],
         }
     }
 
@@ -182,6 +196,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len,
             tile,
             reach,
+            masses,
         } = self;
         let none = || core::array::from_fn(|_| &mut [][..]);
         let read = GridCols {
@@ -193,6 +208,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: *len,
             tile: *tile,
             reach,
+            masses,
         };
         let remap = GridCols {
             mass: &mut [][..],
@@ -203,6 +219,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: *len,
             tile: *tile,
             reach,
+            masses,
         };
         (read, remap)
     }
@@ -226,6 +243,27 @@ impl<'a, const D: usize> GridCols<'a, D> {
         )
     }
 
+    /// [`GridCols::carve_tile`] without the mass column, which the tile reads whole from
+    /// `masses` instead ([`GridCols::masses`]): a force scatter's tile, for the momentum
+    /// approach's weights (the masses of every stencil node, past the tile too).
+    ///
+    /// # Safety
+    /// As for [`GridCols::carve_tile`], the mass column aside: `masses` is the whole mass
+    /// column, which no view changes while this one is alive.
+    pub unsafe fn carve_force_tile(
+        region: &Shared<'a, u8>,
+        layout: &Layout,
+        tile: Tile,
+        masses: &'a [Real],
+    ) -> Self {
+        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        // SAFETY: as required of the caller.
+        let c = unsafe { Carver::window(region, tile.first..end) };
+        let mut g = Self::carve_columns(c, layout, tile, false);
+        g.masses = masses;
+        g
+    }
+
     /// The columns of the nodes `nodes` of the shared grid region: one slab of a grid pass
     /// (a scatter adds nothing to them: their tile holds no row).
     ///
@@ -244,11 +282,20 @@ impl<'a, const D: usize> GridCols<'a, D> {
         Self::carve_with(unsafe { Carver::window(region, nodes) }, layout, tile)
     }
 
-    fn carve_with(mut c: Carver<'a>, layout: &Layout, tile: Tile) -> Self {
+    fn carve_with(c: Carver<'a>, layout: &Layout, tile: Tile) -> Self {
+        Self::carve_columns(c, layout, tile, true)
+    }
+
+    fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, with_mass: bool) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
         let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
-        let mass = c.take(b, n);
+        let mass = if with_mass {
+            c.take(b, n)
+        } else {
+            c.skip(b);
+            &mut [][..]
+        };
         let vel = core::array::from_fn(|_| c.take(b, n));
         let acc = core::array::from_fn(|_| c.take(b, n));
         let remap = core::array::from_fn(|_| if has_remap { c.take(b, n) } else { &mut [][..] });
@@ -261,8 +308,9 @@ impl<'a, const D: usize> GridCols<'a, D> {
                 }
             })
         });
+        let vel: [&mut [Real]; D] = vel;
         GridCols {
-            len: mass.len(),
+            len: vel[0].len(),
             mass,
             vel,
             acc,
@@ -270,6 +318,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             scalar,
             tile,
             reach: &[],
+            masses: &[],
         }
     }
 }
@@ -353,8 +402,7 @@ fn extremes(x: &[Real], status: &[u32], origin: Real, inv_h: Real) -> (Real, Rea
 /// group), the grid lines along the slowest axis their stencils may reach, into `out` (one
 /// entry per group): from the lowest active first node to the highest plus `K - 1`
 /// ([`crate::shape::first_node`], as the stencils clamp it, a NaN position included),
-/// `[u32::MAX, 0]` without an active particle. `x` holds the
-/// positions along the slowest axis.
+/// `[u32::MAX, 0]` without an active particle. `x` holds the positions along the slowest axis.
 #[inline(always)]
 pub(crate) fn reach_lines<const D: usize, const K: usize, S: crate::shape::Shape1D<K>>(
     geom: &Geom<D>,

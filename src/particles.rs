@@ -114,6 +114,11 @@ impl<'a> Carver<'a> {
         }
     }
 
+    /// Passes over the next `bytes` bytes (a column the view leaves out).
+    pub fn skip(&mut self, bytes: usize) {
+        self.at += bytes;
+    }
+
     /// The next `bytes` bytes viewed as `len` values of `T` (`bytes` >= len * size_of T), cut
     /// to the carver's window.
     pub fn take<T: bytemuck::Pod>(&mut self, bytes: usize, len: usize) -> &'a mut [T] {

@@ -232,6 +232,8 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
     let stride = ctx.geom.stride;
     // The second scatter runs where a particle falls back or particle forces are declared.
     let mut rest = ctx.forces;
+    // A tile of the parallel scatter takes the chunks that reach its slab (as `p2g`'s).
+    let slab = g.tile.slab(stride[D - 1]);
     for second in [false, true] {
         if second && !rest {
             return;
@@ -245,10 +247,15 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             apic: false,
         };
         for start in (0..count).step_by(W) {
+            if let Some(slab) = &slab {
+                if !g.chunk_reaches(start, W, slab) {
+                    continue;
+                }
+            }
             let live = live_lanes(p, start, count);
             load_chunk(p, start, &mut x, &mut mass, &mut tau);
             I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, false);
-            w.of::<I, K, S>(ctx, &st, &x, g.mass);
+            w.of::<I, K, S>(ctx, &st, &x, g.all_masses());
             let (carried, weighted) = (live & w.carried, live & w.with_weights);
             rest |= !carried.minus(weighted).is_empty();
             let lanes = match (second, ctx.forces) {
@@ -301,11 +308,16 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             scatter_chunk::<I, D, K, S, W, FORCE>(&mut st, &products, lanes, stride, g, adds);
         }
         if !second {
-            // f_i = m_i sum_p (..): the nodal mass, a factor of every weighted particle's term.
-            let (m, acc) = (&*g.mass, &mut g.acc);
-            ctx.active.for_each_line(stride, m.len(), |r| {
+            // f_i = m_i sum_p (..): the nodal mass, a factor of every weighted particle's term,
+            // on the nodes this view adds to (a tile's own; the whole grid's).
+            let first = g.tile.first;
+            let own = first..first.saturating_add(g.tile.rows).min(first + g.len());
+            let (m, acc) = (g.masses, &mut g.acc);
+            let m = if m.is_empty() { &*g.mass } else { m };
+            ctx.active.for_each_line_in(stride, own, |r| {
+                let nodes = r.start + first..r.end + first;
                 for col in acc.iter_mut() {
-                    if let (Some(f), Some(m)) = (col.get_mut(r.clone()), m.get(r.clone())) {
+                    if let (Some(f), Some(m)) = (col.get_mut(r.clone()), m.get(nodes.clone())) {
                         for (f, &m) in f.iter_mut().zip(m) {
                             *f *= m;
                         }

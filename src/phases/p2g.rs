@@ -51,7 +51,7 @@ pub(crate) fn scatter_rows<
     g: &mut GridCols<'_, D>,
     adds: Adds,
 ) {
-    if !g.lengths_consistent() {
+    if !g.lengths_consistent() || (adds.mode.mass() && g.mass.len() != g.len()) {
         return; // Unreachable by construction; the unchecked row access relies on it.
     }
     if Mode::of(MODE) == Mode::Force && ctx.momentum && !S::AXISYMMETRIC {
@@ -72,7 +72,8 @@ pub(crate) fn scatter_rows<
     // MUSL's re-map scatter (the parallel step's; the serial one's is the particle pass's)
     // weighs the new momenta with the stencils where the substep started. A family that keeps
     // the gradient form re-maps no affine part: its C_p is taken from this re-map.
-    let remap = adds.mode == Mode::Remap;
+    // (Only the full-row functions take it: the others compile none of it.)
+    let remap = Mode::of(MODE) == Mode::All && adds.mode == Mode::Remap;
     let positions = if remap { &p.x_start } else { &p.x };
     let load_affine = adds.apic && !(remap && S::GRADIENT_AFFINE);
     // A tile of the parallel scatter takes the chunks whose rows reach its slab (and adds

@@ -178,13 +178,14 @@ impl<'a, 'g, const D: usize> Direct<'a, 'g, D> {
 }
 
 impl<const D: usize> Direct<'_, '_, D> {
-    /// Adds `v` to slot `c` (a [`slot`]) of stencil row `j` along y, layer `k` along z.
+    /// Where stencil row `j` along y, layer `k` along z starts in the columns, if the row is
+    /// theirs to add to ([`own_row`]).
     #[inline(always)]
-    fn add<const K: usize>(&mut self, j: usize, k: usize, c: usize, v: Row4) {
-        let row = crate::shape::row_start(self.base, j, k, self.stride);
-        // SAFETY: `new` checked the stencil's rows (j, k < K) against the whole grid, or the
-        // columns are a tile's.
-        unsafe { add_own_row(self.g, c, row, v) };
+    fn at(&self, j: usize, k: usize) -> Option<usize> {
+        own_row(
+            self.g,
+            crate::shape::row_start(self.base, j, k, self.stride),
+        )
     }
 }
 
@@ -194,20 +195,16 @@ fn last_row<const D: usize, const K: usize>(stride: [usize; D]) -> usize {
     Stencil::<D, K>::last_row_offset(stride)
 }
 
-/// Adds `v` to the row of slot `c` (a [`slot`]) that starts at node `row`, if the row is the
-/// columns' to add to ([`Tile`]: every row for the whole grid, the rows of its slab for a tile
-/// of the parallel scatter, which adds each row in the order the whole grid's scatter does).
-///
-/// # Safety
-/// For the whole grid ([`Tile::ALL`]), `row + ROW <= g.len()` ([`rows_fit`]); a tile's columns
-/// hold `tile.rows + ROW` entries and every column has g.len() ([`GridCols::lengths_consistent`]).
+/// Where the row that starts at node `row` starts in `g`'s columns, if it is theirs to add to
+/// ([`Tile`]: every row for the whole grid, the rows of its slab for a tile of the parallel
+/// scatter, which adds each row in the order the whole grid's scatter does). A row the scatter
+/// adds at the place returned fits: for the whole grid, the caller checked the stencil's rows
+/// ([`rows_fit`]); a tile's columns hold `tile.rows + ROW` entries
+/// ([`GridCols::lengths_consistent`]).
 #[inline(always)]
-unsafe fn add_own_row<const D: usize>(g: &mut GridCols<'_, D>, c: usize, row: usize, v: Row4) {
+fn own_row<const D: usize>(g: &GridCols<'_, D>, row: usize) -> Option<usize> {
     let at = row.wrapping_sub(g.tile.first);
-    if at < g.tile.rows {
-        // SAFETY: as required of the caller: at + ROW <= g.len() either way.
-        unsafe { add_row(column(g, c), at, v) }
-    }
+    (at < g.tile.rows).then_some(at)
 }
 
 /// Scatters the live lanes of a chunk: the groups of a vector's blocks at once
@@ -619,9 +616,14 @@ impl<const D: usize> RowSink<Row4> for Direct<'_, '_, D> {
         k: usize,
         acc: &[Row4; slot::COUNT],
     ) {
+        let Some(at) = self.at(j, k) else {
+            return; // Another tile's row.
+        };
         for (c, &v) in acc.iter().enumerate() {
             if slot_used::<D, MODE>(c) {
-                self.add::<K>(j, k, c, v);
+                // SAFETY: `new` checked the stencil's rows (j, k < K) against the whole grid,
+                // or the columns are a tile's ([`own_row`]).
+                unsafe { add_row(column(self.g, c), at, v) };
             }
         }
     }
@@ -745,7 +747,7 @@ fn scatter_group<
 /// to the grid block after block, as it adds them: the same values, added in the same order.
 ///
 /// The caller checked that every lane's rows fit the grid ([`rows::fit`]), or `g` is a tile's
-/// columns ([`add_own_row`]).
+/// columns ([`own_row`]).
 #[inline(always)]
 fn scatter_blocks<
     I: Rows,
@@ -815,7 +817,7 @@ fn scatter_blocks<
 /// `first`, in the order [`scatter_group`] adds a group's rows and columns.
 ///
 /// # Safety
-/// Every lane's rows fit the grid, or `g` is a tile's columns ([`add_own_row`]); `sums` holds
+/// Every lane's rows fit the grid, or `g` is a tile's columns ([`own_row`]); `sums` holds
 /// every row (`j < K`, `k < layers`) with the slots `MODE` fills ([`for_each_row`] gave it
 /// them).
 #[inline(always)]
@@ -827,13 +829,15 @@ unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, con
 ) {
     for j in 0..K {
         for k in 0..Stencil::<D, K>::layers() {
+            let Some(at) = own_row(g, crate::shape::row_start(first, j, k, stride)) else {
+                continue; // Another tile's row.
+            };
             for c in 0..slot::COUNT {
                 if slot_used::<D, MODE>(c) {
-                    let row = crate::shape::row_start(first, j, k, stride);
-                    // SAFETY: as required of the caller.
+                    // SAFETY: as required of the caller ([`own_row`]).
                     unsafe {
                         let v = sums.sums[j * K + k][c].assume_init();
-                        add_own_row(g, c, row, I::block(v, B));
+                        add_row(column(g, c), at, I::block(v, B));
                     }
                 }
             }
@@ -887,6 +891,7 @@ mod tests {
             len: LEN,
             tile: crate::grid::Tile::ALL,
             reach: &[],
+            masses: &[],
         }
     }
 

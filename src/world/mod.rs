@@ -184,6 +184,11 @@ impl<'a> World<'a> {
         self.read().diagnostics()
     }
 
+    /// [`World::diagnostics`] on a task system ([`WorldRef::diagnostics_with_tasks`]).
+    pub fn diagnostics_with_tasks(&self, tasks: &dyn crate::TaskSystem) -> Diagnostics {
+        self.read().diagnostics_with_tasks(tasks)
+    }
+
     /// The thermostat's current alpha, 1/s ([`WorldRef::feedback_alpha`]).
     pub fn feedback_alpha(&self) -> f64 {
         self.read().feedback_alpha()

@@ -131,20 +131,33 @@ impl<'b, const D: usize> Columns<'b, D> {
         count: usize,
         adds: Adds,
     ) {
+        self.scatter_tiles(ctx, adds, &|p, g| {
+            passes::scatter::<I, D, K, S, W>(shape, ctx, p, count, g, adds)
+        });
+    }
+
+    /// [`Columns::scatter`] with the pass as `run` (one copy per dimension, not per form).
+    fn scatter_tiles(
+        &mut self,
+        ctx: &Ctx<'_, D>,
+        adds: Adds,
+        run: &(dyn Fn(&ParticleCols<'_, D>, &mut GridCols<'_, D>) + Sync),
+    ) {
+        // The momentum approach's force reads the masses of every stencil node, past its tile
+        // too: its tiles read the whole mass column, which none of them changes.
         let momentum_force = ctx.momentum && adds.mode == Mode::Force;
         let stride = ctx.geom.stride[D - 1];
         let lines = ctx.geom.nodes[D - 1];
         // Tiles need lines of at least a row's width (so that a row's spill into the next
-        // line stays within it); the momentum approach's force reads the masses of every
-        // stencil node, outside its tile too.
-        let tiles = if self.workers == 1 || momentum_force || ctx.geom.nodes[0] < ROW {
+        // line stays within it).
+        let tiles = if self.workers == 1 || ctx.geom.nodes[0] < ROW {
             1
         } else {
             (2 * self.workers).min(ctx.active.hi[D - 1].saturating_sub(ctx.active.lo[D - 1]))
         };
         if tiles < 2 {
             let (p, mut g) = self.full();
-            return passes::scatter::<I, D, K, S, W>(shape, ctx, &p, count, &mut g, adds);
+            return run(&p, &mut g);
         }
         // The lines of tile `t`: the node box's lines cut evenly, the first tile from line 0
         // and the last to the grid's end (no stencil reaches past the box; the chunks a tile
@@ -159,6 +172,15 @@ impl<'b, const D: usize> Columns<'b, D> {
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
         // SAFETY: the table is only read while the tiles run (the node box wrote it).
         let reach: &[[u32; 2]] = unsafe { self.reach.window(0..usize::MAX) };
+        // The mass column (the first), read whole by a momentum force's tiles, which leave it
+        // out of their own columns.
+        let masses: &[crate::Real] = if momentum_force {
+            // SAFETY: the force scatter's tiles carve no mass column, and nothing else runs.
+            let g = unsafe { GridCols::<D>::carve_tile(&self.grid, self.layout, Tile::ALL) };
+            g.mass
+        } else {
+            &[]
+        };
         let (grid, layout, p) = (&self.grid, self.layout, &p);
         for colour in 0..2 {
             let item = |i: usize| {
@@ -166,10 +188,16 @@ impl<'b, const D: usize> Columns<'b, D> {
                 let tile = Tile::of_lines(bound(t)..bound(t + 1), stride);
                 // SAFETY: tiles of one colour have a tile of at least one line, which is at
                 // least ROW entries, between them, so their windows (rows + ROW entries) are
-                // disjoint; the particle view is read only.
-                let mut g = unsafe { GridCols::carve_tile(grid, layout, tile) };
+                // disjoint; the particle view and `masses` are read only.
+                let mut g = unsafe {
+                    if momentum_force {
+                        GridCols::carve_force_tile(grid, layout, tile, masses)
+                    } else {
+                        GridCols::carve_tile(grid, layout, tile)
+                    }
+                };
                 g.reach = reach;
-                passes::scatter::<I, D, K, S, W>(shape, ctx, p, count, &mut g, adds);
+                run(p, &mut g);
             };
             tasks::for_each(self.tasks, (tiles - colour).div_ceil(2), &item);
         }

@@ -470,28 +470,53 @@ impl<'a> WorldRef<'a> {
 
     /// Mass, momentum, centre of mass and energies of the active particles.
     pub fn diagnostics(&self) -> Diagnostics {
+        self.diagnostics_with_tasks(&crate::tasks::Serial)
+    }
+
+    /// [`WorldRef::diagnostics`] on a task system: the sums over fixed blocks of particles
+    /// (none more than 64, each a multiple of 4096 particles, whatever the workers), added in
+    /// block order, so the result is the same for any task system.
+    pub fn diagnostics_with_tasks(&self, tasks: &dyn crate::tasks::TaskSystem) -> Diagnostics {
         let def = self.def();
-        let layout = Layout::of(&def);
+        let n = self.particles().count;
+        let zero = Sums::default();
+        let block = |r: core::ops::Range<usize>| self.sums(&def, r);
+        let cut = (n, crate::tasks::MAX_PARTS, 4096);
+        let sums = crate::tasks::reduce(tasks, cut, zero, &block, Sums::add);
+        let mut out = sums.d;
+        if out.mass > 0.0 {
+            for a in 0..3 {
+                out.center_of_mass[a] = sums.first_moment[a] / out.mass;
+            }
+        }
+        if def.transfer.is_affine() {
+            out.kinetic += self.affine_kinetic(&def);
+        }
+        out
+    }
+
+    /// The sums of [`WorldRef::diagnostics`] over the particles `range`.
+    fn sums(&self, def: &WorldDef, range: core::ops::Range<usize>) -> Sums {
+        let layout = Layout::of(def);
         let materials = self.materials(&layout);
         let view = self.particles();
         let d = layout.d;
-        let mut out = Diagnostics::default();
-        let mut first_moment = [0.0f64; 3];
-        for i in 0..view.count {
+        let mut out = Sums::default();
+        for i in range {
             if view.status[i] != ACTIVE {
                 continue;
             }
             let m = view.mass[i] as f64;
-            out.mass += m;
+            out.d.mass += m;
             let mut x = [0.0f64; 3];
             let mut v = [0.0f64; 3];
             for a in 0..d {
                 v[a] = view.velocity[a][i] as f64;
                 x[a] = view.position[a][i] as f64;
-                out.momentum[a] += m * v[a];
-                out.kinetic += 0.5 * m * v[a] * v[a];
-                first_moment[a] += m * x[a];
-                out.potential -= m * def.gravity[a] as f64 * x[a];
+                out.d.momentum[a] += m * v[a];
+                out.d.kinetic += 0.5 * m * v[a] * v[a];
+                out.first_moment[a] += m * x[a];
+                out.d.potential -= m * def.gravity[a] as f64 * x[a];
             }
             // L = x x m v, plus m eps_abc B_cb with APIC.
             let mut l = [
@@ -526,7 +551,7 @@ impl<'a> WorldRef<'a> {
             }
             let axes = if d == 3 { 0..3 } else { 2..3 };
             for a in axes {
-                out.angular_momentum[a] += l[a];
+                out.d.angular_momentum[a] += l[a];
             }
             if let Some(rec) = materials.get(view.material[i] as usize) {
                 // The elastic part's energy, per volume of the eigenstrained (stress-free)
@@ -545,16 +570,8 @@ impl<'a> WorldRef<'a> {
                 // Real, so that the sum stays finite.
                 let e = scale as f64 * w as f64;
                 let e = if e.is_finite() { e } else { Real::MAX as f64 };
-                out.strain += view.volume0[i] as f64 * e;
+                out.d.strain += view.volume0[i] as f64 * e;
             }
-        }
-        if out.mass > 0.0 {
-            for a in 0..3 {
-                out.center_of_mass[a] = first_moment[a] / out.mass;
-            }
-        }
-        if def.transfer.is_affine() {
-            out.kinetic += self.affine_kinetic(&def);
         }
         out
     }
@@ -770,5 +787,33 @@ mod tests {
         w.header_mut().step_count = u64::MAX;
         w.step(1.0e-3).unwrap();
         assert_eq!(w.step_count(), u64::MAX);
+    }
+}
+
+/// The sums a block of particles adds to [`Diagnostics`] (its centre of mass as the first
+/// moment).
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    d: Diagnostics,
+    first_moment: [f64; 3],
+}
+
+impl Sums {
+    /// The sums of two blocks, `self`'s first.
+    fn add(self, b: Sums) -> Sums {
+        let (x, y) = (self.d, b.d);
+        let v = |a: [f64; 3], b: [f64; 3]| core::array::from_fn(|k| a[k] + b[k]);
+        Sums {
+            d: Diagnostics {
+                mass: x.mass + y.mass,
+                momentum: v(x.momentum, y.momentum),
+                angular_momentum: v(x.angular_momentum, y.angular_momentum),
+                center_of_mass: [0.0; 3],
+                kinetic: x.kinetic + y.kinetic,
+                strain: x.strain + y.strain,
+                potential: x.potential + y.potential,
+            },
+            first_moment: v(self.first_moment, b.first_moment),
+        }
     }
 }
