@@ -235,17 +235,8 @@ fn every_shape_order_and_transfer_gives_one_workers_bits() {
 
 #[test]
 fn every_material_and_effect_gives_one_workers_bits() {
-    let models = [
-        MaterialModel::LinearElastic,
-        MaterialModel::NeoHookean,
-        MaterialModel::FixedCorotated,
-        MaterialModel::Fluid,
-        MaterialModel::VonMises,
-        MaterialModel::DruckerPrager,
-        MaterialModel::Snow,
-    ];
     for dimension in [Dimension::Plane2D, Dimension::ThreeD] {
-        for model in models {
+        for model in MaterialModel::ALL {
             let def = WorldDef {
                 effects: Effects {
                     plasticity: true,
