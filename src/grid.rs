@@ -49,7 +49,7 @@ pub(crate) struct GridCols<'a, const D: usize> {
 /// to add to ([`Tile::ALL`]: the whole grid). A tile of the parallel scatter is a slab of whole
 /// grid lines (rows run along x, so a row never straddles two), its columns `rows + ROW`
 /// long: a row of the slab's last line may reach the first entries of the next line (zeros;
-/// see `phases::p2g`'s scatter for why neighbouring tiles never run at once).
+/// `world::parallel` never runs neighbouring tiles at once).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Tile {
     pub first: usize,
@@ -224,11 +224,10 @@ impl<'a, const D: usize> GridCols<'a, D> {
         (read, remap)
     }
 
-    /// Carves the grid region (starting at `layout.grid_offset`) into columns, each `nodes`
-    /// plus [`ROW`] entries of padding long (a stencil row may reach two entries past the last
-    /// node; the padding only ever receives zero weights).
-    /// The columns of `tile` ([`Tile`]) of the shared grid region: one slab of the parallel
-    /// scatter.
+    /// The columns of `tile` ([`Tile`]; [`Tile::ALL`] for every node) of the shared grid
+    /// region (starting at `layout.grid_offset`): each column `nodes` plus [`ROW`] entries of
+    /// padding long (a stencil row may reach two entries past the last node; the padding only
+    /// ever receives zero weights), cut to the tile's window.
     ///
     /// # Safety
     /// No other view of the region that overlaps the tile's entries (`tile.first..tile.first
@@ -236,10 +235,11 @@ impl<'a, const D: usize> GridCols<'a, D> {
     pub unsafe fn carve_tile(region: &Shared<'a, u8>, layout: &Layout, tile: Tile) -> Self {
         let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
         // SAFETY: as required of the caller.
-        Self::carve_with(
+        Self::carve_columns(
             unsafe { Carver::window(region, tile.first..end) },
             layout,
             tile,
+            true,
         )
     }
 
@@ -279,11 +279,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             rows: 0,
         };
         // SAFETY: as required of the caller.
-        Self::carve_with(unsafe { Carver::window(region, nodes) }, layout, tile)
-    }
-
-    fn carve_with(c: Carver<'a>, layout: &Layout, tile: Tile) -> Self {
-        Self::carve_columns(c, layout, tile, true)
+        Self::carve_columns(unsafe { Carver::window(region, nodes) }, layout, tile, true)
     }
 
     fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, with_mass: bool) -> Self {
@@ -325,9 +321,9 @@ impl<'a, const D: usize> GridCols<'a, D> {
 
 /// The nodes a substep touches: the box `lo[a] <= index along a < hi[a]` that holds the
 /// stencil of every active particle (empty without one), computed from the positions where
-/// the substep starts ([`NodeBox::first_nodes`], [`NodeBox::of_first_nodes`]). The grid passes work on it alone, so a
-/// grid larger than the material costs nothing per node it does not reach: a 32^3-cell block
-/// in a 64^3 grid touches one node in six.
+/// the substep starts ([`NodeBox::first_nodes`], [`NodeBox::of_first_nodes`]). The grid
+/// passes work on it alone, so a grid larger than the material costs nothing per node it does
+/// not reach: a 32^3-cell block in a 64^3 grid touches one node in six.
 ///
 /// Along x the passes also cover the `ROW - K` entries after each line of the box (the rest of
 /// the 4-wide rows the scatter and the gathers load, read with zero weights), so every value
@@ -429,10 +425,9 @@ pub(crate) fn reach_lines<const D: usize, const K: usize, S: crate::shape::Shape
 }
 
 /// The first and last line the stencils of a group whose first nodes run from `lo` to `hi`
-/// reach; `[u32::MAX, 0]` for none (`lo > hi`). Exact: the positions are taken to cell units
-/// as the stencils take them (`(x - origin) * inv_h`, the same operations), so the first
-/// nodes are theirs (a line of margin on either side took 1.1 times as many chunks per tile
-/// in 3D).
+/// reach; `[u32::MAX, 0]` for none (`lo > hi`). Exact, no margin: the positions are taken to
+/// cell units as the stencils take them (`(x - origin) * inv_h`, the same operations), so the
+/// first nodes are theirs.
 fn lines<const K: usize>(lo: i32, hi: i32) -> [u32; 2] {
     if lo <= hi {
         [lo.max(0) as u32, (hi.max(0) as usize + K - 1) as u32]

@@ -514,8 +514,8 @@ impl Layout {
         } else {
             0
         };
-        // And the grid lines each 16 particles' stencils reach along the slowest axis, for the
-        // scatter's tiles.
+        // And the grid lines each REACH_GROUP particles' stencils reach along the slowest
+        // axis, for the scatter's tiles.
         let reach_groups = if scratch_slots > 0 {
             cap.div_ceil(REACH_GROUP)
         } else {

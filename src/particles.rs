@@ -182,10 +182,7 @@ impl<'a, const D: usize> ParticleCols<'a, D> {
         window: Range<usize>,
     ) -> Self {
         // SAFETY: as required of the caller.
-        Self::carve_with(unsafe { Carver::window(region, window) }, layout)
-    }
-
-    fn carve_with(mut c: Carver<'a>, layout: &Layout) -> Self {
+        let mut c = unsafe { Carver::window(region, window) };
         let (rb, ub, n) = (
             layout.real_column_bytes,
             layout.u32_column_bytes,

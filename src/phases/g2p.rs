@@ -307,8 +307,9 @@ pub(crate) fn commit_gradient_affine<const D: usize, const W: usize>(
 /// the remap columns ([`GridCols::split_remap`]), scatters the new momenta to them (E30) with
 /// the stencils already computed (particles contribute as in the scatter pass:
 /// [`scatter_chunk`]); the parallel step gives it none and scatters them in a pass of its own
-/// (`p2g::scatter_rows` in [`Mode::Remap`]), which adds the same values in the same order. Declared damping adds the damping of the module docs; APIC replaces
-/// FLIP. Each of these is a value of the substep ([`Ctx`]), tested once per chunk.
+/// (`p2g::scatter_rows` in [`Mode::Remap`]), which adds the same values in the same order.
+/// Declared damping adds the damping of the module docs; APIC replaces FLIP. Each of these is
+/// a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
 pub(crate) fn particles<
     I: Kernels,

@@ -66,7 +66,7 @@ fn divide_by_mass<const D: usize>(
 
 /// One line of [`divide_by_mass`]: a function of its own, whose slices the compiler knows
 /// apart, so that the loop vectorises (inlined into the closure of a grid pass, it stayed
-/// scalar, and the grid passes took five times as long).
+/// scalar, and the grid passes took four times as long).
 #[inline(never)]
 fn divide_line(col: &mut [Real], mass: &[Real], cutoff: Real, add: Real) {
     for (c, &m) in col.iter_mut().zip(mass) {

@@ -104,8 +104,9 @@ crate::simd::instances! {
 /// rows would have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long
 /// in 3D (benches/PERFORMANCE.md).
 ///
-/// The re-map scatter (MUSL) is part of the particle pass (`g2p::particles`), which scatters
-/// chunk by chunk.
+/// The re-map scatter (MUSL) is part of the particle pass (`g2p::particles`) for one worker;
+/// the parallel step's runs in the full-row functions ([`Mode::Remap`], which calls the
+/// particle pass's chunk kernel: `p2g::scatter_rows`).
 pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -117,12 +118,6 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
     use Mode::*;
     // Branches on the constant alone, so that an instance compiles only the functions it
     // calls.
-    // The re-map scatter calls its chunk kernel from any scatter function (`p2g::scatter_rows`).
-    let adds_rows = if adds.mode == Remap {
-        Adds { mode: All, ..adds }
-    } else {
-        adds
-    };
     if I::FULL_ROWS {
         if adds.mode == Force {
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
@@ -131,11 +126,13 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
         }
         return;
     }
-    match (adds_rows.mode, adds_rows.apic) {
-        (All, false) => {
+    match (adds.mode, adds.apic) {
+        (All | Remap, false) => {
             I::scatter::<D, K, S, W, { rows(All, false) }>(shape, ctx, p, count, g, adds)
         }
-        (All, true) => I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds),
+        (All | Remap, true) => {
+            I::scatter::<D, K, S, W, { rows(All, true) }>(shape, ctx, p, count, g, adds)
+        }
         (MassMomentum, false) => {
             I::scatter::<D, K, S, W, { rows(MassMomentum, false) }>(shape, ctx, p, count, g, adds)
         }
@@ -146,12 +143,11 @@ pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, 
         (Force, _) => {
             I::scatter::<D, K, S, W, { rows(Force, false) }>(shape, ctx, p, count, g, adds)
         }
-        (Remap, _) => {}
     }
 }
 
-/// How the scans of the particles below are cut for a task system: `(particles, ranges,
-/// unit)` for [`tasks::reduce`], four ranges per worker (at most the definition's `workers`).
+/// The task system the scans of the particles below run on, and the workers they are cut
+/// for ([`tasks::reduce`]: four ranges per worker).
 pub(crate) struct Scan<'t> {
     pub tasks: &'t dyn TaskSystem,
     pub workers: usize,
