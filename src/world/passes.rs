@@ -174,25 +174,28 @@ pub(crate) fn node_box<const D: usize, const K: usize, S: crate::shape::Shape1D<
     let count = x
         .iter()
         .fold(count.min(status.len()), |n, c| n.min(c.len()));
-    let range = |r: Range<usize>| {
-        let x = x.each_ref().map(|c| &c[r.clone()]);
-        let status = &status[r.clone()];
-        // The ranges are whole groups.
-        let groups = r.start / REACH_GROUP..r.end.div_ceil(REACH_GROUP);
-        // SAFETY: the ranges of distinct items are disjoint, and so are their groups.
-        let out = reach.map_or(&mut [][..], |t| unsafe { t.window(groups) });
-        let n = r.len();
-        with_instance!(simd, form (D, K), I => I::first_nodes::<D, K, S>(geom, &x, status, n, out))
-    };
     let none = ([i32::MAX; D], [i32::MIN; D]);
     // Whole groups of the reach table per range.
     let (n, parts, _) = scan.cut(count);
     let cut = (n, parts, REACH_GROUP);
-    let (lo, hi) = tasks::reduce(scan.tasks, cut, none, &range, |a, b| {
+    let merge = |a: ([i32; D], [i32; D]), b: ([i32; D], [i32; D])| {
         (
             core::array::from_fn(|k| a.0[k].min(b.0[k])),
             core::array::from_fn(|k| a.1[k].max(b.1[k])),
         )
+    };
+    // The instance is picked here, on the calling thread, once: the ranges call it.
+    let (lo, hi) = with_instance!(simd, form (D, K), I => {
+        let range = |r: Range<usize>| {
+            let x = x.each_ref().map(|c| &c[r.clone()]);
+            let status = &status[r.clone()];
+            // The ranges are whole groups.
+            let groups = r.start / REACH_GROUP..r.end.div_ceil(REACH_GROUP);
+            // SAFETY: the ranges of distinct items are disjoint, and so are their groups.
+            let out = reach.map_or(&mut [][..], |t| unsafe { t.window(groups) });
+            I::first_nodes::<D, K, S>(geom, &x, status, r.len(), out)
+        };
+        tasks::reduce(scan.tasks, cut, none, &range, merge)
     });
     NodeBox::of_first_nodes::<K>(geom, lo, hi)
 }
@@ -208,17 +211,15 @@ pub(crate) fn least_plastic(
     status: &[u32],
     m: u32,
 ) -> Real {
-    let range = |r: Range<usize>| {
-        let (p, mat, st) = (&plastic[r.clone()], &material[r.clone()], &status[r]);
-        with_instance!(simd, I => I::least_plastic(p, mat, st, m))
-    };
     let n = status.len().min(plastic.len()).min(material.len());
-    tasks::reduce(scan.tasks, scan.cut(n), Real::INFINITY, &range, |a, b| {
-        if b < a {
-            b
-        } else {
-            a
-        }
+    let least = |a: Real, b: Real| if b < a { b } else { a };
+    // The instance is picked here, on the calling thread, once: the ranges call it.
+    with_instance!(simd, I => {
+        let range = |r: Range<usize>| {
+            let (p, mat, st) = (&plastic[r.clone()], &material[r.clone()], &status[r]);
+            I::least_plastic(p, mat, st, m)
+        };
+        tasks::reduce(scan.tasks, scan.cut(n), Real::INFINITY, &range, least)
     })
 }
 
@@ -233,9 +234,12 @@ pub(crate) fn fastest_squared(
     d: usize,
 ) -> f64 {
     let n = v.iter().take(d).fold(status.len(), |n, c| n.min(c.len()));
-    let range = |r: Range<usize>| {
-        let v = v.each_ref().map(|c| c.get(r.clone()).unwrap_or(&[]));
-        with_instance!(simd, I => I::fastest_squared(&v, &status[r], d))
-    };
-    tasks::reduce(scan.tasks, scan.cut(n), 0.0, &range, f64::max)
+    // The instance is picked here, on the calling thread, once: the ranges call it.
+    with_instance!(simd, I => {
+        let range = |r: Range<usize>| {
+            let v = v.each_ref().map(|c| c.get(r.clone()).unwrap_or(&[]));
+            I::fastest_squared(&v, &status[r], d)
+        };
+        tasks::reduce(scan.tasks, scan.cut(n), 0.0, &range, f64::max)
+    })
 }
