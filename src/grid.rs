@@ -39,9 +39,19 @@ pub(crate) struct GridCols<'a, const D: usize> {
     /// particles' stencils may reach ([`reach_lines`]), so that its scatter passes over the
     /// chunks that reach none of its lines; empty otherwise.
     pub reach: &'a [[u32; 2]],
-    /// A force scatter's tile ([`GridCols::carve_force_tile`]): the whole mass column, read
-    /// only (its `mass` is then empty); empty otherwise.
-    pub masses: &'a [Real],
+    /// A tile's column read whole, which it leaves out of its own ([`GridCols::carve_tile_reading`],
+    /// [`Whole`]); empty otherwise.
+    pub whole: &'a [Real],
+}
+
+/// The node column a tile of a parallel scatter reads whole, past its own rows, and which none
+/// of the tiles changes: the momentum approach's force reads the masses of every stencil node,
+/// a transported field's flow the nodal values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Whole {
+    Mass,
+    /// The nodal values of transported field `f` (`GridCols::scalar[f][2]`).
+    Value(usize),
 }
 
 /// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
@@ -72,11 +82,41 @@ impl Tile {
         }
     }
 
+    /// Where the stencil row that starts at node `row` starts in the tile's columns, if it is
+    /// the tile's to add to: every row for the whole grid, the rows of its slab for a tile of
+    /// the parallel scatter, which adds each row in the order the whole grid's scatter does. A
+    /// row added at the place returned fits: for the whole grid, the caller checked the
+    /// stencil's rows ([`rows_fit`]); a tile's columns hold `rows + ROW` entries
+    /// ([`GridCols::lengths_consistent`]).
+    #[inline(always)]
+    pub fn own(&self, row: usize) -> Option<usize> {
+        let at = row.wrapping_sub(self.first);
+        (at < self.rows).then_some(at)
+    }
+
     /// The lines along the slowest axis this tile holds (stride as in [`Tile::of_lines`]);
     /// `None` for the whole grid.
     pub fn slab(&self, stride: usize) -> Option<core::ops::Range<usize>> {
         (*self != Tile::ALL && stride > 0)
             .then(|| self.first / stride..(self.first + self.rows) / stride)
+    }
+}
+
+/// Whether the stencils of the chunk of `w` particles from `start` may reach the lines `slab`
+/// by the table `reach` ([`GridCols::reach`]; true where the table does not cover them).
+#[inline(always)]
+pub(crate) fn chunk_reaches(
+    reach: &[[u32; 2]],
+    start: usize,
+    w: usize,
+    slab: &core::ops::Range<usize>,
+) -> bool {
+    let groups = start / REACH_GROUP..(start + w).div_ceil(REACH_GROUP);
+    match reach.get(groups) {
+        Some(g) => g
+            .iter()
+            .any(|&[lo, hi]| (lo as usize) < slab.end && (hi as usize) >= slab.start),
+        None => true,
     }
 }
 
@@ -132,33 +172,34 @@ impl<'a, const D: usize> GridCols<'a, D> {
             cols.iter().all(|c| c.len() == len) || cols.iter().all(|c| c.is_empty())
         };
         let tile_fits = self.tile == Tile::ALL || self.tile.rows.saturating_add(ROW) <= len;
-        (self.mass.len() == len || (self.mass.is_empty() && !self.masses.is_empty()))
+        (self.mass.len() == len || (self.mass.is_empty() && !self.whole.is_empty()))
             && group(&self.vel)
             && group(&self.acc)
             && group(&self.remap)
             && tile_fits
     }
 
-    /// Whether the stencils of the chunk of `w` particles from `start` may reach the lines
-    /// `slab` ([`GridCols::reach`]; true where the table does not cover them).
+    /// [`chunk_reaches`] with this view's table.
     #[inline(always)]
     pub fn chunk_reaches(&self, start: usize, w: usize, slab: &core::ops::Range<usize>) -> bool {
-        let groups = start / REACH_GROUP..(start + w).div_ceil(REACH_GROUP);
-        match self.reach.get(groups) {
-            Some(g) => g
-                .iter()
-                .any(|&[lo, hi]| (lo as usize) < slab.end && (hi as usize) >= slab.start),
-            None => true,
-        }
+        chunk_reaches(self.reach, start, w, slab)
     }
 
     /// The nodal masses by node index: the whole mass column (a force scatter's tile reads
-    /// it whole, [`GridCols::masses`]; else this view's, which must hold the whole grid).
+    /// it whole, [`GridCols::whole`]; else this view's, which must hold the whole grid).
     pub fn all_masses(&self) -> &[Real] {
-        if self.masses.is_empty() {
-            self.mass
+        if self.mass.is_empty() {
+            self.whole
         } else {
-            self.masses
+            self.mass
+        }
+    }
+
+    /// The column `w` of every node, from a view of the whole grid.
+    pub fn into_whole(mut self, w: Whole) -> &'a [Real] {
+        match w {
+            Whole::Mass => self.mass,
+            Whole::Value(f) => core::mem::take::<&mut [Real]>(&mut self.scalar[f][2]),
         }
     }
 
@@ -180,7 +221,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: 0,
             tile: Tile::ALL,
             reach: &[],
-            masses: &[],
+            whole: &[],
         }
     }
 
@@ -196,7 +237,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len,
             tile,
             reach,
-            masses,
+            whole,
         } = self;
         let none = || core::array::from_fn(|_| &mut [][..]);
         let read = GridCols {
@@ -208,7 +249,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: *len,
             tile: *tile,
             reach,
-            masses,
+            whole,
         };
         let remap = GridCols {
             mass: &mut [][..],
@@ -219,7 +260,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             len: *len,
             tile: *tile,
             reach,
-            masses,
+            whole,
         };
         (read, remap)
     }
@@ -239,28 +280,28 @@ impl<'a, const D: usize> GridCols<'a, D> {
             unsafe { Carver::window(region, tile.first..end) },
             layout,
             tile,
-            true,
+            None,
         )
     }
 
-    /// [`GridCols::carve_tile`] without the mass column, which the tile reads whole from
-    /// `masses` instead ([`GridCols::masses`]): a force scatter's tile, for the momentum
-    /// approach's weights (the masses of every stencil node, past the tile too).
+    /// [`GridCols::carve_tile`] without the column `w`, which the tile reads whole from
+    /// `whole` instead ([`Whole`]; [`GridCols::whole`]).
     ///
     /// # Safety
-    /// As for [`GridCols::carve_tile`], the mass column aside: `masses` is the whole mass
-    /// column, which no view changes while this one is alive.
-    pub unsafe fn carve_force_tile(
+    /// As for [`GridCols::carve_tile`], the column `w` aside: `whole` is that column of every
+    /// node, which no view changes while this one is alive.
+    pub unsafe fn carve_tile_reading(
         region: &Shared<'a, u8>,
         layout: &Layout,
         tile: Tile,
-        masses: &'a [Real],
+        w: Whole,
+        whole: &'a [Real],
     ) -> Self {
         let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
         // SAFETY: as required of the caller.
         let c = unsafe { Carver::window(region, tile.first..end) };
-        let mut g = Self::carve_columns(c, layout, tile, false);
-        g.masses = masses;
+        let mut g = Self::carve_columns(c, layout, tile, Some(w));
+        g.whole = whole;
         g
     }
 
@@ -279,26 +320,36 @@ impl<'a, const D: usize> GridCols<'a, D> {
             rows: 0,
         };
         // SAFETY: as required of the caller.
-        Self::carve_columns(unsafe { Carver::window(region, nodes) }, layout, tile, true)
+        Self::carve_columns(unsafe { Carver::window(region, nodes) }, layout, tile, None)
     }
 
-    fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, with_mass: bool) -> Self {
+    fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, leave: Option<Whole>) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
         let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
-        let mass = if with_mass {
-            c.take(b, n)
-        } else {
-            c.skip(b);
-            &mut [][..]
+        // The next column, or nothing where it is `leave`.
+        let take = |c: &mut Carver<'a>, column: Option<Whole>| {
+            if column.is_some() && column == leave {
+                c.skip(b);
+                &mut [][..]
+            } else {
+                c.take(b, n)
+            }
         };
-        let vel = core::array::from_fn(|_| c.take(b, n));
-        let acc = core::array::from_fn(|_| c.take(b, n));
-        let remap = core::array::from_fn(|_| if has_remap { c.take(b, n) } else { &mut [][..] });
+        let mass = take(&mut c, Some(Whole::Mass));
+        let vel = core::array::from_fn(|_| take(&mut c, None));
+        let acc = core::array::from_fn(|_| take(&mut c, None));
+        let remap = core::array::from_fn(|_| {
+            if has_remap {
+                take(&mut c, None)
+            } else {
+                &mut [][..]
+            }
+        });
         let scalar = core::array::from_fn(|f| {
-            core::array::from_fn(|_| {
+            core::array::from_fn(|k| {
                 if layout.scalar_grid[f] {
-                    c.take(b, n)
+                    take(&mut c, (k == 2).then_some(Whole::Value(f)))
                 } else {
                     &mut [][..]
                 }
@@ -314,7 +365,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             scalar,
             tile,
             reach: &[],
-            masses: &[],
+            whole: &[],
         }
     }
 }

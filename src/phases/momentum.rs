@@ -312,8 +312,8 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             // on the nodes this view adds to (a tile's own; the whole grid's).
             let first = g.tile.first;
             let own = first..first.saturating_add(g.tile.rows).min(first + g.len());
-            let (m, acc) = (g.masses, &mut g.acc);
-            let m = if m.is_empty() { &*g.mass } else { m };
+            let m = if g.mass.is_empty() { g.whole } else { &*g.mass };
+            let acc = &mut g.acc;
             ctx.active.for_each_line_in(stride, own, |r| {
                 let nodes = r.start + first..r.end + first;
                 for col in acc.iter_mut() {

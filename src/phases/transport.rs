@@ -38,11 +38,13 @@
 //! The particle loops work as the momentum passes do: chunk by chunk, with the chunk's stencils
 //! computed lane-fastest ([`chunk_stencils`]) and each particle's nodes added to or read from
 //! in 4-wide stencil rows ([`scatter_rows`], [`gather_rows`]). They run only for a declared
-//! field.
+//! field. Each loop is one call ([`particles`] with a [`FieldPass`]), so that the parallel
+//! step runs the scatters by tiles of the grid and the update by ranges of particles, as it
+//! runs the momentum passes.
 
 use super::{Ctx, Kernels};
 use crate::def::{ScalarBoundary, Transport};
-use crate::grid::{add_row, load_row, rows_fit, GridCols};
+use crate::grid::{add_row, chunk_reaches, load_row, rows_fit, GridCols, Tile};
 use crate::layout::MaterialRecord;
 use crate::material::{volume_ratio_minus_one, Deformation};
 use crate::math::Mat;
@@ -71,122 +73,204 @@ const fn scatter_order<const W: usize>() -> [usize; W] {
 /// Index of heat conduction in the per-field arrays (diffusion is 1: [`crate::ScalarField`]).
 const HEAT: usize = crate::ScalarField::Temperature as usize;
 
-/// One substep of field `f` (HEAT or DIFFUSION) with its definition `t` (inlined into each
-/// instruction set's instance, `world::passes`).
+/// One particle loop of a field's substep (the module docs' 1, 2 and 3). Between them come
+/// the grid's sides ([`reset`] before the first, [`nodal_values`], [`nodal_rates`]);
+/// `world::parallel` runs them in that order, the scatters by tiles of the grid and the update
+/// by ranges of particles.
+pub(crate) enum FieldPass<'v, 'g, const D: usize> {
+    /// 1. The capacity and momentum of the particles onto the nodes of `g` (a tile's, or the
+    ///    whole grid's).
+    Capacity(&'v mut GridCols<'g, D>),
+    /// 2. The flow onto the nodes of `g`, from the nodal values (which a tile reads whole,
+    ///    [`GridCols::whole`]).
+    Flow(&'v mut GridCols<'g, D>),
+    /// 3. The particles' values from the nodal rates of `g`: `value` and `on_grid` are the
+    ///    field's particle columns 0 and 1 (taken out of the particle view); `fixed`, whether
+    ///    a face is fixed (its nodes marked, [`nodal_rates`]).
+    Update {
+        g: &'v GridCols<'g, D>,
+        value: &'v mut [Real],
+        on_grid: &'v mut [Real],
+        fixed: bool,
+    },
+}
+
+/// The particle loop `pass` of field `f` (HEAT or DIFFUSION) over the particles `0..count`
+/// (inlined into each instruction set's instance, `world::passes`).
 #[inline(always)]
-pub(crate) fn substep<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(crate) fn particles<
+    I: Kernels,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
     shape: &S,
     ctx: &Ctx<'_, D>,
-    p: &mut ParticleCols<'_, D>,
+    p: &ParticleCols<'_, D>,
     count: usize,
-    g: &mut GridCols<'_, D>,
     f: usize,
-    t: &Transport,
+    pass: FieldPass<'_, '_, D>,
 ) {
-    let n = g.len();
-    if p.scalar[f][0].len() < count || g.scalar[f].iter().any(|c| c.len() != n) {
+    let stride = ctx.geom.stride;
+    let mut st = Stencils::<D, K, W>::default();
+    // The scatters read the particles' values, the update writes them.
+    let values = match &pass {
+        FieldPass::Update { value, .. } => value.len(),
+        _ => p.scalar[f][0].len(),
+    };
+    if values < count {
         return; // Unreachable: the field is declared, so its columns exist.
     }
-    let geom = &ctx.geom;
-    // The grid passes work on the substep's node box, as the momentum's do: every node a
-    // particle's stencil row reads is in it and reset here.
-    for c in g.scalar[f].iter_mut() {
-        zero_lines(ctx, c);
-    }
-    let mut st = Stencils::<D, K, W>::default();
-    // 1. Capacity and momentum.
-    for start in (0..count).step_by(W) {
-        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
-        let [c_col, m_col, _, _] = &mut g.scalar[f];
-        for ln in const { scatter_order::<W>() } {
-            if live.has(ln) {
-                let i = start + ln;
-                let (cap, _) = capacity_and_conductance(ctx, p, i, f);
-                let phi = p.scalar[f][0][i];
-                let cols = [&mut **c_col, &mut **m_col];
-                // SAFETY: `chunk_stencils` checked the rows of a live lane against every
-                // column of length `n`.
-                unsafe {
-                    scatter_rows::<D, K, W, false, 2>(
-                        st.lane(ln),
-                        geom.stride,
-                        cols,
-                        [cap, cap * phi],
-                        |r| (r[0], 0.0),
-                    );
+    match pass {
+        FieldPass::Capacity(g) => {
+            let (n, tile, reach) = (g.len(), g.tile, g.reach);
+            let slab = tile.slab(stride[D - 1]);
+            let [c_col, m_col, _, _] = &mut g.scalar[f];
+            if c_col.len() != n || m_col.len() != n {
+                return; // Unreachable, as above.
+            }
+            // A tile's rows are clipped to it (`Tile::own`); the whole grid's must fit.
+            let fit = if slab.is_some() { usize::MAX } else { n };
+            for start in (0..count).step_by(W) {
+                if slab
+                    .as_ref()
+                    .is_some_and(|s| !chunk_reaches(reach, start, W, s))
+                {
+                    continue;
+                }
+                let live =
+                    chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, fit);
+                for ln in const { scatter_order::<W>() } {
+                    if live.has(ln) {
+                        let i = start + ln;
+                        let (cap, _) = capacity_and_conductance(ctx, p, i, f);
+                        let phi = p.scalar[f][0][i];
+                        let cols = [&mut **c_col, &mut **m_col];
+                        // SAFETY: `chunk_stencils` checked the rows of a live lane against the
+                        // whole grid's columns; a tile's are clipped.
+                        unsafe {
+                            scatter_rows::<D, K, W, false, 2>(
+                                st.lane(ln),
+                                stride,
+                                tile,
+                                cols,
+                                [cap, cap * phi],
+                                |r| (r[0], 0.0),
+                            );
+                        }
+                    }
                 }
             }
         }
-    }
-    nodal_values(ctx, &mut g.scalar[f], t);
-    // 2. Flow: the gradient of the nodal values at the particle, then
-    // `V_p (q_p . G_ip + s_p S_ip)` on its nodes.
-    for start in (0..count).step_by(W) {
-        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
-        let [_, _, v_col, q_col] = &mut g.scalar[f];
-        for ln in const { scatter_order::<W>() } {
-            if !live.has(ln) {
-                continue;
+        // The gradient of the nodal values at the particle, then `V_p (q_p . G_ip + s_p S_ip)`
+        // on its nodes.
+        FieldPass::Flow(g) => {
+            let (n, tile, reach) = (g.len(), g.tile, g.reach);
+            let slab = tile.slab(stride[D - 1]);
+            let [_, _, own, q_col] = &mut g.scalar[f];
+            let values: &[Real] = if own.is_empty() { g.whole } else { own };
+            // The whole grid's flow adds rows where its values are read.
+            if q_col.len() != n || (slab.is_none() && values.len() != n) {
+                return; // Unreachable, as above.
             }
-            let i = start + ln;
-            let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
-            let Some(rec) = ctx.materials.get(p.material[i] as usize) else {
-                continue;
-            };
-            let volume = current_volume(rec, p, i);
-            let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
-            let lane = st.lane(ln);
-            // SAFETY: as in pass 1.
-            let (_, grad) = unsafe { gather_rows::<D, K, W, true, 1>(lane, geom.stride, [v_col]) };
-            // V (q . G + s S), q = -kappa grad: per row, wx V (s r_0 + sum_{b >= 1} q_b r_b)
-            // + dwx V q_0 r_0.
-            let vq: [Real; D] = core::array::from_fn(|a| -(volume * kappa) * grad[a]);
-            let vs = volume * source;
-            unsafe {
-                scatter_rows::<D, K, W, true, 1>(lane, geom.stride, [q_col], [1.0], |r| {
-                    (
-                        (1..D).fold(vs * r[0], |c, b| c + vq[b] * r[b]),
-                        vq[0] * r[0],
-                    )
-                });
+            for start in (0..count).step_by(W) {
+                if slab
+                    .as_ref()
+                    .is_some_and(|s| !chunk_reaches(reach, start, W, s))
+                {
+                    continue;
+                }
+                let live = chunk_stencils::<I, D, K, S, W>(
+                    &mut st,
+                    shape,
+                    ctx,
+                    p,
+                    start,
+                    count,
+                    values.len(),
+                );
+                for ln in const { scatter_order::<W>() } {
+                    if !live.has(ln) {
+                        continue;
+                    }
+                    let i = start + ln;
+                    let (_, kappa) = capacity_and_conductance(ctx, p, i, f);
+                    let Some(rec) = ctx.materials.get(p.material[i] as usize) else {
+                        continue;
+                    };
+                    let volume = current_volume(rec, p, i);
+                    let source = p.scalar[f][2].get(i).copied().unwrap_or(0.0);
+                    let lane = st.lane(ln);
+                    // SAFETY: `chunk_stencils` checked the rows against the values.
+                    let (_, grad) =
+                        unsafe { gather_rows::<D, K, W, true, 1>(lane, stride, [values]) };
+                    // V (q . G + s S), q = -kappa grad: per row, wx V (s r_0 + sum_{b >= 1} q_b r_b)
+                    // + dwx V q_0 r_0.
+                    let vq: [Real; D] = core::array::from_fn(|a| -(volume * kappa) * grad[a]);
+                    let vs = volume * source;
+                    // SAFETY: the rows fit the flow's column, the values' length (the whole
+                    // grid), or are clipped to a tile.
+                    unsafe {
+                        scatter_rows::<D, K, W, true, 1>(lane, stride, tile, [q_col], [1.0], |r| {
+                            (
+                                (1..D).fold(vs * r[0], |c, b| c + vq[b] * r[b]),
+                                vq[0] * r[0],
+                            )
+                        });
+                    }
+                }
             }
         }
-    }
-    let fixed = nodal_rates(ctx, &mut g.scalar[f], t, S::AXISYMMETRIC);
-    // 3. FLIP update of the particles' values, and the grid's value at each particle.
-    for start in (0..count).step_by(W) {
-        let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
-        let [_, marker, value, rate] = &g.scalar[f];
-        for ln in live.iter() {
-            let i = start + ln;
-            // SAFETY: as in pass 1.
-            let (a, v, w) = unsafe {
-                let lane = st.lane(ln);
-                if fixed {
-                    let ([a, v, w], _) =
-                        gather_rows::<D, K, W, false, 3>(lane, geom.stride, [rate, value, marker]);
-                    (a, v, w)
-                } else {
-                    let ([a, v], _) =
-                        gather_rows::<D, K, W, false, 2>(lane, geom.stride, [rate, value]);
-                    (a, v, 0.0)
-                }
-            };
-            let on_grid = v + a * ctx.dt;
-            let flip = p.scalar[f][0][i] + a * ctx.dt;
-            // Next to a fixed face the particle takes the grid's value in the measure `w` of its
-            // weight on the face's nodes.
-            let next = if fixed {
-                flip + w * (on_grid - flip)
-            } else {
-                flip
-            };
-            // A non-finite rate (from a non-finite source or value set by the host) leaves the
-            // values as they were rather than spreading NaN.
-            if next.is_finite() && on_grid.is_finite() {
-                p.scalar[f][0][i] = next;
-                if let Some(gv) = p.scalar[f][1].get_mut(i) {
-                    *gv = on_grid;
+        // FLIP update of the particles' values, and the grid's value at each particle.
+        FieldPass::Update {
+            g,
+            value,
+            on_grid,
+            fixed,
+        } => {
+            let n = g.len();
+            let [marker, values, rate] = [&*g.scalar[f][1], &*g.scalar[f][2], &*g.scalar[f][3]];
+            if [marker, values, rate].iter().any(|c| c.len() != n) {
+                return; // Unreachable, as above.
+            }
+            for start in (0..count).step_by(W) {
+                let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
+                for ln in live.iter() {
+                    let i = start + ln;
+                    // SAFETY: `chunk_stencils` checked the rows of a live lane.
+                    let (a, v, w) = unsafe {
+                        let lane = st.lane(ln);
+                        if fixed {
+                            let ([a, v, w], _) = gather_rows::<D, K, W, false, 3>(
+                                lane,
+                                stride,
+                                [rate, values, marker],
+                            );
+                            (a, v, w)
+                        } else {
+                            let ([a, v], _) =
+                                gather_rows::<D, K, W, false, 2>(lane, stride, [rate, values]);
+                            (a, v, 0.0)
+                        }
+                    };
+                    let grid_value = v + a * ctx.dt;
+                    let flip = value[i] + a * ctx.dt;
+                    // Next to a fixed face the particle takes the grid's value in the measure
+                    // `w` of its weight on the face's nodes.
+                    let next = if fixed {
+                        flip + w * (grid_value - flip)
+                    } else {
+                        flip
+                    };
+                    // A non-finite rate (from a non-finite source or value set by the host)
+                    // leaves the values as they were rather than spreading NaN.
+                    if next.is_finite() && grid_value.is_finite() {
+                        value[i] = next;
+                        if let Some(gv) = on_grid.get_mut(i) {
+                            *gv = grid_value;
+                        }
+                    }
                 }
             }
         }
@@ -196,7 +280,15 @@ pub(crate) fn substep<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>,
 /// The grid's side of a substep, between the particle loops: functions of the dimension
 /// only, one copy each rather than one per shape family and instruction set.
 ///
-/// Zeroes `col` on the substep's node box (every node a particle's stencil row reads).
+/// Resets a field's node columns `cols` on the substep's node box (every node a particle's
+/// stencil row reads), before its first particle loop.
+pub(crate) fn reset<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4]) {
+    for c in cols.iter_mut() {
+        zero_lines(ctx, c);
+    }
+}
+
+/// Zeroes `col` on the substep's node box.
 fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
     ctx.active.for_each_line(ctx.geom.stride, col.len(), |r| {
         if let Some(c) = col.get_mut(r) {
@@ -208,7 +300,11 @@ fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
 /// After the scatter of capacity `c_i` and momentum `p_i` (`cols` = [c, p, value, rate]): the
 /// nodal values `phi_i = p_i / c_i` (E57), with the axis mirror, the fixed faces and
 /// their odd images.
-fn nodal_values<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4], t: &Transport) {
+pub(crate) fn nodal_values<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    cols: &mut [&mut [Real]; 4],
+    t: &Transport,
+) {
     let (geom, bx, cutoff) = (&ctx.geom, &ctx.active, ctx.mass_cutoff);
     let n = cols[0].len();
     let [c_col, m_col, v_col, _] = cols;
@@ -257,7 +353,7 @@ fn nodal_values<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4], t
 /// inflow, the rates `a_i = Q_i / c_i` (E61) with the fixed faces and their images,
 /// and, when a face is fixed, its nodes marked with 1 in the momentum column (free since the
 /// values were formed) for the particle update. Returns whether a face is fixed.
-fn nodal_rates<const D: usize>(
+pub(crate) fn nodal_rates<const D: usize>(
     ctx: &Ctx<'_, D>,
     cols: &mut [&mut [Real]; 4],
     t: &Transport,
@@ -345,10 +441,10 @@ fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, con
 /// stencil, row by row, `(c_x, c_dx) = factors(r)` from the row's factors `r`
 /// ([`Stencil::row`]): `S_ip scale` for `factors(r) = (r_0, 0)`, `G_ip . q` for
 /// `(sum_{b >= 1} q_b r_b, q_0 r_0)` and a scale of 1. `DX`: whether `c_dx` is used (else
-/// skipped).
+/// skipped). `cols` are the columns of `tile`, which takes its own rows alone ([`Tile::own`]).
 ///
 /// # Safety
-/// Every row of the stencil fits in every column ([`rows_fit`]).
+/// Every row of the stencil fits in every column ([`rows_fit`]), or `tile` is a tile's.
 #[inline(always)]
 unsafe fn scatter_rows<
     const D: usize,
@@ -359,6 +455,7 @@ unsafe fn scatter_rows<
 >(
     st: LaneStencil<'_, D, K, W>,
     stride: [usize; D],
+    tile: Tile,
     cols: [&mut [Real]; N],
     scale: [Real; N],
     factors: impl Fn([Real; D]) -> (Real, Real),
@@ -367,11 +464,14 @@ unsafe fn scatter_rows<
     for k in 0..Stencil::<D, K>::layers() {
         for j in 0..K {
             let (row, r) = st.row(j, k, stride);
+            let Some(at) = tile.own(row) else {
+                continue;
+            };
             let (c_x, c_dx) = factors(r);
             let v = if DX { wx * c_x + dwx * c_dx } else { wx * c_x };
             for c in 0..N {
-                // SAFETY: the caller guarantees that the row fits.
-                unsafe { add_row(cols[c], row, v * scale[c]) };
+                // SAFETY: the caller guarantees that the row fits, or it is the tile's.
+                unsafe { add_row(cols[c], at, v * scale[c]) };
             }
         }
     }

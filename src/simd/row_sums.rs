@@ -179,13 +179,12 @@ impl<'a, 'g, const D: usize> Direct<'a, 'g, D> {
 
 impl<const D: usize> Direct<'_, '_, D> {
     /// Where stencil row `j` along y, layer `k` along z starts in the columns, if the row is
-    /// theirs to add to ([`own_row`]).
+    /// theirs to add to ([`Tile::own`]).
     #[inline(always)]
     fn at(&self, j: usize, k: usize) -> Option<usize> {
-        own_row(
-            self.g,
-            crate::shape::row_start(self.base, j, k, self.stride),
-        )
+        self.g
+            .tile
+            .own(crate::shape::row_start(self.base, j, k, self.stride))
     }
 }
 
@@ -193,18 +192,6 @@ impl<const D: usize> Direct<'_, '_, D> {
 #[inline(always)]
 fn last_row<const D: usize, const K: usize>(stride: [usize; D]) -> usize {
     Stencil::<D, K>::last_row_offset(stride)
-}
-
-/// Where the row that starts at node `row` starts in `g`'s columns, if it is theirs to add to
-/// ([`Tile`]: every row for the whole grid, the rows of its slab for a tile of the parallel
-/// scatter, which adds each row in the order the whole grid's scatter does). A row the scatter
-/// adds at the place returned fits: for the whole grid, the caller checked the stencil's rows
-/// ([`rows_fit`]); a tile's columns hold `tile.rows + ROW` entries
-/// ([`GridCols::lengths_consistent`]).
-#[inline(always)]
-fn own_row<const D: usize>(g: &GridCols<'_, D>, row: usize) -> Option<usize> {
-    let at = row.wrapping_sub(g.tile.first);
-    (at < g.tile.rows).then_some(at)
 }
 
 /// Scatters the live lanes of a chunk: the groups of a vector's blocks at once
@@ -622,7 +609,7 @@ impl<const D: usize> RowSink<Row4> for Direct<'_, '_, D> {
         for (c, &v) in acc.iter().enumerate() {
             if slot_used::<D, MODE>(c) {
                 // SAFETY: `new` checked the stencil's rows (j, k < K) against the whole grid,
-                // or the columns are a tile's ([`own_row`]).
+                // or the columns are a tile's ([`Tile::own`]).
                 unsafe { add_row(column(self.g, c), at, v) };
             }
         }
@@ -747,7 +734,7 @@ fn scatter_group<
 /// to the grid block after block, as it adds them: the same values, added in the same order.
 ///
 /// The caller checked that every lane's rows fit the grid ([`rows::fit`]), or `g` is a tile's
-/// columns ([`own_row`]).
+/// columns ([`Tile::own`]).
 #[inline(always)]
 fn scatter_blocks<
     I: Rows,
@@ -817,7 +804,7 @@ fn scatter_blocks<
 /// `first`, in the order [`scatter_group`] adds a group's rows and columns.
 ///
 /// # Safety
-/// Every lane's rows fit the grid, or `g` is a tile's columns ([`own_row`]); `sums` holds
+/// Every lane's rows fit the grid, or `g` is a tile's columns ([`Tile::own`]); `sums` holds
 /// every row (`j < K`, `k < layers`) with the slots `MODE` fills ([`for_each_row`] gave it
 /// them).
 #[inline(always)]
@@ -829,12 +816,12 @@ unsafe fn add_block<I: Rows, const D: usize, const K: usize, const MODE: u8, con
 ) {
     for j in 0..K {
         for k in 0..Stencil::<D, K>::layers() {
-            let Some(at) = own_row(g, crate::shape::row_start(first, j, k, stride)) else {
+            let Some(at) = g.tile.own(crate::shape::row_start(first, j, k, stride)) else {
                 continue; // Another tile's row.
             };
             for c in 0..slot::COUNT {
                 if slot_used::<D, MODE>(c) {
-                    // SAFETY: as required of the caller ([`own_row`]).
+                    // SAFETY: as required of the caller ([`Tile::own`]).
                     unsafe {
                         let v = sums.sums[j * K + k][c].assume_init();
                         add_row(column(g, c), at, I::block(v, B));
@@ -891,7 +878,7 @@ mod tests {
             len: LEN,
             tile: crate::grid::Tile::ALL,
             reach: &[],
-            masses: &[],
+            whole: &[],
         }
     }
 

@@ -1,7 +1,8 @@
 //! The substep's passes on the host's task system ([`crate::tasks`]), bit-identical to one
 //! worker's for any number of workers.
 //!
-//! - **Particle passes** (the particle update, the stress update): items are ranges of whole
+//! - **Particle passes** (the particle update, the stress update, a transported field's
+//!   update): items are ranges of whole
 //!   chunks, each with a window of the particle columns of its own ([`ParticleCols::carve_window`])
 //!   and the grid to read. A particle's update reads only its own values and the grid, so
 //!   it computes the same bits in any item. Each item leaves its part of the report in a slot
@@ -16,19 +17,22 @@
 //!   two neighbours ever run at once.
 //! - MUSL's re-map, which one worker scatters in the particle pass, is a scatter of its own
 //!   here (`p2g::scatter_rows` in `Mode::Remap`): the same rows from the stencils where the
-//!   substep started.
+//!   substep started. Heat and diffusion's two scatters take tiles too, their flow's reading
+//!   the nodal values whole as the momentum approach's force reads the masses ([`Whole`]).
 //!
 //! Races are ruled out by construction: every item's mutable view is carved from a window
 //! no other item of the same pass touches (particle ranges, tiles of one colour with a line
-//! between them), and what items share they only read. The grid passes, the tractions, heat
-//! and diffusion and the momentum approach's force run on the calling thread.
+//! between them), and what items share they only read. The walls, the tractions and a
+//! transported field's nodal values and rates run on the calling thread.
 
 use super::passes::{self, Passes};
-use crate::grid::{GridCols, Tile};
+use crate::def::Transport;
+use crate::grid::{GridCols, Tile, Whole};
 use crate::layout::{Layout, Partial, CHUNK};
 use crate::particles::{ParticleCols, StepReport};
 use crate::phases::grid_update::Nodes;
 use crate::phases::p2g::{Adds, Mode};
+use crate::phases::transport::{self, FieldPass};
 use crate::phases::Ctx;
 use crate::shape::{Shape1D, ROW};
 use crate::tasks::{self, Shared, TaskSystem};
@@ -131,21 +135,22 @@ impl<'b, const D: usize> Columns<'b, D> {
         count: usize,
         adds: Adds,
     ) {
-        self.scatter_tiles(ctx, adds, &|p, g| {
+        // The momentum approach's force reads the masses of every stencil node, past its tile
+        // too.
+        let whole = (ctx.momentum && adds.mode == Mode::Force).then_some(Whole::Mass);
+        self.scatter_tiles(ctx, whole, &|p, g| {
             passes::scatter::<I, D, K, S, W>(shape, ctx, p, count, g, adds)
         });
     }
 
-    /// [`Columns::scatter`] with the pass as `run` (one copy per dimension, not per form).
+    /// [`Columns::scatter`] with the pass as `run` (one copy per dimension, not per form); the
+    /// tiles read the column `whole` of every node, which none of them changes.
     fn scatter_tiles(
         &mut self,
         ctx: &Ctx<'_, D>,
-        adds: Adds,
+        whole: Option<Whole>,
         run: &(dyn Fn(&ParticleCols<'_, D>, &mut GridCols<'_, D>) + Sync),
     ) {
-        // The momentum approach's force reads the masses of every stencil node, past its tile
-        // too: its tiles read the whole mass column, which none of them changes.
-        let momentum_force = ctx.momentum && adds.mode == Mode::Force;
         let stride = ctx.geom.stride[D - 1];
         let lines = ctx.geom.nodes[D - 1];
         // Tiles need lines of at least a row's width (so that a row's spill into the next
@@ -172,14 +177,12 @@ impl<'b, const D: usize> Columns<'b, D> {
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
         // SAFETY: the table is only read while the tiles run (the node box wrote it).
         let reach: &[[u32; 2]] = unsafe { self.reach.window(0..usize::MAX) };
-        // The mass column (the first), read whole by a momentum force's tiles, which leave it
-        // out of their own columns.
-        let masses: &[crate::Real] = if momentum_force {
-            // SAFETY: the force scatter's tiles carve no mass column, and nothing else runs.
-            let g = unsafe { GridCols::<D>::carve_tile(&self.grid, self.layout, Tile::ALL) };
-            g.mass
-        } else {
-            &[]
+        // The column the tiles read whole and leave out of their own.
+        let read: &[crate::Real] = match whole {
+            // SAFETY: the tiles carve no view of this column, and nothing else runs.
+            Some(w) => unsafe { GridCols::<D>::carve_tile(&self.grid, self.layout, Tile::ALL) }
+                .into_whole(w),
+            None => &[],
         };
         let (grid, layout, p) = (&self.grid, self.layout, &p);
         for colour in 0..2 {
@@ -188,12 +191,11 @@ impl<'b, const D: usize> Columns<'b, D> {
                 let tile = Tile::of_lines(bound(t)..bound(t + 1), stride);
                 // SAFETY: tiles of one colour have a tile of at least one line, which is at
                 // least ROW entries, between them, so their windows (rows + ROW entries) are
-                // disjoint; the particle view and `masses` are read only.
+                // disjoint; the particle view and `read` are read only.
                 let mut g = unsafe {
-                    if momentum_force {
-                        GridCols::carve_force_tile(grid, layout, tile, masses)
-                    } else {
-                        GridCols::carve_tile(grid, layout, tile)
+                    match whole {
+                        Some(w) => GridCols::carve_tile_reading(grid, layout, tile, w, read),
+                        None => GridCols::carve_tile(grid, layout, tile),
                     }
                 };
                 g.reach = reach;
@@ -308,6 +310,55 @@ impl<'b, const D: usize> Columns<'b, D> {
     ) {
         self.particle_ranges(count, report, &|p, n, g, report| {
             I::stress::<D, K, S, W>(shape, ctx, p, n, g, report)
+        });
+    }
+
+    /// One substep of the transported field `f` (heat or diffusion) defined by `t`, in the
+    /// order of [`crate::phases::transport`]: its two scatters by tiles, its particle update
+    /// by ranges, the grid's sides between them on the calling thread.
+    pub fn transport<I: Passes, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        count: usize,
+        f: usize,
+        t: &Transport,
+    ) {
+        let axisymmetric = S::AXISYMMETRIC;
+        self.transport_loops(ctx, count, f, t, axisymmetric, &|p, n, pass| {
+            I::transport::<D, K, S, W>(shape, ctx, p, n, f, pass)
+        });
+    }
+
+    /// [`Columns::transport`] with the particle loops as `run` (one copy per dimension, not
+    /// per form).
+    fn transport_loops(
+        &mut self,
+        ctx: &Ctx<'_, D>,
+        count: usize,
+        f: usize,
+        t: &Transport,
+        axisymmetric: bool,
+        run: &(dyn Fn(&ParticleCols<'_, D>, usize, FieldPass<'_, '_, D>) + Sync),
+    ) {
+        transport::reset(ctx, &mut self.grid().scalar[f]);
+        self.scatter_tiles(ctx, None, &|p, g| run(p, count, FieldPass::Capacity(g)));
+        transport::nodal_values(ctx, &mut self.grid().scalar[f], t);
+        self.scatter_tiles(ctx, Some(Whole::Value(f)), &|p, g| {
+            run(p, count, FieldPass::Flow(g))
+        });
+        let fixed = transport::nodal_rates(ctx, &mut self.grid().scalar[f], t, axisymmetric);
+        self.particle_ranges(count, &mut StepReport::default(), &|p, n, g, _| {
+            // The update writes the field's values, which it takes out of the window.
+            let value = core::mem::take(&mut p.scalar[f][0]);
+            let on_grid = core::mem::take(&mut p.scalar[f][1]);
+            let pass = FieldPass::Update {
+                g,
+                value,
+                on_grid,
+                fixed,
+            };
+            run(p, n, pass)
         });
     }
 }

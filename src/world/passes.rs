@@ -11,7 +11,6 @@
 // A pass takes the substep's columns and context.
 #![allow(clippy::too_many_arguments)]
 
-use crate::def::Transport;
 use crate::grid::{Geom, GridCols, NodeBox};
 use crate::layout::{CHUNK, REACH_GROUP, SLOTS_PER_WORKER};
 use crate::particles::{ParticleCols, StepReport};
@@ -61,16 +60,15 @@ crate::simd::instances! {
         report: &mut StepReport,
     ) => stress::stress;
 
-    /// [`transport::substep`] (heat conduction or diffusion, one field).
+    /// [`transport::particles`]: one particle loop of heat conduction or diffusion.
     fn transport [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
-        p: &mut ParticleCols<'_, D>,
+        p: &ParticleCols<'_, D>,
         count: usize,
-        g: &mut GridCols<'_, D>,
         f: usize,
-        t: &Transport,
-    ) => transport::substep;
+        pass: transport::FieldPass<'_, '_, D>,
+    ) => transport::particles;
 
     /// [`NodeBox::first_nodes`] and the reach table ([`crate::grid::first_nodes`]).
     fn first_nodes [const D: usize, const K: usize, S: Shape1D<K>] [] [D, K, S] (

@@ -365,14 +365,11 @@ impl Kernel for Substep<'_> {
         count: usize,
     ) {
         let report = &mut *self.report;
-        {
-            let (mut p, mut g) = cols.full();
-            p.freeze_domain_stretch(count);
-            // Heat and diffusion first, with the particles where the substep starts.
-            for (f, t) in ctx.transport.iter().enumerate() {
-                if let Some(t) = t {
-                    I::transport::<D, K, S, W>(s, ctx, &mut p, count, &mut g, f, t);
-                }
+        cols.full().0.freeze_domain_stretch(count);
+        // Heat and diffusion first, with the particles where the substep starts.
+        for (f, t) in ctx.transport.iter().enumerate() {
+            if let Some(t) = t {
+                cols.transport::<I, K, S, W>(s, ctx, count, f, t);
             }
         }
         grid_update::reset(ctx, &mut GridPasses { cols, ctx });
