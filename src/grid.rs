@@ -102,21 +102,39 @@ impl Tile {
     }
 }
 
-/// Whether the stencils of the chunk of `w` particles from `start` may reach the lines `slab`
-/// by the table `reach` ([`GridCols::reach`]; true where the table does not cover them).
-#[inline(always)]
-pub(crate) fn chunk_reaches(
-    reach: &[[u32; 2]],
-    start: usize,
+/// The first particles of the chunks a view's scatter takes ([`GridCols::chunks`]).
+pub(crate) struct Chunks<'a> {
+    next: usize,
+    count: usize,
     w: usize,
-    slab: &core::ops::Range<usize>,
-) -> bool {
-    let groups = start / REACH_GROUP..(start + w).div_ceil(REACH_GROUP);
-    match reach.get(groups) {
-        Some(g) => g
-            .iter()
-            .any(|&[lo, hi]| (lo as usize) < slab.end && (hi as usize) >= slab.start),
-        None => true,
+    reach: &'a [[u32; 2]],
+    /// A tile's lines; `None` for the whole grid.
+    slab: Option<core::ops::Range<usize>>,
+}
+
+impl Iterator for Chunks<'_> {
+    type Item = usize;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<usize> {
+        while self.next < self.count {
+            let start = self.next;
+            if let Some(slab) = &self.slab {
+                // A group whose particles reach no line of the slab: past all its chunks (a
+                // chunk across two groups, which no chunk width makes, is taken).
+                let group = start / REACH_GROUP;
+                if let Some(&[lo, hi]) = self.reach.get(group) {
+                    let in_group = (start + self.w - 1) / REACH_GROUP == group;
+                    if in_group && ((lo as usize) >= slab.end || (hi as usize) < slab.start) {
+                        self.next = (group + 1) * REACH_GROUP;
+                        continue;
+                    }
+                }
+            }
+            self.next = start + self.w;
+            return Some(start);
+        }
+        None
     }
 }
 
@@ -179,10 +197,18 @@ impl<'a, const D: usize> GridCols<'a, D> {
             && tile_fits
     }
 
-    /// [`chunk_reaches`] with this view's table.
-    #[inline(always)]
-    pub fn chunk_reaches(&self, start: usize, w: usize, slab: &core::ops::Range<usize>) -> bool {
-        chunk_reaches(self.reach, start, w, slab)
+    /// The chunks of `w` particles, of the first `count`, whose stencils may reach this view's
+    /// nodes, by their first particle: every chunk for the whole grid; for a tile, those of
+    /// the groups of the reach table ([`GridCols::reach`]) that reach its slab, a group
+    /// passed over at once. `stride`: the slowest axis's (see [`Tile::slab`]).
+    pub fn chunks(&self, count: usize, w: usize, stride: usize) -> Chunks<'a> {
+        Chunks {
+            next: 0,
+            count,
+            w,
+            reach: self.reach,
+            slab: self.tile.slab(stride),
+        }
     }
 
     /// The nodal masses by node index: the whole mass column (a force scatter's tile reads

@@ -232,8 +232,6 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
     let stride = ctx.geom.stride;
     // The second scatter runs where a particle falls back or particle forces are declared.
     let mut rest = ctx.forces;
-    // A tile of the parallel scatter takes the chunks that reach its slab (as `p2g`'s).
-    let slab = g.tile.slab(stride[D - 1]);
     for second in [false, true] {
         if second && !rest {
             return;
@@ -246,12 +244,8 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             forces: !second || ctx.forces,
             apic: false,
         };
-        for start in (0..count).step_by(W) {
-            if let Some(slab) = &slab {
-                if !g.chunk_reaches(start, W, slab) {
-                    continue;
-                }
-            }
+        // A tile of the parallel scatter takes the chunks that reach its slab (as `p2g`'s).
+        for start in g.chunks(count, W, stride[D - 1]) {
             let live = live_lanes(p, start, count);
             load_chunk(p, start, &mut x, &mut mass, &mut tau);
             I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, false);

@@ -78,13 +78,7 @@ pub(crate) fn scatter_rows<
     let load_affine = adds.apic && !(remap && S::GRADIENT_AFFINE);
     // A tile of the parallel scatter takes the chunks whose rows reach its slab (and adds
     // their rows in the slab alone, `row_sums`).
-    let slab = g.tile.slab(ctx.geom.stride[D - 1]);
-    for start in (0..count).step_by(W) {
-        if let Some(slab) = &slab {
-            if !g.chunk_reaches(start, W, slab) {
-                continue;
-            }
-        }
+    for start in g.chunks(count, W, ctx.geom.stride[D - 1]) {
         for a in 0..D {
             load_into(&mut x[a], positions[a], start);
             load_into(&mut v[a], p.v[a], start);

@@ -44,7 +44,7 @@
 
 use super::{Ctx, Kernels};
 use crate::def::{ScalarBoundary, Transport};
-use crate::grid::{add_row, chunk_reaches, load_row, rows_fit, GridCols, Tile};
+use crate::grid::{add_row, load_row, rows_fit, GridCols, Tile};
 use crate::layout::MaterialRecord;
 use crate::material::{volume_ratio_minus_one, Deformation};
 use crate::math::Mat;
@@ -124,21 +124,15 @@ pub(crate) fn particles<
     }
     match pass {
         FieldPass::Capacity(g) => {
-            let (n, tile, reach) = (g.len(), g.tile, g.reach);
-            let slab = tile.slab(stride[D - 1]);
+            let (n, tile, chunks) = (g.len(), g.tile, g.chunks(count, W, stride[D - 1]));
+            let whole_grid = tile == Tile::ALL;
             let [c_col, m_col, _, _] = &mut g.scalar[f];
             if c_col.len() != n || m_col.len() != n {
                 return; // Unreachable, as above.
             }
             // A tile's rows are clipped to it (`Tile::own`); the whole grid's must fit.
-            let fit = if slab.is_some() { usize::MAX } else { n };
-            for start in (0..count).step_by(W) {
-                if slab
-                    .as_ref()
-                    .is_some_and(|s| !chunk_reaches(reach, start, W, s))
-                {
-                    continue;
-                }
+            let fit = if whole_grid { n } else { usize::MAX };
+            for start in chunks {
                 let live =
                     chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, fit);
                 for ln in const { scatter_order::<W>() } {
@@ -166,21 +160,15 @@ pub(crate) fn particles<
         // The gradient of the nodal values at the particle, then `V_p (q_p . G_ip + s_p S_ip)`
         // on its nodes.
         FieldPass::Flow(g) => {
-            let (n, tile, reach) = (g.len(), g.tile, g.reach);
-            let slab = tile.slab(stride[D - 1]);
+            let (n, tile, chunks) = (g.len(), g.tile, g.chunks(count, W, stride[D - 1]));
+            let whole_grid = tile == Tile::ALL;
             let [_, _, own, q_col] = &mut g.scalar[f];
             let values: &[Real] = if own.is_empty() { g.whole } else { own };
             // The whole grid's flow adds rows where its values are read.
-            if q_col.len() != n || (slab.is_none() && values.len() != n) {
+            if q_col.len() != n || (whole_grid && values.len() != n) {
                 return; // Unreachable, as above.
             }
-            for start in (0..count).step_by(W) {
-                if slab
-                    .as_ref()
-                    .is_some_and(|s| !chunk_reaches(reach, start, W, s))
-                {
-                    continue;
-                }
+            for start in chunks {
                 let live = chunk_stencils::<I, D, K, S, W>(
                     &mut st,
                     shape,

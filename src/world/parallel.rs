@@ -166,7 +166,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         }
         // The lines of tile `t`: the node box's lines cut evenly, the first tile from line 0
         // and the last to the grid's end (no stencil reaches past the box; the chunks a tile
-        // takes are those whose rows reach it, `GridCols::chunk_reaches`).
+        // takes are those whose rows reach it, `GridCols::chunks`).
         let (lo, hi) = (ctx.active.lo[D - 1], ctx.active.hi[D - 1]);
         let bound = |t: usize| match t {
             0 => 0,
