@@ -108,6 +108,10 @@ pub enum Error {
     /// speed, thermal diffusivity, diffusivity or kinematic viscosity, the definition's damping
     /// rates (summed), or a per-particle damping rate. Nothing was added or set.
     StableStepTooShort = 34,
+    /// [`crate::World::add_collider`] past [`crate::Effects::collider_capacity`].
+    ColliderCapacityExceeded = 35,
+    /// A collider id at or past the number of colliders.
+    UnknownCollider = 36,
 }
 
 impl Error {
@@ -178,11 +182,13 @@ impl Error {
             Error::InvalidTransfer => {
                 c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric)"
             }
+            Error::ColliderCapacityExceeded => c"collider capacity exceeded",
+            Error::UnknownCollider => c"collider id at or past the number of colliders",
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 34] = [
+    pub const ALL: [Error; 36] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -217,6 +223,8 @@ impl Error {
         Error::InvalidTransfer,
         Error::UnknownTraction,
         Error::StableStepTooShort,
+        Error::ColliderCapacityExceeded,
+        Error::UnknownCollider,
     ];
 }
 

@@ -4,6 +4,8 @@
 //! 1. the [`Header`] (definition, counts, time; plain old data, 8-byte fields only);
 //! 2. the material table, `material_capacity` [`MaterialRecord`]s;
 //! 3. the traction table, `traction_capacity` [`TractionRecord`]s (none unless declared);
+//!    the collider table, `collider_capacity` [`ColliderRecord`]s, then as many
+//!    [`ColliderImpulse`]s (none unless declared);
 //! 4. the particle columns, one per scalar component, each `capacity` rounded up to
 //!    [`CHUNK`] entries and starting on a [`ALIGN`]-byte boundary, columns of 4 KiB or more
 //!    a page multiple plus 5 cache lines apart (`column_stride`: no 4K aliasing);
@@ -30,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 12;
+const VERSION: u64 = 13;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -104,6 +106,9 @@ pub(crate) struct Header {
     pub traction_schedules: [ScheduleRecord; TRACTION_SCHEDULES],
     /// `Effects::plasticity`.
     pub plasticity: u64,
+    /// `Effects::collider_capacity`, and the colliders added.
+    pub collider_capacity: u64,
+    pub collider_count: u64,
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -255,7 +260,7 @@ const _: () = assert!(
             + 14
             + (4 + TRACTION_SCHEDULES) * (1 + 2 * SCHEDULE_POINTS)
             + 2 * 14
-            + 2
+            + 4
             + 8 * DAMPING_ZONES)
 );
 
@@ -346,6 +351,73 @@ unsafe impl Zeroable for TractionRecord {}
 // SAFETY: as above; Copy and 'static.
 unsafe impl Pod for TractionRecord {}
 
+/// One collider in the buffer's table ([`crate::ColliderDef`]), widened to f64: its pose at
+/// `pose_time` (world time, s), which the step moves on with its velocities. `shape` and
+/// `contact` are the enums' numbers; `size` the shape's lengths (radius; half-extents;
+/// half-length then radius).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub(crate) struct ColliderRecord {
+    pub shape: u64,
+    pub contact: u64,
+    pub friction: f64,
+    pub size: [f64; 3],
+    pub position: [f64; 3],
+    pub rotation: [f64; 4],
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+    pub pose_time: f64,
+}
+
+impl ColliderRecord {
+    /// Whether the record is one [`crate::World::add_collider`] could have written: known
+    /// shape and contact, finite values, positive lengths, a unit rotation.
+    pub fn is_valid(&self) -> bool {
+        let finite = [self.friction, self.pose_time]
+            .iter()
+            .chain(&self.size)
+            .chain(&self.position)
+            .chain(&self.rotation)
+            .chain(&self.velocity)
+            .chain(&self.angular_velocity)
+            .all(|c| c.is_finite());
+        let [a, b, c] = self.size;
+        let lengths = match self.shape {
+            0 => true,
+            1 => a > 0.0,
+            2 => a > 0.0 && b > 0.0 && c > 0.0,
+            3 => a >= 0.0 && b > 0.0,
+            4 => a > 0.0 && b > 0.0,
+            _ => false,
+        };
+        let q2: f64 = self.rotation.iter().map(|c| c * c).sum();
+        finite && lengths && self.contact < 3 && self.friction >= 0.0 && (q2 - 1.0).abs() < 1e-6
+    }
+}
+
+// SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.
+unsafe impl Zeroable for ColliderRecord {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for ColliderRecord {}
+
+/// What the material put on one collider over the last step: the impulse (N s; per unit
+/// thickness in plane strain, per radian axisymmetric) and the angular impulse about the
+/// collider's position where the step began (N m s), summed node by node in node order, and
+/// the step's length.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub(crate) struct ColliderImpulse {
+    pub linear: [f64; 3],
+    pub angular: [f64; 3],
+    pub duration: f64,
+    pub pad: f64,
+}
+
+// SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.
+unsafe impl Zeroable for ColliderImpulse {}
+// SAFETY: as above; Copy and 'static.
+unsafe impl Pod for ColliderImpulse {}
+
 /// (row, column) of each stored symmetric stress component; in 2D the fourth stored
 /// component is the out-of-plane `zz`.
 pub(crate) const fn sym_pairs(d: usize) -> &'static [(usize, usize)] {
@@ -374,6 +446,10 @@ pub(crate) struct Layout {
     pub materials_offset: usize,
     pub tractions_offset: usize,
     pub traction_capacity: usize,
+    /// The collider table and, after it, the colliders' impulses (the end of the head: the
+    /// step writes them).
+    pub colliders_offset: usize,
+    pub impulses_offset: usize,
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
@@ -502,8 +578,14 @@ impl Layout {
             ALIGN,
         );
         let traction_capacity = def.effects.traction_capacity as usize;
-        let particle_offset = round_up(
+        let colliders_offset = round_up(
             tractions_offset + traction_capacity * size_of::<TractionRecord>(),
+            ALIGN,
+        );
+        let collider_capacity = def.effects.collider_capacity as usize;
+        let impulses_offset = colliders_offset + collider_capacity * size_of::<ColliderRecord>();
+        let particle_offset = round_up(
+            impulses_offset + collider_capacity * size_of::<ColliderImpulse>(),
             ALIGN,
         );
         let grid_offset =
@@ -531,6 +613,8 @@ impl Layout {
             materials_offset,
             tractions_offset,
             traction_capacity,
+            colliders_offset,
+            impulses_offset,
             particle_offset,
             real_column_bytes,
             u32_column_bytes,
@@ -750,6 +834,8 @@ impl Header {
             damping_zones: damping.zones.each_ref().map(ZoneRecord::of),
             traction_schedules: fx.traction_schedules.each_ref().map(ScheduleRecord::of),
             plasticity: fx.plasticity as u64,
+            collider_capacity: fx.collider_capacity as u64,
+            collider_count: 0,
         }
     }
 
@@ -831,6 +917,7 @@ impl Header {
             heat: self.heat.transport()?,
             diffusion: self.diffusion.transport()?,
             plasticity: flag(self.plasticity)?,
+            collider_capacity: small(self.collider_capacity)?,
         };
         Ok(WorldDef {
             dimension,

@@ -90,8 +90,8 @@ pub use def::{
     UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS, MIN_STABLE_DT,
 };
 pub use def::{
-    Damping, DampingZone, Effects, Feedback, ScalarBoundary, ScalarField, Schedule, Transport,
-    DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
+    ColliderDef, ColliderShape, Contact, Damping, DampingZone, Effects, Feedback, ScalarBoundary,
+    ScalarField, Schedule, Transport, DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
 pub use error::Error;
 pub use layout::{memory_requirements, MemoryRequirements, ALIGN, CHUNK};
@@ -101,7 +101,8 @@ pub use storage::AlignedBuffer;
 pub use storage::HeapBuffer;
 pub use tasks::{Serial, TaskSystem};
 pub use world::{
-    Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport, World, WorldRef,
+    ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, StepReport,
+    World, WorldRef,
 };
 
 /// The scalar type of every column, parameter and result: f32, or f64 with the `f64` feature.

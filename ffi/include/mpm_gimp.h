@@ -185,6 +185,10 @@ enum MpmStatus
   // `mpm_memory_requirements`), or a per-particle damping rate above half of what that sum
   // leaves (`mpm_world_set_particle_damping`). Nothing was added or set.
   MPM_STATUS_STABLE_STEP_TOO_SHORT = 34,
+  // A collider added past `MpmEffects::collider_capacity`.
+  MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED = 35,
+  // A collider id at or past the number of colliders.
+  MPM_STATUS_UNKNOWN_COLLIDER = 36,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or

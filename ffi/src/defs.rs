@@ -718,6 +718,8 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         damping,
         particle_forces: flag(e.particle_forces)?,
         traction_capacity: e.traction_capacity,
+        // Colliders are not yet declared through the C definition.
+        collider_capacity: 0,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
         traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),

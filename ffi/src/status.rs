@@ -115,6 +115,10 @@ pub enum MpmStatus {
     /// `mpm_memory_requirements`), or a per-particle damping rate above half of what that sum
     /// leaves (`mpm_world_set_particle_damping`). Nothing was added or set.
     StableStepTooShort = 34,
+    /// A collider added past `MpmEffects::collider_capacity`.
+    ColliderCapacityExceeded = 35,
+    /// A collider id at or past the number of colliders.
+    UnknownCollider = 36,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -181,13 +185,15 @@ impl From<Error> for MpmStatus {
             Error::InvalidTransfer => MpmStatus::InvalidTransfer,
             Error::UnknownTraction => MpmStatus::UnknownTraction,
             Error::StableStepTooShort => MpmStatus::StableStepTooShort,
+            Error::ColliderCapacityExceeded => MpmStatus::ColliderCapacityExceeded,
+            Error::UnknownCollider => MpmStatus::UnknownCollider,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 42] = [
+    pub const ALL: [MpmStatus; 44] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -223,6 +229,8 @@ impl MpmStatus {
         MpmStatus::InvalidTransfer,
         MpmStatus::UnknownTraction,
         MpmStatus::StableStepTooShort,
+        MpmStatus::ColliderCapacityExceeded,
+        MpmStatus::UnknownCollider,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

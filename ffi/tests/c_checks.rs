@@ -863,6 +863,7 @@ fn effects2d(t: &mut Text) {
                 sources: false,
             }),
             plasticity: false,
+            collider_capacity: 0,
         },
         ..WorldDef::DEFAULT
     };
@@ -1664,6 +1665,7 @@ fn effects_definition_round_trip() {
             heat: Some(heat),
             diffusion: Some(diffusion),
             plasticity: true,
+            collider_capacity: 0,
         },
         ..WorldDef::DEFAULT
     };

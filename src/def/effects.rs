@@ -142,6 +142,10 @@ pub struct Effects {
     /// Those models can be added only when it is declared; a world without it has the memory
     /// and the step of one without plastic materials.
     pub plasticity: bool,
+    /// Most colliders the world holds (0: none, and no collider pass runs): kinematic solids
+    /// in the scene that the material contacts at the grid and pushes back
+    /// ([`crate::World::add_collider`], E90-E93).
+    pub collider_capacity: u32,
 }
 
 /// How many schedules the tractions may follow ([`Effects::traction_schedules`]).
@@ -159,6 +163,7 @@ impl Effects {
         heat: None,
         diffusion: None,
         plasticity: false,
+        collider_capacity: 0,
     };
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
@@ -170,7 +175,8 @@ impl Effects {
         let ok_transport = [self.heat, self.diffusion]
             .iter()
             .all(|t| t.is_none_or(|t| t.is_valid(axes)));
-        if ok_damping && ok_body && ok_transport && self.traction_capacity <= 1 << 24 {
+        let ok_capacity = self.traction_capacity <= 1 << 24 && self.collider_capacity <= 1 << 12;
+        if ok_damping && ok_body && ok_transport && ok_capacity {
             Ok(())
         } else {
             Err(Error::InvalidEffect)
@@ -426,4 +432,126 @@ pub enum ScalarField {
     Temperature = 0,
     /// Concentration potential `c / c_sat` (diffusion).
     Concentration = 1,
+}
+
+/// The solid of a collider in its own frame: centred on its position, its axes turned by its
+/// rotation ([`ColliderDef`]). In 2D the frame's z axis is the plane's normal, and a solid is
+/// its section by the plane z = 0; axisymmetric, by the (r, z) half-plane, so a solid on the
+/// axis is a solid of revolution (a [`ColliderShape::Cylinder`] along the axis is a disk).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ColliderShape {
+    /// The half-space below the plane through the position whose normal is the frame's y
+    /// axis: a floor with no rotation, a slope when turned.
+    HalfSpace,
+    /// A sphere (a circle in 2D) of `radius`, m, > 0.
+    Sphere {
+        /// m.
+        radius: Real,
+    },
+    /// A box (a rectangle in 2D) of half-extents along the frame's axes, m, each > 0.
+    Box {
+        /// m.
+        half_extents: Vec3,
+    },
+    /// The points within `radius` of the segment from `-half_length` to `half_length` along
+    /// the frame's y axis (a stadium in 2D). m; `radius > 0`, `half_length >= 0`.
+    Capsule {
+        /// m.
+        half_length: Real,
+        /// m.
+        radius: Real,
+    },
+    /// A cylinder along the frame's y axis (a rectangle in 2D). m, each > 0.
+    Cylinder {
+        /// m.
+        half_length: Real,
+        /// m.
+        radius: Real,
+    },
+}
+
+/// How the material meets a collider at a node inside it (E91).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contact {
+    /// The node moves with the collider.
+    Stick,
+    /// The node keeps no velocity along the collider's normal relative to it, in either
+    /// direction (bilateral), and slides along it with Coulomb friction where it presses.
+    Slip,
+    /// As [`Contact::Slip`] while the node approaches the collider; a node moving away from
+    /// it is left free (unilateral contact, the usual one).
+    Separate,
+}
+
+/// A kinematic collider: its solid, its pose and velocity, and how the material meets it
+/// ([`crate::World::add_collider`]). [`ColliderDef::DEFAULT`] is a floor through the origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColliderDef {
+    /// The solid in the collider's frame.
+    pub shape: ColliderShape,
+    /// The frame's origin, m: the solid's centre, the point about which its angular velocity
+    /// turns it and about which [`crate::ColliderState::torque`] is reported.
+    pub position: Vec3,
+    /// The frame's rotation as a unit quaternion `[x, y, z, w]` (normalised when set); in 2D
+    /// only turns about z keep the solid in the plane.
+    pub rotation: [Real; 4],
+    /// Velocity of the frame's origin, m/s.
+    pub velocity: Vec3,
+    /// Angular velocity about the origin, rad/s (in 2D only its z).
+    pub angular_velocity: Vec3,
+    /// Stick, slip or separating contact.
+    pub contact: Contact,
+    /// Coulomb friction coefficient of slip and separating contact, >= 0 (0: frictionless).
+    pub friction: Real,
+}
+
+impl ColliderDef {
+    /// A frictionless separating floor: the half-space y < 0, at rest.
+    pub const DEFAULT: ColliderDef = ColliderDef {
+        shape: ColliderShape::HalfSpace,
+        position: Vec3::ZERO,
+        rotation: [0.0, 0.0, 0.0, 1.0],
+        velocity: Vec3::ZERO,
+        angular_velocity: Vec3::ZERO,
+        contact: Contact::Separate,
+        friction: 0.0,
+    };
+
+    /// Whether every value is finite and in range (the rotation's length above zero).
+    pub(crate) fn is_valid(&self) -> bool {
+        let finite = |v: Vec3| v.is_finite();
+        let q = self.rotation;
+        let q2: Real = q.iter().map(|c| c * c).sum();
+        let shape = match self.shape {
+            ColliderShape::HalfSpace => true,
+            ColliderShape::Sphere { radius } => radius > 0.0 && radius.is_finite(),
+            ColliderShape::Box { half_extents } => {
+                finite(half_extents) && half_extents.min_element() > 0.0
+            }
+            ColliderShape::Capsule {
+                half_length,
+                radius,
+            } => {
+                half_length >= 0.0 && half_length.is_finite() && radius > 0.0 && radius.is_finite()
+            }
+            ColliderShape::Cylinder {
+                half_length,
+                radius,
+            } => half_length > 0.0 && half_length.is_finite() && radius > 0.0 && radius.is_finite(),
+        };
+        shape
+            && finite(self.position)
+            && finite(self.velocity)
+            && finite(self.angular_velocity)
+            && q2.is_finite()
+            && q2 > 1e-12
+            && self.friction >= 0.0
+            && self.friction.is_finite()
+    }
+}
+
+impl Default for ColliderDef {
+    fn default() -> Self {
+        ColliderDef::DEFAULT
+    }
 }

@@ -9,8 +9,8 @@ pub(crate) mod effects;
 
 use crate::{Real, Vec3};
 pub use effects::{
-    Damping, DampingZone, Effects, Feedback, ScalarBoundary, ScalarField, Schedule, Transport,
-    DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
+    ColliderDef, ColliderShape, Contact, Damping, DampingZone, Effects, Feedback, ScalarBoundary,
+    ScalarField, Schedule, Transport, DAMPING_ZONES, SCHEDULE_POINTS, TRACTION_SCHEDULES,
 };
 
 /// Spatial dimension and kinematic assumption of a world.

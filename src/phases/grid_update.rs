@@ -7,8 +7,10 @@
 //! which fold nodes onto their images across lines, on the whole grid.
 
 use super::Ctx;
+use crate::effects::colliders::Collider;
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
+use crate::layout::ColliderImpulse;
 use crate::Real;
 
 /// The node columns of a substep, as the grid passes take them: whole, or in slabs of whole
@@ -19,6 +21,8 @@ pub(crate) trait Nodes<const D: usize> {
     fn whole(&mut self) -> GridCols<'_, D>;
     /// Runs `f` on each slab, in any order or at once.
     fn each_slab(&mut self, f: &(dyn Fn(&mut GridCols<'_, D>) + Sync));
+    /// The whole grid and the colliders' impulses of the step ([`ColliderImpulse`]).
+    fn with_impulses(&mut self) -> (GridCols<'_, D>, &mut [ColliderImpulse]);
 }
 
 /// Zeroes every nodal column the step accumulates into, on the nodes of the substep
@@ -100,8 +104,8 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<
     mirror_vector(ctx, &mut nodes.whole().vel, false);
 }
 
-/// Force to acceleration `a_i = f_i / m_i + g` (E19), then the walls on the updated
-/// velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
+/// Force to acceleration `a_i = f_i / m_i + g` (E19), then the colliders (E92) and the walls
+/// on the updated velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
 /// the wall's reaction `-v_i / dt` (E20). The particle update then sees the wall stop the material
 /// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
@@ -113,7 +117,8 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
             damp_nodes(ctx, nodal, g);
         }
     });
-    let g = &mut nodes.whole();
+    let (g, impulses) = &mut nodes.with_impulses();
+    collide(ctx, g, Some(&mut **impulses));
     let inv_dt = 1.0 / ctx.dt;
     ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
@@ -200,6 +205,7 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut
 }
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    collide(ctx, g, None);
     ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
         for a in 0..D {
             if axes[a] {
@@ -208,4 +214,67 @@ fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
         }
     });
     mirror_vector(ctx, &mut g.remap, false);
+}
+
+/// The colliders on the nodes of the substep's node box that carry mass, one collider after
+/// the other, node by node (E92): with `impulses`, on the updated velocity `v_i + a_i dt`,
+/// which becomes what the contact leaves through the acceleration (as at a wall), and each
+/// collider's impulse takes what the material puts on it (E93: `-m_i (v* - (v_i + a_i dt))`,
+/// its moment about the collider's origin); without, on the re-mapped or constrained velocity
+/// in `remap` (an updated velocity too). On the calling thread, in node order: the sums have
+/// one worker's bits.
+fn collide<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    mut impulses: Option<&mut [ColliderImpulse]>,
+) {
+    let (geom, bx, dt) = (&ctx.geom, &ctx.active, ctx.dt);
+    let (n, nx) = (g.len(), geom.nodes[0]);
+    let pad =
+        |v: [Real; D]| -> [Real; 3] { core::array::from_fn(|a| if a < D { v[a] } else { 0.0 }) };
+    for (k, record) in ctx.colliders.iter().enumerate() {
+        let Some(c) = Collider::at(record, ctx.time) else {
+            continue;
+        };
+        let (mut linear, mut angular) = ([0.0f64; 3], [0.0f64; 3]);
+        bx.for_each_line(geom.stride, n, |r| {
+            // The box's nodes alone (a line's range runs on past its end).
+            for i in r.filter(|i| (bx.lo[0]..bx.hi[0]).contains(&(i % nx))) {
+                let m = g.mass.get(i).copied().unwrap_or(0.0);
+                if m <= ctx.mass_cutoff || m.is_nan() {
+                    continue;
+                }
+                let x = pad(geom.node_position(i));
+                if impulses.is_some() {
+                    let v = pad(core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt));
+                    let Some(w) = c.contact(x, v) else {
+                        continue;
+                    };
+                    for a in 0..D {
+                        g.acc[a][i] = (w[a] - g.vel[a][i]) / dt;
+                    }
+                    let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
+                    let arm: [f64; 3] = core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
+                    for a in 0..3 {
+                        let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+                        linear[a] -= dp[a];
+                        angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
+                    }
+                } else if g.remap[0].len() == n {
+                    let v = pad(core::array::from_fn(|a| g.remap[a][i]));
+                    if let Some(w) = c.contact(x, v) {
+                        for a in 0..D {
+                            g.remap[a][i] = w[a];
+                        }
+                    }
+                }
+            }
+        });
+        if let Some(sum) = impulses.as_deref_mut().and_then(|t| t.get_mut(k)) {
+            for a in 0..3 {
+                sum.linear[a] += linear[a];
+                sum.angular[a] += angular[a];
+            }
+        }
+    }
 }

@@ -75,6 +75,10 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub materials: &'m [MaterialRecord],
     /// The traction table's used entries.
     pub tractions: &'m [TractionRecord],
+    /// The collider table's used entries, and the world time the substep starts at (their
+    /// poses, E90).
+    pub colliders: &'m [crate::layout::ColliderRecord],
+    pub time: f64,
     /// The tractions' time factors this substep, one per schedule.
     pub traction_scales: [Real; crate::TRACTION_SCHEDULES],
     /// The transported scalars declared (heat, diffusion).

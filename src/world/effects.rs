@@ -4,10 +4,12 @@
 //! [`crate::effects`].
 
 use super::World;
-use crate::def::Feedback;
 use crate::def::ScalarField;
-use crate::layout::{Layout, TractionRecord};
+use crate::def::{ColliderDef, Feedback};
+use crate::effects::colliders;
+use crate::layout::{ColliderImpulse, ColliderRecord, Layout, TractionRecord};
 use crate::{Error, Real, Vec3};
+use core::mem::size_of;
 use core::ops::Range;
 
 impl World<'_> {
@@ -255,5 +257,132 @@ impl World<'_> {
             Error::NonFiniteInput,
             |_| Ok(()),
         )
+    }
+}
+
+/// Colliders (E90-E93).
+impl World<'_> {
+    /// Adds a collider ([`ColliderDef`]) and returns its id; its pose is the definition's
+    /// now ([`World::time`]). Needs [`crate::Effects::collider_capacity`] (else
+    /// [`Error::EffectNotDeclared`]); [`Error::InvalidEffect`] for a value not finite or out
+    /// of range, [`Error::ColliderCapacityExceeded`] past the capacity. Nothing changes on
+    /// failure.
+    pub fn add_collider(&mut self, c: &ColliderDef) -> Result<u32, Error> {
+        let def = self.def();
+        if def.effects.collider_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let id = self.header().collider_count as u32;
+        if id >= def.effects.collider_capacity {
+            return Err(Error::ColliderCapacityExceeded);
+        }
+        let record = self.collider_record(c)?;
+        *self.collider_mut(id) = record;
+        self.header_mut().collider_count += 1;
+        Ok(id)
+    }
+
+    /// Replaces collider `id`'s definition (its pose, velocities, shape, contact): a host
+    /// that moves it sets it between steps, as [`World::add_collider`] checks it.
+    /// [`Error::UnknownCollider`] for an id not added. The impulse of the last step stays.
+    pub fn set_collider(&mut self, id: u32, c: &ColliderDef) -> Result<(), Error> {
+        if id as u64 >= self.header().collider_count {
+            return Err(Error::UnknownCollider);
+        }
+        let record = self.collider_record(c)?;
+        *self.collider_mut(id) = record;
+        Ok(())
+    }
+
+    /// Collider `id` as it is now and what the material put on it over the last step
+    /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added.
+    pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
+        if id as u64 >= self.header().collider_count {
+            return Err(Error::UnknownCollider);
+        }
+        let layout = Layout::of(&self.def());
+        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        let r: ColliderRecord =
+            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
+        let at = layout.impulses_offset + id as usize * size_of::<ColliderImpulse>();
+        let i: ColliderImpulse =
+            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        let v = |a: [f64; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+        let shape = colliders::shape_of(r.shape, r.size).ok_or(Error::InvalidState)?;
+        let contact = colliders::contact_of(r.contact).ok_or(Error::InvalidState)?;
+        Ok(crate::ColliderState {
+            def: ColliderDef {
+                shape,
+                position: v(r.position),
+                rotation: r.rotation.map(|c| c as Real),
+                velocity: v(r.velocity),
+                angular_velocity: v(r.angular_velocity),
+                contact,
+                friction: r.friction as Real,
+            },
+            impulse: v(i.linear),
+            angular_impulse: v(i.angular),
+            duration: i.duration as Real,
+        })
+    }
+
+    /// The record of `c`, posed now; in 2D its motion kept in the plane (no z velocity, no
+    /// turn but about z).
+    fn collider_record(&self, c: &ColliderDef) -> Result<ColliderRecord, Error> {
+        if !c.is_valid() {
+            return Err(Error::InvalidEffect);
+        }
+        let planar = self.def().axes() == 2;
+        let w = |v: Vec3, keep: [bool; 3]| {
+            core::array::from_fn(|a| if keep[a] { v[a] as f64 } else { 0.0 })
+        };
+        let (shape, size) = colliders::shape_record(&c.shape);
+        let q = c.rotation.map(|x| x as f64);
+        let len = libm::sqrt(q.iter().map(|x| x * x).sum::<f64>());
+        Ok(ColliderRecord {
+            shape,
+            contact: colliders::contact_code(c.contact),
+            friction: c.friction as f64,
+            size,
+            position: w(c.position, [true; 3]),
+            rotation: q.map(|x| x / len),
+            velocity: w(c.velocity, [true, true, !planar]),
+            angular_velocity: w(c.angular_velocity, [!planar, !planar, true]),
+            pose_time: self.time(),
+        })
+    }
+
+    fn collider_mut(&mut self, id: u32) -> &mut ColliderRecord {
+        let layout = Layout::of(&self.def());
+        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        bytemuck::from_bytes_mut(&mut self.buf[at..at + size_of::<ColliderRecord>()])
+    }
+
+    fn impulses_mut(&mut self) -> &mut [ColliderImpulse] {
+        let layout = Layout::of(&self.def());
+        let n = self.header().collider_count as usize;
+        let at = layout.impulses_offset;
+        bytemuck::cast_slice_mut(&mut self.buf[at..at + n * size_of::<ColliderImpulse>()])
+    }
+
+    /// At the start of a step of `dt`: the colliders' impulses back to zero.
+    pub(super) fn start_collider_impulses(&mut self, dt: Real) {
+        for i in self.impulses_mut() {
+            *i = ColliderImpulse {
+                duration: dt as f64,
+                ..ColliderImpulse::default()
+            };
+        }
+    }
+
+    /// At the end of a step, at world time `end`: each collider's pose moved on to then (E90).
+    pub(super) fn move_colliders(&mut self, end: f64) {
+        for id in 0..self.header().collider_count as u32 {
+            let r = self.collider_mut(id);
+            let (position, rotation) = colliders::pose_at(r, end);
+            r.position = position.to_array();
+            r.rotation = rotation.to_array();
+            r.pose_time = end;
+        }
     }
 }

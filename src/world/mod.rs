@@ -14,7 +14,7 @@ mod types;
 pub use crate::particles::StepReport;
 pub use query::WorldRef;
 pub use step::Phase;
-pub use types::{Diagnostics, ParticleBatch, ParticleDef, ParticlesView};
+pub use types::{ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView};
 
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{validate, Header, Layout, TractionRecord, ALIGN};
@@ -89,6 +89,7 @@ impl<'a> World<'a> {
             || h.particle_count > def.particle_capacity as u64
             || h.material_count > def.material_capacity as u64
             || h.traction_count > def.effects.traction_capacity as u64
+            || h.collider_count > def.effects.collider_capacity as u64
         {
             return Err(Error::NotAWorld);
         }

@@ -28,7 +28,7 @@
 use super::passes::{self, Passes};
 use crate::def::Transport;
 use crate::grid::{GridCols, Tile, Whole};
-use crate::layout::{Layout, Partial, CHUNK};
+use crate::layout::{ColliderImpulse, Layout, Partial, CHUNK};
 use crate::particles::{ParticleCols, StepReport};
 use crate::phases::grid_update::Nodes;
 use crate::phases::p2g::{Adds, Mode};
@@ -46,6 +46,8 @@ pub(crate) struct Columns<'b, const D: usize> {
     /// The grid lines each group of particles reaches ([`GridCols::reach`]), filled with the
     /// node box.
     reach: Shared<'b, [u32; 2]>,
+    /// The colliders' impulses of the step (the grid update adds to them).
+    impulses: &'b mut [ColliderImpulse],
     layout: &'b Layout,
     tasks: &'b dyn TaskSystem,
     /// Workers the passes are cut for: 1 runs every pass as one call on the calling thread.
@@ -58,6 +60,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         particles: &'b mut [u8],
         grid: &'b mut [u8],
         scratch: &'b mut [u8],
+        impulses: &'b mut [ColliderImpulse],
         layout: &'b Layout,
         tasks: &'b dyn TaskSystem,
     ) -> Self {
@@ -78,6 +81,7 @@ impl<'b, const D: usize> Columns<'b, D> {
             grid: Shared::new(grid),
             partials: Shared::new(partials),
             reach: Shared::new(reach),
+            impulses,
             layout,
             tasks,
             workers,
@@ -376,6 +380,13 @@ pub(crate) struct GridPasses<'c, 'b, 'x, const D: usize> {
 impl<const D: usize> Nodes<D> for GridPasses<'_, '_, '_, D> {
     fn whole(&mut self) -> GridCols<'_, D> {
         self.cols.grid()
+    }
+
+    fn with_impulses(&mut self) -> (GridCols<'_, D>, &mut [ColliderImpulse]) {
+        let cols = &mut *self.cols;
+        // SAFETY: `&mut self` excludes every other view of the grid (as `Columns::full`).
+        let g = unsafe { GridCols::carve_tile(&cols.grid, cols.layout, Tile::ALL) };
+        (g, &mut *cols.impulses)
     }
 
     fn each_slab(&mut self, f: &(dyn Fn(&mut GridCols<'_, D>) + Sync)) {

@@ -5,7 +5,9 @@ use super::add::speed_resolvable;
 use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
 use crate::def::{MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
-use crate::layout::{col, Header, Layout, MaterialRecord, TractionRecord};
+use crate::layout::{
+    col, ColliderImpulse, ColliderRecord, Header, Layout, MaterialRecord, TractionRecord,
+};
 use crate::material::{
     eigenstrain_part, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
     material_resolvable, model_of, particle_stress, wave_speed, Deformation,
@@ -89,6 +91,22 @@ impl<'a> WorldRef<'a> {
         let tractions: &[TractionRecord] =
             bytemuck::cast_slice(&self.buf[trac_start..trac_start + trac_bytes]);
         if !tractions.iter().all(|t| t.is_valid(n, d)) {
+            return invalid;
+        }
+        let colliders = h.collider_count as usize;
+        if h.collider_count > h.collider_capacity {
+            return invalid;
+        }
+        let at = layout.colliders_offset;
+        let records: &[ColliderRecord] =
+            bytemuck::cast_slice(&self.buf[at..at + colliders * size_of::<ColliderRecord>()]);
+        let at = layout.impulses_offset;
+        let impulses: &[ColliderImpulse] =
+            bytemuck::cast_slice(&self.buf[at..at + colliders * size_of::<ColliderImpulse>()]);
+        let finite = |i: &ColliderImpulse| {
+            (i.linear.iter().chain(&i.angular)).all(|c| c.is_finite()) && i.duration >= 0.0
+        };
+        if !records.iter().all(|r| r.is_valid()) || !impulses.iter().all(finite) {
             return invalid;
         }
         let v = self.particles();

@@ -7,7 +7,7 @@ use super::{StepReport, World};
 use crate::def::{Transfer, UpdateOrder, WorldDef};
 use crate::effects::damping::NodalDamping;
 use crate::grid::Geom;
-use crate::layout::{Layout, MaterialRecord, TractionRecord};
+use crate::layout::{ColliderImpulse, ColliderRecord, Layout, MaterialRecord, TractionRecord};
 use crate::math::ceil;
 use crate::particles::FROZEN;
 use crate::phases::p2g::{Adds, Mode};
@@ -95,6 +95,7 @@ impl<'a> World<'a> {
         };
         let mut report = StepReport::default();
         let fx = def.effects;
+        self.start_collider_impulses(dt);
         let hardening = fx.plasticity && self.read().materials_harden();
         let time0 = self.time();
         let mut k = 0;
@@ -119,8 +120,10 @@ impl<'a> World<'a> {
         }
         report.substeps = plan.count;
         report.substep_dt = plan.dt;
+        let end = self.time() + dt as f64;
+        self.move_colliders(end);
         let h = self.header_mut();
-        h.time += dt as f64;
+        h.time = end;
         h.step_count = h.step_count.saturating_add(1);
         Ok(report)
     }
@@ -217,7 +220,11 @@ impl<'a> World<'a> {
         let n_materials = self.material_count();
         let n_tractions = self.header().traction_count as usize;
         let feedback_alpha = self.header().feedback_alpha as Real;
+        let n_colliders = self.header().collider_count as usize;
         let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
+        let (head, impulses) = head.split_at_mut(layout.impulses_offset);
+        let impulses: &mut [ColliderImpulse] =
+            bytemuck::cast_slice_mut(&mut impulses[..n_colliders * size_of::<ColliderImpulse>()]);
         let (pbytes, rest) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
         let (gbytes, scratch) = rest.split_at_mut(layout.scratch_offset - layout.grid_offset);
         let mat_start = layout.materials_offset;
@@ -228,7 +235,11 @@ impl<'a> World<'a> {
         let tractions: &[TractionRecord] = bytemuck::cast_slice(
             &head[trac_start..trac_start + n_tractions * size_of::<TractionRecord>()],
         );
-        let mut cols = Columns::<D>::new(pbytes, gbytes, scratch, layout, tasks);
+        let col_start = layout.colliders_offset;
+        let colliders: &[ColliderRecord] = bytemuck::cast_slice(
+            &head[col_start..col_start + n_colliders * size_of::<ColliderRecord>()],
+        );
+        let mut cols = Columns::<D>::new(pbytes, gbytes, scratch, impulses, layout, tasks);
         let fx = &def.effects;
         let body = fx.body_force * fx.body_force_scale.at(time);
         // The grid rate (thermostat included) acts in the particle update or on the force.
@@ -270,6 +281,8 @@ impl<'a> World<'a> {
             mass_cutoff: (NODAL_MASS_CUTOFF as f64 * min_mass) as Real,
             materials,
             tractions,
+            colliders,
+            time,
             traction_scales: fx.traction_schedules.each_ref().map(|s| s.at(time)),
             transport: [fx.heat, fx.diffusion],
             eigenstrain: [

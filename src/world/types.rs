@@ -171,3 +171,41 @@ impl ParticlesView<'_> {
         1.0 + self.jacobian_minus_one(i)
     }
 }
+
+/// A collider as the world holds it ([`World::collider`]): its definition with the pose it
+/// has now (the step moves it with its velocities), and what the material put on it over the
+/// last step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColliderState {
+    /// The definition, its `position` and `rotation` those of now.
+    pub def: crate::ColliderDef,
+    /// The impulse the material put on the collider over the last step, N s (per unit
+    /// thickness in plane strain, per radian axisymmetric), summed in a fixed order: the
+    /// same bits for any number of workers.
+    pub impulse: Vec3,
+    /// The angular impulse about the collider's origin over the last step, N m s.
+    pub angular_impulse: Vec3,
+    /// The last step's length, s (0 before the first step).
+    pub duration: Real,
+}
+
+impl ColliderState {
+    /// The mean force of the last step, `impulse / duration`, N (zero before a step).
+    pub fn force(&self) -> Vec3 {
+        if self.duration > 0.0 {
+            self.impulse / self.duration
+        } else {
+            Vec3::ZERO
+        }
+    }
+
+    /// The mean torque about the collider's origin over the last step, N m (zero before a
+    /// step).
+    pub fn torque(&self) -> Vec3 {
+        if self.duration > 0.0 {
+            self.angular_impulse / self.duration
+        } else {
+            Vec3::ZERO
+        }
+    }
+}

@@ -12,6 +12,8 @@ mod accuracy;
 mod api_contract;
 #[cfg(feature = "effects")]
 mod axisymmetric;
+#[cfg(feature = "effects")]
+mod colliders;
 mod conservation;
 #[cfg(feature = "effects")]
 mod effects;

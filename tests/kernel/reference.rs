@@ -1952,6 +1952,7 @@ fn declared_effects() -> Effects {
         }),
         diffusion: Some(Transport::INSULATED),
         plasticity: false,
+        collider_capacity: 0,
     }
 }
 

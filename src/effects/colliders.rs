@@ -1,0 +1,332 @@
+//! Colliders (E90-E93): kinematic solids that the material meets at the grid, and the impulse
+//! it puts on them.
+//!
+//! A collider is a solid in its own frame ([`crate::ColliderShape`]) with a pose that moves
+//! with its velocities (E90). At each node inside the solid (signed distance `phi <= 0`) that
+//! carries mass, the grid update replaces the node's updated velocity by what the contact law
+//! leaves (E91, E92), relative to the solid's velocity at the node; the momentum it takes from
+//! the node is what the material puts on the collider (E93), summed node by node in node
+//! order on the calling thread, so that it has one worker's bits for any number of workers.
+
+use crate::def::{ColliderShape, Contact};
+use crate::layout::ColliderRecord;
+use crate::Real;
+use glam::{DQuat, DVec3};
+
+/// A vector of three [`Real`]s (z is 0 in 2D).
+type V3 = [Real; 3];
+
+fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn scale(a: V3, s: Real) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+fn dot(a: V3, b: V3) -> Real {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn norm(a: V3) -> Real {
+    crate::math::sqrt(dot(a, a))
+}
+
+/// The solid's lengths, m.
+#[derive(Clone, Copy, Debug)]
+enum Solid {
+    HalfSpace,
+    Sphere(Real),
+    Box(V3),
+    Capsule(Real, Real),
+    Cylinder(Real, Real),
+}
+
+/// One collider at one instant, in the world frame.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Collider {
+    solid: Solid,
+    contact: Contact,
+    friction: Real,
+    /// The frame's origin, m.
+    pub centre: V3,
+    /// The frame's axes in the world (rows: x, y, z).
+    axes: [V3; 3],
+    velocity: V3,
+    omega: V3,
+}
+
+/// The shape number of `s` in a [`ColliderRecord`], and its lengths.
+pub(crate) fn shape_record(s: &ColliderShape) -> (u64, [f64; 3]) {
+    match *s {
+        ColliderShape::HalfSpace => (0, [0.0; 3]),
+        ColliderShape::Sphere { radius } => (1, [radius as f64, 0.0, 0.0]),
+        ColliderShape::Box { half_extents: e } => (2, [e.x as f64, e.y as f64, e.z as f64]),
+        ColliderShape::Capsule {
+            half_length,
+            radius,
+        } => (3, [half_length as f64, radius as f64, 0.0]),
+        ColliderShape::Cylinder {
+            half_length,
+            radius,
+        } => (4, [half_length as f64, radius as f64, 0.0]),
+    }
+}
+
+/// The shape of a record's number and lengths (`None`: a number no build writes).
+pub(crate) fn shape_of(code: u64, size: [f64; 3]) -> Option<ColliderShape> {
+    let r = |k: usize| size[k] as Real;
+    Some(match code {
+        0 => ColliderShape::HalfSpace,
+        1 => ColliderShape::Sphere { radius: r(0) },
+        2 => ColliderShape::Box {
+            half_extents: crate::Vec3::new(r(0), r(1), r(2)),
+        },
+        3 => ColliderShape::Capsule {
+            half_length: r(0),
+            radius: r(1),
+        },
+        4 => ColliderShape::Cylinder {
+            half_length: r(0),
+            radius: r(1),
+        },
+        _ => return None,
+    })
+}
+
+/// The contact's number in a record, and back.
+pub(crate) fn contact_code(c: Contact) -> u64 {
+    c as u64
+}
+pub(crate) fn contact_of(code: u64) -> Option<Contact> {
+    [Contact::Stick, Contact::Slip, Contact::Separate]
+        .get(code as usize)
+        .copied()
+}
+
+/// The pose of record `r` at world time `t` (E90): its position moved on by `v (t - t_0)`, its
+/// rotation turned by `omega (t - t_0)` about its origin.
+pub(crate) fn pose_at(r: &ColliderRecord, t: f64) -> (DVec3, DQuat) {
+    let tau = t - r.pose_time;
+    let position = DVec3::from_array(r.position) + DVec3::from_array(r.velocity) * tau;
+    let turn = DQuat::from_scaled_axis(DVec3::from_array(r.angular_velocity) * tau);
+    let rotation = (turn * DQuat::from_array(r.rotation)).normalize();
+    (position, rotation)
+}
+
+impl Collider {
+    /// The collider of record `r` at world time `t` (`None` for a record no build writes).
+    pub fn at(r: &ColliderRecord, t: f64) -> Option<Collider> {
+        let (position, rotation) = pose_at(r, t);
+        let lengths = r.size.map(|l| l as Real);
+        let solid = match r.shape {
+            0 => Solid::HalfSpace,
+            1 => Solid::Sphere(lengths[0]),
+            2 => Solid::Box(lengths),
+            3 => Solid::Capsule(lengths[0], lengths[1]),
+            4 => Solid::Cylinder(lengths[0], lengths[1]),
+            _ => return None,
+        };
+        let axis = |a: DVec3| (rotation * a).to_array().map(|c| c as Real);
+        Some(Collider {
+            solid,
+            contact: contact_of(r.contact)?,
+            friction: r.friction as Real,
+            centre: position.to_array().map(|c| c as Real),
+            axes: [axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z)],
+            velocity: r.velocity.map(|c| c as Real),
+            omega: r.angular_velocity.map(|c| c as Real),
+        })
+    }
+
+    /// The signed distance from the solid's surface at `x` (negative inside), m, and the
+    /// surface's outward unit normal there (E91).
+    pub fn distance(&self, x: V3) -> (Real, V3) {
+        let d = sub(x, self.centre);
+        let p: V3 = core::array::from_fn(|a| dot(self.axes[a], d));
+        let (phi, n) = local_distance(self.solid, p);
+        let world = add(
+            add(scale(self.axes[0], n[0]), scale(self.axes[1], n[1])),
+            scale(self.axes[2], n[2]),
+        );
+        (phi, world)
+    }
+
+    /// The velocity of the solid's point at `x`: `v + omega x (x - c)`.
+    pub fn velocity_at(&self, x: V3) -> V3 {
+        add(self.velocity, cross(self.omega, sub(x, self.centre)))
+    }
+
+    /// The velocity the contact leaves a node at `x` whose updated velocity is `v` (E92),
+    /// or `None` where it leaves `v` as it is (the node outside the solid, or separating).
+    pub fn contact(&self, x: V3, v: V3) -> Option<V3> {
+        let (phi, n) = self.distance(x);
+        if phi > 0.0 || phi.is_nan() {
+            return None;
+        }
+        let vc = self.velocity_at(x);
+        let rel = sub(v, vc);
+        let vn = dot(rel, n);
+        let tangent = match self.contact {
+            Contact::Stick => return Some(vc),
+            Contact::Separate if vn >= 0.0 => return None,
+            Contact::Slip | Contact::Separate => sub(rel, scale(n, vn)),
+        };
+        // Coulomb: where the node presses on the solid (`v_n < 0`), the tangential speed falls
+        // by `mu |v_n|`, down to sticking; a slip contact pulled apart keeps it.
+        let speed = norm(tangent);
+        let kept = if speed > 0.0 {
+            (1.0 - self.friction * (-vn).max(0.0) / speed).max(0.0)
+        } else {
+            0.0
+        };
+        Some(add(vc, scale(tangent, kept)))
+    }
+}
+
+/// The signed distance and outward normal of `solid` at `p` in its own frame (E91).
+fn local_distance(solid: Solid, p: V3) -> (Real, V3) {
+    let up = [0.0, 1.0, 0.0];
+    let unit = |v: V3, fallback: V3| {
+        let l = norm(v);
+        if l > 0.0 {
+            scale(v, 1.0 / l)
+        } else {
+            fallback
+        }
+    };
+    match solid {
+        Solid::HalfSpace => (p[1], up),
+        Solid::Sphere(r) => (norm(p) - r, unit(p, up)),
+        Solid::Box(e) => {
+            let q: V3 = core::array::from_fn(|a| p[a].abs() - e[a]);
+            let sign = |a: usize| if p[a] < 0.0 { -1.0 } else { 1.0 };
+            let outside: V3 = core::array::from_fn(|a| q[a].max(0.0) * sign(a));
+            if q.iter().any(|&c| c > 0.0) {
+                (norm(outside), unit(outside, up))
+            } else {
+                // Inside: the nearest face.
+                let a = (0..3).fold(0, |m, a| if q[a] > q[m] { a } else { m });
+                let mut n = [0.0; 3];
+                n[a] = sign(a);
+                (q[a], n)
+            }
+        }
+        Solid::Capsule(h, r) => {
+            let d = [p[0], p[1] - p[1].clamp(-h, h), p[2]];
+            (norm(d) - r, unit(d, [1.0, 0.0, 0.0]))
+        }
+        Solid::Cylinder(h, r) => {
+            let radial = unit([p[0], 0.0, p[2]], [1.0, 0.0, 0.0]);
+            let axial = [0.0, if p[1] < 0.0 { -1.0 } else { 1.0 }, 0.0];
+            let (dr, dy) = (
+                crate::math::sqrt(p[0] * p[0] + p[2] * p[2]) - r,
+                p[1].abs() - h,
+            );
+            if dr > 0.0 || dy > 0.0 {
+                let (or, oy) = (dr.max(0.0), dy.max(0.0));
+                let o = add(scale(radial, or), scale(axial, oy));
+                (norm(o), unit(o, up))
+            } else if dr > dy {
+                (dr, radial)
+            } else {
+                (dy, axial)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(shape: ColliderShape) -> ColliderRecord {
+        let (code, size) = shape_record(&shape);
+        ColliderRecord {
+            shape: code,
+            contact: contact_code(Contact::Separate),
+            size,
+            rotation: [0.0, 0.0, 0.0, 1.0],
+            ..ColliderRecord::default()
+        }
+    }
+
+    #[test]
+    fn distances_of_each_solid_at_known_points() {
+        let at = |shape, x: V3| Collider::at(&record(shape), 0.0).unwrap().distance(x);
+        let close = |a: Real, b: Real| (a - b).abs() < 1e-6;
+        assert!(close(
+            at(ColliderShape::HalfSpace, [3.0, -0.25, 1.0]).0,
+            -0.25
+        ));
+        let sphere = ColliderShape::Sphere { radius: 1.0 };
+        let (phi, n) = at(sphere, [0.0, 0.0, 2.0]);
+        assert!(close(phi, 1.0) && close(n[2], 1.0));
+        let bx = ColliderShape::Box {
+            half_extents: crate::Vec3::new(1.0, 2.0, 3.0),
+        };
+        assert!(close(at(bx, [0.5, 0.0, 0.0]).0, -0.5));
+        assert!(close(at(bx, [4.0, 6.0, 0.0]).0, 5.0));
+        let capsule = ColliderShape::Capsule {
+            half_length: 1.0,
+            radius: 0.5,
+        };
+        assert!(close(at(capsule, [0.0, 3.0, 0.0]).0, 1.5));
+        assert!(close(at(capsule, [1.0, 0.3, 0.0]).0, 0.5));
+        let cylinder = ColliderShape::Cylinder {
+            half_length: 1.0,
+            radius: 0.5,
+        };
+        assert!(close(at(cylinder, [0.0, 0.9, 0.0]).0, -0.1));
+        assert!(close(at(cylinder, [3.5, 5.0, 0.0]).0, 5.0));
+    }
+
+    #[test]
+    fn a_turned_moving_collider_is_where_its_velocities_take_it() {
+        // A floor turned 90 degrees about z after a quarter turn at pi/2 rad/s for 1 s,
+        // moved by (1, 0, 0): its normal +y is now -x, its plane through x = 1.
+        let mut r = record(ColliderShape::HalfSpace);
+        r.velocity = [1.0, 0.0, 0.0];
+        r.angular_velocity = [0.0, 0.0, core::f64::consts::FRAC_PI_2];
+        let c = Collider::at(&r, 1.0).unwrap();
+        let (phi, n) = c.distance([0.0, 0.0, 0.0]);
+        assert!(
+            (phi - 1.0).abs() < 1e-5 && (n[0] + 1.0).abs() < 1e-5,
+            "{phi} {n:?}"
+        );
+    }
+
+    #[test]
+    fn contact_laws_keep_what_each_promises() {
+        let mut r = record(ColliderShape::HalfSpace);
+        let inside = [0.0, -0.1, 0.0];
+        let v = [2.0, -1.0, 0.0];
+        r.contact = contact_code(Contact::Stick);
+        assert_eq!(
+            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Some([0.0; 3])
+        );
+        r.contact = contact_code(Contact::Slip);
+        assert_eq!(
+            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Some([2.0, 0.0, 0.0])
+        );
+        // Coulomb with mu = 0.5: the tangential speed 2 falls by 0.5 * 1.
+        r.friction = 0.5;
+        assert_eq!(
+            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Some([1.5, 0.0, 0.0])
+        );
+        r.contact = contact_code(Contact::Separate);
+        let c = Collider::at(&r, 0.0).unwrap();
+        assert_eq!(c.contact(inside, [2.0, 1.0, 0.0]), None, "separating");
+        assert_eq!(c.contact([0.0, 0.1, 0.0], v), None, "outside");
+    }
+}

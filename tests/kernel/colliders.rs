@@ -1,0 +1,285 @@
+//! Colliders (E90-E93): the force read back, friction against the exact sliding law, one
+//! worker's bits on many, snapshots and misuse.
+
+use mpm_gimp::{
+    memory_requirements, ColliderDef, ColliderShape, Contact, Damping, Effects, Error, HeapBuffer,
+    MaterialDef, Real, Schedule, Vec3, World, WorldDef,
+};
+
+const G: Real = 9.81;
+
+fn def(gravity: Vec3, damping: Real) -> WorldDef {
+    WorldDef {
+        cells: [32, 32, 1],
+        cell_size: 1.0 / 32.0,
+        particle_capacity: 4096,
+        gravity,
+        effects: Effects {
+            collider_capacity: 2,
+            damping: (damping > 0.0).then_some(Damping {
+                grid: Schedule::constant(damping),
+                ..Damping::NONE
+            }),
+            ..Effects::NONE
+        },
+        ..WorldDef::DEFAULT
+    }
+}
+
+const BLOCK: MaterialDef = MaterialDef {
+    youngs_modulus: 1.0e6,
+    ..MaterialDef::DEFAULT
+};
+
+/// A floor at y = 0.25 and a block of `BLOCK` resting on it, x in [0.3, 0.7], y in
+/// [0.25, 0.45]; returns its mass per unit thickness.
+fn block_on_floor(world: &mut World<'_>, floor: ColliderDef) -> Real {
+    let m = world.add_material(&BLOCK).expect("material");
+    world.add_collider(&floor).expect("floor");
+    world
+        .fill_box(
+            Vec3::new(0.3, 0.25, 0.0),
+            Vec3::new(0.7, 0.45, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .expect("block");
+    world.particles().mass.iter().sum()
+}
+
+fn floor(contact: Contact, friction: Real) -> ColliderDef {
+    ColliderDef {
+        position: Vec3::new(0.0, 0.25, 0.0),
+        contact,
+        friction,
+        ..ColliderDef::DEFAULT
+    }
+}
+
+/// The mass-weighted mean of `column` of the particles.
+fn mean(world: &World<'_>, column: impl Fn(&mpm_gimp::ParticlesView<'_>) -> Vec<Real>) -> Real {
+    let p = world.particles();
+    let m: Real = p.mass.iter().sum();
+    p.mass
+        .iter()
+        .zip(column(&p))
+        .map(|(m, v)| m * v)
+        .sum::<Real>()
+        / m
+}
+
+fn mean_vx(world: &World<'_>) -> Real {
+    mean(world, |p| p.velocity[0].to_vec())
+}
+
+fn mean_x(world: &World<'_>) -> Real {
+    mean(world, |p| p.position[0].to_vec())
+}
+
+/// A block at rest on a floor collider puts its weight on it: once the drop onto it has
+/// settled (grid damping), the mean force of the last 0.1 s read back from the collider is
+/// `M g` downward within 1 % (at rest the grid's momentum balance makes the contact impulse
+/// exactly the weight's; the 1 % leaves room for what motion is left).
+#[test]
+fn a_body_at_rest_on_a_collider_reports_its_weight() {
+    let def = def(Vec3::new(0.0, -G, 0.0), 30.0);
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    let mass = block_on_floor(&mut world, floor(Contact::Separate, 0.0));
+    let dt = world.stable_dt();
+    let (mut impulse, mut time) = (Vec3::ZERO, 0.0);
+    while world.time() < 1.0 {
+        world.step(dt).expect("step");
+        if world.time() > 0.9 {
+            let c = world.collider(0).expect("floor");
+            impulse += c.impulse;
+            time += c.duration;
+        }
+    }
+    let force = impulse / time;
+    let weight = mass * G;
+    assert!(
+        (force.y + weight).abs() < 0.01 * weight && force.x.abs() < 0.01 * weight,
+        "force {force:?} against the weight {weight}"
+    );
+    // The torque about the floor's origin (x = 0) is the weight's: its arm is the block's
+    // centre, x = 0.5.
+    let c = world.collider(0).expect("floor");
+    let torque = c.torque().z;
+    assert!(
+        (torque + 0.5 * weight).abs() < 0.02 * 0.5 * weight,
+        "torque {torque} against {}",
+        -0.5 * weight
+    );
+}
+
+/// A block on a floor with Coulomb friction `mu` and separating contact, loaded as on a slope
+/// of angle `theta` in the slope's frame: gravity `g cos theta` into the floor, and, once the
+/// block has settled on it (grid damping until `T0`), a body force along it that ramps up to
+/// `g sin theta` over `TAU` (a sudden one sets the elastic block rocking, and its normal force
+/// with it). It slides with `a = g (r(t) sin theta - mu cos theta)` once that is positive, `r`
+/// the ramp, when `tan theta > mu` (3 %, for the grid's stick and slip of the contact nodes),
+/// and stays where `tan theta < mu` (its mean displacement under 3 % of the frictionless
+/// slide's: the elastic block shears a little).
+/// (Slip contact holds the material to the floor in tension too, so its contact nodes can
+/// press harder than the weight: it is held to the frictionless law alone. An undamped block
+/// dropped on the slope bounces, and its normal force with it: it creeps by stick and slip.)
+#[test]
+fn a_block_slides_down_a_slope_at_the_coulomb_rate_and_stays_below_it() {
+    let theta: Real = 0.5;
+    let (s, c) = (theta.sin(), theta.cos());
+    const T0: Real = 0.3;
+    const TAU: Real = 0.05;
+    let t_end = T0 + 0.25;
+    for (mu, contact) in [
+        (0.0, Contact::Separate),
+        (0.0, Contact::Slip),
+        (0.3, Contact::Separate),
+        (0.7, Contact::Separate),
+    ] {
+        let mut def = def(Vec3::new(0.0, -G * c, 0.0), 0.0);
+        let fx = &mut def.effects;
+        fx.damping = Some(Damping {
+            grid: Schedule::from_points(&[(T0 - 0.01, 30.0), (T0, 0.0)]).expect("ramp"),
+            ..Damping::NONE
+        });
+        fx.body_force = Vec3::new(G * s, 0.0, 0.0);
+        fx.body_force_scale = Schedule::from_points(&[(T0, 0.0), (T0 + TAU, 1.0)]).expect("ramp");
+        let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+        let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+        block_on_floor(&mut world, floor(contact, mu));
+        let dt = world.stable_dt();
+        while world.time() < T0 as f64 {
+            world.step(dt).expect("step");
+        }
+        let (x0, v0, t0) = (mean_x(&world), mean_vx(&world), world.time());
+        while world.time() < t_end as f64 {
+            world.step(dt).expect("step");
+        }
+        let t = (world.time() - t0) as Real;
+        let v = mean_vx(&world) - v0;
+        if s > mu * c {
+            // Sliding from when the ramp's load passes friction's, `t_s = TAU mu / tan theta`:
+            // the integral of `g (r sin theta - mu cos theta)` from there.
+            let t_s = TAU * mu * c / s;
+            let exact =
+                G * s * (t - 0.5 * TAU) - G * mu * c * (t - t_s) - G * s * t_s * t_s / (2.0 * TAU);
+            assert!(
+                (v - exact).abs() < 0.03 * exact,
+                "mu {mu} {contact:?}: {v} m/s against {exact}"
+            );
+        } else {
+            let moved = mean_x(&world) - x0;
+            let slide = 0.5 * G * s * (t - 0.5 * TAU) * (t - 0.5 * TAU);
+            assert!(
+                moved.abs() < 0.03 * slide,
+                "mu {mu}: moved {moved} m, should stay"
+            );
+        }
+    }
+}
+
+/// The colliders' state and impulses are bit-identical for any number of workers, and a
+/// snapshot carries them: a copy of the state steps on as the original does.
+#[test]
+fn colliders_give_one_workers_bits_and_travel_with_a_snapshot() {
+    let mut def = def(Vec3::new(0.0, -G, 0.0), 0.0);
+    def.workers = 4;
+    let bytes = memory_requirements(&def).expect("valid").bytes;
+    let drum = ColliderDef {
+        shape: ColliderShape::Sphere { radius: 0.1 },
+        position: Vec3::new(0.5, 0.53, 0.0),
+        velocity: Vec3::new(0.0, -0.5, 0.0),
+        angular_velocity: Vec3::new(0.0, 0.0, 3.0),
+        contact: Contact::Slip,
+        friction: 0.4,
+        ..ColliderDef::DEFAULT
+    };
+    let run = |workers: usize| {
+        let mut buf = HeapBuffer::new(bytes);
+        let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+        block_on_floor(&mut world, floor(Contact::Stick, 0.0));
+        world.add_collider(&drum).expect("drum");
+        let tasks = mpm_gimp_rayon::RayonTasks::new(workers).expect("pool");
+        for _ in 0..40 {
+            world.step_with_tasks(2.0e-4, &tasks).expect("step");
+        }
+        let state = world.state_bytes().to_vec();
+        (
+            state,
+            world.as_bytes().to_vec(),
+            world.collider(1).expect("drum"),
+        )
+    };
+    let (state_one, one, drum_one) = run(1);
+    for workers in [2, 3, 4] {
+        let (state, _, drum) = run(workers);
+        assert!(state_one == state, "{workers} workers: the state differs");
+        assert_eq!(drum_one, drum);
+    }
+    assert!(drum_one.impulse.length() > 0.0, "the drum met the block");
+    let mut copy = HeapBuffer::new(bytes);
+    copy.as_mut_bytes()[..one.len()].copy_from_slice(&one);
+    let mut world = World::open(copy.as_mut_bytes()).expect("a snapshot opens");
+    assert_eq!(world.collider(1).expect("drum"), drum_one);
+    world.step(2.0e-4).expect("step");
+}
+
+/// Misuse: each call refused with its error and the world unchanged.
+#[test]
+fn collider_misuse_is_refused_and_changes_nothing() {
+    let mut def = def(Vec3::new(0.0, -G, 0.0), 0.0);
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    let bad = [
+        ColliderDef {
+            shape: ColliderShape::Sphere { radius: 0.0 },
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            shape: ColliderShape::Box {
+                half_extents: Vec3::new(1.0, Real::NAN, 1.0),
+            },
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            rotation: [0.0; 4],
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            friction: -1.0,
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            velocity: Vec3::new(Real::INFINITY, 0.0, 0.0),
+            ..ColliderDef::DEFAULT
+        },
+    ];
+    let before = world.state_bytes().to_vec();
+    for c in &bad {
+        assert_eq!(world.add_collider(c), Err(Error::InvalidEffect), "{c:?}");
+    }
+    assert_eq!(world.collider(0).map(|_| ()), Err(Error::UnknownCollider));
+    assert_eq!(
+        world.set_collider(0, &ColliderDef::DEFAULT),
+        Err(Error::UnknownCollider)
+    );
+    assert!(world.state_bytes() == before.as_slice());
+    world.add_collider(&ColliderDef::DEFAULT).expect("one");
+    world.add_collider(&ColliderDef::DEFAULT).expect("two");
+    let full = world.state_bytes().to_vec();
+    assert_eq!(
+        world.add_collider(&ColliderDef::DEFAULT),
+        Err(Error::ColliderCapacityExceeded)
+    );
+    assert_eq!(world.set_collider(1, &bad[0]), Err(Error::InvalidEffect));
+    assert!(world.state_bytes() == full.as_slice());
+    // None declared: nothing to add to.
+    def.effects.collider_capacity = 0;
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    assert_eq!(
+        world.add_collider(&ColliderDef::DEFAULT),
+        Err(Error::EffectNotDeclared)
+    );
+}
