@@ -40,15 +40,17 @@
 #if defined(MPM_GIMP_F64)
 #define mpm_world_def_default mpm_world_def_default_f64
 #define mpm_material_def_default mpm_material_def_default_f64
+#define mpm_collider_def_default mpm_collider_def_default_f64
 #else
 #define mpm_world_def_default mpm_world_def_default_f32
 #define mpm_material_def_default mpm_material_def_default_f32
+#define mpm_collider_def_default mpm_collider_def_default_f32
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.5.0"
+#define MPM_GIMP_VERSION "0.6.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 500
+#define MPM_GIMP_ABI_VERSION 600
 
 
 // Most points an `MpmSchedule` holds.
@@ -445,6 +447,46 @@ enum MpmScalarField
 typedef uint32_t MpmScalarField;
 #endif // __cplusplus
 
+// A collider's solid (`mpm_gimp::ColliderShape`), in its own frame.
+enum MpmColliderShape
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // The half-space below the plane through the position whose normal is the frame's y
+  // axis (a floor with no rotation).
+  MPM_COLLIDER_SHAPE_HALF_SPACE = 0,
+  // A sphere (a circle in 2D) of `radius`.
+  MPM_COLLIDER_SHAPE_SPHERE = 1,
+  // A box (a rectangle in 2D) of `half_extents`.
+  MPM_COLLIDER_SHAPE_BOX = 2,
+  // The points within `radius` of the segment from `-half_length` to `half_length` along
+  // the frame's y axis.
+  MPM_COLLIDER_SHAPE_CAPSULE = 3,
+  // A cylinder of `radius` along the frame's y axis, `2 half_length` long.
+  MPM_COLLIDER_SHAPE_CYLINDER = 4,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmColliderShape;
+#endif // __cplusplus
+
+// How the material meets a collider (`mpm_gimp::Contact`).
+enum MpmContact
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // The nodes inside move with the collider.
+  MPM_CONTACT_STICK = 0,
+  // No normal velocity relative to it, either way; Coulomb friction where the node presses.
+  MPM_CONTACT_SLIP = 1,
+  // As slip while the node approaches it; free while it moves away.
+  MPM_CONTACT_SEPARATE = 2,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmContact;
+#endif // __cplusplus
+
 // A world. Opaque: it is the memory the host passed to `mpm_world_init` (the pointer is that
 // memory's address), and it lives as long as the host keeps that memory.
 typedef struct MpmWorld MpmWorld;
@@ -588,6 +630,8 @@ typedef struct MpmEffects {
   // 1: reserve the plastic history column the plastic models need
   // (`mpm_gimp::Effects::plasticity`); 0 (default): none.
   uint32_t plasticity;
+  // Most colliders the world holds (`mpm_world_add_collider`), at most 4096; default 0.
+  uint32_t collider_capacity;
 } MpmEffects;
 
 // Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -897,6 +941,54 @@ typedef struct MpmTaskSystem {
   // The workers the system runs ranges on: 1 to the world definition's `workers`.
   uint32_t worker_count;
 } MpmTaskSystem;
+
+// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
+// `mpm_collider_def_default()` (a frictionless separating floor through the origin).
+typedef struct MpmColliderDef {
+  // Default `MPM_COLLIDER_SHAPE_HALF_SPACE`.
+  MpmColliderShape shape;
+  // Default `MPM_CONTACT_SEPARATE`.
+  MpmContact contact;
+  // Sphere, capsule, cylinder: m, > 0. Default 0.5.
+  mpm_real radius;
+  // Capsule (>= 0) and cylinder (> 0): half the length of the axis, m. Default 0.5.
+  mpm_real half_length;
+  // Box: half-extents along the frame's axes, m, each > 0. Default (0.5, 0.5, 0.5).
+  struct MpmVec3 half_extents;
+  // The frame's origin, m: the solid's centre, about which it turns and its torque is
+  // reported. Default (0, 0, 0).
+  struct MpmVec3 position;
+  // The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
+  // (0, 0, 0, 1).
+  mpm_real rotation[4];
+  // Velocity of the origin, m/s. Default (0, 0, 0).
+  struct MpmVec3 velocity;
+  // Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
+  struct MpmVec3 angular_velocity;
+  // Coulomb friction coefficient, >= 0. Default 0.
+  mpm_real friction;
+  // Set by `mpm_collider_def_default`; do not change.
+  uint32_t internal_cookie;
+} MpmColliderDef;
+
+// A collider as the world holds it (`mpm_world_get_collider`): its definition with its pose
+// now, and what the material put on it over the last step, summed in a fixed order (the
+// same bits for any number of workers).
+typedef struct MpmColliderState {
+  // The definition, with the position and rotation of now.
+  struct MpmColliderDef def;
+  // Impulse over the last step, N s (per unit thickness in plane strain, per radian
+  // axisymmetric).
+  struct MpmVec3 impulse;
+  // Angular impulse about the origin over the last step, N m s.
+  struct MpmVec3 angular_impulse;
+  // `impulse / duration`, N (0 before a step).
+  struct MpmVec3 force;
+  // `angular_impulse / duration`, N m (0 before a step).
+  struct MpmVec3 torque;
+  // The last step's length, s (0 before the first step).
+  mpm_real duration;
+} MpmColliderState;
 
 // The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
 #define MPM_MAX_HARDENING_COEFFICIENT 100.0
@@ -1307,6 +1399,49 @@ MpmStatus mpm_world_step_tasks(struct MpmWorld *world,
                                mpm_real dt,
                                const struct MpmTaskSystem *tasks,
                                struct MpmStepReport *report_out);
+
+#if !defined(MPM_GIMP_F64)
+// The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`, a frictionless
+// separating floor through the origin), with the cookie `mpm_world_add_collider` checks.
+// Precision-specific symbol, as `mpm_world_def_default`.
+struct MpmColliderDef mpm_collider_def_default_f32(void);
+#endif
+
+#if defined(MPM_GIMP_F64)
+// The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`), with the cookie
+// `mpm_world_add_collider` checks. Precision-specific symbol, as `mpm_world_def_default`.
+struct MpmColliderDef mpm_collider_def_default_f64(void);
+#endif
+
+// Adds a collider, posed as `def` says now, and returns its id in `id_out`. Needs
+// `MpmEffects::collider_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a value not finite or
+// out of range is `MPM_STATUS_INVALID_EFFECT`, an enum out of range
+// `MPM_STATUS_INVALID_ENUM`, one past the capacity `MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED`.
+//
+// # Safety
+// `world` is NULL or a world; the other pointers are NULL or valid.
+MpmStatus mpm_world_add_collider(struct MpmWorld *world,
+                                 const struct MpmColliderDef *def,
+                                 uint32_t *id_out);
+
+// Replaces collider `id`'s definition: a host moves a collider by setting its pose and
+// velocities between steps. Checked as `mpm_world_add_collider`;
+// `MPM_STATUS_UNKNOWN_COLLIDER` for an id not added.
+//
+// # Safety
+// `world` is NULL or a world; `def` is NULL or valid.
+MpmStatus mpm_world_set_collider(struct MpmWorld *world,
+                                 uint32_t id,
+                                 const struct MpmColliderDef *def);
+
+// Collider `id` as it is now, and the impulse, force and torque the material put on it over
+// the last step, into `state_out`; `MPM_STATUS_UNKNOWN_COLLIDER` for an id not added.
+//
+// # Safety
+// `world` is NULL or a world; `state_out` is NULL or valid.
+MpmStatus mpm_world_get_collider(const struct MpmWorld *world,
+                                 uint32_t id,
+                                 struct MpmColliderState *state_out);
 
 #ifdef __cplusplus
 }  // extern "C"

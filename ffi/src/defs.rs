@@ -366,6 +366,8 @@ pub struct MpmEffects {
     /// 1: reserve the plastic history column the plastic models need
     /// (`mpm_gimp::Effects::plasticity`); 0 (default): none.
     pub plasticity: u32,
+    /// Most colliders the world holds (`mpm_world_add_collider`), at most 4096; default 0.
+    pub collider_capacity: u32,
 }
 
 /// Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -489,7 +491,7 @@ pub(crate) fn vec3(v: MpmVec3) -> kernel::Vec3 {
     kernel::Vec3::new(v.x, v.y, v.z)
 }
 
-fn c_vec3(v: kernel::Vec3) -> MpmVec3 {
+pub(crate) fn c_vec3(v: kernel::Vec3) -> MpmVec3 {
     MpmVec3 {
         x: v.x,
         y: v.y,
@@ -619,6 +621,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
         plasticity: e.plasticity as u32,
+        collider_capacity: e.collider_capacity,
     }
 }
 
@@ -718,8 +721,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         damping,
         particle_forces: flag(e.particle_forces)?,
         traction_capacity: e.traction_capacity,
-        // Colliders are not yet declared through the C definition.
-        collider_capacity: 0,
+        collider_capacity: e.collider_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
         traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),

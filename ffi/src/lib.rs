@@ -40,9 +40,11 @@ pub mod effects;
 pub mod read;
 pub mod status;
 pub mod world;
-// After world: the header declares the task system after the world's calls.
+// After world: the header declares the task system and the colliders after the world's calls.
+pub mod colliders;
 pub mod tasks;
 
+pub use colliders::*;
 pub use defs::*;
 pub use effects::*;
 pub use read::*;

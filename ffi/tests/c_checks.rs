@@ -112,6 +112,8 @@ fn rust_layout() -> String {
         type_line!("MpmParticleStatus", MpmParticleStatus),
         type_line!("MpmScalarBoundaryKind", MpmScalarBoundaryKind),
         type_line!("MpmScalarField", MpmScalarField),
+        type_line!("MpmColliderShape", MpmColliderShape),
+        type_line!("MpmContact", MpmContact),
     ];
     lines.extend(struct_lines!(MpmVec3 { x, y, z }));
     lines.extend(struct_lines!(MpmSchedule {
@@ -158,6 +160,7 @@ fn rust_layout() -> String {
         heat,
         diffusion,
         plasticity,
+        collider_capacity,
     }));
     lines.extend(struct_lines!(MpmWorldDef {
         dimension,
@@ -264,6 +267,27 @@ fn rust_layout() -> String {
         finish_task,
         user_context,
         worker_count,
+    }));
+    lines.extend(struct_lines!(MpmColliderDef {
+        shape,
+        contact,
+        radius,
+        half_length,
+        half_extents,
+        position,
+        rotation,
+        velocity,
+        angular_velocity,
+        friction,
+        internal_cookie,
+    }));
+    lines.extend(struct_lines!(MpmColliderState {
+        def,
+        impulse,
+        angular_impulse,
+        force,
+        torque,
+        duration,
     }));
     let mut text = lines.join("\n");
     text.push('\n');
@@ -1601,6 +1625,7 @@ fn effects_definition_round_trip() {
             sources: 0,
         },
         plasticity: 1,
+        collider_capacity: 3,
     };
     let heat = Transport {
         faces: [
@@ -1665,7 +1690,7 @@ fn effects_definition_round_trip() {
             heat: Some(heat),
             diffusion: Some(diffusion),
             plasticity: true,
-            collider_capacity: 0,
+            collider_capacity: 3,
         },
         ..WorldDef::DEFAULT
     };

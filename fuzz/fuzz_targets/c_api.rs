@@ -377,6 +377,12 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     e.diffusion = transport(inp, -2.0, 2.0);
     // The plastic models' history column, about half the time (2: an invalid flag).
     e.plasticity = inp.u32_below(3) % 3;
+    // Room for a few colliders, sometimes none, sometimes past the limit.
+    e.collider_capacity = match inp.byte() % 16 {
+        0 => inp.u32_below(u32::MAX),
+        1..=4 => 0,
+        b => (b % 4) as u32,
+    };
     e
 }
 
@@ -451,7 +457,7 @@ fuzz_target!(|data: &[u8]| {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 15;
+        let op = inp.byte() % 16;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -720,6 +726,44 @@ fuzz_target!(|data: &[u8]| {
                     let s = mpm_world_diagnostics(world, &mut diag);
                     assert_eq!(world_hash(world), before, "a read changed the world");
                     s
+                }
+                15 => {
+                    // Colliders: any shape and contact number (one past them too), sizes,
+                    // poses and velocities in and out of range, a def not from the default
+                    // now and then; set one, or read one back (a read changes nothing).
+                    let mut c = mpm_collider_def_default_f32();
+                    c.shape = inp.u32_below(6);
+                    c.contact = inp.u32_below(4);
+                    c.radius = inp.real_in(-0.1, 0.5);
+                    c.half_length = inp.real_in(-0.1, 0.5);
+                    c.half_extents = inp.vec3_in(-0.1, 0.5);
+                    c.position = inp.vec3_in(-0.5, 1.5);
+                    c.rotation = core::array::from_fn(|_| inp.real_in(-1.0, 1.0));
+                    c.velocity = inp.vec3_in(-5.0, 5.0);
+                    c.angular_velocity = inp.vec3_in(-20.0, 20.0);
+                    c.friction = inp.real_in(-0.5, 2.0);
+                    if inp.byte() % 32 == 0 {
+                        c.internal_cookie ^= 1;
+                    }
+                    if inp.byte() % 32 == 0 {
+                        c.velocity.x = mpm_real::NAN;
+                    }
+                    match inp.byte() % 3 {
+                        0 => {
+                            let mut id = 0;
+                            mpm_world_add_collider(world, &c, &mut id)
+                        }
+                        1 => mpm_world_set_collider(world, inp.u32_below(6), &c),
+                        _ => {
+                            let mut state = core::mem::zeroed::<MpmColliderState>();
+                            let s = mpm_world_get_collider(world, inp.u32_below(6), &mut state);
+                            if s == MpmStatus::Ok {
+                                assert!(state.impulse.x.is_finite() && state.duration >= 0.0);
+                            }
+                            assert_eq!(world_hash(world), before, "a read changed the world");
+                            s
+                        }
+                    }
                 }
                 4 | 5 => {
                     let mut dt = 0.0;

@@ -295,35 +295,9 @@ impl World<'_> {
     }
 
     /// Collider `id` as it is now and what the material put on it over the last step
-    /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added.
+    /// ([`crate::WorldRef::collider`]).
     pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
-        if id as u64 >= self.header().collider_count {
-            return Err(Error::UnknownCollider);
-        }
-        let layout = Layout::of(&self.def());
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
-        let r: ColliderRecord =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
-        let at = layout.impulses_offset + id as usize * size_of::<ColliderImpulse>();
-        let i: ColliderImpulse =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
-        let v = |a: [f64; 3]| Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
-        let shape = colliders::shape_of(r.shape, r.size).ok_or(Error::InvalidState)?;
-        let contact = colliders::contact_of(r.contact).ok_or(Error::InvalidState)?;
-        Ok(crate::ColliderState {
-            def: ColliderDef {
-                shape,
-                position: v(r.position),
-                rotation: r.rotation.map(|c| c as Real),
-                velocity: v(r.velocity),
-                angular_velocity: v(r.angular_velocity),
-                contact,
-                friction: r.friction as Real,
-            },
-            impulse: v(i.linear),
-            angular_impulse: v(i.angular),
-            duration: i.duration as Real,
-        })
+        self.read().collider(id)
     }
 
     /// The record of `c`, posed now; in 2D its motion kept in the plane (no z velocity, no

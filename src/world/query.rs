@@ -248,6 +248,37 @@ impl<'a> WorldRef<'a> {
         bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
     }
 
+    /// Collider `id` as it is now and what the material put on it over the last step
+    /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added.
+    pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
+        use crate::effects::colliders::{contact_of, shape_of};
+        if id as u64 >= self.header().collider_count {
+            return Err(Error::UnknownCollider);
+        }
+        let layout = self.layout();
+        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        let r: ColliderRecord =
+            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
+        let at = layout.impulses_offset + id as usize * size_of::<ColliderImpulse>();
+        let i: ColliderImpulse =
+            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        let v = |a: [f64; 3]| crate::Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+        Ok(crate::ColliderState {
+            def: crate::ColliderDef {
+                shape: shape_of(r.shape, r.size).ok_or(Error::InvalidState)?,
+                position: v(r.position),
+                rotation: r.rotation.map(|c| c as Real),
+                velocity: v(r.velocity),
+                angular_velocity: v(r.angular_velocity),
+                contact: contact_of(r.contact).ok_or(Error::InvalidState)?,
+                friction: r.friction as Real,
+            },
+            impulse: v(i.linear),
+            angular_impulse: v(i.angular),
+            duration: i.duration as Real,
+        })
+    }
+
     /// The definition of material `id`.
     pub fn material(&self, id: u32) -> Option<MaterialDef> {
         let layout = self.layout();

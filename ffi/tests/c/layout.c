@@ -32,6 +32,8 @@ PROBE(MpmMaterialModel)
 PROBE(MpmParticleStatus)
 PROBE(MpmScalarBoundaryKind)
 PROBE(MpmScalarField)
+PROBE(MpmColliderShape)
+PROBE(MpmContact)
 PROBE(MpmVec3)
 PROBE(MpmSchedule)
 PROBE(MpmFeedback)
@@ -49,6 +51,8 @@ PROBE(MpmParticleArrays)
 PROBE(MpmIdRange)
 PROBE(MpmStepReport)
 PROBE(MpmTaskSystem)
+PROBE(MpmColliderDef)
+PROBE(MpmColliderState)
 
 #define ALIGN_OF(T) offsetof(struct probe_##T, t)
 
@@ -85,6 +89,8 @@ int main(void) {
     TYPE(MpmParticleStatus);
     TYPE(MpmScalarBoundaryKind);
     TYPE(MpmScalarField);
+    TYPE(MpmColliderShape);
+    TYPE(MpmContact);
 
     TYPE(MpmVec3);
     FIELD(MpmVec3, x);
@@ -138,6 +144,7 @@ int main(void) {
     FIELD(MpmEffects, heat);
     FIELD(MpmEffects, diffusion);
     FIELD(MpmEffects, plasticity);
+    FIELD(MpmEffects, collider_capacity);
 
     TYPE(MpmWorldDef);
     FIELD(MpmWorldDef, dimension);
@@ -250,6 +257,27 @@ int main(void) {
     FIELD(MpmTaskSystem, finish_task);
     FIELD(MpmTaskSystem, user_context);
     FIELD(MpmTaskSystem, worker_count);
+
+    TYPE(MpmColliderDef);
+    FIELD(MpmColliderDef, shape);
+    FIELD(MpmColliderDef, contact);
+    FIELD(MpmColliderDef, radius);
+    FIELD(MpmColliderDef, half_length);
+    FIELD(MpmColliderDef, half_extents);
+    FIELD(MpmColliderDef, position);
+    FIELD(MpmColliderDef, rotation);
+    FIELD(MpmColliderDef, velocity);
+    FIELD(MpmColliderDef, angular_velocity);
+    FIELD(MpmColliderDef, friction);
+    FIELD(MpmColliderDef, internal_cookie);
+
+    TYPE(MpmColliderState);
+    FIELD(MpmColliderState, def);
+    FIELD(MpmColliderState, impulse);
+    FIELD(MpmColliderState, angular_impulse);
+    FIELD(MpmColliderState, force);
+    FIELD(MpmColliderState, torque);
+    FIELD(MpmColliderState, duration);
 
     return 0;
 }

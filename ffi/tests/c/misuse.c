@@ -2369,6 +2369,8 @@ static void status_strings(void) {
         MPM_STATUS_INVALID_TRANSFER,
         MPM_STATUS_UNKNOWN_TRACTION,
         MPM_STATUS_STABLE_STEP_TOO_SHORT,
+        MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED,
+        MPM_STATUS_UNKNOWN_COLLIDER,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
@@ -2479,6 +2481,89 @@ static void deformation_misuse(void) {
         }
         expect_true("deformation 2D: J = det F = 1.01 for every particle", all);
     }
+}
+
+/* Colliders: every refusal with its status and the world unchanged, then a floor under a
+ * block that, stepped, reads back a finite downward force over the step's length. */
+static void collider_misuse(void) {
+    MpmWorldDef d = def_2d();
+    MpmMemoryRequirements req;
+    Block mem;
+    MpmWorld *w = NULL;
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmColliderDef floor = mpm_collider_def_default(), bad;
+    MpmColliderState state;
+    MpmStepReport report;
+    MpmIdRange ids;
+    uint32_t id = 7;
+
+    d.effects.collider_capacity = 1;
+    if (mpm_memory_requirements(&d, &req) != MPM_STATUS_OK) {
+        fail("colliders: setup", "mpm_memory_requirements refused a collider capacity");
+    }
+    mem = block_new(req.bytes, req.align, 0);
+    if (mpm_world_init(&d, mem.at, req.bytes, &w) != MPM_STATUS_OK) {
+        fail("colliders: setup", "mpm_world_init refused a collider capacity");
+    }
+    track(w);
+    ACCEPTED("colliders: material", 1, mpm_world_add_material(w, &m, &id));
+    ACCEPTED("colliders: block", 1,
+             mpm_world_fill_box(w, v3(0.3, 0.3, 0), v3(0.5, 0.4, 0), 0, v3(0, 0, 0), &ids));
+    floor.position = v3(0.0, 0.3, 0.0);
+
+    REFUSED("colliders: NULL def", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_collider(w, NULL, OUT(uint32_t)));
+    REFUSED("colliders: NULL id_out", MPM_STATUS_NULL_POINTER,
+            mpm_world_add_collider(w, &floor, NULL));
+    bad = floor;
+    bad.internal_cookie ^= 1u;
+    REFUSED("colliders: def not from the default", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.shape = 5;
+    REFUSED("colliders: shape out of range", MPM_STATUS_INVALID_ENUM,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.contact = 3;
+    REFUSED("colliders: contact out of range", MPM_STATUS_INVALID_ENUM,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.shape = MPM_COLLIDER_SHAPE_SPHERE;
+    bad.radius = R(0.0);
+    REFUSED("colliders: sphere of radius 0", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.friction = R(-1.0);
+    REFUSED("colliders: negative friction", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.rotation[0] = bad.rotation[1] = bad.rotation[2] = bad.rotation[3] = R(0.0);
+    REFUSED("colliders: zero rotation", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    REFUSED("colliders: none declared", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_collider(g_w2, &floor, OUT(uint32_t)));
+    REFUSED("colliders: get an id not added", MPM_STATUS_UNKNOWN_COLLIDER,
+            mpm_world_get_collider(w, 0, OUT(MpmColliderState)));
+    REFUSED("colliders: set an id not added", MPM_STATUS_UNKNOWN_COLLIDER,
+            mpm_world_set_collider(w, 0, &floor));
+    REFUSED("colliders: get into NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_get_collider(w, 0, NULL));
+
+    ACCEPTED("colliders: add the floor", 1, mpm_world_add_collider(w, &floor, &id));
+    expect_true("colliders: the first id is 0", id == 0);
+    REFUSED("colliders: past the capacity", MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED,
+            mpm_world_add_collider(w, &floor, OUT(uint32_t)));
+    floor.friction = R(0.5);
+    ACCEPTED("colliders: set it", 1, mpm_world_set_collider(w, 0, &floor));
+    ACCEPTED("colliders: step", 1, mpm_world_step(w, R(1.0 / 256.0), &report));
+    ACCEPTED("colliders: read it back", 0, mpm_world_get_collider(w, 0, &state));
+    expect_true("colliders: the step's length", state.duration == R(1.0 / 256.0));
+    expect_true("colliders: the block presses down on the floor",
+                state.force.y < R(0.0) && state.impulse.y < R(0.0));
+    expect_true("colliders: the definition read back",
+                state.def.friction == R(0.5) && state.def.position.y == R(0.3));
+    untrack(w);
+    free(mem.raw);
 }
 
 int main(void) {
@@ -2608,6 +2693,7 @@ int main(void) {
     cpgimp_world();
     copy_misuse();
     capacity_misuse();
+    collider_misuse();
     status_strings();
 
     /* After all of it both worlds still step. */

@@ -1,0 +1,271 @@
+//! Colliders from C (`mpm_gimp::ColliderDef`, E90-E93 of docs/equations.md): kinematic solids
+//! the material meets at the grid, and what it puts on them, read back for the host's rigid
+//! bodies. Declared with `MpmEffects::collider_capacity`.
+
+use crate::defs::c_vec3;
+use crate::defs::vec3;
+use crate::status::MpmStatus;
+use crate::world::{put, world_at, world_ref, MpmWorld};
+use crate::{apart, guard, mpm_real, non_null, MpmVec3};
+use kernel::{ColliderDef, ColliderShape, Contact};
+
+/// A collider's solid (`mpm_gimp::ColliderShape`), in its own frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmColliderShape {
+    /// The half-space below the plane through the position whose normal is the frame's y
+    /// axis (a floor with no rotation).
+    HalfSpace = 0,
+    /// A sphere (a circle in 2D) of `radius`.
+    Sphere = 1,
+    /// A box (a rectangle in 2D) of `half_extents`.
+    Box = 2,
+    /// The points within `radius` of the segment from `-half_length` to `half_length` along
+    /// the frame's y axis.
+    Capsule = 3,
+    /// A cylinder of `radius` along the frame's y axis, `2 half_length` long.
+    Cylinder = 4,
+}
+
+/// How the material meets a collider (`mpm_gimp::Contact`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmContact {
+    /// The nodes inside move with the collider.
+    Stick = 0,
+    /// No normal velocity relative to it, either way; Coulomb friction where the node presses.
+    Slip = 1,
+    /// As slip while the node approaches it; free while it moves away.
+    Separate = 2,
+}
+
+/// An `MpmColliderShape` as C passes it.
+pub type MpmColliderShapeValue = u32;
+/// An `MpmContact` as C passes it.
+pub type MpmContactValue = u32;
+
+/// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
+/// `mpm_collider_def_default()` (a frictionless separating floor through the origin).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct MpmColliderDef {
+    /// Default `MPM_COLLIDER_SHAPE_HALF_SPACE`.
+    pub shape: MpmColliderShapeValue,
+    /// Default `MPM_CONTACT_SEPARATE`.
+    pub contact: MpmContactValue,
+    /// Sphere, capsule, cylinder: m, > 0. Default 0.5.
+    pub radius: mpm_real,
+    /// Capsule (>= 0) and cylinder (> 0): half the length of the axis, m. Default 0.5.
+    pub half_length: mpm_real,
+    /// Box: half-extents along the frame's axes, m, each > 0. Default (0.5, 0.5, 0.5).
+    pub half_extents: MpmVec3,
+    /// The frame's origin, m: the solid's centre, about which it turns and its torque is
+    /// reported. Default (0, 0, 0).
+    pub position: MpmVec3,
+    /// The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
+    /// (0, 0, 0, 1).
+    pub rotation: [mpm_real; 4],
+    /// Velocity of the origin, m/s. Default (0, 0, 0).
+    pub velocity: MpmVec3,
+    /// Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
+    pub angular_velocity: MpmVec3,
+    /// Coulomb friction coefficient, >= 0. Default 0.
+    pub friction: mpm_real,
+    /// Set by `mpm_collider_def_default`; do not change.
+    pub internal_cookie: u32,
+}
+
+/// A collider as the world holds it (`mpm_world_get_collider`): its definition with its pose
+/// now, and what the material put on it over the last step, summed in a fixed order (the
+/// same bits for any number of workers).
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct MpmColliderState {
+    /// The definition, with the position and rotation of now.
+    pub def: MpmColliderDef,
+    /// Impulse over the last step, N s (per unit thickness in plane strain, per radian
+    /// axisymmetric).
+    pub impulse: MpmVec3,
+    /// Angular impulse about the origin over the last step, N m s.
+    pub angular_impulse: MpmVec3,
+    /// `impulse / duration`, N (0 before a step).
+    pub force: MpmVec3,
+    /// `angular_impulse / duration`, N m (0 before a step).
+    pub torque: MpmVec3,
+    /// The last step's length, s (0 before the first step).
+    pub duration: mpm_real,
+}
+
+/// The cookie of a collider definition of this precision.
+const COLLIDER_COOKIE: u32 =
+    u32::from_le_bytes(*b"MPMC") ^ (core::mem::size_of::<mpm_real>() as u32);
+
+/// The C form of a Rust collider (with the cookie).
+fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
+    let (shape, radius, half_length, half_extents) = match d.shape {
+        ColliderShape::HalfSpace => (MpmColliderShape::HalfSpace, 0.5, 0.5, None),
+        ColliderShape::Sphere { radius } => (MpmColliderShape::Sphere, radius, 0.5, None),
+        ColliderShape::Box { half_extents } => {
+            (MpmColliderShape::Box, 0.5, 0.5, Some(half_extents))
+        }
+        ColliderShape::Capsule {
+            half_length,
+            radius,
+        } => (MpmColliderShape::Capsule, radius, half_length, None),
+        ColliderShape::Cylinder {
+            half_length,
+            radius,
+        } => (MpmColliderShape::Cylinder, radius, half_length, None),
+    };
+    MpmColliderDef {
+        shape: shape as u32,
+        contact: d.contact as u32,
+        radius,
+        half_length,
+        half_extents: c_vec3(half_extents.unwrap_or(kernel::Vec3::splat(0.5))),
+        position: c_vec3(d.position),
+        rotation: d.rotation,
+        velocity: c_vec3(d.velocity),
+        angular_velocity: c_vec3(d.angular_velocity),
+        friction: d.friction,
+        internal_cookie: COLLIDER_COOKIE,
+    }
+}
+
+/// The Rust collider of a C one: the cookie and the enum values checked (the values
+/// themselves by the kernel).
+fn collider_def_from_c(d: &MpmColliderDef) -> Result<ColliderDef, MpmStatus> {
+    if d.internal_cookie != COLLIDER_COOKIE {
+        return Err(MpmStatus::DefNotFromDefault);
+    }
+    let shape = match d.shape {
+        0 => ColliderShape::HalfSpace,
+        1 => ColliderShape::Sphere { radius: d.radius },
+        2 => ColliderShape::Box {
+            half_extents: vec3(d.half_extents),
+        },
+        3 => ColliderShape::Capsule {
+            half_length: d.half_length,
+            radius: d.radius,
+        },
+        4 => ColliderShape::Cylinder {
+            half_length: d.half_length,
+            radius: d.radius,
+        },
+        _ => return Err(MpmStatus::InvalidEnum),
+    };
+    let contact = match d.contact {
+        0 => Contact::Stick,
+        1 => Contact::Slip,
+        2 => Contact::Separate,
+        _ => return Err(MpmStatus::InvalidEnum),
+    };
+    Ok(ColliderDef {
+        shape,
+        position: vec3(d.position),
+        rotation: d.rotation,
+        velocity: vec3(d.velocity),
+        angular_velocity: vec3(d.angular_velocity),
+        contact,
+        friction: d.friction,
+    })
+}
+
+/// The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`, a frictionless
+/// separating floor through the origin), with the cookie `mpm_world_add_collider` checks.
+/// Precision-specific symbol, as `mpm_world_def_default`.
+#[cfg(not(feature = "f64"))]
+#[no_mangle]
+pub extern "C" fn mpm_collider_def_default_f32() -> MpmColliderDef {
+    collider_def_to_c(&ColliderDef::DEFAULT)
+}
+
+/// The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`), with the cookie
+/// `mpm_world_add_collider` checks. Precision-specific symbol, as `mpm_world_def_default`.
+#[cfg(feature = "f64")]
+#[no_mangle]
+pub extern "C" fn mpm_collider_def_default_f64() -> MpmColliderDef {
+    collider_def_to_c(&ColliderDef::DEFAULT)
+}
+
+/// Adds a collider, posed as `def` says now, and returns its id in `id_out`. Needs
+/// `MpmEffects::collider_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a value not finite or
+/// out of range is `MPM_STATUS_INVALID_EFFECT`, an enum out of range
+/// `MPM_STATUS_INVALID_ENUM`, one past the capacity `MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED`.
+///
+/// # Safety
+/// `world` is NULL or a world; the other pointers are NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_collider(
+    world: *mut MpmWorld,
+    def: *const MpmColliderDef,
+    id_out: *mut u32,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def)?;
+        non_null(id_out)?;
+        // SAFETY: checked non-NULL; the caller promises a valid definition.
+        let c = collider_def_from_c(unsafe { &*def })?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        apart(w.as_bytes(), id_out, 1)?;
+        let id = w.add_collider(&c)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(id_out, id) };
+        Ok(())
+    })
+}
+
+/// Replaces collider `id`'s definition: a host moves a collider by setting its pose and
+/// velocities between steps. Checked as `mpm_world_add_collider`;
+/// `MPM_STATUS_UNKNOWN_COLLIDER` for an id not added.
+///
+/// # Safety
+/// `world` is NULL or a world; `def` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_collider(
+    world: *mut MpmWorld,
+    id: u32,
+    def: *const MpmColliderDef,
+) -> MpmStatus {
+    guard(|| {
+        non_null(def)?;
+        // SAFETY: checked non-NULL; the caller promises a valid definition.
+        let c = collider_def_from_c(unsafe { &*def })?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        w.set_collider(id, &c)?;
+        Ok(())
+    })
+}
+
+/// Collider `id` as it is now, and the impulse, force and torque the material put on it over
+/// the last step, into `state_out`; `MPM_STATUS_UNKNOWN_COLLIDER` for an id not added.
+///
+/// # Safety
+/// `world` is NULL or a world; `state_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_get_collider(
+    world: *const MpmWorld,
+    id: u32,
+    state_out: *mut MpmColliderState,
+) -> MpmStatus {
+    guard(|| {
+        non_null(state_out)?;
+        // SAFETY: the caller promises a world.
+        let w = unsafe { world_ref(world) }?;
+        apart(w.as_bytes(), state_out, 1)?;
+        let s = w.collider(id)?;
+        let state = MpmColliderState {
+            def: collider_def_to_c(&s.def),
+            impulse: c_vec3(s.impulse),
+            angular_impulse: c_vec3(s.angular_impulse),
+            force: c_vec3(s.force()),
+            torque: c_vec3(s.torque()),
+            duration: s.duration,
+        };
+        // SAFETY: checked non-NULL.
+        unsafe { put(state_out, state) };
+        Ok(())
+    })
+}
