@@ -354,7 +354,7 @@ unsafe impl Pod for TractionRecord {}
 /// One collider in the buffer's table ([`crate::ColliderDef`]), widened to f64: its pose at
 /// `pose_time` (world time, s), which the step moves on with its velocities. `shape` and
 /// `contact` are the enums' numbers; `size` the shape's lengths (radius; half-extents;
-/// half-length then radius).
+/// half-length then radius, and a cylinder's inner radius).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct ColliderRecord {
@@ -387,7 +387,7 @@ impl ColliderRecord {
             1 => a > 0.0,
             2 => a > 0.0 && b > 0.0 && c > 0.0,
             3 => a >= 0.0 && b > 0.0,
-            4 => a > 0.0 && b > 0.0,
+            4 => a > 0.0 && c >= 0.0 && c < b,
             _ => false,
         };
         let q2: f64 = self.rotation.iter().map(|c| c * c).sum();

@@ -180,6 +180,19 @@ pub fn ceil(x: Real) -> Real {
     }
 }
 
+/// Rounds down to the previous integer.
+#[inline(always)]
+pub fn floor(x: Real) -> Real {
+    #[cfg(not(feature = "f64"))]
+    {
+        libm::floorf(x)
+    }
+    #[cfg(feature = "f64")]
+    {
+        libm::floor(x)
+    }
+}
+
 /// The identity matrix.
 #[inline(always)]
 pub fn identity<const D: usize>() -> Mat<D> {

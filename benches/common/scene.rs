@@ -50,11 +50,15 @@ pub enum Effect {
     /// its margin so that the axis r = 0 is the lower x face's wall plane (a slip wall), and the
     /// block keeps its cells (so its size), at r >= 0.
     Axisymmetric,
+    /// Four colliders, spheres (circles in 2D) of a tenth of the block's height at rest in
+    /// it (their nodes follow them; the block's particles there stay): what each collider
+    /// costs per node of the node box, which every collider visits.
+    Colliders,
 }
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 15] = [
+    pub const ALL: [(Effect, &'static str); 16] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -70,6 +74,7 @@ impl Effect {
         (Effect::Diffusion, "diffusion"),
         (Effect::ThermalExpansion, "thermal_expansion"),
         (Effect::Axisymmetric, "axisymmetric"),
+        (Effect::Colliders, "colliders"),
     ];
 
     /// The effect's name.
@@ -155,6 +160,7 @@ impl Effect {
             Effect::Momentum => def.transfer = Transfer::FlipMomentum,
             Effect::Heat | Effect::ThermalExpansion => fx.heat = Some(Transport::INSULATED),
             Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
+            Effect::Colliders => fx.collider_capacity = 4,
             Effect::Axisymmetric => {
                 if def.dimension == Dimension::ThreeD {
                     return Err(format!(
@@ -208,6 +214,31 @@ impl Effect {
                 for i in last {
                     world
                         .add_tractions(i..i + 1, Face::XMax, Vec3::new(1.0e3, 0.0, 0.0))
+                        .map_err(err)?;
+                }
+                Ok(())
+            }
+            Effect::Colliders => {
+                // Four spheres along the block's middle, at its particles' mean height.
+                let p = world.particles();
+                let lo = p
+                    .position
+                    .map(|c| c.iter().fold(Real::MAX, |m, &v| m.min(v)));
+                let hi = p
+                    .position
+                    .map(|c| c.iter().fold(Real::MIN, |m, &v| m.max(v)));
+                let d = world.def().axes();
+                let mid = |a: usize| if a < d { 0.5 * (lo[a] + hi[a]) } else { 0.0 };
+                let radius = 0.1 * (hi[1] - lo[1]);
+                for k in 0..4 {
+                    let x = lo[0] + (k as Real + 0.5) * 0.25 * (hi[0] - lo[0]);
+                    world
+                        .add_collider(&mpm_gimp::ColliderDef {
+                            shape: mpm_gimp::ColliderShape::Sphere { radius },
+                            position: Vec3::new(x, mid(1), mid(2)),
+                            contact: mpm_gimp::Contact::Stick,
+                            ..mpm_gimp::ColliderDef::DEFAULT
+                        })
                         .map_err(err)?;
                 }
                 Ok(())

@@ -463,7 +463,8 @@ enum MpmColliderShape
   // The points within `radius` of the segment from `-half_length` to `half_length` along
   // the frame's y axis.
   MPM_COLLIDER_SHAPE_CAPSULE = 3,
-  // A cylinder of `radius` along the frame's y axis, `2 half_length` long.
+  // A cylinder of `radius` along the frame's y axis, `2 half_length` long, hollow inside
+  // `inner_radius`.
   MPM_COLLIDER_SHAPE_CYLINDER = 4,
 };
 #ifndef __cplusplus
@@ -892,6 +893,57 @@ typedef struct MpmStepReport {
   uint32_t first_frozen[8];
 } MpmStepReport;
 
+// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
+// `mpm_collider_def_default()` (a frictionless separating floor through the origin).
+typedef struct MpmColliderDef {
+  // Default `MPM_COLLIDER_SHAPE_HALF_SPACE`.
+  MpmColliderShape shape;
+  // Default `MPM_CONTACT_SEPARATE`.
+  MpmContact contact;
+  // Sphere, capsule, cylinder: m, > 0. Default 0.5.
+  mpm_real radius;
+  // Capsule (>= 0) and cylinder (> 0): half the length of the axis, m. Default 0.5.
+  mpm_real half_length;
+  // Box: half-extents along the frame's axes, m, each > 0. Default (0.5, 0.5, 0.5).
+  struct MpmVec3 half_extents;
+  // Cylinder: the radius of its hole (a tube, a drum's shell), m, in `[0, radius)`.
+  // Default 0 (solid).
+  mpm_real inner_radius;
+  // The frame's origin, m: the solid's centre, about which it turns and its torque is
+  // reported. Default (0, 0, 0).
+  struct MpmVec3 position;
+  // The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
+  // (0, 0, 0, 1).
+  mpm_real rotation[4];
+  // Velocity of the origin, m/s. Default (0, 0, 0).
+  struct MpmVec3 velocity;
+  // Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
+  struct MpmVec3 angular_velocity;
+  // Coulomb friction coefficient, >= 0. Default 0.
+  mpm_real friction;
+  // Set by `mpm_collider_def_default`; do not change.
+  uint32_t internal_cookie;
+} MpmColliderDef;
+
+// A collider as the world holds it (`mpm_world_get_collider`): its definition with its pose
+// now, and what the material put on it over the last step, summed in a fixed order (the
+// same bits for any number of workers).
+typedef struct MpmColliderState {
+  // The definition, with the position and rotation of now.
+  struct MpmColliderDef def;
+  // Impulse over the last step, N s (per unit thickness in plane strain, per radian
+  // axisymmetric).
+  struct MpmVec3 impulse;
+  // Angular impulse about the origin over the last step, N m s.
+  struct MpmVec3 angular_impulse;
+  // `impulse / duration`, N (0 before a step).
+  struct MpmVec3 force;
+  // `angular_impulse / duration`, N m (0 before a step).
+  struct MpmVec3 torque;
+  // The last step's length, s (0 before the first step).
+  mpm_real duration;
+} MpmColliderState;
+
 // A task the library hands the host: runs the items `start .. end` (`start < end <=
 // item_count`) on worker `worker` (`< worker_count`) and returns when they are done.
 // `task_context` is the value `MpmEnqueueTaskCallback` received with the task, passed back
@@ -941,54 +993,6 @@ typedef struct MpmTaskSystem {
   // The workers the system runs ranges on: 1 to the world definition's `workers`.
   uint32_t worker_count;
 } MpmTaskSystem;
-
-// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
-// `mpm_collider_def_default()` (a frictionless separating floor through the origin).
-typedef struct MpmColliderDef {
-  // Default `MPM_COLLIDER_SHAPE_HALF_SPACE`.
-  MpmColliderShape shape;
-  // Default `MPM_CONTACT_SEPARATE`.
-  MpmContact contact;
-  // Sphere, capsule, cylinder: m, > 0. Default 0.5.
-  mpm_real radius;
-  // Capsule (>= 0) and cylinder (> 0): half the length of the axis, m. Default 0.5.
-  mpm_real half_length;
-  // Box: half-extents along the frame's axes, m, each > 0. Default (0.5, 0.5, 0.5).
-  struct MpmVec3 half_extents;
-  // The frame's origin, m: the solid's centre, about which it turns and its torque is
-  // reported. Default (0, 0, 0).
-  struct MpmVec3 position;
-  // The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
-  // (0, 0, 0, 1).
-  mpm_real rotation[4];
-  // Velocity of the origin, m/s. Default (0, 0, 0).
-  struct MpmVec3 velocity;
-  // Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
-  struct MpmVec3 angular_velocity;
-  // Coulomb friction coefficient, >= 0. Default 0.
-  mpm_real friction;
-  // Set by `mpm_collider_def_default`; do not change.
-  uint32_t internal_cookie;
-} MpmColliderDef;
-
-// A collider as the world holds it (`mpm_world_get_collider`): its definition with its pose
-// now, and what the material put on it over the last step, summed in a fixed order (the
-// same bits for any number of workers).
-typedef struct MpmColliderState {
-  // The definition, with the position and rotation of now.
-  struct MpmColliderDef def;
-  // Impulse over the last step, N s (per unit thickness in plane strain, per radian
-  // axisymmetric).
-  struct MpmVec3 impulse;
-  // Angular impulse about the origin over the last step, N m s.
-  struct MpmVec3 angular_impulse;
-  // `impulse / duration`, N (0 before a step).
-  struct MpmVec3 force;
-  // `angular_impulse / duration`, N m (0 before a step).
-  struct MpmVec3 torque;
-  // The last step's length, s (0 before the first step).
-  mpm_real duration;
-} MpmColliderState;
 
 // The largest snow hardening coefficient xi (`mpm_gimp::MAX_HARDENING_COEFFICIENT`).
 #define MPM_MAX_HARDENING_COEFFICIENT 100.0
@@ -1380,26 +1384,6 @@ void mpm_simd_use_baseline_only(void);
 // change, only speed. Irreversible for the process.
 void mpm_simd_use_avx2_at_most(void);
 
-// `mpm_world_step` on the host's task system: the step's parallel parts run as tasks on
-// `tasks`, with the same results, bit for bit, for any `worker_count` and however the host
-// cuts and spreads the ranges. `tasks->worker_count` must lie in 1..=the definition's
-// `workers` (`MPM_STATUS_INVALID_LIMIT`); NULL `tasks` or a NULL callback is
-// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins.
-//
-// A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
-// `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
-// broke it were not run, and the world may be in an intermediate state.
-//
-// # Safety
-// `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and
-// its callbacks keep the contracts of `MpmEnqueueTaskCallback` and `MpmFinishTaskCallback`
-// that the library cannot check (a `task_context` passed back unchanged, no call of the task
-// after its finish returned).
-MpmStatus mpm_world_step_tasks(struct MpmWorld *world,
-                               mpm_real dt,
-                               const struct MpmTaskSystem *tasks,
-                               struct MpmStepReport *report_out);
-
 #if !defined(MPM_GIMP_F64)
 // The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`, a frictionless
 // separating floor through the origin), with the cookie `mpm_world_add_collider` checks.
@@ -1442,6 +1426,26 @@ MpmStatus mpm_world_set_collider(struct MpmWorld *world,
 MpmStatus mpm_world_get_collider(const struct MpmWorld *world,
                                  uint32_t id,
                                  struct MpmColliderState *state_out);
+
+// `mpm_world_step` on the host's task system: the step's parallel parts run as tasks on
+// `tasks`, with the same results, bit for bit, for any `worker_count` and however the host
+// cuts and spreads the ranges. `tasks->worker_count` must lie in 1..=the definition's
+// `workers` (`MPM_STATUS_INVALID_LIMIT`); NULL `tasks` or a NULL callback is
+// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins.
+//
+// A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
+// `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
+// broke it were not run, and the world may be in an intermediate state.
+//
+// # Safety
+// `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and
+// its callbacks keep the contracts of `MpmEnqueueTaskCallback` and `MpmFinishTaskCallback`
+// that the library cannot check (a `task_context` passed back unchanged, no call of the task
+// after its finish returned).
+MpmStatus mpm_world_step_tasks(struct MpmWorld *world,
+                               mpm_real dt,
+                               const struct MpmTaskSystem *tasks,
+                               struct MpmStepReport *report_out);
 
 #ifdef __cplusplus
 }  // extern "C"

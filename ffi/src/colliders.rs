@@ -23,7 +23,8 @@ pub enum MpmColliderShape {
     /// The points within `radius` of the segment from `-half_length` to `half_length` along
     /// the frame's y axis.
     Capsule = 3,
-    /// A cylinder of `radius` along the frame's y axis, `2 half_length` long.
+    /// A cylinder of `radius` along the frame's y axis, `2 half_length` long, hollow inside
+    /// `inner_radius`.
     Cylinder = 4,
 }
 
@@ -59,6 +60,9 @@ pub struct MpmColliderDef {
     pub half_length: mpm_real,
     /// Box: half-extents along the frame's axes, m, each > 0. Default (0.5, 0.5, 0.5).
     pub half_extents: MpmVec3,
+    /// Cylinder: the radius of its hole (a tube, a drum's shell), m, in `[0, radius)`.
+    /// Default 0 (solid).
+    pub inner_radius: mpm_real,
     /// The frame's origin, m: the solid's centre, about which it turns and its torque is
     /// reported. Default (0, 0, 0).
     pub position: MpmVec3,
@@ -102,20 +106,27 @@ const COLLIDER_COOKIE: u32 =
 
 /// The C form of a Rust collider (with the cookie).
 fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
-    let (shape, radius, half_length, half_extents) = match d.shape {
-        ColliderShape::HalfSpace => (MpmColliderShape::HalfSpace, 0.5, 0.5, None),
-        ColliderShape::Sphere { radius } => (MpmColliderShape::Sphere, radius, 0.5, None),
+    let (shape, radius, half_length, half_extents, inner_radius) = match d.shape {
+        ColliderShape::HalfSpace => (MpmColliderShape::HalfSpace, 0.5, 0.5, None, 0.0),
+        ColliderShape::Sphere { radius } => (MpmColliderShape::Sphere, radius, 0.5, None, 0.0),
         ColliderShape::Box { half_extents } => {
-            (MpmColliderShape::Box, 0.5, 0.5, Some(half_extents))
+            (MpmColliderShape::Box, 0.5, 0.5, Some(half_extents), 0.0)
         }
         ColliderShape::Capsule {
             half_length,
             radius,
-        } => (MpmColliderShape::Capsule, radius, half_length, None),
+        } => (MpmColliderShape::Capsule, radius, half_length, None, 0.0),
         ColliderShape::Cylinder {
             half_length,
             radius,
-        } => (MpmColliderShape::Cylinder, radius, half_length, None),
+            inner_radius,
+        } => (
+            MpmColliderShape::Cylinder,
+            radius,
+            half_length,
+            None,
+            inner_radius,
+        ),
     };
     MpmColliderDef {
         shape: shape as u32,
@@ -123,6 +134,7 @@ fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
         radius,
         half_length,
         half_extents: c_vec3(half_extents.unwrap_or(kernel::Vec3::splat(0.5))),
+        inner_radius,
         position: c_vec3(d.position),
         rotation: d.rotation,
         velocity: c_vec3(d.velocity),
@@ -151,6 +163,7 @@ fn collider_def_from_c(d: &MpmColliderDef) -> Result<ColliderDef, MpmStatus> {
         4 => ColliderShape::Cylinder {
             half_length: d.half_length,
             radius: d.radius,
+            inner_radius: d.inner_radius,
         },
         _ => return Err(MpmStatus::InvalidEnum),
     };

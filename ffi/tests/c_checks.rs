@@ -274,6 +274,7 @@ fn rust_layout() -> String {
         radius,
         half_length,
         half_extents,
+        inner_radius,
         position,
         rotation,
         velocity,

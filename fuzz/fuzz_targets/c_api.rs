@@ -737,6 +737,7 @@ fuzz_target!(|data: &[u8]| {
                     c.radius = inp.real_in(-0.1, 0.5);
                     c.half_length = inp.real_in(-0.1, 0.5);
                     c.half_extents = inp.vec3_in(-0.1, 0.5);
+                    c.inner_radius = inp.real_in(-0.1, 0.5);
                     c.position = inp.vec3_in(-0.5, 1.5);
                     c.rotation = core::array::from_fn(|_| inp.real_in(-1.0, 1.0));
                     c.velocity = inp.vec3_in(-5.0, 5.0);

@@ -2,7 +2,7 @@
 //! onto x-y, far particles drawn first), each a disc of the particle spacing coloured by a
 //! field, as RGB pixels; PNG frames and animated GIFs of them.
 
-use mpm_gimp::{Boundary, Dimension, Face, ParticlesView, World};
+use mpm_gimp::{Boundary, Dimension, Face, ParticlesView, Real, Vec3, World};
 use std::io::{self, Write};
 
 /// What colours the particles.
@@ -77,8 +77,40 @@ fn value(v: &ParticlesView<'_>, colour: Colour, i: usize, density: &[f64]) -> f6
     }
 }
 
+/// The colliders' solids under the particles: every pixel whose centre is inside one (3D: in
+/// the grid's middle plane along z), in one grey; `rgb` is the picture's `width` (from
+/// `scale`) by `height` pixels.
+fn draw_colliders(world: &World, scale: f64, height: u32, rgb: &mut [u8]) {
+    let def = world.def();
+    let n = world.collider_count();
+    if n == 0 {
+        return;
+    }
+    let w = rgb.len() / 3 / height.max(1) as usize;
+    let z = def.origin.z as f64 + 0.5 * def.cells[2] as f64 * def.cell_size as f64;
+    let solid = [120u8, 110, 100];
+    let colliders: Vec<_> = (0..n as u32)
+        .filter_map(|id| world.collider(id).ok())
+        .collect();
+    for y in 0..height as usize {
+        let wy = def.origin.y as f64 + (height as f64 - y as f64 - 0.5) / scale;
+        for x in 0..w {
+            let wx = def.origin.x as f64 + (x as f64 + 0.5) / scale;
+            let p = Vec3::new(wx as Real, wy as Real, z as Real);
+            if colliders
+                .iter()
+                .any(|c| c.def.distance(p).is_some_and(|d| d <= 0.0))
+            {
+                let at = 3 * (y * w + x);
+                rgb[at..at + 3].copy_from_slice(&solid);
+            }
+        }
+    }
+}
+
 /// Renders the world's active particles over the grid's box, `width` pixels wide (the height
-/// follows the box), coloured by `colour` from `range.0` (dark) to `range.1` (light).
+/// follows the box), coloured by `colour` from `range.0` (dark) to `range.1` (light), over
+/// the colliders' solids.
 pub fn render(world: &World, colour: Colour, range: (f64, f64), width: u32) -> Picture {
     let def = world.def();
     let d = def.axes();
@@ -89,6 +121,7 @@ pub fn render(world: &World, colour: Colour, range: (f64, f64), width: u32) -> P
     for _ in 0..w * height {
         rgb.extend_from_slice(&BACKGROUND);
     }
+    draw_colliders(world, scale, height, &mut rgb);
     let v = world.particles();
     let density = crate::densities(world);
     // Far particles first (3D), so that near ones cover them.

@@ -13,8 +13,9 @@
 use crate::picture::Colour;
 use crate::stiffness::{modulus_for_substeps, youngs_modulus};
 use mpm_gimp::{
-    memory_requirements, Boundary, Dimension, Error, Face, HeapBuffer, MaterialDef, MaterialModel,
-    Real, ScalarBoundary, ScalarField, Transfer, Transport, Vec3, World, WorldDef,
+    memory_requirements, Boundary, ColliderDef, ColliderShape, Contact, Dimension, Error, Face,
+    HeapBuffer, MaterialDef, MaterialModel, Real, ScalarBoundary, ScalarField, Transfer, Transport,
+    Vec3, World, WorldDef,
 };
 
 /// One example scene: how to make it, how to show it, how long it runs.
@@ -171,6 +172,32 @@ pub const ALL: &[Scene] = &[
         // The bending stress at the root passes the yield stress (83 kPa) and stays there.
         colour: Colour::Pressure,
         range: (-1.0e5, 1.0e5),
+        in_readme: true,
+    },
+    Scene {
+        name: "paddle",
+        title: "A turning paddle stirs a water tank",
+        def: paddle_def,
+        fill: paddle_fill,
+        frame_dt: FRAME,
+        substeps: WATER_SUBSTEPS,
+        frames: 120,
+        // One flat colour keeps its GIF small (by speed it was 1.4 MB).
+        colour: Colour::Material,
+        range: (0.0, 1.0),
+        in_readme: true,
+    },
+    Scene {
+        name: "drum",
+        title: "Sand tumbles in a turning drum",
+        def: drum_def,
+        fill: drum_fill,
+        frame_dt: FRAME,
+        substeps: SAND_SUBSTEPS,
+        frames: 120,
+        // As the paddle's.
+        colour: Colour::Material,
+        range: (0.0, 1.0),
         in_readme: true,
     },
 ];
@@ -567,4 +594,125 @@ fn metal_fill(world: &mut World) -> Result<usize, Error> {
         Vec3::new(0.0, -2.0, 0.0),
     )?;
     Ok(a.len() + b.len())
+}
+
+/// The water scene's box, with room for one collider.
+fn paddle_def() -> WorldDef {
+    let mut def = water_def();
+    def.effects.collider_capacity = 1;
+    def
+}
+
+/// Water 0.45 m deep (as the water scene's) and a paddle, a box 0.5 m by 0.06 m centred
+/// 0.4 m above the floor, turning at 4 rad/s about its centre: a kinematic collider that
+/// moves on its own (no call between frames), separating contact with some friction.
+fn paddle_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let water = world.add_material(&MaterialDef {
+        model: MaterialModel::Fluid,
+        bulk_modulus: modulus_for_substeps(&def, 1000.0, FRAME, WATER_SUBSTEPS, 2.5),
+        viscosity: 1.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    let centre = Vec3::new(0.5, y0 + 0.4, 0.0);
+    world.add_collider(&ColliderDef {
+        shape: ColliderShape::Box {
+            half_extents: Vec3::new(0.25, 0.03, 0.5),
+        },
+        position: centre,
+        angular_velocity: Vec3::new(0.0, 0.0, 4.0),
+        contact: Contact::Separate,
+        friction: 0.2,
+        ..ColliderDef::DEFAULT
+    })?;
+    // The water around the paddle: the box cut where the paddle lies at rest.
+    let mut n = 0;
+    for (lo, hi) in [(y0, centre.y - 0.035), (centre.y + 0.035, y0 + 0.45)] {
+        n += world
+            .fill_box(
+                Vec3::new(wall, lo, 0.0),
+                Vec3::new(1.0 - wall, hi, 0.0),
+                water,
+                Vec3::ZERO,
+            )?
+            .len();
+    }
+    for (lo, hi) in [(wall, centre.x - 0.26), (centre.x + 0.26, 1.0 - wall)] {
+        n += world
+            .fill_box(
+                Vec3::new(lo, centre.y - 0.035, 0.0),
+                Vec3::new(hi, centre.y + 0.035, 0.0),
+                water,
+                Vec3::ZERO,
+            )?
+            .len();
+    }
+    Ok(n)
+}
+
+/// The sand scene's box (plasticity declared), with room for the drum.
+fn drum_def() -> WorldDef {
+    let mut def = sand_def();
+    def.effects.collider_capacity = 1;
+    def
+}
+
+/// A drum, the shell of a cylinder of radii 0.4 m and 0.45 m about the box's centre turned so
+/// that its axis is the plane's normal, turning at 1.5 rad/s (a kinematic collider, sticking
+/// with friction 0.6), and dry sand (as the sand scene's) filling its lower part: the sand is
+/// carried up the wall until its slope fails and it tumbles.
+fn drum_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let sand = world.add_material(&MaterialDef {
+        model: MaterialModel::DruckerPrager,
+        youngs_modulus: budget_modulus(&def, 1600.0, 0.3, SAND_SUBSTEPS, 2.5),
+        density: 1600.0,
+        friction_angle: 30.0,
+        ..MaterialDef::DEFAULT
+    })?;
+    let centre = Vec3::new(0.5, 0.5, 0.0);
+    let half = core::f64::consts::FRAC_1_SQRT_2 as Real;
+    world.add_collider(&ColliderDef {
+        shape: ColliderShape::Cylinder {
+            half_length: 1.0,
+            radius: 0.46,
+            inner_radius: 0.4,
+        },
+        position: centre,
+        // A quarter turn about x: the cylinder's axis (its frame's y) along z.
+        rotation: [half, 0.0, 0.0, half],
+        angular_velocity: Vec3::new(0.0, 0.0, 1.5),
+        contact: Contact::Separate,
+        friction: 0.6,
+        ..ColliderDef::DEFAULT
+    })?;
+    // The lower part of the drum's hole, less a margin from its wall: the sites of the fills'
+    // lattice (`particles_per_cell` per cell and axis) below the centre.
+    let spacing = def.cell_size as f64 / def.particles_per_cell as f64;
+    let (r, c) = (0.38, [centre.x as f64, centre.y as f64]);
+    let mut x = [Vec::new(), Vec::new(), Vec::new()];
+    let steps = (r / spacing).ceil() as i64;
+    for j in -steps..0 {
+        for i in -steps..steps {
+            let p = [(i as f64 + 0.5) * spacing, (j as f64 + 0.5) * spacing];
+            if p[0] * p[0] + p[1] * p[1] < r * r {
+                x[0].push((c[0] + p[0]) as Real);
+                x[1].push((c[1] + p[1]) as Real);
+            }
+        }
+    }
+    let n = x[0].len();
+    x[2] = vec![0.0; n];
+    let zeros = vec![0.0 as Real; n];
+    let volume = vec![(spacing * spacing) as Real; n];
+    let mass: Vec<Real> = volume.iter().map(|v| 1600.0 * v).collect();
+    world.add_particles(&mpm_gimp::ParticleBatch {
+        position: [&x[0], &x[1], &x[2]],
+        velocity: [&zeros, &zeros, &zeros],
+        mass: &mass,
+        volume: &volume,
+        material: &vec![sand; n],
+    })?;
+    Ok(n)
 }

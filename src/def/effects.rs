@@ -461,12 +461,16 @@ pub enum ColliderShape {
         /// m.
         radius: Real,
     },
-    /// A cylinder along the frame's y axis (a rectangle in 2D). m, each > 0.
+    /// A cylinder along the frame's y axis (a rectangle in 2D), hollow inside `inner_radius`
+    /// (0: solid): a tube, a drum's shell; axisymmetric, on the axis, a disk or a ring. m;
+    /// `half_length > 0`, `0 <= inner_radius < radius`.
     Cylinder {
         /// m.
         half_length: Real,
         /// m.
         radius: Real,
+        /// m.
+        inner_radius: Real,
     },
 }
 
@@ -537,7 +541,14 @@ impl ColliderDef {
             ColliderShape::Cylinder {
                 half_length,
                 radius,
-            } => half_length > 0.0 && half_length.is_finite() && radius > 0.0 && radius.is_finite(),
+                inner_radius,
+            } => {
+                half_length > 0.0
+                    && half_length.is_finite()
+                    && radius.is_finite()
+                    && inner_radius >= 0.0
+                    && inner_radius < radius
+            }
         };
         shape
             && finite(self.position)

@@ -46,7 +46,8 @@ enum Solid {
     Sphere(Real),
     Box(V3),
     Capsule(Real, Real),
-    Cylinder(Real, Real),
+    /// Half-length, radius, inner radius.
+    Cylinder(Real, Real, Real),
 }
 
 /// One collider at one instant, in the world frame.
@@ -76,7 +77,8 @@ pub(crate) fn shape_record(s: &ColliderShape) -> (u64, [f64; 3]) {
         ColliderShape::Cylinder {
             half_length,
             radius,
-        } => (4, [half_length as f64, radius as f64, 0.0]),
+            inner_radius,
+        } => (4, [half_length as f64, radius as f64, inner_radius as f64]),
     }
 }
 
@@ -96,6 +98,7 @@ pub(crate) fn shape_of(code: u64, size: [f64; 3]) -> Option<ColliderShape> {
         4 => ColliderShape::Cylinder {
             half_length: r(0),
             radius: r(1),
+            inner_radius: r(2),
         },
         _ => return None,
     })
@@ -131,7 +134,7 @@ impl Collider {
             1 => Solid::Sphere(lengths[0]),
             2 => Solid::Box(lengths),
             3 => Solid::Capsule(lengths[0], lengths[1]),
-            4 => Solid::Cylinder(lengths[0], lengths[1]),
+            4 => Solid::Cylinder(lengths[0], lengths[1], lengths[2]),
             _ => return None,
         };
         let axis = |a: DVec3| (rotation * a).to_array().map(|c| c as Real);
@@ -157,6 +160,21 @@ impl Collider {
             scale(self.axes[2], n[2]),
         );
         (phi, world)
+    }
+
+    /// The box `[lo, hi]` (world axes, m) that holds the solid, or `None` where it is
+    /// unbounded (a half-space).
+    pub fn bounds(&self) -> Option<(V3, V3)> {
+        let e: V3 = match self.solid {
+            Solid::HalfSpace => return None,
+            Solid::Sphere(r) => [r; 3],
+            Solid::Box(e) => e,
+            Solid::Capsule(h, r) => [r, h + r, r],
+            Solid::Cylinder(h, r, _) => [r, h, r],
+        };
+        // Half the box along world axis `i`: the frame's axes' reach, `sum_j |axis_j[i]| e_j`.
+        let half: V3 = core::array::from_fn(|i| (0..3).map(|j| self.axes[j][i].abs() * e[j]).sum());
+        Some((sub(self.centre, half), add(self.centre, half)))
     }
 
     /// The velocity of the solid's point at `x`: `v + omega x (x - c)`.
@@ -223,13 +241,17 @@ fn local_distance(solid: Solid, p: V3) -> (Real, V3) {
             let d = [p[0], p[1] - p[1].clamp(-h, h), p[2]];
             (norm(d) - r, unit(d, [1.0, 0.0, 0.0]))
         }
-        Solid::Cylinder(h, r) => {
+        Solid::Cylinder(h, r, inner) => {
+            let rho = crate::math::sqrt(p[0] * p[0] + p[2] * p[2]);
             let radial = unit([p[0], 0.0, p[2]], [1.0, 0.0, 0.0]);
+            // The shell's radial distance: past the outer face, or (hollow) inside the inner.
+            let (dr, radial) = if inner > 0.0 && inner - rho > rho - r {
+                (inner - rho, scale(radial, -1.0))
+            } else {
+                (rho - r, radial)
+            };
             let axial = [0.0, if p[1] < 0.0 { -1.0 } else { 1.0 }, 0.0];
-            let (dr, dy) = (
-                crate::math::sqrt(p[0] * p[0] + p[2] * p[2]) - r,
-                p[1].abs() - h,
-            );
+            let dy = p[1].abs() - h;
             if dr > 0.0 || dy > 0.0 {
                 let (or, oy) = (dr.max(0.0), dy.max(0.0));
                 let o = add(scale(radial, or), scale(axial, oy));
@@ -240,6 +262,32 @@ fn local_distance(solid: Solid, p: V3) -> (Real, V3) {
                 (dy, axial)
             }
         }
+    }
+}
+
+impl crate::ColliderDef {
+    /// The signed distance from this collider's surface at `x` (negative inside), m, in the
+    /// pose it has: what the step tests each node with (E91), for a host that draws it or
+    /// seeds material around it. `None` for a definition [`crate::World::add_collider`]
+    /// refuses.
+    pub fn distance(&self, x: crate::Vec3) -> Option<Real> {
+        if !self.is_valid() {
+            return None;
+        }
+        let (shape, size) = shape_record(&self.shape);
+        let q = self.rotation.map(|c| c as f64);
+        let len = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
+        let w = |v: crate::Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        let record = ColliderRecord {
+            shape,
+            contact: contact_code(self.contact),
+            friction: self.friction as f64,
+            size,
+            position: w(self.position),
+            rotation: q.map(|c| c / len),
+            ..ColliderRecord::default()
+        };
+        Some(Collider::at(&record, 0.0)?.distance([x.x, x.y, x.z]).0)
     }
 }
 
@@ -283,9 +331,23 @@ mod tests {
         let cylinder = ColliderShape::Cylinder {
             half_length: 1.0,
             radius: 0.5,
+            inner_radius: 0.0,
         };
         assert!(close(at(cylinder, [0.0, 0.9, 0.0]).0, -0.1));
         assert!(close(at(cylinder, [3.5, 5.0, 0.0]).0, 5.0));
+        // A tube of radii 0.3 and 0.5: inside its hole, in its wall, outside it.
+        let tube = ColliderShape::Cylinder {
+            half_length: 1.0,
+            radius: 0.5,
+            inner_radius: 0.3,
+        };
+        let (phi, n) = at(tube, [0.1, 0.0, 0.0]);
+        assert!(
+            close(phi, 0.2) && close(n[0], -1.0),
+            "in the hole: {phi} {n:?}"
+        );
+        assert!(close(at(tube, [0.0, 0.0, 0.45]).0, -0.05));
+        assert!(close(at(tube, [0.7, 0.0, 0.0]).0, 0.2));
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::effects::colliders::Collider;
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
 use crate::layout::ColliderImpulse;
+use crate::math::{ceil, floor};
 use crate::Real;
 
 /// The node columns of a substep, as the grid passes take them: whole, or in slabs of whole
@@ -228,48 +229,73 @@ fn collide<const D: usize>(
     g: &mut GridCols<'_, D>,
     mut impulses: Option<&mut [ColliderImpulse]>,
 ) {
-    let (geom, bx, dt) = (&ctx.geom, &ctx.active, ctx.dt);
-    let (n, nx) = (g.len(), geom.nodes[0]);
-    let pad =
-        |v: [Real; D]| -> [Real; 3] { core::array::from_fn(|a| if a < D { v[a] } else { 0.0 }) };
+    let (geom, dt) = (&ctx.geom, ctx.dt);
+    let n = g.len();
+    if impulses.is_none() && g.remap[0].len() != n {
+        return; // No re-mapped velocity to act on (USL).
+    }
     for (k, record) in ctx.colliders.iter().enumerate() {
         let Some(c) = Collider::at(record, ctx.time) else {
             continue;
         };
+        // The node box's nodes within the solid's bounds (a half-space: all of them).
+        let (mut lo, mut hi) = (ctx.active.lo, ctx.active.hi);
+        if let Some((min, max)) = c.bounds() {
+            for a in 0..D {
+                let from = ceil((min[a] - geom.origin[a]) * geom.inv_h).max(0.0);
+                let to = floor((max[a] - geom.origin[a]) * geom.inv_h) + 1.0;
+                lo[a] = lo[a].max(from as usize);
+                hi[a] = hi[a].min(to.max(0.0) as usize);
+            }
+        }
         let (mut linear, mut angular) = ([0.0f64; 3], [0.0f64; 3]);
-        bx.for_each_line(geom.stride, n, |r| {
-            // The box's nodes alone (a line's range runs on past its end).
-            for i in r.filter(|i| (bx.lo[0]..bx.hi[0]).contains(&(i % nx))) {
-                let m = g.mass.get(i).copied().unwrap_or(0.0);
-                if m <= ctx.mass_cutoff || m.is_nan() {
-                    continue;
-                }
-                let x = pad(geom.node_position(i));
-                if impulses.is_some() {
-                    let v = pad(core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt));
-                    let Some(w) = c.contact(x, v) else {
+        let layers = if D == 3 { lo[D - 1]..hi[D - 1] } else { 0..1 };
+        for z in layers {
+            for j in lo[1]..hi[1] {
+                let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
+                let at = |a: usize, index: usize| geom.origin[a] + index as Real * geom.h;
+                let y = at(1, j);
+                let zz = if D == 3 { at(D - 1, z) } else { 0.0 };
+                for i in lo[0]..hi[0] {
+                    let node = line + i;
+                    let m = g.mass.get(node).copied().unwrap_or(0.0);
+                    if m <= ctx.mass_cutoff || m.is_nan() || node >= n {
                         continue;
-                    };
-                    for a in 0..D {
-                        g.acc[a][i] = (w[a] - g.vel[a][i]) / dt;
                     }
-                    let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
-                    let arm: [f64; 3] = core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
-                    for a in 0..3 {
-                        let (b, e) = ((a + 1) % 3, (a + 2) % 3);
-                        linear[a] -= dp[a];
-                        angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
-                    }
-                } else if g.remap[0].len() == n {
-                    let v = pad(core::array::from_fn(|a| g.remap[a][i]));
-                    if let Some(w) = c.contact(x, v) {
+                    let x = [at(0, i), y, zz];
+                    if impulses.is_some() {
+                        let v: [Real; 3] = core::array::from_fn(|a| {
+                            if a < D {
+                                g.vel[a][node] + g.acc[a][node] * dt
+                            } else {
+                                0.0
+                            }
+                        });
+                        let Some(w) = c.contact(x, v) else {
+                            continue;
+                        };
                         for a in 0..D {
-                            g.remap[a][i] = w[a];
+                            g.acc[a][node] = (w[a] - g.vel[a][node]) / dt;
+                        }
+                        let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
+                        let arm: [f64; 3] = core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
+                        for a in 0..3 {
+                            let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+                            linear[a] -= dp[a];
+                            angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
+                        }
+                    } else {
+                        let v: [Real; 3] =
+                            core::array::from_fn(|a| if a < D { g.remap[a][node] } else { 0.0 });
+                        if let Some(w) = c.contact(x, v) {
+                            for a in 0..D {
+                                g.remap[a][node] = w[a];
+                            }
                         }
                     }
                 }
             }
-        });
+        }
         if let Some(sum) = impulses.as_deref_mut().and_then(|t| t.get_mut(k)) {
             for a in 0..3 {
                 sum.linear[a] += linear[a];

@@ -294,6 +294,11 @@ impl World<'_> {
         Ok(())
     }
 
+    /// Number of colliders added.
+    pub fn collider_count(&self) -> usize {
+        self.read().collider_count()
+    }
+
     /// Collider `id` as it is now and what the material put on it over the last step
     /// ([`crate::WorldRef::collider`]).
     pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {

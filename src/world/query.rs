@@ -248,6 +248,11 @@ impl<'a> WorldRef<'a> {
         bytemuck::cast_slice(&self.buf[layout.u32_col(j, count)])
     }
 
+    /// Number of colliders added ([`World::add_collider`]).
+    pub fn collider_count(&self) -> usize {
+        self.header().collider_count as usize
+    }
+
     /// Collider `id` as it is now and what the material put on it over the last step
     /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added.
     pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {

@@ -11,7 +11,7 @@
 pub mod text;
 
 use mpm_gimp::{
-    Dimension, Error, HeapBuffer, Real, Serial, StepReport, TaskSystem, World, WorldDef,
+    Dimension, Error, HeapBuffer, Real, Serial, StepReport, TaskSystem, Vec3, World, WorldDef,
     MAX_WORKERS,
 };
 use mpm_gimp_output::picture::{self, Colour, Picture};
@@ -352,11 +352,24 @@ impl Sim {
     /// `w = 1 - r / reach` falling to 0 at the reach (out of plane, `-m w v_z / DRAG_TIME`).
     /// The forces are set once more when the drag ends, to zero.
     fn set_drag(&mut self, drag: Option<Drag>) -> Result<(), Error> {
+        // A scene with a collider: the mouse carries the first one, at the cursor's velocity
+        // (it stays where it is let go).
+        let mut world = World::reopen(self.storage.as_mut_bytes())?;
+        if world.collider_count() > 0 {
+            let mut c = world.collider(0)?.def;
+            match drag {
+                Some(drag) => {
+                    c.position = Vec3::new(drag.at[0] as Real, drag.at[1] as Real, c.position.z);
+                    c.velocity = Vec3::new(drag.velocity[0] as Real, drag.velocity[1] as Real, 0.0);
+                }
+                None => c.velocity = Vec3::ZERO,
+            }
+            return world.set_collider(0, &c);
+        }
         if drag.is_none() && !self.forces_set {
             return Ok(());
         }
         let reach = DRAG_RADIUS.max(DRAG_CELLS * self.def.cell_size as f64);
-        let mut world = World::reopen(self.storage.as_mut_bytes())?;
         let v = world.particles();
         let n = v.count;
         for f in &mut self.forces {
@@ -689,7 +702,7 @@ impl App {
         let help = [
             "space pause/run    n or . single step    r reset",
             "c next colour, or s speed  p stress  t temp  m material",
-            "drag (left button) on the picture: push material",
+            "drag (left button) on the picture: push material, or move a collider",
             "esc or q: quit",
         ];
         for (k, h) in help.iter().enumerate() {

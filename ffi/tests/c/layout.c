@@ -264,6 +264,7 @@ int main(void) {
     FIELD(MpmColliderDef, radius);
     FIELD(MpmColliderDef, half_length);
     FIELD(MpmColliderDef, half_extents);
+    FIELD(MpmColliderDef, inner_radius);
     FIELD(MpmColliderDef, position);
     FIELD(MpmColliderDef, rotation);
     FIELD(MpmColliderDef, velocity);
