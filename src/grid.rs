@@ -659,6 +659,10 @@ pub(crate) struct Geom<const D: usize> {
     pub hi: [Real; D],
     /// Boundary condition of the lower and upper face of each axis.
     pub faces: [[Boundary; 2]; D],
+    /// Friction coefficient and velocity of the lower and upper wall of each axis
+    /// (`WorldDef::wall_friction`, `WorldDef::wall_velocity`).
+    pub wall_friction: [[Real; 2]; D],
+    pub wall_velocity: [[[Real; D]; 2]; D],
     /// Axisymmetric: the nodes between the grid's first face and the axis (the wall plane of
     /// the lower r face) are the mirror images of those past the axis, for the momentum as past
     /// any wall ([`Geom::for_each_wall_image`]) and, here only, for heat and diffusion's
@@ -679,6 +683,8 @@ impl<const D: usize> Geom<D> {
             lo: [0.0; D],
             hi: [0.0; D],
             faces: [[Boundary::Slip; 2]; D],
+            wall_friction: [[0.0; 2]; D],
+            wall_velocity: [[[0.0; D]; 2]; D],
             axis_mirror: def.dimension == crate::Dimension::Axisymmetric2D,
         };
         let mut stride = 1;
@@ -690,6 +696,10 @@ impl<const D: usize> Geom<D> {
             g.lo[a] = margin as Real;
             g.hi[a] = (def.cells[a] as usize - margin) as Real;
             g.faces[a] = [def.faces[2 * a], def.faces[2 * a + 1]];
+            g.wall_friction[a] = [def.wall_friction[2 * a], def.wall_friction[2 * a + 1]];
+            g.wall_velocity[a] = core::array::from_fn(|side| {
+                core::array::from_fn(|b| def.wall_velocity[2 * a + side][b])
+            });
         }
         g
     }
@@ -702,19 +712,58 @@ impl<const D: usize> Geom<D> {
         })
     }
 
-    /// Calls `f(node, fixed)` for every node between a grid face and its wall plane, for each
-    /// stick or slip face, where `fixed[a]` says which velocity components the wall fixes to
-    /// zero: all of them at a stick wall, the normal one at a slip wall. A node near an edge
-    /// is visited once per face it belongs to.
-    pub fn for_each_wall_node(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, [bool; D])) {
+    /// Calls `f(node, axis, side)` for every node between a grid face and its wall plane, for
+    /// each stick or slip face (`side` 0 low, 1 high, of `axis`). A node near an edge is
+    /// visited once per face it belongs to.
+    pub fn for_each_wall_node(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, usize, usize)) {
         for axis in 0..D {
             for side in 0..2 {
-                let fixed: [bool; D] = match self.faces[axis][side] {
-                    Boundary::Open => continue,
-                    Boundary::Stick => [true; D],
-                    Boundary::Slip => core::array::from_fn(|a| a == axis),
+                if self.faces[axis][side] != Boundary::Open {
+                    self.for_each_face_node(axis, side, bx, &mut |i, _| f(i, axis, side));
+                }
+            }
+        }
+    }
+
+    /// The velocity the wall of face `side` of `axis` leaves a node whose updated velocity is
+    /// `v` (E20, E94): a stick wall's own (along its plane); a slip wall's `v` without its
+    /// normal part, and with Coulomb friction, where the node presses on it, on the part along
+    /// the plane relative to the wall's velocity. `None` where it leaves `v` as it is but its
+    /// normal part (a frictionless slip wall; an open face: nothing).
+    pub fn wall_law(&self, axis: usize, side: usize, v: [Real; D]) -> Option<[Real; D]> {
+        let wall = self.wall_velocity[axis][side];
+        match self.faces[axis][side] {
+            Boundary::Open => None,
+            Boundary::Stick => Some(core::array::from_fn(
+                |a| {
+                    if a == axis {
+                        0.0
+                    } else {
+                        wall[a]
+                    }
+                },
+            )),
+            Boundary::Slip => {
+                let mu = self.wall_friction[axis][side];
+                if mu == 0.0 {
+                    return None;
+                }
+                let press = if side == 0 { -v[axis] } else { v[axis] };
+                let t: [Real; D] =
+                    core::array::from_fn(|a| if a == axis { 0.0 } else { v[a] - wall[a] });
+                let speed = crate::math::sqrt(t.iter().map(|c| c * c).sum());
+                let kept = if speed > 0.0 {
+                    (1.0 - mu * press.max(0.0) / speed).max(0.0)
+                } else {
+                    0.0
                 };
-                self.for_each_face_node(axis, side, bx, &mut |i, _| f(i, fixed));
+                Some(core::array::from_fn(|a| {
+                    if a == axis {
+                        0.0
+                    } else {
+                        wall[a] + t[a] * kept
+                    }
+                }))
             }
         }
     }

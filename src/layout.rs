@@ -109,6 +109,9 @@ pub(crate) struct Header {
     /// `Effects::collider_capacity`, and the colliders added.
     pub collider_capacity: u64,
     pub collider_count: u64,
+    /// `WorldDef::wall_friction`, `WorldDef::wall_velocity`.
+    pub wall_friction: [f64; 6],
+    pub wall_velocity: [[f64; 3]; 6],
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -261,6 +264,7 @@ const _: () = assert!(
             + (4 + TRACTION_SCHEDULES) * (1 + 2 * SCHEDULE_POINTS)
             + 2 * 14
             + 4
+            + 6 * 4
             + 8 * DAMPING_ZONES)
 );
 
@@ -681,8 +685,15 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
         return Err(Error::InvalidCellSize);
     }
     let used_finite = |v: Vec3| (0..def.axes()).all(|a| v[a].is_finite());
-    if !used_finite(def.origin) || !used_finite(def.gravity) {
+    if !used_finite(def.origin)
+        || !used_finite(def.gravity)
+        || !def.wall_velocity.iter().all(|&v| used_finite(v))
+        || !def.wall_friction.iter().all(|f| f.is_finite())
+    {
         return Err(Error::NonFiniteDefinition);
+    }
+    if def.wall_friction.iter().any(|&f| f < 0.0) {
+        return Err(Error::InvalidEffect);
     }
     if def.dimension == Dimension::Axisymmetric2D {
         // The axis r = 0 is the lower r face's wall plane, `margin` cells in from the grid's
@@ -836,6 +847,8 @@ impl Header {
             plasticity: fx.plasticity as u64,
             collider_capacity: fx.collider_capacity as u64,
             collider_count: 0,
+            wall_friction: def.wall_friction.map(|f| f as f64),
+            wall_velocity: def.wall_velocity.map(w),
         }
     }
 
@@ -937,6 +950,8 @@ impl Header {
             update_order,
             gravity: v(self.gravity),
             faces,
+            wall_friction: self.wall_friction.map(|f| f as Real),
+            wall_velocity: self.wall_velocity.map(v),
             exp_terms: small(self.exp_terms)?,
             cfl: self.cfl as Real,
             max_substeps: small(self.max_substeps)?,

@@ -666,6 +666,11 @@ typedef struct MpmWorldDef {
   struct MpmVec3 gravity;
   // Boundary of each face, indexed by `MpmFace`. Default all `MPM_BOUNDARY_SLIP`.
   MpmBoundary faces[6];
+  // Coulomb friction coefficient of each slip face, >= 0. Default 0.
+  mpm_real wall_friction[6];
+  // Velocity of each face's wall along its plane, m/s (a stick face moves the material on
+  // it so; a slip face's friction acts relative to it). Default zero.
+  struct MpmVec3 wall_velocity[6];
   // Terms of exp(grad v dt), 1..=8. Default 2.
   uint32_t exp_terms;
   // Courant number in (0, 1]. Default 0.5.

@@ -403,6 +403,11 @@ pub struct MpmWorldDef {
     pub gravity: MpmVec3,
     /// Boundary of each face, indexed by `MpmFace`. Default all `MPM_BOUNDARY_SLIP`.
     pub faces: [MpmBoundaryValue; 6],
+    /// Coulomb friction coefficient of each slip face, >= 0. Default 0.
+    pub wall_friction: [mpm_real; 6],
+    /// Velocity of each face's wall along its plane, m/s (a stick face moves the material on
+    /// it so; a slip face's friction acts relative to it). Default zero.
+    pub wall_velocity: [MpmVec3; 6],
     /// Terms of exp(grad v dt), 1..=8. Default 2.
     pub exp_terms: u32,
     /// Courant number in (0, 1]. Default 0.5.
@@ -515,6 +520,8 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         update_order: d.update_order as u32,
         gravity: c_vec3(d.gravity),
         faces: d.faces.map(|f| f as u32),
+        wall_friction: d.wall_friction,
+        wall_velocity: d.wall_velocity.map(c_vec3),
         exp_terms: d.exp_terms,
         cfl: d.cfl,
         max_substeps: d.max_substeps,
@@ -774,6 +781,8 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
         update_order,
         gravity: vec3(d.gravity),
         faces,
+        wall_friction: d.wall_friction,
+        wall_velocity: d.wall_velocity.map(vec3),
         exp_terms: d.exp_terms,
         cfl: d.cfl,
         max_substeps: d.max_substeps,

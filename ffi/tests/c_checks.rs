@@ -176,6 +176,8 @@ fn rust_layout() -> String {
         update_order,
         gravity,
         faces,
+        wall_friction,
+        wall_velocity,
         exp_terms,
         cfl,
         max_substeps,

@@ -200,6 +200,30 @@ pub const ALL: &[Scene] = &[
         range: (0.0, 1.0),
         in_readme: true,
     },
+    Scene {
+        name: "plough",
+        title: "A plough pushes a layer of snow into a bank",
+        def: plough_def,
+        fill: plough_fill,
+        frame_dt: FRAME,
+        substeps: SNOWBALL_PACKED_SUBSTEPS,
+        frames: 60,
+        colour: Colour::Material,
+        range: (0.0, 1.0),
+        in_readme: true,
+    },
+    Scene {
+        name: "punch",
+        title: "A punch presses a dent into a soft-metal plate",
+        def: punch_def,
+        fill: punch_fill,
+        frame_dt: FRAME,
+        substeps: METAL_SUBSTEPS,
+        frames: 60,
+        colour: Colour::Pressure,
+        range: (-2.0e5, 2.0e5),
+        in_readme: true,
+    },
 ];
 
 /// The frame of every scene: 1/60 s.
@@ -420,12 +444,7 @@ const WATER_SUBSTEPS: u32 = 20;
 fn water_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
     let (y0, wall) = (floor(&def), floor(&def));
-    let water = world.add_material(&MaterialDef {
-        model: MaterialModel::Fluid,
-        bulk_modulus: modulus_for_substeps(&def, 1000.0, FRAME, WATER_SUBSTEPS, 2.5),
-        viscosity: 1.0,
-        ..MaterialDef::DEFAULT
-    })?;
+    let water = world.add_material(&water(&def))?;
     let wood = world.add_material(&MaterialDef {
         model: MaterialModel::FixedCorotated,
         youngs_modulus: budget_modulus(&def, 600.0, 0.3, WATER_SUBSTEPS, 2.5),
@@ -469,13 +488,7 @@ const SAND_SUBSTEPS: u32 = 20;
 fn sand_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
     let (y0, wall) = (floor(&def), floor(&def));
-    let sand = world.add_material(&MaterialDef {
-        model: MaterialModel::DruckerPrager,
-        youngs_modulus: budget_modulus(&def, 1600.0, 0.3, SAND_SUBSTEPS, 2.5),
-        density: 1600.0,
-        friction_angle: 30.0,
-        ..MaterialDef::DEFAULT
-    })?;
+    let sand = world.add_material(&sand(&def))?;
     Ok(world
         .fill_box(
             Vec3::new(wall, y0, 0.0),
@@ -518,14 +531,7 @@ const SNOWBALL_PACKED_SUBSTEPS: u32 = 125;
 /// 140 kPa and hardening 10, packs to twice the wave speed, 266 substeps a frame).
 fn snowball_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
-    let snow = world.add_material(&MaterialDef {
-        model: MaterialModel::Snow,
-        youngs_modulus: budget_modulus(&def, 400.0, 0.2, SNOWBALL_SUBSTEPS, 6.5),
-        poisson_ratio: 0.2,
-        density: 400.0,
-        hardening_coefficient: 5.0,
-        ..MaterialDef::DEFAULT
-    })?;
+    let snow = world.add_material(&snow(&def))?;
     Ok(world
         .fill_disk(
             Vec3::new(0.3, 0.6, 0.0),
@@ -564,16 +570,7 @@ const METAL_YIELD_STRAIN: Real = 0.02;
 fn metal_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
     let wall = def.origin.x + def.shape.margin_cells() as Real * def.cell_size;
-    let e = budget_modulus(&def, 2700.0, 0.3, METAL_SUBSTEPS, 2.5);
-    let metal = world.add_material(&MaterialDef {
-        model: MaterialModel::VonMises,
-        youngs_modulus: e,
-        poisson_ratio: 0.3,
-        density: 2700.0,
-        yield_stress: METAL_YIELD_STRAIN * e,
-        hardening_modulus: 0.1 * e,
-        ..MaterialDef::DEFAULT
-    })?;
+    let metal = world.add_material(&soft_metal(&def))?;
     let weight = world.add_material(&MaterialDef {
         model: MaterialModel::VonMises,
         youngs_modulus: 1.0e6,
@@ -603,18 +600,17 @@ fn paddle_def() -> WorldDef {
     def
 }
 
-/// Water 0.45 m deep (as the water scene's) and a paddle, a box 0.5 m by 0.06 m centred
-/// 0.4 m above the floor, turning at 4 rad/s about its centre: a kinematic collider that
-/// moves on its own (no call between frames), separating contact with some friction.
+/// Water 0.45 m deep (as the water scene's, in two layers of two materials) and a paddle, a
+/// box 0.5 m by 0.06 m centred 0.4 m above the floor, turning at 4 rad/s about its centre: a
+/// kinematic collider that moves on its own (no call between frames), separating contact
+/// with some friction.
 fn paddle_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
     let (y0, wall) = (floor(&def), floor(&def));
-    let water = world.add_material(&MaterialDef {
-        model: MaterialModel::Fluid,
-        bulk_modulus: modulus_for_substeps(&def, 1000.0, FRAME, WATER_SUBSTEPS, 2.5),
-        viscosity: 1.0,
-        ..MaterialDef::DEFAULT
-    })?;
+    let water = water(&def);
+    // The same water twice, the lower layer and the upper one, so that the picture shows
+    // them mix.
+    let (lower, upper) = (world.add_material(&water)?, world.add_material(&water)?);
     let centre = Vec3::new(0.5, y0 + 0.4, 0.0);
     world.add_collider(&ColliderDef {
         shape: ColliderShape::Box {
@@ -627,13 +623,18 @@ fn paddle_fill(world: &mut World) -> Result<usize, Error> {
         ..ColliderDef::DEFAULT
     })?;
     // The water around the paddle: the box cut where the paddle lies at rest.
+    let (below, above) = (centre.y - 0.035, centre.y + 0.035);
     let mut n = 0;
-    for (lo, hi) in [(y0, centre.y - 0.035), (centre.y + 0.035, y0 + 0.45)] {
+    for (lo, hi, m) in [
+        (y0, y0 + 0.2, lower),
+        (y0 + 0.2, below, upper),
+        (above, y0 + 0.45, upper),
+    ] {
         n += world
             .fill_box(
                 Vec3::new(wall, lo, 0.0),
                 Vec3::new(1.0 - wall, hi, 0.0),
-                water,
+                m,
                 Vec3::ZERO,
             )?
             .len();
@@ -641,9 +642,9 @@ fn paddle_fill(world: &mut World) -> Result<usize, Error> {
     for (lo, hi) in [(wall, centre.x - 0.26), (centre.x + 0.26, 1.0 - wall)] {
         n += world
             .fill_box(
-                Vec3::new(lo, centre.y - 0.035, 0.0),
-                Vec3::new(hi, centre.y + 0.035, 0.0),
-                water,
+                Vec3::new(lo, below, 0.0),
+                Vec3::new(hi, above, 0.0),
+                upper,
                 Vec3::ZERO,
             )?
             .len();
@@ -660,17 +661,13 @@ fn drum_def() -> WorldDef {
 
 /// A drum, the shell of a cylinder of radii 0.4 m and 0.45 m about the box's centre turned so
 /// that its axis is the plane's normal, turning at 1.5 rad/s (a kinematic collider, sticking
-/// with friction 0.6), and dry sand (as the sand scene's) filling its lower part: the sand is
-/// carried up the wall until its slope fails and it tumbles.
+/// with friction 0.6), and dry sand (as the sand scene's, its halves two materials) filling its
+/// lower part: the sand is carried up the wall until its slope fails and it tumbles.
 fn drum_fill(world: &mut World) -> Result<usize, Error> {
     let def = world.def();
-    let sand = world.add_material(&MaterialDef {
-        model: MaterialModel::DruckerPrager,
-        youngs_modulus: budget_modulus(&def, 1600.0, 0.3, SAND_SUBSTEPS, 2.5),
-        density: 1600.0,
-        friction_angle: 30.0,
-        ..MaterialDef::DEFAULT
-    })?;
+    let sand = sand(&def);
+    // The same sand twice, left and right, so that the picture shows it mix.
+    let (left, right) = (world.add_material(&sand)?, world.add_material(&sand)?);
     let centre = Vec3::new(0.5, 0.5, 0.0);
     let half = core::f64::consts::FRAC_1_SQRT_2 as Real;
     world.add_collider(&ColliderDef {
@@ -712,7 +709,139 @@ fn drum_fill(world: &mut World) -> Result<usize, Error> {
         velocity: [&zeros, &zeros, &zeros],
         mass: &mass,
         volume: &volume,
-        material: &vec![sand; n],
+        material: &x[0]
+            .iter()
+            .map(|&px| if px < centre.x { left } else { right })
+            .collect::<Vec<u32>>(),
     })?;
     Ok(n)
+}
+
+/// The snowball's box (a stick floor, plasticity declared) with a slip right wall and room for
+/// the plough.
+fn plough_def() -> WorldDef {
+    let mut def = snowball_def();
+    def.faces[Face::XMax as usize] = Boundary::Slip;
+    def.effects.collider_capacity = 1;
+    def
+}
+
+/// A layer of the snowball's snow, 0.12 m deep, and a plough: a blade (a box 0.04 m by
+/// 0.25 m, tilted back 20 degrees) moving right at 0.5 m/s (a kinematic collider, separating,
+/// friction 0.2). The snow packs and heaps up in front of it.
+fn plough_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let snow = snow(&def);
+    // Two layers of the same snow, so that the picture shows how the bank folds them.
+    let (lower, upper) = (world.add_material(&snow)?, world.add_material(&snow)?);
+    let tilt: Real = -0.35 / 2.0;
+    world.add_collider(&ColliderDef {
+        shape: ColliderShape::Box {
+            half_extents: Vec3::new(0.02, 0.125, 0.5),
+        },
+        position: Vec3::new(0.1, y0 + 0.13, 0.0),
+        rotation: [0.0, 0.0, tilt.sin(), tilt.cos()],
+        velocity: Vec3::new(0.5, 0.0, 0.0),
+        contact: Contact::Separate,
+        friction: 0.2,
+        ..ColliderDef::DEFAULT
+    })?;
+    let mut n = 0;
+    for (lo, hi, m) in [(y0, y0 + 0.06, lower), (y0 + 0.06, y0 + 0.12, upper)] {
+        n += world
+            .fill_box(
+                Vec3::new(0.2, lo, 0.0),
+                Vec3::new(1.0 - wall, hi, 0.0),
+                m,
+                Vec3::ZERO,
+            )?
+            .len();
+    }
+    Ok(n)
+}
+
+/// The metal scene's box (plasticity declared) with a stick floor and room for the punch.
+fn punch_def() -> WorldDef {
+    let mut def = metal_def();
+    def.faces[Face::XMin as usize] = Boundary::Slip;
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    def.effects.collider_capacity = 1;
+    def
+}
+
+/// A plate of the metal scene's soft metal, 0.15 m thick on the floor, and a punch: a capsule
+/// 0.1 m wide pressing down at 0.1 m/s (a kinematic collider, stick): the metal yields under
+/// it, flows aside and keeps the dent.
+fn punch_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let metal = world.add_material(&soft_metal(&def))?;
+    let top = y0 + 0.15;
+    world.add_collider(&ColliderDef {
+        shape: ColliderShape::Capsule {
+            half_length: 0.05,
+            radius: 0.05,
+        },
+        position: Vec3::new(0.5, top + 0.1, 0.0),
+        velocity: Vec3::new(0.0, -0.1, 0.0),
+        contact: Contact::Stick,
+        ..ColliderDef::DEFAULT
+    })?;
+    Ok(world
+        .fill_box(
+            Vec3::new(wall, y0, 0.0),
+            Vec3::new(1.0 - wall, top, 0.0),
+            metal,
+            Vec3::ZERO,
+        )?
+        .len())
+}
+
+/// The water of the water and paddle scenes: weakly compressible, the stiffest that
+/// [`WATER_SUBSTEPS`] substeps a frame carry at 2.5 m/s, with a little viscosity.
+fn water(def: &WorldDef) -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::Fluid,
+        bulk_modulus: modulus_for_substeps(def, 1000.0, FRAME, WATER_SUBSTEPS, 2.5),
+        viscosity: 1.0,
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// The dry sand of the sand and drum scenes (see [`sand_fill`]).
+fn sand(def: &WorldDef) -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::DruckerPrager,
+        youngs_modulus: budget_modulus(def, 1600.0, 0.3, SAND_SUBSTEPS, 2.5),
+        density: 1600.0,
+        friction_angle: 30.0,
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// The snow of the snowball and plough scenes (see [`snowball_fill`]).
+fn snow(def: &WorldDef) -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::Snow,
+        youngs_modulus: budget_modulus(def, 400.0, 0.2, SNOWBALL_SUBSTEPS, 6.5),
+        poisson_ratio: 0.2,
+        density: 400.0,
+        hardening_coefficient: 5.0,
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// The soft metal of the metal and punch scenes (see [`metal_fill`]).
+fn soft_metal(def: &WorldDef) -> MaterialDef {
+    let e = budget_modulus(def, 2700.0, 0.3, METAL_SUBSTEPS, 2.5);
+    MaterialDef {
+        model: MaterialModel::VonMises,
+        youngs_modulus: e,
+        poisson_ratio: 0.3,
+        density: 2700.0,
+        yield_stress: METAL_YIELD_STRAIN * e,
+        hardening_modulus: 0.1 * e,
+        ..MaterialDef::DEFAULT
+    }
 }

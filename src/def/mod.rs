@@ -535,6 +535,16 @@ pub struct WorldDef {
     /// Boundary condition of each face, indexed by [`Face`]. Default all [`Boundary::Slip`]:
     /// frictionless walls keep everything in the box and add no friction.
     pub faces: [Boundary; 6],
+    /// Coulomb friction coefficient of each slip face, indexed by [`Face`], >= 0: where the
+    /// material presses on the wall its speed along the wall (relative to the wall's
+    /// `wall_velocity`) falls by `friction` times the normal speed the wall takes away
+    /// (E94). Default 0: frictionless.
+    pub wall_friction: [Real; 6],
+    /// Velocity of each face's wall along its plane, m/s, indexed by [`Face`] (the component
+    /// along the face's normal is not used: the wall stays where it is): a stick face moves
+    /// the material on it at this velocity (a conveyor, a driven lid), a slip face's friction
+    /// acts relative to it (E94). Default zero.
+    pub wall_velocity: [Vec3; 6],
     /// Highest power of `grad v dt` kept in `dF = exp(grad v dt)` (E31), 1..=8.
     /// Default 2: second order, exact for the time integration's own order and cheap.
     pub exp_terms: u32,
@@ -582,6 +592,8 @@ impl WorldDef {
         update_order: UpdateOrder::Musl,
         gravity: Vec3::new(0.0, -9.81, 0.0),
         faces: [Boundary::Slip; 6],
+        wall_friction: [0.0; 6],
+        wall_velocity: [Vec3::ZERO; 6],
         exp_terms: 2,
         cfl: 0.5,
         max_substeps: 1000,

@@ -120,14 +120,24 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
     });
     let (g, impulses) = &mut nodes.with_impulses();
     collide(ctx, g, Some(&mut **impulses));
-    let inv_dt = 1.0 / ctx.dt;
-    ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
-        for a in 0..D {
-            if axes[a] {
-                g.acc[a][i] = -g.vel[a][i] * inv_dt;
+    let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
+    ctx.geom
+        .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
+            let v: [Real; D] = core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt);
+            match ctx.geom.wall_law(axis, side, v) {
+                Some(w) => {
+                    for a in 0..D {
+                        // A wall at rest gives `-v / dt`, the bits of the walls before they moved.
+                        g.acc[a][i] = if w[a] == 0.0 {
+                            -g.vel[a][i] * inv_dt
+                        } else {
+                            (w[a] - g.vel[a][i]) * inv_dt
+                        };
+                    }
+                }
+                None => g.acc[axis][i] = -g.vel[axis][i] * inv_dt,
             }
-        }
-    });
+        });
     // Past the wall planes the nodes take their images' values.
     mirror_vector(ctx, &mut g.acc, false);
 }
@@ -207,13 +217,18 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     collide(ctx, g, None);
-    ctx.geom.for_each_wall_node(&ctx.active, &mut |i, axes| {
-        for a in 0..D {
-            if axes[a] {
-                g.remap[a][i] = 0.0;
+    ctx.geom
+        .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
+            let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
+            match ctx.geom.wall_law(axis, side, v) {
+                Some(w) => {
+                    for a in 0..D {
+                        g.remap[a][i] = w[a];
+                    }
+                }
+                None => g.remap[axis][i] = 0.0,
             }
-        }
-    });
+        });
     mirror_vector(ctx, &mut g.remap, false);
 }
 

@@ -113,7 +113,8 @@ fn a_body_at_rest_on_a_collider_reports_its_weight() {
     );
 }
 
-/// A block on a floor with Coulomb friction `mu` and separating contact, loaded as on a slope
+/// A block on a floor with Coulomb friction `mu` (a collider with separating contact, or the
+/// box's floor as a slip face with `wall_friction`, E94), loaded as on a slope
 /// of angle `theta` in the slope's frame: gravity `g cos theta` into the floor, and, once the
 /// block has settled on it (grid damping until `T0`), a body force along it that ramps up to
 /// `g sin theta` over `TAU` (a sudden one sets the elastic block rocking, and its normal force
@@ -131,11 +132,13 @@ fn a_block_slides_down_a_slope_at_the_coulomb_rate_and_stays_below_it() {
     const T0: Real = 0.3;
     const TAU: Real = 0.05;
     let t_end = T0 + 0.25;
-    for (mu, contact) in [
-        (0.0, Contact::Separate),
-        (0.0, Contact::Slip),
-        (0.3, Contact::Separate),
-        (0.7, Contact::Separate),
+    for (mu, contact, on_face) in [
+        (0.0, Contact::Separate, false),
+        (0.0, Contact::Slip, false),
+        (0.3, Contact::Separate, false),
+        (0.7, Contact::Separate, false),
+        (0.3, Contact::Slip, true),
+        (0.7, Contact::Slip, true),
     ] {
         let mut def = def(Vec3::new(0.0, -G * c, 0.0), 0.0);
         let fx = &mut def.effects;
@@ -145,9 +148,29 @@ fn a_block_slides_down_a_slope_at_the_coulomb_rate_and_stays_below_it() {
         });
         fx.body_force = Vec3::new(G * s, 0.0, 0.0);
         fx.body_force_scale = Schedule::from_points(&[(T0, 0.0), (T0 + TAU, 1.0)]).expect("ramp");
+        if on_face {
+            // The box's floor: a slip face with friction, its wall plane at y = 0.25 (the
+            // grid moved down so that it is).
+            def.faces[Face::YMin as usize] = Boundary::Slip;
+            def.wall_friction[Face::YMin as usize] = mu;
+            def.origin.y = 0.25 - def.shape.margin_cells() as Real * def.cell_size;
+            def.effects.collider_capacity = 0;
+        }
         let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
         let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
-        block_on_floor(&mut world, floor(contact, mu));
+        if on_face {
+            let m = world.add_material(&BLOCK).expect("material");
+            world
+                .fill_box(
+                    Vec3::new(0.3, 0.25, 0.0),
+                    Vec3::new(0.7, 0.45, 0.0),
+                    m,
+                    Vec3::ZERO,
+                )
+                .expect("block");
+        } else {
+            block_on_floor(&mut world, floor(contact, mu));
+        }
         let dt = world.stable_dt();
         while world.time() < T0 as f64 {
             world.step(dt).expect("step");
@@ -166,7 +189,7 @@ fn a_block_slides_down_a_slope_at_the_coulomb_rate_and_stays_below_it() {
                 G * s * (t - 0.5 * TAU) - G * mu * c * (t - t_s) - G * s * t_s * t_s / (2.0 * TAU);
             assert!(
                 (v - exact).abs() < 0.03 * exact,
-                "mu {mu} {contact:?}: {v} m/s against {exact}"
+                "mu {mu} {contact:?} (on the face: {on_face}): {v} m/s against {exact}"
             );
         } else {
             let moved = mean_x(&world) - x0;
@@ -449,4 +472,38 @@ fn a_piston_does_the_work_the_column_stores() {
         mean < -0.8 * travel,
         "the column compressed by {mean}, the piston {travel}"
     );
+}
+
+/// A moving wall (E94): a block resting on a stick floor that moves at 0.5 m/s along x (a
+/// conveyor) is carried at the floor's speed: its mean velocity, averaged over the last 0.1 s
+/// of 0.4 s (its elastic shear rings about it), within 3 % of 0.5 m/s.
+#[test]
+fn a_moving_stick_floor_carries_a_block_at_its_speed() {
+    let mut def = def(Vec3::new(0.0, -G, 0.0), 0.0);
+    def.effects.collider_capacity = 0;
+    def.faces[Face::YMin as usize] = Boundary::Stick;
+    def.wall_velocity[Face::YMin as usize] = Vec3::new(0.5, 0.0, 0.0);
+    def.origin.y = 0.25 - def.shape.margin_cells() as Real * def.cell_size;
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    let m = world.add_material(&BLOCK).expect("material");
+    world
+        .fill_box(
+            Vec3::new(0.2, 0.25, 0.0),
+            Vec3::new(0.4, 0.35, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .expect("block");
+    let dt = world.stable_dt();
+    let (mut sum, mut time) = (0.0f64, 0.0f64);
+    while world.time() < 0.4 {
+        world.step(dt).expect("step");
+        if world.time() > 0.3 {
+            sum += mean_vx(&world) as f64 * dt as f64;
+            time += dt as f64;
+        }
+    }
+    let v = sum / time;
+    assert!((v - 0.5).abs() < 0.03 * 0.5, "the block moves at {v} m/s");
 }

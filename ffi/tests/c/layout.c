@@ -160,6 +160,8 @@ int main(void) {
     FIELD(MpmWorldDef, update_order);
     FIELD(MpmWorldDef, gravity);
     FIELD(MpmWorldDef, faces);
+    FIELD(MpmWorldDef, wall_friction);
+    FIELD(MpmWorldDef, wall_velocity);
     FIELD(MpmWorldDef, exp_terms);
     FIELD(MpmWorldDef, cfl);
     FIELD(MpmWorldDef, max_substeps);
