@@ -23,10 +23,11 @@ import sys
 # in CI's test build (its clean build alone took about 60 s). The library's ceiling rose to
 # 13.2 MB with the parallel step (13.03 MB: its tiles, slabs and scans per form), and to
 # 13.4 MB with heat and diffusion in parallel (13.10 to 13.28 MB: their loops one call each
-# that a tile or a range makes, and the tiles' clip), and to 13.6 MB with colliders (13.48 MB:
-# 0.13 MB of it the library's metadata for their API, 0.04 MB code, one copy per dimension).
+# that a tile or a range makes, and the tiles' clip), and to 13.8 MB with colliders (13.48 MB:
+# 0.13 MB of it the library's metadata for their API, 0.04 MB code, one copy per dimension;
+# 13.60 MB with walls that move and distance fields).
 FUNCTIONS = {"avx2": 146, "avx512": 146, "baseline": 119}
-LIBRARY_BYTES = 13_600_000
+LIBRARY_BYTES = 13_800_000
 KERNEL_BUILD_SECONDS = 240.0
 
 failed = []

@@ -22,7 +22,7 @@
 //! instance the CPU has, AVX-512 or AVX2; `avx2` caps it at AVX2; `baseline` forces the SSE2
 //! instance, e.g. under valgrind, which cannot decode every AVX instruction). The JSON line
 //! says which instance ran (`"simd"`).
-//! `--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|body_force|apic|mls|heat|diffusion|thermal_expansion|axisymmetric|colliders`
+//! `--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|body_force|apic|mls|heat|diffusion|thermal_expansion|axisymmetric|colliders|sdf_colliders`
 //! declares one effect (see `benches/common/scene.rs`; default none) to price it; the JSON line
 //! names it and gives the world's bytes per particle (`benches/effect_cost.sh` tabulates every
 //! effect's marginal cost). `thermal_expansion` declares heat conduction too (its cost includes
@@ -60,7 +60,7 @@ const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
 [--particle-order fill|rows|shuffled] [--threads N (1..=256)] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
-body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)|colliders]";
+body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)|colliders|sdf_colliders]";
 
 #[path = "../benches/common/scene.rs"]
 mod scene;

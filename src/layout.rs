@@ -5,7 +5,7 @@
 //! 2. the material table, `material_capacity` [`MaterialRecord`]s;
 //! 3. the traction table, `traction_capacity` [`TractionRecord`]s (none unless declared);
 //!    the collider table, `collider_capacity` [`ColliderRecord`]s, then as many
-//!    [`ColliderImpulse`]s (none unless declared);
+//!    [`ColliderImpulse`]s, then `sdf_capacity` distance samples (none unless declared);
 //! 4. the particle columns, one per scalar component, each `capacity` rounded up to
 //!    [`CHUNK`] entries and starting on a [`ALIGN`]-byte boundary, columns of 4 KiB or more
 //!    a page multiple plus 5 cache lines apart (`column_stride`: no 4K aliasing);
@@ -32,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 13;
+const VERSION: u64 = 14;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,6 +112,9 @@ pub(crate) struct Header {
     /// `WorldDef::wall_friction`, `WorldDef::wall_velocity`.
     pub wall_friction: [f64; 6],
     pub wall_velocity: [[f64; 3]; 6],
+    /// `Effects::sdf_capacity`, and the distance samples added.
+    pub sdf_capacity: u64,
+    pub sdf_count: u64,
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -265,6 +268,7 @@ const _: () = assert!(
             + 2 * 14
             + 4
             + 6 * 4
+            + 2
             + 8 * DAMPING_ZONES)
 );
 
@@ -371,12 +375,15 @@ pub(crate) struct ColliderRecord {
     pub velocity: [f64; 3],
     pub angular_velocity: [f64; 3],
     pub pose_time: f64,
+    /// A distance field's first sample and its samples along x, y, z (zeros otherwise).
+    pub grid: [u64; 4],
 }
 
 impl ColliderRecord {
-    /// Whether the record is one [`crate::World::add_collider`] could have written: known
-    /// shape and contact, finite values, positive lengths, a unit rotation.
-    pub fn is_valid(&self) -> bool {
+    /// Whether the record is one [`crate::World::add_collider`] could have written in a world
+    /// of `samples` distance samples: known shape and contact, finite values, positive
+    /// lengths, a unit rotation, a distance field within the samples.
+    pub fn is_valid(&self, samples: u64) -> bool {
         let finite = [self.friction, self.pose_time]
             .iter()
             .chain(&self.size)
@@ -392,6 +399,16 @@ impl ColliderRecord {
             2 => a > 0.0 && b > 0.0 && c > 0.0,
             3 => a >= 0.0 && b > 0.0,
             4 => a > 0.0 && c >= 0.0 && c < b,
+            5 => {
+                let [first, nx, ny, nz] = self.grid;
+                let n = nx.checked_mul(ny).and_then(|n| n.checked_mul(nz));
+                a > 0.0
+                    && nx >= 2
+                    && ny >= 2
+                    && nz >= 1
+                    && n.and_then(|n| n.checked_add(first))
+                        .is_some_and(|end| end <= samples)
+            }
             _ => false,
         };
         let q2: f64 = self.rotation.iter().map(|c| c * c).sum();
@@ -450,10 +467,11 @@ pub(crate) struct Layout {
     pub materials_offset: usize,
     pub tractions_offset: usize,
     pub traction_capacity: usize,
-    /// The collider table and, after it, the colliders' impulses (the end of the head: the
-    /// step writes them).
+    /// The collider table and, after it, the colliders' impulses (the step writes them), then
+    /// the distance samples (the end of the head).
     pub colliders_offset: usize,
     pub impulses_offset: usize,
+    pub sdf_offset: usize,
     pub particle_offset: usize,
     pub real_column_bytes: usize,
     pub u32_column_bytes: usize,
@@ -588,8 +606,9 @@ impl Layout {
         );
         let collider_capacity = def.effects.collider_capacity as usize;
         let impulses_offset = colliders_offset + collider_capacity * size_of::<ColliderRecord>();
+        let sdf_offset = impulses_offset + collider_capacity * size_of::<ColliderImpulse>();
         let particle_offset = round_up(
-            impulses_offset + collider_capacity * size_of::<ColliderImpulse>(),
+            sdf_offset + def.effects.sdf_capacity as usize * size_of::<Real>(),
             ALIGN,
         );
         let grid_offset =
@@ -619,6 +638,7 @@ impl Layout {
             traction_capacity,
             colliders_offset,
             impulses_offset,
+            sdf_offset,
             particle_offset,
             real_column_bytes,
             u32_column_bytes,
@@ -849,6 +869,8 @@ impl Header {
             collider_count: 0,
             wall_friction: def.wall_friction.map(|f| f as f64),
             wall_velocity: def.wall_velocity.map(w),
+            sdf_capacity: fx.sdf_capacity as u64,
+            sdf_count: 0,
         }
     }
 
@@ -931,6 +953,7 @@ impl Header {
             diffusion: self.diffusion.transport()?,
             plasticity: flag(self.plasticity)?,
             collider_capacity: small(self.collider_capacity)?,
+            sdf_capacity: small(self.sdf_capacity)?,
         };
         Ok(WorldDef {
             dimension,

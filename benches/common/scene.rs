@@ -54,11 +54,14 @@ pub enum Effect {
     /// it (their nodes follow them; the block's particles there stay): what each collider
     /// costs per node of the node box, which every collider visits.
     Colliders,
+    /// The same four spheres as distance fields sampled every half cell: what a distance
+    /// field costs against the analytic solid.
+    SdfColliders,
 }
 
 impl Effect {
     /// Every effect, with the name the cost example takes.
-    pub const ALL: [(Effect, &'static str); 16] = [
+    pub const ALL: [(Effect, &'static str); 17] = [
         (Effect::None, "none"),
         (Effect::Damping, "damping"),
         (Effect::Feedback, "feedback"),
@@ -75,6 +78,7 @@ impl Effect {
         (Effect::ThermalExpansion, "thermal_expansion"),
         (Effect::Axisymmetric, "axisymmetric"),
         (Effect::Colliders, "colliders"),
+        (Effect::SdfColliders, "sdf_colliders"),
     ];
 
     /// The effect's name.
@@ -161,6 +165,10 @@ impl Effect {
             Effect::Heat | Effect::ThermalExpansion => fx.heat = Some(Transport::INSULATED),
             Effect::Diffusion => fx.diffusion = Some(Transport::INSULATED),
             Effect::Colliders => fx.collider_capacity = 4,
+            Effect::SdfColliders => {
+                fx.collider_capacity = 4;
+                fx.sdf_capacity = 1 << 23;
+            }
             Effect::Axisymmetric => {
                 if def.dimension == Dimension::ThreeD {
                     return Err(format!(
@@ -218,7 +226,7 @@ impl Effect {
                 }
                 Ok(())
             }
-            Effect::Colliders => {
+            Effect::Colliders | Effect::SdfColliders => {
                 // Four spheres along the block's middle, at its particles' mean height.
                 let p = world.particles();
                 let lo = p
@@ -230,11 +238,34 @@ impl Effect {
                 let d = world.def().axes();
                 let mid = |a: usize| if a < d { 0.5 * (lo[a] + hi[a]) } else { 0.0 };
                 let radius = 0.1 * (hi[1] - lo[1]);
+                // The sampled sphere: every half cell over its box and a cell more.
+                let spacing = 0.5 * CELL;
+                let m = 2 * ((radius + CELL) / spacing).ceil() as usize + 1;
+                let dims = [m, m, if d == 3 { m } else { 1 }];
+                let shape = if self == Effect::SdfColliders {
+                    let half = 0.5 * (m - 1) as Real * spacing;
+                    let at = |i: usize| i as Real * spacing - half;
+                    let samples: Vec<Real> = (0..dims[0] * dims[1] * dims[2])
+                        .map(|k| {
+                            let (i, j, l) = (k % m, (k / m) % m, k / (m * m));
+                            let z = if d == 3 { at(l) } else { 0.0 };
+                            (at(i).powi(2) + at(j).powi(2) + z * z).sqrt() - radius
+                        })
+                        .collect();
+                    let first = world.add_distance_field(&samples).map_err(err)?;
+                    mpm_gimp::ColliderShape::Sdf {
+                        first,
+                        dims: dims.map(|n| n as u32),
+                        spacing,
+                    }
+                } else {
+                    mpm_gimp::ColliderShape::Sphere { radius }
+                };
                 for k in 0..4 {
                     let x = lo[0] + (k as Real + 0.5) * 0.25 * (hi[0] - lo[0]);
                     world
                         .add_collider(&mpm_gimp::ColliderDef {
-                            shape: mpm_gimp::ColliderShape::Sphere { radius },
+                            shape,
                             position: Vec3::new(x, mid(1), mid(2)),
                             contact: mpm_gimp::Contact::Stick,
                             ..mpm_gimp::ColliderDef::DEFAULT

@@ -466,6 +466,9 @@ enum MpmColliderShape
   // A cylinder of `radius` along the frame's y axis, `2 half_length` long, hollow inside
   // `inner_radius`.
   MPM_COLLIDER_SHAPE_CYLINDER = 4,
+  // A signed distance field (`mpm_world_add_distance_field`): `sdf_dims` samples
+  // `sdf_spacing` apart from sample `sdf_first`, centred on the frame's origin.
+  MPM_COLLIDER_SHAPE_SDF = 5,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmColliderShape;
@@ -633,6 +636,9 @@ typedef struct MpmEffects {
   uint32_t plasticity;
   // Most colliders the world holds (`mpm_world_add_collider`), at most 4096; default 0.
   uint32_t collider_capacity;
+  // Most distance-field samples the world holds (`mpm_world_add_distance_field`), at most
+  // 2^26; default 0.
+  uint32_t sdf_capacity;
 } MpmEffects;
 
 // Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -914,6 +920,13 @@ typedef struct MpmColliderDef {
   // Cylinder: the radius of its hole (a tube, a drum's shell), m, in `[0, radius)`.
   // Default 0 (solid).
   mpm_real inner_radius;
+  // Distance field: its first sample (from `mpm_world_add_distance_field`). Default 0.
+  uint32_t sdf_first;
+  // Distance field: its samples along x, y, z (x fastest; at least 2, 2, 1; z 1 in 2D).
+  // Default (2, 2, 1).
+  uint32_t sdf_dims[3];
+  // Distance field: the distance between samples, m, > 0. Default 1.
+  mpm_real sdf_spacing;
   // The frame's origin, m: the solid's centre, about which it turns and its torque is
   // reported. Default (0, 0, 0).
   struct MpmVec3 position;
@@ -1412,6 +1425,20 @@ struct MpmColliderDef mpm_collider_def_default_f64(void);
 MpmStatus mpm_world_add_collider(struct MpmWorld *world,
                                  const struct MpmColliderDef *def,
                                  uint32_t *id_out);
+
+// Adds `count` samples of a signed distance field (m, negative inside) to the world's and
+// returns the index of the first in `first_out`: what an `MPM_COLLIDER_SHAPE_SDF` collider
+// names. Needs `MpmEffects::sdf_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a sample not
+// finite is `MPM_STATUS_NON_FINITE_INPUT`, samples past the capacity
+// `MPM_STATUS_INVALID_CAPACITY` (checked before any is read).
+//
+// # Safety
+// `world` is NULL or a world; `samples` is NULL or valid for reads of `count` values;
+// `first_out` is NULL or valid.
+MpmStatus mpm_world_add_distance_field(struct MpmWorld *world,
+                                       const mpm_real *samples,
+                                       size_t count,
+                                       uint32_t *first_out);
 
 // Replaces collider `id`'s definition: a host moves a collider by setting its pose and
 // velocities between steps. Checked as `mpm_world_add_collider`;

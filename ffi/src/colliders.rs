@@ -26,6 +26,9 @@ pub enum MpmColliderShape {
     /// A cylinder of `radius` along the frame's y axis, `2 half_length` long, hollow inside
     /// `inner_radius`.
     Cylinder = 4,
+    /// A signed distance field (`mpm_world_add_distance_field`): `sdf_dims` samples
+    /// `sdf_spacing` apart from sample `sdf_first`, centred on the frame's origin.
+    Sdf = 5,
 }
 
 /// How the material meets a collider (`mpm_gimp::Contact`).
@@ -63,6 +66,13 @@ pub struct MpmColliderDef {
     /// Cylinder: the radius of its hole (a tube, a drum's shell), m, in `[0, radius)`.
     /// Default 0 (solid).
     pub inner_radius: mpm_real,
+    /// Distance field: its first sample (from `mpm_world_add_distance_field`). Default 0.
+    pub sdf_first: u32,
+    /// Distance field: its samples along x, y, z (x fastest; at least 2, 2, 1; z 1 in 2D).
+    /// Default (2, 2, 1).
+    pub sdf_dims: [u32; 3],
+    /// Distance field: the distance between samples, m, > 0. Default 1.
+    pub sdf_spacing: mpm_real,
     /// The frame's origin, m: the solid's centre, about which it turns and its torque is
     /// reported. Default (0, 0, 0).
     pub position: MpmVec3,
@@ -106,7 +116,16 @@ const COLLIDER_COOKIE: u32 =
 
 /// The C form of a Rust collider (with the cookie).
 fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
+    let (mut sdf_first, mut sdf_dims, mut sdf_spacing) = (0, [2, 2, 1], 1.0);
     let (shape, radius, half_length, half_extents, inner_radius) = match d.shape {
+        ColliderShape::Sdf {
+            first,
+            dims,
+            spacing,
+        } => {
+            (sdf_first, sdf_dims, sdf_spacing) = (first, dims, spacing);
+            (MpmColliderShape::Sdf, 0.5, 0.5, None, 0.0)
+        }
         ColliderShape::HalfSpace => (MpmColliderShape::HalfSpace, 0.5, 0.5, None, 0.0),
         ColliderShape::Sphere { radius } => (MpmColliderShape::Sphere, radius, 0.5, None, 0.0),
         ColliderShape::Box { half_extents } => {
@@ -135,6 +154,9 @@ fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
         half_length,
         half_extents: c_vec3(half_extents.unwrap_or(kernel::Vec3::splat(0.5))),
         inner_radius,
+        sdf_first,
+        sdf_dims,
+        sdf_spacing,
         position: c_vec3(d.position),
         rotation: d.rotation,
         velocity: c_vec3(d.velocity),
@@ -164,6 +186,11 @@ fn collider_def_from_c(d: &MpmColliderDef) -> Result<ColliderDef, MpmStatus> {
             half_length: d.half_length,
             radius: d.radius,
             inner_radius: d.inner_radius,
+        },
+        5 => ColliderShape::Sdf {
+            first: d.sdf_first,
+            dims: d.sdf_dims,
+            spacing: d.sdf_spacing,
         },
         _ => return Err(MpmStatus::InvalidEnum),
     };
@@ -225,6 +252,46 @@ pub unsafe extern "C" fn mpm_world_add_collider(
         let id = w.add_collider(&c)?;
         // SAFETY: checked non-NULL.
         unsafe { put(id_out, id) };
+        Ok(())
+    })
+}
+
+/// Adds `count` samples of a signed distance field (m, negative inside) to the world's and
+/// returns the index of the first in `first_out`: what an `MPM_COLLIDER_SHAPE_SDF` collider
+/// names. Needs `MpmEffects::sdf_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a sample not
+/// finite is `MPM_STATUS_NON_FINITE_INPUT`, samples past the capacity
+/// `MPM_STATUS_INVALID_CAPACITY` (checked before any is read).
+///
+/// # Safety
+/// `world` is NULL or a world; `samples` is NULL or valid for reads of `count` values;
+/// `first_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_distance_field(
+    world: *mut MpmWorld,
+    samples: *const mpm_real,
+    count: usize,
+    first_out: *mut u32,
+) -> MpmStatus {
+    guard(|| {
+        non_null(samples)?;
+        non_null(first_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let def = w.def();
+        if def.effects.sdf_capacity == 0 {
+            return Err(MpmStatus::EffectNotDeclared);
+        }
+        if count > def.effects.sdf_capacity as usize {
+            return Err(MpmStatus::InvalidCapacity);
+        }
+        apart(w.as_bytes(), samples, count)?;
+        apart(w.as_bytes(), first_out, 1)?;
+        // SAFETY: non-NULL, valid for `count` reads (the caller), `count` bounded by the
+        // capacity, and apart from the world.
+        let values = unsafe { core::slice::from_raw_parts(samples, count) };
+        let first = w.add_distance_field(values)?;
+        // SAFETY: checked non-NULL.
+        unsafe { put(first_out, first) };
         Ok(())
     })
 }

@@ -368,6 +368,9 @@ pub struct MpmEffects {
     pub plasticity: u32,
     /// Most colliders the world holds (`mpm_world_add_collider`), at most 4096; default 0.
     pub collider_capacity: u32,
+    /// Most distance-field samples the world holds (`mpm_world_add_distance_field`), at most
+    /// 2^26; default 0.
+    pub sdf_capacity: u32,
 }
 
 /// Everything that fixes a world's size and method: the C form of `mpm_gimp::WorldDef`, whose
@@ -629,6 +632,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         diffusion: transport_to_c(&e.diffusion),
         plasticity: e.plasticity as u32,
         collider_capacity: e.collider_capacity,
+        sdf_capacity: e.sdf_capacity,
     }
 }
 
@@ -729,6 +733,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         particle_forces: flag(e.particle_forces)?,
         traction_capacity: e.traction_capacity,
         collider_capacity: e.collider_capacity,
+        sdf_capacity: e.sdf_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
         traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),

@@ -161,6 +161,7 @@ fn rust_layout() -> String {
         diffusion,
         plasticity,
         collider_capacity,
+        sdf_capacity,
     }));
     lines.extend(struct_lines!(MpmWorldDef {
         dimension,
@@ -277,6 +278,9 @@ fn rust_layout() -> String {
         half_length,
         half_extents,
         inner_radius,
+        sdf_first,
+        sdf_dims,
+        sdf_spacing,
         position,
         rotation,
         velocity,
@@ -891,6 +895,7 @@ fn effects2d(t: &mut Text) {
             }),
             plasticity: false,
             collider_capacity: 0,
+            sdf_capacity: 0,
         },
         ..WorldDef::DEFAULT
     };
@@ -1629,6 +1634,7 @@ fn effects_definition_round_trip() {
         },
         plasticity: 1,
         collider_capacity: 3,
+        sdf_capacity: 7,
     };
     let heat = Transport {
         faces: [
@@ -1694,6 +1700,7 @@ fn effects_definition_round_trip() {
             diffusion: Some(diffusion),
             plasticity: true,
             collider_capacity: 3,
+            sdf_capacity: 7,
         },
         ..WorldDef::DEFAULT
     };

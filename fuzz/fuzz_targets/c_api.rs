@@ -383,6 +383,11 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
         1..=4 => 0,
         b => (b % 4) as u32,
     };
+    e.sdf_capacity = match inp.byte() % 8 {
+        0 => inp.u32_below(u32::MAX),
+        1..=3 => 0,
+        _ => inp.u32_below(600),
+    };
     e
 }
 
@@ -732,12 +737,15 @@ fuzz_target!(|data: &[u8]| {
                     // poses and velocities in and out of range, a def not from the default
                     // now and then; set one, or read one back (a read changes nothing).
                     let mut c = mpm_collider_def_default_f32();
-                    c.shape = inp.u32_below(6);
+                    c.shape = inp.u32_below(7);
                     c.contact = inp.u32_below(4);
                     c.radius = inp.real_in(-0.1, 0.5);
                     c.half_length = inp.real_in(-0.1, 0.5);
                     c.half_extents = inp.vec3_in(-0.1, 0.5);
                     c.inner_radius = inp.real_in(-0.1, 0.5);
+                    c.sdf_first = inp.u32_below(600);
+                    c.sdf_dims = [inp.u32_below(12), inp.u32_below(12), inp.u32_below(3)];
+                    c.sdf_spacing = inp.real_in(-0.01, 0.1);
                     c.position = inp.vec3_in(-0.5, 1.5);
                     c.rotation = core::array::from_fn(|_| inp.real_in(-1.0, 1.0));
                     c.velocity = inp.vec3_in(-5.0, 5.0);
@@ -749,10 +757,22 @@ fuzz_target!(|data: &[u8]| {
                     if inp.byte() % 32 == 0 {
                         c.velocity.x = mpm_real::NAN;
                     }
-                    match inp.byte() % 3 {
+                    match inp.byte() % 4 {
                         0 => {
                             let mut id = 0;
                             mpm_world_add_collider(world, &c, &mut id)
+                        }
+                        3 => {
+                            // Distance samples: some out of range or not finite.
+                            let n = inp.u32_below(700) as usize;
+                            let samples: Vec<mpm_real> = (0..n)
+                                .map(|_| match inp.byte() % 64 {
+                                    0 => mpm_real::NAN,
+                                    _ => inp.real_in(-0.5, 0.5),
+                                })
+                                .collect();
+                            let mut first = 0;
+                            mpm_world_add_distance_field(world, samples.as_ptr(), n, &mut first)
                         }
                         1 => mpm_world_set_collider(world, inp.u32_below(6), &c),
                         _ => {

@@ -89,17 +89,15 @@ fn draw_colliders(world: &World, scale: f64, height: u32, rgb: &mut [u8]) {
     let w = rgb.len() / 3 / height.max(1) as usize;
     let z = def.origin.z as f64 + 0.5 * def.cells[2] as f64 * def.cell_size as f64;
     let solid = [120u8, 110, 100];
-    let colliders: Vec<_> = (0..n as u32)
-        .filter_map(|id| world.collider(id).ok())
-        .collect();
+    let ids = 0..n as u32;
     for y in 0..height as usize {
         let wy = def.origin.y as f64 + (height as f64 - y as f64 - 0.5) / scale;
         for x in 0..w {
             let wx = def.origin.x as f64 + (x as f64 + 0.5) / scale;
             let p = Vec3::new(wx as Real, wy as Real, z as Real);
-            if colliders
-                .iter()
-                .any(|c| c.def.distance(p).is_some_and(|d| d <= 0.0))
+            if ids
+                .clone()
+                .any(|id| world.collider_distance(id, p).is_ok_and(|d| d <= 0.0))
             {
                 let at = 3 * (y * w + x);
                 rgb[at..at + 3].copy_from_slice(&solid);

@@ -146,6 +146,9 @@ pub struct Effects {
     /// in the scene that the material contacts at the grid and pushes back
     /// ([`crate::World::add_collider`], E90-E93).
     pub collider_capacity: u32,
+    /// Most samples of signed distance fields the world holds
+    /// ([`crate::World::add_distance_field`], for [`ColliderShape::Sdf`] colliders); 0: none.
+    pub sdf_capacity: u32,
 }
 
 /// How many schedules the tractions may follow ([`Effects::traction_schedules`]).
@@ -164,6 +167,7 @@ impl Effects {
         diffusion: None,
         plasticity: false,
         collider_capacity: 0,
+        sdf_capacity: 0,
     };
 
     /// Checks every parameter ([`Error::InvalidEffect`] names them all).
@@ -175,7 +179,9 @@ impl Effects {
         let ok_transport = [self.heat, self.diffusion]
             .iter()
             .all(|t| t.is_none_or(|t| t.is_valid(axes)));
-        let ok_capacity = self.traction_capacity <= 1 << 24 && self.collider_capacity <= 1 << 12;
+        let ok_capacity = self.traction_capacity <= 1 << 24
+            && self.collider_capacity <= 1 << 12
+            && self.sdf_capacity <= 1 << 26;
         if ok_damping && ok_body && ok_transport && ok_capacity {
             Ok(())
         } else {
@@ -461,6 +467,19 @@ pub enum ColliderShape {
         /// m.
         radius: Real,
     },
+    /// Any solid: the signed distance field (negative inside, m) sampled on a grid of
+    /// `dims` points `spacing` apart, centred on the frame's origin, its samples x fastest
+    /// from `first` in the world's distance samples ([`crate::World::add_distance_field`]).
+    /// Between samples it is interpolated linearly (bilinearly in 2D, where `dims[2]` is 1);
+    /// outside the grid's box, the distance to the box is added to the nearest point's.
+    Sdf {
+        /// The field's first sample (what `add_distance_field` returned).
+        first: u32,
+        /// Samples along x, y, z: at least 2 along x and y, 1 or more along z (1 in 2D).
+        dims: [u32; 3],
+        /// Distance between samples, m, > 0.
+        spacing: Real,
+    },
     /// A cylinder along the frame's y axis (a rectangle in 2D), hollow inside `inner_radius`
     /// (0: solid): a tube, a drum's shell; axisymmetric, on the axis, a disk or a ring. m;
     /// `half_length > 0`, `0 <= inner_radius < radius`.
@@ -537,6 +556,9 @@ impl ColliderDef {
                 radius,
             } => {
                 half_length >= 0.0 && half_length.is_finite() && radius > 0.0 && radius.is_finite()
+            }
+            ColliderShape::Sdf { dims, spacing, .. } => {
+                spacing > 0.0 && spacing.is_finite() && dims[0] >= 2 && dims[1] >= 2 && dims[2] >= 1
             }
             ColliderShape::Cylinder {
                 half_length,

@@ -41,19 +41,21 @@ fn norm(a: V3) -> Real {
 
 /// The solid's lengths, m.
 #[derive(Clone, Copy, Debug)]
-enum Solid {
+enum Solid<'s> {
     HalfSpace,
     Sphere(Real),
     Box(V3),
     Capsule(Real, Real),
     /// Half-length, radius, inner radius.
     Cylinder(Real, Real, Real),
+    /// A distance field: its samples (x fastest), points per axis, spacing.
+    Sdf(&'s [Real], [usize; 3], Real),
 }
 
 /// One collider at one instant, in the world frame.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Collider {
-    solid: Solid,
+pub(crate) struct Collider<'s> {
+    solid: Solid<'s>,
     contact: Contact,
     friction: Real,
     /// The frame's origin, m.
@@ -64,28 +66,52 @@ pub(crate) struct Collider {
     omega: V3,
 }
 
-/// The shape number of `s` in a [`ColliderRecord`], and its lengths.
-pub(crate) fn shape_record(s: &ColliderShape) -> (u64, [f64; 3]) {
+/// The shape number of `s` in a [`ColliderRecord`], its lengths, and a distance field's
+/// first sample and points per axis.
+pub(crate) fn shape_record(s: &ColliderShape) -> (u64, [f64; 3], [u64; 4]) {
+    let none = [0; 4];
     match *s {
-        ColliderShape::HalfSpace => (0, [0.0; 3]),
-        ColliderShape::Sphere { radius } => (1, [radius as f64, 0.0, 0.0]),
-        ColliderShape::Box { half_extents: e } => (2, [e.x as f64, e.y as f64, e.z as f64]),
+        ColliderShape::HalfSpace => (0, [0.0; 3], none),
+        ColliderShape::Sphere { radius } => (1, [radius as f64, 0.0, 0.0], none),
+        ColliderShape::Box { half_extents: e } => (2, [e.x as f64, e.y as f64, e.z as f64], none),
         ColliderShape::Capsule {
             half_length,
             radius,
-        } => (3, [half_length as f64, radius as f64, 0.0]),
+        } => (3, [half_length as f64, radius as f64, 0.0], none),
         ColliderShape::Cylinder {
             half_length,
             radius,
             inner_radius,
-        } => (4, [half_length as f64, radius as f64, inner_radius as f64]),
+        } => (
+            4,
+            [half_length as f64, radius as f64, inner_radius as f64],
+            none,
+        ),
+        ColliderShape::Sdf {
+            first,
+            dims,
+            spacing,
+        } => (
+            5,
+            [spacing as f64, 0.0, 0.0],
+            [first as u64, dims[0] as u64, dims[1] as u64, dims[2] as u64],
+        ),
     }
 }
 
-/// The shape of a record's number and lengths (`None`: a number no build writes).
-pub(crate) fn shape_of(code: u64, size: [f64; 3]) -> Option<ColliderShape> {
+/// The shape of a record's number, lengths and grid (`None`: a number no build writes).
+pub(crate) fn shape_of(code: u64, size: [f64; 3], grid: [u64; 4]) -> Option<ColliderShape> {
     let r = |k: usize| size[k] as Real;
     Some(match code {
+        5 => ColliderShape::Sdf {
+            first: u32::try_from(grid[0]).ok()?,
+            dims: [
+                u32::try_from(grid[1]).ok()?,
+                u32::try_from(grid[2]).ok()?,
+                u32::try_from(grid[3]).ok()?,
+            ],
+            spacing: r(0),
+        },
         0 => ColliderShape::HalfSpace,
         1 => ColliderShape::Sphere { radius: r(0) },
         2 => ColliderShape::Box {
@@ -124,9 +150,10 @@ pub(crate) fn pose_at(r: &ColliderRecord, t: f64) -> (DVec3, DQuat) {
     (position, rotation)
 }
 
-impl Collider {
-    /// The collider of record `r` at world time `t` (`None` for a record no build writes).
-    pub fn at(r: &ColliderRecord, t: f64) -> Option<Collider> {
+impl<'s> Collider<'s> {
+    /// The collider of record `r` at world time `t`, a distance field's samples in `samples`
+    /// (the world's); `None` for a record no build writes or a field past the samples.
+    pub fn at(r: &ColliderRecord, t: f64, samples: &'s [Real]) -> Option<Collider<'s>> {
         let (position, rotation) = pose_at(r, t);
         let lengths = r.size.map(|l| l as Real);
         let solid = match r.shape {
@@ -135,6 +162,15 @@ impl Collider {
             2 => Solid::Box(lengths),
             3 => Solid::Capsule(lengths[0], lengths[1]),
             4 => Solid::Cylinder(lengths[0], lengths[1], lengths[2]),
+            5 => {
+                let [first, nx, ny, nz] = r.grid.map(|g| g as usize);
+                if nx < 2 || ny < 2 || nz < 1 {
+                    return None;
+                }
+                let n = nx.checked_mul(ny)?.checked_mul(nz)?;
+                let field = samples.get(first..first.checked_add(n)?)?;
+                Solid::Sdf(field, [nx, ny, nz], lengths[0])
+            }
             _ => return None,
         };
         let axis = |a: DVec3| (rotation * a).to_array().map(|c| c as Real);
@@ -152,9 +188,15 @@ impl Collider {
     /// The signed distance from the solid's surface at `x` (negative inside), m, and the
     /// surface's outward unit normal there (E91).
     pub fn distance(&self, x: V3) -> (Real, V3) {
+        self.distance_and(x, true)
+    }
+
+    /// [`Collider::distance`], the normal only `with_normal` (a distance field's takes four or
+    /// six more samplings: a node outside needs none).
+    fn distance_and(&self, x: V3, with_normal: bool) -> (Real, V3) {
         let d = sub(x, self.centre);
         let p: V3 = core::array::from_fn(|a| dot(self.axes[a], d));
-        let (phi, n) = local_distance(self.solid, p);
+        let (phi, n) = local_distance(self.solid, p, with_normal);
         let world = add(
             add(scale(self.axes[0], n[0]), scale(self.axes[1], n[1])),
             scale(self.axes[2], n[2]),
@@ -171,6 +213,10 @@ impl Collider {
             Solid::Box(e) => e,
             Solid::Capsule(h, r) => [r, h + r, r],
             Solid::Cylinder(h, r, _) => [r, h, r],
+            // The field's box: distances past it only grow.
+            Solid::Sdf(_, n, spacing) => {
+                core::array::from_fn(|a| 0.5 * (n[a] - 1) as Real * spacing)
+            }
         };
         // Half the box along world axis `i`: the frame's axes' reach, `sum_j |axis_j[i]| e_j`.
         let half: V3 = core::array::from_fn(|i| (0..3).map(|j| self.axes[j][i].abs() * e[j]).sum());
@@ -185,10 +231,11 @@ impl Collider {
     /// The velocity the contact leaves a node at `x` whose updated velocity is `v` (E92),
     /// or `None` where it leaves `v` as it is (the node outside the solid, or separating).
     pub fn contact(&self, x: V3, v: V3) -> Option<V3> {
-        let (phi, n) = self.distance(x);
+        let (phi, _) = self.distance_and(x, false);
         if phi > 0.0 || phi.is_nan() {
             return None;
         }
+        let (_, n) = self.distance_and(x, true);
         let vc = self.velocity_at(x);
         let rel = sub(v, vc);
         let vn = dot(rel, n);
@@ -210,7 +257,7 @@ impl Collider {
 }
 
 /// The signed distance and outward normal of `solid` at `p` in its own frame (E91).
-fn local_distance(solid: Solid, p: V3) -> (Real, V3) {
+fn local_distance(solid: Solid<'_>, p: V3, with_normal: bool) -> (Real, V3) {
     let up = [0.0, 1.0, 0.0];
     let unit = |v: V3, fallback: V3| {
         let l = norm(v);
@@ -221,6 +268,24 @@ fn local_distance(solid: Solid, p: V3) -> (Real, V3) {
         }
     };
     match solid {
+        Solid::Sdf(field, n, spacing) => {
+            // The normal: the field's gradient, by central differences half a spacing apart.
+            let d = 0.5 * spacing;
+            let phi = field_distance(field, n, spacing, p);
+            if !with_normal {
+                return (phi, up);
+            }
+            let grad: V3 = core::array::from_fn(|a| {
+                if n[a] < 2 {
+                    return 0.0;
+                }
+                let (mut lo, mut hi) = (p, p);
+                lo[a] -= d;
+                hi[a] += d;
+                field_distance(field, n, spacing, hi) - field_distance(field, n, spacing, lo)
+            });
+            (phi, unit(grad, up))
+        }
         Solid::HalfSpace => (p[1], up),
         Solid::Sphere(r) => (norm(p) - r, unit(p, up)),
         Solid::Box(e) => {
@@ -269,12 +334,13 @@ impl crate::ColliderDef {
     /// The signed distance from this collider's surface at `x` (negative inside), m, in the
     /// pose it has: what the step tests each node with (E91), for a host that draws it or
     /// seeds material around it. `None` for a definition [`crate::World::add_collider`]
-    /// refuses.
+    /// refuses, and for a distance field, whose samples the world holds
+    /// ([`crate::WorldRef::collider_distance`]).
     pub fn distance(&self, x: crate::Vec3) -> Option<Real> {
         if !self.is_valid() {
             return None;
         }
-        let (shape, size) = shape_record(&self.shape);
+        let (shape, size, grid) = shape_record(&self.shape);
         let q = self.rotation.map(|c| c as f64);
         let len = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
         let w = |v: crate::Vec3| [v.x as f64, v.y as f64, v.z as f64];
@@ -285,10 +351,50 @@ impl crate::ColliderDef {
             size,
             position: w(self.position),
             rotation: q.map(|c| c / len),
+            grid,
             ..ColliderRecord::default()
         };
-        Some(Collider::at(&record, 0.0)?.distance([x.x, x.y, x.z]).0)
+        // A distance field's samples are the world's: `None` here.
+        Some(Collider::at(&record, 0.0, &[])?.distance([x.x, x.y, x.z]).0)
     }
+}
+
+/// The distance field `field` (points `n` per axis, `spacing` apart, centred on the origin,
+/// x fastest) at `p`: interpolated linearly between its points (an axis of one point is
+/// constant along it), plus the distance from `p` to the field's box where `p` is outside it.
+fn field_distance(field: &[Real], n: [usize; 3], spacing: Real, p: V3) -> Real {
+    let mut index = [0usize; 3];
+    let mut frac: V3 = [0.0; 3];
+    let mut outside: V3 = [0.0; 3];
+    for a in 0..3 {
+        let half = 0.5 * (n[a] - 1) as Real * spacing;
+        let clamped = p[a].clamp(-half, half);
+        outside[a] = p[a] - clamped;
+        if n[a] < 2 {
+            continue;
+        }
+        let u = (clamped + half) / spacing;
+        let i = (u as usize).min(n[a] - 2);
+        index[a] = i;
+        frac[a] = (u - i as Real).clamp(0.0, 1.0);
+    }
+    let at = |i: usize, j: usize, k: usize| {
+        field
+            .get(i + n[0] * (j + n[1] * k))
+            .copied()
+            .unwrap_or(Real::MAX)
+    };
+    let lerp = |a: Real, b: Real, t: Real| a + (b - a) * t;
+    let (i, j, k) = (index[0], index[1], index[2]);
+    let (k1, fz) = if n[2] < 2 { (k, 0.0) } else { (k + 1, frac[2]) };
+    let plane = |k: usize| {
+        lerp(
+            lerp(at(i, j, k), at(i + 1, j, k), frac[0]),
+            lerp(at(i, j + 1, k), at(i + 1, j + 1, k), frac[0]),
+            frac[1],
+        )
+    };
+    lerp(plane(k), plane(k1), fz) + norm(outside)
 }
 
 #[cfg(test)]
@@ -296,11 +402,12 @@ mod tests {
     use super::*;
 
     fn record(shape: ColliderShape) -> ColliderRecord {
-        let (code, size) = shape_record(&shape);
+        let (code, size, grid) = shape_record(&shape);
         ColliderRecord {
             shape: code,
             contact: contact_code(Contact::Separate),
             size,
+            grid,
             rotation: [0.0, 0.0, 0.0, 1.0],
             ..ColliderRecord::default()
         }
@@ -308,7 +415,7 @@ mod tests {
 
     #[test]
     fn distances_of_each_solid_at_known_points() {
-        let at = |shape, x: V3| Collider::at(&record(shape), 0.0).unwrap().distance(x);
+        let at = |shape, x: V3| Collider::at(&record(shape), 0.0, &[]).unwrap().distance(x);
         let close = |a: Real, b: Real| (a - b).abs() < 1e-6;
         assert!(close(
             at(ColliderShape::HalfSpace, [3.0, -0.25, 1.0]).0,
@@ -357,7 +464,7 @@ mod tests {
         let mut r = record(ColliderShape::HalfSpace);
         r.velocity = [1.0, 0.0, 0.0];
         r.angular_velocity = [0.0, 0.0, core::f64::consts::FRAC_PI_2];
-        let c = Collider::at(&r, 1.0).unwrap();
+        let c = Collider::at(&r, 1.0, &[]).unwrap();
         let (phi, n) = c.distance([0.0, 0.0, 0.0]);
         assert!(
             (phi - 1.0).abs() < 1e-5 && (n[0] + 1.0).abs() < 1e-5,
@@ -372,22 +479,22 @@ mod tests {
         let v = [2.0, -1.0, 0.0];
         r.contact = contact_code(Contact::Stick);
         assert_eq!(
-            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
             Some([0.0; 3])
         );
         r.contact = contact_code(Contact::Slip);
         assert_eq!(
-            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
             Some([2.0, 0.0, 0.0])
         );
         // Coulomb with mu = 0.5: the tangential speed 2 falls by 0.5 * 1.
         r.friction = 0.5;
         assert_eq!(
-            Collider::at(&r, 0.0).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
             Some([1.5, 0.0, 0.0])
         );
         r.contact = contact_code(Contact::Separate);
-        let c = Collider::at(&r, 0.0).unwrap();
+        let c = Collider::at(&r, 0.0, &[]).unwrap();
         assert_eq!(c.contact(inside, [2.0, 1.0, 0.0]), None, "separating");
         assert_eq!(c.contact([0.0, 0.1, 0.0], v), None, "outside");
     }

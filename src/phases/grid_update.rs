@@ -250,7 +250,7 @@ fn collide<const D: usize>(
         return; // No re-mapped velocity to act on (USL).
     }
     for (k, record) in ctx.colliders.iter().enumerate() {
-        let Some(c) = Collider::at(record, ctx.time) else {
+        let Some(c) = Collider::at(record, ctx.time, ctx.sdf) else {
             continue;
         };
         // The node box's nodes within the solid's bounds (a half-space: all of them).

@@ -78,6 +78,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// The collider table's used entries, and the world time the substep starts at (their
     /// poses, E90).
     pub colliders: &'m [crate::layout::ColliderRecord],
+    /// The distance fields' samples.
+    pub sdf: &'m [Real],
     pub time: f64,
     /// The tractions' time factors this substep, one per schedule.
     pub traction_scales: [Real; crate::TRACTION_SCHEDULES],

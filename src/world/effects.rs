@@ -282,6 +282,33 @@ impl World<'_> {
         Ok(id)
     }
 
+    /// Adds the samples of a signed distance field (m, negative inside) to the world's and
+    /// returns the index of the first: what a [`crate::ColliderShape::Sdf`] collider names.
+    /// Needs [`crate::Effects::sdf_capacity`] (else [`Error::EffectNotDeclared`]);
+    /// [`Error::NonFiniteInput`] for a sample not finite, [`Error::InvalidCapacity`] past the
+    /// capacity (nothing is added).
+    pub fn add_distance_field(&mut self, samples: &[Real]) -> Result<u32, Error> {
+        let def = self.def();
+        if def.effects.sdf_capacity == 0 {
+            return Err(Error::EffectNotDeclared);
+        }
+        let first = self.header().sdf_count as usize;
+        let end = first
+            .checked_add(samples.len())
+            .filter(|&e| e <= def.effects.sdf_capacity as usize)
+            .ok_or(Error::InvalidCapacity)?;
+        if !samples.iter().all(|d| d.is_finite()) {
+            return Err(Error::NonFiniteInput);
+        }
+        let at = Layout::of(&def).sdf_offset;
+        let field: &mut [Real] = bytemuck::cast_slice_mut(
+            &mut self.buf[at + first * size_of::<Real>()..at + end * size_of::<Real>()],
+        );
+        field.copy_from_slice(samples);
+        self.header_mut().sdf_count = end as u64;
+        Ok(first as u32)
+    }
+
     /// Replaces collider `id`'s definition (its pose, velocities, shape, contact): a host
     /// that moves it sets it between steps, as [`World::add_collider`] checks it.
     /// [`Error::UnknownCollider`] for an id not added. The impulse of the last step stays.
@@ -305,6 +332,12 @@ impl World<'_> {
         self.read().collider(id)
     }
 
+    /// The signed distance from collider `id`'s surface at `x`
+    /// ([`crate::WorldRef::collider_distance`]).
+    pub fn collider_distance(&self, id: u32, x: Vec3) -> Result<Real, Error> {
+        self.read().collider_distance(id, x)
+    }
+
     /// The record of `c`, posed now; in 2D its motion kept in the plane (no z velocity, no
     /// turn but about z).
     fn collider_record(&self, c: &ColliderDef) -> Result<ColliderRecord, Error> {
@@ -315,10 +348,10 @@ impl World<'_> {
         let w = |v: Vec3, keep: [bool; 3]| {
             core::array::from_fn(|a| if keep[a] { v[a] as f64 } else { 0.0 })
         };
-        let (shape, size) = colliders::shape_record(&c.shape);
+        let (shape, size, grid) = colliders::shape_record(&c.shape);
         let q = c.rotation.map(|x| x as f64);
         let len = libm::sqrt(q.iter().map(|x| x * x).sum::<f64>());
-        Ok(ColliderRecord {
+        let record = ColliderRecord {
             shape,
             contact: colliders::contact_code(c.contact),
             friction: c.friction as f64,
@@ -328,7 +361,14 @@ impl World<'_> {
             velocity: w(c.velocity, [true, true, !planar]),
             angular_velocity: w(c.angular_velocity, [!planar, !planar, true]),
             pose_time: self.time(),
-        })
+            grid,
+        };
+        // A distance field within the samples added.
+        if record.is_valid(self.header().sdf_count) {
+            Ok(record)
+        } else {
+            Err(Error::InvalidEffect)
+        }
     }
 
     fn collider_mut(&mut self, id: u32) -> &mut ColliderRecord {

@@ -90,6 +90,7 @@ impl<'a> World<'a> {
             || h.material_count > def.material_capacity as u64
             || h.traction_count > def.effects.traction_capacity as u64
             || h.collider_count > def.effects.collider_capacity as u64
+            || h.sdf_count > def.effects.sdf_capacity as u64
         {
             return Err(Error::NotAWorld);
         }

@@ -94,7 +94,7 @@ impl<'a> WorldRef<'a> {
             return invalid;
         }
         let colliders = h.collider_count as usize;
-        if h.collider_count > h.collider_capacity {
+        if h.collider_count > h.collider_capacity || h.sdf_count > h.sdf_capacity {
             return invalid;
         }
         let at = layout.colliders_offset;
@@ -106,7 +106,13 @@ impl<'a> WorldRef<'a> {
         let finite = |i: &ColliderImpulse| {
             (i.linear.iter().chain(&i.angular)).all(|c| c.is_finite()) && i.duration >= 0.0
         };
-        if !records.iter().all(|r| r.is_valid()) || !impulses.iter().all(finite) {
+        if !records.iter().all(|r| r.is_valid(h.sdf_count)) || !impulses.iter().all(finite) {
+            return invalid;
+        }
+        let at = layout.sdf_offset;
+        let samples: &[Real] =
+            bytemuck::cast_slice(&self.buf[at..at + h.sdf_count as usize * size_of::<Real>()]);
+        if !samples.iter().all(|d| d.is_finite()) {
             return invalid;
         }
         let v = self.particles();
@@ -270,7 +276,7 @@ impl<'a> WorldRef<'a> {
         let v = |a: [f64; 3]| crate::Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
         Ok(crate::ColliderState {
             def: crate::ColliderDef {
-                shape: shape_of(r.shape, r.size).ok_or(Error::InvalidState)?,
+                shape: shape_of(r.shape, r.size, r.grid).ok_or(Error::InvalidState)?,
                 position: v(r.position),
                 rotation: r.rotation.map(|c| c as Real),
                 velocity: v(r.velocity),
@@ -282,6 +288,26 @@ impl<'a> WorldRef<'a> {
             angular_impulse: v(i.angular),
             duration: i.duration as Real,
         })
+    }
+
+    /// The signed distance from collider `id`'s surface at `x` (negative inside), m, in its
+    /// pose of now: what the step tests each node with (E91), distance fields too
+    /// ([`crate::ColliderDef::distance`] needs no world but cannot read a field's samples).
+    pub fn collider_distance(&self, id: u32, x: crate::Vec3) -> Result<Real, Error> {
+        use crate::effects::colliders::Collider;
+        if id as u64 >= self.header().collider_count {
+            return Err(Error::UnknownCollider);
+        }
+        let layout = self.layout();
+        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        let r: &ColliderRecord =
+            bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
+        let at = layout.sdf_offset;
+        let samples: &[Real] = bytemuck::cast_slice(
+            &self.buf[at..at + self.header().sdf_count as usize * size_of::<Real>()],
+        );
+        let c = Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)?;
+        Ok(c.distance([x.x, x.y, x.z]).0)
     }
 
     /// The definition of material `id`.

@@ -221,10 +221,13 @@ impl<'a> World<'a> {
         let n_tractions = self.header().traction_count as usize;
         let feedback_alpha = self.header().feedback_alpha as Real;
         let n_colliders = self.header().collider_count as usize;
+        let n_samples = self.header().sdf_count as usize;
         let (head, rest) = self.buf.split_at_mut(layout.particle_offset);
         let (head, impulses) = head.split_at_mut(layout.impulses_offset);
+        let (impulses, sdf) = impulses.split_at_mut(layout.sdf_offset - layout.impulses_offset);
         let impulses: &mut [ColliderImpulse] =
             bytemuck::cast_slice_mut(&mut impulses[..n_colliders * size_of::<ColliderImpulse>()]);
+        let sdf: &[Real] = bytemuck::cast_slice(&sdf[..n_samples * size_of::<Real>()]);
         let (pbytes, rest) = rest.split_at_mut(layout.grid_offset - layout.particle_offset);
         let (gbytes, scratch) = rest.split_at_mut(layout.scratch_offset - layout.grid_offset);
         let mat_start = layout.materials_offset;
@@ -282,6 +285,7 @@ impl<'a> World<'a> {
             materials,
             tractions,
             colliders,
+            sdf,
             time,
             traction_scales: fx.traction_schedules.each_ref().map(|s| s.at(time)),
             transport: [fx.heat, fx.diffusion],

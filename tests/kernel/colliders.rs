@@ -507,3 +507,113 @@ fn a_moving_stick_floor_carries_a_block_at_its_speed() {
     let v = sum / time;
     assert!((v - 0.5).abs() < 0.03 * 0.5, "the block moves at {v} m/s");
 }
+
+/// A distance field collider (`ColliderShape::Sdf`): sampled from a circle of radius 0.2 m
+/// every 0.01 m, it answers the circle's distance within the bilinear interpolation's error
+/// bound, `h^2 / 8 (|f_xx| + |f_yy|)` = `h^2 / (8 r)` for `f = r - R`, at 1000 points from
+/// r = 0.05 m out (2.9e-4 m in the cells there; 1e-6 m more for f32's rounding); a floor sampled from the half-space `y < 0` carries a resting
+/// block's weight within 1 %, as the analytic floor does.
+#[test]
+fn a_distance_field_collider_is_the_solid_it_samples() {
+    let mut def = def(Vec3::new(0.0, -G, 0.0), 30.0);
+    def.effects.sdf_capacity = 4096;
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    // The circle, 61 x 61 samples 0.01 m apart about its centre.
+    let (n, h, r) = (61usize, 0.01 as Real, 0.2 as Real);
+    let half = 0.5 * (n - 1) as Real * h;
+    let circle: Vec<Real> = (0..n * n)
+        .map(|k| {
+            let (x, y) = ((k % n) as Real * h - half, (k / n) as Real * h - half);
+            (x * x + y * y).sqrt() - r
+        })
+        .collect();
+    let first = world.add_distance_field(&circle).expect("samples");
+    let centre = Vec3::new(0.5, 0.7, 0.0);
+    let ball = world
+        .add_collider(&ColliderDef {
+            shape: ColliderShape::Sdf {
+                first,
+                dims: [n as u32, n as u32, 1],
+                spacing: h,
+            },
+            position: centre,
+            ..ColliderDef::DEFAULT
+        })
+        .expect("ball");
+    let mut worst: Real = 0.0;
+    for k in 0..1000 {
+        let (a, d) = (k as Real * 2.399, 0.05 + 0.2 * (k % 10) as Real / 10.0);
+        let p = centre + Vec3::new(d * a.cos(), d * a.sin(), 0.0);
+        let got = world.collider_distance(ball, p).expect("distance");
+        worst = worst.max((got - ((p - centre).length() - r)).abs());
+    }
+    // The nearest cells reach in to r = 0.05 - h / sqrt 2.
+    let bound = h * h / (8.0 * (0.05 - h * std::f64::consts::FRAC_1_SQRT_2 as Real)) + 1.0e-6;
+    assert!(
+        worst < bound,
+        "distance off the circle's by up to {worst} m (bound {bound})"
+    );
+    // A floor: the half-space below y = 0.25 sampled as `phi = y` on 41 x 9 points.
+    let floor: Vec<Real> = (0..41 * 9)
+        .map(|k| (k / 41) as Real * 0.025 - 0.1)
+        .collect();
+    let first = world.add_distance_field(&floor).expect("samples");
+    world
+        .add_collider(&ColliderDef {
+            shape: ColliderShape::Sdf {
+                first,
+                dims: [41, 9, 1],
+                spacing: 0.025,
+            },
+            position: Vec3::new(0.5, 0.25, 0.0),
+            ..ColliderDef::DEFAULT
+        })
+        .expect("floor");
+    let m = world.add_material(&BLOCK).expect("material");
+    world
+        .fill_box(
+            Vec3::new(0.3, 0.25, 0.0),
+            Vec3::new(0.7, 0.45, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .expect("block");
+    let mass: Real = world.particles().mass.iter().sum();
+    let dt = world.stable_dt();
+    let (mut impulse, mut time) = (Vec3::ZERO, 0.0);
+    while world.time() < 1.0 {
+        world.step(dt).expect("step");
+        if world.time() > 0.9 {
+            let c = world.collider(1).expect("floor");
+            impulse += c.impulse;
+            time += c.duration;
+        }
+    }
+    let force = impulse / time;
+    assert!(
+        (force.y + mass * G).abs() < 0.01 * mass * G,
+        "force {force:?} against the weight {}",
+        mass * G
+    );
+    // Misuse: a field past the samples added, samples not finite, past the capacity.
+    let past = ColliderDef {
+        shape: ColliderShape::Sdf {
+            first: 4000,
+            dims: [10, 10, 1],
+            spacing: 0.01,
+        },
+        ..ColliderDef::DEFAULT
+    };
+    let before = world.state_bytes().to_vec();
+    assert_eq!(world.set_collider(1, &past), Err(Error::InvalidEffect));
+    assert_eq!(
+        world.add_distance_field(&[0.0, Real::NAN]),
+        Err(Error::NonFiniteInput)
+    );
+    assert_eq!(
+        world.add_distance_field(&[0.0; 1000]),
+        Err(Error::InvalidCapacity)
+    );
+    assert!(world.state_bytes() == before.as_slice());
+}

@@ -1953,6 +1953,7 @@ fn declared_effects() -> Effects {
         diffusion: Some(Transport::INSULATED),
         plasticity: false,
         collider_capacity: 0,
+        sdf_capacity: 0,
     }
 }
 

@@ -145,6 +145,7 @@ int main(void) {
     FIELD(MpmEffects, diffusion);
     FIELD(MpmEffects, plasticity);
     FIELD(MpmEffects, collider_capacity);
+    FIELD(MpmEffects, sdf_capacity);
 
     TYPE(MpmWorldDef);
     FIELD(MpmWorldDef, dimension);
@@ -267,6 +268,9 @@ int main(void) {
     FIELD(MpmColliderDef, half_length);
     FIELD(MpmColliderDef, half_extents);
     FIELD(MpmColliderDef, inner_radius);
+    FIELD(MpmColliderDef, sdf_first);
+    FIELD(MpmColliderDef, sdf_dims);
+    FIELD(MpmColliderDef, sdf_spacing);
     FIELD(MpmColliderDef, position);
     FIELD(MpmColliderDef, rotation);
     FIELD(MpmColliderDef, velocity);

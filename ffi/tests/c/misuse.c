@@ -2520,7 +2520,7 @@ static void collider_misuse(void) {
     REFUSED("colliders: def not from the default", MPM_STATUS_DEF_NOT_FROM_DEFAULT,
             mpm_world_add_collider(w, &bad, OUT(uint32_t)));
     bad = floor;
-    bad.shape = 5;
+    bad.shape = 6;
     REFUSED("colliders: shape out of range", MPM_STATUS_INVALID_ENUM,
             mpm_world_add_collider(w, &bad, OUT(uint32_t)));
     bad = floor;
@@ -2540,6 +2540,12 @@ static void collider_misuse(void) {
     bad.rotation[0] = bad.rotation[1] = bad.rotation[2] = bad.rotation[3] = R(0.0);
     REFUSED("colliders: zero rotation", MPM_STATUS_INVALID_EFFECT,
             mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    bad = floor;
+    bad.shape = MPM_COLLIDER_SHAPE_SDF;
+    REFUSED("colliders: a distance field past the samples added", MPM_STATUS_INVALID_EFFECT,
+            mpm_world_add_collider(w, &bad, OUT(uint32_t)));
+    REFUSED("colliders: distance samples not declared", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_distance_field(w, &floor.radius, 1, OUT(uint32_t)));
     REFUSED("colliders: none declared", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_collider(g_w2, &floor, OUT(uint32_t)));
     REFUSED("colliders: get an id not added", MPM_STATUS_UNKNOWN_COLLIDER,
