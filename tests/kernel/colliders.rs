@@ -56,6 +56,22 @@ fn floor(contact: Contact, friction: Real) -> ColliderDef {
     }
 }
 
+/// Steps `world` to 1 s at its stable step and returns the mean force of the last 0.1 s on
+/// collider `id` (its impulses over their durations).
+fn settled_force(world: &mut World<'_>, id: u32) -> Vec3 {
+    let dt = world.stable_dt();
+    let (mut impulse, mut time) = (Vec3::ZERO, 0.0);
+    while world.time() < 1.0 {
+        world.step(dt).expect("step");
+        if world.time() > 0.9 {
+            let c = world.collider(id).expect("collider");
+            impulse += c.impulse;
+            time += c.duration;
+        }
+    }
+    impulse / time
+}
+
 /// The mass-weighted mean of `column` of the particles.
 fn mean(world: &World<'_>, column: impl Fn(&mpm_gimp::ParticlesView<'_>) -> Vec<Real>) -> Real {
     let p = world.particles();
@@ -86,17 +102,7 @@ fn a_body_at_rest_on_a_collider_reports_its_weight() {
     let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
     let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
     let mass = block_on_floor(&mut world, floor(Contact::Separate, 0.0));
-    let dt = world.stable_dt();
-    let (mut impulse, mut time) = (Vec3::ZERO, 0.0);
-    while world.time() < 1.0 {
-        world.step(dt).expect("step");
-        if world.time() > 0.9 {
-            let c = world.collider(0).expect("floor");
-            impulse += c.impulse;
-            time += c.duration;
-        }
-    }
-    let force = impulse / time;
+    let force = settled_force(&mut world, 0);
     let weight = mass * G;
     assert!(
         (force.y + weight).abs() < 0.01 * weight && force.x.abs() < 0.01 * weight,
@@ -580,17 +586,7 @@ fn a_distance_field_collider_is_the_solid_it_samples() {
         )
         .expect("block");
     let mass: Real = world.particles().mass.iter().sum();
-    let dt = world.stable_dt();
-    let (mut impulse, mut time) = (Vec3::ZERO, 0.0);
-    while world.time() < 1.0 {
-        world.step(dt).expect("step");
-        if world.time() > 0.9 {
-            let c = world.collider(1).expect("floor");
-            impulse += c.impulse;
-            time += c.duration;
-        }
-    }
-    let force = impulse / time;
+    let force = settled_force(&mut world, 1);
     assert!(
         (force.y + mass * G).abs() < 0.01 * mass * G,
         "force {force:?} against the weight {}",
