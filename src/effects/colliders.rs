@@ -331,6 +331,30 @@ fn local_distance(solid: Solid<'_>, p: V3, with_normal: bool) -> (Real, V3) {
 }
 
 impl crate::ColliderDef {
+    /// The buffer's record of this (checked) definition, posed at `pose_time`: its rotation
+    /// normalised; `planar` (2D), its motion kept in the plane (no z velocity, no turn but
+    /// about z).
+    pub(crate) fn record(&self, planar: bool, pose_time: f64) -> ColliderRecord {
+        let w = |v: crate::Vec3, keep: [bool; 3]| {
+            core::array::from_fn(|a| if keep[a] { v[a] as f64 } else { 0.0 })
+        };
+        let (shape, size, grid) = shape_record(&self.shape);
+        let q = self.rotation.map(|c| c as f64);
+        let len = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
+        ColliderRecord {
+            shape,
+            contact: contact_code(self.contact),
+            friction: self.friction as f64,
+            size,
+            position: w(self.position, [true; 3]),
+            rotation: q.map(|c| c / len),
+            velocity: w(self.velocity, [true, true, !planar]),
+            angular_velocity: w(self.angular_velocity, [!planar, !planar, true]),
+            pose_time,
+            grid,
+        }
+    }
+
     /// The signed distance from this collider's surface at `x` (negative inside), m, in the
     /// pose it has: what the step tests each node with (E91), for a host that draws it or
     /// seeds material around it. `None` for a definition [`crate::World::add_collider`]
@@ -340,20 +364,7 @@ impl crate::ColliderDef {
         if !self.is_valid() {
             return None;
         }
-        let (shape, size, grid) = shape_record(&self.shape);
-        let q = self.rotation.map(|c| c as f64);
-        let len = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
-        let w = |v: crate::Vec3| [v.x as f64, v.y as f64, v.z as f64];
-        let record = ColliderRecord {
-            shape,
-            contact: contact_code(self.contact),
-            friction: self.friction as f64,
-            size,
-            position: w(self.position),
-            rotation: q.map(|c| c / len),
-            grid,
-            ..ColliderRecord::default()
-        };
+        let record = self.record(false, 0.0);
         // A distance field's samples are the world's: `None` here.
         Some(Collider::at(&record, 0.0, &[])?.distance([x.x, x.y, x.z]).0)
     }

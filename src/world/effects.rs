@@ -344,25 +344,7 @@ impl World<'_> {
         if !c.is_valid() {
             return Err(Error::InvalidEffect);
         }
-        let planar = self.def().axes() == 2;
-        let w = |v: Vec3, keep: [bool; 3]| {
-            core::array::from_fn(|a| if keep[a] { v[a] as f64 } else { 0.0 })
-        };
-        let (shape, size, grid) = colliders::shape_record(&c.shape);
-        let q = c.rotation.map(|x| x as f64);
-        let len = libm::sqrt(q.iter().map(|x| x * x).sum::<f64>());
-        let record = ColliderRecord {
-            shape,
-            contact: colliders::contact_code(c.contact),
-            friction: c.friction as f64,
-            size,
-            position: w(c.position, [true; 3]),
-            rotation: q.map(|x| x / len),
-            velocity: w(c.velocity, [true, true, !planar]),
-            angular_velocity: w(c.angular_velocity, [!planar, !planar, true]),
-            pose_time: self.time(),
-            grid,
-        };
+        let record = c.record(self.def().axes() == 2, self.time());
         // A distance field within the samples added.
         if record.is_valid(self.header().sdf_count) {
             Ok(record)

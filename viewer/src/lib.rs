@@ -251,6 +251,7 @@ pub struct Sim {
     pub def: WorldDef,
     storage: HeapBuffer,
     forces: [Vec<Real>; 3],
+    /// The mouse acted in the last frame (forces set, or a collider carried).
     forces_set: bool,
     timings: VecDeque<f64>,
     /// The last step's report.
@@ -352,8 +353,13 @@ impl Sim {
     /// `w = 1 - r / reach` falling to 0 at the reach (out of plane, `-m w v_z / DRAG_TIME`).
     /// The forces are set once more when the drag ends, to zero.
     fn set_drag(&mut self, drag: Option<Drag>) -> Result<(), Error> {
-        // A scene with a collider: the mouse carries the first one, at the cursor's velocity
-        // (it stays where it is let go).
+        // Nothing to do while the mouse neither drags nor has just let go.
+        if drag.is_none() && !self.forces_set {
+            return Ok(());
+        }
+        self.forces_set = drag.is_some();
+        // A scene with a collider: the mouse carries the first one, at the cursor's velocity;
+        // let go, it stays there at rest (its own motion otherwise left as the scene set it).
         let mut world = World::reopen(self.storage.as_mut_bytes())?;
         if world.collider_count() > 0 {
             let mut c = world.collider(0)?.def;
@@ -365,9 +371,6 @@ impl Sim {
                 None => c.velocity = Vec3::ZERO,
             }
             return world.set_collider(0, &c);
-        }
-        if drag.is_none() && !self.forces_set {
-            return Ok(());
         }
         let reach = DRAG_RADIUS.max(DRAG_CELLS * self.def.cell_size as f64);
         let v = world.particles();
@@ -397,7 +400,6 @@ impl Sim {
         }
         let [fx, fy, fz] = &self.forces;
         world.set_particle_forces(0, [fx, fy, fz])?;
-        self.forces_set = drag.is_some();
         Ok(())
     }
 }
