@@ -112,6 +112,10 @@ pub enum Error {
     ColliderCapacityExceeded = 35,
     /// A collider id at or past the number of colliders.
     UnknownCollider = 36,
+    /// A periodic face ([`crate::Boundary::Periodic`]) whose opposite face is not periodic,
+    /// on the radial axis of an axisymmetric world, with a wall friction or velocity, or with
+    /// a heat or diffusion condition other than insulated.
+    InvalidBoundary = 37,
 }
 
 impl Error {
@@ -184,11 +188,14 @@ impl Error {
             }
             Error::ColliderCapacityExceeded => c"collider capacity exceeded",
             Error::UnknownCollider => c"collider id at or past the number of colliders",
+            Error::InvalidBoundary => {
+                c"periodic face without a periodic opposite face, on the radial axis, or with a wall or scalar condition"
+            }
         }
     }
 
     /// Every variant, in numeric order (for tests and the C status table).
-    pub const ALL: [Error; 36] = [
+    pub const ALL: [Error; 37] = [
         Error::BufferTooSmall,
         Error::BufferMisaligned,
         Error::NotAWorld,
@@ -225,6 +232,7 @@ impl Error {
         Error::StableStepTooShort,
         Error::ColliderCapacityExceeded,
         Error::UnknownCollider,
+        Error::InvalidBoundary,
     ];
 }
 

@@ -565,9 +565,13 @@ impl<const D: usize> NodeBox<D> {
             b.hi[0] = b.hi[0].max((2 * geom.margin + 1).min(geom.nodes[0]));
         }
         // A box that reaches past a wall plane also holds the images of the nodes it reaches
-        // there ([`Geom::for_each_wall_image`]).
+        // there ([`Geom::for_each_wall_image`]); along a periodic axis, the whole axis.
         for a in 0..D {
             let (n, m) = (geom.nodes[a], geom.margin);
+            if geom.faces[a][0] == Boundary::Periodic {
+                (b.lo[a], b.hi[a]) = (0, n);
+                continue;
+            }
             if geom.faces[a][0] != Boundary::Open && b.lo[a] < m {
                 b.hi[a] = b.hi[a].max((2 * m + 1).min(n));
             }
@@ -666,7 +670,7 @@ pub(crate) struct Geom<const D: usize> {
     /// Axisymmetric: the nodes between the grid's first face and the axis (the wall plane of
     /// the lower r face) are the mirror images of those past the axis, for the momentum as past
     /// any wall ([`Geom::for_each_wall_image`]) and, here only, for heat and diffusion's
-    /// scalars ([`Geom::for_each_mirror`]).
+    /// scalars ([`Geom::for_each_scalar_image`]).
     pub axis_mirror: bool,
 }
 
@@ -718,7 +722,7 @@ impl<const D: usize> Geom<D> {
     pub fn for_each_wall_node(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, usize, usize)) {
         for axis in 0..D {
             for side in 0..2 {
-                if self.faces[axis][side] != Boundary::Open {
+                if matches!(self.faces[axis][side], Boundary::Stick | Boundary::Slip) {
                     self.for_each_face_node(axis, side, bx, &mut |i, _| f(i, axis, side));
                 }
             }
@@ -733,7 +737,7 @@ impl<const D: usize> Geom<D> {
     pub fn wall_law(&self, axis: usize, side: usize, v: [Real; D]) -> Option<[Real; D]> {
         let wall = self.wall_velocity[axis][side];
         match self.faces[axis][side] {
-            Boundary::Open => None,
+            Boundary::Open | Boundary::Periodic => None,
             Boundary::Stick => Some(core::array::from_fn(
                 |a| {
                     if a == axis {
@@ -830,6 +834,10 @@ impl<const D: usize> Geom<D> {
     /// wall plane froze the strain of the material's first cell (a settled column's stress near
     /// its floor was off by up to 35 % of its weight).
     ///
+    /// A periodic face's ghosts are the nodes from the grid face to its wall plane (the plane
+    /// included on the high side, where it is the low plane's node), each the image of the
+    /// node one period (E95) away, every component as it is.
+    ///
     /// Faces in the order x low, x high, y low, ... or, `reversed`, the other way: folding in
     /// that order and reading back in reverse carries a corner node (past two walls) to its
     /// image across both.
@@ -844,6 +852,10 @@ impl<const D: usize> Geom<D> {
             let (axis, side) = (face / 2, face % 2);
             let stick = match self.faces[axis][side] {
                 Boundary::Open => continue,
+                Boundary::Periodic => {
+                    self.for_each_periodic_image(axis, side, bx, &mut |g, i| f(g, i, [1.0; D]));
+                    continue;
+                }
                 Boundary::Stick => !(self.axis_mirror && axis == 0 && side == 0),
                 Boundary::Slip => false,
             };
@@ -869,6 +881,27 @@ impl<const D: usize> Geom<D> {
                     f(i, j, signs)
                 });
             }
+        }
+    }
+
+    /// Calls `f(ghost, image)` for every node of box `bx` between the periodic face `side` of
+    /// `axis` and its wall plane (included on the high side), with its image one period
+    /// (`cells - 2 margin` nodes) inward. Each image lies in the admissible region: an axis
+    /// has at least `2 + 2 margin` cells (`layout::validate`), and no margin exceeds 1.
+    fn for_each_periodic_image(
+        &self,
+        axis: usize,
+        side: usize,
+        bx: &NodeBox<D>,
+        f: &mut dyn FnMut(usize, usize),
+    ) {
+        let (n, m) = (self.nodes[axis], self.margin);
+        let shift = (n - 1 - 2 * m) * self.stride[axis];
+        let layers = if side == 0 { 0..m } else { n - 1 - m..n };
+        for layer in layers {
+            self.for_each_node_in_plane(axis, layer, bx, &mut |i| {
+                f(i, if side == 0 { i + shift } else { i - shift })
+            });
         }
     }
 
@@ -905,40 +938,59 @@ impl<const D: usize> Geom<D> {
         });
     }
 
-    /// Axisymmetric: calls `f(ghost, image)` for every node before the axis (r < 0) and its
-    /// mirror image across the axis (r > 0); nothing otherwise. Material near the axis reaches
-    /// those nodes with the wider stencils (B-splines); what it puts there belongs to the image
-    /// node (the body is symmetric about the axis), and what the image has is read there, with
-    /// the radial component's sign flipped.
-    pub fn for_each_mirror(&self, bx: &NodeBox<D>, f: &mut dyn FnMut(usize, usize)) {
-        if !self.axis_mirror {
-            return;
+    /// The images of a transported scalar's nodes: calls `f(ghost, image)` for every node
+    /// before the axis (r < 0) and its mirror image across it (r > 0), axisymmetric, and for
+    /// every node past a periodic face and its image ([`Geom::for_each_periodic_image`]);
+    /// `reversed`, in the reverse order (as [`Geom::for_each_wall_image`], so that a corner
+    /// node reads its image across both). Material near the axis reaches the nodes before it
+    /// with the wider stencils (B-splines); what it puts there belongs to the image node (the
+    /// body is symmetric about the axis), and what the image has is read there. A scalar
+    /// wall needs no image: insulated, fixed and flux faces act on the nodes themselves.
+    fn for_each_scalar_image(
+        &self,
+        bx: &NodeBox<D>,
+        reversed: bool,
+        f: &mut dyn FnMut(usize, usize),
+    ) {
+        let axis = |f: &mut dyn FnMut(usize, usize)| {
+            if self.axis_mirror {
+                for layer in 0..self.margin {
+                    let shift = 2 * (self.margin - layer) * self.stride[0];
+                    self.for_each_node_in_plane(0, layer, bx, &mut |i| f(i, i + shift));
+                }
+            }
+        };
+        if !reversed {
+            axis(f);
         }
-        for layer in 0..self.margin {
-            let shift = 2 * (self.margin - layer) * self.stride[0];
-            self.for_each_node_in_plane(0, layer, bx, &mut |i| f(i, i + shift));
+        for q in 0..2 * D {
+            let face = if reversed { 2 * D - 1 - q } else { q };
+            if self.faces[face / 2][face % 2] == Boundary::Periodic {
+                self.for_each_periodic_image(face / 2, face % 2, bx, f);
+            }
+        }
+        if reversed {
+            axis(f);
         }
     }
 
-    /// Axisymmetric: adds what the particles put on each node before the axis to its image,
-    /// times `sign` (-1 for a radial component, 1 otherwise), and empties it. Nothing
-    /// otherwise. Every index is below the node count, which every column exceeds: the bound
-    /// checks never fail.
-    pub fn fold_mirror(&self, col: &mut [Real], sign: Real, bx: &NodeBox<D>) {
-        self.for_each_mirror(bx, &mut |ghost, image| {
+    /// Adds what the particles put on each scalar ghost node to its image and empties it
+    /// ([`Geom::for_each_scalar_image`]). Every index is below the node count, which every
+    /// column exceeds: the bound checks never fail.
+    pub fn fold_scalar_images(&self, col: &mut [Real], bx: &NodeBox<D>) {
+        self.for_each_scalar_image(bx, false, &mut |ghost, image| {
             if let (Some(&v), true) = (col.get(ghost), image < col.len()) {
-                col[image] += sign * v;
+                col[image] += v;
                 col[ghost] = 0.0;
             }
         });
     }
 
-    /// Axisymmetric: each node before the axis takes its image's value times `sign`. Nothing
-    /// otherwise.
-    pub fn mirror(&self, col: &mut [Real], sign: Real, bx: &NodeBox<D>) {
-        self.for_each_mirror(bx, &mut |ghost, image| {
+    /// Each scalar ghost node takes its image's value ([`Geom::for_each_scalar_image`]).
+    pub fn read_scalar_images(&self, col: &mut [Real], bx: &NodeBox<D>) {
+        self.for_each_scalar_image(bx, true, &mut |ghost, image| {
             if let (Some(&v), true) = (col.get(image), ghost < col.len()) {
-                col[ghost] = sign * v;
+                col[ghost] = v;
             }
         });
     }

@@ -723,6 +723,31 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
             return Err(Error::InvalidAxis);
         }
     }
+    // Periodic faces come in pairs, on an axis with walls at neither end (E95).
+    for a in 0..def.axes() {
+        let periodic = [2 * a, 2 * a + 1].map(|f| def.faces[f] == Boundary::Periodic);
+        if !periodic[0] && !periodic[1] {
+            continue;
+        }
+        let scalar = |t: Option<Transport>| {
+            t.is_some_and(|t| {
+                [2 * a, 2 * a + 1]
+                    .iter()
+                    .any(|&f| t.faces[f] != ScalarBoundary::Insulated)
+            })
+        };
+        let wall = [2 * a, 2 * a + 1]
+            .iter()
+            .any(|&f| def.wall_friction[f] != 0.0 || def.wall_velocity[f] != Vec3::ZERO);
+        if periodic[0] != periodic[1]
+            || (a == 0 && def.dimension == Dimension::Axisymmetric2D)
+            || wall
+            || scalar(def.effects.heat)
+            || scalar(def.effects.diffusion)
+        {
+            return Err(Error::InvalidBoundary);
+        }
+    }
     let min_cells = 2 + 2 * def.shape.margin_cells();
     let mut nodes: u64 = 1;
     for a in 0..def.axes() {

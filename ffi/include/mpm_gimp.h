@@ -191,6 +191,10 @@ enum MpmStatus
   MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED = 35,
   // A collider id at or past the number of colliders.
   MPM_STATUS_UNKNOWN_COLLIDER = 36,
+  // A periodic face (`MPM_BOUNDARY_PERIODIC`) whose opposite face is not periodic, on the
+  // radial axis of an axisymmetric world, with a wall friction or velocity, or with a heat
+  // or diffusion condition other than insulated.
+  MPM_STATUS_INVALID_BOUNDARY = 37,
   // A pointer argument that must not be NULL was NULL.
   MPM_STATUS_NULL_POINTER = 64,
   // A definition that did not come from `mpm_world_def_default` or
@@ -336,6 +340,10 @@ enum MpmBoundary
   MPM_BOUNDARY_SLIP = 1,
   // No condition; particles that cross the face leave the simulation.
   MPM_BOUNDARY_OPEN = 2,
+  // Material that leaves comes back through the opposite face, which must be periodic
+  // too; not the radial axis, no wall friction or velocity, scalar faces insulated, or
+  // `MPM_STATUS_INVALID_BOUNDARY`.
+  MPM_BOUNDARY_PERIODIC = 3,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmBoundary;

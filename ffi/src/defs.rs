@@ -109,6 +109,10 @@ pub enum MpmBoundary {
     Slip = 1,
     /// No condition; particles that cross the face leave the simulation.
     Open = 2,
+    /// Material that leaves comes back through the opposite face, which must be periodic
+    /// too; not the radial axis, no wall friction or velocity, scalar faces insulated, or
+    /// `MPM_STATUS_INVALID_BOUNDARY`.
+    Periodic = 3,
 }
 
 /// Index of each face in `MpmWorldDef::faces`, and the face of a particle's domain that a

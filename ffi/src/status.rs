@@ -119,6 +119,10 @@ pub enum MpmStatus {
     ColliderCapacityExceeded = 35,
     /// A collider id at or past the number of colliders.
     UnknownCollider = 36,
+    /// A periodic face (`MPM_BOUNDARY_PERIODIC`) whose opposite face is not periodic, on the
+    /// radial axis of an axisymmetric world, with a wall friction or velocity, or with a heat
+    /// or diffusion condition other than insulated.
+    InvalidBoundary = 37,
     /// A pointer argument that must not be NULL was NULL.
     NullPointer = 64,
     /// A definition that did not come from `mpm_world_def_default` or
@@ -187,13 +191,14 @@ impl From<Error> for MpmStatus {
             Error::StableStepTooShort => MpmStatus::StableStepTooShort,
             Error::ColliderCapacityExceeded => MpmStatus::ColliderCapacityExceeded,
             Error::UnknownCollider => MpmStatus::UnknownCollider,
+            Error::InvalidBoundary => MpmStatus::InvalidBoundary,
         }
     }
 }
 
 impl MpmStatus {
     /// Every status, in numeric order.
-    pub const ALL: [MpmStatus; 44] = [
+    pub const ALL: [MpmStatus; 45] = [
         MpmStatus::Ok,
         MpmStatus::BufferTooSmall,
         MpmStatus::BufferMisaligned,
@@ -231,6 +236,7 @@ impl MpmStatus {
         MpmStatus::StableStepTooShort,
         MpmStatus::ColliderCapacityExceeded,
         MpmStatus::UnknownCollider,
+        MpmStatus::InvalidBoundary,
         MpmStatus::NullPointer,
         MpmStatus::DefNotFromDefault,
         MpmStatus::InvalidEnum,

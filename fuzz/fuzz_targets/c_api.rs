@@ -410,7 +410,15 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     def.update_order = inp.u32_below(4);
     def.gravity = inp.vec3_in(-20.0, 20.0);
     for f in def.faces.iter_mut() {
-        *f = inp.u32_below(4);
+        *f = inp.u32_below(5); // 0..=3 the boundaries (periodic 3), 4 out of range
+    }
+    // Periodic faces mostly in pairs (a lone one is refused with `InvalidBoundary`).
+    if inp.byte() % 4 != 0 {
+        for a in 0..3 {
+            if def.faces[2 * a] == MpmBoundary::Periodic as u32 {
+                def.faces[2 * a + 1] = MpmBoundary::Periodic as u32;
+            }
+        }
     }
     def.exp_terms = inp.u32_below(10);
     def.cfl = inp.real_in(0.05, 1.0);

@@ -242,6 +242,13 @@ pub enum Boundary {
     /// No condition on the nodes; a particle that crosses this face leaves the simulation
     /// (status [`crate::ParticleStatus::Escaped`]) and is counted in the step report.
     Open = 2,
+    /// The material that leaves through this face comes back through the opposite one, which
+    /// must be periodic too (E95): the admissible region wraps along the axis, whose period
+    /// is the admissible length `(cells - 2 margin) h`, and the nodes past its faces are the
+    /// images of the nodes inside. Not on the radial axis of an axisymmetric world, nor with
+    /// a wall's friction or velocity or a scalar condition other than insulated. Colliders,
+    /// distance fields and damping zones do not wrap.
+    Periodic = 3,
 }
 
 impl Boundary {
@@ -252,6 +259,7 @@ impl Boundary {
             0 => Some(Boundary::Stick),
             1 => Some(Boundary::Slip),
             2 => Some(Boundary::Open),
+            3 => Some(Boundary::Periodic),
             _ => None,
         }
     }
@@ -707,7 +715,7 @@ mod tests {
         check(&faces, |v| v as u32, F::from_code);
         use Boundary as Bd;
         check(
-            &[Bd::Stick, Bd::Slip, Bd::Open],
+            &[Bd::Stick, Bd::Slip, Bd::Open, Bd::Periodic],
             |v| v as u32,
             Bd::from_code,
         );

@@ -296,8 +296,8 @@ pub(crate) fn nodal_values<const D: usize>(
     let (geom, bx, cutoff) = (&ctx.geom, &ctx.active, ctx.mass_cutoff);
     let n = cols[0].len();
     let [c_col, m_col, v_col, _] = cols;
-    geom.fold_mirror(c_col, 1.0, bx);
-    geom.fold_mirror(m_col, 1.0, bx);
+    geom.fold_scalar_images(c_col, bx);
+    geom.fold_scalar_images(m_col, bx);
     // Past a fixed face the material's odd image about the fixed value: what the particles
     // put on a node past the wall plane, their images put on its image (capacity `c`,
     // value `2 phi_f - phi`), so that a node near the face averages both sides.
@@ -334,7 +334,7 @@ pub(crate) fn nodal_values<const D: usize>(
             v_col[ghost] = 2.0 * value - vi;
         }
     });
-    geom.mirror(v_col, 1.0, bx);
+    geom.read_scalar_images(v_col, bx);
 }
 
 /// After the scatter of the flow `Q_i` (`cols` = [c, p, value, rate]): the flux faces'
@@ -354,7 +354,7 @@ pub(crate) fn nodal_rates<const D: usize>(
         // face (per unit thickness in 2D), then the rate; a fixed face's rate takes the node
         // to its value.
         let [c_col, _, _, q_col] = &mut *cols;
-        geom.fold_mirror(q_col, 1.0, bx);
+        geom.fold_scalar_images(q_col, bx);
         // The odd image's flow: its gradient's normal part is the material's, its other parts
         // and its source flip, and so does the gradient of the image node's shape function
         // along the normal: every term changes sign.
@@ -387,7 +387,7 @@ pub(crate) fn nodal_rates<const D: usize>(
                 q_col[ghost] = -qi;
             }
         });
-        geom.mirror(q_col, 1.0, bx);
+        geom.read_scalar_images(q_col, bx);
     }
     let fixed = t
         .faces

@@ -110,7 +110,8 @@ pub(crate) fn advance<I: Compare>(x: Wide<I>, x_low: Wide<I>, dx: Wide<I>) -> (W
 }
 
 /// One axis's two faces, for [`walls`]: the grid's origin and `1 / h`, the admissible range
-/// in cells and its ends in metres, and which faces are open.
+/// in cells and its ends in metres, which faces are open, and whether the axis is periodic,
+/// with its period in metres.
 #[derive(Clone, Copy)]
 pub(crate) struct Faces<I: Compare> {
     zero: Wide<I>,
@@ -121,6 +122,8 @@ pub(crate) struct Faces<I: Compare> {
     lo_x: Wide<I>,
     hi_x: Wide<I>,
     open: [WideMask<I>; 2],
+    periodic: bool,
+    period: Wide<I>,
 }
 
 impl<I: Compare> Faces<I> {
@@ -128,15 +131,21 @@ impl<I: Compare> Faces<I> {
     #[inline(always)]
     pub fn of<const D: usize>(geom: &Geom<D>, axis: usize) -> Self {
         let open = |side: usize| geom.faces[axis][side] == Boundary::Open;
+        let (lo_x, hi_x) = (
+            geom.origin[axis] + geom.lo[axis] * geom.h,
+            geom.origin[axis] + geom.hi[axis] * geom.h,
+        );
         Faces {
             zero: Wide::splat(0.0),
             origin: Wide::splat(geom.origin[axis]),
             inv_h: Wide::splat(geom.inv_h),
             lo: Wide::splat(geom.lo[axis]),
             hi: Wide::splat(geom.hi[axis]),
-            lo_x: Wide::splat(geom.origin[axis] + geom.lo[axis] * geom.h),
-            hi_x: Wide::splat(geom.origin[axis] + geom.hi[axis] * geom.h),
+            lo_x: Wide::splat(lo_x),
+            hi_x: Wide::splat(hi_x),
             open: [WideMask::splat(open(0)), WideMask::splat(open(1))],
+            periodic: geom.faces[axis][0] == Boundary::Periodic,
+            period: Wide::splat(hi_x - lo_x),
         }
     }
 }
@@ -157,7 +166,9 @@ pub(crate) struct AtFaces<I: Compare> {
 
 /// The walls and open faces along one axis: a particle at `x + x_low` (m) with velocity `v`
 /// that left the admissible range is put on the plane it crossed; at a stick or slip wall its
-/// outward velocity is zeroed, and through an open face it escapes.
+/// outward velocity is zeroed, and through an open face it escapes. Along a periodic axis it
+/// comes back through the other face, moved by the period, its low part keeping what the
+/// move rounded off (E95).
 #[inline(always)]
 pub(crate) fn walls<I: Compare>(
     f: &Faces<I>,
@@ -168,10 +179,29 @@ pub(crate) fn walls<I: Compare>(
     let zero = f.zero;
     let s = (x - f.origin) * f.inv_h;
     let (below, above) = (s.lt(f.lo), s.gt(f.hi));
+    let out = below | above;
+    if f.periodic {
+        // One branch per axis and chunk, the same for every lane: an axis with walls pays
+        // nothing for it.
+        let shift = below.select(f.period, -f.period);
+        let moved = x + shift;
+        let moved_low = x_low + ((x - moved) + shift);
+        // Within the range, whatever the rounding of the move.
+        let moved = moved.lt(f.lo_x).select(f.lo_x, moved);
+        let moved = moved.gt(f.hi_x).select(f.hi_x, moved);
+        let none = WideMask::splat(false);
+        return AtFaces {
+            x: out.select(moved, x),
+            x_low: out.select(moved_low, x_low),
+            v,
+            open: none,
+            wall: none,
+        };
+    }
     let x = below.select(f.lo_x, above.select(f.hi_x, x));
-    let x_low = (below | above).select(zero, x_low);
+    let x_low = out.select(zero, x_low);
     let open = (below & f.open[0]) | (above & f.open[1]);
-    let wall = (below | above).and_not(open);
+    let wall = out.and_not(open);
     let outward = (below & v.lt(zero)) | (above & v.gt(zero));
     let v = (wall & outward).select(zero, v);
     AtFaces {

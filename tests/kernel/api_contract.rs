@@ -1661,7 +1661,7 @@ fn every_error_has_a_distinct_message_and_its_one_based_position_as_number() {
     // Every variant is listed once (distinct numbers, and the last number is the count).
     let numbers: HashSet<u32> = Error::ALL.iter().map(|&e| e as u32).collect();
     assert_eq!(numbers.len(), Error::ALL.len());
-    assert_eq!(Error::UnknownCollider as u32 as usize, Error::ALL.len());
+    assert_eq!(Error::InvalidBoundary as u32 as usize, Error::ALL.len());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -25,6 +25,7 @@ mod hard_cases;
 mod initial_state;
 #[cfg(feature = "effects")]
 mod materials;
+mod periodic;
 #[cfg(feature = "effects")]
 mod precision;
 mod reference;

@@ -951,10 +951,23 @@ static void init_misuse(void) {
         for (f = 0; f < 6; f++) {
             char name[64];
             d = g_def2;
-            d.faces[f] = 3;
-            snprintf(name, sizeof name, "init: faces[%d] 3", f);
+            d.faces[f] = 4;
+            snprintf(name, sizeof name, "init: faces[%d] 4", f);
             init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
         }
+        /* Periodic faces come in pairs, without a wall's friction or velocity. */
+        for (f = 0; f < 4; f++) {
+            char name[64];
+            d = g_def2;
+            d.faces[f] = MPM_BOUNDARY_PERIODIC;
+            snprintf(name, sizeof name, "init: faces[%d] periodic alone", f);
+            init_refused(name, MPM_STATUS_INVALID_BOUNDARY, &d);
+        }
+        d = g_def2;
+        d.faces[MPM_FACE_X_MIN] = d.faces[MPM_FACE_X_MAX] = MPM_BOUNDARY_PERIODIC;
+        ACCEPTED("init: x faces periodic", 0, mpm_memory_requirements(&d, &req));
+        d.wall_friction[MPM_FACE_X_MAX] = (mpm_real)0.3;
+        init_refused("init: periodic face with friction", MPM_STATUS_INVALID_BOUNDARY, &d);
     }
     axisymmetric_def_misuse();
 
@@ -2371,6 +2384,7 @@ static void status_strings(void) {
         MPM_STATUS_STABLE_STEP_TOO_SHORT,
         MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED,
         MPM_STATUS_UNKNOWN_COLLIDER,
+        MPM_STATUS_INVALID_BOUNDARY,
         MPM_STATUS_NULL_POINTER,
         MPM_STATUS_DEF_NOT_FROM_DEFAULT,
         MPM_STATUS_INVALID_ENUM,
