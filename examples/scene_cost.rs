@@ -73,6 +73,7 @@ fn measure(scene: &Scene, frames: u32, runs: u32, forces: bool) {
     let mut world = World::init(&def, storage.as_mut_bytes()).expect("the buffer fits");
     let particles = (scene.fill)(&mut world).expect("a scene fills its world") as f64;
     let frame = |world: &mut World<'_>| {
+        (scene.host)(world, scene.frame_dt).expect("the scene's host fits its world");
         let t0 = Instant::now();
         let report = world
             .step_with_simd(scene.frame_dt, Simd::Detect)

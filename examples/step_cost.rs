@@ -46,12 +46,18 @@
 //! the state as a world sized for one worker holds it: the same for every N (the parallel
 //! step's results are bit-identical), and for N = 1 the plain state bytes' hash as before. The
 //! JSON line gives `"threads"`.
+//! `--remove none|half|half_rebuilt` (default none; one thread): `half` removes the particles
+//! in the block's upper half (`World::remove_particles` with a box) before the timing, and
+//! the JSON line gives that call's cost per particle of the world before it
+//! (`"removal_ns_per_particle"`); `half_rebuilt` then builds a new world from the remaining
+//! particles alone, as a host would add them, and times that one: the same state (the
+//! `state_hash` agrees with `half`'s), so the same step cost (`benches/compare.sh` of the two).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
 use mpm_gimp::{
-    memory_requirements, Dimension, HeapBuffer, MaterialModel, Real, Serial, ShapeFunction,
-    UpdateOrder, World, WorldDef, MAX_WORKERS,
+    memory_requirements, Dimension, HeapBuffer, MaterialModel, ParticleBatch, Real, Removal,
+    Serial, ShapeFunction, UpdateOrder, Vec3, World, WorldDef, MAX_WORKERS,
 };
 use mpm_gimp_rayon::RayonTasks;
 use std::process::exit;
@@ -59,7 +65,7 @@ use std::process::exit;
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
-[--particle-order fill|rows|shuffled] [--threads N (1..=256)] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
+[--particle-order fill|rows|shuffled] [--threads N (1..=256)] [--remove none|half|half_rebuilt] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
 body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)|colliders|sdf_colliders]";
 
 #[path = "../benches/common/scene.rs"]
@@ -82,6 +88,15 @@ struct Options {
     shrink: u32,
     particle_order: ParticleOrder,
     threads: u32,
+    remove: Remove,
+}
+
+/// What `--remove` does before the timing.
+#[derive(Clone, Copy, PartialEq)]
+enum Remove {
+    None,
+    Half,
+    HalfRebuilt,
 }
 
 fn usage_error(msg: &str) -> ! {
@@ -104,6 +119,7 @@ fn parse_options() -> Options {
         shrink: 1,
         particle_order: ParticleOrder::Fill,
         threads: 1,
+        remove: Remove::None,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -129,6 +145,7 @@ fn parse_options() -> Options {
             "--shrink",
             "--particle-order",
             "--threads",
+            "--remove",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -223,6 +240,14 @@ fn parse_options() -> Options {
             "--threads" => {
                 o.threads = match value.parse::<u32>() {
                     Ok(n) if (1..=MAX_WORKERS).contains(&n) => n,
+                    _ => bad(),
+                }
+            }
+            "--remove" => {
+                o.remove = match value.as_str() {
+                    "none" => Remove::None,
+                    "half" => Remove::Half,
+                    "half_rebuilt" => Remove::HalfRebuilt,
                     _ => bad(),
                 }
             }
@@ -325,6 +350,7 @@ pub fn main() {
     let n = o.grid_scale;
     let first = axes_scaled(first, &|f, a| f + grid[a] * (n - 1) / 2);
     let grid = axes_scaled(grid, &|g, _| g * n);
+    let mut rebuilt: HeapBuffer;
     let mut scene = match Scene::new(&SceneDef {
         dimension: if o.dim == 3 {
             Dimension::ThreeD
@@ -348,9 +374,48 @@ pub fn main() {
             exit(1);
         }
     };
-    let particles = scene.particles;
-    let bytes_per_particle = scene.bytes as f64 / particles as f64;
+    let bytes_per_particle = scene.bytes as f64 / scene.particles as f64;
     let mut world = scene.world();
+    let mut removal_ns = 0.0;
+    if o.remove != Remove::None {
+        if o.threads != 1 || o.effect != Effect::None {
+            usage_error("--remove takes one thread and no effect");
+        }
+        // The block's upper half: every particle above its middle height.
+        let def = world.def();
+        let v = world.particles();
+        let (lo, hi) = v.position[1]
+            .iter()
+            .fold((Real::MAX, Real::MIN), |(l, h), &y| (l.min(y), h.max(y)));
+        let top: Vec3 = Vec3::new(1.0e6, 1.0e6, 1.0e6);
+        let min = Vec3::new(-1.0e6, 0.5 * (lo + hi), -1.0e6);
+        let n = world.particle_count();
+        let start = std::time::Instant::now();
+        world
+            .remove_particles(Removal::Box { min, max: top })
+            .expect("a box of finite corners");
+        removal_ns = start.elapsed().as_nanos() as f64 / n as f64;
+        if o.remove == Remove::HalfRebuilt {
+            rebuilt = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+            let mut fresh = World::init(&def, rebuilt.as_mut_bytes()).expect("the buffer fits");
+            for id in 0..world.material_count() as u32 {
+                let m = world.material(id).expect("a material the world has");
+                fresh.add_material(&m).expect("the same material");
+            }
+            let v = world.particles();
+            fresh
+                .add_particles(&ParticleBatch {
+                    position: v.position,
+                    velocity: v.velocity,
+                    mass: v.mass,
+                    volume: v.volume0,
+                    material: v.material,
+                })
+                .expect("the same particles");
+            world = fresh;
+        }
+    }
+    let particles = world.particle_count() as u32;
     // One thread: the calling thread, as `World::step`; more: a rayon pool of that many, the
     // steps run on one of its threads (`RayonTasks::install`), as a host with a job system
     // steps from a job.
@@ -391,7 +456,7 @@ pub fn main() {
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
 \"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"threads\":{},\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
-\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"state_hash\":\"{:016x}\"}}",
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"removal_ns_per_particle\":{:.3},\"state_hash\":\"{:016x}\"}}",
         o.dim,
         particles,
         cells,
@@ -408,6 +473,7 @@ pub fn main() {
         o.effect.name(),
         bytes_per_particle,
         o.particle_order.name(),
+        removal_ns,
         state_hash
     );
     eprintln!(

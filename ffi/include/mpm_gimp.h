@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.6.0"
+#define MPM_GIMP_VERSION "0.7.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 600
+#define MPM_GIMP_ABI_VERSION 700
 
 
 // Most points an `MpmSchedule` holds.
@@ -1409,6 +1409,109 @@ void mpm_simd_use_baseline_only(void);
 // run (some Intel server parts), which would slow the host's own code too. Results do not
 // change, only speed. Irreversible for the process.
 void mpm_simd_use_avx2_at_most(void);
+
+// Moves particles `first .. first + count` to the positions `x`, `y`, `z` (`count` values
+// each; `z` not read in 2D, and may be NULL there): a teleport (`World::set_particle_positions`).
+// All or nothing: `MPM_STATUS_UNKNOWN_PARTICLE`, `MPM_STATUS_NON_FINITE_INPUT`,
+// `MPM_STATUS_POSITION_OUTSIDE_DOMAIN` as `mpm_world_add_particles` checks them.
+//
+// # Safety
+// `world` is NULL or a world; each array the dimension reads is NULL or valid for reads of
+// `count` values.
+MpmStatus mpm_world_set_particle_positions(struct MpmWorld *world,
+                                           uint32_t first,
+                                           const mpm_real *x,
+                                           const mpm_real *y,
+                                           const mpm_real *z,
+                                           size_t count);
+
+// Gives particles `first .. first + count` the velocities `vx`, `vy`, `vz` (m/s, `count`
+// values each; `vz` not read in 2D): an impulse, or a kinematic particle set before each
+// step (`World::set_particle_velocities`). All or nothing:
+// `MPM_STATUS_UNKNOWN_PARTICLE`, `MPM_STATUS_NON_FINITE_INPUT`, and
+// `MPM_STATUS_STABLE_STEP_TOO_SHORT` for a speed no stable step resolves.
+//
+// # Safety
+// As `mpm_world_set_particle_positions`.
+MpmStatus mpm_world_set_particle_velocities(struct MpmWorld *world,
+                                            uint32_t first,
+                                            const mpm_real *vx,
+                                            const mpm_real *vy,
+                                            const mpm_real *vz,
+                                            size_t count);
+
+// Sets the affine matrix of particles `first .. first + count` as the particle view's
+// `affine` holds it (`World::set_particle_affine`: APIC's `B_p`, or `C_p` with linear shapes
+// and MLS-MPM). `affine` points to 9 pointers, row-major: `affine[3 * a + b]` holds `count`
+// values of entry `(a, b)`; in 2D only `affine[0]`, `[1]`, `[3]`, `[4]` are read.
+// `MPM_STATUS_EFFECT_NOT_DECLARED` unless the transfer is APIC or MLS-MPM; all or nothing:
+// `MPM_STATUS_UNKNOWN_PARTICLE`, `MPM_STATUS_NON_FINITE_INPUT`.
+//
+// # Safety
+// `world` is NULL or a world; `affine` is NULL or valid for reads of 9 pointers, each of
+// which the dimension reads NULL or valid for reads of `count` values.
+MpmStatus mpm_world_set_particle_affine(struct MpmWorld *world,
+                                        uint32_t first,
+                                        const mpm_real *const *affine,
+                                        size_t count);
+
+// Gives particles `first .. first + count` the materials `material` (`count` ids) as adding
+// them would (`World::set_particle_materials`): the plastic history restarts and the stress is
+// the new material's at the current deformation. All or nothing:
+// `MPM_STATUS_UNKNOWN_PARTICLE`, `MPM_STATUS_UNKNOWN_MATERIAL`,
+// `MPM_STATUS_INVALID_DEFORMATION` where the new material's stress is not finite.
+//
+// # Safety
+// `world` is NULL or a world; `material` is NULL or valid for reads of `count` ids.
+MpmStatus mpm_world_set_particle_materials(struct MpmWorld *world,
+                                           uint32_t first,
+                                           const uint32_t *material,
+                                           size_t count);
+
+// Removes particles `first .. first + count`. The others keep their order and state (the
+// world steps as one built with them alone would); a particle after the removed ones moves
+// down by the number removed before it, which is how a host follows its ids; the room is
+// free for later additions. Tractions on removed particles go too (those after them move
+// down); the others follow their particle. O(n) in the particle count.
+// `MPM_STATUS_UNKNOWN_PARTICLE` for a range past the particles (nothing removed).
+//
+// # Safety
+// `world` is NULL or a world; `removed_out` is NULL or valid.
+MpmStatus mpm_world_remove_particles(struct MpmWorld *world,
+                                     uint32_t first,
+                                     uint32_t count,
+                                     uint32_t *removed_out);
+
+// Removes the particles of the `count` ids at `ids` (any order; an id given twice is
+// removed once), as `mpm_world_remove_particles` does. `MPM_STATUS_UNKNOWN_PARTICLE` if any
+// id is not a particle's (nothing removed).
+//
+// # Safety
+// `world` is NULL or a world; `ids` is NULL or valid for reads of `count` ids (none is read
+// when `count` is 0); `removed_out` is NULL or valid.
+MpmStatus mpm_world_remove_particle_list(struct MpmWorld *world,
+                                         const uint32_t *ids,
+                                         size_t count,
+                                         uint32_t *removed_out);
+
+// Removes every particle whose position lies in the box from `min` to `max` (faces
+// included; z not read in 2D), whatever its status: a sink. As `mpm_world_remove_particles`
+// does; `MPM_STATUS_NON_FINITE_INPUT` for a corner that is not finite,
+// `MPM_STATUS_INVALID_REGION` for `min > max` on an axis (nothing removed).
+//
+// # Safety
+// `world` is NULL or a world; `removed_out` is NULL or valid.
+MpmStatus mpm_world_remove_particles_in_box(struct MpmWorld *world,
+                                            struct MpmVec3 min,
+                                            struct MpmVec3 max,
+                                            uint32_t *removed_out);
+
+// Removes every particle that no longer takes part (escaped through an open face, or
+// frozen), as `mpm_world_remove_particles` does.
+//
+// # Safety
+// `world` is NULL or a world; `removed_out` is NULL or valid.
+MpmStatus mpm_world_remove_inactive_particles(struct MpmWorld *world, uint32_t *removed_out);
 
 #if !defined(MPM_GIMP_F64)
 // The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`, a frictionless

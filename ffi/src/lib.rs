@@ -6,6 +6,8 @@
 //! - [`defs`]: `MpmWorldDef`, `MpmMaterialDef`, their `*_default()` functions and the enums.
 //! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
 //!   dt, step.
+//! - [`particles`]: setting particles' position, velocity, affine matrix and material, and
+//!   removing particles (by range, list, box or status).
 //! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
 //!   thermostat's alpha, temperatures, concentrations and their sources.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
@@ -40,6 +42,8 @@ pub mod effects;
 pub mod read;
 pub mod status;
 pub mod world;
+// After world: setting and removing particles.
+pub mod particles;
 // After world: the header declares the task system and the colliders after the world's calls.
 pub mod colliders;
 pub mod tasks;
@@ -47,6 +51,7 @@ pub mod tasks;
 pub use colliders::*;
 pub use defs::*;
 pub use effects::*;
+pub use particles::*;
 pub use read::*;
 pub use status::*;
 pub use tasks::*;

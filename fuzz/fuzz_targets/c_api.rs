@@ -470,7 +470,7 @@ fuzz_target!(|data: &[u8]| {
         if inp.0.is_empty() {
             break;
         }
-        let op = inp.byte() % 16;
+        let op = inp.byte() % 17;
         if world.is_null() || op == 0 {
             let def = new_def(&mut inp);
             let mut req = MpmMemoryRequirements::default();
@@ -791,6 +791,59 @@ fuzz_target!(|data: &[u8]| {
                             }
                             assert_eq!(world_hash(world), before, "a read changed the world");
                             s
+                        }
+                    }
+                }
+                16 => {
+                    // Particles after they are in: moved, sped up, given an affine matrix or a
+                    // material (values in and out of range, some not finite), or removed by
+                    // range, list, box or status.
+                    let (first, count) = particle_range(&mut inp, world);
+                    let n = (count as usize).min(512);
+                    let values = |inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real| {
+                        (0..n)
+                            .map(|_| match inp.byte() % 64 {
+                                0 => mpm_real::NAN,
+                                _ => inp.real_in(lo, hi),
+                            })
+                            .collect::<Vec<mpm_real>>()
+                    };
+                    match inp.byte() % 8 {
+                        0 | 1 => {
+                            let c: [Vec<mpm_real>; 3] = core::array::from_fn(|_| values(&mut inp, -0.2, 1.2));
+                            let (x, y, z) = (c[0].as_ptr(), c[1].as_ptr(), c[2].as_ptr());
+                            if inp.byte() % 2 == 0 {
+                                mpm_world_set_particle_positions(world, first, x, y, z, n)
+                            } else {
+                                mpm_world_set_particle_velocities(world, first, x, y, z, n)
+                            }
+                        }
+                        2 => {
+                            let c: [Vec<mpm_real>; 9] = core::array::from_fn(|_| values(&mut inp, -5.0, 5.0));
+                            let p: [*const mpm_real; 9] = core::array::from_fn(|k| c[k].as_ptr());
+                            mpm_world_set_particle_affine(world, first, p.as_ptr(), n)
+                        }
+                        3 => {
+                            let ids: Vec<u32> = (0..n).map(|_| inp.u32_below(5)).collect();
+                            mpm_world_set_particle_materials(world, first, ids.as_ptr(), n)
+                        }
+                        4 => {
+                            let mut removed = 0;
+                            mpm_world_remove_particles(world, first, count, &mut removed)
+                        }
+                        5 => {
+                            let ids: Vec<u32> = (0..n).map(|_| inp.u32_below(first.saturating_add(4))).collect();
+                            let mut removed = 0;
+                            mpm_world_remove_particle_list(world, ids.as_ptr(), n, &mut removed)
+                        }
+                        6 => {
+                            let (lo, hi) = (inp.vec3_in(-0.2, 1.2), inp.vec3_in(-0.2, 1.2));
+                            let mut removed = 0;
+                            mpm_world_remove_particles_in_box(world, lo, hi, &mut removed)
+                        }
+                        _ => {
+                            let mut removed = 0;
+                            mpm_world_remove_inactive_particles(world, &mut removed)
                         }
                     }
                 }

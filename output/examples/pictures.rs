@@ -54,7 +54,9 @@ fn main() -> std::io::Result<()> {
                 write_png(std::fs::File::create(path)?, &picture)?;
             }
             pictures.push(picture);
-            world.step(scene.frame_dt).expect("a frame's substeps");
+            scene
+                .frame(&mut world, scene.frame_dt)
+                .expect("a frame's substeps");
         }
         let path = out.join(format!("{}.gif", scene.name));
         write_gif(std::fs::File::create(&path)?, &pictures, 3)?;

@@ -7,7 +7,8 @@
 //! - [`write_csv`]: one frame as CSV, a row per particle, for spreadsheets and scripts;
 //! - [`picture`]: pictures without a window, PNG frames and animated GIFs;
 //! - [`scenes`]: the example scenes, defined once;
-//! - [`stiffness`]: the modulus that lets a material run in a chosen number of substeps a frame.
+//! - [`stiffness`]: the modulus that lets a material run in a chosen number of substeps a frame;
+//! - [`tap`]: a source that adds a stream of particles and a drain that removes them.
 //!
 //! The columns ([`columns`]): the position (`position + position_low`, in f64), velocity, mass,
 //! initial volume, material, status, `J`, the displacement gradient `H = F - I` (row major),
@@ -27,6 +28,7 @@
 pub mod picture;
 pub mod scenes;
 pub mod stiffness;
+pub mod tap;
 
 use mpm_gimp::{Dimension, Real, World};
 use std::fmt::Write as _;

@@ -12,10 +12,11 @@
 
 use crate::picture::Colour;
 use crate::stiffness::{modulus_for_substeps, youngs_modulus};
+use crate::tap::Tap;
 use mpm_gimp::{
     memory_requirements, Boundary, ColliderDef, ColliderShape, Contact, Dimension, Error, Face,
-    HeapBuffer, MaterialDef, MaterialModel, Real, ScalarBoundary, ScalarField, Transfer, Transport,
-    Vec3, World, WorldDef,
+    HeapBuffer, MaterialDef, MaterialModel, Real, ScalarBoundary, ScalarField, StepReport,
+    Transfer, Transport, Vec3, World, WorldDef,
 };
 
 /// One example scene: how to make it, how to show it, how long it runs.
@@ -30,6 +31,10 @@ pub struct Scene {
     /// Fills a world made from `def` (materials, particles, their scalars); returns how many
     /// particles it added.
     pub fill: fn(&mut World) -> Result<usize, Error>,
+    /// What the host does before each frame of the given length (s): most scenes nothing
+    /// ([`no_host`]); the tap pours and drains ([`crate::tap::Tap::frame`]). [`Scene::frame`]
+    /// calls it.
+    pub host: fn(&mut World, Real) -> Result<(), Error>,
     /// Simulated time of one frame, s (one [`World::step`] call).
     pub frame_dt: Real,
     /// Substeps a frame its materials were chosen for: its stiffest material is the stiffest
@@ -56,6 +61,18 @@ impl Scene {
     pub fn storage(def: &WorldDef) -> Result<HeapBuffer, Error> {
         Ok(HeapBuffer::new(memory_requirements(def)?.bytes))
     }
+
+    /// One frame of `dt` (s; the scene's [`Scene::frame_dt`], or a part of it): the host's
+    /// work between steps ([`Scene::host`]), then the step.
+    pub fn frame(&self, world: &mut World, dt: Real) -> Result<StepReport, Error> {
+        (self.host)(world, dt)?;
+        world.step(dt)
+    }
+}
+
+/// The host of a scene that needs none between frames.
+pub fn no_host(_: &mut World, _: Real) -> Result<(), Error> {
+    Ok(())
 }
 
 /// Every example scene, in menu order.
@@ -65,6 +82,7 @@ pub const ALL: &[Scene] = &[
         title: "Rubber block dropped on a stick floor",
         def: || drop_def(false, false),
         fill: drop_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: DROP_SUBSTEPS,
         frames: 60,
@@ -78,6 +96,7 @@ pub const ALL: &[Scene] = &[
         title: "The same block in 3D, seen along z",
         def: || drop_def(true, false),
         fill: drop_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: DROP_SUBSTEPS,
         frames: 60,
@@ -90,6 +109,7 @@ pub const ALL: &[Scene] = &[
         title: "Two rubber disks collide (APIC)",
         def: collide_def,
         fill: collide_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: COLLIDE_SUBSTEPS,
         frames: 90,
@@ -102,6 +122,7 @@ pub const ALL: &[Scene] = &[
         title: "Cantilever sags under gravity",
         def: beam_def,
         fill: beam_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: BEAM_SUBSTEPS,
         frames: 90,
@@ -116,6 +137,7 @@ pub const ALL: &[Scene] = &[
         title: "Block warmed by a hot floor",
         def: heat_def,
         fill: heat_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: HEAT_SUBSTEPS,
         frames: 120,
@@ -128,6 +150,7 @@ pub const ALL: &[Scene] = &[
         title: "Wooden block dropped into a water tank",
         def: water_def,
         fill: water_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: WATER_SUBSTEPS,
         frames: 90,
@@ -142,6 +165,7 @@ pub const ALL: &[Scene] = &[
         title: "Sand column collapses into a pile",
         def: sand_def,
         fill: sand_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: SAND_SUBSTEPS,
         frames: 75,
@@ -154,6 +178,7 @@ pub const ALL: &[Scene] = &[
         title: "Snowball thrown at a wall",
         def: snowball_def,
         fill: snowball_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: SNOWBALL_PACKED_SUBSTEPS,
         frames: 60,
@@ -166,6 +191,7 @@ pub const ALL: &[Scene] = &[
         title: "Weight dropped on a soft-metal cantilever bends it for good",
         def: metal_def,
         fill: metal_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: METAL_SUBSTEPS,
         frames: 60,
@@ -179,6 +205,7 @@ pub const ALL: &[Scene] = &[
         title: "A turning paddle stirs a water tank",
         def: paddle_def,
         fill: paddle_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: WATER_SUBSTEPS,
         frames: 120,
@@ -192,6 +219,7 @@ pub const ALL: &[Scene] = &[
         title: "Sand tumbles in a turning drum",
         def: drum_def,
         fill: drum_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: SAND_SUBSTEPS,
         frames: 120,
@@ -205,6 +233,7 @@ pub const ALL: &[Scene] = &[
         title: "A plough pushes a layer of snow into a bank",
         def: plough_def,
         fill: plough_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: SNOWBALL_PACKED_SUBSTEPS,
         frames: 60,
@@ -217,11 +246,25 @@ pub const ALL: &[Scene] = &[
         title: "A punch presses a dent into a soft-metal plate",
         def: punch_def,
         fill: punch_fill,
+        host: no_host,
         frame_dt: FRAME,
         substeps: METAL_SUBSTEPS,
         frames: 60,
         colour: Colour::Pressure,
         range: (-2.0e5, 2.0e5),
+        in_readme: true,
+    },
+    Scene {
+        name: "tap",
+        title: "A tap pours water into a basin that drains",
+        def: water_def,
+        fill: tap_fill,
+        host: tap_host,
+        frame_dt: FRAME,
+        substeps: WATER_SUBSTEPS,
+        frames: 120,
+        colour: Colour::Speed,
+        range: (0.0, 2.5),
         in_readme: true,
     },
 ];
@@ -796,6 +839,48 @@ fn punch_fill(world: &mut World) -> Result<usize, Error> {
             Vec3::ZERO,
         )?
         .len())
+}
+
+/// Water 0.05 m deep across the box's floor, which the tap ([`tap`]) fills and its drain
+/// empties. The stream lands at 4.1 m/s (1 m/s out of the nozzle, 0.8 m of fall): the
+/// water is the stiffest that [`WATER_SUBSTEPS`] substeps carry at 4.5 m/s.
+fn tap_fill(world: &mut World) -> Result<usize, Error> {
+    let def = world.def();
+    let (y0, wall) = (floor(&def), floor(&def));
+    let water = world.add_material(&MaterialDef {
+        bulk_modulus: modulus_for_substeps(&def, 1000.0, FRAME, WATER_SUBSTEPS, 4.5),
+        ..water(&def)
+    })?;
+    let ids = world.fill_box(
+        Vec3::new(wall, y0, 0.0),
+        Vec3::new(1.0 - wall, y0 + 0.05, 0.0),
+        water,
+        Vec3::ZERO,
+    )?;
+    Ok(ids.len())
+}
+
+/// The tap scene's tap: a stream 4 cm wide leaving a nozzle 0.8 m above the floor at
+/// 1 m/s (40 litres a second per metre of thickness), and a drain in the floor's right fifth,
+/// 5 cm deep. The basin settles where the drain takes what the tap gives.
+fn tap(def: &WorldDef) -> Tap {
+    let (y0, wall) = (floor(def), floor(def));
+    Tap {
+        nozzle: Vec3::new(0.3, y0 + 0.8, 0.0),
+        width: 0.04,
+        speed: 1.0,
+        material: 0,
+        density: 1000.0,
+        spacing: def.cell_size / def.particles_per_cell as Real,
+        drain: (
+            Vec3::new(0.8, y0, 0.0),
+            Vec3::new(1.0 - wall, y0 + 0.05, 0.0),
+        ),
+    }
+}
+
+fn tap_host(world: &mut World, dt: Real) -> Result<(), Error> {
+    tap(&world.def()).frame(world, dt).map(|_| ())
 }
 
 /// The water of the water and paddle scenes: weakly compressible, the stiffest that

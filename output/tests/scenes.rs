@@ -20,7 +20,7 @@ fn every_scene_runs_its_default_duration_stably() {
         assert_eq!(world.particle_count(), n, "{}", scene.name);
         let mut substeps = 0;
         for f in 0..scene.frames {
-            let report = world.step(scene.frame_dt).unwrap();
+            let report = scene.frame(&mut world, scene.frame_dt).unwrap();
             assert_eq!(report.frozen, 0, "{} frame {f}: {report:?}", scene.name);
             assert_eq!(report.escaped, 0, "{} frame {f}", scene.name);
             substeps += report.substeps;

@@ -142,25 +142,59 @@ impl<'a> World<'a> {
             let m = crate::num::matrix(|a, b| h[a][b][i]);
             Deformation::<D>::new(m, if axisymmetric { h[2][2][i] } else { 0.0 })
         };
-        // Checked in blocks, then written in blocks: a block's stresses are computed from
-        // the world read-only and written after (no allocation).
+        self.set_with_stress::<D>(
+            range,
+            |world, view, i, p| {
+                let f = deformation(i);
+                let finite = f.h.iter().flatten().all(|v| v.is_finite())
+                    && f.hzz.is_finite()
+                    && f.jm1 >= band[0]
+                    && f.jm1 <= band[1];
+                world.particle_stress(view, p, &f).filter(|_| finite)
+            },
+            |w, i, p| {
+                let cap = layout.padded_capacity;
+                for a in 0..D {
+                    for b in 0..D {
+                        w.real_col_mut(&layout, col::h(D, a, b), cap)[p] = h[a][b][i];
+                    }
+                }
+                if axisymmetric {
+                    w.real_col_mut(&layout, layout.hoop.first, cap)[p] = h[2][2][i];
+                }
+            },
+        )
+    }
+
+    /// The stress setters' one path, for particles `range`: `stress(world, view, i, p)` gives
+    /// the new `tau / rho0` of particle `p`, entry `i` of the input (`None` or a value that is
+    /// not finite: `InvalidDeformation`, nothing written). Computed in blocks from the world
+    /// read-only; when every particle passes, the blocks are computed again and written:
+    /// `write(world, i, p)` writes the particle's inputs, then its stress is stored (no
+    /// allocation).
+    pub(super) fn set_with_stress<const D: usize>(
+        &mut self,
+        range: Range<usize>,
+        stress: impl Fn(
+            &super::WorldRef<'_>,
+            &super::ParticlesView<'_>,
+            usize,
+            usize,
+        ) -> Option<[Real; 6]>,
+        mut write: impl FnMut(&mut Self, usize, usize),
+    ) -> Result<(), Error> {
+        let layout = Layout::of(&self.def());
         const BLOCK: usize = 64;
         let mut tau = [[0.0; 6]; BLOCK];
         for pass in [false, true] {
-            for start in (0..n).step_by(BLOCK) {
-                let len = BLOCK.min(n - start);
+            for start in (0..range.len()).step_by(BLOCK) {
+                let len = BLOCK.min(range.len() - start);
                 {
                     let world = self.read();
                     let view = world.particles();
                     for (k, tau) in tau.iter_mut().enumerate().take(len) {
                         let (i, p) = (start + k, range.start + start + k);
-                        let f = deformation(i);
-                        let finite = f.h.iter().flatten().all(|v| v.is_finite())
-                            && f.hzz.is_finite()
-                            && f.jm1 >= band[0]
-                            && f.jm1 <= band[1];
-                        let stress = world.particle_stress(&view, p, &f).filter(|_| finite);
-                        match stress {
+                        match stress(&world, &view, i, p) {
                             Some(s) if s.iter().all(|v| v.is_finite()) => *tau = s,
                             _ => return Err(Error::InvalidDeformation),
                         }
@@ -172,14 +206,7 @@ impl<'a> World<'a> {
                 let cap = layout.padded_capacity;
                 for (k, tau) in tau.iter().enumerate().take(len) {
                     let (i, p) = (start + k, range.start + start + k);
-                    for a in 0..D {
-                        for b in 0..D {
-                            self.real_col_mut(&layout, col::h(D, a, b), cap)[p] = h[a][b][i];
-                        }
-                    }
-                    if axisymmetric {
-                        self.real_col_mut(&layout, layout.hoop.first, cap)[p] = h[2][2][i];
-                    }
+                    write(self, i, p);
                     for (c, &v) in tau
                         .iter()
                         .enumerate()

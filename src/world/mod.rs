@@ -3,6 +3,7 @@
 //! phase order of a step lives in `step.rs` and only there ([`World::step`]).
 
 mod add;
+mod edit;
 mod effects;
 mod parallel;
 mod passes;
@@ -14,7 +15,7 @@ mod types;
 pub use crate::particles::StepReport;
 pub use query::WorldRef;
 pub use step::Phase;
-pub use types::{ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView};
+pub use types::{ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Removal};
 
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{validate, Header, Layout, TractionRecord, ALIGN};

@@ -719,9 +719,18 @@ impl WorldRef<'_> {
         i: usize,
         f: &Deformation<D>,
     ) -> Option<[Real; 6]> {
-        let rec = self
-            .materials(&self.layout())
-            .get(view.material[i] as usize)?;
+        self.particle_stress_of(view, i, view.material[i], f)
+    }
+
+    /// [`WorldRef::particle_stress`] with material `material` in place of the particle's own.
+    pub(super) fn particle_stress_of<const D: usize>(
+        &self,
+        view: &ParticlesView<'_>,
+        i: usize,
+        material: u32,
+        f: &Deformation<D>,
+    ) -> Option<[Real; 6]> {
+        let rec = self.materials(&self.layout()).get(material as usize)?;
         particle_stress(rec, f, eigenstrain_of(rec, view, i))
     }
 }

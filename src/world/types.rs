@@ -25,6 +25,25 @@ pub struct ParticleDef {
     pub material: u32,
 }
 
+/// Which particles [`World::remove_particles`] removes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Removal<'r> {
+    /// The particles of this id range.
+    Range(core::ops::Range<u32>),
+    /// The particles of these ids, in any order (an id given twice is removed once).
+    List(&'r [u32]),
+    /// Every particle whose position lies in the box from `min` to `max` (its faces included;
+    /// in 2D the z components are not read), whatever its status: a sink.
+    Box {
+        /// The lowest corner, m.
+        min: Vec3,
+        /// The highest corner, m.
+        max: Vec3,
+    },
+    /// Every particle that no longer takes part: escaped through an open face or frozen.
+    Inactive,
+}
+
 /// Particles as structure-of-arrays slices, all of one length, for [`World::add_particles`].
 /// In 2D the z slices may be empty.
 #[derive(Clone, Copy, Debug)]

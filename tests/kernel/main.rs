@@ -30,6 +30,7 @@ mod periodic;
 mod precision;
 mod reference;
 mod reliability;
+mod removal;
 mod robustness;
 mod threads;
 #[cfg(feature = "effects")]

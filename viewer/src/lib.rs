@@ -312,6 +312,7 @@ impl Sim {
         for _ in 0..calls {
             self.set_drag(drag)?;
             let mut world = World::reopen(self.storage.as_mut_bytes())?;
+            (self.scene.host)(&mut world, dt)?;
             let n = world.particle_count();
             let start = Instant::now();
             let report = step_on_every_core(&mut world, dt)?;

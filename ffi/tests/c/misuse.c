@@ -2586,6 +2586,105 @@ static void collider_misuse(void) {
     free(mem.raw);
 }
 
+/* Setting and removing particles: every refusal, then a removal of each kind that frees
+ * room for as many new particles. */
+static void particle_edit_misuse(void) {
+    MpmWorldDef d = def_2d();
+    MpmMemoryRequirements req;
+    Block mem;
+    MpmWorld *w = NULL;
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmIdRange ids;
+    uint32_t id = 7, removed = 7, n, list[3];
+    mpm_real x[2], y[2], nan_, far[2], fast[2];
+    const mpm_real *affine[9] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+    uint32_t mats[2] = {0, 0}, bad_mats[2] = {0, 9};
+
+    d.particle_capacity = 64;
+    if (mpm_memory_requirements(&d, &req) != MPM_STATUS_OK) {
+        fail("particles: setup", "mpm_memory_requirements refused the definition");
+    }
+    mem = block_new(req.bytes, req.align, 0);
+    if (mpm_world_init(&d, mem.at, req.bytes, &w) != MPM_STATUS_OK) {
+        fail("particles: setup", "mpm_world_init refused the definition");
+    }
+    track(w);
+    ACCEPTED("particles: material", 1, mpm_world_add_material(w, &m, &id));
+    ACCEPTED("particles: block", 1,
+             mpm_world_fill_box(w, v3(0.3, 0.3, 0), v3(0.5, 0.5, 0), 0, v3(0, 0, 0), &ids));
+    n = ids.count;
+    expect_true("particles: the block fills the capacity", n == 64);
+    x[0] = x[1] = R(0.4);
+    y[0] = y[1] = R(0.45);
+    nan_ = (mpm_real)NAN;
+    far[0] = far[1] = R(50.0);
+    fast[0] = fast[1] = R(1.0e30);
+
+    REFUSED("particles: positions NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_set_particle_positions(w, 0, x, NULL, NULL, 2));
+    REFUSED("particles: positions past the end", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_set_particle_positions(w, n - 1, x, y, NULL, 2));
+    REFUSED("particles: position outside", MPM_STATUS_POSITION_OUTSIDE_DOMAIN,
+            mpm_world_set_particle_positions(w, 0, far, y, NULL, 2));
+    y[1] = nan_;
+    REFUSED("particles: position NaN", MPM_STATUS_NON_FINITE_INPUT,
+            mpm_world_set_particle_positions(w, 0, x, y, NULL, 2));
+    REFUSED("particles: velocity NaN", MPM_STATUS_NON_FINITE_INPUT,
+            mpm_world_set_particle_velocities(w, 0, x, y, NULL, 2));
+    y[1] = R(0.45);
+    REFUSED("particles: velocity no step resolves", MPM_STATUS_STABLE_STEP_TOO_SHORT,
+            mpm_world_set_particle_velocities(w, 0, fast, y, NULL, 2));
+    REFUSED("particles: velocities in the world's memory", MPM_STATUS_OVERLAPPING_MEMORY,
+            mpm_world_set_particle_velocities(w, 0, (const mpm_real *)(const void *)w, y, NULL, 2));
+    REFUSED("particles: materials NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_set_particle_materials(w, 0, NULL, 2));
+    REFUSED("particles: material unknown", MPM_STATUS_UNKNOWN_MATERIAL,
+            mpm_world_set_particle_materials(w, 0, bad_mats, 2));
+    REFUSED("particles: affine NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_set_particle_affine(w, 0, NULL, 2));
+    REFUSED("particles: affine without APIC", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_set_particle_affine(w, 0, affine, 2));
+    REFUSED("particles: remove a range past the end", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_remove_particles(w, n - 1, 2, OUT(uint32_t)));
+    REFUSED("particles: remove a range past u32", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_remove_particles(w, 1, 0xFFFFFFFFu, OUT(uint32_t)));
+    REFUSED("particles: remove into NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_remove_particles(w, 0, 1, NULL));
+    list[0] = 1;
+    list[1] = n;
+    list[2] = 0;
+    REFUSED("particles: remove a list with an unknown id", MPM_STATUS_UNKNOWN_PARTICLE,
+            mpm_world_remove_particle_list(w, list, 3, OUT(uint32_t)));
+    REFUSED("particles: remove a NULL list", MPM_STATUS_NULL_POINTER,
+            mpm_world_remove_particle_list(w, NULL, 3, OUT(uint32_t)));
+    REFUSED("particles: remove a box with a NaN corner", MPM_STATUS_NON_FINITE_INPUT,
+            mpm_world_remove_particles_in_box(w, v3(NAN, 0, 0), v3(1, 1, 0), OUT(uint32_t)));
+    REFUSED("particles: remove a box inside out", MPM_STATUS_INVALID_REGION,
+            mpm_world_remove_particles_in_box(w, v3(1, 1, 0), v3(0, 0, 0), OUT(uint32_t)));
+    REFUSED("particles: the world is full", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
+            mpm_world_fill_box(w, v3(0.6, 0.3, 0), v3(0.65, 0.35, 0), 0, v3(0, 0, 0), &ids));
+
+    ACCEPTED("particles: move two", 1, mpm_world_set_particle_positions(w, 0, x, y, NULL, 2));
+    ACCEPTED("particles: give two a velocity", 1,
+             mpm_world_set_particle_velocities(w, 0, y, x, NULL, 2));
+    ACCEPTED("particles: give two their material", -1,
+             mpm_world_set_particle_materials(w, 0, mats, 2));
+    ACCEPTED("particles: remove two by range", 1, mpm_world_remove_particles(w, 4, 2, &removed));
+    expect_true("particles: two removed by range", removed == 2);
+    list[1] = 1;
+    ACCEPTED("particles: remove by a list (a repeat)", 1,
+             mpm_world_remove_particle_list(w, list, 3, &removed));
+    expect_true("particles: two removed by list", removed == 2);
+    ACCEPTED("particles: remove the moved ones by box", -1,
+             mpm_world_remove_particles_in_box(w, v3(0.39, 0.44, 0), v3(0.41, 0.46, 0), &removed));
+    ACCEPTED("particles: nothing inactive", 0, mpm_world_remove_inactive_particles(w, &removed));
+    expect_true("particles: nothing inactive to remove", removed == 0);
+    ACCEPTED("particles: the room is free again", 1,
+             mpm_world_fill_box(w, v3(0.6, 0.3, 0), v3(0.65, 0.35, 0), 0, v3(0, 0, 0), &ids));
+    untrack(w);
+    free(mem.raw);
+}
+
 int main(void) {
     MpmMemoryRequirements req2, req3, reqe2, reqe3, reqa;
     Block mem2, mem3, meme2, meme3, mema;
@@ -2714,6 +2813,7 @@ int main(void) {
     copy_misuse();
     capacity_misuse();
     collider_misuse();
+    particle_edit_misuse();
     status_strings();
 
     /* After all of it both worlds still step. */

@@ -1,0 +1,311 @@
+//! Changing particles after they are in: their position, velocity, affine matrix and material
+//! (each validated as [`World::add_particles`] validates, all or nothing), and removing them,
+//! which frees their room for later additions.
+
+use super::add::speed_resolvable;
+use super::{GeomAny, Removal, World};
+use crate::layout::{col, Layout, TractionRecord};
+use crate::material::Deformation;
+use crate::particles::ACTIVE;
+use crate::{Error, Real};
+use core::mem::size_of;
+
+/// The status a particle the removal takes out carries during the call (no stored status has
+/// it: [`crate::ParticleStatus`] uses 0 to 2).
+const REMOVED: u32 = 3;
+
+impl World<'_> {
+    /// Moves particles `first..first + n` to `position` (one slice per axis, `n` values each;
+    /// in 2D the z slice is not read): a teleport. The part of each position that rounding
+    /// left out (`position_low`) is cleared; the deformation and velocity stay.
+    /// `LengthMismatch`, `UnknownParticle`, `NonFiniteInput`, `PositionOutsideDomain` as
+    /// [`World::add_particles`] checks them; nothing is changed unless every value passes.
+    pub fn set_particle_positions(
+        &mut self,
+        first: u32,
+        position: [&[Real]; 3],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let (d, geom) = (def.axes(), GeomAny::new(&def));
+        let range = self.vectors_range(first, &position[..d])?;
+        for i in 0..range.len() {
+            let x: [Real; 3] = core::array::from_fn(|a| if a < d { position[a][i] } else { 0.0 });
+            if !x.iter().all(|c| c.is_finite()) {
+                return Err(Error::NonFiniteInput);
+            }
+            if !geom.admits(x) {
+                return Err(Error::PositionOutsideDomain);
+            }
+        }
+        let layout = Layout::of(&def);
+        for (a, values) in position.iter().enumerate().take(d) {
+            self.real_col_mut(&layout, col::x(a), range.end)[range.clone()].copy_from_slice(values);
+            self.real_col_mut(&layout, col::x_low(d, a), range.end)[range.clone()].fill(0.0);
+        }
+        Ok(())
+    }
+
+    /// Gives particles `first..first + n` the velocity `velocity` (m/s, one slice per axis,
+    /// `n` values each; in 2D the z slice is not read): an impulse, or a kinematic particle
+    /// set before every step. `LengthMismatch`, `UnknownParticle`, `NonFiniteInput`, and
+    /// `StableStepTooShort` for a speed no stable step resolves, as [`World::add_particles`];
+    /// nothing is changed unless every value passes.
+    pub fn set_particle_velocities(
+        &mut self,
+        first: u32,
+        velocity: [&[Real]; 3],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let d = def.axes();
+        let range = self.vectors_range(first, &velocity[..d])?;
+        for i in 0..range.len() {
+            let v: [Real; 3] = core::array::from_fn(|a| if a < d { velocity[a][i] } else { 0.0 });
+            if !v.iter().all(|c| c.is_finite()) {
+                return Err(Error::NonFiniteInput);
+            }
+            if !speed_resolvable(&def, v) {
+                return Err(Error::StableStepTooShort);
+            }
+        }
+        let layout = Layout::of(&def);
+        for (a, values) in velocity.iter().enumerate().take(d) {
+            self.real_col_mut(&layout, col::v(d, a), range.end)[range.clone()]
+                .copy_from_slice(values);
+        }
+        Ok(())
+    }
+
+    /// Sets the affine matrix of particles `first..first + n` as [`crate::ParticlesView::affine`]
+    /// holds it (APIC's `B_p`, m^2/s; `C_p`, 1/s, with linear shapes and MLS-MPM's gradient
+    /// form): `affine[a][b]` holds `n` values of entry `(a, b)`, the first `D` rows and columns
+    /// read. Zero is no affine motion; a copy of the view's values restores them.
+    /// `EffectNotDeclared` unless the transfer is APIC or MLS-MPM; `LengthMismatch`,
+    /// `UnknownParticle`, `NonFiniteInput`; nothing is changed unless every value passes.
+    pub fn set_particle_affine(
+        &mut self,
+        first: u32,
+        affine: [[&[Real]; 3]; 3],
+    ) -> Result<(), Error> {
+        let def = self.def();
+        let (d, layout) = (def.axes(), Layout::of(&def));
+        let group = (layout.affine.count > 0).then_some(layout.affine.first);
+        let mut columns: [&[Real]; 9] = [&[]; 9];
+        for a in 0..d {
+            for b in 0..d {
+                columns[a * d + b] = affine[a][b];
+            }
+        }
+        let columns = &columns[..d * d];
+        self.write_particle_columns(
+            &layout,
+            group,
+            first,
+            columns,
+            Error::NonFiniteInput,
+            |_| Ok(()),
+        )
+    }
+
+    /// Gives particles `first..first + n` the materials `material` as adding them would: the
+    /// plastic history restarts at 0 and the stress is the new material's at the particle's
+    /// current deformation (with the eigenstrain of its temperature and concentration).
+    /// `UnknownParticle`; `UnknownMaterial` for an id not added; `InvalidDeformation` where the
+    /// new material gives a stress that is not finite; nothing is changed unless every
+    /// particle passes.
+    pub fn set_particle_materials(&mut self, first: u32, material: &[u32]) -> Result<(), Error> {
+        if self.def().axes() == 3 {
+            self.set_materials::<3>(first, material)
+        } else {
+            self.set_materials::<2>(first, material)
+        }
+    }
+
+    fn set_materials<const D: usize>(&mut self, first: u32, material: &[u32]) -> Result<(), Error> {
+        let def = self.def();
+        let layout = Layout::of(&def);
+        let range = self.particle_range(first, material.len())?;
+        let known = self.material_count() as u32;
+        if material.iter().any(|&m| m >= known) {
+            return Err(Error::UnknownMaterial);
+        }
+        self.set_with_stress::<D>(
+            range,
+            |world, view, i, p| {
+                let h = crate::num::matrix(|a, b| view.displacement_gradient[a][b][p]);
+                let hoop = view.hoop.get(p).copied().unwrap_or(0.0);
+                let f = Deformation::<D>::new(h, hoop);
+                world.particle_stress_of(view, p, material[i], &f)
+            },
+            |w, i, p| {
+                let cap = layout.padded_capacity;
+                w.u32_col_mut(&layout, col::MATERIAL, cap)[p] = material[i];
+                if layout.plastic.count > 0 {
+                    w.real_col_mut(&layout, layout.plastic.first, cap)[p] = 0.0;
+                }
+            },
+        )
+    }
+
+    /// `first..first + n` for the `D` slices of a vector setter: `LengthMismatch` unless they
+    /// have one length `n`, `UnknownParticle` unless those particles exist.
+    fn vectors_range(
+        &self,
+        first: u32,
+        slices: &[&[Real]],
+    ) -> Result<core::ops::Range<usize>, Error> {
+        let n = slices.first().map_or(0, |s| s.len());
+        if slices.iter().any(|s| s.len() != n) {
+            return Err(Error::LengthMismatch);
+        }
+        self.particle_range(first, n)
+    }
+
+    /// Removes the particles `which` selects and returns how many it removed. The others keep
+    /// their order and every column of theirs (so the step that follows is the step of a
+    /// world built with them alone, to the bit): a particle moves down by the number removed
+    /// before it, which is how a host follows its ids. The room they held is free for later
+    /// additions. Tractions on removed particles are removed too (those after them move down,
+    /// as with [`World::remove_tractions`]); the others follow their particle.
+    ///
+    /// O(n) for n particles: one pass over each particle column. `UnknownParticle` for a
+    /// range or an id not in the world, `NonFiniteInput` for a box corner that is not finite,
+    /// `InvalidRegion` for a box with `min > max` on an axis; nothing is removed then.
+    pub fn remove_particles(&mut self, which: Removal<'_>) -> Result<usize, Error> {
+        let def = self.def();
+        let (d, count) = (def.axes(), self.particle_count());
+        match which {
+            Removal::Range(ref r) if r.start > r.end || r.end as usize > count => {
+                return Err(Error::UnknownParticle)
+            }
+            Removal::List(ids) if ids.iter().any(|&i| i as usize >= count) => {
+                return Err(Error::UnknownParticle)
+            }
+            Removal::Box { min, max } => {
+                if !(0..d).all(|a| min[a].is_finite() && max[a].is_finite()) {
+                    return Err(Error::NonFiniteInput);
+                }
+                if (0..d).any(|a| min[a] > max[a]) {
+                    return Err(Error::InvalidRegion);
+                }
+            }
+            _ => {}
+        }
+        let layout = Layout::of(&def);
+        self.mark_removed(&layout, count, &which);
+        Ok(self.compact(&layout, count))
+    }
+
+    /// Gives the particles `which` selects the status [`REMOVED`].
+    fn mark_removed(&mut self, layout: &Layout, count: usize, which: &Removal<'_>) {
+        let d = layout.d;
+        let (_, particles) = self.buf[..layout.grid_offset].split_at_mut(layout.particle_offset);
+        let (reals, u32s) =
+            particles.split_at_mut(layout.particle_real_columns * layout.real_column_bytes);
+        let status = &mut u32s[layout.u32_column_bytes..layout.u32_column_bytes + 4 * count];
+        let status: &mut [u32] = bytemuck::cast_slice_mut(status);
+        match *which {
+            Removal::Range(ref r) => status[r.start as usize..r.end as usize].fill(REMOVED),
+            Removal::List(ids) => ids.iter().for_each(|&i| status[i as usize] = REMOVED),
+            Removal::Box { min, max } => {
+                let x: [&[Real]; 3] = core::array::from_fn(|a| {
+                    let start = col::x(a.min(d - 1)) * layout.real_column_bytes;
+                    bytemuck::cast_slice(&reals[start..start + count * size_of::<Real>()])
+                });
+                for (i, s) in status.iter_mut().enumerate() {
+                    if (0..d).all(|a| x[a][i] >= min[a] && x[a][i] <= max[a]) {
+                        *s = REMOVED;
+                    }
+                }
+            }
+            Removal::Inactive => status
+                .iter_mut()
+                .filter(|s| **s != ACTIVE)
+                .for_each(|s| *s = REMOVED),
+        }
+    }
+
+    /// Removes the particles marked [`REMOVED`] from every particle column (the others moved
+    /// down in their order, the freed entries zeroed as a new world's are) and from the
+    /// traction table; returns how many.
+    fn compact(&mut self, layout: &Layout, count: usize) -> usize {
+        let used = self.header().traction_count as usize;
+        let (head, particles) = self.buf[..layout.grid_offset].split_at_mut(layout.particle_offset);
+        let (reals, u32s) =
+            particles.split_at_mut(layout.particle_real_columns * layout.real_column_bytes);
+        let (material, status) = u32s.split_at_mut(layout.u32_column_bytes);
+        let material: &mut [u32] = bytemuck::cast_slice_mut(&mut material[..4 * count]);
+        let status: &mut [u32] = bytemuck::cast_slice_mut(&mut status[..4 * count]);
+        let mut tractions = used;
+        if used > 0 {
+            // Each kept particle's status carries, above its two bits, how many particles
+            // before it go (its id moves down by that much; below 2^30 particles, it fits):
+            // the tractions read their particle's new id there.
+            let mut before = 0u32;
+            for s in status.iter_mut() {
+                if *s == REMOVED {
+                    before += 1;
+                } else {
+                    *s |= before << 2;
+                }
+            }
+            let start = layout.tractions_offset;
+            let records: &mut [TractionRecord] = bytemuck::cast_slice_mut(
+                &mut head[start..start + used * size_of::<TractionRecord>()],
+            );
+            tractions = 0;
+            for t in 0..used {
+                let mut r = records[t];
+                let s = status[r.particle as usize];
+                if s & 3 != REMOVED {
+                    r.particle -= s >> 2;
+                    records[tractions] = r;
+                    tractions += 1;
+                }
+            }
+        }
+        let column_bytes = count * size_of::<Real>();
+        let d = layout.d;
+        let mut min_mass = f64::INFINITY;
+        for j in 0..layout.particle_real_columns {
+            let start = j * layout.real_column_bytes;
+            let column: &mut [Real] =
+                bytemuck::cast_slice_mut(&mut reals[start..start + column_bytes]);
+            let kept = compact_column(column, status);
+            if j == col::mass(d) {
+                min_mass = column[..kept]
+                    .iter()
+                    .fold(min_mass, |m, &v| m.min(v as f64));
+            }
+        }
+        compact_column(material, status);
+        // The status last: it says which entries go.
+        let mut kept = 0;
+        for i in 0..count {
+            let s = status[i] & 3;
+            if s != REMOVED {
+                status[kept] = s;
+                kept += 1;
+            }
+        }
+        status[kept..].fill(0);
+        let h = self.header_mut();
+        h.particle_count = kept as u64;
+        h.min_particle_mass = min_mass;
+        h.traction_count = tractions as u64;
+        count - kept
+    }
+}
+
+/// Moves the entries of `column` whose particle stays (`status`, as long, not [`REMOVED`] in
+/// its two low bits) down, in their order, and zeroes the rest; returns how many stay.
+fn compact_column<T: Copy + Default>(column: &mut [T], status: &[u32]) -> usize {
+    let mut kept = 0;
+    for (i, &s) in status.iter().enumerate().take(column.len()) {
+        if s & 3 != REMOVED {
+            column[kept] = column[i];
+            kept += 1;
+        }
+    }
+    column[kept..].fill(T::default());
+    kept
+}
