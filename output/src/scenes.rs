@@ -862,7 +862,8 @@ fn tap_fill(world: &mut World) -> Result<usize, Error> {
 
 /// The tap scene's tap: a stream 4 cm wide leaving a nozzle 0.8 m above the floor at
 /// 1 m/s (40 litres a second per metre of thickness), and a drain in the floor's right fifth,
-/// 5 cm deep. The basin settles where the drain takes what the tap gives.
+/// 5 cm deep. The basin settles where the drain takes what the tap gives: about 600
+/// particles, at most 613 over a minute (`cargo run --release --example tap`).
 fn tap(def: &WorldDef) -> Tap {
     let (y0, wall) = (floor(def), floor(def));
     Tap {

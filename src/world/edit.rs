@@ -201,8 +201,8 @@ impl World<'_> {
         let (_, particles) = self.buf[..layout.grid_offset].split_at_mut(layout.particle_offset);
         let (reals, u32s) =
             particles.split_at_mut(layout.particle_real_columns * layout.real_column_bytes);
-        let status = &mut u32s[layout.u32_column_bytes..layout.u32_column_bytes + 4 * count];
-        let status: &mut [u32] = bytemuck::cast_slice_mut(status);
+        let status = col::STATUS * layout.u32_column_bytes;
+        let status: &mut [u32] = bytemuck::cast_slice_mut(&mut u32s[status..status + 4 * count]);
         match *which {
             Removal::Range(ref r) => status[r.start as usize..r.end as usize].fill(REMOVED),
             Removal::List(ids) => ids.iter().for_each(|&i| status[i as usize] = REMOVED),
@@ -232,6 +232,8 @@ impl World<'_> {
         let (head, particles) = self.buf[..layout.grid_offset].split_at_mut(layout.particle_offset);
         let (reals, u32s) =
             particles.split_at_mut(layout.particle_real_columns * layout.real_column_bytes);
+        // The u32 columns: the material, then the status.
+        const _: () = assert!(col::MATERIAL == 0 && col::STATUS == 1);
         let (material, status) = u32s.split_at_mut(layout.u32_column_bytes);
         let material: &mut [u32] = bytemuck::cast_slice_mut(&mut material[..4 * count]);
         let status: &mut [u32] = bytemuck::cast_slice_mut(&mut status[..4 * count]);
