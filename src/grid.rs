@@ -733,11 +733,12 @@ impl<const D: usize> Geom<D> {
     /// `v` (E20, E94): a stick wall's own (along its plane); a slip wall's `v` without its
     /// normal part, and with Coulomb friction, where the node presses on it, on the part along
     /// the plane relative to the wall's velocity. `None` where it leaves `v` as it is but its
-    /// normal part (a frictionless slip wall; an open face: nothing).
+    /// normal part (a frictionless slip wall). An open or periodic face has no wall (the
+    /// callers pass stick and slip faces, [`Geom::for_each_wall_node`]): `v` as it is.
     pub fn wall_law(&self, axis: usize, side: usize, v: [Real; D]) -> Option<[Real; D]> {
         let wall = self.wall_velocity[axis][side];
         match self.faces[axis][side] {
-            Boundary::Open | Boundary::Periodic => None,
+            Boundary::Open | Boundary::Periodic => Some(v),
             Boundary::Stick => Some(core::array::from_fn(
                 |a| {
                     if a == axis {

@@ -249,10 +249,22 @@ pub fn block_lattice(
     v: impl Fn([Real; 3]) -> [Real; 3],
 ) {
     let n = (side / spacing).round() as usize;
-    let nz = if d == 3 { n } else { 1 };
+    box_lattice(cols, d, at, [n; 3], spacing, v);
+}
+
+/// [`block_lattice`] for a box of `sites[a]` sites along each axis `a < d`.
+pub fn box_lattice(
+    cols: &mut [Vec<Real>; 6],
+    d: usize,
+    at: [Real; 3],
+    sites: [usize; 3],
+    spacing: Real,
+    v: impl Fn([Real; 3]) -> [Real; 3],
+) {
+    let nz = if d == 3 { sites[2] } else { 1 };
     for k in 0..nz {
-        for j in 0..n {
-            for i in 0..n {
+        for j in 0..sites[1] {
+            for i in 0..sites[0] {
                 let ijk = [i, j, k];
                 let x: [Real; 3] = core::array::from_fn(|a| {
                     if a < d {

@@ -41,27 +41,15 @@ fn fill(
     let d = def.axes();
     let m = def.shape.margin_cells();
     let spacing = def.cell_size / 2.0;
-    let n: [u32; 3] = core::array::from_fn(|a| if a < d { 2 * (def.cells[a] - 2 * m) } else { 1 });
-    let mut cols: [Vec<Real>; 6] = Default::default();
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                let ijk = [i, j, k];
-                let x: [Real; 3] = core::array::from_fn(|a| {
-                    if a < d {
-                        (ijk[a] as Real + 0.5) * spacing
-                    } else {
-                        0.0
-                    }
-                });
-                let vel = v(x);
-                for a in 0..3 {
-                    cols[a].push(x[a]);
-                    cols[3 + a].push(vel[a]);
-                }
-            }
+    let sites = core::array::from_fn(|a| {
+        if a < d {
+            2 * (def.cells[a] - 2 * m) as usize
+        } else {
+            1
         }
-    }
+    });
+    let mut cols: [Vec<Real>; 6] = Default::default();
+    box_lattice(&mut cols, d, [0.0; 3], sites, spacing, v);
     let count = cols[0].len();
     let vol = spacing.powi(d as i32);
     world

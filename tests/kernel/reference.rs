@@ -2570,6 +2570,15 @@ fn axisymmetric_form_steps_as_the_reference_does() {
     }
 }
 
+/// 2D, the axisymmetric form (which comes with the `effects` feature) and 3D.
+fn dimension_forms() -> Vec<Dimension> {
+    let mut forms = vec![Dimension::Plane2D, Dimension::ThreeD];
+    if cfg!(feature = "effects") {
+        forms.insert(1, Dimension::Axisymmetric2D);
+    }
+    forms
+}
+
 /// FLIP moving the particles with their own new velocity (E27), in 2D, the axisymmetric
 /// form and 3D, with two shape families and every order, free, against walls and with the
 /// declared effects (damping among them), in every instance of the passes this CPU runs,
@@ -2581,15 +2590,7 @@ fn flip_with_the_particle_velocity_steps_as_the_reference_does() {
     if cfg!(feature = "effects") {
         scenes.push(Scene::Effects);
     }
-    for dim in [
-        Dimension::Plane2D,
-        Dimension::Axisymmetric2D,
-        Dimension::ThreeD,
-    ] {
-        // The axisymmetric form comes with the `effects` feature.
-        if dim == Dimension::Axisymmetric2D && !cfg!(feature = "effects") {
-            continue;
-        }
+    for dim in dimension_forms() {
         for shape in [ShapeFunction::Gimp, ShapeFunction::QuadraticBspline] {
             for order in ORDERS {
                 for &scene in &scenes {
@@ -2614,14 +2615,7 @@ fn flip_with_the_particle_velocity_steps_as_the_reference_does() {
 /// Without the affine part the diagnostics were 6 % to 15 % low on this block.
 #[test]
 fn affine_kinetic_energy_is_what_the_transfer_carries() {
-    for dim in [
-        Dimension::Plane2D,
-        Dimension::Axisymmetric2D,
-        Dimension::ThreeD,
-    ] {
-        if dim == Dimension::Axisymmetric2D && !cfg!(feature = "effects") {
-            continue;
-        }
+    for dim in dimension_forms() {
         for shape in SHAPES {
             let b_spline = matches!(
                 shape,
@@ -2852,14 +2846,7 @@ fn periodic_faces_act_as_the_reference_does() {
     if cfg!(feature = "effects") {
         transfers.push(Transfer::Apic);
     }
-    for dim in [
-        Dimension::Plane2D,
-        Dimension::Axisymmetric2D,
-        Dimension::ThreeD,
-    ] {
-        if dim == Dimension::Axisymmetric2D && !cfg!(feature = "effects") {
-            continue;
-        }
+    for dim in dimension_forms() {
         for shape in [ShapeFunction::Gimp, ShapeFunction::CubicBspline] {
             for order in ORDERS {
                 for &transfer in &transfers {
