@@ -54,6 +54,42 @@ pub(crate) enum Whole {
     Value(usize),
 }
 
+/// The node columns a view carves ([`GridCols::carve_columns`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Part {
+    All,
+    /// All but the column a tile reads whole.
+    AllBut(Whole),
+    AllButRemap,
+    /// The re-map columns alone.
+    Remap,
+}
+
+/// What a node column holds, for [`Part::holds`].
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Column {
+    Mass,
+    /// Velocity or acceleration.
+    Motion,
+    Remap,
+    /// A transported field's nodal values.
+    Value(usize),
+    /// A transported field's other columns.
+    Scalar,
+}
+
+impl Part {
+    fn holds(self, column: Column) -> bool {
+        match self {
+            Part::All => true,
+            Part::AllBut(Whole::Mass) => column != Column::Mass,
+            Part::AllBut(Whole::Value(f)) => column != Column::Value(f),
+            Part::AllButRemap => column != Column::Remap,
+            Part::Remap => column == Column::Remap,
+        }
+    }
+}
+
 /// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
 /// node `first`, and the stencil rows that start at nodes `first..first + rows` are the view's
 /// to add to ([`Tile::ALL`]: the whole grid). A tile of the parallel scatter is a slab of whole
@@ -306,7 +342,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             unsafe { Carver::window(region, tile.first..end) },
             layout,
             tile,
-            None,
+            Part::All,
         )
     }
 
@@ -326,7 +362,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
         let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
         // SAFETY: as required of the caller.
         let c = unsafe { Carver::window(region, tile.first..end) };
-        let mut g = Self::carve_columns(c, layout, tile, Some(w));
+        let mut g = Self::carve_columns(c, layout, tile, Part::AllBut(w));
         g.whole = whole;
         g
     }
@@ -346,28 +382,55 @@ impl<'a, const D: usize> GridCols<'a, D> {
             rows: 0,
         };
         // SAFETY: as required of the caller.
-        Self::carve_columns(unsafe { Carver::window(region, nodes) }, layout, tile, None)
+        Self::carve_columns(
+            unsafe { Carver::window(region, nodes) },
+            layout,
+            tile,
+            Part::All,
+        )
     }
 
-    fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, leave: Option<Whole>) -> Self {
+    /// The re-map columns of `tile` alone (the others empty): what a tile of MUSL's parallel
+    /// particle pass adds to ([`GridCols::carve_all_but_remap`] the columns it reads).
+    ///
+    /// # Safety
+    /// As for [`GridCols::carve_tile`], for the re-map columns alone.
+    pub unsafe fn carve_tile_remap(region: &Shared<'a, u8>, layout: &Layout, tile: Tile) -> Self {
+        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        // SAFETY: as required of the caller.
+        let c = unsafe { Carver::window(region, tile.first..end) };
+        Self::carve_columns(c, layout, tile, Part::Remap)
+    }
+
+    /// Every column of every node but the re-map ones (left empty).
+    ///
+    /// # Safety
+    /// No other view of these columns is alive while this one is.
+    pub unsafe fn carve_all_but_remap(region: &Shared<'a, u8>, layout: &Layout) -> Self {
+        // SAFETY: as required of the caller.
+        let c = unsafe { Carver::window(region, 0..usize::MAX) };
+        Self::carve_columns(c, layout, Tile::ALL, Part::AllButRemap)
+    }
+
+    fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, part: Part) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
         let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
-        // The next column, or nothing where it is `leave`.
-        let take = |c: &mut Carver<'a>, column: Option<Whole>| {
-            if column.is_some() && column == leave {
+        // The next column, or nothing where `part` leaves it out.
+        let take = |c: &mut Carver<'a>, column: Column| {
+            if part.holds(column) {
+                c.take(b, n)
+            } else {
                 c.skip(b);
                 &mut [][..]
-            } else {
-                c.take(b, n)
             }
         };
-        let mass = take(&mut c, Some(Whole::Mass));
-        let vel = core::array::from_fn(|_| take(&mut c, None));
-        let acc = core::array::from_fn(|_| take(&mut c, None));
+        let mass = take(&mut c, Column::Mass);
+        let vel = core::array::from_fn(|_| take(&mut c, Column::Motion));
+        let acc = core::array::from_fn(|_| take(&mut c, Column::Motion));
         let remap = core::array::from_fn(|_| {
             if has_remap {
-                take(&mut c, None)
+                take(&mut c, Column::Remap)
             } else {
                 &mut [][..]
             }
@@ -375,15 +438,21 @@ impl<'a, const D: usize> GridCols<'a, D> {
         let scalar = core::array::from_fn(|f| {
             core::array::from_fn(|k| {
                 if layout.scalar_grid[f] {
-                    take(&mut c, (k == 2).then_some(Whole::Value(f)))
+                    let column = if k == 2 {
+                        Column::Value(f)
+                    } else {
+                        Column::Scalar
+                    };
+                    take(&mut c, column)
                 } else {
                     &mut [][..]
                 }
             })
         });
         let vel: [&mut [Real]; D] = vel;
+        let remap: [&mut [Real]; D] = remap;
         GridCols {
-            len: vel[0].len(),
+            len: vel[0].len().max(remap[0].len()),
             mass,
             vel,
             acc,

@@ -92,6 +92,63 @@ pub(crate) struct ParticleCols<'a, const D: usize> {
     pub status: &'a mut [u32],
 }
 
+/// The columns MUSL's re-map reads of a window of particles, read only: what a tile of the
+/// parallel particle pass reads of the particles another item updated (`world::parallel`,
+/// [`crate::phases::g2p::remap`]). Optional columns not reserved are empty.
+pub(crate) struct RemapCols<'a, const D: usize> {
+    pub x_start: [&'a [Real]; D],
+    pub v: [&'a [Real]; D],
+    pub mass: &'a [Real],
+    pub affine: [[&'a [Real]; D]; D],
+    pub stretch: [&'a [Real]; D],
+    pub status: &'a [u32],
+}
+
+impl<'a, const D: usize> RemapCols<'a, D> {
+    /// The particles `window` of the shared particle region, particle `window.start` their
+    /// first value (the columns where [`ParticleCols::carve_window`] finds them: the layout's
+    /// column order).
+    ///
+    /// # Safety
+    /// No view that may change these particles is alive while this one is.
+    pub unsafe fn read(region: &Shared<'a, u8>, layout: &Layout, window: Range<usize>) -> Self {
+        let (rb, ub, n) = (
+            layout.real_column_bytes,
+            layout.u32_column_bytes,
+            layout.padded_capacity,
+        );
+        let (start, end) = (window.start.min(n), window.end.min(n));
+        let size = size_of::<Real>();
+        let real = |column: usize| -> &'a [Real] {
+            let at = column * rb;
+            // SAFETY: column `column`'s bytes, cut to the window; the caller keeps writers
+            // away.
+            bytemuck::cast_slice(unsafe { region.read(at + start * size..at + end * size) })
+        };
+        let group = |g: crate::layout::ColumnGroup, k: usize| -> &'a [Real] {
+            if k < g.count {
+                real(g.first + k)
+            } else {
+                &[]
+            }
+        };
+        // The u32 columns follow the Real ones: material, then status.
+        let at = layout.particle_real_columns * rb + ub;
+        // SAFETY: as for `real`.
+        let status = unsafe { region.read(at + start * 4..at + end * 4) };
+        RemapCols {
+            x_start: core::array::from_fn(|a| group(layout.x_start, a)),
+            v: core::array::from_fn(|a| real(D + a)),
+            mass: real(2 * D),
+            affine: core::array::from_fn(|a| {
+                core::array::from_fn(|b| group(layout.affine, a * D + b))
+            }),
+            stretch: core::array::from_fn(|a| group(layout.stretch, a)),
+            status: bytemuck::cast_slice(status),
+        }
+    }
+}
+
 /// Hands out consecutive column slices of a byte region, each cut to a window of its values
 /// (all of them, or the part of each column one item of a parallel pass works on).
 pub(crate) struct Carver<'a> {
@@ -315,6 +372,32 @@ impl StepReport {
     }
 }
 
+impl crate::layout::Partial {
+    /// Adds `part`, whose particle 0 is particle `first`, in any order: the counts add and
+    /// the frozen ids keep the least 8 in order, so the parts of a pass absorbed in any order
+    /// give the report one worker gives ([`StepReport::merge`] of the result). Each part's
+    /// ids are its least, in order (an item updates its particles in order).
+    pub(crate) fn absorb(&mut self, part: &crate::layout::Partial, first: u32) {
+        self.stopped += part.stopped;
+        self.escaped += part.escaped;
+        self.frozen += part.frozen;
+        self.runaway += part.runaway;
+        let cap = self.first_frozen.len();
+        let n = (part.first_count as usize).min(part.first_frozen.len());
+        for &id in &part.first_frozen[..n] {
+            let id = first + id;
+            let len = (self.first_count as usize).min(cap);
+            let at = self.first_frozen[..len].partition_point(|&k| k < id);
+            if at == cap {
+                break; // The rest of the part's ids are larger still.
+            }
+            self.first_frozen.copy_within(at..cap - 1, at + 1);
+            self.first_frozen[at] = id;
+            self.first_count = (len + 1).min(cap) as u32;
+        }
+    }
+}
+
 /// The least plastic history of the active particles of material `m` (`status`'s length;
 /// `material` and `plastic` at least as long), `Real::INFINITY` where it has none: the
 /// material's fastest particle where its wave speed falls as the history grows
@@ -393,6 +476,89 @@ pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Parts absorbed in any order keep the least 8 frozen ids in order and every count:
+    /// what [`StepReport::merge`] of the parts in particle order keeps.
+    #[test]
+    fn absorbed_parts_keep_the_least_frozen_ids_in_order() {
+        use crate::layout::Partial;
+        // Parts of particles 0..100, 100..200, ..: part k froze ids k*100 + (3 j + k) % 40.
+        let part = |k: u32| {
+            let mut r = StepReport::default();
+            for j in 0..(k % 5 + 3) {
+                r.note_frozen((3 * j + k) % 40 + j, j % 2 == 0);
+            }
+            r.stopped = k;
+            r.to_partial()
+        };
+        let mut in_order = StepReport::default();
+        for k in 0..6 {
+            in_order.merge(&part(k), k * 100);
+        }
+        for order in [[5, 4, 3, 2, 1, 0], [2, 0, 5, 1, 4, 3], [0, 1, 2, 3, 4, 5]] {
+            let mut acc = Partial::default();
+            for k in order {
+                acc.absorb(&part(k), k * 100);
+            }
+            let mut merged = StepReport::default();
+            merged.merge(&acc, 0);
+            assert_eq!(merged, in_order, "{order:?}");
+        }
+    }
+
+    /// [`RemapCols::read`] finds each column where [`ParticleCols::carve_window`] does, for
+    /// every optional group a definition may reserve.
+    #[test]
+    fn remap_columns_are_the_views_columns() {
+        use crate::{ShapeFunction, Transfer, UpdateOrder, WorldDef};
+        for (shape, transfer) in [
+            (ShapeFunction::Gimp, Transfer::Flip),
+            (ShapeFunction::CpGimp, Transfer::Apic),
+            (ShapeFunction::CubicBspline, Transfer::Apic),
+        ] {
+            let def = WorldDef {
+                particle_capacity: 100,
+                update_order: UpdateOrder::Musl,
+                shape,
+                transfer,
+                ..WorldDef::DEFAULT
+            };
+            let layout = Layout::of(&def);
+            // 8-byte aligned, as the columns' casts need.
+            let mut words = [0u64; 1 << 13];
+            let region = Shared::new(bytemuck::cast_slice_mut::<u64, u8>(&mut words));
+            for window in [0..32, 32..96, 64..128] {
+                // SAFETY: one view at a time, both only compared.
+                let cols =
+                    unsafe { ParticleCols::<2>::carve_window(&region, &layout, window.clone()) };
+                let (x_start, v, mass) = (
+                    cols.x_start[1].as_ptr(),
+                    cols.v[1].as_ptr(),
+                    cols.mass.as_ptr(),
+                );
+                let (affine, stretch) = (cols.affine[1][0].as_ptr(), cols.stretch[1].as_ptr());
+                let (status, len) = (cols.status.as_ptr(), cols.status.len());
+                let reserved = (!cols.affine[1][0].is_empty(), !cols.stretch[1].is_empty());
+                // SAFETY: as above.
+                let r = unsafe { RemapCols::<2>::read(&region, &layout, window) };
+                assert_eq!(
+                    (r.x_start[1].as_ptr(), r.v[1].as_ptr(), r.mass.as_ptr()),
+                    (x_start, v, mass)
+                );
+                assert_eq!((r.status.as_ptr(), r.status.len()), (status, len));
+                assert_eq!(
+                    (!r.affine[1][0].is_empty(), !r.stretch[1].is_empty()),
+                    reserved
+                );
+                if reserved.0 {
+                    assert_eq!(r.affine[1][0].as_ptr(), affine);
+                }
+                if reserved.1 {
+                    assert_eq!(r.stretch[1].as_ptr(), stretch);
+                }
+            }
+        }
+    }
 
     /// [`least_plastic`] finds what a particle-by-particle scan finds, over every length to 48
     /// (full chunks and tails), with three materials, inactive particles and NaN histories.

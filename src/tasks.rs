@@ -140,6 +140,18 @@ impl<'a, T> Shared<'a, T> {
         // disjoint.
         unsafe { core::slice::from_raw_parts_mut(self.ptr.add(start), end - start) }
     }
+
+    /// The values `r` of the region (clipped to its end), to read.
+    ///
+    /// # Safety
+    /// No window ([`Shared::window`]) that overlaps `r` is alive at the same time: items may
+    /// read the same values at once, but none may change them meanwhile.
+    pub unsafe fn read(&self, r: Range<usize>) -> &'a [T] {
+        let end = r.end.min(self.len);
+        let start = r.start.min(end);
+        // SAFETY: as for `window`, inside the region; the caller keeps every writer away.
+        unsafe { core::slice::from_raw_parts(self.ptr.add(start), end - start) }
+    }
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::particles::StepReport;
-use crate::particles::{ParticleCols, ESCAPED, FROZEN};
+use crate::particles::{ParticleCols, RemapCols, ACTIVE, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
 use crate::simd::lanes::{commit, live_lanes, load_into, Block, Lane, Lanes};
 use crate::simd::rows::{self, Compare};
@@ -356,9 +356,8 @@ pub(crate) fn particles<
     // with (E76).
     let (mut v_move, mut a_move) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     let mut weights = super::momentum::Weights::zero();
-    // MUSL: what the re-map scatters (it reads no stress).
+    // MUSL: what the re-map scatters.
     let mut products = Products::zero();
-    let (no_tau, no_force) = ([[0.0; W]; 6], [[0.0; W]; D]);
     // The constants of the update and the walls, made once per pass.
     let step = update::Step::<I>::new(dt, ctx.beta, ctx.particle_velocity);
     let faces: [_; D] = core::array::from_fn(|a| update::Faces::<I>::of(geom, a));
@@ -505,20 +504,80 @@ pub(crate) fn particles<
             // An active lane was committed: its velocity is v_new. The B_p of a family that
             // keeps the gradient form are zero here: its C_p is taken from this re-map (see
             // `commit_gradient_affine`).
-            let adds = Adds {
-                mode: Mode::Remap,
-                forces: false,
-                apic,
-            };
-            products.set::<I, K, S>(&st, &mass, &v_new, &no_tau, &no_force, &affine, adds);
-            let (stride, pr) = (geom.stride, &products);
-            if apic {
-                const REMAP: u8 = rows(Mode::Remap, true);
-                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, remap, adds);
-            } else {
-                const REMAP: u8 = rows(Mode::Remap, false);
-                I::scatter_chunk::<D, K, S, W, REMAP>(&mut st, pr, active, stride, remap, adds);
+            let chunk = (&*mass, &*v_new, &*affine, active);
+            remap_rows::<I, D, K, S, W>(ctx, &mut st, &mut products, chunk, remap);
+        }
+    }
+}
+
+/// MUSL's re-map of one chunk (E30): its new momenta (and APIC's affine momenta) weighed with
+/// the stencils `st` where the substep started, added to the re-map columns of `remap` for
+/// the lanes `active` (the products of a scatter: [`scatter_chunk`]).
+#[inline(always)]
+fn remap_rows<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    ctx: &Ctx<'_, D>,
+    st: &mut Stencils<D, K, W>,
+    products: &mut Products<D, W>,
+    (mass, v, affine, active): (&Lane<W>, &[Lane<W>; D], &LaneMat<D, W>, Lanes<W>),
+    remap: &mut GridCols<'_, D>,
+) {
+    let apic = ctx.apic;
+    let adds = Adds {
+        mode: Mode::Remap,
+        forces: false,
+        apic,
+    };
+    // What the re-map reads no stress nor force of: those products stay zero.
+    products.set_momenta::<I, K, S>(st, mass, v, affine, adds);
+    let stride = ctx.geom.stride;
+    if apic {
+        const REMAP: u8 = rows(Mode::Remap, true);
+        I::scatter_chunk::<D, K, S, W, REMAP>(st, products, active, stride, remap, adds);
+    } else {
+        const REMAP: u8 = rows(Mode::Remap, false);
+        I::scatter_chunk::<D, K, S, W, REMAP>(st, products, active, stride, remap, adds);
+    }
+}
+
+/// MUSL's re-map of particles another item of the parallel step updated (`world::parallel`):
+/// the rows of the chunks of `p` (its first `count` particles, updated, with the positions
+/// where the substep started) that `remap` holds, the same values [`particles`] adds when it
+/// re-maps them in its own pass.
+#[inline(always)]
+pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &RemapCols<'_, D>,
+    count: usize,
+    remap: &mut GridCols<'_, D>,
+) {
+    let mut st = Stencils::<D, K, W>::default();
+    let (mut x, mut v) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
+    let mut mass = Block([0.0; W]);
+    let mut affine = Block([[[0.0; W]; D]; D]);
+    let mut products = Products::zero();
+    // A family that keeps the gradient form re-maps no affine part (see `particles`).
+    let load_affine = ctx.apic && !S::GRADIENT_AFFINE;
+    for start in (0..count).step_by(W) {
+        for a in 0..D {
+            load_into(&mut x[a], p.x_start[a], start);
+            load_into(&mut v[a], p.v[a], start);
+        }
+        load_into(&mut mass, p.mass, start);
+        if load_affine {
+            for (a, row) in affine.iter_mut().enumerate() {
+                for (b, lanes) in row.iter_mut().enumerate() {
+                    load_into(lanes, p.affine[a][b], start);
+                }
             }
         }
+        let (apic, mls) = (ctx.apic, ctx.mls);
+        super::stencils_of::<I, D, K, S, W>(
+            &mut st, shape, ctx, &p.stretch, start, &x, apic, false, mls,
+        );
+        let n = W.min(count.saturating_sub(start));
+        let active = Lanes::equal(&crate::simd::lanes::load(p.status, start), ACTIVE).first_n(n);
+        let chunk = (&*mass, &*v, &*affine, active);
+        remap_rows::<I, D, K, S, W>(ctx, &mut st, &mut products, chunk, remap);
     }
 }

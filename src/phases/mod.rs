@@ -117,6 +117,31 @@ pub(crate) fn stencils<
     lanes: bool,
     mls: bool,
 ) {
+    let stretch = p.stretch.each_ref().map(|c| &**c);
+    stencils_of::<I, D, K, S, W>(st, shape, ctx, &stretch, start, x, affine, lanes, mls);
+}
+
+/// [`stencils`] with the particles' domain stretches (cpGIMP; empty columns for every other
+/// family) in place of their columns.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn stencils_of<
+    I: Compare,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
+    st: &mut Stencils<D, K, W>,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    stretch: &[&[Real]; D],
+    start: usize,
+    x: &[Lane<W>; D],
+    affine: bool,
+    lanes: bool,
+    mls: bool,
+) {
     let geom = &ctx.geom;
     // The positions in cell units from the grid's origin.
     let mut s = [[0.0; W]; D];
@@ -126,8 +151,8 @@ pub(crate) fn stencils<
         }
     }
     // cpGIMP's domain stretches; other families read none, and the chunk loads none.
-    let stretch: Option<[Lane<W>; D]> = if p.stretches() {
-        Some(core::array::from_fn(|a| load(p.stretch[a], start)))
+    let stretch: Option<[Lane<W>; D]> = if !stretch[0].is_empty() {
+        Some(core::array::from_fn(|a| load(stretch[a], start)))
     } else {
         None
     };

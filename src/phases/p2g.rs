@@ -69,18 +69,11 @@ pub(crate) fn scatter_rows<
     let mut f_ext = Block([[0.0; W]; D]);
     let mut affine = Block([[[0.0; W]; D]; D]);
     let mut products = Products::zero();
-    // MUSL's re-map scatter (the parallel step's; the serial one's is the particle pass's)
-    // weighs the new momenta with the stencils where the substep started. A family that keeps
-    // the gradient form re-maps no affine part: its C_p is taken from this re-map.
-    // (Only the full-row functions take it: the others compile none of it.)
-    let remap = Mode::of(MODE) == Mode::All && adds.mode == Mode::Remap;
-    let positions = if remap { &p.x_start } else { &p.x };
-    let load_affine = adds.apic && !(remap && S::GRADIENT_AFFINE);
     // A tile of the parallel scatter takes the chunks whose rows reach its slab (and adds
     // their rows in the slab alone, `row_sums`).
     for start in g.chunks(count, W, ctx.geom.stride[D - 1]) {
         for a in 0..D {
-            load_into(&mut x[a], positions[a], start);
+            load_into(&mut x[a], p.x[a], start);
             load_into(&mut v[a], p.v[a], start);
             if adds.forces {
                 load_into(&mut f_ext[a], p.force[a], start);
@@ -94,7 +87,7 @@ pub(crate) fn scatter_rows<
                 load_into(&mut tau[k], p.tau[k], start);
             }
         }
-        if load_affine {
+        if adds.apic {
             for (a, row) in affine.iter_mut().enumerate() {
                 for (b, lanes) in row.iter_mut().enumerate() {
                     load_into(lanes, p.affine[a][b], start);
@@ -106,19 +99,7 @@ pub(crate) fn scatter_rows<
         let live = crate::simd::lanes::live_lanes(p, start, count);
         products.set::<I, K, S>(&st, &mass, &v, &tau, &f_ext, &affine, adds);
         let stride = ctx.geom.stride;
-        if remap {
-            // The particle pass's re-map kernel: no scatter function of its own per form.
-            const APIC: u8 = rows(Mode::Remap, true);
-            const PLAIN: u8 = rows(Mode::Remap, false);
-            let pr = &products;
-            if adds.apic {
-                I::scatter_chunk::<D, K, S, W, APIC>(&mut st, pr, live, stride, g, adds);
-            } else {
-                I::scatter_chunk::<D, K, S, W, PLAIN>(&mut st, pr, live, stride, g, adds);
-            }
-        } else {
-            scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, stride, g, adds);
-        }
+        scatter_chunk::<I, D, K, S, W, MODE>(&mut st, &products, live, stride, g, adds);
     }
 }
 
@@ -174,6 +155,24 @@ impl<const D: usize, const W: usize> Products<D, W> {
                 }
             }
         }
+    }
+}
+
+impl<const D: usize, const W: usize> Products<D, W> {
+    /// [`Products::set`] for a scatter that adds no force (MUSL's re-map): the momenta alone.
+    #[inline(always)]
+    pub fn set_momenta<I: Compare, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        st: &Stencils<D, K, W>,
+        mass: &Lane<W>,
+        v: &[Lane<W>; D],
+        affine: &[[Lane<W>; D]; D],
+        adds: Adds,
+    ) {
+        debug_assert!(!adds.mode.force());
+        // Never read: the mode adds no force.
+        let (tau, force) = ([[0.0; W]; 6], [[0.0; W]; D]);
+        self.set::<I, K, S>(st, mass, v, &tau, &force, affine, adds);
     }
 }
 

@@ -9,33 +9,36 @@
 //!   of the world's scratch ([`Partial`]); the step merges them in item order, which is
 //!   particle order, as one worker fills it.
 //! - **Scatter**: the grid is cut into tiles, slabs of whole lines along the slowest axis
-//!   ([`Tile`]). A tile takes, in particle order, every chunk whose stencils reach its slab
-//!   and adds the rows in its slab alone: each node receives the same values in the same
-//!   order as from one worker's scatter, so every sum has the same bits. A row of a slab's
-//!   last line may add zeros to the first entries of the next line (a 4-wide row of a
-//!   3-node stencil at the end of its line): so the even tiles run, then the odd ones, and no
-//!   two neighbours ever run at once.
-//! - MUSL's re-map, which one worker scatters in the particle pass, is a scatter of its own
-//!   here (`p2g::scatter_rows` in `Mode::Remap`): the same rows from the stencils where the
-//!   substep started. Heat and diffusion's two scatters take tiles too, their flow's reading
-//!   the nodal values whole as the momentum approach's force reads the masses ([`Whole`]).
+//!   ([`Tile`], [`Tiles`]), cut where about as many groups of particles reach each. A tile
+//!   takes, in particle order, every chunk whose stencils reach its slab and adds the rows in
+//!   its slab alone: each node receives the same values in the same order as from one
+//!   worker's scatter, so every sum has the same bits. A row of a slab's last line may add
+//!   zeros to the first entries of the next line (a 4-wide row of a 3-node stencil at the
+//!   end of its line): so the even tiles run, then the odd ones, and no two neighbours ever
+//!   run at once. Heat and diffusion's two scatters take tiles too, their flow's reading the
+//!   nodal values whole as the momentum approach's force reads the masses ([`Whole`]).
+//! - **MUSL's particle pass** scatters the re-map as it updates, as one worker does: by the
+//!   same tiles, each updating the groups of particles it owns and re-mapping in particle
+//!   order the rows of every group that reaches it ([`Columns::particles_by_tiles`]). A
+//!   group another tile owns is read only once that tile is done ([`RemapCols`]).
 //!
 //! Races are ruled out by construction: every item's mutable view is carved from a window
 //! no other item of the same pass touches (particle ranges, tiles of one colour with a line
-//! between them), and what items share they only read. The walls, the tractions and a
+//! between them, the groups a tile owns), and what items share they only read. The walls, the tractions and a
 //! transported field's nodal values and rates run on the calling thread.
 
 use super::passes::{self, Passes};
 use crate::def::Transport;
 use crate::grid::{GridCols, Tile, Whole};
-use crate::layout::{ColliderImpulse, Layout, Partial, CHUNK};
-use crate::particles::{ParticleCols, StepReport};
+use crate::layout::{ColliderImpulse, Layout, Partial, CHUNK, REACH_GROUP};
+use crate::particles::{ParticleCols, RemapCols, StepReport};
 use crate::phases::grid_update::Nodes;
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::transport::{self, FieldPass};
 use crate::phases::Ctx;
 use crate::shape::{Shape1D, ROW};
 use crate::tasks::{self, Shared, TaskSystem};
+use core::ops::Range;
 
 /// The columns of a substep and the task system its passes run on: views carved on demand,
 /// the whole of them ([`Columns::full`]) or the windows of a parallel pass's items.
@@ -52,6 +55,9 @@ pub(crate) struct Columns<'b, const D: usize> {
     tasks: &'b dyn TaskSystem,
     /// Workers the passes are cut for: 1 runs every pass as one call on the calling thread.
     workers: usize,
+    /// The scatter's tiles, cut with the node box; `None` where there is one worker or the
+    /// grid is too small to cut.
+    tiles: Option<Tiles>,
 }
 
 impl<'b, const D: usize> Columns<'b, D> {
@@ -85,6 +91,7 @@ impl<'b, const D: usize> Columns<'b, D> {
             layout,
             tasks,
             workers,
+            tiles: None,
         }
     }
 
@@ -115,7 +122,21 @@ impl<'b, const D: usize> Columns<'b, D> {
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
         let reach = (self.workers > 1).then_some(&self.reach);
         let x = p.x.each_ref().map(|c| &**c);
-        passes::node_box::<D, K, S>(simd, &scan, geom, &x, p.status, count, reach)
+        let active = passes::node_box::<D, K, S>(simd, &scan, geom, &x, p.status, count, reach);
+        // The tiles need lines of at least a row's width (so that a row's spill into the
+        // next line stays within it).
+        let (lo, hi) = (active.lo[D - 1], active.hi[D - 1]);
+        let n = if self.workers == 1 || geom.nodes[0] < ROW {
+            1
+        } else {
+            (2 * self.workers).min(MAX_TILES).min(hi.saturating_sub(lo))
+        };
+        self.tiles = (n >= 2).then(|| {
+            // SAFETY: the scan is done; the table is only read here.
+            let reach = unsafe { self.reach.read(0..count.div_ceil(REACH_GROUP)) };
+            Tiles::balanced(n, lo..hi, geom.nodes[D - 1], geom.stride[D - 1], reach)
+        });
+        active
     }
 
     /// Every particle and node column.
@@ -142,7 +163,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         // The momentum approach's force reads the masses of every stencil node, past its tile
         // too.
         let whole = (ctx.momentum && adds.mode == Mode::Force).then_some(Whole::Mass);
-        self.scatter_tiles(ctx, whole, &|p, g| {
+        self.scatter_tiles(whole, &|p, g| {
             passes::scatter::<I, D, K, S, W>(shape, ctx, p, count, g, adds)
         });
     }
@@ -151,31 +172,12 @@ impl<'b, const D: usize> Columns<'b, D> {
     /// tiles read the column `whole` of every node, which none of them changes.
     fn scatter_tiles(
         &mut self,
-        ctx: &Ctx<'_, D>,
         whole: Option<Whole>,
         run: &(dyn Fn(&ParticleCols<'_, D>, &mut GridCols<'_, D>) + Sync),
     ) {
-        let stride = ctx.geom.stride[D - 1];
-        let lines = ctx.geom.nodes[D - 1];
-        // Tiles need lines of at least a row's width (so that a row's spill into the next
-        // line stays within it).
-        let tiles = if self.workers == 1 || ctx.geom.nodes[0] < ROW {
-            1
-        } else {
-            (2 * self.workers).min(ctx.active.hi[D - 1].saturating_sub(ctx.active.lo[D - 1]))
-        };
-        if tiles < 2 {
+        let Some(tiles) = self.tiles else {
             let (p, mut g) = self.full();
             return run(&p, &mut g);
-        }
-        // The lines of tile `t`: the node box's lines cut evenly, the first tile from line 0
-        // and the last to the grid's end (no stencil reaches past the box; the chunks a tile
-        // takes are those whose rows reach it, `GridCols::chunks`).
-        let (lo, hi) = (ctx.active.lo[D - 1], ctx.active.hi[D - 1]);
-        let bound = |t: usize| match t {
-            0 => 0,
-            t if t == tiles => lines,
-            t => lo + tasks::part(hi - lo, tiles, 1, t).start,
         };
         // SAFETY: the particle columns are only read while the tiles run.
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
@@ -191,8 +193,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         let (grid, layout, p) = (&self.grid, self.layout, &p);
         for colour in 0..2 {
             let item = |i: usize| {
-                let t = 2 * i + colour;
-                let tile = Tile::of_lines(bound(t)..bound(t + 1), stride);
+                let tile = tiles.tile(2 * i + colour);
                 // SAFETY: tiles of one colour have a tile of at least one line, which is at
                 // least ROW entries, between them, so their windows (rows + ROW entries) are
                 // disjoint; the particle view and `read` are read only.
@@ -205,7 +206,7 @@ impl<'b, const D: usize> Columns<'b, D> {
                 g.reach = reach;
                 run(p, &mut g);
             };
-            tasks::for_each(self.tasks, (tiles - colour).div_ceil(2), &item);
+            tasks::for_each(self.tasks, tiles.of_colour(colour), &item);
         }
     }
 
@@ -263,25 +264,137 @@ impl<'b, const D: usize> Columns<'b, D> {
         count: usize,
         report: &mut StepReport,
     ) {
-        if self.workers == 1 {
+        let musl = ctx.order == crate::UpdateOrder::Musl;
+        let tiles = self.tiles;
+        if self.workers == 1 || (musl && tiles.is_none()) {
             let (mut p, mut g) = self.full();
             let (read, mut remap) = g.split_remap();
             return I::particles::<D, K, S, W>(
                 shape, ctx, &mut p, count, &read, &mut remap, report,
             );
         }
-        self.particle_ranges(count, report, &|p, n, g, report| {
-            let mut none = GridCols::empty();
-            I::particles::<D, K, S, W>(shape, ctx, p, n, g, &mut none, report)
-        });
-        if ctx.order == crate::UpdateOrder::Musl {
-            let adds = Adds {
-                mode: Mode::Remap,
-                forces: false,
-                apic: ctx.apic,
-            };
-            self.scatter::<I, K, S, W>(shape, ctx, count, adds);
+        let Some(tiles) = tiles.filter(|_| musl) else {
+            return self.particle_ranges(count, report, &|p, n, g, report| {
+                let mut none = GridCols::empty();
+                I::particles::<D, K, S, W>(shape, ctx, p, n, g, &mut none, report)
+            });
+        };
+        let (p, layout) = (&self.particles.clone(), self.layout);
+        // The particles `r` by groups: their columns, to update, and to read for the re-map.
+        // SAFETY (both): `particles_by_tiles` hands a group to one item to update, and to
+        // others to read only once it is updated and no item changes it.
+        let update = |r: Range<usize>, g: &GridCols<'_, D>, remap: &mut GridCols<'_, D>| {
+            let mut part = StepReport::default();
+            let window = r.start..r.end.next_multiple_of(CHUNK);
+            let mut cols = unsafe { ParticleCols::carve_window(p, layout, window) };
+            I::particles::<D, K, S, W>(shape, ctx, &mut cols, r.len(), g, remap, &mut part);
+            part.to_partial()
+        };
+        let read = |r: Range<usize>, remap: &mut GridCols<'_, D>| {
+            let window = r.start..r.end.next_multiple_of(CHUNK);
+            let cols = unsafe { RemapCols::read(p, layout, window) };
+            I::remap::<D, K, S, W>(shape, ctx, &cols, r.len(), remap)
+        };
+        self.particles_by_tiles(count, &tiles, report, &update, &read);
+    }
+
+    /// MUSL's particle pass on several workers, with the re-map scatter inside it as one
+    /// worker runs it ([`Columns::particles`]): by the scatter's tiles, in two colours. A tile
+    /// takes, in particle order, the groups of particles ([`REACH_GROUP`]) whose stencils
+    /// reach its lines; it updates those it owns and re-maps their rows in its slab (`update`),
+    /// and re-maps the rows of the others, updated before (`read`). So every node receives
+    /// the same values in the same order as from one worker.
+    ///
+    /// A group that reaches one tile is that tile's; one that reaches two neighbours is the
+    /// even one's (the first colour's: the odd one reads it after). A group that reaches
+    /// three tiles or more (two of one colour), or none, is updated before the tiles run, by
+    /// ranges (`update` without re-map columns). So no group is changed while another item
+    /// reads it.
+    fn particles_by_tiles(
+        &mut self,
+        count: usize,
+        tiles: &Tiles,
+        report: &mut StepReport,
+        update: &(dyn Fn(Range<usize>, &GridCols<'_, D>, &mut GridCols<'_, D>) -> Partial + Sync),
+        read: &(dyn Fn(Range<usize>, &mut GridCols<'_, D>) + Sync),
+    ) {
+        let groups = count.div_ceil(REACH_GROUP);
+        // SAFETY: the node box wrote the table; it is only read here.
+        let reach: &[[u32; 2]] = unsafe { self.reach.window(0..groups) };
+        // The tile that updates group `k`, if one does.
+        let owner = |k: usize| -> Option<usize> {
+            let &[lo, hi] = reach.get(k)?;
+            let (a, b) = (tiles.of_line(lo as usize), tiles.of_line(hi as usize));
+            match lo <= hi {
+                true if a == b => Some(a),
+                true if b == a + 1 => Some(a + a % 2),
+                _ => None,
+            }
+        };
+        let particles = |k: Range<usize>| k.start * REACH_GROUP..(k.end * REACH_GROUP).min(count);
+        // SAFETY: the grid's columns but the re-map ones are only read while the items run.
+        let g = unsafe { GridCols::<D>::carve_all_but_remap(&self.grid, self.layout) };
+        let (grid, layout, partials, g) = (&self.grid, self.layout, &self.partials, &g);
+        let mut merged = Partial::default();
+        // The groups no tile owns, by ranges of groups.
+        if (0..groups).any(|k| owner(k).is_none()) {
+            let items = (crate::layout::SLOTS_PER_WORKER * self.workers).min(groups);
+            tasks::for_each(self.tasks, items, &|i| {
+                let mut part = Partial::default();
+                let mine = runs(tasks::part(groups, items, 1, i), |k| owner(k).is_none());
+                for (_, run) in mine.filter(|&(none, _)| none) {
+                    let r = particles(run);
+                    part.absorb(
+                        &update(r.clone(), g, &mut GridCols::empty()),
+                        r.start as u32,
+                    );
+                }
+                // SAFETY: item i alone writes slot i.
+                if let Some(slot) = unsafe { partials.window(i..i + 1) }.first_mut() {
+                    *slot = part;
+                }
+            });
+            // SAFETY: the items are done; this is the only view of the slots.
+            for slot in unsafe { self.partials.window(0..items) }.iter() {
+                merged.absorb(slot, 0);
+            }
         }
+        for colour in 0..2 {
+            tasks::for_each(self.tasks, tiles.of_colour(colour), &|i| {
+                let t = 2 * i + colour;
+                let tile = tiles.tile(t);
+                let slab = tile.slab(tiles.stride).unwrap_or(0..0);
+                // SAFETY: tiles of one colour are apart (as in `Columns::scatter_tiles`), and
+                // only the re-map columns are carved.
+                let mut remap = unsafe { GridCols::carve_tile_remap(grid, layout, tile) };
+                // Whether tile `t` updates group `k` (`Some(true)`), reads it or passes it.
+                let takes = |k: usize| {
+                    let [lo, hi] = reach[k];
+                    let reaches = (lo as usize) < slab.end && hi as usize >= slab.start;
+                    reaches.then(|| owner(k) == Some(t))
+                };
+                let mut part = Partial::default();
+                for (takes, run) in runs(0..groups, takes) {
+                    let r = particles(run);
+                    match takes {
+                        Some(true) => {
+                            part.absorb(&update(r.clone(), g, &mut remap), r.start as u32)
+                        }
+                        Some(false) => read(r, &mut remap),
+                        None => {}
+                    }
+                }
+                // SAFETY: tile t alone writes slot t.
+                if let Some(slot) = unsafe { partials.window(t..t + 1) }.first_mut() {
+                    *slot = part;
+                }
+            });
+        }
+        // SAFETY: the items are done; this is the only view of the slots.
+        for slot in unsafe { self.partials.window(0..tiles.n) }.iter() {
+            merged.absorb(slot, 0);
+        }
+        report.merge(&merged, 0);
     }
 
     /// Runs `f` on the grid cut into `slabs` slabs of whole lines along the slowest axis (the
@@ -346,9 +459,9 @@ impl<'b, const D: usize> Columns<'b, D> {
         run: &(dyn Fn(&ParticleCols<'_, D>, usize, FieldPass<'_, '_, D>) + Sync),
     ) {
         transport::reset(ctx, &mut self.grid().scalar[f]);
-        self.scatter_tiles(ctx, None, &|p, g| run(p, count, FieldPass::Capacity(g)));
+        self.scatter_tiles(None, &|p, g| run(p, count, FieldPass::Capacity(g)));
         transport::nodal_values(ctx, &mut self.grid().scalar[f], t);
-        self.scatter_tiles(ctx, Some(Whole::Value(f)), &|p, g| {
+        self.scatter_tiles(Some(Whole::Value(f)), &|p, g| {
             run(p, count, FieldPass::Flow(g))
         });
         let fixed = transport::nodal_rates(ctx, &mut self.grid().scalar[f], t, axisymmetric);
@@ -365,6 +478,114 @@ impl<'b, const D: usize> Columns<'b, D> {
             run(p, n, pass)
         });
     }
+}
+
+/// The most tiles a scatter is cut into: two per worker up to 64 workers.
+const MAX_TILES: usize = 128;
+
+/// The tiles of the parallel scatter: `n` slabs of whole lines along the slowest axis, the
+/// first from line 0 and the last to the grid's end (no stencil reaches past the node box).
+/// Tiles `0, 2, 4, ..` are the first colour, `1, 3, ..` the second: tiles of one colour have
+/// a tile between them, so they run at once.
+#[derive(Clone, Copy)]
+struct Tiles {
+    n: usize,
+    /// Nodes per line.
+    stride: usize,
+    /// The first line of each tile, then the grid's lines.
+    bounds: [u32; MAX_TILES + 1],
+}
+
+impl Tiles {
+    /// `n` tiles (at least 2, at most [`MAX_TILES`]) of the node box's lines `box_lines`, cut
+    /// where about as many groups of particles reach each (`reach`, [`GridCols::reach`]; the
+    /// lines evenly without one): the lines at the box's ends, which the stencils' edges
+    /// reach, carry less work than the others. The results do not depend on the cut.
+    fn balanced(
+        n: usize,
+        box_lines: Range<usize>,
+        lines: usize,
+        stride: usize,
+        reach: &[[u32; 2]],
+    ) -> Tiles {
+        const BINS: usize = 256;
+        let (lo, span) = (box_lines.start, box_lines.len());
+        // Bins of `per` lines of the box, each with the groups that reach it.
+        let per = span.div_ceil(BINS).max(1);
+        let mut weight = [0u32; BINS];
+        for &[a, b] in reach {
+            let (a, b) = (a as usize, b as usize);
+            if a > b || b < lo || a >= lo + span {
+                continue;
+            }
+            let (a, b) = (a.max(lo) - lo, b.min(lo + span - 1) - lo);
+            for w in &mut weight[a / per..=b / per] {
+                *w += 1;
+            }
+        }
+        let total: u64 = weight.iter().map(|&w| w as u64).sum();
+        let mut bounds = [lines as u32; MAX_TILES + 1];
+        bounds[0] = 0;
+        let (mut bin, mut sum) = (0, 0u64);
+        for t in 1..n {
+            let cut = if total == 0 {
+                lo + tasks::part(span, n, 1, t).start
+            } else {
+                // After the bin where the groups reached so far pass t / n of all.
+                while bin < BINS && sum * (n as u64) < total * t as u64 {
+                    sum += weight[bin] as u64;
+                    bin += 1;
+                }
+                lo + bin * per
+            };
+            // At least one line per tile, and room for the rest.
+            let least = if t == 1 {
+                lo + 1
+            } else {
+                bounds[t - 1] as usize + 1
+            };
+            bounds[t] = cut.max(least).min(lo + span - (n - t)) as u32;
+        }
+        Tiles { n, stride, bounds }
+    }
+
+    /// The first line of tile `t` (the grid's lines for `t == n`).
+    fn bound(&self, t: usize) -> usize {
+        self.bounds[t.min(self.n)] as usize
+    }
+
+    fn tile(&self, t: usize) -> Tile {
+        Tile::of_lines(self.bound(t)..self.bound(t + 1), self.stride)
+    }
+
+    /// The tile that holds line `line` (the last for a line past the grid).
+    fn of_line(&self, line: usize) -> usize {
+        self.bounds[1..self.n].partition_point(|&b| b as usize <= line)
+    }
+
+    /// How many tiles colour `c` (0 or 1) has.
+    fn of_colour(&self, c: usize) -> usize {
+        (self.n - c).div_ceil(2)
+    }
+}
+
+/// The runs of consecutive indices of `range` that `class` puts in one class, in order, each
+/// with its class.
+fn runs<T: PartialEq + Copy>(
+    range: Range<usize>,
+    class: impl Fn(usize) -> T,
+) -> impl Iterator<Item = (T, Range<usize>)> {
+    let mut next = range.start;
+    core::iter::from_fn(move || {
+        let start = next;
+        (start < range.end).then(|| {
+            let c = class(start);
+            next = (start + 1..range.end)
+                .find(|&k| class(k) != c)
+                .unwrap_or(range.end);
+            (c, start..next)
+        })
+    })
 }
 
 /// The fewest nodes a slab of a grid pass holds: the grid passes are a few operations per
@@ -401,5 +622,75 @@ impl<const D: usize> Nodes<D> for GridPasses<'_, '_, '_, D> {
             return f(&mut self.cols.grid());
         }
         self.cols.slabs(self.ctx, slabs, f);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::vec::Vec;
+
+    /// Balanced tiles cover the grid's lines in order, one line each at least, and cut where
+    /// the groups' reach is even: a box of 40 lines whose first 10 lines are reached by nine
+    /// times as many groups as the rest gives its first tiles a few lines each.
+    #[test]
+    fn balanced_tiles_cover_the_lines_and_even_out_the_groups() {
+        let mut reach = Vec::new();
+        for line in 10..50u32 {
+            let groups = if line < 20 { 9 } else { 1 };
+            reach.extend((0..groups).map(|_| [line, line + 2]));
+        }
+        reach.push([u32::MAX, 0]); // A group without an active particle.
+        for n in 2..=12 {
+            let t = Tiles::balanced(n, 10..52, 60, 7, &reach);
+            assert_eq!((t.bound(0), t.bound(n)), (0, 60), "{n}");
+            for k in 0..n {
+                assert!(t.bound(k) < t.bound(k + 1), "{n}: tile {k} empty");
+                for line in t.bound(k)..t.bound(k + 1) {
+                    assert_eq!(t.of_line(line), k, "{n}: line {line}");
+                }
+            }
+            // Each tile's share of the reached lines is within one line's worth of 1 / n.
+            let total: usize = reach.iter().filter(|r| r[0] <= r[1]).map(|_| 3).sum();
+            for k in 0..n {
+                let lines = t.bound(k)..t.bound(k + 1);
+                let work: usize = reach
+                    .iter()
+                    .filter(|r| r[0] <= r[1])
+                    .map(|r| {
+                        (r[0]..=r[1])
+                            .filter(|l| lines.contains(&(*l as usize)))
+                            .count()
+                    })
+                    .sum();
+                assert!(
+                    work <= total / n + 3 * 9 * 3,
+                    "{n}: tile {k} takes {work} of {total}"
+                );
+            }
+        }
+        // Without a reached group: the box's lines evenly.
+        let t = Tiles::balanced(4, 10..50, 60, 7, &[]);
+        assert_eq!((1..4).map(|k| t.bound(k)).collect::<Vec<_>>(), [20, 30, 40]);
+    }
+
+    /// The runs of a class cover the range in order, each of one class and longest.
+    #[test]
+    fn runs_are_the_longest_of_one_class() {
+        let class = |k: usize| (k / 3).is_multiple_of(2) || k == 10;
+        let got: Vec<_> = runs(1..12, class).collect();
+        assert_eq!(
+            got,
+            [
+                (true, 1..3),
+                (false, 3..6),
+                (true, 6..9),
+                (false, 9..10),
+                (true, 10..11),
+                (false, 11..12)
+            ]
+        );
+        assert_eq!(runs(5..5, class).count(), 0);
     }
 }

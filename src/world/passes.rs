@@ -13,7 +13,7 @@
 
 use crate::grid::{Geom, GridCols, NodeBox};
 use crate::layout::{CHUNK, REACH_GROUP, SLOTS_PER_WORKER};
-use crate::particles::{ParticleCols, StepReport};
+use crate::particles::{ParticleCols, RemapCols, StepReport};
 use crate::phases::kernels::Kernels;
 use crate::phases::p2g::{self, rows, Adds, Mode};
 use crate::phases::{g2p, stress, transport, Ctx};
@@ -49,6 +49,15 @@ crate::simd::instances! {
         remap: &mut GridCols<'_, D>,
         report: &mut StepReport,
     ) => g2p::particles;
+
+    /// [`g2p::remap`]: MUSL's re-map of particles another item of the parallel step updated.
+    fn remap [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        p: &RemapCols<'_, D>,
+        count: usize,
+        remap: &mut GridCols<'_, D>,
+    ) => g2p::remap;
 
     /// [`g2p::stress`].
     fn stress [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
@@ -102,9 +111,8 @@ crate::simd::instances! {
 /// rows would have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long
 /// in 3D (benches/PERFORMANCE.md).
 ///
-/// The re-map scatter (MUSL) is part of the particle pass (`g2p::particles`) for one worker;
-/// the parallel step's runs in the full-row functions ([`Mode::Remap`], which calls the
-/// particle pass's chunk kernel: `p2g::scatter_rows`).
+/// MUSL's re-map scatter is part of the particle pass (`g2p::particles`, and `g2p::remap` for
+/// the particles another item of the parallel step updated), never a scatter of its own.
 pub(crate) fn scatter<I: Passes, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
