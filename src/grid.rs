@@ -93,13 +93,16 @@ impl Part {
 /// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
 /// node `first`, and the stencil rows that start at nodes `first..first + rows` are the view's
 /// to add to ([`Tile::ALL`]: the whole grid). A tile of the parallel scatter is a slab of whole
-/// grid lines (rows run along x, so a row never straddles two), its columns `rows + ROW`
+/// grid lines (rows run along x, so a row never straddles two), its columns `rows + ROW - 1`
 /// long: a row of the slab's last line may reach the first entries of the next line (zeros;
-/// `world::parallel` never runs neighbouring tiles at once).
+/// `world::parallel` then never runs neighbouring tiles at once), unless no row reaches past
+/// its line's end ([`Tile::within_lines`]: the columns are the slab's alone).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Tile {
     pub first: usize,
     pub rows: usize,
+    /// The nodes of the tile's slab, whose sums it completes (`first..first + nodes`).
+    pub nodes: usize,
 }
 
 impl Tile {
@@ -107,6 +110,7 @@ impl Tile {
     pub const ALL: Tile = Tile {
         first: 0,
         rows: usize::MAX,
+        nodes: usize::MAX,
     };
 
     /// The tile of the grid lines `lines` along the slowest axis, whose stride is `stride`
@@ -115,14 +119,33 @@ impl Tile {
         Tile {
             first: lines.start * stride,
             rows: lines.len() * stride,
+            nodes: lines.len() * stride,
         }
+    }
+
+    /// [`Tile::of_lines`] for rows that never reach past their line's end: the rows that
+    /// start in the slab's last `ROW - 1` nodes are left out (none start there), so that the
+    /// columns (`rows + ROW - 1` entries) are the slab's alone and neighbouring tiles can
+    /// run at once.
+    pub fn within_lines(lines: core::ops::Range<usize>, stride: usize) -> Tile {
+        let t = Tile::of_lines(lines, stride);
+        Tile {
+            rows: t.rows.saturating_sub(ROW - 1),
+            ..t
+        }
+    }
+
+    /// The last entry past the tile's columns: rows added from its last row start reach
+    /// `ROW - 1` entries past it.
+    pub fn end(&self) -> usize {
+        self.first.saturating_add(self.rows).saturating_add(ROW - 1)
     }
 
     /// Where the stencil row that starts at node `row` starts in the tile's columns, if it is
     /// the tile's to add to: every row for the whole grid, the rows of its slab for a tile of
     /// the parallel scatter, which adds each row in the order the whole grid's scatter does. A
     /// row added at the place returned fits: for the whole grid, the caller checked the
-    /// stencil's rows ([`rows_fit`]); a tile's columns hold `rows + ROW` entries
+    /// stencil's rows ([`rows_fit`]); a tile's columns hold `rows + ROW - 1` entries
     /// ([`GridCols::lengths_consistent`]).
     #[inline(always)]
     pub fn own(&self, row: usize) -> Option<usize> {
@@ -134,7 +157,7 @@ impl Tile {
     /// `None` for the whole grid.
     pub fn slab(&self, stride: usize) -> Option<core::ops::Range<usize>> {
         (*self != Tile::ALL && stride > 0)
-            .then(|| self.first / stride..(self.first + self.rows) / stride)
+            .then(|| self.first / stride..(self.first + self.nodes) / stride)
     }
 }
 
@@ -225,7 +248,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
         let group = |cols: &[&mut [Real]]| {
             cols.iter().all(|c| c.len() == len) || cols.iter().all(|c| c.is_empty())
         };
-        let tile_fits = self.tile == Tile::ALL || self.tile.rows.saturating_add(ROW) <= len;
+        let tile_fits = self.tile == Tile::ALL || self.tile.rows.saturating_add(ROW - 1) <= len;
         (self.mass.len() == len || (self.mass.is_empty() && !self.whole.is_empty()))
             && group(&self.vel)
             && group(&self.acc)
@@ -334,9 +357,9 @@ impl<'a, const D: usize> GridCols<'a, D> {
     ///
     /// # Safety
     /// No other view of the region that overlaps the tile's entries (`tile.first..tile.first
-    /// + tile.rows + ROW`) is alive while this one is.
+    /// + tile.rows + ROW - 1`) is alive while this one is.
     pub unsafe fn carve_tile(region: &Shared<'a, u8>, layout: &Layout, tile: Tile) -> Self {
-        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        let end = tile.end();
         // SAFETY: as required of the caller.
         Self::carve_columns(
             unsafe { Carver::window(region, tile.first..end) },
@@ -359,7 +382,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
         w: Whole,
         whole: &'a [Real],
     ) -> Self {
-        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        let end = tile.end();
         // SAFETY: as required of the caller.
         let c = unsafe { Carver::window(region, tile.first..end) };
         let mut g = Self::carve_columns(c, layout, tile, Part::AllBut(w));
@@ -380,6 +403,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
         let tile = Tile {
             first: nodes.start,
             rows: 0,
+            nodes: nodes.len(),
         };
         // SAFETY: as required of the caller.
         Self::carve_columns(
@@ -396,7 +420,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
     /// # Safety
     /// As for [`GridCols::carve_tile`], for the re-map columns alone.
     pub unsafe fn carve_tile_remap(region: &Shared<'a, u8>, layout: &Layout, tile: Tile) -> Self {
-        let end = tile.first.saturating_add(tile.rows).saturating_add(ROW);
+        let end = tile.end();
         // SAFETY: as required of the caller.
         let c = unsafe { Carver::window(region, tile.first..end) };
         Self::carve_columns(c, layout, tile, Part::Remap)

@@ -35,7 +35,9 @@
 
 use mpm_gimp::tasks::Task;
 use mpm_gimp::TaskSystem;
-use rayon::{ThreadPool, ThreadPoolBuildError, ThreadPoolBuilder};
+use rayon::{ThreadPool, ThreadPoolBuildError, ThreadPoolBuilder, Yield};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
 
 /// The most ranges [`RayonTasks::parallel_for`](TaskSystem::parallel_for) cuts a pass into per
 /// worker (fewer when the pass's `min_range` allows fewer): more than one, so that a worker
@@ -94,10 +96,54 @@ impl RayonTasks {
     /// hundred nanoseconds), instead of handing every pass over from the calling thread and
     /// waiting for it (tens of microseconds each, a dozen passes a substep: the 2D default
     /// step on 2 workers took 1.25 times as long; benches/PERFORMANCE.md).
+    ///
+    /// Meanwhile the pool's other threads do not sleep between the passes: they spin, taking
+    /// whatever rayon work the pool has (the passes' ranges, and any rayon work of `f`'s
+    /// own), until `f` returns or unwinds. A thread woken for each pass made the 2D default
+    /// step on 2 workers about 3 % longer. So `f` should be the step, not the host's whole
+    /// frame. Called from a thread of the pool, or on a pool of one thread, it is
+    /// [`ThreadPool::install`]. A panic of `f` reaches the caller once the threads stop.
     pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
-        match &self.pool {
-            Some(pool) => pool.install(f),
-            None => f(),
+        let Some(pool) = &self.pool else {
+            return f();
+        };
+        if pool.current_num_threads() < 2 || pool.current_thread_index().is_some() {
+            return pool.install(f);
+        }
+        // Thread 0 runs `f`; the others take the passes' ranges as rayon's threads do
+        // (`yield_now` steals them), spinning in between rather than sleeping, until `f`
+        // returns or unwinds.
+        struct Release<'a>(&'a AtomicBool);
+        impl Drop for Release<'_> {
+            fn drop(&mut self) {
+                self.0.store(true, Ordering::Release);
+            }
+        }
+        let (f, out, done) = (
+            Mutex::new(Some(f)),
+            Mutex::new(None),
+            AtomicBool::new(false),
+        );
+        pool.broadcast(|ctx| {
+            if ctx.index() == 0 {
+                let _release = Release(&done);
+                let f = f.lock().ok().and_then(|mut f| f.take());
+                if let (Some(f), Ok(mut out)) = (f, out.lock()) {
+                    *out = Some(f());
+                }
+            } else {
+                while !done.load(Ordering::Acquire) {
+                    if pool.yield_now() != Some(Yield::Executed) {
+                        std::hint::spin_loop();
+                    }
+                }
+            }
+        });
+        match out.into_inner() {
+            Ok(Some(r)) => r,
+            // Thread 0 ran `f` once and stored its result, or unwound (which `broadcast`
+            // carries here before this point).
+            _ => unreachable!("install: the closure ran on thread 0"),
         }
     }
 

@@ -150,3 +150,21 @@ fn a_panic_reaches_the_caller() {
     // The pool still works.
     check(&tasks, 1000, 1);
 }
+
+/// `install` returns its closure's value, carries its panic to the caller (the pool's other
+/// threads, spinning meanwhile, are released), and runs rayon work handed to the pool inside
+/// it; the pool works after either.
+#[test]
+fn install_returns_unwinds_and_runs_rayon_work() {
+    let tasks = RayonTasks::new(3).expect("a pool");
+    assert_eq!(tasks.install(|| 7), 7);
+    let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        tasks.install(|| -> u32 { panic!("inside install") })
+    }));
+    assert!(caught.is_err());
+    let (a, b) = tasks.install(|| rayon::join(|| 1 + 1, rayon::current_thread_index));
+    assert_eq!(a, 2);
+    assert!(b.is_some_and(|i| i < 3));
+    tasks.install(|| check(&tasks, 1000, 1));
+    check(&tasks, 1000, 7);
+}

@@ -126,6 +126,20 @@ fn any_thread_count_steps_as_the_serial_step() {
     }
 }
 
+/// Inside `install` the pool's other threads take the passes spinning between them: the
+/// same bits.
+#[test]
+fn steps_inside_install_step_as_the_serial_step() {
+    let (mut def, fill) = snow_3d();
+    def.workers = WORKERS;
+    let reference = serial(&def, &fill);
+    for threads in THREADS {
+        let tasks = RayonTasks::new(threads).expect("a pool");
+        let state = tasks.install(|| on(&def, &fill, &tasks));
+        assert!(state == reference, "{threads} threads in install differ");
+    }
+}
+
 #[test]
 fn the_global_pool_steps_as_the_serial_step() {
     let tasks = RayonTasks::global();

@@ -305,7 +305,7 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
             // f_i = m_i sum_p (..): the nodal mass, a factor of every weighted particle's term,
             // on the nodes this view adds to (a tile's own; the whole grid's).
             let first = g.tile.first;
-            let own = first..first.saturating_add(g.tile.rows).min(first + g.len());
+            let own = first..first.saturating_add(g.tile.nodes).min(first + g.len());
             let m = if g.mass.is_empty() { g.whole } else { &*g.mass };
             let acc = &mut g.acc;
             ctx.active.for_each_line_in(stride, own, |r| {

@@ -124,17 +124,24 @@ impl<'b, const D: usize> Columns<'b, D> {
         let x = p.x.each_ref().map(|c| &**c);
         let active = passes::node_box::<D, K, S>(simd, &scan, geom, &x, p.status, count, reach);
         // The tiles need lines of at least a row's width (so that a row's spill into the
-        // next line stays within it).
+        // next line stays within it). Where no row reaches past its line's end, one tile per
+        // worker, all at once; else two, in two colours.
         let (lo, hi) = (active.lo[D - 1], active.hi[D - 1]);
+        let apart = active.hi[0] + active.tail <= geom.nodes[0];
         let n = if self.workers == 1 || geom.nodes[0] < ROW {
             1
         } else {
-            (2 * self.workers).min(MAX_TILES).min(hi.saturating_sub(lo))
+            let per_worker = if apart { 1 } else { 2 };
+            (per_worker * self.workers)
+                .min(MAX_TILES)
+                .min(hi.saturating_sub(lo))
         };
         self.tiles = (n >= 2).then(|| {
             // SAFETY: the scan is done; the table is only read here.
             let reach = unsafe { self.reach.read(0..count.div_ceil(REACH_GROUP)) };
-            Tiles::balanced(n, lo..hi, geom.nodes[D - 1], geom.stride[D - 1], reach)
+            let mut t = Tiles::balanced(n, lo..hi, geom.nodes[D - 1], geom.stride[D - 1], reach);
+            t.apart = apart;
+            t
         });
         active
     }
@@ -191,11 +198,10 @@ impl<'b, const D: usize> Columns<'b, D> {
             None => &[],
         };
         let (grid, layout, p) = (&self.grid, self.layout, &p);
-        for colour in 0..2 {
+        for colour in 0..tiles.colours() {
             let item = |i: usize| {
-                let tile = tiles.tile(2 * i + colour);
-                // SAFETY: tiles of one colour have a tile of at least one line, which is at
-                // least ROW entries, between them, so their windows (rows + ROW entries) are
+                let tile = tiles.tile(tiles.nth(colour, i));
+                // SAFETY: tiles of one colour are apart ([`Tiles`]), so their windows are
                 // disjoint; the particle view and `read` are read only.
                 let mut g = unsafe {
                     match whole {
@@ -305,11 +311,11 @@ impl<'b, const D: usize> Columns<'b, D> {
     /// and re-maps the rows of the others, updated before (`read`). So every node receives
     /// the same values in the same order as from one worker.
     ///
-    /// A group that reaches one tile is that tile's; one that reaches two neighbours is the
-    /// even one's (the first colour's: the odd one reads it after). A group that reaches
-    /// three tiles or more (two of one colour), or none, is updated before the tiles run, by
-    /// ranges (`update` without re-map columns). So no group is changed while another item
-    /// reads it.
+    /// A group that reaches one tile is that tile's. In two colours, one that reaches two
+    /// neighbours is the even one's (the first colour's: the odd one reads it after). Any
+    /// other group (one that reaches tiles that run at once, or none) is updated before the
+    /// tiles run, by ranges (`update` without re-map columns). So no group is changed while
+    /// another item reads it.
     fn particles_by_tiles(
         &mut self,
         count: usize,
@@ -327,7 +333,7 @@ impl<'b, const D: usize> Columns<'b, D> {
             let (a, b) = (tiles.of_line(lo as usize), tiles.of_line(hi as usize));
             match lo <= hi {
                 true if a == b => Some(a),
-                true if b == a + 1 => Some(a + a % 2),
+                true if b == a + 1 && !tiles.apart => Some(a + a % 2),
                 _ => None,
             }
         };
@@ -359,13 +365,13 @@ impl<'b, const D: usize> Columns<'b, D> {
                 merged.absorb(slot, 0);
             }
         }
-        for colour in 0..2 {
+        for colour in 0..tiles.colours() {
             tasks::for_each(self.tasks, tiles.of_colour(colour), &|i| {
-                let t = 2 * i + colour;
+                let t = tiles.nth(colour, i);
                 let tile = tiles.tile(t);
                 let slab = tile.slab(tiles.stride).unwrap_or(0..0);
-                // SAFETY: tiles of one colour are apart (as in `Columns::scatter_tiles`), and
-                // only the re-map columns are carved.
+                // SAFETY: tiles of one colour are apart ([`Tiles`]), and only the re-map
+                // columns are carved.
                 let mut remap = unsafe { GridCols::carve_tile_remap(grid, layout, tile) };
                 // Whether tile `t` updates group `k` (`Some(true)`), reads it or passes it.
                 let takes = |k: usize| {
@@ -485,11 +491,14 @@ const MAX_TILES: usize = 128;
 
 /// The tiles of the parallel scatter: `n` slabs of whole lines along the slowest axis, the
 /// first from line 0 and the last to the grid's end (no stencil reaches past the node box).
-/// Tiles `0, 2, 4, ..` are the first colour, `1, 3, ..` the second: tiles of one colour have
-/// a tile between them, so they run at once.
+/// Where no row reaches past its line's end, every tile's columns are its slab's alone
+/// ([`Tile::within_lines`]) and they all run at once (`apart`). Else a tile's rows may add
+/// zeros to the next tile's first entries: tiles `0, 2, 4, ..` are the first colour, `1, 3,
+/// ..` the second, and tiles of one colour, a tile between them, run at once.
 #[derive(Clone, Copy)]
 struct Tiles {
     n: usize,
+    apart: bool,
     /// Nodes per line.
     stride: usize,
     /// The first line of each tile, then the grid's lines.
@@ -546,7 +555,12 @@ impl Tiles {
             };
             bounds[t] = cut.max(least).min(lo + span - (n - t)) as u32;
         }
-        Tiles { n, stride, bounds }
+        Tiles {
+            n,
+            apart: false,
+            stride,
+            bounds,
+        }
     }
 
     /// The first line of tile `t` (the grid's lines for `t == n`).
@@ -555,7 +569,30 @@ impl Tiles {
     }
 
     fn tile(&self, t: usize) -> Tile {
-        Tile::of_lines(self.bound(t)..self.bound(t + 1), self.stride)
+        let lines = self.bound(t)..self.bound(t + 1);
+        if self.apart {
+            Tile::within_lines(lines, self.stride)
+        } else {
+            Tile::of_lines(lines, self.stride)
+        }
+    }
+
+    /// The colours the tiles run in, one after the other: 1 where they are apart, else 2.
+    fn colours(&self) -> usize {
+        if self.apart {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// Tile `i` of colour `c`.
+    fn nth(&self, c: usize, i: usize) -> usize {
+        if self.apart {
+            i
+        } else {
+            2 * i + c
+        }
     }
 
     /// The tile that holds line `line` (the last for a line past the grid).
@@ -563,9 +600,13 @@ impl Tiles {
         self.bounds[1..self.n].partition_point(|&b| b as usize <= line)
     }
 
-    /// How many tiles colour `c` (0 or 1) has.
+    /// How many tiles colour `c` has.
     fn of_colour(&self, c: usize) -> usize {
-        (self.n - c).div_ceil(2)
+        if self.apart {
+            self.n
+        } else {
+            (self.n - c).div_ceil(2)
+        }
     }
 }
 

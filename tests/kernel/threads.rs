@@ -94,6 +94,19 @@ fn scene<'a>(def: &WorldDef, material: &MaterialDef, buf: &'a mut [u8]) -> World
     let ids = world
         .fill_box(lo, hi, m, Vec3::new(0.4, -1.5, 0.2))
         .expect("block fits");
+    // And a slab two cells thick against the admissible region's end along x: the stencils
+    // there reach the grid's last node, whose rows reach past their line's end (the tiles
+    // then run in two colours).
+    let h = def.cell_size;
+    let x_max = def.origin.x + (def.cells[0] as Real - def.shape.margin_cells() as Real) * h;
+    let (slab_lo, slab_hi) = (
+        Vec3::new(x_max - 2.0 * h, lo.y, lo.z),
+        Vec3::new(x_max, hi.y, hi.z),
+    );
+    let slab = world
+        .fill_box(slab_lo, slab_hi, m, Vec3::new(0.0, -1.5, 0.0))
+        .expect("slab fits");
+    let ids = ids.start..slab.end;
     let n = ids.len();
     let ramp: Vec<Real> = (0..n).map(|i| (i % 17) as Real / 17.0).collect();
     let fx = def.effects;
