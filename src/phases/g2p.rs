@@ -572,9 +572,7 @@ pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, c
             }
         }
         let (apic, mls) = (ctx.apic, ctx.mls);
-        super::stencils_of::<I, D, K, S, W>(
-            &mut st, shape, ctx, &p.stretch, start, &x, apic, false, mls,
-        );
+        I::stencils::<D, K, S, W>(&mut st, shape, ctx, &p.stretch, start, &x, apic, false, mls);
         let n = W.min(count.saturating_sub(start));
         let active = Lanes::equal(&crate::simd::lanes::load(p.status, start), ACTIVE).first_n(n);
         let chunk = (&*mass, &*v, &*affine, active);

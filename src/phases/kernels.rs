@@ -11,7 +11,6 @@
 use super::{g2p, p2g, Ctx};
 use crate::grid::GridCols;
 use crate::layout::MaterialRecord;
-use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
 use crate::simd::lanes::{Lane, Lanes};
 use crate::simd::Isa;
@@ -33,21 +32,22 @@ crate::simd::instances! {
         out: &mut g2p::Gathered<D, W>,
     ) => g2p::gather_chunk;
 
-    /// [`super::stencils`]: one chunk's stencils, for the transport and momentum passes (one
-    /// function rather than a copy of the three families' code in each). The scatter, particle
-    /// and stress passes inline theirs: called out of line they made the default step 1.03
-    /// to 1.05 times as long (benches/PERFORMANCE.md, "Decisions").
+    /// [`super::stencils_of`]: one chunk's stencils, for the transport and momentum passes
+    /// and MUSL's re-map of particles another item updated (one function rather than a copy
+    /// of the three families' code in each). The scatter, particle and stress passes inline
+    /// theirs: called out of line they made the default step 1.03 to 1.05 times as long
+    /// (benches/PERFORMANCE.md, "Decisions").
     fn stencils [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         st: &mut Stencils<D, K, W>,
         shape: &S,
         ctx: &Ctx<'_, D>,
-        p: &ParticleCols<'_, D>,
+        stretch: &[&[crate::Real]; D],
         start: usize,
         x: &[Lane<W>; D],
         affine: bool,
         lanes: bool,
         mls: bool,
-    ) => crate::phases::stencils;
+    ) => crate::phases::stencils_of;
 
     /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
     /// particle pass's re-map).

@@ -248,7 +248,10 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
         for start in g.chunks(count, W, stride[D - 1]) {
             let live = live_lanes(p, start, count);
             load_chunk(p, start, &mut x, &mut mass, &mut tau);
-            I::stencils::<D, K, S, W>(&mut st, shape, ctx, p, start, &x, false, false, false);
+            let stretch = p.stretch.each_ref().map(|c| &**c);
+            I::stencils::<D, K, S, W>(
+                &mut st, shape, ctx, &stretch, start, &x, false, false, false,
+            );
             w.of::<I, K, S>(ctx, &st, &x, g.all_masses());
             let (carried, weighted) = (live & w.carried, live & w.with_weights);
             rest |= !carried.minus(weighted).is_empty();

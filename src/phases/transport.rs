@@ -420,7 +420,8 @@ fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, con
 ) -> Lanes<W> {
     let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
     // The shape functions' gradients, with MLS-MPM too.
-    I::stencils::<D, K, S, W>(st, shape, ctx, p, start, &x, false, true, false);
+    let stretch = p.stretch.each_ref().map(|c| &**c);
+    I::stencils::<D, K, S, W>(st, shape, ctx, &stretch, start, &x, false, true, false);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }

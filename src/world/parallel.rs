@@ -285,21 +285,18 @@ impl<'b, const D: usize> Columns<'b, D> {
                 I::particles::<D, K, S, W>(shape, ctx, p, n, g, &mut none, report)
             });
         };
-        let (p, layout) = (&self.particles.clone(), self.layout);
-        // The particles `r` by groups: their columns, to update, and to read for the re-map.
-        // SAFETY (both): `particles_by_tiles` hands a group to one item to update, and to
-        // others to read only once it is updated and no item changes it.
-        let update = |r: Range<usize>, g: &GridCols<'_, D>, remap: &mut GridCols<'_, D>| {
+        // A run of particles: updated (with the re-map where `remap` holds its columns), or
+        // re-mapped.
+        let update = |cols: &mut ParticleCols<'_, D>,
+                      n: usize,
+                      g: &GridCols<'_, D>,
+                      remap: &mut GridCols<'_, D>| {
             let mut part = StepReport::default();
-            let window = r.start..r.end.next_multiple_of(CHUNK);
-            let mut cols = unsafe { ParticleCols::carve_window(p, layout, window) };
-            I::particles::<D, K, S, W>(shape, ctx, &mut cols, r.len(), g, remap, &mut part);
+            I::particles::<D, K, S, W>(shape, ctx, cols, n, g, remap, &mut part);
             part.to_partial()
         };
-        let read = |r: Range<usize>, remap: &mut GridCols<'_, D>| {
-            let window = r.start..r.end.next_multiple_of(CHUNK);
-            let cols = unsafe { RemapCols::read(p, layout, window) };
-            I::remap::<D, K, S, W>(shape, ctx, &cols, r.len(), remap)
+        let read = |cols: &RemapCols<'_, D>, n: usize, remap: &mut GridCols<'_, D>| {
+            I::remap::<D, K, S, W>(shape, ctx, cols, n, remap)
         };
         self.particles_by_tiles(count, &tiles, report, &update, &read);
     }
@@ -321,8 +318,8 @@ impl<'b, const D: usize> Columns<'b, D> {
         count: usize,
         tiles: &Tiles,
         report: &mut StepReport,
-        update: &(dyn Fn(Range<usize>, &GridCols<'_, D>, &mut GridCols<'_, D>) -> Partial + Sync),
-        read: &(dyn Fn(Range<usize>, &mut GridCols<'_, D>) + Sync),
+        update: &Update<'_, D>,
+        read: &(dyn Fn(&RemapCols<'_, D>, usize, &mut GridCols<'_, D>) + Sync),
     ) {
         let groups = count.div_ceil(REACH_GROUP);
         // SAFETY: the node box wrote the table; it is only read here.
@@ -338,6 +335,23 @@ impl<'b, const D: usize> Columns<'b, D> {
             }
         };
         let particles = |k: Range<usize>| k.start * REACH_GROUP..(k.end * REACH_GROUP).min(count);
+        // The columns of the particles `r` (whole chunks), to update and to read.
+        // SAFETY (both): a group is handed to one item to update, and to others to read only
+        // once it is updated and no item changes it (see above).
+        let (p, layout) = (&self.particles.clone(), self.layout);
+        let update = |r: Range<usize>, g: &GridCols<'_, D>, remap: &mut GridCols<'_, D>| {
+            let window = r.start..r.end.next_multiple_of(CHUNK);
+            let mut cols = unsafe { ParticleCols::carve_window(p, layout, window) };
+            update(&mut cols, r.len(), g, remap)
+        };
+        let read = |r: Range<usize>, remap: &mut GridCols<'_, D>| {
+            let window = r.start..r.end.next_multiple_of(CHUNK);
+            read(
+                &unsafe { RemapCols::read(p, layout, window) },
+                r.len(),
+                remap,
+            )
+        };
         // SAFETY: the grid's columns but the re-map ones are only read while the items run.
         let g = unsafe { GridCols::<D>::carve_all_but_remap(&self.grid, self.layout) };
         let (grid, layout, partials, g) = (&self.grid, self.layout, &self.partials, &g);
@@ -485,6 +499,12 @@ impl<'b, const D: usize> Columns<'b, D> {
         });
     }
 }
+
+/// A run of particles' update in MUSL's parallel particle pass: the view, its particles, the
+/// grid to read and the re-map columns (or none), giving its part of the report.
+type Update<'a, const D: usize> = dyn Fn(&mut ParticleCols<'_, D>, usize, &GridCols<'_, D>, &mut GridCols<'_, D>) -> Partial
+    + Sync
+    + 'a;
 
 /// The most tiles a scatter is cut into: two per worker up to 64 workers.
 const MAX_TILES: usize = 128;
