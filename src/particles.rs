@@ -200,6 +200,12 @@ impl<const D: usize> ParticleCols<'_, D> {
         !self.stretch[0].is_empty()
     }
 
+    /// The domain stretch columns to read (empty but for cpGIMP): what the stencils take.
+    #[inline(always)]
+    pub fn stretch_columns(&self) -> [&[Real]; D] {
+        self.stretch.each_ref().map(|c| &**c)
+    }
+
     /// The stretch of particle `i`'s domain per axis (cpGIMP); 1 for every other family.
     #[inline(always)]
     pub fn domain_stretch(&self, i: usize) -> [Real; D] {

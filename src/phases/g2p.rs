@@ -28,9 +28,9 @@ use crate::def::UpdateOrder;
 use crate::effects::damping;
 use crate::grid::GridCols;
 use crate::particles::StepReport;
-use crate::particles::{ParticleCols, RemapCols, ACTIVE, ESCAPED, FROZEN};
+use crate::particles::{ParticleCols, RemapCols, ESCAPED, FROZEN};
 use crate::shape::{Shape1D, Stencil, Stencils, ROW};
-use crate::simd::lanes::{commit, live_lanes, load_into, Block, Lane, Lanes};
+use crate::simd::lanes::{active_lanes, commit, live_lanes, load_into, Block, Lane, Lanes};
 use crate::simd::rows::{self, Compare};
 use crate::simd::wide::{Wide, WideMask};
 use crate::Real;
@@ -306,8 +306,8 @@ pub(crate) fn commit_gradient_affine<const D: usize, const W: usize>(
 /// start of the step in the `x_start` columns, for the stress pass, and, where `remap` holds
 /// the remap columns ([`GridCols::split_remap`]), scatters the new momenta to them (E30) with
 /// the stencils already computed (particles contribute as in the scatter pass:
-/// [`scatter_chunk`]); the parallel step gives it none and scatters them in a pass of its own
-/// (`p2g::scatter_rows` in [`Mode::Remap`]), which adds the same values in the same order.
+/// [`scatter_chunk`]). The parallel step gives it a tile's re-map columns, or none for the
+/// particles it updates before the tiles, whose rows [`remap`] adds (the same values).
 /// Declared damping adds the damping of the module docs; APIC replaces FLIP. Each of these is
 /// a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
@@ -573,8 +573,7 @@ pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, c
         }
         let (apic, mls) = (ctx.apic, ctx.mls);
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, &p.stretch, start, &x, apic, false, mls);
-        let n = W.min(count.saturating_sub(start));
-        let active = Lanes::equal(&crate::simd::lanes::load(p.status, start), ACTIVE).first_n(n);
+        let active = active_lanes(p.status, start, count);
         let chunk = (&*mass, &*v, &*affine, active);
         remap_rows::<I, D, K, S, W>(ctx, &mut st, &mut products, chunk, remap);
     }

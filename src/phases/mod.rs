@@ -117,7 +117,7 @@ pub(crate) fn stencils<
     lanes: bool,
     mls: bool,
 ) {
-    let stretch = p.stretch.each_ref().map(|c| &**c);
+    let stretch = p.stretch_columns();
     stencils_of::<I, D, K, S, W>(st, shape, ctx, &stretch, start, x, affine, lanes, mls);
 }
 

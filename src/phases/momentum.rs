@@ -248,7 +248,7 @@ pub(crate) fn forces<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, 
         for start in g.chunks(count, W, stride[D - 1]) {
             let live = live_lanes(p, start, count);
             load_chunk(p, start, &mut x, &mut mass, &mut tau);
-            let stretch = p.stretch.each_ref().map(|c| &**c);
+            let stretch = p.stretch_columns();
             I::stencils::<D, K, S, W>(
                 &mut st, shape, ctx, &stretch, start, &x, false, false, false,
             );

@@ -420,7 +420,7 @@ fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, con
 ) -> Lanes<W> {
     let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
     // The shape functions' gradients, with MLS-MPM too.
-    let stretch = p.stretch.each_ref().map(|c| &**c);
+    let stretch = p.stretch_columns();
     I::stencils::<D, K, S, W>(st, shape, ctx, &stretch, start, &x, false, true, false);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))

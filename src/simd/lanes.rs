@@ -254,6 +254,12 @@ pub(crate) fn live_lanes<const D: usize, const W: usize>(
     start: usize,
     count: usize,
 ) -> Lanes<W> {
+    active_lanes(p.status, start, count)
+}
+
+/// [`live_lanes`] from the status column `status`.
+#[inline(always)]
+pub(crate) fn active_lanes<const W: usize>(status: &[u32], start: usize, count: usize) -> Lanes<W> {
     let n = W.min(count.saturating_sub(start));
-    Lanes::equal(&load(p.status, start), ACTIVE).first_n(n)
+    Lanes::equal(&load(status, start), ACTIVE).first_n(n)
 }

@@ -139,9 +139,8 @@ impl<'b, const D: usize> Columns<'b, D> {
         self.tiles = (n >= 2).then(|| {
             // SAFETY: the scan is done; the table is only read here.
             let reach = unsafe { self.reach.read(0..count.div_ceil(REACH_GROUP)) };
-            let mut t = Tiles::balanced(n, lo..hi, geom.nodes[D - 1], geom.stride[D - 1], reach);
-            t.apart = apart;
-            t
+            let (lines, stride) = (geom.nodes[D - 1], geom.stride[D - 1]);
+            Tiles::balanced(n, apart, lo..hi, lines, stride, reach)
         });
         active
     }
@@ -261,8 +260,8 @@ impl<'b, const D: usize> Columns<'b, D> {
         }
     }
 
-    /// The particle update ([`passes::Passes::particles`]); with MUSL, the re-map scatter
-    /// after it where there are several workers (one worker scatters it within the pass).
+    /// The particle update ([`passes::Passes::particles`]), with MUSL's re-map scatter inside
+    /// it: on several workers by tiles ([`Columns::particles_by_tiles`]).
     pub fn particles<I: Passes, const K: usize, S: Shape1D<K>, const W: usize>(
         &mut self,
         shape: &S,
@@ -302,7 +301,7 @@ impl<'b, const D: usize> Columns<'b, D> {
     }
 
     /// MUSL's particle pass on several workers, with the re-map scatter inside it as one
-    /// worker runs it ([`Columns::particles`]): by the scatter's tiles, in two colours. A tile
+    /// worker runs it ([`Columns::particles`]): by the scatter's tiles and colours. A tile
     /// takes, in particle order, the groups of particles ([`REACH_GROUP`]) whose stencils
     /// reach its lines; it updates those it owns and re-maps their rows in its slab (`update`),
     /// and re-maps the rows of the others, updated before (`read`). So every node receives
@@ -526,12 +525,14 @@ struct Tiles {
 }
 
 impl Tiles {
-    /// `n` tiles (at least 2, at most [`MAX_TILES`]) of the node box's lines `box_lines`, cut
+    /// `n` tiles (at least 2, at most [`MAX_TILES`]; `apart` or in two colours) of the node
+    /// box's lines `box_lines`, cut
     /// where about as many groups of particles reach each (`reach`, [`GridCols::reach`]; the
     /// lines evenly without one): the lines at the box's ends, which the stencils' edges
     /// reach, carry less work than the others. The results do not depend on the cut.
     fn balanced(
         n: usize,
+        apart: bool,
         box_lines: Range<usize>,
         lines: usize,
         stride: usize,
@@ -577,7 +578,7 @@ impl Tiles {
         }
         Tiles {
             n,
-            apart: false,
+            apart,
             stride,
             bounds,
         }
@@ -704,7 +705,7 @@ mod tests {
         }
         reach.push([u32::MAX, 0]); // A group without an active particle.
         for n in 2..=12 {
-            let t = Tiles::balanced(n, 10..52, 60, 7, &reach);
+            let t = Tiles::balanced(n, false, 10..52, 60, 7, &reach);
             assert_eq!((t.bound(0), t.bound(n)), (0, 60), "{n}");
             for k in 0..n {
                 assert!(t.bound(k) < t.bound(k + 1), "{n}: tile {k} empty");
@@ -732,7 +733,7 @@ mod tests {
             }
         }
         // Without a reached group: the box's lines evenly.
-        let t = Tiles::balanced(4, 10..50, 60, 7, &[]);
+        let t = Tiles::balanced(4, false, 10..50, 60, 7, &[]);
         assert_eq!((1..4).map(|k| t.bound(k)).collect::<Vec<_>>(), [20, 30, 40]);
     }
 
