@@ -64,6 +64,9 @@ pub(crate) struct Collider<'s> {
     axes: [V3; 3],
     velocity: V3,
     omega: V3,
+    /// The distance outside the surface within which a point counts as in contact (0, or
+    /// [`Collider::with_skin`]'s).
+    skin: Real,
 }
 
 /// The shape number of `s` in a [`ColliderRecord`], its lengths, and a distance field's
@@ -182,7 +185,16 @@ impl<'s> Collider<'s> {
             axes: [axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z)],
             velocity: r.velocity.map(|c| c as Real),
             omega: r.angular_velocity.map(|c| c as Real),
+            skin: 0.0,
         })
+    }
+
+    /// This collider with points up to `skin` (m) outside its surface in contact: the grid
+    /// update's, so that a node on a face, which the distance puts a rounding error to either
+    /// side of it, is in contact (E91).
+    pub fn with_skin(mut self, skin: Real) -> Self {
+        self.skin = skin;
+        self
     }
 
     /// The signed distance from the solid's surface at `x` (negative inside), m, and the
@@ -231,15 +243,41 @@ impl<'s> Collider<'s> {
     /// The velocity the contact leaves a node at `x` whose updated velocity is `v` (E92),
     /// or `None` where it leaves `v` as it is (the node outside the solid, or separating).
     pub fn contact(&self, x: V3, v: V3) -> Option<V3> {
-        let (phi, _) = self.distance_and(x, false);
-        if phi > 0.0 || phi.is_nan() {
+        self.law(self.contact, x, v)
+    }
+
+    /// Whether `x` is in contact: inside the solid or within its skin (E91).
+    pub fn touches(&self, x: V3) -> bool {
+        self.distance_and(x, false).0 <= self.skin
+    }
+
+    /// [`Collider::contact`] on USF's lagged velocity, which the stress update reads and no
+    /// impulse pays for (E92): a separating contact holds it as slip does, in both
+    /// directions. Released where the lagged velocity parts from the solid and held where it
+    /// presses, a node would keep the noise that moves it apart and drop the noise that
+    /// presses: a ratchet that turns the particles' velocity noise into strain energy no
+    /// impulse accounts for.
+    pub fn hold(&self, x: V3, v: V3) -> Option<V3> {
+        let law = match self.contact {
+            Contact::Separate => Contact::Slip,
+            law => law,
+        };
+        self.law(law, x, v)
+    }
+
+    fn law(&self, law: Contact, x: V3, v: V3) -> Option<V3> {
+        if !self.touches(x) {
             return None;
         }
         let (_, n) = self.distance_and(x, true);
+        self.law_at(law, x, v, n)
+    }
+
+    fn law_at(&self, law: Contact, x: V3, v: V3, n: V3) -> Option<V3> {
         let vc = self.velocity_at(x);
         let rel = sub(v, vc);
         let vn = dot(rel, n);
-        let tangent = match self.contact {
+        let tangent = match law {
             Contact::Stick => return Some(vc),
             Contact::Separate if vn >= 0.0 => return None,
             Contact::Slip | Contact::Separate => sub(rel, scale(n, vn)),

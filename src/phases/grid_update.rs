@@ -7,6 +7,7 @@
 //! which fold nodes onto their images across lines, on the whole grid.
 
 use super::Ctx;
+use crate::def::UpdateOrder;
 use crate::effects::colliders::Collider;
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
@@ -119,7 +120,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
         }
     });
     let (g, impulses) = &mut nodes.with_impulses();
-    collide(ctx, g, Some(&mut **impulses));
+    collide(ctx, g, On::Updated(impulses));
     let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
     ctx.geom
         .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
@@ -216,7 +217,11 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut
 }
 
 fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
-    collide(ctx, g, None);
+    let on = match ctx.order {
+        UpdateOrder::Musl => On::Remapped,
+        _ => On::Lagged,
+    };
+    collide(ctx, g, on);
     ctx.geom
         .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
             let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
@@ -232,33 +237,48 @@ fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     mirror_vector(ctx, &mut g.remap, false);
 }
 
+/// The distance outside a collider's surface, in cells, within which a node is in contact
+/// (E91): a node on a face (a box's face on a grid line) is then in contact whichever side of
+/// it the distance's rounding puts it, not one cell further in.
+const NODE_SKIN: Real = 1.0e-3;
+
+/// What a pass of the colliders acts on (E92).
+enum On<'i> {
+    /// The updated velocity `v_i + a_i dt`, which becomes what the contact leaves through the
+    /// acceleration (as at a wall); each collider's impulse takes what the material puts on it
+    /// (E93: `-m_i (v* - (v_i + a_i dt))`, its moment about the collider's origin).
+    Updated(&'i mut [ColliderImpulse]),
+    /// MUSL's re-mapped velocity: at a node in contact it takes the updated velocity the
+    /// contact left, which the impulse paid for (USL's there).
+    Remapped,
+    /// USF's lagged velocity, which no impulse pays for: the contact holds it in both
+    /// directions ([`Collider::hold`]).
+    Lagged,
+}
+
 /// The colliders on the nodes of the substep's node box that carry mass, one collider after
-/// the other, node by node (E92): with `impulses`, on the updated velocity `v_i + a_i dt`,
-/// which becomes what the contact leaves through the acceleration (as at a wall), and each
-/// collider's impulse takes what the material puts on it (E93: `-m_i (v* - (v_i + a_i dt))`,
-/// its moment about the collider's origin); without, on the re-mapped or constrained velocity
-/// in `remap` (an updated velocity too). On the calling thread, in node order: the sums have
-/// one worker's bits.
-fn collide<const D: usize>(
-    ctx: &Ctx<'_, D>,
-    g: &mut GridCols<'_, D>,
-    mut impulses: Option<&mut [ColliderImpulse]>,
-) {
+/// the other, node by node (E92), on the velocity `on` says. On the calling thread, in node
+/// order: the impulses' sums have one worker's bits.
+fn collide<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>, mut on: On<'_>) {
     let (geom, dt) = (&ctx.geom, ctx.dt);
     let n = g.len();
-    if impulses.is_none() && g.remap[0].len() != n {
-        return; // No re-mapped velocity to act on (USL).
+    if !matches!(on, On::Updated(_)) && g.remap[0].len() != n {
+        return; // Unreachable: USF and MUSL reserve the remap columns.
     }
     for (k, record) in ctx.colliders.iter().enumerate() {
         let Some(c) = Collider::at(record, ctx.time, ctx.sdf) else {
             continue;
         };
+        // A node on a face is in contact wherever rounding puts it.
+        let c = c.with_skin(NODE_SKIN * geom.h);
         // The node box's nodes within the solid's bounds (a half-space: all of them).
         let (mut lo, mut hi) = (ctx.active.lo, ctx.active.hi);
         if let Some((min, max)) = c.bounds() {
             for a in 0..D {
-                let from = ceil((min[a] - geom.origin[a]) * geom.inv_h).max(0.0);
-                let to = floor((max[a] - geom.origin[a]) * geom.inv_h) + 1.0;
+                // One node past each end: a node on the solid's face is in contact, and the
+                // product may round it out of `ceil`'s reach.
+                let from = (ceil((min[a] - geom.origin[a]) * geom.inv_h) - 1.0).max(0.0);
+                let to = floor((max[a] - geom.origin[a]) * geom.inv_h) + 2.0;
                 lo[a] = lo[a].max(from as usize);
                 hi[a] = hi[a].min(to.max(0.0) as usize);
             }
@@ -278,40 +298,62 @@ fn collide<const D: usize>(
                         continue;
                     }
                     let x = [at(0, i), y, zz];
-                    if impulses.is_some() {
-                        let v: [Real; 3] = core::array::from_fn(|a| {
-                            if a < D {
-                                g.vel[a][node] + g.acc[a][node] * dt
-                            } else {
-                                0.0
-                            }
-                        });
-                        let Some(w) = c.contact(x, v) else {
-                            continue;
-                        };
-                        for a in 0..D {
-                            g.acc[a][node] = (w[a] - g.vel[a][node]) / dt;
-                        }
-                        let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
-                        let arm: [f64; 3] = core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
-                        for a in 0..3 {
-                            let (b, e) = ((a + 1) % 3, (a + 2) % 3);
-                            linear[a] -= dp[a];
-                            angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
-                        }
-                    } else {
-                        let v: [Real; 3] =
-                            core::array::from_fn(|a| if a < D { g.remap[a][node] } else { 0.0 });
-                        if let Some(w) = c.contact(x, v) {
+                    match &mut on {
+                        On::Updated(_) => {
+                            let v: [Real; 3] = core::array::from_fn(|a| {
+                                if a < D {
+                                    g.vel[a][node] + g.acc[a][node] * dt
+                                } else {
+                                    0.0
+                                }
+                            });
+                            let Some(w) = c.contact(x, v) else {
+                                continue;
+                            };
                             for a in 0..D {
-                                g.remap[a][node] = w[a];
+                                g.acc[a][node] = (w[a] - g.vel[a][node]) / dt;
+                            }
+                            let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
+                            let arm: [f64; 3] =
+                                core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
+                            for a in 0..3 {
+                                let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+                                linear[a] -= dp[a];
+                                angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
+                            }
+                        }
+                        On::Remapped => {
+                            if c.touches(x) {
+                                for a in 0..D {
+                                    g.remap[a][node] = g.vel[a][node] + g.acc[a][node] * dt;
+                                }
+                            }
+                        }
+                        On::Lagged => {
+                            let v: [Real; 3] =
+                                core::array::from_fn(
+                                    |a| {
+                                        if a < D {
+                                            g.remap[a][node]
+                                        } else {
+                                            0.0
+                                        }
+                                    },
+                                );
+                            if let Some(w) = c.hold(x, v) {
+                                for a in 0..D {
+                                    g.remap[a][node] = w[a];
+                                }
                             }
                         }
                     }
                 }
             }
         }
-        if let Some(sum) = impulses.as_deref_mut().and_then(|t| t.get_mut(k)) {
+        if let Some(sum) = match &mut on {
+            On::Updated(impulses) => impulses.get_mut(k),
+            _ => None,
+        } {
             for a in 0..3 {
                 sum.linear[a] += linear[a];
                 sum.angular[a] += angular[a];
