@@ -9,6 +9,7 @@ mod parallel;
 mod passes;
 mod query;
 mod seed;
+mod state;
 mod step;
 mod types;
 

@@ -143,6 +143,12 @@ pub struct ParticlesView<'w> {
     /// The grid's concentration potential at each particle after the last step, as
     /// [`ParticlesView::grid_temperature`]. Empty unless diffusion is declared.
     pub grid_concentration: &'w [Real],
+    /// Heat sources, W/m^3 (empty unless heat conduction is declared with
+    /// [`crate::Transport::sources`]).
+    pub temperature_source: &'w [Real],
+    /// Sources of the concentration potential, 1/s (empty unless diffusion is declared with
+    /// [`crate::Transport::sources`]).
+    pub concentration_source: &'w [Real],
     /// Axisymmetric only (else empty): the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`, the
     /// out-of-plane part of the deformation gradient.
     pub hoop: &'w [Real],
