@@ -85,7 +85,9 @@ pub enum Error {
     /// past what the world resolves ([`crate::Resolvable`]), a plastic history out of its
     /// model's range (`J_p <= 0` or, active, hardened past the resolved wave speed, for snow;
     /// < 0 for von Mises and Drucker-Prager; not 0 for a model without one) or an inverted F;
-    /// a material or traction record out of range.
+    /// a material or traction record out of range. From [`crate::World::set_particle_state`]
+    /// and [`crate::World::add_particles_with_state`]: an unknown status, or a low part of a
+    /// position past one unit in the last place of the position.
     InvalidState = 29,
     /// A limit of the definition out of range: [`max_substeps`](crate::WorldDef::max_substeps)
     /// outside `1..=MAX_SUBSTEPS`, [`max_volume_ratio`](crate::WorldDef::max_volume_ratio)
@@ -95,7 +97,9 @@ pub enum Error {
     /// A displacement gradient ([`crate::World::set_displacement_gradient`]) not finite,
     /// inverted (`det F <= 0`), with `det F` outside the definition's
     /// [`max_volume_ratio`](crate::WorldDef::max_volume_ratio) band, or whose stress is not
-    /// finite.
+    /// finite; a state ([`crate::World::set_particle_state`]) whose `H`, hoop stretch or
+    /// stress is not finite, whose F inverts or hoop stretch is <= -1, or whose plastic
+    /// history is out of its model's range.
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or the dimension:
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
@@ -177,7 +181,7 @@ impl Error {
                 c"max_substeps must be in 1..=2^20, max_volume_ratio > 1 and workers in 1..=256 (no fewer than the task system's)"
             }
             Error::InvalidDeformation => {
-                c"deformation gradient not finite, inverted, or its volume ratio outside max_volume_ratio"
+                c"deformation gradient, stress or plastic history not finite or out of range (F inverted, volume ratio past max_volume_ratio)"
             }
             Error::UnknownTraction => c"traction id at or past the number of tractions",
             Error::StableStepTooShort => {

@@ -101,8 +101,8 @@ pub use storage::AlignedBuffer;
 pub use storage::HeapBuffer;
 pub use tasks::{Serial, TaskSystem};
 pub use world::{
-    ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Phase, Removal,
-    StepReport, World, WorldRef,
+    ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticleState, ParticlesView, Phase,
+    Removal, StepReport, World, WorldRef,
 };
 
 /// The scalar type of every column, parameter and result: f32, or f64 with the `f64` feature.

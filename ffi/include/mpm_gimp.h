@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.7.0"
+#define MPM_GIMP_VERSION "0.8.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 700
+#define MPM_GIMP_ABI_VERSION 800
 
 
 // Most points an `MpmSchedule` holds.
@@ -164,7 +164,9 @@ enum MpmStatus
   // a plastic history out of its model's range (snow: `J_p <= 0`, or an active particle
   // hardened past the wave speed the world resolves; von Mises, Drucker-Prager: < 0; a
   // model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
-  // call) check only the header, in constant time.
+  // call) check only the header, in constant time. `mpm_world_set_particle_state`,
+  // `mpm_world_add_particles_with_state`: an unknown status, or a low part of a position
+  // past one unit in its last place.
   MPM_STATUS_INVALID_STATE = 29,
   // A limit of the definition out of range: `max_substeps` outside 1..=1048576,
   // `max_volume_ratio` not > 1, or `workers` outside 1..=256; or a task system's
@@ -172,7 +174,9 @@ enum MpmStatus
   MPM_STATUS_INVALID_LIMIT = 30,
   // `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
   // (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
-  // stress is not finite (nothing was set).
+  // stress is not finite (nothing was set). `mpm_world_set_particle_state`,
+  // `mpm_world_add_particles_with_state`: an H, hoop stretch or stress not finite, an
+  // inverted F, a hoop stretch <= -1, or a plastic history out of its model's range.
   MPM_STATUS_INVALID_DEFORMATION = 31,
   // A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
   // needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not
@@ -830,6 +834,11 @@ typedef struct MpmParticlesView {
   // shear (Drucker-Prager), J_p - 1 (snow); 0 for other models (NULL unless
   // `MpmEffects::plasticity`).
   const mpm_real *plastic;
+  // Heat sources, W/m^3 (NULL unless `MpmEffects::heat` with `sources`).
+  const mpm_real *temperature_source;
+  // Sources of the concentration potential, 1/s (NULL unless `MpmEffects::diffusion` with
+  // `sources`).
+  const mpm_real *concentration_source;
 } MpmParticlesView;
 
 // Sums over the active particles, in double precision. In plane strain mass, momentum and
@@ -911,6 +920,61 @@ typedef struct MpmStepReport {
   // Ids of the first frozen particles.
   uint32_t first_frozen[8];
 } MpmStepReport;
+
+// Every column of some particles' state, for `mpm_world_add_particles_with_state` and
+// `mpm_world_set_particle_state`: the fields of `MpmParticlesView`, each pointing to `count`
+// values of the host's (never the world's own memory: copy a view's columns first), or NULL:
+// not given. A column not given stays as it is when set, and takes a new particle's value
+// when added (0; status `MPM_PARTICLE_STATUS_ACTIVE`); a group of columns (the axes of a
+// vector, the entries of a matrix) is given whole or not at all. Pointers of axes the
+// dimension lacks (z in 2D; matrix entries `3 a + b` with a or b = 2 in 2D; stress 4 and 5 in
+// 2D) and `hoop` outside the axisymmetric form are not read; one of an effect the
+// definition does not declare must be NULL. Nothing is derived from what is given: the stress
+// is written as given (a viscous stress depends on the last step's velocity gradient), so a
+// particle's columns read from a world and given back are that particle, bit for bit.
+typedef struct MpmParticleState {
+  // Positions per axis, m.
+  const mpm_real *position[3];
+  // The low parts of the positions per axis, m (`MpmParticlesView::position_low`).
+  const mpm_real *position_low[3];
+  // Velocities per axis, m/s.
+  const mpm_real *velocity[3];
+  // Masses, kg, > 0.
+  const mpm_real *mass;
+  // Initial volumes, m^3 (m^2 per unit thickness in plane strain), > 0.
+  const mpm_real *volume0;
+  // Displacement gradient H = F - I, entry (a, b) at index `3 a + b`.
+  const mpm_real *displacement_gradient[9];
+  // Kirchhoff stress over initial density, in the order of `MpmParticlesView::stress`.
+  const mpm_real *stress[6];
+  // Material ids.
+  const uint32_t *material;
+  // Statuses (`MpmParticleStatus`).
+  const uint32_t *status;
+  // External forces per axis, N (`MpmEffects::particle_forces`).
+  const mpm_real *force[3];
+  // Local grid and particle damping, 1/s (`MpmDamping::per_particle`).
+  const mpm_real *damping[2];
+  // The affine matrix, entry (a, b) at index `3 a + b` (`MPM_TRANSFER_APIC`,
+  // `MPM_TRANSFER_MLS`).
+  const mpm_real *affine[9];
+  // Temperatures, K (`MpmEffects::heat`).
+  const mpm_real *temperature;
+  // Concentration potentials (`MpmEffects::diffusion`).
+  const mpm_real *concentration;
+  // The grid's temperature at each particle, K (`MpmEffects::heat`).
+  const mpm_real *grid_temperature;
+  // The grid's concentration potential at each particle (`MpmEffects::diffusion`).
+  const mpm_real *grid_concentration;
+  // The hoop stretch F_thetatheta - 1 (axisymmetric).
+  const mpm_real *hoop;
+  // The plastic history (`MpmEffects::plasticity`).
+  const mpm_real *plastic;
+  // Heat sources, W/m^3 (`MpmEffects::heat` with `sources`).
+  const mpm_real *temperature_source;
+  // Sources of the concentration potential, 1/s (`MpmEffects::diffusion` with `sources`).
+  const mpm_real *concentration_source;
+} MpmParticleState;
 
 // A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
 // `mpm_collider_def_default()` (a frictionless separating floor through the origin).
@@ -1467,6 +1531,50 @@ MpmStatus mpm_world_set_particle_materials(struct MpmWorld *world,
                                            uint32_t first,
                                            const uint32_t *material,
                                            size_t count);
+
+// Adds `count` particles with the state `state` (`MpmParticleState`; the kernel's
+// `World::add_particles_with_state`); all or nothing. Their ids go to `ids_out`. Their
+// position, mass, volume0 and material must be given (`MPM_STATUS_NULL_POINTER`); every
+// other column not given takes a new particle's value. A particle's columns read from a
+// world (`MpmParticlesView`, copied) and added here, to that world or another with the same
+// materials and declared effects, are that particle, bit for bit. In order:
+// `MPM_STATUS_NULL_POINTER` for `state` or `ids_out`, the world's checks,
+// `MPM_STATUS_EFFECT_NOT_DECLARED` for an array of an undeclared effect,
+// `MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED` (before any array is read), NULL required arrays,
+// `MPM_STATUS_OVERLAPPING_MEMORY`, then each particle as `mpm_world_set_particle_state`
+// checks it.
+//
+// # Safety
+// `world` is NULL or a world; `state` is NULL or valid, and each pointer in it that the
+// dimension reads is NULL or valid for reads of `count` values; `ids_out` is NULL or valid.
+MpmStatus mpm_world_add_particles_with_state(struct MpmWorld *world,
+                                             const struct MpmParticleState *state,
+                                             size_t count,
+                                             struct MpmIdRange *ids_out);
+
+// Sets the columns `state` gives (`MpmParticleState`, non-NULL pointers) of particles
+// `first .. first + count`, as given, bit for bit; the others stay (the kernel's
+// `World::set_particle_state`). Nothing is derived: the stress is what is given
+// (`mpm_world_set_displacement_gradient` derives it). In order: `MPM_STATUS_NULL_POINTER`
+// for `state`, the world's checks, `MPM_STATUS_EFFECT_NOT_DECLARED` for an array of an
+// undeclared effect, `MPM_STATUS_UNKNOWN_PARTICLE` (before any array is read),
+// `MPM_STATUS_OVERLAPPING_MEMORY`, `MPM_STATUS_LENGTH_MISMATCH` for a group given in part; then
+// each particle with its values after the call, as `mpm_world_open` checks a snapshot's:
+// `MPM_STATUS_NON_FINITE_INPUT`, `MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME`,
+// `MPM_STATUS_STABLE_STEP_TOO_SHORT` (a speed, a snow's hardening or a damping rate no step
+// resolves), `MPM_STATUS_UNKNOWN_MATERIAL`, `MPM_STATUS_POSITION_OUTSIDE_DOMAIN`,
+// `MPM_STATUS_INVALID_STATE` (an unknown status, a low part of the position past one unit
+// in the last place of the position), `MPM_STATUS_INVALID_DEFORMATION` (H, hoop stretch or
+// stress not finite, J <= 0, a hoop stretch <= -1, a plastic history out of its model's
+// range), `MPM_STATUS_INVALID_EFFECT` (a damping rate < 0).
+//
+// # Safety
+// `world` is NULL or a world; `state` is NULL or valid, and each pointer in it that the
+// dimension reads is NULL or valid for reads of `count` values.
+MpmStatus mpm_world_set_particle_state(struct MpmWorld *world,
+                                       uint32_t first,
+                                       const struct MpmParticleState *state,
+                                       size_t count);
 
 // Removes particles `first .. first + count`. The others keep their order and state (the
 // world steps as one built with them alone would); a particle after the removed ones moves

@@ -6,8 +6,9 @@
 //! - [`defs`]: `MpmWorldDef`, `MpmMaterialDef`, their `*_default()` functions and the enums.
 //! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
 //!   dt, step.
-//! - [`particles`]: setting particles' position, velocity, affine matrix and material, and
-//!   removing particles (by range, list, box or status).
+//! - [`particles`]: setting particles' position, velocity, affine matrix and material, or
+//!   their whole state (`MpmParticleState`, also what particles are added with), and removing
+//!   particles (by range, list, box or status).
 //! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
 //!   thermostat's alpha, temperatures, concentrations and their sources.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.

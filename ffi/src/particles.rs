@@ -1,11 +1,12 @@
 //! Particles after they are in: setting their position, velocity, affine matrix and material,
-//! and removing them (by range, list, box or status), which frees their room.
+//! or every column of their state at once (and adding particles with it), and removing them
+//! (by range, list, box or status), which frees their room.
 
 use crate::defs::vec3;
 use crate::status::MpmStatus;
-use crate::world::{put, world_at, MpmWorld};
+use crate::world::{id_range, put, world_at, MpmIdRange, MpmWorld};
 use crate::{apart, guard, mpm_real, non_null, MpmVec3};
-use kernel::{Removal, World};
+use kernel::{ParticleState, Removal, World, WorldDef};
 
 /// `first..first + count` exists (else `UnknownParticle`), checked before any array is
 /// formed: a count past the particles reads nothing.
@@ -183,6 +184,294 @@ pub unsafe extern "C" fn mpm_world_set_particle_materials(
         let ids = unsafe { core::slice::from_raw_parts(material, count) };
         w.set_particle_materials(first, ids)?;
         Ok(())
+    })
+}
+
+/// Every column of some particles' state, for `mpm_world_add_particles_with_state` and
+/// `mpm_world_set_particle_state`: the fields of `MpmParticlesView`, each pointing to `count`
+/// values of the host's (never the world's own memory: copy a view's columns first), or NULL:
+/// not given. A column not given stays as it is when set, and takes a new particle's value
+/// when added (0; status `MPM_PARTICLE_STATUS_ACTIVE`); a group of columns (the axes of a
+/// vector, the entries of a matrix) is given whole or not at all. Pointers of axes the
+/// dimension lacks (z in 2D; matrix entries `3 a + b` with a or b = 2 in 2D; stress 4 and 5 in
+/// 2D) and `hoop` outside the axisymmetric form are not read; one of an effect the
+/// definition does not declare must be NULL. Nothing is derived from what is given: the stress
+/// is written as given (a viscous stress depends on the last step's velocity gradient), so a
+/// particle's columns read from a world and given back are that particle, bit for bit.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub struct MpmParticleState {
+    /// Positions per axis, m.
+    pub position: [*const mpm_real; 3],
+    /// The low parts of the positions per axis, m (`MpmParticlesView::position_low`).
+    pub position_low: [*const mpm_real; 3],
+    /// Velocities per axis, m/s.
+    pub velocity: [*const mpm_real; 3],
+    /// Masses, kg, > 0.
+    pub mass: *const mpm_real,
+    /// Initial volumes, m^3 (m^2 per unit thickness in plane strain), > 0.
+    pub volume0: *const mpm_real,
+    /// Displacement gradient H = F - I, entry (a, b) at index `3 a + b`.
+    pub displacement_gradient: [*const mpm_real; 9],
+    /// Kirchhoff stress over initial density, in the order of `MpmParticlesView::stress`.
+    pub stress: [*const mpm_real; 6],
+    /// Material ids.
+    pub material: *const u32,
+    /// Statuses (`MpmParticleStatus`).
+    pub status: *const u32,
+    /// External forces per axis, N (`MpmEffects::particle_forces`).
+    pub force: [*const mpm_real; 3],
+    /// Local grid and particle damping, 1/s (`MpmDamping::per_particle`).
+    pub damping: [*const mpm_real; 2],
+    /// The affine matrix, entry (a, b) at index `3 a + b` (`MPM_TRANSFER_APIC`,
+    /// `MPM_TRANSFER_MLS`).
+    pub affine: [*const mpm_real; 9],
+    /// Temperatures, K (`MpmEffects::heat`).
+    pub temperature: *const mpm_real,
+    /// Concentration potentials (`MpmEffects::diffusion`).
+    pub concentration: *const mpm_real,
+    /// The grid's temperature at each particle, K (`MpmEffects::heat`).
+    pub grid_temperature: *const mpm_real,
+    /// The grid's concentration potential at each particle (`MpmEffects::diffusion`).
+    pub grid_concentration: *const mpm_real,
+    /// The hoop stretch F_thetatheta - 1 (axisymmetric).
+    pub hoop: *const mpm_real,
+    /// The plastic history (`MpmEffects::plasticity`).
+    pub plastic: *const mpm_real,
+    /// Heat sources, W/m^3 (`MpmEffects::heat` with `sources`).
+    pub temperature_source: *const mpm_real,
+    /// Sources of the concentration potential, 1/s (`MpmEffects::diffusion` with `sources`).
+    pub concentration_source: *const mpm_real,
+}
+
+/// Where a world of a definition keeps an array of [`MpmParticleState`]: whether the
+/// dimension reads it, and whether the definition reserves its column.
+#[derive(Clone, Copy)]
+struct Kept {
+    read: bool,
+    kept: bool,
+}
+
+/// The kernel's state of the arrays `s`, each array the dimension reads turned into a slice by
+/// `col` (an array of real values) or `ids` (of u32 ids), with where the world keeps it; the
+/// others empty.
+fn state_of<'a, E>(
+    def: &WorldDef,
+    s: &MpmParticleState,
+    count: usize,
+    mut col: impl FnMut(*const mpm_real, Kept) -> Result<&'a [mpm_real], E>,
+    mut ids: impl FnMut(*const u32) -> Result<&'a [u32], E>,
+) -> Result<ParticleState<'a>, E> {
+    let d = def.axes();
+    let fx = &def.effects;
+    let heat = fx.heat.is_some();
+    let diffusion = fx.diffusion.is_some();
+    let sources = |t: Option<kernel::Transport>| t.is_some_and(|t| t.sources);
+    let all = |read: bool| Kept { read, kept: true };
+    let effect = |kept: bool| Kept { read: true, kept };
+    let mut vector = |p: [*const mpm_real; 3], kept: bool| -> Result<[&'a [mpm_real]; 3], E> {
+        let mut out: [&'a [mpm_real]; 3] = [&[]; 3];
+        for a in 0..3 {
+            out[a] = col(p[a], Kept { read: a < d, kept })?;
+        }
+        Ok(out)
+    };
+    let position = vector(s.position, true)?;
+    let position_low = vector(s.position_low, true)?;
+    let velocity = vector(s.velocity, true)?;
+    let force = vector(s.force, fx.particle_forces)?;
+    let mut matrix = |p: [*const mpm_real; 9], kept: bool| -> Result<[[&'a [mpm_real]; 3]; 3], E> {
+        let mut out: [[&'a [mpm_real]; 3]; 3] = [[&[]; 3]; 3];
+        for k in 0..9 {
+            let read = k / 3 < d && k % 3 < d;
+            out[k / 3][k % 3] = col(p[k], Kept { read, kept })?;
+        }
+        Ok(out)
+    };
+    let displacement_gradient = matrix(s.displacement_gradient, true)?;
+    let affine = matrix(s.affine, def.transfer.is_affine())?;
+    let ns = if d == 3 { 6 } else { 4 };
+    let mut stress: [&'a [mpm_real]; 6] = [&[]; 6];
+    for (k, out) in stress.iter_mut().enumerate() {
+        *out = col(s.stress[k], all(k < ns))?;
+    }
+    let per_particle = fx.damping.is_some_and(|dm| dm.per_particle);
+    let damping = [
+        col(s.damping[0], effect(per_particle))?,
+        col(s.damping[1], effect(per_particle))?,
+    ];
+    Ok(ParticleState {
+        count,
+        position,
+        position_low,
+        velocity,
+        mass: col(s.mass, all(true))?,
+        volume0: col(s.volume0, all(true))?,
+        displacement_gradient,
+        stress,
+        material: ids(s.material)?,
+        status: ids(s.status)?,
+        force,
+        damping,
+        temperature: col(s.temperature, effect(heat))?,
+        concentration: col(s.concentration, effect(diffusion))?,
+        grid_temperature: col(s.grid_temperature, effect(heat))?,
+        grid_concentration: col(s.grid_concentration, effect(diffusion))?,
+        temperature_source: col(s.temperature_source, effect(sources(fx.heat)))?,
+        concentration_source: col(s.concentration_source, effect(sources(fx.diffusion)))?,
+        hoop: col(
+            s.hoop,
+            all(def.dimension == kernel::Dimension::Axisymmetric2D),
+        )?,
+        plastic: col(s.plastic, effect(fx.plasticity))?,
+        affine,
+    })
+}
+
+/// The state setters' one path: the world, the struct (copied first), the arrays an undeclared
+/// effect's column must not have (`MPM_STATUS_EFFECT_NOT_DECLARED`), then `room` (the particle
+/// range or the capacity, before any array is read), each array's overlap with the world,
+/// then `write` with the kernel's state.
+///
+/// # Safety
+/// As `mpm_world_set_particle_state`.
+unsafe fn with_state(
+    world: *mut MpmWorld,
+    state: *const MpmParticleState,
+    count: usize,
+    room: impl FnOnce(&World<'_>, &MpmParticleState) -> Result<(), MpmStatus>,
+    write: impl FnOnce(&mut World<'_>, &ParticleState<'_>) -> Result<(), MpmStatus>,
+) -> Result<(), MpmStatus> {
+    non_null(state)?;
+    // SAFETY: checked non-NULL; copied before the world is opened for writing (the caller may
+    // keep the struct anywhere).
+    let s = unsafe { *state };
+    // SAFETY: the caller promises a world.
+    let mut w = unsafe { world_at(world) }?;
+    let def = w.def();
+    state_of(
+        &def,
+        &s,
+        count,
+        |p, k| {
+            if k.read && !k.kept && !p.is_null() {
+                Err(MpmStatus::EffectNotDeclared)
+            } else {
+                Ok(&[])
+            }
+        },
+        |_| Ok(&[]),
+    )?;
+    room(&w, &s)?;
+    let bytes = w.as_bytes();
+    let kernel_state = state_of(
+        &def,
+        &s,
+        count,
+        |p, k| -> Result<&[mpm_real], MpmStatus> {
+            if !k.read || p.is_null() {
+                return Ok(&[]);
+            }
+            apart(bytes, p, count)?;
+            // SAFETY: non-NULL and apart from the world; the caller promises `count` values,
+            // which `room` bounded by the capacity (so the byte length fits in isize).
+            Ok(unsafe { core::slice::from_raw_parts(p, count) })
+        },
+        |p| -> Result<&[u32], MpmStatus> {
+            if p.is_null() {
+                return Ok(&[]);
+            }
+            apart(bytes, p, count)?;
+            // SAFETY: as for the real arrays.
+            Ok(unsafe { core::slice::from_raw_parts(p, count) })
+        },
+    )?;
+    write(&mut w, &kernel_state)
+}
+
+/// Adds `count` particles with the state `state` (`MpmParticleState`; the kernel's
+/// `World::add_particles_with_state`); all or nothing. Their ids go to `ids_out`. Their
+/// position, mass, volume0 and material must be given (`MPM_STATUS_NULL_POINTER`); every
+/// other column not given takes a new particle's value. A particle's columns read from a
+/// world (`MpmParticlesView`, copied) and added here, to that world or another with the same
+/// materials and declared effects, are that particle, bit for bit. In order:
+/// `MPM_STATUS_NULL_POINTER` for `state` or `ids_out`, the world's checks,
+/// `MPM_STATUS_EFFECT_NOT_DECLARED` for an array of an undeclared effect,
+/// `MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED` (before any array is read), NULL required arrays,
+/// `MPM_STATUS_OVERLAPPING_MEMORY`, then each particle as `mpm_world_set_particle_state`
+/// checks it.
+///
+/// # Safety
+/// `world` is NULL or a world; `state` is NULL or valid, and each pointer in it that the
+/// dimension reads is NULL or valid for reads of `count` values; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_particles_with_state(
+    world: *mut MpmWorld,
+    state: *const MpmParticleState,
+    count: usize,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    guard(|| {
+        non_null(ids_out)?;
+        let room = |w: &World<'_>, s: &MpmParticleState| {
+            if count > w.def().particle_capacity as usize - w.particle_count() {
+                return Err(MpmStatus::ParticleCapacityExceeded);
+            }
+            let d = w.def().axes();
+            for &p in s.position[..d].iter().chain([&s.mass, &s.volume0]) {
+                non_null(p)?;
+            }
+            non_null(s.material)?;
+            apart(w.as_bytes(), ids_out, 1)
+        };
+        let write = |w: &mut World<'_>, s: &ParticleState<'_>| {
+            let ids = w.add_particles_with_state(s)?;
+            // SAFETY: checked non-NULL and apart from the world.
+            unsafe { put(ids_out, id_range(ids)) };
+            Ok(())
+        };
+        // SAFETY: forwarded contract.
+        unsafe { with_state(world, state, count, room, write) }
+    })
+}
+
+/// Sets the columns `state` gives (`MpmParticleState`, non-NULL pointers) of particles
+/// `first .. first + count`, as given, bit for bit; the others stay (the kernel's
+/// `World::set_particle_state`). Nothing is derived: the stress is what is given
+/// (`mpm_world_set_displacement_gradient` derives it). In order: `MPM_STATUS_NULL_POINTER`
+/// for `state`, the world's checks, `MPM_STATUS_EFFECT_NOT_DECLARED` for an array of an
+/// undeclared effect, `MPM_STATUS_UNKNOWN_PARTICLE` (before any array is read),
+/// `MPM_STATUS_OVERLAPPING_MEMORY`, `MPM_STATUS_LENGTH_MISMATCH` for a group given in part; then
+/// each particle with its values after the call, as `mpm_world_open` checks a snapshot's:
+/// `MPM_STATUS_NON_FINITE_INPUT`, `MPM_STATUS_NON_POSITIVE_MASS_OR_VOLUME`,
+/// `MPM_STATUS_STABLE_STEP_TOO_SHORT` (a speed, a snow's hardening or a damping rate no step
+/// resolves), `MPM_STATUS_UNKNOWN_MATERIAL`, `MPM_STATUS_POSITION_OUTSIDE_DOMAIN`,
+/// `MPM_STATUS_INVALID_STATE` (an unknown status, a low part of the position past one unit
+/// in the last place of the position), `MPM_STATUS_INVALID_DEFORMATION` (H, hoop stretch or
+/// stress not finite, J <= 0, a hoop stretch <= -1, a plastic history out of its model's
+/// range), `MPM_STATUS_INVALID_EFFECT` (a damping rate < 0).
+///
+/// # Safety
+/// `world` is NULL or a world; `state` is NULL or valid, and each pointer in it that the
+/// dimension reads is NULL or valid for reads of `count` values.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_set_particle_state(
+    world: *mut MpmWorld,
+    first: u32,
+    state: *const MpmParticleState,
+    count: usize,
+) -> MpmStatus {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        unsafe {
+            with_state(
+                world,
+                state,
+                count,
+                |w, _| existing(w, first, count),
+                |w, s| Ok(w.set_particle_state(first, s)?),
+            )
+        }
     })
 }
 

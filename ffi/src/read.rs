@@ -69,6 +69,11 @@ pub struct MpmParticlesView {
     /// shear (Drucker-Prager), J_p - 1 (snow); 0 for other models (NULL unless
     /// `MpmEffects::plasticity`).
     pub plastic: *const mpm_real,
+    /// Heat sources, W/m^3 (NULL unless `MpmEffects::heat` with `sources`).
+    pub temperature_source: *const mpm_real,
+    /// Sources of the concentration potential, 1/s (NULL unless `MpmEffects::diffusion` with
+    /// `sources`).
+    pub concentration_source: *const mpm_real,
 }
 
 /// Sums over the active particles, in double precision. In plane strain mass, momentum and
@@ -124,6 +129,7 @@ pub unsafe extern "C" fn mpm_world_particles(
         let heat = def.effects.heat.is_some();
         let diffusion = def.effects.diffusion.is_some();
         let axisymmetric = def.dimension == kernel::Dimension::Axisymmetric2D;
+        let sources = |t: Option<kernel::Transport>| t.is_some_and(|t| t.sources);
         let out = MpmParticlesView {
             count: v.count,
             dimension: v.dimension as u32,
@@ -152,6 +158,8 @@ pub unsafe extern "C" fn mpm_world_particles(
             grid_concentration: axis(v.grid_concentration, diffusion),
             hoop: axis(v.hoop, axisymmetric),
             plastic: axis(v.plastic, def.effects.plasticity),
+            temperature_source: axis(v.temperature_source, sources(def.effects.heat)),
+            concentration_source: axis(v.concentration_source, sources(def.effects.diffusion)),
         };
         // SAFETY: checked non-NULL.
         unsafe { put(view_out, out) };

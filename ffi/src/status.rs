@@ -92,7 +92,9 @@ pub enum MpmStatus {
     /// a plastic history out of its model's range (snow: `J_p <= 0`, or an active particle
     /// hardened past the wave speed the world resolves; von Mises, Drucker-Prager: < 0; a
     /// model without one: not 0); a material or traction record out of range. Calls on a world pointer (every other
-    /// call) check only the header, in constant time.
+    /// call) check only the header, in constant time. `mpm_world_set_particle_state`,
+    /// `mpm_world_add_particles_with_state`: an unknown status, or a low part of a position
+    /// past one unit in its last place.
     InvalidState = 29,
     /// A limit of the definition out of range: `max_substeps` outside 1..=1048576,
     /// `max_volume_ratio` not > 1, or `workers` outside 1..=256; or a task system's
@@ -100,7 +102,9 @@ pub enum MpmStatus {
     InvalidLimit = 30,
     /// `mpm_world_set_displacement_gradient`: a displacement gradient not finite, inverted
     /// (`det F <= 0`), with `det F` outside the definition's `max_volume_ratio` band, or whose
-    /// stress is not finite (nothing was set).
+    /// stress is not finite (nothing was set). `mpm_world_set_particle_state`,
+    /// `mpm_world_add_particles_with_state`: an H, hoop stretch or stress not finite, an
+    /// inverted F, a hoop stretch <= -1, or a plastic history out of its model's range.
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS`
     /// needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not

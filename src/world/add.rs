@@ -2,7 +2,7 @@
 //! through. The setters of the effects' per-particle data live with their effect
 //! ([`crate::effects`]).
 
-use super::{GeomAny, ParticleBatch, ParticleDef, World};
+use super::{ParticleBatch, ParticleDef, ParticleState, World};
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{col, Layout, MaterialRecord};
 use crate::material::{material_record, material_resolvable, Deformation};
@@ -50,54 +50,24 @@ impl<'a> World<'a> {
         self.add_particles(&batch).map(|r| r.start)
     }
 
-    /// Adds a batch of particles; all or nothing. Returns the range of their ids.
+    /// Adds a batch of particles; all or nothing. Returns the range of their ids. Every slice
+    /// the dimension reads holds one value per particle (`LengthMismatch`); each particle is
+    /// checked as [`World::add_particles_with_state`] checks it, the path this call takes: a
+    /// batch is a state with the position, velocity, mass, volume and material given.
     pub fn add_particles(&mut self, b: &ParticleBatch<'_>) -> Result<Range<u32>, Error> {
-        let def = self.def();
-        let d = def.axes();
-        let n = b.mass.len();
-        let lengths_ok = (0..d).all(|a| b.position[a].len() == n && b.velocity[a].len() == n)
-            && b.volume.len() == n
-            && b.material.len() == n;
-        if !lengths_ok {
+        let (d, n) = (self.def().axes(), b.mass.len());
+        if b.velocity[..d].iter().any(|v| v.len() != n) {
             return Err(Error::LengthMismatch);
         }
-        self.check_room(&def, n)?;
-        let materials = self.material_count() as u32;
-        let geom = GeomAny::new(&def);
-        for i in 0..n {
-            let x: [Real; 3] = core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 });
-            let v: [Real; 3] = core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 });
-            let (m, vol) = (b.mass[i], b.volume[i]);
-            if !(x.iter().chain(v.iter()).all(|c| c.is_finite())
-                && m.is_finite()
-                && vol.is_finite())
-            {
-                return Err(Error::NonFiniteInput);
-            }
-            if m <= 0.0 || vol <= 0.0 {
-                return Err(Error::NonPositiveMassOrVolume);
-            }
-            if !speed_resolvable(&def, v) {
-                return Err(Error::StableStepTooShort);
-            }
-            if b.material[i] >= materials {
-                return Err(Error::UnknownMaterial);
-            }
-            if !geom.admits(x) {
-                return Err(Error::PositionOutsideDomain);
-            }
-        }
-        // Validated: write.
-        let items = (0..n).map(|i| {
-            (
-                core::array::from_fn(|a| if a < d { b.position[a][i] } else { 0.0 }),
-                core::array::from_fn(|a| if a < d { b.velocity[a][i] } else { 0.0 }),
-                b.mass[i],
-                b.volume[i],
-                b.material[i],
-            )
-        });
-        Ok(self.append(&def, items))
+        self.add_particles_with_state(&ParticleState {
+            count: n,
+            position: b.position,
+            velocity: b.velocity,
+            mass: b.mass,
+            volume0: b.volume,
+            material: b.material,
+            ..ParticleState::NONE
+        })
     }
 
     /// Gives particles `first..first + n` the displacement gradient `H = F - I` (so the
@@ -261,13 +231,6 @@ impl<'a> World<'a> {
             Some(end) if end <= self.particle_count() => Ok(first..end),
             _ => Err(Error::UnknownParticle),
         }
-    }
-
-    fn check_room(&self, def: &WorldDef, n: usize) -> Result<(), Error> {
-        if n > def.particle_capacity as usize - self.particle_count() {
-            return Err(Error::ParticleCapacityExceeded);
-        }
-        Ok(())
     }
 
     /// Appends validated particles `(x, v, mass, volume, material)`; returns their ids.

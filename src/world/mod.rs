@@ -9,13 +9,16 @@ mod parallel;
 mod passes;
 mod query;
 mod seed;
+mod state;
 mod step;
 mod types;
 
 pub use crate::particles::StepReport;
 pub use query::WorldRef;
 pub use step::Phase;
-pub use types::{ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticlesView, Removal};
+pub use types::{
+    ColliderState, Diagnostics, ParticleBatch, ParticleDef, ParticleState, ParticlesView, Removal,
+};
 
 use crate::def::{MaterialDef, WorldDef};
 use crate::layout::{validate, Header, Layout, TractionRecord, ALIGN};

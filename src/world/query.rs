@@ -1,8 +1,7 @@
 //! Reading a world in place: [`WorldRef`] and its queries (the state check, the stable time
 //! step, the particle view, the diagnostics), on a shared borrow of the bytes.
 
-use super::add::speed_resolvable;
-use super::{check_buffer, Diagnostics, GeomAny, ParticlesView, World};
+use super::{check_buffer, Diagnostics, ParticlesView, World};
 use crate::def::{MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
 use crate::layout::{
@@ -12,11 +11,10 @@ use crate::material::{
     eigenstrain_part, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
     material_resolvable, model_of, particle_stress, wave_speed, Deformation,
 };
-use crate::particles::{ParticleStatus, ACTIVE};
+use crate::particles::ACTIVE;
 use crate::shape::{domain_stretch, Shape1D, Stencils};
 use crate::simd::Simd;
 use crate::{Error, Real};
-use core::cmp::Ordering;
 use core::mem::size_of;
 
 /// A world read in place: every query of [`World`] that changes nothing, on a shared borrow
@@ -115,71 +113,25 @@ impl<'a> WorldRef<'a> {
         if !samples.iter().all(|d| d.is_finite()) {
             return invalid;
         }
-        let v = self.particles();
-        let materials = self.material_count();
-        let geom = GeomAny::new(&def);
-        // Every particle Real column a particle's state lives in: those of `H`, the stress,
-        // the declared effects (the MUSL start positions and the cpGIMP stretches are scratch).
-        let real = |j: usize| self.real_col(&layout, j, n);
-        let groups = [
-            layout.force,
-            layout.damping,
-            layout.affine,
-            layout.scalar[0],
-            layout.scalar[1],
-            layout.hoop,
-            layout.plastic,
-        ];
-        let columns = (0..d * d)
-            .map(|k| col::h(d, k / d, k % d))
-            .chain((0..crate::layout::stress_components(d)).map(|k| col::tau(d, k)))
-            .chain(groups.iter().flat_map(|g| g.first..g.first + g.count))
-            .map(real);
-        let records = self.materials(&layout);
-        let rate_limit = def
-            .effects
-            .damping
-            .map_or(0.0, |dm| dm.particle_rate_limit(&def));
-        let speed_limit = def.resolvable().speed;
+        // Every particle as the state setters check the values they would leave
+        // (`ParticleRules::check`); the MUSL start positions and the cpGIMP stretches are
+        // scratch, which every substep writes before it reads them.
+        let rules = super::state::ParticleRules::new(self);
+        let mut columns: [&[Real]; super::state::MAX_COLUMNS] = [&[]; super::state::MAX_COLUMNS];
+        for (j, c) in columns
+            .iter_mut()
+            .enumerate()
+            .take(layout.particle_real_columns)
+        {
+            *c = self.real_col(&layout, j, n);
+        }
+        let material = self.u32_col(&layout, col::MATERIAL, n);
+        let status = self.u32_col(&layout, col::STATUS, n);
         let mut min_mass = f64::INFINITY;
         for i in 0..n {
-            let (m, vol) = (v.mass[i], v.volume0[i]);
-            min_mass = min_mass.min(m as f64);
-            let x: [Real; 3] = core::array::from_fn(|a| if a < d { v.position[a][i] } else { 0.0 });
-            let vel: [Real; 3] =
-                core::array::from_fn(|a| if a < d { v.velocity[a][i] } else { 0.0 });
-            // The low part of the position is what the last rounding of `x` left out: at most
-            // one unit in its last place (half of one where the step moved it less than its
-            // distance from the origin).
-            let low_ok = |a: usize| {
-                let (x, low) = (v.position[a][i].abs(), v.position_low[a][i]);
-                low.is_finite() && low.abs() <= x.next_up() - x
-            };
-            let history_ok = match (records.get(v.material[i] as usize), v.plastic.get(i)) {
-                (Some(rec), Some(&p)) => {
-                    let active = v.status[i] == ACTIVE;
-                    history_in_range(rec, p, active.then_some(speed_limit))
-                }
-                _ => true,
-            };
-            let sound = ParticleStatus::from_code(v.status[i]).is_some()
-                && (v.material[i] as usize) < materials
-                && m.is_finite()
-                && m > 0.0
-                && vol.is_finite()
-                && vol > 0.0
-                && vel[..d].iter().all(|c| c.is_finite())
-                && speed_resolvable(&def, vel)
-                && (0..d).all(low_ok)
-                && columns.clone().all(|c| c[i].is_finite())
-                && v.damping
-                    .iter()
-                    .all(|c| c.get(i).is_none_or(|&x| x >= 0.0 && x as f64 <= rate_limit))
-                && history_ok
-                && v.hoop.get(i).is_none_or(|&x| x > -1.0)
-                && v.jacobian_minus_one(i).partial_cmp(&-1.0) == Some(Ordering::Greater)
-                && geom.holds(x);
-            if !sound {
+            min_mass = min_mass.min(columns[col::mass(d)][i] as f64);
+            let value = |j: usize| columns[j].get(i).copied().unwrap_or(Real::NAN);
+            if rules.check(value, material[i], status[i]).is_err() {
                 return invalid;
             }
         }
@@ -246,7 +198,12 @@ impl<'a> WorldRef<'a> {
         bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
     }
 
-    fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [Real] {
+    /// The material records of the materials added.
+    pub(super) fn material_records(&self) -> &'a [MaterialRecord] {
+        self.materials(&self.layout())
+    }
+
+    pub(super) fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [Real] {
         bytemuck::cast_slice(&self.buf[layout.real_col(j, count)])
     }
 
@@ -499,6 +456,8 @@ impl<'a> WorldRef<'a> {
             concentration: group(layout.scalar[1], 0),
             grid_temperature: group(layout.scalar[0], 1),
             grid_concentration: group(layout.scalar[1], 1),
+            temperature_source: group(layout.scalar[0], 2),
+            concentration_source: group(layout.scalar[1], 2),
             hoop: group(layout.hoop, 0),
             plastic: group(layout.plastic, 0),
             damping: core::array::from_fn(|k| group(layout.damping, k)),
@@ -741,14 +700,6 @@ fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> R
         .enumerate()
         .filter_map(|(f, col)| col.get(i).map(|&v| eigenstrain_part(rec, f, v)))
         .sum()
-}
-
-/// Whether `plastic` is a plastic history a particle of material `rec` can carry
-/// ([`crate::material::history_in_range`]) and, for an active particle (`speed_limit` given,
-/// m/s), one whose wave speed the world resolves.
-fn history_in_range(rec: &MaterialRecord, plastic: Real, speed_limit: Option<f64>) -> bool {
-    crate::material::history_in_range(rec, plastic)
-        && speed_limit.is_none_or(|limit| wave_speed(rec, plastic) <= limit)
 }
 
 /// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the

@@ -60,6 +60,151 @@ pub struct ParticleBatch<'b> {
     pub material: &'b [u32],
 }
 
+/// Every column of some particles' state, in the shape of [`ParticlesView`], for
+/// [`World::add_particles_with_state`] and [`World::set_particle_state`]: what moves a
+/// particle out of a world and back, or into another world with the same materials and
+/// declared effects, bit for bit (a view's [`ParticlesView::state`], cut to some rows with
+/// [`ParticleState::rows`] and copied, is such a state).
+///
+/// Each column holds `count` values or is empty: not given. A column not given is left as
+/// it is by [`World::set_particle_state`] and takes a new particle's value in
+/// [`World::add_particles_with_state`] (0; the status [`crate::ParticleStatus::Active`]).
+/// A group of columns (the axes of a vector, the entries of a matrix) is given whole or not
+/// at all. Columns of axes the dimension lacks (z in 2D, the third row and column of the
+/// matrices, stress components 4 and 5 in 2D) and the hoop stretch outside the axisymmetric
+/// form are not read; a column of an effect the definition does not declare must be empty.
+///
+/// Nothing is derived from what is given: the stress is written as given, not computed from
+/// the deformation (a viscous stress depends on the velocity gradient of the last step, and
+/// a stress computed again differs from the step's in its last bits), so a state read from a
+/// world steps on as it would have there. A stress that does not go with the deformation is
+/// what a snapshot of such a state would hold: it loads the grid until the particle's next
+/// stress update replaces it with its material's. [`World::set_displacement_gradient`] and
+/// [`World::set_particle_materials`] derive the stress instead.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleState<'s> {
+    /// Number of particles: the length of every column given.
+    pub count: usize,
+    /// Positions per axis, m ([`ParticlesView::position`]).
+    pub position: [&'s [Real]; 3],
+    /// The low parts of the positions per axis, m ([`ParticlesView::position_low`]).
+    pub position_low: [&'s [Real]; 3],
+    /// Velocities per axis, m/s.
+    pub velocity: [&'s [Real]; 3],
+    /// Masses, kg, > 0.
+    pub mass: &'s [Real],
+    /// Initial volumes, m^3, > 0.
+    pub volume0: &'s [Real],
+    /// Displacement gradient `H = F - I`, entry `[a][b]` ([`ParticlesView::displacement_gradient`]).
+    pub displacement_gradient: [[&'s [Real]; 3]; 3],
+    /// Kirchhoff stress over initial density, m^2/s^2, in the order of
+    /// [`ParticlesView::stress`].
+    pub stress: [&'s [Real]; 6],
+    /// Material ids.
+    pub material: &'s [u32],
+    /// Status codes ([`crate::ParticleStatus`]).
+    pub status: &'s [u32],
+    /// External forces per axis, N (particle forces).
+    pub force: [&'s [Real]; 3],
+    /// Local grid and particle damping, 1/s (per-particle damping).
+    pub damping: [&'s [Real]; 2],
+    /// Temperatures, K (heat conduction).
+    pub temperature: &'s [Real],
+    /// Concentration potentials (diffusion).
+    pub concentration: &'s [Real],
+    /// The grid's temperature at each particle ([`ParticlesView::grid_temperature`]), K.
+    pub grid_temperature: &'s [Real],
+    /// The grid's concentration potential at each particle.
+    pub grid_concentration: &'s [Real],
+    /// Heat sources, W/m^3 (heat conduction with sources).
+    pub temperature_source: &'s [Real],
+    /// Sources of the concentration potential, 1/s (diffusion with sources).
+    pub concentration_source: &'s [Real],
+    /// The hoop stretch `F_thetatheta - 1` (axisymmetric).
+    pub hoop: &'s [Real],
+    /// The plastic history ([`ParticlesView::plastic`]; declared plasticity).
+    pub plastic: &'s [Real],
+    /// The affine matrix, entry `[a][b]` ([`ParticlesView::affine`]; APIC and MLS-MPM).
+    pub affine: [[&'s [Real]; 3]; 3],
+}
+
+impl ParticleState<'_> {
+    /// No particle, no column given: the start of a state built field by field
+    /// (`ParticleState { count, mass, .. ParticleState::NONE }`).
+    pub const NONE: ParticleState<'static> = ParticleState {
+        count: 0,
+        position: [&[]; 3],
+        position_low: [&[]; 3],
+        velocity: [&[]; 3],
+        mass: &[],
+        volume0: &[],
+        displacement_gradient: [[&[]; 3]; 3],
+        stress: [&[]; 6],
+        material: &[],
+        status: &[],
+        force: [&[]; 3],
+        damping: [&[]; 2],
+        temperature: &[],
+        concentration: &[],
+        grid_temperature: &[],
+        grid_concentration: &[],
+        temperature_source: &[],
+        concentration_source: &[],
+        hoop: &[],
+        plastic: &[],
+        affine: [[&[]; 3]; 3],
+    };
+}
+
+impl<'s> ParticleState<'s> {
+    /// The state of rows `range` of these particles: each column given cut to the range
+    /// (columns not given stay empty). `None` unless `range` lies within `0..count` and every
+    /// column given is `count` long.
+    pub fn rows(&self, range: core::ops::Range<usize>) -> Option<ParticleState<'s>> {
+        if range.start > range.end || range.end > self.count {
+            return None;
+        }
+        let mut whole = true;
+        let mut cut = |c: &'s [Real]| -> &'s [Real] {
+            whole &= c.is_empty() || c.len() == self.count;
+            c.get(range.clone()).unwrap_or(&[])
+        };
+        let out = ParticleState {
+            count: range.len(),
+            position: self.position.map(&mut cut),
+            position_low: self.position_low.map(&mut cut),
+            velocity: self.velocity.map(&mut cut),
+            mass: cut(self.mass),
+            volume0: cut(self.volume0),
+            displacement_gradient: self.displacement_gradient.map(|r| r.map(&mut cut)),
+            stress: self.stress.map(&mut cut),
+            material: &[],
+            status: &[],
+            force: self.force.map(&mut cut),
+            damping: self.damping.map(&mut cut),
+            temperature: cut(self.temperature),
+            concentration: cut(self.concentration),
+            grid_temperature: cut(self.grid_temperature),
+            grid_concentration: cut(self.grid_concentration),
+            temperature_source: cut(self.temperature_source),
+            concentration_source: cut(self.concentration_source),
+            hoop: cut(self.hoop),
+            plastic: cut(self.plastic),
+            affine: self.affine.map(|r| r.map(&mut cut)),
+        };
+        let ids = |c: &'s [u32]| {
+            let ok = c.is_empty() || c.len() == self.count;
+            (ok, c.get(range.clone()).unwrap_or(&[]))
+        };
+        let ((m_ok, material), (s_ok, status)) = (ids(self.material), ids(self.status));
+        (whole && m_ok && s_ok).then_some(ParticleState {
+            material,
+            status,
+            ..out
+        })
+    }
+}
+
 /// Sums over the active particles, in f64.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Diagnostics {
@@ -143,6 +288,12 @@ pub struct ParticlesView<'w> {
     /// The grid's concentration potential at each particle after the last step, as
     /// [`ParticlesView::grid_temperature`]. Empty unless diffusion is declared.
     pub grid_concentration: &'w [Real],
+    /// Heat sources, W/m^3 (empty unless heat conduction is declared with
+    /// [`crate::Transport::sources`]).
+    pub temperature_source: &'w [Real],
+    /// Sources of the concentration potential, 1/s (empty unless diffusion is declared with
+    /// [`crate::Transport::sources`]).
+    pub concentration_source: &'w [Real],
     /// Axisymmetric only (else empty): the hoop stretch `F_thetatheta - 1 = r / r_0 - 1`, the
     /// out-of-plane part of the deformation gradient.
     pub hoop: &'w [Real],
@@ -161,7 +312,36 @@ pub struct ParticlesView<'w> {
     pub affine: [[&'w [Real]; 3]; 3],
 }
 
-impl ParticlesView<'_> {
+impl<'w> ParticlesView<'w> {
+    /// Every column of the view as a [`ParticleState`]: what
+    /// [`World::add_particles_with_state`] and [`World::set_particle_state`] take (copied out
+    /// of the world first when the world they go to is this one).
+    pub fn state(&self) -> ParticleState<'w> {
+        ParticleState {
+            count: self.count,
+            position: self.position,
+            position_low: self.position_low,
+            velocity: self.velocity,
+            mass: self.mass,
+            volume0: self.volume0,
+            displacement_gradient: self.displacement_gradient,
+            stress: self.stress,
+            material: self.material,
+            status: self.status,
+            force: self.force,
+            damping: self.damping,
+            temperature: self.temperature,
+            concentration: self.concentration,
+            grid_temperature: self.grid_temperature,
+            grid_concentration: self.grid_concentration,
+            temperature_source: self.temperature_source,
+            concentration_source: self.concentration_source,
+            hoop: self.hoop,
+            plastic: self.plastic,
+            affine: self.affine,
+        }
+    }
+
     /// `J - 1 = det F - 1` of particle `i`'s stored `F` (with `F_thetatheta` when
     /// axisymmetric), computed from H without cancellation. The plastic models store the
     /// elastic part `F_e`: snow's whole volume ratio is `J_e J_p`, `J_p - 1` its history.

@@ -26,6 +26,8 @@ mod hard_cases;
 mod initial_state;
 #[cfg(feature = "effects")]
 mod materials;
+#[cfg(feature = "effects")]
+mod particle_state;
 mod periodic;
 #[cfg(feature = "effects")]
 mod precision;

@@ -48,6 +48,7 @@ PROBE(MpmParticlesView)
 PROBE(MpmDiagnostics)
 PROBE(MpmMemoryRequirements)
 PROBE(MpmParticleArrays)
+PROBE(MpmParticleState)
 PROBE(MpmIdRange)
 PROBE(MpmStepReport)
 PROBE(MpmTaskSystem)
@@ -216,6 +217,8 @@ int main(void) {
     FIELD(MpmParticlesView, grid_concentration);
     FIELD(MpmParticlesView, hoop);
     FIELD(MpmParticlesView, plastic);
+    FIELD(MpmParticlesView, temperature_source);
+    FIELD(MpmParticlesView, concentration_source);
 
     TYPE(MpmDiagnostics);
     FIELD(MpmDiagnostics, particle_count);
@@ -239,6 +242,28 @@ int main(void) {
     FIELD(MpmParticleArrays, mass);
     FIELD(MpmParticleArrays, volume);
     FIELD(MpmParticleArrays, material);
+
+    TYPE(MpmParticleState);
+    FIELD(MpmParticleState, position);
+    FIELD(MpmParticleState, position_low);
+    FIELD(MpmParticleState, velocity);
+    FIELD(MpmParticleState, mass);
+    FIELD(MpmParticleState, volume0);
+    FIELD(MpmParticleState, displacement_gradient);
+    FIELD(MpmParticleState, stress);
+    FIELD(MpmParticleState, material);
+    FIELD(MpmParticleState, status);
+    FIELD(MpmParticleState, force);
+    FIELD(MpmParticleState, damping);
+    FIELD(MpmParticleState, affine);
+    FIELD(MpmParticleState, temperature);
+    FIELD(MpmParticleState, concentration);
+    FIELD(MpmParticleState, grid_temperature);
+    FIELD(MpmParticleState, grid_concentration);
+    FIELD(MpmParticleState, hoop);
+    FIELD(MpmParticleState, plastic);
+    FIELD(MpmParticleState, temperature_source);
+    FIELD(MpmParticleState, concentration_source);
 
     TYPE(MpmIdRange);
     FIELD(MpmIdRange, first);
