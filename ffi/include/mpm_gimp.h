@@ -691,7 +691,8 @@ typedef struct MpmWorldDef {
   struct MpmVec3 wall_velocity[6];
   // Terms of exp(grad v dt), 1..=8. Default 2.
   uint32_t exp_terms;
-  // Courant number in (0, 1]. Default 0.5.
+  // Courant number in (0, 1] of the fastest wave and particle, and of a collider near the
+  // material (at most this many cells a substep). Default 0.5.
   mpm_real cfl;
   // Most substeps one `mpm_world_step` call may take, 1..=1048576; a dt that needs more is
   // refused with `MPM_STATUS_SUBSTEP_LIMIT` (nothing changes), so a call costs at most this

@@ -417,7 +417,8 @@ pub struct MpmWorldDef {
     pub wall_velocity: [MpmVec3; 6],
     /// Terms of exp(grad v dt), 1..=8. Default 2.
     pub exp_terms: u32,
-    /// Courant number in (0, 1]. Default 0.5.
+    /// Courant number in (0, 1] of the fastest wave and particle, and of a collider near the
+    /// material (at most this many cells a substep). Default 0.5.
     pub cfl: mpm_real,
     /// Most substeps one `mpm_world_step` call may take, 1..=1048576; a dt that needs more is
     /// refused with `MPM_STATUS_SUBSTEP_LIMIT` (nothing changes), so a call costs at most this

@@ -556,7 +556,8 @@ pub struct WorldDef {
     /// Highest power of `grad v dt` kept in `dF = exp(grad v dt)` (E31), 1..=8.
     /// Default 2: second order, exact for the time integration's own order and cheap.
     pub exp_terms: u32,
-    /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)` (E88), in (0, 1].
+    /// Courant number of the stable time step `dt = cfl h / (c_max + |v|_max)` (E88), in (0, 1];
+    /// a step also keeps a collider near the material within `cfl` cells a substep.
     /// Default 0.5: the usual margin for explicit MPM with FLIP.
     pub cfl: Real,
     /// Most substeps one [`crate::World::step`] call may take, in `1..=`[`crate::MAX_SUBSTEPS`]:

@@ -394,6 +394,73 @@ impl<'a> WorldRef<'a> {
         }
     }
 
+    /// The longest substep of a step of `dt` in which no collider that may touch the material
+    /// moves its surface more than `cfl` cells (E88): `cfl h / s`, `s = |v| + |omega| r` its
+    /// fastest surface speed, `r` the farthest its solid lies from its origin within reach of
+    /// the particles (their box, widened by the two cells a stencil reaches and by how far
+    /// the solid travels in the step); infinite where none may touch. A solid moved faster
+    /// than the grid resolves would tear through the material without a word.
+    pub(super) fn collider_substep(&self, dt: Real) -> Real {
+        use crate::effects::colliders::Collider;
+        let count = self.header().collider_count as usize;
+        if count == 0 {
+            return Real::INFINITY;
+        }
+        let (layout, def) = (self.layout(), self.def());
+        let at = layout.colliders_offset;
+        let colliders: &[ColliderRecord] =
+            bytemuck::cast_slice(&self.buf[at..at + count * size_of::<ColliderRecord>()]);
+        let at = layout.sdf_offset;
+        let samples: &[Real] = bytemuck::cast_slice(
+            &self.buf[at..at + self.header().sdf_count as usize * size_of::<Real>()],
+        );
+        let (n, d, h) = (self.particle_count(), layout.d, def.cell_size as f64);
+        let status = self.u32_col(&layout, col::STATUS, n);
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for a in 0..d {
+            let x = self.real_col(&layout, col::x(a), n);
+            for (&x, _) in x.iter().zip(status).filter(|(_, &s)| s == ACTIVE) {
+                lo[a] = lo[a].min(x as f64);
+                hi[a] = hi[a].max(x as f64);
+            }
+        }
+        let mut speed = 0.0f64;
+        for r in colliders {
+            let Some(c) = Collider::at(r, self.time(), samples) else {
+                continue;
+            };
+            let norm = |v: [f64; 3]| libm::sqrt(v.iter().map(|c| c * c).sum::<f64>());
+            let (v, omega) = (norm(r.velocity), norm(r.angular_velocity));
+            let reach = 2.0 * h + (v + omega * norm(r.size)) * dt as f64;
+            // The part of the particles' box the solid may reach, and its farthest corner.
+            let (mut near_lo, mut near_hi) = ([0.0; 3], [0.0; 3]);
+            let mut touches = true;
+            for a in 0..d {
+                let (mut l, mut u) = (lo[a] - reach, hi[a] + reach);
+                if let Some((min, max)) = c.bounds() {
+                    l = l.max(min[a] as f64 - reach);
+                    u = u.min(max[a] as f64 + reach);
+                }
+                touches &= l <= u;
+                (near_lo[a], near_hi[a]) = (l, u);
+            }
+            if !touches {
+                continue;
+            }
+            let far: [f64; 3] = core::array::from_fn(|a| {
+                let centre = c.centre[a] as f64;
+                (near_lo[a] - centre).abs().max((near_hi[a] - centre).abs())
+            });
+            speed = speed.max(v + omega * norm(far));
+        }
+        let dt = def.cfl as f64 * h / speed;
+        if dt.is_finite() {
+            dt as Real
+        } else {
+            Real::INFINITY
+        }
+    }
+
     /// Whether some material stiffens with its plastic history (snow with `xi > 0`), so that
     /// its wave speed can outgrow a substep chosen before.
     pub(super) fn materials_harden(&self) -> bool {

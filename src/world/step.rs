@@ -78,7 +78,7 @@ impl<'a> World<'a> {
             tasks,
             workers: tasks.worker_count(),
         };
-        let limits = self.read().time_step_limits(simd, &scan);
+        let limits = self.limits(dt, simd, &scan);
         let ratio = dt / limits.stable_dt;
         let substeps = if ratio <= 1.0 { 1.0 } else { ceil(ratio) };
         // NaN-safe: a NaN ratio fails `<=`.
@@ -128,6 +128,14 @@ impl<'a> World<'a> {
         Ok(report)
     }
 
+    /// The stable step's limits for a step of `dt`, the colliders' speed among them (E88).
+    fn limits(&self, dt: Real, simd: Simd, scan: &Scan<'_>) -> super::query::TimeStepLimits {
+        let w = self.read();
+        let mut limits = w.time_step_limits(simd, scan);
+        limits.stable_dt = limits.stable_dt.min(w.collider_substep(dt));
+        limits
+    }
+
     /// Before substep `k` of a step of `dt` in a world whose material hardens: where the stable
     /// step has fallen below the planned substep, splits the rest of the step into equal
     /// substeps again, at most what [`WorldDef::max_substeps`] leaves; if even those are
@@ -141,7 +149,7 @@ impl<'a> World<'a> {
         (simd, scan): (Simd, &Scan<'_>),
         report: &mut StepReport,
     ) {
-        let limits = self.read().time_step_limits(simd, scan);
+        let limits = self.limits(dt, simd, scan);
         if limits.stable_dt >= plan.dt {
             return;
         }

@@ -318,3 +318,71 @@ fn piston(scheme: Scheme) {
         );
     }
 }
+
+/// A collider's speed enters the substep plan (E88): a box driven at 20 m/s through a soft
+/// block (wave speed 12 m/s, whose own limit takes 13 substeps a 60 Hz frame) never moves
+/// more than the Courant number's fraction of a cell in a substep (0.5 by default: 22
+/// substeps a frame at h = 1/32 m, where it moved 0.8 cells before), and no particle it
+/// shears freezes; one driven at 1e6 m/s, past what `max_substeps` resolves, is refused
+/// with `SubstepLimit` and the world is unchanged; one as fast but far from the material
+/// adds no substep.
+#[test]
+fn a_fast_collider_is_resolved_or_refused() {
+    let scheme = Scheme::of(UpdateOrder::Musl, TRANSFERS[0]);
+    let def = scheme.def(Dimension::Plane2D, 32);
+    let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+    let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+    let m = world.add_material(&SOFT).expect("material");
+    world
+        .fill_box(
+            Vec3::new(0.3, 0.3, 0.0),
+            Vec3::new(0.7, 0.7, 0.0),
+            m,
+            Vec3::ZERO,
+        )
+        .expect("block");
+    let frame: Real = 1.0 / 60.0;
+    let bat = |x: Real, speed: Real| ColliderDef {
+        shape: ColliderShape::Box {
+            half_extents: Vec3::new(0.02, 0.05, 0.5),
+        },
+        position: Vec3::new(x, 0.5, 0.0),
+        velocity: Vec3::new(speed, 0.0, 0.0),
+        ..ColliderDef::DEFAULT
+    };
+    let material_only = substeps_of(&world, frame);
+    // Far from the block (more than its travel in a frame plus two cells): no limit.
+    world.add_collider(&bat(0.05, 1.0)).expect("bat");
+    let far = substeps_of(&world, frame);
+    assert_eq!(
+        far, material_only,
+        "a collider far from the material sets no substep"
+    );
+    world.set_collider(0, &bat(0.25, 20.0)).expect("bat");
+    let report = world.step(frame).expect("step");
+    let per_substep = 20.0 * report.substep_dt / def.cell_size;
+    assert!(
+        per_substep <= def.cfl * (1.0 + 1e-5) && report.substeps > material_only,
+        "the bat moved {per_substep} cells a substep in {} substeps",
+        report.substeps
+    );
+    assert_eq!(report.frozen, 0, "{report:?}");
+    let before = world.state_bytes().to_vec();
+    world.set_collider(0, &bat(0.5, 1.0e6)).expect("bat");
+    let before_step = world.state_bytes().to_vec();
+    assert_ne!(before, before_step);
+    assert_eq!(world.step(frame), Err(mpm_gimp::Error::SubstepLimit));
+    assert_eq!(
+        world.state_bytes(),
+        &before_step[..],
+        "a refused step changes nothing"
+    );
+}
+
+/// The substeps a step of `dt` of a copy of `world` takes.
+fn substeps_of(world: &World<'_>, dt: Real) -> u32 {
+    let mut copy = HeapBuffer::new(world.as_bytes().len());
+    copy.as_mut_bytes().copy_from_slice(world.as_bytes());
+    let mut w = World::open(copy.as_mut_bytes()).expect("a copy opens");
+    w.step(dt).expect("step").substeps
+}
