@@ -217,10 +217,10 @@ enum MpmStatus
   MPM_STATUS_OVERLAPPING_MEMORY = 69,
   // `mpm_world_step_tasks`: the host's task system broke the contract of
   // `MpmEnqueueTaskCallback`: it called the task with a range outside the items, a worker
-  // index at or past `worker_count`, two ranges at once on one worker or two overlapping
-  // ranges at once (such ranges were not run), left items out or ran some twice, or its
-  // finish returned while a range still ran. The report is not written; the world may be in
-  // an intermediate state (restore a snapshot).
+  // index at or past `worker_count`, two ranges at once on one worker or a range with an
+  // item that another range ran or runs (such ranges were not run: no item runs twice),
+  // left items out, or its finish returned while a range still ran. The report is not
+  // written; the world may be in an intermediate state (restore a snapshot).
   MPM_STATUS_TASK_CONTRACT = 70,
 };
 #ifndef __cplusplus
@@ -989,9 +989,11 @@ typedef void MpmTaskCallback(uint32_t start, uint32_t end, uint32_t worker, void
 // check it); at most `worker_count` ranges run at once, each with its own worker index below
 // `worker_count` (ranges that run one after another may share one). How the items are cut and
 // spread does not change the results. The library refuses to run a range outside the items,
-// with a worker index out of range or in use, or overlapping a range that runs, and the step
-// then answers `MPM_STATUS_TASK_CONTRACT`. The callbacks must return normally (no `longjmp`,
-// no C++ exception).
+// with a worker index out of range or in use, or with an item that a range of the task ran
+// or runs already, and checks when the task is finished that every item ran: each item of
+// the kernel runs at most once, and a broken contract (items run twice or left out, whatever
+// the ranges' lengths add up to) makes the step answer `MPM_STATUS_TASK_CONTRACT`. The
+// callbacks must return normally (no `longjmp`, no C++ exception).
 typedef void *MpmEnqueueTaskCallback(MpmTaskCallback *task,
                                      uint32_t item_count,
                                      uint32_t min_range,
@@ -1578,7 +1580,8 @@ MpmStatus mpm_world_get_collider(const struct MpmWorld *world,
 //
 // A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
 // `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
-// broke it were not run, and the world may be in an intermediate state.
+// broke it were not run (no item ran twice), and the world may be in an intermediate state:
+// restore a snapshot taken before the call.
 //
 // # Safety
 // `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and
