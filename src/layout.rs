@@ -362,7 +362,9 @@ unsafe impl Pod for TractionRecord {}
 /// One collider in the buffer's table ([`crate::ColliderDef`]), widened to f64: its pose at
 /// `pose_time` (world time, s), which the step moves on with its velocities. `shape` and
 /// `contact` are the enums' numbers; `size` the shape's lengths (radius; half-extents;
-/// half-length then radius, and a cylinder's inner radius).
+/// half-length then radius, and a cylinder's inner radius). What it holds and whether a
+/// record is one the API writes: `effects/colliders.rs` (`ColliderRecord::def`,
+/// `ColliderRecord::is_valid`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct ColliderRecord {
@@ -377,43 +379,6 @@ pub(crate) struct ColliderRecord {
     pub pose_time: f64,
     /// A distance field's first sample and its samples along x, y, z (zeros otherwise).
     pub grid: [u64; 4],
-}
-
-impl ColliderRecord {
-    /// Whether the record is one [`crate::World::add_collider`] could have written in a world
-    /// of `samples` distance samples: known shape and contact, finite values, positive
-    /// lengths, a unit rotation, a distance field within the samples.
-    pub fn is_valid(&self, samples: u64) -> bool {
-        let finite = [self.friction, self.pose_time]
-            .iter()
-            .chain(&self.size)
-            .chain(&self.position)
-            .chain(&self.rotation)
-            .chain(&self.velocity)
-            .chain(&self.angular_velocity)
-            .all(|c| c.is_finite());
-        let [a, b, c] = self.size;
-        let lengths = match self.shape {
-            0 => true,
-            1 => a > 0.0,
-            2 => a > 0.0 && b > 0.0 && c > 0.0,
-            3 => a >= 0.0 && b > 0.0,
-            4 => a > 0.0 && c >= 0.0 && c < b,
-            5 => {
-                let [first, nx, ny, nz] = self.grid;
-                let n = nx.checked_mul(ny).and_then(|n| n.checked_mul(nz));
-                a > 0.0
-                    && nx >= 2
-                    && ny >= 2
-                    && nz >= 1
-                    && n.and_then(|n| n.checked_add(first))
-                        .is_some_and(|end| end <= samples)
-            }
-            _ => false,
-        };
-        let q2: f64 = self.rotation.iter().map(|c| c * c).sum();
-        finite && lengths && self.contact < 3 && self.friction >= 0.0 && (q2 - 1.0).abs() < 1e-6
-    }
 }
 
 // SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.
@@ -660,6 +625,14 @@ impl Layout {
             reach_groups,
             total,
         }
+    }
+}
+
+impl Header {
+    /// Whether the world's motion is in a plane (2D, plane strain or axisymmetric): read from
+    /// the stored dimension's number.
+    pub fn planar(&self) -> bool {
+        self.dimension != Dimension::ThreeD as u64
     }
 }
 

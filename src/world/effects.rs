@@ -266,7 +266,9 @@ impl World<'_> {
     /// now ([`World::time`]). Needs [`crate::Effects::collider_capacity`] (else
     /// [`Error::EffectNotDeclared`]); [`Error::InvalidEffect`] for a value not finite or out
     /// of range, [`Error::ColliderCapacityExceeded`] past the capacity. Nothing changes on
-    /// failure.
+    /// failure. In 2D the position's and velocity's z and the angular velocity's x and y are
+    /// not read (not checked, stored as 0), as no z of a 2D call is. [`World::open`] checks
+    /// a stored collider as this checks a definition.
     pub fn add_collider(&mut self, c: &ColliderDef) -> Result<u32, Error> {
         let def = self.def();
         if def.effects.collider_capacity == 0 {
@@ -338,15 +340,17 @@ impl World<'_> {
         self.read().collider_distance(id, x)
     }
 
-    /// The record of `c`, posed now; in 2D its motion kept in the plane (no z velocity, no
-    /// turn but about z).
+    /// The record of `c`, posed now; in 2D the components a 2D world does not read stored as
+    /// 0 ([`ColliderDef::read_components`]). The record is checked as [`World::open`] checks
+    /// a stored one ([`ColliderRecord::is_valid`]: one check for both; here it adds that a
+    /// distance field lies within the samples added).
     fn collider_record(&self, c: &ColliderDef) -> Result<ColliderRecord, Error> {
-        if !c.is_valid() {
+        let h = self.header();
+        if !c.is_valid(h.planar()) {
             return Err(Error::InvalidEffect);
         }
-        let record = c.record(self.def().axes() == 2, self.time());
-        // A distance field within the samples added.
-        if record.is_valid(self.header().sdf_count) {
+        let record = c.record(h.planar(), h.time);
+        if record.is_valid(h.sdf_count, h.planar(), h.time) {
             Ok(record)
         } else {
             Err(Error::InvalidEffect)
