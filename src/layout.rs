@@ -559,23 +559,14 @@ impl Layout {
             + 2 * d
             + if stress_velocity { d } else { 0 }
             + 4 * scalar_grid.iter().filter(|&&b| b).count();
-        let materials_offset = round_up(size_of::<Header>(), ALIGN);
-        let tractions_offset = round_up(
-            materials_offset + def.material_capacity as usize * size_of::<MaterialRecord>(),
-            ALIGN,
-        );
         let traction_capacity = def.effects.traction_capacity as usize;
-        let colliders_offset = round_up(
-            tractions_offset + traction_capacity * size_of::<TractionRecord>(),
-            ALIGN,
+        let tables = Tables::of(
+            def.material_capacity as usize,
+            traction_capacity,
+            def.effects.collider_capacity as usize,
+            def.effects.sdf_capacity as usize,
         );
-        let collider_capacity = def.effects.collider_capacity as usize;
-        let impulses_offset = colliders_offset + collider_capacity * size_of::<ColliderRecord>();
-        let sdf_offset = impulses_offset + collider_capacity * size_of::<ColliderImpulse>();
-        let particle_offset = round_up(
-            sdf_offset + def.effects.sdf_capacity as usize * size_of::<Real>(),
-            ALIGN,
-        );
+        let particle_offset = tables.end;
         let grid_offset =
             particle_offset + particle_real_columns * real_column_bytes + 2 * u32_column_bytes;
         let scratch_offset = grid_offset + grid_columns * node_column_bytes;
@@ -598,12 +589,12 @@ impl Layout {
             d,
             padded_capacity: cap,
             nodes,
-            materials_offset,
-            tractions_offset,
+            materials_offset: tables.materials,
+            tractions_offset: tables.tractions,
             traction_capacity,
-            colliders_offset,
-            impulses_offset,
-            sdf_offset,
+            colliders_offset: tables.colliders,
+            impulses_offset: tables.impulses,
+            sdf_offset: tables.sdf,
             particle_offset,
             real_column_bytes,
             u32_column_bytes,
@@ -628,7 +619,60 @@ impl Layout {
     }
 }
 
+/// Where the tables at the head of a buffer start, bytes (items 2 and 3 of the module's
+/// list): a function of four capacities alone, which the header holds, so that a query of one
+/// record finds it from the header's fields without the definition ([`Header::tables`]);
+/// [`Layout::of`] takes its offsets from here too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tables {
+    pub materials: usize,
+    pub tractions: usize,
+    pub colliders: usize,
+    pub impulses: usize,
+    pub sdf: usize,
+    /// The first byte after them: where the particle columns start.
+    pub end: usize,
+}
+
+impl Tables {
+    /// The tables of `materials` material records, `tractions` traction records, `colliders`
+    /// collider records and impulses and `samples` distance samples.
+    pub const fn of(materials: usize, tractions: usize, colliders: usize, samples: usize) -> Self {
+        let material_table = round_up(size_of::<Header>(), ALIGN);
+        let traction_table = round_up(
+            material_table + materials * size_of::<MaterialRecord>(),
+            ALIGN,
+        );
+        let collider_table = round_up(
+            traction_table + tractions * size_of::<TractionRecord>(),
+            ALIGN,
+        );
+        let impulses = collider_table + colliders * size_of::<ColliderRecord>();
+        let sdf = impulses + colliders * size_of::<ColliderImpulse>();
+        Tables {
+            materials: material_table,
+            tractions: traction_table,
+            colliders: collider_table,
+            impulses,
+            sdf,
+            end: round_up(sdf + samples * size_of::<Real>(), ALIGN),
+        }
+    }
+}
+
 impl Header {
+    /// The tables of the world this header heads ([`Tables`]), from its capacities alone: for
+    /// a header that [`World::reopen`](crate::World::reopen)'s checks passed (its capacities
+    /// are its definition's), the offsets [`Layout::of`] gives, in a few additions.
+    pub fn tables(&self) -> Tables {
+        Tables::of(
+            self.material_capacity as usize,
+            self.traction_capacity as usize,
+            self.collider_capacity as usize,
+            self.sdf_capacity as usize,
+        )
+    }
+
     /// Whether the world's motion is in a plane (2D, plane strain or axisymmetric): read from
     /// the stored dimension's number.
     pub fn planar(&self) -> bool {

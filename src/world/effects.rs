@@ -340,6 +340,11 @@ impl World<'_> {
         self.read().collider_distance(id, x)
     }
 
+    /// The box that holds collider `id`'s solid now ([`crate::WorldRef::collider_bounds`]).
+    pub fn collider_bounds(&self, id: u32) -> Result<Option<(Vec3, Vec3)>, Error> {
+        self.read().collider_bounds(id)
+    }
+
     /// The record of `c`, posed now; in 2D the components a 2D world does not read stored as
     /// 0 ([`ColliderDef::read_components`]). The record is checked as [`World::open`] checks
     /// a stored one ([`ColliderRecord::is_valid`]: one check for both; here it adds that a
@@ -358,15 +363,13 @@ impl World<'_> {
     }
 
     fn collider_mut(&mut self, id: u32) -> &mut ColliderRecord {
-        let layout = Layout::of(&self.def());
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        let at = self.header().tables().colliders + id as usize * size_of::<ColliderRecord>();
         bytemuck::from_bytes_mut(&mut self.buf[at..at + size_of::<ColliderRecord>()])
     }
 
     fn impulses_mut(&mut self) -> &mut [ColliderImpulse] {
-        let layout = Layout::of(&self.def());
         let n = self.header().collider_count as usize;
-        let at = layout.impulses_offset;
+        let at = self.header().tables().impulses;
         bytemuck::cast_slice_mut(&mut self.buf[at..at + n * size_of::<ColliderImpulse>()])
     }
 

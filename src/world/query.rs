@@ -76,7 +76,7 @@ impl<'a> WorldRef<'a> {
         if !(h.time.is_finite() && h.time >= 0.0 && alpha_ok) {
             return invalid;
         }
-        for (id, rec) in self.materials(&layout).iter().enumerate() {
+        for (id, rec) in self.materials().iter().enumerate() {
             let again = self.material(id as u32).map(|m| material_record(&m));
             if !matches!(again, Some(Ok(r)) if bytemuck::bytes_of(&r) == bytemuck::bytes_of(rec)) {
                 return invalid;
@@ -138,7 +138,7 @@ impl<'a> WorldRef<'a> {
             .chain((0..crate::layout::stress_components(d)).map(|k| col::tau(d, k)))
             .chain(groups.iter().flat_map(|g| g.first..g.first + g.count))
             .map(real);
-        let records = self.materials(&layout);
+        let records = self.materials();
         let rate_limit = def
             .effects
             .damping
@@ -243,9 +243,10 @@ impl<'a> WorldRef<'a> {
         &self.buf[..self.layout().grid_offset]
     }
 
-    fn materials(&self, layout: &Layout) -> &'a [MaterialRecord] {
+    /// The material table's records of the materials added, found from the header alone.
+    fn materials(&self) -> &'a [MaterialRecord] {
         let n = self.material_count();
-        let start = layout.materials_offset;
+        let start = self.header().tables().materials;
         bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
     }
 
@@ -262,21 +263,28 @@ impl<'a> WorldRef<'a> {
         self.header().collider_count as usize
     }
 
+    /// Collider `id`'s record and impulse, found from the header alone (a per-item query
+    /// costs what it reads: no definition decoded, no layout computed);
+    /// [`Error::UnknownCollider`] for an id not added.
+    fn collider_record(&self, id: u32) -> Result<(&'a ColliderRecord, &'a ColliderImpulse), Error> {
+        let h = self.header();
+        if id as u64 >= h.collider_count {
+            return Err(Error::UnknownCollider);
+        }
+        let (tables, id) = (h.tables(), id as usize);
+        let at = tables.colliders + id * size_of::<ColliderRecord>();
+        let record = bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
+        let at = tables.impulses + id * size_of::<ColliderImpulse>();
+        let impulse = bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        Ok((record, impulse))
+    }
+
     /// Collider `id` as it is now and what the material put on it over the last step
     /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added. In 2D its
     /// position's and velocity's z and its angular velocity's x and y are 0 (they are not
     /// read: [`crate::ColliderDef::position`]).
     pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
-        if id as u64 >= self.header().collider_count {
-            return Err(Error::UnknownCollider);
-        }
-        let layout = self.layout();
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
-        let r: ColliderRecord =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
-        let at = layout.impulses_offset + id as usize * size_of::<ColliderImpulse>();
-        let i: ColliderImpulse =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        let (r, i) = self.collider_record(id)?;
         let v = |a: [f64; 3]| crate::Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
         Ok(crate::ColliderState {
             def: r.def().ok_or(Error::InvalidState)?,
@@ -290,53 +298,61 @@ impl<'a> WorldRef<'a> {
     /// pose of now: what the step tests each node with (E91), distance fields too
     /// ([`crate::ColliderDef::distance`] needs no world but cannot read a field's samples).
     /// In 2D `x`'s z is not read: the distance is the one in the plane z = 0, where the
-    /// step's nodes lie.
+    /// step's nodes lie. Costs the distance and the collider's pose, read from the header and
+    /// the record alone.
     pub fn collider_distance(&self, id: u32, x: crate::Vec3) -> Result<Real, Error> {
-        use crate::effects::colliders::Collider;
-        if id as u64 >= self.header().collider_count {
-            return Err(Error::UnknownCollider);
-        }
-        let layout = self.layout();
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
-        let r: &ColliderRecord =
-            bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
-        let at = layout.sdf_offset;
-        let samples: &[Real] = bytemuck::cast_slice(
-            &self.buf[at..at + self.header().sdf_count as usize * size_of::<Real>()],
-        );
-        let c = Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)?;
+        let c = self.collider_now(id)?;
         let z = if self.header().planar() { 0.0 } else { x.z };
         Ok(c.distance([x.x, x.y, z]).0)
     }
 
-    /// The definition of material `id`.
+    /// Collider `id` in its pose of now, as the step meets it, found from the header alone.
+    fn collider_now(&self, id: u32) -> Result<crate::effects::colliders::Collider<'a>, Error> {
+        let (r, _) = self.collider_record(id)?;
+        let h = self.header();
+        let at = h.tables().sdf;
+        let samples: &[Real] =
+            bytemuck::cast_slice(&self.buf[at..at + h.sdf_count as usize * size_of::<Real>()]);
+        crate::effects::colliders::Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)
+    }
+
+    /// The box `(min, max)` (world axes, m) that holds collider `id`'s solid in its pose of
+    /// now, as the step bounds the nodes it tests (E91); `None` for an unbounded solid (a
+    /// half-space). For a host that draws the collider or seeds around it: the distance
+    /// ([`WorldRef::collider_distance`]) is positive everywhere outside. In 2D the box's z is
+    /// the plane's, 0. [`Error::UnknownCollider`] for an id not added.
+    pub fn collider_bounds(&self, id: u32) -> Result<Option<(crate::Vec3, crate::Vec3)>, Error> {
+        let c = self.collider_now(id)?;
+        let planar = self.header().planar();
+        let v = |a: [Real; 3]| crate::Vec3::new(a[0], a[1], if planar { 0.0 } else { a[2] });
+        Ok(c.bounds().map(|(lo, hi)| (v(lo), v(hi))))
+    }
+
+    /// The definition of material `id` (its record found from the header alone).
     pub fn material(&self, id: u32) -> Option<MaterialDef> {
-        let layout = self.layout();
-        self.materials(&layout)
-            .get(id as usize)
-            .map(|r| MaterialDef {
-                model: model_of(r),
-                youngs_modulus: r.youngs_modulus,
-                poisson_ratio: r.poisson_ratio,
-                density: r.density,
-                heat_capacity: r.heat_capacity,
-                conductivity: r.conductivity,
-                diffusivity: r.diffusivity,
-                thermal_expansion: r.thermal_expansion,
-                reference_temperature: r.reference_temperature,
-                swelling: r.swelling,
-                reference_concentration: r.reference_concentration,
-                viscosity: r.viscosity,
-                bulk_modulus: r.bulk_modulus,
-                pressure_exponent: r.pressure_exponent,
-                yield_stress: r.yield_stress,
-                hardening_modulus: r.hardening_modulus,
-                friction_angle: r.friction_angle,
-                cohesion: r.cohesion,
-                critical_compression: r.critical_compression,
-                critical_stretch: r.critical_stretch,
-                hardening_coefficient: r.hardening_coefficient,
-            })
+        self.materials().get(id as usize).map(|r| MaterialDef {
+            model: model_of(r),
+            youngs_modulus: r.youngs_modulus,
+            poisson_ratio: r.poisson_ratio,
+            density: r.density,
+            heat_capacity: r.heat_capacity,
+            conductivity: r.conductivity,
+            diffusivity: r.diffusivity,
+            thermal_expansion: r.thermal_expansion,
+            reference_temperature: r.reference_temperature,
+            swelling: r.swelling,
+            reference_concentration: r.reference_concentration,
+            viscosity: r.viscosity,
+            bulk_modulus: r.bulk_modulus,
+            pressure_exponent: r.pressure_exponent,
+            yield_stress: r.yield_stress,
+            hardening_modulus: r.hardening_modulus,
+            friction_angle: r.friction_angle,
+            cohesion: r.cohesion,
+            critical_compression: r.critical_compression,
+            critical_stretch: r.critical_stretch,
+            hardening_coefficient: r.hardening_coefficient,
+        })
     }
 
     /// Largest stable time step `cfl h / (c_max + |v|_max)` (E88), s: `c_max` is the fastest
@@ -371,7 +387,7 @@ impl<'a> WorldRef<'a> {
         let n = self.particle_count();
         let d = layout.d;
         let status = self.u32_col(&layout, col::STATUS, n);
-        let materials = self.materials(&layout);
+        let materials = self.materials();
         let mut c_max = materials
             .iter()
             .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
@@ -439,7 +455,7 @@ impl<'a> WorldRef<'a> {
     /// Whether some material stiffens with its plastic history (snow with `xi > 0`), so that
     /// its wave speed can outgrow a substep chosen before.
     pub(super) fn materials_harden(&self) -> bool {
-        self.materials(&self.layout()).iter().any(hardens)
+        self.materials().iter().any(hardens)
     }
 
     /// Whether particle `i` is active, of a material that hardens, with a hardened wave speed
@@ -451,7 +467,7 @@ impl<'a> WorldRef<'a> {
         }
         let id = self.u32_col(layout, col::MATERIAL, n)[i] as usize;
         let plastic = self.real_col(layout, layout.plastic.first, n)[i];
-        self.materials(layout).get(id).is_some_and(|r| {
+        self.materials().get(id).is_some_and(|r| {
             let c = wave_speed(r, plastic);
             hardens(r) && (c.is_nan() || c > limit)
         })
@@ -576,10 +592,9 @@ impl<'a> WorldRef<'a> {
 
     /// The sums of [`WorldRef::diagnostics`] over the particles `range`.
     fn sums(&self, def: &WorldDef, range: core::ops::Range<usize>) -> Sums {
-        let layout = Layout::of(def);
-        let materials = self.materials(&layout);
+        let materials = self.materials();
         let view = self.particles();
-        let d = layout.d;
+        let d = def.axes();
         let mut out = Sums::default();
         for i in range {
             if view.status[i] != ACTIVE {
@@ -729,7 +744,7 @@ impl WorldRef<'_> {
         material: u32,
         f: &Deformation<D>,
     ) -> Option<[Real; 6]> {
-        let rec = self.materials(&self.layout()).get(material as usize)?;
+        let rec = self.materials().get(material as usize)?;
         particle_stress(rec, f, eigenstrain_of(rec, view, i))
     }
 }
