@@ -362,7 +362,9 @@ unsafe impl Pod for TractionRecord {}
 /// One collider in the buffer's table ([`crate::ColliderDef`]), widened to f64: its pose at
 /// `pose_time` (world time, s), which the step moves on with its velocities. `shape` and
 /// `contact` are the enums' numbers; `size` the shape's lengths (radius; half-extents;
-/// half-length then radius, and a cylinder's inner radius).
+/// half-length then radius, and a cylinder's inner radius). What it holds and whether a
+/// record is one the API writes: `effects/colliders.rs` (`ColliderRecord::def`,
+/// `ColliderRecord::is_valid`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct ColliderRecord {
@@ -377,43 +379,6 @@ pub(crate) struct ColliderRecord {
     pub pose_time: f64,
     /// A distance field's first sample and its samples along x, y, z (zeros otherwise).
     pub grid: [u64; 4],
-}
-
-impl ColliderRecord {
-    /// Whether the record is one [`crate::World::add_collider`] could have written in a world
-    /// of `samples` distance samples: known shape and contact, finite values, positive
-    /// lengths, a unit rotation, a distance field within the samples.
-    pub fn is_valid(&self, samples: u64) -> bool {
-        let finite = [self.friction, self.pose_time]
-            .iter()
-            .chain(&self.size)
-            .chain(&self.position)
-            .chain(&self.rotation)
-            .chain(&self.velocity)
-            .chain(&self.angular_velocity)
-            .all(|c| c.is_finite());
-        let [a, b, c] = self.size;
-        let lengths = match self.shape {
-            0 => true,
-            1 => a > 0.0,
-            2 => a > 0.0 && b > 0.0 && c > 0.0,
-            3 => a >= 0.0 && b > 0.0,
-            4 => a > 0.0 && c >= 0.0 && c < b,
-            5 => {
-                let [first, nx, ny, nz] = self.grid;
-                let n = nx.checked_mul(ny).and_then(|n| n.checked_mul(nz));
-                a > 0.0
-                    && nx >= 2
-                    && ny >= 2
-                    && nz >= 1
-                    && n.and_then(|n| n.checked_add(first))
-                        .is_some_and(|end| end <= samples)
-            }
-            _ => false,
-        };
-        let q2: f64 = self.rotation.iter().map(|c| c * c).sum();
-        finite && lengths && self.contact < 3 && self.friction >= 0.0 && (q2 - 1.0).abs() < 1e-6
-    }
 }
 
 // SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.
@@ -594,23 +559,14 @@ impl Layout {
             + 2 * d
             + if stress_velocity { d } else { 0 }
             + 4 * scalar_grid.iter().filter(|&&b| b).count();
-        let materials_offset = round_up(size_of::<Header>(), ALIGN);
-        let tractions_offset = round_up(
-            materials_offset + def.material_capacity as usize * size_of::<MaterialRecord>(),
-            ALIGN,
-        );
         let traction_capacity = def.effects.traction_capacity as usize;
-        let colliders_offset = round_up(
-            tractions_offset + traction_capacity * size_of::<TractionRecord>(),
-            ALIGN,
+        let tables = Tables::of(
+            def.material_capacity as usize,
+            traction_capacity,
+            def.effects.collider_capacity as usize,
+            def.effects.sdf_capacity as usize,
         );
-        let collider_capacity = def.effects.collider_capacity as usize;
-        let impulses_offset = colliders_offset + collider_capacity * size_of::<ColliderRecord>();
-        let sdf_offset = impulses_offset + collider_capacity * size_of::<ColliderImpulse>();
-        let particle_offset = round_up(
-            sdf_offset + def.effects.sdf_capacity as usize * size_of::<Real>(),
-            ALIGN,
-        );
+        let particle_offset = tables.end;
         let grid_offset =
             particle_offset + particle_real_columns * real_column_bytes + 2 * u32_column_bytes;
         let scratch_offset = grid_offset + grid_columns * node_column_bytes;
@@ -633,12 +589,12 @@ impl Layout {
             d,
             padded_capacity: cap,
             nodes,
-            materials_offset,
-            tractions_offset,
+            materials_offset: tables.materials,
+            tractions_offset: tables.tractions,
             traction_capacity,
-            colliders_offset,
-            impulses_offset,
-            sdf_offset,
+            colliders_offset: tables.colliders,
+            impulses_offset: tables.impulses,
+            sdf_offset: tables.sdf,
             particle_offset,
             real_column_bytes,
             u32_column_bytes,
@@ -660,6 +616,67 @@ impl Layout {
             reach_groups,
             total,
         }
+    }
+}
+
+/// Where the tables at the head of a buffer start, bytes (items 2 and 3 of the module's
+/// list): a function of four capacities alone, which the header holds, so that a query of one
+/// record finds it from the header's fields without the definition ([`Header::tables`]);
+/// [`Layout::of`] takes its offsets from here too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Tables {
+    pub materials: usize,
+    pub tractions: usize,
+    pub colliders: usize,
+    pub impulses: usize,
+    pub sdf: usize,
+    /// The first byte after them: where the particle columns start.
+    pub end: usize,
+}
+
+impl Tables {
+    /// The tables of `materials` material records, `tractions` traction records, `colliders`
+    /// collider records and impulses and `samples` distance samples.
+    pub const fn of(materials: usize, tractions: usize, colliders: usize, samples: usize) -> Self {
+        let material_table = round_up(size_of::<Header>(), ALIGN);
+        let traction_table = round_up(
+            material_table + materials * size_of::<MaterialRecord>(),
+            ALIGN,
+        );
+        let collider_table = round_up(
+            traction_table + tractions * size_of::<TractionRecord>(),
+            ALIGN,
+        );
+        let impulses = collider_table + colliders * size_of::<ColliderRecord>();
+        let sdf = impulses + colliders * size_of::<ColliderImpulse>();
+        Tables {
+            materials: material_table,
+            tractions: traction_table,
+            colliders: collider_table,
+            impulses,
+            sdf,
+            end: round_up(sdf + samples * size_of::<Real>(), ALIGN),
+        }
+    }
+}
+
+impl Header {
+    /// The tables of the world this header heads ([`Tables`]), from its capacities alone: for
+    /// a header that [`World::reopen`](crate::World::reopen)'s checks passed (its capacities
+    /// are its definition's), the offsets [`Layout::of`] gives, in a few additions.
+    pub fn tables(&self) -> Tables {
+        Tables::of(
+            self.material_capacity as usize,
+            self.traction_capacity as usize,
+            self.collider_capacity as usize,
+            self.sdf_capacity as usize,
+        )
+    }
+
+    /// Whether the world's motion is in a plane (2D, plane strain or axisymmetric): read from
+    /// the stored dimension's number.
+    pub fn planar(&self) -> bool {
+        self.dimension != Dimension::ThreeD as u64
     }
 }
 

@@ -16,6 +16,11 @@ use core::ops::Range;
 /// A task over the items `start..end`, run by worker `worker` (`< worker_count`).
 pub type Task<'t> = dyn Fn(usize, usize, usize) + Sync + 't;
 
+/// The most items of one loop the step hands a task system ([`TaskSystem::parallel_for`]'s
+/// `items`): four per worker of [`crate::MAX_WORKERS`]. A system that checks its ranges can
+/// keep a bit per item in this many bits, on its stack (the C interface's adapter does).
+pub const MAX_ITEMS: usize = 1024;
+
 /// A host's task system (Box2D v3's enqueue and finish, as one call).
 ///
 /// # Safety
@@ -25,7 +30,7 @@ pub type Task<'t> = dyn Fn(usize, usize, usize) + Sync + 't;
 /// except possibly the last; at most [`TaskSystem::worker_count`] ranges run at once, no two
 /// of them with the same `worker`; it returns once every range has returned. A system may run
 /// everything on the calling thread. The step's results do not depend on how the ranges are
-/// cut nor on which worker runs which.
+/// cut nor on which worker runs which. The step's loops have at most [`MAX_ITEMS`] items.
 pub unsafe trait TaskSystem: Sync {
     /// The workers the system runs tasks on, at least 1.
     fn worker_count(&self) -> usize;
@@ -51,8 +56,10 @@ unsafe impl TaskSystem for Serial {
     }
 }
 
-/// Runs `item(i)` for every `i` in `0..items` on `tasks`, one item per range at least.
+/// Runs `item(i)` for every `i` in `0..items` (at most [`MAX_ITEMS`]) on `tasks`, one item
+/// per range at least.
 pub(crate) fn for_each(tasks: &dyn TaskSystem, items: usize, item: &(dyn Fn(usize) + Sync)) {
+    debug_assert!(items <= MAX_ITEMS, "a loop of {items} items");
     tasks.parallel_for(items, 1, &|start, end, _worker| {
         for i in start..end {
             item(i);

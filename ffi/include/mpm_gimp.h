@@ -221,10 +221,10 @@ enum MpmStatus
   MPM_STATUS_OVERLAPPING_MEMORY = 69,
   // `mpm_world_step_tasks`: the host's task system broke the contract of
   // `MpmEnqueueTaskCallback`: it called the task with a range outside the items, a worker
-  // index at or past `worker_count`, two ranges at once on one worker or two overlapping
-  // ranges at once (such ranges were not run), left items out or ran some twice, or its
-  // finish returned while a range still ran. The report is not written; the world may be in
-  // an intermediate state (restore a snapshot).
+  // index at or past `worker_count`, two ranges at once on one worker or a range with an
+  // item that another range ran or runs (such ranges were not run: no item runs twice),
+  // left items out, or its finish returned while a range still ran. The report is not
+  // written; the world may be in an intermediate state (restore a snapshot).
   MPM_STATUS_TASK_CONTRACT = 70,
 };
 #ifndef __cplusplus
@@ -1001,14 +1001,16 @@ typedef struct MpmColliderDef {
   // Distance field: the distance between samples, m, > 0. Default 1.
   mpm_real sdf_spacing;
   // The frame's origin, m: the solid's centre, about which it turns and its torque is
-  // reported. Default (0, 0, 0).
+  // reported. In 2D z is not read, as no z of a 2D call is (the origin lies in the plane
+  // z = 0 and reads back with z = 0). Default (0, 0, 0).
   struct MpmVec3 position;
   // The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
   // (0, 0, 0, 1).
   mpm_real rotation[4];
-  // Velocity of the origin, m/s. Default (0, 0, 0).
+  // Velocity of the origin, m/s (2D: z is not read and reads back 0). Default (0, 0, 0).
   struct MpmVec3 velocity;
-  // Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
+  // Angular velocity about the origin, rad/s (2D: only z is read; x and y read back 0).
+  // Default (0, 0, 0).
   struct MpmVec3 angular_velocity;
   // Coulomb friction coefficient, >= 0. Default 0.
   mpm_real friction;
@@ -1054,9 +1056,11 @@ typedef void MpmTaskCallback(uint32_t start, uint32_t end, uint32_t worker, void
 // check it); at most `worker_count` ranges run at once, each with its own worker index below
 // `worker_count` (ranges that run one after another may share one). How the items are cut and
 // spread does not change the results. The library refuses to run a range outside the items,
-// with a worker index out of range or in use, or overlapping a range that runs, and the step
-// then answers `MPM_STATUS_TASK_CONTRACT`. The callbacks must return normally (no `longjmp`,
-// no C++ exception).
+// with a worker index out of range or in use, or with an item that a range of the task ran
+// or runs already, and checks when the task is finished that every item ran: each item of
+// the kernel runs at most once, and a broken contract (items run twice or left out, whatever
+// the ranges' lengths add up to) makes the step answer `MPM_STATUS_TASK_CONTRACT`. The
+// callbacks must return normally (no `longjmp`, no C++ exception).
 typedef void *MpmEnqueueTaskCallback(MpmTaskCallback *task,
                                      uint32_t item_count,
                                      uint32_t min_range,
@@ -1639,6 +1643,9 @@ struct MpmColliderDef mpm_collider_def_default_f64(void);
 // `MpmEffects::collider_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a value not finite or
 // out of range is `MPM_STATUS_INVALID_EFFECT`, an enum out of range
 // `MPM_STATUS_INVALID_ENUM`, one past the capacity `MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED`.
+// In 2D the position's and velocity's z and the angular velocity's x and y are not read
+// (not checked, stored as 0). `mpm_world_open` checks a stored collider as this call checks
+// a definition.
 //
 // # Safety
 // `world` is NULL or a world; the other pointers are NULL or valid.
@@ -1687,7 +1694,8 @@ MpmStatus mpm_world_get_collider(const struct MpmWorld *world,
 //
 // A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
 // `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
-// broke it were not run, and the world may be in an intermediate state.
+// broke it were not run (no item ran twice), and the world may be in an intermediate state:
+// restore a snapshot taken before the call.
 //
 // # Safety
 // `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and

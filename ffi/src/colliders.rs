@@ -74,14 +74,16 @@ pub struct MpmColliderDef {
     /// Distance field: the distance between samples, m, > 0. Default 1.
     pub sdf_spacing: mpm_real,
     /// The frame's origin, m: the solid's centre, about which it turns and its torque is
-    /// reported. Default (0, 0, 0).
+    /// reported. In 2D z is not read, as no z of a 2D call is (the origin lies in the plane
+    /// z = 0 and reads back with z = 0). Default (0, 0, 0).
     pub position: MpmVec3,
     /// The frame's rotation, a quaternion (x, y, z, w), normalised when set. Default
     /// (0, 0, 0, 1).
     pub rotation: [mpm_real; 4],
-    /// Velocity of the origin, m/s. Default (0, 0, 0).
+    /// Velocity of the origin, m/s (2D: z is not read and reads back 0). Default (0, 0, 0).
     pub velocity: MpmVec3,
-    /// Angular velocity about the origin, rad/s (2D: only z). Default (0, 0, 0).
+    /// Angular velocity about the origin, rad/s (2D: only z is read; x and y read back 0).
+    /// Default (0, 0, 0).
     pub angular_velocity: MpmVec3,
     /// Coulomb friction coefficient, >= 0. Default 0.
     pub friction: mpm_real,
@@ -232,6 +234,9 @@ pub extern "C" fn mpm_collider_def_default_f64() -> MpmColliderDef {
 /// `MpmEffects::collider_capacity` (`MPM_STATUS_EFFECT_NOT_DECLARED`); a value not finite or
 /// out of range is `MPM_STATUS_INVALID_EFFECT`, an enum out of range
 /// `MPM_STATUS_INVALID_ENUM`, one past the capacity `MPM_STATUS_COLLIDER_CAPACITY_EXCEEDED`.
+/// In 2D the position's and velocity's z and the angular velocity's x and y are not read
+/// (not checked, stored as 0). `mpm_world_open` checks a stored collider as this call checks
+/// a definition.
 ///
 /// # Safety
 /// `world` is NULL or a world; the other pointers are NULL or valid.

@@ -149,10 +149,10 @@ pub enum MpmStatus {
     OverlappingMemory = 69,
     /// `mpm_world_step_tasks`: the host's task system broke the contract of
     /// `MpmEnqueueTaskCallback`: it called the task with a range outside the items, a worker
-    /// index at or past `worker_count`, two ranges at once on one worker or two overlapping
-    /// ranges at once (such ranges were not run), left items out or ran some twice, or its
-    /// finish returned while a range still ran. The report is not written; the world may be in
-    /// an intermediate state (restore a snapshot).
+    /// index at or past `worker_count`, two ranges at once on one worker or a range with an
+    /// item that another range ran or runs (such ranges were not run: no item runs twice),
+    /// left items out, or its finish returned while a range still ran. The report is not
+    /// written; the world may be in an intermediate state (restore a snapshot).
     TaskContract = 70,
 }
 

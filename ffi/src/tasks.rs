@@ -5,19 +5,26 @@
 //!
 //! The host is not trusted with the kernel's memory: the task it is handed checks every range
 //! it is called with (inside `0..item_count`, a worker index below `worker_count`, no two
-//! ranges at once on one worker, no two overlapping ranges at once) and runs only those that
-//! pass, so that whatever the host does with its ranges no two of the kernel's items write the
-//! same memory at once. A range that fails a check, items left out or run twice, a finish that
-//! returns while a range still runs, and a panic inside a task make the step answer an error
+//! ranges at once on one worker, no item that another range of the task took before) and runs
+//! only those that pass, so that whatever the host does with its ranges each of the kernel's
+//! items runs at most once. Each loop keeps one bit per item (`Loop::taken`): a range sets its
+//! items' bits before it runs and is refused if one was set already, and the loop is complete
+//! when every bit is set. So an item run twice or never is caught whatever the counts of the
+//! ranges add up to. A range that fails a check, an item left out, a finish that returns while
+//! a range still runs, and a panic inside a task make the step answer an error
 //! (`MPM_STATUS_TASK_CONTRACT`, `MPM_STATUS_INTERNAL`) once the task is finished.
 
 use crate::status::MpmStatus;
 use crate::world::{put, step_report, world_at, MpmStepReport, MpmWorld};
 use crate::{apart, guard, mpm_real, non_null};
 use core::ffi::c_void;
-use core::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
-use kernel::tasks::Task;
+use core::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use kernel::tasks::{Task, MAX_ITEMS};
 use kernel::{TaskSystem, MAX_WORKERS};
+
+/// Words of a loop's item bits ([`Loop::taken`]): one bit for each of the most items a loop of
+/// the kernel has ([`MAX_ITEMS`]).
+const TAKEN_WORDS: usize = MAX_ITEMS.div_ceil(64);
 
 /// A task the library hands the host: runs the items `start .. end` (`start < end <=
 /// item_count`) on worker `worker` (`< worker_count`) and returns when they are done.
@@ -39,9 +46,11 @@ pub type MpmTaskCallback =
 /// check it); at most `worker_count` ranges run at once, each with its own worker index below
 /// `worker_count` (ranges that run one after another may share one). How the items are cut and
 /// spread does not change the results. The library refuses to run a range outside the items,
-/// with a worker index out of range or in use, or overlapping a range that runs, and the step
-/// then answers `MPM_STATUS_TASK_CONTRACT`. The callbacks must return normally (no `longjmp`,
-/// no C++ exception).
+/// with a worker index out of range or in use, or with an item that a range of the task ran
+/// or runs already, and checks when the task is finished that every item ran: each item of
+/// the kernel runs at most once, and a broken contract (items run twice or left out, whatever
+/// the ranges' lengths add up to) makes the step answer `MPM_STATUS_TASK_CONTRACT`. The
+/// callbacks must return normally (no `longjmp`, no C++ exception).
 pub type MpmEnqueueTaskCallback = Option<
     unsafe extern "C" fn(
         task: MpmTaskCallback,
@@ -108,8 +117,11 @@ struct Loop<'a, 't> {
     /// The range each worker runs now, packed as `start << 32 | end` (0: none; a range that
     /// runs is never empty, so its end is at least 1).
     running: [AtomicU64; MAX_WORKERS as usize],
-    /// Items run so far.
-    done: AtomicUsize,
+    /// One bit per item (item `i`: bit `i % 64` of word `i / 64`), set by the range that takes
+    /// it, before the range runs: the items run or running. A range that finds one of its
+    /// bits set is refused (the bits it set before it found it stay set, and the loop is
+    /// broken anyway).
+    taken: [AtomicU64; TAKEN_WORDS],
     panicked: &'a AtomicBool,
     broken: &'a AtomicBool,
 }
@@ -120,6 +132,36 @@ impl Loop<'_, '_> {
         self.running[..self.workers]
             .iter()
             .any(|r| r.load(Ordering::SeqCst) != 0)
+    }
+
+    /// Takes the items `start..end` (`start < end <= items`): sets their bits, and answers
+    /// whether none was set before. Two ranges that share an item both set its bit, one after
+    /// the other (one atomic word), so the later one sees it, whether the two run at once or
+    /// one after the other.
+    fn take(&self, start: usize, end: usize) -> bool {
+        let mut fresh = true;
+        for w in start / 64..end.div_ceil(64) {
+            let lo = start.max(64 * w) - 64 * w;
+            let hi = end.min(64 * w + 64) - 64 * w;
+            // Bits lo..hi of the word (hi > lo, hi <= 64).
+            let mask = (u64::MAX >> (64 - (hi - lo))) << lo;
+            fresh &= self.taken[w].fetch_or(mask, Ordering::Relaxed) & mask == 0;
+        }
+        fresh
+    }
+
+    /// Whether every item of the loop was taken.
+    fn all_taken(&self) -> bool {
+        self.taken.iter().enumerate().all(|(w, bits)| {
+            // The bits of items 64 w .. 64 w + 64 that the loop has.
+            let have = self.items.saturating_sub(64 * w).min(64);
+            let want = if have == 64 {
+                u64::MAX
+            } else {
+                (1 << have) - 1
+            };
+            bits.load(Ordering::Relaxed) == want
+        })
     }
 }
 
@@ -145,9 +187,8 @@ unsafe extern "C" fn run_range(start: u32, end: u32, worker: u32, task_context: 
         return;
     }
     let packed = (start as u64) << 32 | end as u64;
-    // Claim the worker, then look at every other worker's range. Both sides of two
-    // overlapping ranges store before they load, all sequentially consistent, so at least one
-    // of them sees the other and neither runs on alongside it.
+    // Claim the worker, then the items: a range that shares an item with one that ran or
+    // runs (on any worker) finds its bit set and does not run.
     if lp.running[w]
         .compare_exchange(0, packed, Ordering::SeqCst, Ordering::SeqCst)
         .is_err()
@@ -155,18 +196,11 @@ unsafe extern "C" fn run_range(start: u32, end: u32, worker: u32, task_context: 
         lp.broken.store(true, Ordering::Relaxed);
         return;
     }
-    let overlaps = lp.running[..lp.workers]
-        .iter()
-        .enumerate()
-        .filter(|&(v, _)| v != w)
-        .map(|(_, r)| r.load(Ordering::SeqCst))
-        .any(|o| o != 0 && o >> 32 < u64::from(end) && u64::from(start) < o & 0xffff_ffff);
-    if !overlaps {
+    if lp.take(s, e) {
         let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| (lp.task)(s, e, w)));
         if ran.is_err() {
             lp.panicked.store(true, Ordering::Relaxed);
         }
-        lp.done.fetch_add(e - s, Ordering::Relaxed);
     } else {
         lp.broken.store(true, Ordering::Relaxed);
     }
@@ -174,9 +208,10 @@ unsafe extern "C" fn run_range(start: u32, end: u32, worker: u32, task_context: 
 }
 
 // SAFETY: the callback runs a range only if it lies within `0..items`, its worker is below
-// the count and idle, and it overlaps no range still running; ranges run twice or not at all
-// are refused after finish (`MPM_STATUS_TASK_CONTRACT`), and `parallel_for` waits out a range
-// still running before it returns. So no two ranges the kernel's items see overlap.
+// the count and idle, and none of its items was taken by another range of the loop before
+// (`Loop::take`): each item runs at most once, so no two ranges the kernel's items see
+// overlap. Items never run are found after finish (`MPM_STATUS_TASK_CONTRACT`), and
+// `parallel_for` waits out a range still running before it returns.
 unsafe impl TaskSystem for HostTasks {
     fn worker_count(&self) -> usize {
         self.workers
@@ -200,10 +235,11 @@ impl HostTasks {
         if items == 0 {
             return;
         }
-        let Ok(count) = u32::try_from(items) else {
-            // More items than the C interface counts: on the calling thread, which no range
-            // occupies now.
-            return task(0, items, 0);
+        let count = match u32::try_from(items) {
+            Ok(count) if items <= MAX_ITEMS => count,
+            // More items than a loop's bits hold (no loop of the kernel's has that many) or the
+            // C interface counts: on the calling thread, which no range occupies now.
+            _ => return task(0, items, 0),
         };
         if self.broken.load(Ordering::Relaxed) {
             return task(0, items, 0);
@@ -213,7 +249,7 @@ impl HostTasks {
             items,
             workers: self.workers.min(MAX_WORKERS as usize),
             running: [const { AtomicU64::new(0) }; MAX_WORKERS as usize],
-            done: AtomicUsize::new(0),
+            taken: [const { AtomicU64::new(0) }; TAKEN_WORDS],
             panicked: &self.panicked,
             broken: &self.broken,
         };
@@ -233,7 +269,8 @@ impl HostTasks {
             lp.broken.store(true, Ordering::Relaxed);
             std::thread::yield_now();
         }
-        if lp.done.load(Ordering::Relaxed) != items {
+        // Items no range took (the finish made what the ranges did visible here).
+        if !lp.all_taken() {
             lp.broken.store(true, Ordering::Relaxed);
         }
     }
@@ -247,7 +284,8 @@ impl HostTasks {
 ///
 /// A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
 /// `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
-/// broke it were not run, and the world may be in an intermediate state.
+/// broke it were not run (no item ran twice), and the world may be in an intermediate state:
+/// restore a snapshot taken before the call.
 ///
 /// # Safety
 /// `world` is NULL or a world; `report_out` is NULL or valid; `tasks` is NULL or valid, and
@@ -306,7 +344,7 @@ pub unsafe extern "C" fn mpm_world_step_tasks(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::atomic::AtomicU32;
+    use std::sync::atomic::{AtomicU32, AtomicUsize};
     use std::sync::Mutex;
     use std::thread::JoinHandle;
 
@@ -540,7 +578,7 @@ mod tests {
     /// loop is flagged.
     #[test]
     fn ranges_out_of_bounds_are_not_run_and_flagged() {
-        let cases: [(Ranges, &[u32]); 7] = [
+        let cases: [(Ranges, &[u32]); 6] = [
             // Past the end.
             (&[(0, 8, 0), (8, 11, 0)], &[1, 1, 1, 1, 1, 1, 1, 1, 0, 0]),
             // Reversed.
@@ -555,8 +593,6 @@ mod tests {
             ),
             // Items left out.
             (&[(0, 9, 0)], &[1, 1, 1, 1, 1, 1, 1, 1, 1, 0]),
-            // An item run twice (one after the other: not at once, so it runs).
-            (&[(0, 10, 0), (9, 10, 1)], &[1, 1, 1, 1, 1, 1, 1, 1, 1, 2]),
         ];
         for (ranges, want) in cases {
             let host = TestHost::new(Mode::Ranges(ranges), 2);
@@ -565,6 +601,77 @@ mod tests {
             assert_eq!(counts, want, "{ranges:?}");
             assert_eq!(flags(&tasks), (false, true), "{ranges:?}");
         }
+    }
+
+    /// A range with an item that a range of the loop ran before, on any worker, is not run
+    /// and flags the loop, whatever the ranges' lengths add up to: as many items run twice as
+    /// are left out (the count of items run is `items`), in one word of the item bits and
+    /// across words, or more run twice than left out.
+    #[test]
+    fn an_item_run_twice_or_never_is_caught_whatever_the_counts() {
+        let cases: [(usize, Ranges, Vec<u32>); 5] = [
+            // The first item again instead of the last.
+            (
+                10,
+                &[(0, 9, 0), (0, 1, 1)],
+                [1; 9].into_iter().chain([0]).collect(),
+            ),
+            // A range twice, the next one left out, on one worker and on two.
+            (
+                10,
+                &[(0, 5, 0), (0, 5, 0)],
+                [1; 5].into_iter().chain([0; 5]).collect(),
+            ),
+            (
+                10,
+                &[(5, 10, 1), (5, 10, 0)],
+                [0; 5].into_iter().chain([1; 5]).collect(),
+            ),
+            // Across words of the item bits: 0..100 twice, 100..200 left out.
+            (
+                200,
+                &[(0, 100, 0), (0, 100, 1)],
+                [1; 100].into_iter().chain([0; 100]).collect(),
+            ),
+            // Every item, then one again.
+            (10, &[(0, 10, 0), (9, 10, 1)], vec![1; 10]),
+        ];
+        for (items, ranges, want) in cases {
+            let host = TestHost::new(Mode::Ranges(ranges), 2);
+            let tasks = host.tasks();
+            let (counts, _) = run(&host, &tasks, items, 1);
+            assert_eq!(counts, want, "{ranges:?}: each item runs at most once");
+            assert_eq!(flags(&tasks), (false, true), "{ranges:?}");
+        }
+        // The counts of the first four cases add up to the items: the check is not a sum. Nor
+        // does it look only at ranges that run at once.
+        let host = TestHost::new(Mode::Ranges(&[(0, 128, 0), (64, 192, 1), (192, 256, 0)]), 2);
+        let tasks = host.tasks();
+        let (counts, _) = run(&host, &tasks, 320, 1);
+        assert_eq!(&counts[64..128], &[1; 64], "the shared items run once");
+        assert_eq!(flags(&tasks), (false, true));
+    }
+
+    /// Loops of every length up to the most the kernel hands out, cut in ranges that end at
+    /// and across the item bits' words, keep the contract; one more item runs on the calling
+    /// thread.
+    #[test]
+    fn loops_up_to_the_most_items_are_checked_and_longer_ones_run_inline() {
+        for items in [1, 63, 64, 65, 127, 128, 129, 1000, MAX_ITEMS] {
+            for min_range in [1, 7, 64] {
+                let host = TestHost::new(Mode::Threads, 3);
+                let tasks = host.tasks();
+                let (counts, _) = run(&host, &tasks, items, min_range);
+                assert!(counts.iter().all(|&c| c == 1), "{items} {min_range}");
+                assert_eq!(flags(&tasks), (false, false), "{items} {min_range}");
+            }
+        }
+        let host = TestHost::new(Mode::Threads, 3);
+        let tasks = host.tasks();
+        let (counts, worker) = run(&host, &tasks, MAX_ITEMS + 1, 1);
+        assert!(counts.iter().all(|&c| c == 1));
+        assert_eq!((worker, host.enqueued.load(Ordering::SeqCst)), (0, 0));
+        assert_eq!(flags(&tasks), (false, false));
     }
 
     #[test]

@@ -79,28 +79,40 @@ fn value(v: &ParticlesView<'_>, colour: Colour, i: usize, density: &[f64]) -> f6
 
 /// The colliders' solids under the particles: every pixel whose centre is inside one (3D: in
 /// the grid's middle plane along z), in one grey; `rgb` is the picture's `width` (from
-/// `scale`) by `height` pixels.
+/// `scale`) by `height` pixels. Each collider is asked for its distance only at the pixels
+/// of the box that holds it ([`World::collider_bounds`]; all of them for a half-space).
 fn draw_colliders(world: &World, scale: f64, height: u32, rgb: &mut [u8]) {
     let def = world.def();
-    let n = world.collider_count();
-    if n == 0 {
-        return;
-    }
     let w = rgb.len() / 3 / height.max(1) as usize;
     let z = def.origin.z as f64 + 0.5 * def.cells[2] as f64 * def.cell_size as f64;
     let solid = [120u8, 110, 100];
-    let ids = 0..n as u32;
-    for y in 0..height as usize {
-        let wy = def.origin.y as f64 + (height as f64 - y as f64 - 0.5) / scale;
-        for x in 0..w {
-            let wx = def.origin.x as f64 + (x as f64 + 0.5) / scale;
-            let p = Vec3::new(wx as Real, wy as Real, z as Real);
-            if ids
-                .clone()
-                .any(|id| world.collider_distance(id, p).is_ok_and(|d| d <= 0.0))
-            {
-                let at = 3 * (y * w + x);
-                rgb[at..at + 3].copy_from_slice(&solid);
+    // Pixel x of world x, and pixel row of world y (rows top to bottom).
+    let column = |x: f64| (x - def.origin.x as f64) * scale - 0.5;
+    let row = |y: f64| height as f64 - (y - def.origin.y as f64) * scale - 0.5;
+    for id in 0..world.collider_count() as u32 {
+        let Ok(bounds) = world.collider_bounds(id) else {
+            continue;
+        };
+        // The pixels whose centres may lie inside: the box's and one more around it (a centre
+        // on the box's face, rounded either way), clamped to the picture.
+        let (x0, x1, y0, y1) = match bounds {
+            Some((lo, hi)) => (
+                (column(lo.x as f64).ceil() - 1.0).max(0.0) as usize,
+                (column(hi.x as f64).floor() + 2.0).clamp(0.0, w as f64) as usize,
+                (row(hi.y as f64).ceil() - 1.0).max(0.0) as usize,
+                (row(lo.y as f64).floor() + 2.0).clamp(0.0, height as f64) as usize,
+            ),
+            None => (0, w, 0, height as usize),
+        };
+        for y in y0..y1 {
+            let wy = def.origin.y as f64 + (height as f64 - y as f64 - 0.5) / scale;
+            for x in x0..x1 {
+                let wx = def.origin.x as f64 + (x as f64 + 0.5) / scale;
+                let p = Vec3::new(wx as Real, wy as Real, z as Real);
+                if world.collider_distance(id, p).is_ok_and(|d| d <= 0.0) {
+                    let at = 3 * (y * w + x);
+                    rgb[at..at + 3].copy_from_slice(&solid);
+                }
             }
         }
     }
@@ -235,5 +247,103 @@ pub fn value_range(world: &World, colour: Colour) -> (f64, f64) {
         (lo, hi)
     } else {
         (0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mpm_gimp::{
+        memory_requirements, ColliderDef, ColliderShape, Effects, HeapBuffer, World, WorldDef,
+    };
+
+    /// The colliders drawn from their boxes are the pixels a query at every pixel finds
+    /// inside one: a sphere, a turned box, a capsule crossing the picture's edge, a cylinder
+    /// and a turned half-space, in 2D and 3D (the grid's middle plane), at two widths.
+    #[test]
+    fn colliders_drawn_from_their_bounds_are_those_every_pixel_finds() {
+        for three_d in [false, true] {
+            let def = WorldDef {
+                dimension: if three_d {
+                    Dimension::ThreeD
+                } else {
+                    Dimension::Plane2D
+                },
+                cells: [24, 16, if three_d { 8 } else { 1 }],
+                cell_size: 0.05,
+                particle_capacity: 64,
+                effects: Effects {
+                    collider_capacity: 5,
+                    ..Effects::NONE
+                },
+                ..WorldDef::DEFAULT
+            };
+            let mut buf = HeapBuffer::new(memory_requirements(&def).unwrap().bytes);
+            let mut world = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let turn = |a: f32| [0.0, 0.0, (0.5 * a).sin() as Real, (0.5 * a).cos() as Real];
+            let z = 0.2;
+            for c in [
+                ColliderDef {
+                    shape: ColliderShape::Sphere { radius: 0.13 },
+                    position: Vec3::new(0.3, 0.4, z),
+                    ..ColliderDef::DEFAULT
+                },
+                ColliderDef {
+                    shape: ColliderShape::Box {
+                        half_extents: Vec3::new(0.2, 0.05, 0.1),
+                    },
+                    position: Vec3::new(0.7, 0.5, z),
+                    rotation: turn(0.6),
+                    ..ColliderDef::DEFAULT
+                },
+                ColliderDef {
+                    shape: ColliderShape::Capsule {
+                        half_length: 0.2,
+                        radius: 0.05,
+                    },
+                    position: Vec3::new(1.15, 0.7, z),
+                    rotation: turn(1.1),
+                    ..ColliderDef::DEFAULT
+                },
+                ColliderDef {
+                    shape: ColliderShape::Cylinder {
+                        half_length: 0.1,
+                        radius: 0.08,
+                        inner_radius: 0.04,
+                    },
+                    position: Vec3::new(0.4, 0.15, z),
+                    ..ColliderDef::DEFAULT
+                },
+                ColliderDef {
+                    position: Vec3::new(0.0, 0.1, 0.0),
+                    rotation: turn(-0.2),
+                    ..ColliderDef::DEFAULT
+                },
+            ] {
+                world.add_collider(&c).unwrap();
+            }
+            for width in [97, 240] {
+                let scale = width as f64 / (def.cells[0] as f64 * def.cell_size as f64);
+                let height = (def.cells[1] as f64 * def.cell_size as f64 * scale).round() as u32;
+                let mut drawn = vec![0u8; 3 * (width * height) as usize];
+                draw_colliders(&world, scale, height, &mut drawn);
+                let mut every = vec![0u8; drawn.len()];
+                let zc = def.origin.z as f64 + 0.5 * def.cells[2] as f64 * def.cell_size as f64;
+                for y in 0..height as usize {
+                    let wy = def.origin.y as f64 + (height as f64 - y as f64 - 0.5) / scale;
+                    for x in 0..width as usize {
+                        let wx = def.origin.x as f64 + (x as f64 + 0.5) / scale;
+                        let p = Vec3::new(wx as Real, wy as Real, zc as Real);
+                        if (0..5).any(|id| world.collider_distance(id, p).is_ok_and(|d| d <= 0.0)) {
+                            let at = 3 * (y * width as usize + x);
+                            every[at..at + 3].copy_from_slice(&[120, 110, 100]);
+                        }
+                    }
+                }
+                let inside = every.iter().filter(|&&c| c != 0).count();
+                assert!(inside > 0, "3D {three_d}, width {width}: something drawn");
+                assert!(drawn == every, "3D {three_d}, width {width}");
+            }
+        }
     }
 }

@@ -513,14 +513,17 @@ pub struct ColliderDef {
     /// The solid in the collider's frame.
     pub shape: ColliderShape,
     /// The frame's origin, m: the solid's centre, the point about which its angular velocity
-    /// turns it and about which [`crate::ColliderState::torque`] is reported.
+    /// turns it and about which [`crate::ColliderState::torque`] is reported. In 2D its z is
+    /// not read, as no z of a 2D call is: the origin lies in the plane z = 0, and reads back
+    /// with z = 0.
     pub position: Vec3,
     /// The frame's rotation as a unit quaternion `[x, y, z, w]` (normalised when set); in 2D
     /// only turns about z keep the solid in the plane.
     pub rotation: [Real; 4],
-    /// Velocity of the frame's origin, m/s.
+    /// Velocity of the frame's origin, m/s (in 2D its z is not read, and reads back 0).
     pub velocity: Vec3,
-    /// Angular velocity about the origin, rad/s (in 2D only its z).
+    /// Angular velocity about the origin, rad/s (in 2D only its z is read; x and y read back
+    /// 0).
     pub angular_velocity: Vec3,
     /// Stick, slip or separating contact.
     pub contact: Contact,
@@ -540,9 +543,27 @@ impl ColliderDef {
         friction: 0.0,
     };
 
-    /// Whether every value is finite and in range (the rotation's length above zero).
-    pub(crate) fn is_valid(&self) -> bool {
+    /// The components of [`ColliderDef::position`], [`ColliderDef::velocity`] and
+    /// [`ColliderDef::angular_velocity`] a world reads: every one in 3D; in 2D (`planar`) the
+    /// position and velocity in the plane and the turn about z (E90). The others are not read,
+    /// as no z of a 2D call is, and are stored as 0.
+    pub(crate) const fn read_components(planar: bool) -> [[bool; 3]; 3] {
+        let off_plane = !planar;
+        [
+            [true, true, off_plane],
+            [true, true, off_plane],
+            [off_plane, off_plane, true],
+        ]
+    }
+
+    /// Whether every value a world of `planar` (2D) motion or not reads is finite and in
+    /// range (the rotation's length above zero; [`ColliderDef::read_components`]): what
+    /// [`crate::World::add_collider`] accepts, and what [`crate::World::open`] asks of a
+    /// stored collider's definition.
+    pub(crate) fn is_valid(&self, planar: bool) -> bool {
         let finite = |v: Vec3| v.is_finite();
+        let [position, velocity, omega] = Self::read_components(planar);
+        let read_finite = |v: Vec3, read: [bool; 3]| (0..3).all(|a| !read[a] || v[a].is_finite());
         let q = self.rotation;
         let q2: Real = q.iter().map(|c| c * c).sum();
         let shape = match self.shape {
@@ -573,9 +594,9 @@ impl ColliderDef {
             }
         };
         shape
-            && finite(self.position)
-            && finite(self.velocity)
-            && finite(self.angular_velocity)
+            && read_finite(self.position, position)
+            && read_finite(self.velocity, velocity)
+            && read_finite(self.angular_velocity, omega)
             && q2.is_finite()
             && q2 > 1e-12
             && self.friction >= 0.0

@@ -8,7 +8,7 @@
 //! the node is what the material puts on the collider (E93), summed node by node in node
 //! order on the calling thread, so that it has one worker's bits for any number of workers.
 
-use crate::def::{ColliderShape, Contact};
+use crate::def::{ColliderDef, ColliderShape, Contact};
 use crate::layout::ColliderRecord;
 use crate::Real;
 use glam::{DQuat, DVec3};
@@ -141,6 +141,67 @@ pub(crate) fn contact_of(code: u64) -> Option<Contact> {
     [Contact::Stick, Contact::Slip, Contact::Separate]
         .get(code as usize)
         .copied()
+}
+
+impl ColliderRecord {
+    /// The definition the record holds, in its pose of `pose_time`, its values rounded to
+    /// [`Real`] (what [`crate::WorldRef::collider`] reads back); `None` for a shape or contact
+    /// number no build writes, or a distance field's numbers past `u32`.
+    pub fn def(&self) -> Option<ColliderDef> {
+        let v = |a: [f64; 3]| crate::Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
+        Some(ColliderDef {
+            shape: shape_of(self.shape, self.size, self.grid)?,
+            position: v(self.position),
+            rotation: self.rotation.map(|c| c as Real),
+            velocity: v(self.velocity),
+            angular_velocity: v(self.angular_velocity),
+            contact: contact_of(self.contact)?,
+            friction: self.friction as Real,
+        })
+    }
+
+    /// Whether the record is one that [`crate::World::add_collider`] (or `set_collider`)
+    /// could have written, and steps moved on since, in a world of time `time`, `samples`
+    /// distance samples and `planar` (2D) motion or not: the definition it holds passes
+    /// `add_collider`'s checks ([`ColliderDef::is_valid`]: every value the world reads finite
+    /// as a [`Real`], lengths positive, friction >= 0, a rotation of non-zero length); what
+    /// no step changes (shape, lengths, contact, friction, velocities, the components the
+    /// world does not read) is what `add_collider` makes of that definition, bit for bit; the
+    /// rotation is of unit length; the pose is of the world's time (the calls pose a record
+    /// then, and a step moves it on to the step's end); a distance field lies within the
+    /// samples.
+    pub fn is_valid(&self, samples: u64, planar: bool, time: f64) -> bool {
+        let Some(def) = self.def().filter(|d| d.is_valid(planar)) else {
+            return false;
+        };
+        let again = def.record(planar, time);
+        let kept = (
+            again.shape,
+            again.contact,
+            again.friction,
+            again.size,
+            again.grid,
+        ) == (
+            self.shape,
+            self.contact,
+            self.friction,
+            self.size,
+            self.grid,
+        ) && again.velocity == self.velocity
+            && again.angular_velocity == self.angular_velocity;
+        let read = ColliderDef::read_components(planar)[0];
+        let in_plane = (0..3).all(|a| read[a] || self.position[a] == 0.0);
+        let q2: f64 = self.rotation.iter().map(|c| c * c).sum();
+        let field = match def.shape {
+            ColliderShape::Sdf { first, dims, .. } => dims
+                .iter()
+                .try_fold(1u64, |n, &k| n.checked_mul(k as u64))
+                .and_then(|n| n.checked_add(first as u64))
+                .is_some_and(|end| end <= samples),
+            _ => true,
+        };
+        kept && in_plane && (q2 - 1.0).abs() < 1e-6 && self.pose_time == time && field
+    }
 }
 
 /// The pose of record `r` at world time `t` (E90): its position moved on by `v (t - t_0)`, its
@@ -368,14 +429,16 @@ fn local_distance(solid: Solid<'_>, p: V3, with_normal: bool) -> (Real, V3) {
     }
 }
 
-impl crate::ColliderDef {
+impl ColliderDef {
     /// The buffer's record of this (checked) definition, posed at `pose_time`: its rotation
-    /// normalised; `planar` (2D), its motion kept in the plane (no z velocity, no turn but
+    /// normalised; `planar` (2D), the components a 2D world does not read stored as 0
+    /// ([`ColliderDef::read_components`]: in the plane z = 0, no z velocity, no turn but
     /// about z).
     pub(crate) fn record(&self, planar: bool, pose_time: f64) -> ColliderRecord {
         let w = |v: crate::Vec3, keep: [bool; 3]| {
             core::array::from_fn(|a| if keep[a] { v[a] as f64 } else { 0.0 })
         };
+        let [position, velocity, omega] = ColliderDef::read_components(planar);
         let (shape, size, grid) = shape_record(&self.shape);
         let q = self.rotation.map(|c| c as f64);
         let len = libm::sqrt(q.iter().map(|c| c * c).sum::<f64>());
@@ -384,10 +447,10 @@ impl crate::ColliderDef {
             contact: contact_code(self.contact),
             friction: self.friction as f64,
             size,
-            position: w(self.position, [true; 3]),
+            position: w(self.position, position),
             rotation: q.map(|c| c / len),
-            velocity: w(self.velocity, [true, true, !planar]),
-            angular_velocity: w(self.angular_velocity, [!planar, !planar, true]),
+            velocity: w(self.velocity, velocity),
+            angular_velocity: w(self.angular_velocity, omega),
             pose_time,
             grid,
         }
@@ -399,7 +462,7 @@ impl crate::ColliderDef {
     /// refuses, and for a distance field, whose samples the world holds
     /// ([`crate::WorldRef::collider_distance`]).
     pub fn distance(&self, x: crate::Vec3) -> Option<Real> {
-        if !self.is_valid() {
+        if !self.is_valid(false) {
             return None;
         }
         let record = self.record(false, 0.0);

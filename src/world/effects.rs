@@ -266,7 +266,9 @@ impl World<'_> {
     /// now ([`World::time`]). Needs [`crate::Effects::collider_capacity`] (else
     /// [`Error::EffectNotDeclared`]); [`Error::InvalidEffect`] for a value not finite or out
     /// of range, [`Error::ColliderCapacityExceeded`] past the capacity. Nothing changes on
-    /// failure.
+    /// failure. In 2D the position's and velocity's z and the angular velocity's x and y are
+    /// not read (not checked, stored as 0), as no z of a 2D call is. [`World::open`] checks
+    /// a stored collider as this checks a definition.
     pub fn add_collider(&mut self, c: &ColliderDef) -> Result<u32, Error> {
         let def = self.def();
         if def.effects.collider_capacity == 0 {
@@ -338,15 +340,22 @@ impl World<'_> {
         self.read().collider_distance(id, x)
     }
 
-    /// The record of `c`, posed now; in 2D its motion kept in the plane (no z velocity, no
-    /// turn but about z).
+    /// The box that holds collider `id`'s solid now ([`crate::WorldRef::collider_bounds`]).
+    pub fn collider_bounds(&self, id: u32) -> Result<Option<(Vec3, Vec3)>, Error> {
+        self.read().collider_bounds(id)
+    }
+
+    /// The record of `c`, posed now; in 2D the components a 2D world does not read stored as
+    /// 0 ([`ColliderDef::read_components`]). The record is checked as [`World::open`] checks
+    /// a stored one ([`ColliderRecord::is_valid`]: one check for both; here it adds that a
+    /// distance field lies within the samples added).
     fn collider_record(&self, c: &ColliderDef) -> Result<ColliderRecord, Error> {
-        if !c.is_valid() {
+        let h = self.header();
+        if !c.is_valid(h.planar()) {
             return Err(Error::InvalidEffect);
         }
-        let record = c.record(self.def().axes() == 2, self.time());
-        // A distance field within the samples added.
-        if record.is_valid(self.header().sdf_count) {
+        let record = c.record(h.planar(), h.time);
+        if record.is_valid(h.sdf_count, h.planar(), h.time) {
             Ok(record)
         } else {
             Err(Error::InvalidEffect)
@@ -354,15 +363,13 @@ impl World<'_> {
     }
 
     fn collider_mut(&mut self, id: u32) -> &mut ColliderRecord {
-        let layout = Layout::of(&self.def());
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
+        let at = self.header().tables().colliders + id as usize * size_of::<ColliderRecord>();
         bytemuck::from_bytes_mut(&mut self.buf[at..at + size_of::<ColliderRecord>()])
     }
 
     fn impulses_mut(&mut self) -> &mut [ColliderImpulse] {
-        let layout = Layout::of(&self.def());
         let n = self.header().collider_count as usize;
-        let at = layout.impulses_offset;
+        let at = self.header().tables().impulses;
         bytemuck::cast_slice_mut(&mut self.buf[at..at + n * size_of::<ColliderImpulse>()])
     }
 

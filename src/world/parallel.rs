@@ -508,6 +508,14 @@ type Update<'a, const D: usize> = dyn Fn(&mut ParticleCols<'_, D>, usize, &GridC
 /// The most tiles a scatter is cut into: two per worker up to 64 workers.
 const MAX_TILES: usize = 128;
 
+// Every loop of the parallel step has at most `tasks::MAX_ITEMS` items (a task system may keep
+// a bit per item): tiles, the particle passes' and the grid's ranges, reductions' parts.
+const _: () = assert!(
+    MAX_TILES <= tasks::MAX_ITEMS
+        && crate::layout::SLOTS_PER_WORKER * crate::def::MAX_WORKERS as usize <= tasks::MAX_ITEMS
+        && tasks::MAX_PARTS <= tasks::MAX_ITEMS
+);
+
 /// The tiles of the parallel scatter: `n` slabs of whole lines along the slowest axis, the
 /// first from line 0 and the last to the grid's end (no stencil reaches past the node box).
 /// Where no row reaches past its line's end, every tile's columns are its slab's alone

@@ -48,7 +48,9 @@ impl<'a> WorldRef<'a> {
     ///   (infinite before the first particle);
     /// - each material record is what [`World::add_material`] makes of a valid definition;
     ///   each traction names an existing particle and a face of the dimension, with a finite
-    ///   traction;
+    ///   traction; each collider is one [`World::add_collider`] could have written and the
+    ///   steps moved on, posed at the world's time (its values within [`Real`], as
+    ///   `add_collider` checks a definition);
     /// - every particle has a known status and material, a finite mass and volume > 0, a
     ///   position in the admissible region (the grid less the shape function's margin; on
     ///   its wall planes, where the step puts a particle that reaches them), and every value
@@ -72,7 +74,7 @@ impl<'a> WorldRef<'a> {
         if !(h.time.is_finite() && h.time >= 0.0 && alpha_ok) {
             return invalid;
         }
-        for (id, rec) in self.materials(&layout).iter().enumerate() {
+        for (id, rec) in self.materials().iter().enumerate() {
             let again = self.material(id as u32).map(|m| material_record(&m));
             if !matches!(again, Some(Ok(r)) if bytemuck::bytes_of(&r) == bytemuck::bytes_of(rec)) {
                 return invalid;
@@ -104,7 +106,8 @@ impl<'a> WorldRef<'a> {
         let finite = |i: &ColliderImpulse| {
             (i.linear.iter().chain(&i.angular)).all(|c| c.is_finite()) && i.duration >= 0.0
         };
-        if !records.iter().all(|r| r.is_valid(h.sdf_count)) || !impulses.iter().all(finite) {
+        let valid = |r: &ColliderRecord| r.is_valid(h.sdf_count, h.planar(), h.time);
+        if !records.iter().all(valid) || !impulses.iter().all(finite) {
             return invalid;
         }
         let at = layout.sdf_offset;
@@ -192,15 +195,16 @@ impl<'a> WorldRef<'a> {
         &self.buf[..self.layout().grid_offset]
     }
 
-    fn materials(&self, layout: &Layout) -> &'a [MaterialRecord] {
+    /// The material table's records of the materials added, found from the header alone.
+    fn materials(&self) -> &'a [MaterialRecord] {
         let n = self.material_count();
-        let start = layout.materials_offset;
+        let start = self.header().tables().materials;
         bytemuck::cast_slice(&self.buf[start..start + n * size_of::<MaterialRecord>()])
     }
 
     /// The material records of the materials added.
     pub(super) fn material_records(&self) -> &'a [MaterialRecord] {
-        self.materials(&self.layout())
+        self.materials()
     }
 
     pub(super) fn real_col(&self, layout: &Layout, j: usize, count: usize) -> &'a [Real] {
@@ -216,31 +220,31 @@ impl<'a> WorldRef<'a> {
         self.header().collider_count as usize
     }
 
-    /// Collider `id` as it is now and what the material put on it over the last step
-    /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added.
-    pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
-        use crate::effects::colliders::{contact_of, shape_of};
-        if id as u64 >= self.header().collider_count {
+    /// Collider `id`'s record and impulse, found from the header alone (a per-item query
+    /// costs what it reads: no definition decoded, no layout computed);
+    /// [`Error::UnknownCollider`] for an id not added.
+    fn collider_record(&self, id: u32) -> Result<(&'a ColliderRecord, &'a ColliderImpulse), Error> {
+        let h = self.header();
+        if id as u64 >= h.collider_count {
             return Err(Error::UnknownCollider);
         }
-        let layout = self.layout();
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
-        let r: ColliderRecord =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
-        let at = layout.impulses_offset + id as usize * size_of::<ColliderImpulse>();
-        let i: ColliderImpulse =
-            *bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        let (tables, id) = (h.tables(), id as usize);
+        let at = tables.colliders + id * size_of::<ColliderRecord>();
+        let record = bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
+        let at = tables.impulses + id * size_of::<ColliderImpulse>();
+        let impulse = bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderImpulse>()]);
+        Ok((record, impulse))
+    }
+
+    /// Collider `id` as it is now and what the material put on it over the last step
+    /// ([`crate::ColliderState`]); [`Error::UnknownCollider`] for an id not added. In 2D its
+    /// position's and velocity's z and its angular velocity's x and y are 0 (they are not
+    /// read: [`crate::ColliderDef::position`]).
+    pub fn collider(&self, id: u32) -> Result<crate::ColliderState, Error> {
+        let (r, i) = self.collider_record(id)?;
         let v = |a: [f64; 3]| crate::Vec3::new(a[0] as Real, a[1] as Real, a[2] as Real);
         Ok(crate::ColliderState {
-            def: crate::ColliderDef {
-                shape: shape_of(r.shape, r.size, r.grid).ok_or(Error::InvalidState)?,
-                position: v(r.position),
-                rotation: r.rotation.map(|c| c as Real),
-                velocity: v(r.velocity),
-                angular_velocity: v(r.angular_velocity),
-                contact: contact_of(r.contact).ok_or(Error::InvalidState)?,
-                friction: r.friction as Real,
-            },
+            def: r.def().ok_or(Error::InvalidState)?,
             impulse: v(i.linear),
             angular_impulse: v(i.angular),
             duration: i.duration as Real,
@@ -250,51 +254,62 @@ impl<'a> WorldRef<'a> {
     /// The signed distance from collider `id`'s surface at `x` (negative inside), m, in its
     /// pose of now: what the step tests each node with (E91), distance fields too
     /// ([`crate::ColliderDef::distance`] needs no world but cannot read a field's samples).
+    /// In 2D `x`'s z is not read: the distance is the one in the plane z = 0, where the
+    /// step's nodes lie. Costs the distance and the collider's pose, read from the header and
+    /// the record alone.
     pub fn collider_distance(&self, id: u32, x: crate::Vec3) -> Result<Real, Error> {
-        use crate::effects::colliders::Collider;
-        if id as u64 >= self.header().collider_count {
-            return Err(Error::UnknownCollider);
-        }
-        let layout = self.layout();
-        let at = layout.colliders_offset + id as usize * size_of::<ColliderRecord>();
-        let r: &ColliderRecord =
-            bytemuck::from_bytes(&self.buf[at..at + size_of::<ColliderRecord>()]);
-        let at = layout.sdf_offset;
-        let samples: &[Real] = bytemuck::cast_slice(
-            &self.buf[at..at + self.header().sdf_count as usize * size_of::<Real>()],
-        );
-        let c = Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)?;
-        Ok(c.distance([x.x, x.y, x.z]).0)
+        let c = self.collider_now(id)?;
+        let z = if self.header().planar() { 0.0 } else { x.z };
+        Ok(c.distance([x.x, x.y, z]).0)
     }
 
-    /// The definition of material `id`.
+    /// Collider `id` in its pose of now, as the step meets it, found from the header alone.
+    fn collider_now(&self, id: u32) -> Result<crate::effects::colliders::Collider<'a>, Error> {
+        let (r, _) = self.collider_record(id)?;
+        let h = self.header();
+        let at = h.tables().sdf;
+        let samples: &[Real] =
+            bytemuck::cast_slice(&self.buf[at..at + h.sdf_count as usize * size_of::<Real>()]);
+        crate::effects::colliders::Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)
+    }
+
+    /// The box `(min, max)` (world axes, m) that holds collider `id`'s solid in its pose of
+    /// now, as the step bounds the nodes it tests (E91); `None` for an unbounded solid (a
+    /// half-space). For a host that draws the collider or seeds around it: the distance
+    /// ([`WorldRef::collider_distance`]) is positive everywhere outside. In 2D the box's z is
+    /// the plane's, 0. [`Error::UnknownCollider`] for an id not added.
+    pub fn collider_bounds(&self, id: u32) -> Result<Option<(crate::Vec3, crate::Vec3)>, Error> {
+        let c = self.collider_now(id)?;
+        let planar = self.header().planar();
+        let v = |a: [Real; 3]| crate::Vec3::new(a[0], a[1], if planar { 0.0 } else { a[2] });
+        Ok(c.bounds().map(|(lo, hi)| (v(lo), v(hi))))
+    }
+
+    /// The definition of material `id` (its record found from the header alone).
     pub fn material(&self, id: u32) -> Option<MaterialDef> {
-        let layout = self.layout();
-        self.materials(&layout)
-            .get(id as usize)
-            .map(|r| MaterialDef {
-                model: model_of(r),
-                youngs_modulus: r.youngs_modulus,
-                poisson_ratio: r.poisson_ratio,
-                density: r.density,
-                heat_capacity: r.heat_capacity,
-                conductivity: r.conductivity,
-                diffusivity: r.diffusivity,
-                thermal_expansion: r.thermal_expansion,
-                reference_temperature: r.reference_temperature,
-                swelling: r.swelling,
-                reference_concentration: r.reference_concentration,
-                viscosity: r.viscosity,
-                bulk_modulus: r.bulk_modulus,
-                pressure_exponent: r.pressure_exponent,
-                yield_stress: r.yield_stress,
-                hardening_modulus: r.hardening_modulus,
-                friction_angle: r.friction_angle,
-                cohesion: r.cohesion,
-                critical_compression: r.critical_compression,
-                critical_stretch: r.critical_stretch,
-                hardening_coefficient: r.hardening_coefficient,
-            })
+        self.materials().get(id as usize).map(|r| MaterialDef {
+            model: model_of(r),
+            youngs_modulus: r.youngs_modulus,
+            poisson_ratio: r.poisson_ratio,
+            density: r.density,
+            heat_capacity: r.heat_capacity,
+            conductivity: r.conductivity,
+            diffusivity: r.diffusivity,
+            thermal_expansion: r.thermal_expansion,
+            reference_temperature: r.reference_temperature,
+            swelling: r.swelling,
+            reference_concentration: r.reference_concentration,
+            viscosity: r.viscosity,
+            bulk_modulus: r.bulk_modulus,
+            pressure_exponent: r.pressure_exponent,
+            yield_stress: r.yield_stress,
+            hardening_modulus: r.hardening_modulus,
+            friction_angle: r.friction_angle,
+            cohesion: r.cohesion,
+            critical_compression: r.critical_compression,
+            critical_stretch: r.critical_stretch,
+            hardening_coefficient: r.hardening_coefficient,
+        })
     }
 
     /// Largest stable time step `cfl h / (c_max + |v|_max)` (E88), s: `c_max` is the fastest
@@ -329,7 +344,7 @@ impl<'a> WorldRef<'a> {
         let n = self.particle_count();
         let d = layout.d;
         let status = self.u32_col(&layout, col::STATUS, n);
-        let materials = self.materials(&layout);
+        let materials = self.materials();
         let mut c_max = materials
             .iter()
             .fold(0.0 as Real, |c, r| c.max(r.wave_speed));
@@ -464,7 +479,7 @@ impl<'a> WorldRef<'a> {
     /// Whether some material stiffens with its plastic history (snow with `xi > 0`), so that
     /// its wave speed can outgrow a substep chosen before.
     pub(super) fn materials_harden(&self) -> bool {
-        self.materials(&self.layout()).iter().any(hardens)
+        self.materials().iter().any(hardens)
     }
 
     /// Whether particle `i` is active, of a material that hardens, with a hardened wave speed
@@ -476,7 +491,7 @@ impl<'a> WorldRef<'a> {
         }
         let id = self.u32_col(layout, col::MATERIAL, n)[i] as usize;
         let plastic = self.real_col(layout, layout.plastic.first, n)[i];
-        self.materials(layout).get(id).is_some_and(|r| {
+        self.materials().get(id).is_some_and(|r| {
             let c = wave_speed(r, plastic);
             hardens(r) && (c.is_nan() || c > limit)
         })
@@ -603,10 +618,9 @@ impl<'a> WorldRef<'a> {
 
     /// The sums of [`WorldRef::diagnostics`] over the particles `range`.
     fn sums(&self, def: &WorldDef, range: core::ops::Range<usize>) -> Sums {
-        let layout = Layout::of(def);
-        let materials = self.materials(&layout);
+        let materials = self.materials();
         let view = self.particles();
-        let d = layout.d;
+        let d = def.axes();
         let mut out = Sums::default();
         for i in range {
             if view.status[i] != ACTIVE {
@@ -756,7 +770,7 @@ impl WorldRef<'_> {
         material: u32,
         f: &Deformation<D>,
     ) -> Option<[Real; 6]> {
-        let rec = self.materials(&self.layout()).get(material as usize)?;
+        let rec = self.materials().get(material as usize)?;
         particle_stress(rec, f, eigenstrain_of(rec, view, i))
     }
 }
@@ -877,6 +891,168 @@ mod tests {
         }
         copy.as_mut_bytes().copy_from_slice(&snapshot);
         assert!(World::open(copy.as_mut_bytes()).is_ok());
+    }
+
+    /// `open` checks a collider record as `add_collider` checks a definition: each edit of a
+    /// snapshot's record that `add_collider` could not have written, nor a step since, is
+    /// `InvalidState`, the bytes unchanged. Values past `Real`'s range (which read back as
+    /// infinities, and a collider so placed touched nothing), not finite, or not what the
+    /// definition's check admits (a length of zero or one rounding to zero in `Real`, a
+    /// negative friction, a rotation not of unit length, unknown numbers), what `add_collider`
+    /// stores of no definition (a sphere's unused lengths, a distance field's numbers on
+    /// another shape, a field past the samples), a pose time other than the world's, and in
+    /// 2D a z component or a turn not about z. The intact snapshot opens, in 2D and 3D (where
+    /// z is read).
+    #[cfg(feature = "effects")]
+    #[test]
+    fn open_refuses_collider_records_add_collider_could_not_write() {
+        use crate::{ColliderDef, ColliderShape, Contact, Dimension, Effects};
+        use std::{vec, vec::Vec};
+        type Edit = fn(&mut ColliderRecord, f64);
+        // Past the largest Real: infinite in Real (f32), or in f64 itself.
+        const BEYOND: f64 = Real::MAX as f64 * 2.0;
+        // A length that rounds to zero in f32 (positive in f64, where no edit is needed).
+        let rounds_to_zero = 1.0e-300;
+        let mut edits: Vec<(&str, Edit)> = vec![
+            ("position x past Real", |r, _| r.position[0] = BEYOND),
+            ("position y NaN", |r, _| r.position[1] = f64::NAN),
+            ("position x infinite", |r, _| r.position[0] = f64::INFINITY),
+            ("velocity x past Real", |r, _| r.velocity[0] = BEYOND),
+            ("velocity y NaN", |r, _| r.velocity[1] = f64::NAN),
+            ("angular velocity z past Real", |r, _| {
+                r.angular_velocity[2] = BEYOND
+            }),
+            ("radius past Real", |r, _| r.size[0] = BEYOND),
+            ("radius zero", |r, _| r.size[0] = 0.0),
+            ("radius negative", |r, _| r.size[0] = -0.1),
+            ("a sphere's second length", |r, _| r.size[1] = 0.5),
+            ("friction past Real", |r, _| r.friction = BEYOND),
+            ("friction negative", |r, _| r.friction = -0.25),
+            ("friction NaN", |r, _| r.friction = f64::NAN),
+            ("rotation zero", |r, _| r.rotation = [0.0; 4]),
+            ("rotation of length 2", |r, _| {
+                r.rotation = [0.0, 0.0, 0.0, 2.0]
+            }),
+            ("rotation NaN", |r, _| r.rotation[3] = f64::NAN),
+            ("pose time NaN", |r, _| r.pose_time = f64::NAN),
+            ("pose time infinite", |r, _| r.pose_time = f64::INFINITY),
+            ("pose time after the world's", |r, t| r.pose_time = t + 1.0),
+            ("pose time before the world's", |r, t| r.pose_time = t - 1.0),
+            ("pose time far before the world's", |r, _| {
+                r.pose_time = -1.0e300
+            }),
+            ("unknown contact", |r, _| r.contact = 3),
+            ("unknown shape", |r, _| r.shape = 9),
+            ("a distance field's numbers on a sphere", |r, _| {
+                r.grid[1] = 2
+            }),
+            ("2D: position z", |r, _| r.position[2] = 0.5),
+            ("2D: velocity z", |r, _| r.velocity[2] = 1.0),
+            ("2D: a turn about x", |r, _| r.angular_velocity[0] = 1.0),
+        ];
+        if rounds_to_zero as Real == 0.0 {
+            edits.push(("radius rounding to zero", |r, _| r.size[0] = 1.0e-300));
+            edits.push(("friction not a Real", |r, _| r.friction = 0.1));
+        }
+        let mut def = WorldDef {
+            cells: [16, 16, 1],
+            cell_size: 0.1,
+            particle_capacity: 512,
+            effects: Effects {
+                collider_capacity: 2,
+                sdf_capacity: 8,
+                ..Effects::NONE
+            },
+            ..WorldDef::DEFAULT
+        };
+        let sphere = ColliderDef {
+            shape: ColliderShape::Sphere { radius: 0.2 },
+            position: Vec3::new(0.8, 0.5, 0.0),
+            velocity: Vec3::new(0.5, 0.0, 0.0),
+            angular_velocity: Vec3::new(0.0, 0.0, 2.0),
+            contact: Contact::Slip,
+            friction: 0.25,
+            ..ColliderDef::DEFAULT
+        };
+        let field = ColliderDef {
+            shape: ColliderShape::Sdf {
+                first: 0,
+                dims: [2, 2, 2],
+                spacing: 0.5,
+            },
+            ..ColliderDef::DEFAULT
+        };
+        for dimension in [Dimension::Plane2D, Dimension::ThreeD] {
+            def.dimension = dimension;
+            def.cells[2] = if dimension == Dimension::ThreeD {
+                16
+            } else {
+                1
+            };
+            let layout = Layout::of(&def);
+            let mut buf = HeapBuffer::new(crate::memory_requirements(&def).unwrap().bytes);
+            let mut w = block_world(&def, buf.as_mut_bytes());
+            let dims_z = if dimension == Dimension::ThreeD { 2 } else { 1 };
+            w.add_distance_field(&[1.0; 8]).unwrap();
+            w.add_collider(&ColliderDef {
+                position: Vec3::new(0.8, 0.5, 0.75),
+                ..sphere
+            })
+            .unwrap();
+            let dims = [2, 2, dims_z];
+            w.add_collider(&ColliderDef {
+                shape: ColliderShape::Sdf {
+                    first: 8 - 4 * dims_z,
+                    dims,
+                    spacing: 0.5,
+                },
+                ..field
+            })
+            .unwrap();
+            // Moved on by steps: positions and rotations are the steps' f64 arithmetic.
+            for _ in 0..3 {
+                w.step(1.0e-3).unwrap();
+            }
+            let time = w.time();
+            let snapshot = w.as_bytes().to_vec();
+            let mut copy = HeapBuffer::new(snapshot.len());
+            let record = |k: usize| {
+                let at = layout.colliders_offset + k * size_of::<ColliderRecord>();
+                at..at + size_of::<ColliderRecord>()
+            };
+            let field_edits: [(&str, Edit); 3] = [
+                ("a field past the samples", |r, _| r.grid[0] = 5),
+                ("a field of one sample along x", |r, _| r.grid[1] = 1),
+                ("a field's count overflowing", |r, _| {
+                    r.grid = [0, u64::MAX, 2, 2]
+                }),
+            ];
+            let planar = dimension != Dimension::ThreeD;
+            let cases = edits
+                .iter()
+                .filter(|(what, _)| planar || !what.starts_with("2D"))
+                .map(|e| (0, e))
+                .chain(field_edits.iter().map(|e| (1, e)));
+            for (k, (what, edit)) in cases {
+                let mem = copy.as_mut_bytes();
+                mem.copy_from_slice(&snapshot);
+                edit(bytemuck::from_bytes_mut(&mut mem[record(k)]), time);
+                let before = mem.to_vec();
+                assert_eq!(
+                    World::open(mem).err(),
+                    Some(Error::InvalidState),
+                    "{dimension:?}: {what}"
+                );
+                assert!(
+                    *mem == before[..],
+                    "{what}: the refused open changed the bytes"
+                );
+            }
+            copy.as_mut_bytes().copy_from_slice(&snapshot);
+            let opened = World::open(copy.as_mut_bytes()).expect("the intact snapshot opens");
+            let z = opened.collider(0).unwrap().def.position.z;
+            assert_eq!(z, if planar { 0.0 } else { 0.75 }, "{dimension:?}");
+        }
     }
 
     /// The step count saturates: a world at `u64::MAX` steps stays there after another step

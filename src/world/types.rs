@@ -376,7 +376,8 @@ impl<'w> ParticlesView<'w> {
 /// last step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColliderState {
-    /// The definition, its `position` and `rotation` those of now.
+    /// The definition, its `position` and `rotation` those of now (in 2D, what a 2D world
+    /// does not read is 0: [`crate::ColliderDef::position`]).
     pub def: crate::ColliderDef,
     /// The impulse the material put on the collider over the last step, N s (per unit
     /// thickness in plane strain, per radian axisymmetric), summed in a fixed order: the

@@ -254,6 +254,70 @@ fn colliders_give_one_workers_bits_and_travel_with_a_snapshot() {
     world.step(2.0e-4).expect("step");
 }
 
+/// In 2D a collider's position z, its velocity's z and its turns about x and y are not read,
+/// as no z of a 2D call is (`ColliderDef::position`): a sphere pressed into a block with its
+/// centre at z = 0.5 (a plane-strain section of it would miss the plane), a z velocity and a
+/// turn about x, and one with those values NaN or infinite, meet the block exactly as the
+/// same sphere at z = 0: the state bytes are the same after 40 steps, a move by
+/// `set_collider` half-way included, and the sphere met the block. Each reads back
+/// with those components 0, and its distance at a point does not depend on the point's z.
+#[test]
+fn a_2d_collider_ignores_the_components_2d_does_not_read() {
+    let def = def(Vec3::new(0.0, -G, 0.0), 0.0);
+    let bytes = memory_requirements(&def).expect("valid").bytes;
+    let sphere = |z: Real, vz: Real, wx: Real, y: Real| ColliderDef {
+        shape: ColliderShape::Sphere { radius: 0.1 },
+        position: Vec3::new(0.5, y, z),
+        velocity: Vec3::new(0.0, -0.5, vz),
+        angular_velocity: Vec3::new(wx, -wx, 3.0),
+        contact: Contact::Slip,
+        friction: 0.4,
+        ..ColliderDef::DEFAULT
+    };
+    let run = |z: Real, vz: Real, wx: Real| {
+        let mut buf = HeapBuffer::new(bytes);
+        let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+        block_on_floor(&mut world, floor(Contact::Stick, 0.0));
+        world
+            .add_collider(&sphere(z, vz, wx, 0.53))
+            .expect("sphere");
+        let mut pushed = Vec3::ZERO;
+        for k in 0..40 {
+            if k == 20 {
+                world
+                    .set_collider(1, &sphere(z, vz, wx, 0.5))
+                    .expect("moved");
+            }
+            world.step(2.0e-4).expect("step");
+            pushed += world.collider(1).expect("sphere").impulse;
+        }
+        let c = world.collider(1).expect("sphere").def;
+        let off_plane = [
+            c.position.z,
+            c.velocity.z,
+            c.angular_velocity.x,
+            c.angular_velocity.y,
+        ];
+        assert_eq!(off_plane, [0.0; 4], "z {z}: read back");
+        let p = Vec3::new(0.45, 0.41, 0.0);
+        let d = world.collider_distance(1, p).expect("distance");
+        for pz in [0.7, -3.0, Real::NAN] {
+            let q = Vec3::new(p.x, p.y, pz);
+            assert_eq!(world.collider_distance(1, q), Ok(d), "point z {pz}");
+        }
+        (world.state_bytes().to_vec(), pushed)
+    };
+    let (in_plane, pushed) = run(0.0, 0.0, 0.0);
+    assert!(pushed.length() > 0.0, "the sphere met the block");
+    for (z, vz, wx) in [(0.5, 2.0, 1.0), (Real::NAN, Real::INFINITY, Real::NAN)] {
+        let (state, _) = run(z, vz, wx);
+        assert!(
+            state == in_plane,
+            "z {z}, vz {vz}, wx {wx}: the state differs"
+        );
+    }
+}
+
 /// Misuse: each call refused with its error and the world unchanged.
 #[test]
 fn collider_misuse_is_refused_and_changes_nothing() {

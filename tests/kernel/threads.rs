@@ -55,6 +55,11 @@ unsafe impl TaskSystem for Hostile {
     }
 
     fn parallel_for(&self, items: usize, min_range: usize, task: &mpm_gimp::tasks::Task<'_>) {
+        // What the trait promises a system that keeps a bit per item (the C adapter).
+        assert!(
+            items <= mpm_gimp::tasks::MAX_ITEMS,
+            "a loop of {items} items"
+        );
         // Uneven ranges of at least min_range (the last may be shorter).
         let mut ranges = Vec::new();
         let mut start = 0;

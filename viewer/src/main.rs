@@ -7,15 +7,23 @@
 //! esc or q quits. The scenes step on every core (a rayon pool of one thread per core, see
 //! `mpm_gimp_viewer::tasks`); the panel shows the thread count.
 //!
-//! Options: `--scene NAME` starts on that scene; `--frames N` runs N frames and exits;
-//! `--screenshot FILE.png` (with `--frames`) then writes what the window shows as PNG;
-//! `--list` prints the scenes and exits.
+//! Options: `--scene NAME` starts on that scene; `--frames N` runs N frames, prints the
+//! median wall time of a frame's step (with the host's work between steps), drawing and
+//! window update, and exits; `--screenshot FILE.png` (with `--frames`) then writes what the
+//! window shows as PNG; `--list` prints the scenes and exits.
 
 use minifb::{Key, KeyRepeat, MouseButton, MouseMode, Window, WindowOptions};
 use mpm_gimp_output::picture::{write_png, Colour};
 use mpm_gimp_output::scenes::ALL;
 use mpm_gimp_viewer::{App, Command, Frame, Input, HEIGHT, PANEL_BACKGROUND, WIDTH};
 use std::process::ExitCode;
+use std::time::Instant;
+
+/// The median of `t`, ms (0 for none).
+fn median_ms(t: &mut [f64]) -> f64 {
+    t.sort_by(f64::total_cmp);
+    t.get(t.len() / 2).map_or(0.0, |s| s * 1e3)
+}
 
 struct Options {
     scene: usize,
@@ -121,6 +129,8 @@ fn run(o: Options) -> Result<(), String> {
     // Interactive: at most 60 frames a second. A bounded run goes as fast as it steps.
     window.set_target_fps(if o.frames.is_some() { 0 } else { 60 });
     let mut frame = Frame::new(WIDTH, HEIGHT, PANEL_BACKGROUND);
+    // Seconds each frame spent stepping, drawing and updating the window.
+    let (mut step, mut draw, mut show) = (Vec::new(), Vec::new(), Vec::new());
     while window.is_open() {
         let Some(commands) = commands(&window) else {
             break;
@@ -130,17 +140,33 @@ fn run(o: Options) -> Result<(), String> {
             mouse: window.get_mouse_pos(MouseMode::Discard),
             left_down: window.get_mouse_down(MouseButton::Left),
         };
+        let start = Instant::now();
         app.update(&input);
+        let stepped = Instant::now();
         app.draw(&mut frame);
+        let drawn = Instant::now();
         window
             .update_with_buffer(&frame.pixels, frame.width, frame.height)
             .map_err(|e| format!("window update: {e}"))?;
+        step.push((stepped - start).as_secs_f64());
+        draw.push((drawn - stepped).as_secs_f64());
+        show.push(drawn.elapsed().as_secs_f64());
         if o.frames.is_some_and(|n| app.frames >= n) {
             break;
         }
         if let (Some(_), Some(m)) = (o.frames, &app.message) {
             return Err(format!("{}: {m}", ALL[app.scene].name));
         }
+    }
+    if o.frames.is_some() {
+        println!(
+            "{}: {} frames; a frame's medians: step {:.2} ms, draw {:.2} ms, window {:.2} ms",
+            ALL[app.scene].name,
+            app.frames,
+            median_ms(&mut step),
+            median_ms(&mut draw),
+            median_ms(&mut show)
+        );
     }
     if let Some(path) = &o.screenshot {
         // What the window showed last: the buffer it was given.

@@ -22,7 +22,14 @@
  *      particle), and so are a per-particle damping rate and a particle speed past their
  *      bounds; derived moduli that overflow are MPM_STATUS_INVALID_MATERIAL; a world whose
  *      rate is just inside its bound steps at stable_dt (>= MPM_MIN_STABLE_DT / 2) with
- *      nothing frozen.
+ *      nothing frozen;
+ *   5. collider records: mpm_world_open refuses a snapshot whose collider record holds what
+ *      mpm_world_add_collider could not have written: a position, velocity, radius or friction
+ *      past mpm_real's range (in single precision: such a collider read back as infinities
+ *      and touched nothing), a radius that rounds to 0 or is 0, a negative friction, a
+ *      rotation not of unit length, a pose time other than the world's (NaN, later, earlier),
+ *      in 2D a position or velocity z or a turn about x, an unknown contact or shape; the
+ *      intact snapshot opens, steps and reads back its collider.
  * Every refused call changes no byte of the world (FNV-1a hash of its extent).
  *
  * One line per check ("ok <name>: ..."); the first failure prints "FAIL <name>: <why>" and
@@ -540,6 +547,141 @@ static void rates(void) {
     }
 }
 
+/* ---- 5. collider records ----------------------------------------------------------------- */
+
+/* A collider's record in a world's buffer: 8-byte fields (uint64 or double), in this order:
+ * shape, contact, friction, size[3], position[3], rotation[4], velocity[3],
+ * angular_velocity[3], pose_time, a distance field's grid[4]. */
+enum {
+    F_SHAPE = 0,
+    F_CONTACT = 1,
+    F_FRICTION = 2,
+    F_SIZE = 3,
+    F_POSITION = 6,
+    F_ROTATION = 9,
+    F_VELOCITY = 13,
+    F_ANGULAR = 16,
+    F_POSE_TIME = 19,
+    RECORD_FIELDS = 24
+};
+
+/* The record in `w` (of `bytes`) that starts with a sphere's shape, slip contact and a
+ * friction of 0.375, or NULL. */
+static unsigned char *sphere_record(const MpmWorld *w, size_t bytes) {
+    unsigned char head[24];
+    const unsigned char *at = (const unsigned char *)(const void *)w;
+    uint64_t shape = MPM_COLLIDER_SHAPE_SPHERE, contact = MPM_CONTACT_SLIP;
+    double friction = 0.375;
+    size_t k;
+    memcpy(head, &shape, 8);
+    memcpy(head + 8, &contact, 8);
+    memcpy(head + 16, &friction, 8);
+    for (k = 0; k + 8 * RECORD_FIELDS <= bytes; k += 8) {
+        if (memcmp(at + k, head, sizeof head) == 0) {
+            return (unsigned char *)(void *)w + k;
+        }
+    }
+    return NULL;
+}
+
+static void collider_records(void) {
+    MpmWorldDef d = def_2d();
+    MpmMaterialDef m = mpm_material_def_default();
+    MpmColliderDef c = mpm_collider_def_default();
+    MpmColliderState state;
+    Mem src;
+    uint32_t id, cid;
+    double time;
+    unsigned char *record;
+    const int single = sizeof(mpm_real) == 4;
+    /* Past mpm_real's range: infinite in double precision. */
+    const double beyond = single ? 1e39 : (double)INFINITY;
+    struct {
+        const char *what;
+        int field; /* of the record */
+        int is_u64;
+        double value;
+        uint64_t code;
+        int single_only; /* a value double precision holds */
+    } edits[] = {
+        {"position x past the real range", F_POSITION, 0, 0, 0, 0},
+        {"position y NaN", F_POSITION + 1, 0, 0, 0, 0},
+        {"2D: position z 0.5", F_POSITION + 2, 0, 0.5, 0, 0},
+        {"velocity x past the real range", F_VELOCITY, 0, 0, 0, 0},
+        {"2D: velocity z 1", F_VELOCITY + 2, 0, 1.0, 0, 0},
+        {"2D: a turn about x", F_ANGULAR, 0, 1.0, 0, 0},
+        {"radius past the real range", F_SIZE, 0, 0, 0, 0},
+        {"radius 0", F_SIZE, 0, 0.0, 0, 0},
+        {"radius 1e-300 (0 as a float)", F_SIZE, 0, 1e-300, 0, 1},
+        {"friction -0.25", F_FRICTION, 0, -0.25, 0, 0},
+        {"friction past the real range", F_FRICTION, 0, 0, 0, 0},
+        {"rotation of length 2", F_ROTATION + 3, 0, 2.0, 0, 0},
+        {"pose time NaN", F_POSE_TIME, 0, 0, 0, 0},
+        {"pose time after the world's", F_POSE_TIME, 0, 0, 0, 0},
+        {"pose time before the world's", F_POSE_TIME, 0, 0, 0, 0},
+        {"contact 3", F_CONTACT, 1, 0, 3, 0},
+        {"shape 9", F_SHAPE, 1, 0, 9, 0},
+    };
+    size_t e, n = sizeof edits / sizeof edits[0];
+    d.effects.collider_capacity = 1;
+    src = world_new("colliders: world", &d);
+    ok_status("colliders: material", mpm_world_add_material(src.w, &m, &id));
+    fill("colliders: fill", src.w, id, 0.3, 0.3, 0.6, 0.6, 0.0);
+    c.shape = MPM_COLLIDER_SHAPE_SPHERE;
+    c.contact = MPM_CONTACT_SLIP;
+    c.friction = R(0.375);
+    c.radius = R(0.1);
+    c.position = v3(0.45, 0.7, 0.0);
+    c.velocity = v3(0.2, -0.3, 0.0);
+    c.angular_velocity = v3(0.0, 0.0, 2.0);
+    ok_status("colliders: a sphere", mpm_world_add_collider(src.w, &c, &cid));
+    step("colliders: first step", src.w, 1.0 / 240.0);
+    step("colliders: second step", src.w, 1.0 / 240.0);
+    record = sphere_record(src.w, src.bytes);
+    expect_true("colliders: the sphere's record is found in the snapshot", record != NULL);
+    memcpy(&time, record + 8 * F_POSE_TIME, 8);
+    expect_true("colliders: the record is posed at the world's time (2 steps of 1/240 s)",
+                time == 2.0 * (double)R(1.0 / 240.0));
+    edits[0].value = beyond;
+    edits[1].value = (double)NAN;
+    edits[3].value = beyond;
+    edits[6].value = beyond;
+    edits[10].value = beyond;
+    edits[12].value = (double)NAN;
+    edits[13].value = time + 1.0;
+    edits[14].value = time - 1.0;
+    for (e = 0; e < n; e++) {
+        char name[128];
+        Mem copy;
+        unsigned char *field;
+        if (edits[e].single_only && !single) {
+            continue;
+        }
+        copy = copy_of(&src);
+        field = (unsigned char *)at_copy(&copy, &src, record + 8 * edits[e].field);
+        if (edits[e].is_u64) {
+            memcpy(field, &edits[e].code, 8);
+        } else {
+            memcpy(field, &edits[e].value, 8);
+        }
+        snprintf(name, sizeof name, "colliders: a record with %s refused", edits[e].what);
+        open_expect(name, &copy, MPM_STATUS_INVALID_STATE);
+        mem_free(&copy);
+    }
+    {
+        Mem copy = copy_of(&src);
+        MpmWorld *opened = NULL;
+        ok_status("colliders: the intact snapshot opens", mpm_world_open(copy.w, copy.bytes, &opened));
+        step("colliders: the intact snapshot steps", opened, 1.0 / 240.0);
+        ok_status("colliders: read back", mpm_world_get_collider(opened, cid, &state));
+        expect_true("colliders: the intact snapshot's sphere reads back finite, in the plane",
+                    isfinite((double)state.def.position.x) && state.def.position.z == 0 &&
+                        state.def.radius == R(0.1));
+        mem_free(&copy);
+    }
+    mem_free(&src);
+}
+
 int main(void) {
     position_low();
     plastic_history();
@@ -548,6 +690,7 @@ int main(void) {
     snow_drop(100.0, 10.0);
     snow_bound();
     rates();
+    collider_records();
     printf("all %lu ranges checks passed\n", g_checks);
     return 0;
 }

@@ -15,10 +15,13 @@
  * from its scan of the particles for the stable step, a scan that runs on the task system).
  *
  * Hostile hosts: a host that calls the task past the items, with a worker index past
- * worker_count, leaves the last item out or runs the first item twice makes the step answer
- * MPM_STATUS_TASK_CONTRACT without a report, once the kernel hands it a task. (A kernel whose
- * step hands out no task, as the serial kernel does, steps as usual: then the check is that
- * the step succeeds; each check says which case it met.)
+ * worker_count, leaves the last item out, runs the first item twice, or runs some ranges twice
+ * and leaves as many items out (the count of items run is the task's item count) makes the
+ * step answer MPM_STATUS_TASK_CONTRACT without a report, once the kernel hands it a task (of
+ * two items or more, for the last). (A kernel whose step hands out no task, as the serial
+ * kernel does, steps as usual: then the check is that the step succeeds; each check says
+ * which case it met.) The world may then be in an intermediate state, as the header says: a
+ * snapshot taken before the step, copied back, opens and steps as the world it was.
  *
  * One line per check ("ok <name>..."); the first failure prints "FAIL <name>: <why>" and
  * exits with status 1. The last line on success is "all <n> tasks checks passed".
@@ -184,12 +187,13 @@ typedef enum {
     HOST_BAD_WORKER, /* the items, on worker index worker_count */
     HOST_SKIP_LAST,  /* every item but the last */
     HOST_TWICE,      /* the items, then the first one again */
+    HOST_SAME_COUNT, /* ranges cut in pairs: the first of each twice, the second left out */
     HOST_COUNT
 } HostMode;
 
 static const char *const HOST_NAMES[HOST_COUNT] = {
     "inline", "past the end", "worker index past worker_count", "last item left out",
-    "first item run twice",
+    "first item run twice", "ranges run twice and as many items left out",
 };
 
 typedef struct {
@@ -197,12 +201,35 @@ typedef struct {
     uint32_t worker_count;
     unsigned long tasks;    /* tasks received */
     unsigned long finishes; /* finish calls */
+    unsigned long twisted;  /* tasks whose ranges broke the contract (HOST_SAME_COUNT) */
 } Host;
+
+/* HOST_SAME_COUNT: ranges of `len` items (min_range, at most half the items), taken in pairs
+ * of equal length: the first of a pair runs twice (on worker 0, then on worker 1) and the
+ * second not at all; the items of a pair's first range run from its start on, the rest of the
+ * task (less than a pair) once. The ranges' lengths add up to item_count. A task of one item
+ * runs as a whole. */
+static void same_count(Host *h, MpmTaskCallback *task, uint32_t items, uint32_t min_range,
+                       void *context) {
+    uint32_t len = min_range < items / 2 ? min_range : items / 2;
+    uint32_t at = 0;
+    if (len == 0) {
+        task(0, items, 0, context);
+        return;
+    }
+    h->twisted++;
+    for (; items - at >= 2 * len; at += 2 * len) {
+        task(at, at + len, 0, context);
+        task(at, at + len, 1 % h->worker_count, context);
+    }
+    if (at < items) {
+        task(at, items, 0, context);
+    }
+}
 
 static void *host_enqueue(MpmTaskCallback *task, uint32_t item_count, uint32_t min_range,
                           void *task_context, void *user_context) {
     Host *h = (Host *)user_context;
-    (void)min_range;
     h->tasks++;
     switch (h->mode) {
     case HOST_INLINE:
@@ -221,6 +248,9 @@ static void *host_enqueue(MpmTaskCallback *task, uint32_t item_count, uint32_t m
     case HOST_TWICE:
         task(0, item_count, 0, task_context);
         task(0, 1, 0, task_context);
+        break;
+    case HOST_SAME_COUNT:
+        same_count(h, task, item_count, min_range, task_context);
         break;
     default:
         break;
@@ -603,20 +633,34 @@ static void misuse(void) {
 
 static void hostile(void) {
     Scene s = plane2d();
+    uint64_t want[FRAMES];
     int mode;
+    reference(&s, want);
     for (mode = HOST_PAST_END; mode < HOST_COUNT; mode++) {
         Host h;
         MpmTaskSystem t;
         MpmWorld *w = seed(&s);
+        MpmWorld *opened = NULL;
+        MpmStepReport r;
         MpmStatus st;
         char name[160];
+        size_t bytes = 0;
+        unsigned char *snapshot;
+        int contract;
         memset(&h, 0, sizeof h);
         h.mode = (HostMode)mode;
         h.worker_count = 2;
         t = host_system(&h);
+        must("mpm_world_bytes", mpm_world_bytes(w, &bytes));
+        snapshot = (unsigned char *)malloc(bytes);
+        if (snapshot == NULL) {
+            fail("malloc", "out of memory");
+        }
+        memcpy(snapshot, w, bytes);
         out_reset();
         st = mpm_world_step_tasks(w, R(1.0 / 60), &t, OUT(MpmStepReport));
-        if (h.tasks == 0) {
+        contract = mode == HOST_SAME_COUNT ? h.twisted > 0 : h.tasks > 0;
+        if (!contract) {
             snprintf(name, sizeof name,
                      "a host whose tasks break the contract (%s): the step handed it no task "
                      "and succeeded",
@@ -629,6 +673,17 @@ static void hostile(void) {
                      HOST_NAMES[mode], h.tasks);
             expect_true(name, st == MPM_STATUS_TASK_CONTRACT && out_untouched());
         }
+        /* The promise after MPM_STATUS_TASK_CONTRACT: the snapshot restores the world, which
+         * then steps as a world that never met the host. */
+        memcpy(w, snapshot, bytes);
+        must("mpm_world_open", mpm_world_open(w, bytes, &opened));
+        must("mpm_world_step", mpm_world_step(opened, R(1.0 / 60), &r));
+        snprintf(name, sizeof name,
+                 "after a host whose tasks break the contract (%s): the snapshot taken before "
+                 "opens and steps as the world it was",
+                 HOST_NAMES[mode]);
+        expect_true(name, opened == w && state_hash(opened, &r) == want[0]);
+        free(snapshot);
         free(w);
     }
 }
