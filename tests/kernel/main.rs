@@ -15,6 +15,7 @@ mod axisymmetric;
 #[cfg(feature = "effects")]
 mod colliders;
 mod conservation;
+#[cfg(feature = "effects")]
 mod contact_work;
 #[cfg(feature = "effects")]
 mod effects;

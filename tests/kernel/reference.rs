@@ -17,9 +17,10 @@
 //! wall nodes' reaction, the nodes past a wall's plane mirroring those inside it, particles
 //! stopped at the plane); and of the declared effects the particle forces (E14), tractions
 //! (E15, E16), a body force, damping (E48-E53: grid and particle rates, each a global
-//! value plus the particle's own), the damping thermostat, and heat conduction and diffusion
+//! value plus the particle's own), the damping thermostat, heat conduction and diffusion
 //! (E54-E64, with sources, fixed and flux faces), particles nearer the axis than their
-//! half-width included.
+//! half-width included, and colliders (E90-E93: half-spaces, spheres and boxes, posed and
+//! moving, with each contact law, and the impulses they read back).
 //!
 //! The tolerance: the kernel computes in `Real` (f32 by default) and sums in another order, so
 //! a column may differ from the reference by round-off of the size of its operands: at most
@@ -157,6 +158,221 @@ struct Method {
     /// The particles carry the plastic history column (`Effects::plasticity`).
     plasticity: bool,
     mass_cutoff: f64,
+    /// The colliders (E90-E93), posed where the substep starts, and the impulse each takes.
+    colliders: Vec<Collider>,
+}
+
+/// A kinematic solid the grid meets (E90-E92): its shape in its own frame, its frame (origin
+/// `c`, axes the columns of `r`), its velocities and its contact law; the impulse and angular
+/// impulse about `c` the material puts on it in the substep (E93).
+struct Collider {
+    shape: mpm_gimp::ColliderShape,
+    c: [f64; 3],
+    r: Mat,
+    v: [f64; 3],
+    omega: [f64; 3],
+    contact: mpm_gimp::Contact,
+    mu: f64,
+    impulse: [f64; 3],
+    angular: [f64; 3],
+}
+
+impl Collider {
+    /// The collider `state` reads back (its pose of now), with no impulse yet.
+    fn of(state: &mpm_gimp::ColliderState) -> Collider {
+        let d = &state.def;
+        let f = |v: mpm_gimp::Vec3| [v.x as f64, v.y as f64, v.z as f64];
+        // The rotation matrix of the unit quaternion (x, y, z, w).
+        let [x, y, z, w] = d.rotation.map(|c| c as f64);
+        let r = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - z * w),
+                2.0 * (x * z + y * w),
+            ],
+            [
+                2.0 * (x * y + z * w),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - x * w),
+            ],
+            [
+                2.0 * (x * z - y * w),
+                2.0 * (y * z + x * w),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        Collider {
+            shape: d.shape,
+            c: f(d.position),
+            r,
+            v: f(d.velocity),
+            omega: f(d.angular_velocity),
+            contact: d.contact,
+            mu: d.friction as f64,
+            impulse: [0.0; 3],
+            angular: [0.0; 3],
+        }
+    }
+
+    /// The signed distance of E91 at `x` and the outward normal there, in the world frame:
+    /// the half-space below the frame's y = 0, a sphere, a box (the nearest face's normal
+    /// inside it).
+    fn distance(&self, x: [f64; 3]) -> (f64, [f64; 3]) {
+        use mpm_gimp::ColliderShape as S;
+        let rel: [f64; 3] = std::array::from_fn(|a| x[a] - self.c[a]);
+        // p = R^T (x - c).
+        let p: [f64; 3] = std::array::from_fn(|a| (0..3).map(|b| self.r[b][a] * rel[b]).sum());
+        let norm = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let (phi, n) = match self.shape {
+            S::HalfSpace => (p[1], [0.0, 1.0, 0.0]),
+            S::Sphere { radius } => (norm(p) - radius as f64, p.map(|c| c / norm(p))),
+            S::Box { half_extents: e } => {
+                let e = [e.x as f64, e.y as f64, e.z as f64];
+                let q: [f64; 3] = std::array::from_fn(|a| p[a].abs() - e[a]);
+                let sign = |a: usize| if p[a] < 0.0 { -1.0 } else { 1.0 };
+                if q.iter().any(|&c| c > 0.0) {
+                    let out: [f64; 3] = std::array::from_fn(|a| q[a].max(0.0) * sign(a));
+                    (norm(out), out.map(|c| c / norm(out)))
+                } else {
+                    let a = (0..3).fold(0, |m, a| if q[a] > q[m] { a } else { m });
+                    let mut n = [0.0; 3];
+                    n[a] = sign(a);
+                    (q[a], n)
+                }
+            }
+            other => panic!("the reference has no {other:?}"),
+        };
+        (
+            phi,
+            std::array::from_fn(|a| (0..3).map(|b| self.r[a][b] * n[b]).sum()),
+        )
+    }
+
+    /// The velocity of the solid's point at `x`, `v + omega x (x - c)`.
+    fn velocity_at(&self, x: [f64; 3]) -> [f64; 3] {
+        let d: [f64; 3] = std::array::from_fn(|a| x[a] - self.c[a]);
+        let w = self.omega;
+        let cross = [
+            w[1] * d[2] - w[2] * d[1],
+            w[2] * d[0] - w[0] * d[2],
+            w[0] * d[1] - w[1] * d[0],
+        ];
+        std::array::from_fn(|a| self.v[a] + cross[a])
+    }
+
+    /// E92: the velocity `law` leaves a node at `x` with normal `n` moving at `u`, or `None`
+    /// where a separating contact parts.
+    fn law(
+        &self,
+        law: mpm_gimp::Contact,
+        x: [f64; 3],
+        u: [f64; 3],
+        n: [f64; 3],
+    ) -> Option<[f64; 3]> {
+        use mpm_gimp::Contact;
+        let vc = self.velocity_at(x);
+        let rel: [f64; 3] = std::array::from_fn(|a| u[a] - vc[a]);
+        let un: f64 = (0..3).map(|a| rel[a] * n[a]).sum();
+        match law {
+            Contact::Stick => return Some(vc),
+            Contact::Separate if un >= 0.0 => return None,
+            _ => {}
+        }
+        let t: [f64; 3] = std::array::from_fn(|a| rel[a] - un * n[a]);
+        let speed = t.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let kept = if speed > 0.0 {
+            (1.0 - self.mu * (-un).max(0.0) / speed).max(0.0)
+        } else {
+            0.0
+        };
+        Some(std::array::from_fn(|a| vc[a] + kept * t[a]))
+    }
+}
+
+/// The position of node `i`.
+fn node_x(m: &Method, i: usize) -> [f64; 3] {
+    let mut rest = i;
+    std::array::from_fn(|a| {
+        if a >= m.d {
+            return 0.0;
+        }
+        let index = rest % m.nodes[a];
+        rest /= m.nodes[a];
+        m.origin[a] + index as f64 * m.h
+    })
+}
+
+/// Whether node `x` is in a collider's contact (E91: within `10^-3 h` of its surface).
+fn in_contact(m: &Method, c: &Collider, x: [f64; 3]) -> Option<[f64; 3]> {
+    let (phi, n) = c.distance(x);
+    (phi <= 1e-3 * m.h).then_some(n)
+}
+
+/// The colliders on the updated velocity `v_i + a_i dt` of every node that carries mass,
+/// one after the other (E92): the acceleration becomes `(v* - v_i) / dt`, and each collider
+/// takes `-m_i (v* - v_i - a_i dt)` and its moment about its origin (E93).
+fn colliders(m: &mut Method, grid: &mut [Node], dt: f64) {
+    let mut colliders = std::mem::take(&mut m.colliders);
+    for c in colliders.iter_mut() {
+        for (i, n) in grid.iter_mut().enumerate() {
+            let x = node_x(m, i);
+            if n.m <= m.mass_cutoff {
+                continue;
+            }
+            let Some(normal) = in_contact(m, c, x) else {
+                continue;
+            };
+            let u: [f64; 3] =
+                std::array::from_fn(|a| if a < m.d { n.v[a] + n.a[a] * dt } else { 0.0 });
+            let Some(w) = c.law(c.contact, x, u, normal) else {
+                continue;
+            };
+            let dp: [f64; 3] =
+                std::array::from_fn(|a| if a < m.d { n.m * (w[a] - u[a]) } else { 0.0 });
+            for a in 0..m.d {
+                n.a[a] = (w[a] - n.v[a]) / dt;
+            }
+            let arm: [f64; 3] = std::array::from_fn(|a| x[a] - c.c[a]);
+            for a in 0..3 {
+                let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+                c.impulse[a] -= dp[a];
+                c.angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
+            }
+        }
+    }
+    m.colliders = colliders;
+}
+
+/// The colliders on the velocity the stress update differentiates (E92): MUSL's re-mapped
+/// velocity takes, at a node in contact, the updated velocity the contact left (paid for by
+/// its impulse); USF's lagged velocity takes the law, a separating contact as slip.
+fn colliders_on_stress_velocity(m: &Method, grid: &mut [Node], dt: f64) {
+    use mpm_gimp::Contact;
+    for c in &m.colliders {
+        for (i, n) in grid.iter_mut().enumerate() {
+            let x = node_x(m, i);
+            if n.m <= m.mass_cutoff {
+                continue;
+            }
+            let Some(normal) = in_contact(m, c, x) else {
+                continue;
+            };
+            if m.order == UpdateOrder::Musl {
+                for a in 0..m.d {
+                    n.remap[a] = n.v[a] + n.a[a] * dt;
+                }
+                continue;
+            }
+            let law = match c.contact {
+                Contact::Separate => Contact::Slip,
+                law => law,
+            };
+            let u: [f64; 3] = std::array::from_fn(|a| if a < m.d { n.remap[a] } else { 0.0 });
+            if let Some(w) = c.law(law, x, u, normal) {
+                n.remap[..m.d].copy_from_slice(&w[..m.d]);
+            }
+        }
+    }
 }
 
 /// The block's material: its model and constants, in f64 from the definition (E3
@@ -659,7 +875,7 @@ fn grid_velocity(m: &Method, grid: &mut [Node]) {
 
 /// Grid update (E19): `a_i = f_i / m_i + g`, and at the walls the reaction (E20) that holds
 /// the updated velocity's fixed components at zero, `a_i = -v_i / dt`.
-fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
+fn grid_acceleration(m: &mut Method, grid: &mut [Node], dt: f64) {
     fold_wall_images(m, grid, |n| &mut n.f);
     for n in grid.iter_mut() {
         n.a = n.f;
@@ -685,6 +901,8 @@ fn grid_acceleration(m: &Method, grid: &mut [Node], dt: f64) {
             }
         }
     }
+    // The colliders, then the walls.
+    colliders(m, grid, dt);
     for_each_wall_node(m, |i, fixed| {
         for a in 0..m.d {
             if fixed[a] {
@@ -1752,6 +1970,7 @@ fn lagged_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node], dt: f64) {
     for n in grid.iter_mut() {
         n.remap = n.v;
     }
+    colliders_on_stress_velocity(m, grid, dt);
     constrain(m, grid, |n| &mut n.remap);
     for p in ps.iter_mut() {
         let st = stencil(m, &p.x, &p.lp);
@@ -1782,6 +2001,7 @@ fn musl_particles_and_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node],
     }
     fold_wall_images(m, grid, |n| &mut n.remap);
     divide_by_mass(m, grid, |n| &mut n.remap, [0.0; 3]);
+    colliders_on_stress_velocity(m, grid, dt);
     constrain(m, grid, |n| &mut n.remap);
     for (p, x0) in ps.iter_mut().zip(&start) {
         let st = stencil(m, x0, &p.lp);
@@ -1885,6 +2105,9 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         },
         plasticity: fx.plasticity,
         mass_cutoff: (Real::EPSILON as f64).powi(2) * min_mass,
+        colliders: (0..world.collider_count() as u32)
+            .map(|id| Collider::of(&world.collider(id).unwrap()))
+            .collect(),
     };
     let ns = if d == 2 { 4 } else { 6 };
     let ps = (0..v.count)
@@ -2063,6 +2286,52 @@ enum Scene {
     /// insulated. The block's stencils reach the nodes past both faces' planes, whose images
     /// hold material of their own.
     Periodic,
+    /// Three colliders cutting into the block, each with its own law, turn and motion: a
+    /// spinning sphere (separating, friction 0.4) at one corner, a turned box (slip) on the
+    /// far side, a tilted stick floor under it ([`add_colliders`]).
+    #[cfg_attr(not(feature = "effects"), allow(dead_code))]
+    Colliders,
+}
+
+/// The colliders of [`Scene::Colliders`] around the block that spans 0.35..0.65 m.
+#[cfg(feature = "effects")]
+fn add_colliders(world: &mut World) {
+    use mpm_gimp::{ColliderDef, ColliderShape, Contact, Vec3};
+    let three_d = world.def().axes() == 3;
+    let z = |z: Real| if three_d { z } else { 0.0 };
+    // A turn of `angle` about z as a quaternion.
+    let about_z = |angle: Real| [0.0, 0.0, (0.5 * angle).sin(), (0.5 * angle).cos()];
+    let colliders = [
+        ColliderDef {
+            shape: ColliderShape::Sphere { radius: 0.1 },
+            position: Vec3::new(0.3, 0.3, z(0.3)),
+            velocity: Vec3::new(0.1, 0.05, 0.0),
+            angular_velocity: Vec3::new(0.0, 0.0, 1.5),
+            contact: Contact::Separate,
+            friction: 0.4,
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            shape: ColliderShape::Box {
+                half_extents: Vec3::new(0.1, 0.08, 0.4),
+            },
+            position: Vec3::new(0.72, 0.55, z(0.5)),
+            rotation: about_z(0.3),
+            velocity: Vec3::new(-0.2, 0.1, 0.0),
+            contact: Contact::Slip,
+            ..ColliderDef::DEFAULT
+        },
+        ColliderDef {
+            position: Vec3::new(0.5, 0.38, z(0.5)),
+            rotation: about_z(0.1),
+            velocity: Vec3::new(0.05, 0.0, 0.0),
+            contact: Contact::Stick,
+            ..ColliderDef::DEFAULT
+        },
+    ];
+    for c in &colliders {
+        world.add_collider(c).unwrap();
+    }
 }
 
 /// The damping of [`Scene::NodalDamping`]: the grid rate and the thermostat on the nodal
@@ -2170,6 +2439,9 @@ fn check(
     #[cfg(feature = "effects")]
     if scene == Scene::NodalDamping {
         def.effects.damping = Some(nodal_damping());
+    }
+    if scene == Scene::Colliders {
+        def.effects.collider_capacity = 3;
     }
     if matches!(scene, Scene::Walls | Scene::NodalDamping) {
         // The block spans 0.35..0.65 m on each axis: the floor's plane 0.3 cells below it, the
@@ -2283,7 +2555,7 @@ fn check(
     #[cfg_attr(not(feature = "effects"), allow(unused_mut))]
     let mut heat_sources = vec![0.0; n];
     #[cfg(feature = "effects")]
-    if scene != Scene::Free {
+    if !matches!(scene, Scene::Free | Scene::Colliders) {
         let wave = |i: usize, k: usize| ((i * (2 * k + 5)) % 11) as Real / 11.0 - 0.5;
         let temperature: Vec<Real> = (0..n).map(|i| 300.0 + 50.0 * wave(i, 0)).collect();
         let concentration: Vec<Real> = (0..n).map(|i| 0.4 + 0.3 * wave(i, 1)).collect();
@@ -2366,6 +2638,10 @@ fn check(
             }
         }
     }
+    #[cfg(feature = "effects")]
+    if scene == Scene::Colliders {
+        add_colliders(&mut world);
+    }
     let dt = world.stable_dt();
     for _ in 0..4 {
         world.step_with_simd(dt, simd).unwrap();
@@ -2384,6 +2660,25 @@ fn check(
     assert_eq!(report.substeps, 1);
     assert_eq!(report.frozen, 0);
     substep(&mut method, &mut ps, dt as f64);
+    // Each collider's impulse (E93): the kernel sums `m_i (v* - v_i - a_i dt)` in its
+    // precision, each term carrying the round-off of velocities of the size of the nodes' (the
+    // block's speed and the colliders' surface speeds, under 1 m/s).
+    for (id, c) in method.colliders.iter().enumerate() {
+        let state = world.collider(id as u32).unwrap();
+        let kernel =
+            [state.impulse, state.angular_impulse].map(|v| [v.x as f64, v.y as f64, v.z as f64]);
+        let mass: f64 = ps.iter().map(|p| p.m).sum();
+        let bound = 64.0 * Real::EPSILON as f64 * mass;
+        for (k, r) in kernel.iter().zip([c.impulse, c.angular]) {
+            for a in 0..3 {
+                assert!(
+                    (k[a] - r[a]).abs() <= bound,
+                    "{dim:?} {shape:?} {order:?} {transfer:?} {simd:?}: collider {id}'s \
+                     impulse {k:?}, the reference's {r:?}"
+                );
+            }
+        }
+    }
     let reference = columns(&method, &ps);
     let (_, kernel) = read(&world, material);
     let kernel = columns(&method, &kernel);
@@ -2827,6 +3122,42 @@ fn walls_act_as_the_reference_does() {
                     for simd in INSTANCES {
                         let material = soft_neo_hookean();
                         check(dim, shape, order, transfer, &material, simd, Scene::Walls);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Colliders (E90-E93: a spinning sphere with Coulomb friction, a turned moving box with
+/// slip, a tilted moving stick floor, all cutting into the block) with every shape and order,
+/// FLIP, APIC and the momentum approach (not axisymmetric), in 2D, the axisymmetric form and
+/// 3D, in every instance
+/// of the passes this CPU runs, agree with the reference step to round-off, their impulses
+/// too: the contact law on the updated velocity, MUSL's re-mapped velocity at the nodes in
+/// contact taking the velocity the contact left, USF's lagged one the law as slip.
+#[cfg(feature = "effects")]
+#[test]
+fn colliders_act_as_the_reference_does() {
+    for dim in dimension_forms() {
+        for shape in SHAPES {
+            for order in ORDERS {
+                for transfer in [Transfer::Flip, Transfer::Apic, Transfer::FlipMomentum] {
+                    // The momentum approach has no axisymmetric form.
+                    if transfer == Transfer::FlipMomentum && dim == Dimension::Axisymmetric2D {
+                        continue;
+                    }
+                    for simd in INSTANCES {
+                        let material = soft_neo_hookean();
+                        check(
+                            dim,
+                            shape,
+                            order,
+                            transfer,
+                            &material,
+                            simd,
+                            Scene::Colliders,
+                        );
                     }
                 }
             }
