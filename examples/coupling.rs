@@ -1,16 +1,20 @@
-//! Two-way coupling with a host's rigid body: a heavy box falls into a bed of soft elastic
-//! material, and the host moves it with the force the material puts on it.
+//! Two-way coupling with a host's rigid body at a game's frame rate: a box falls into a bed
+//! of soft elastic material, and the step moves it by the force the material puts on it.
 //!
-//! The pattern (docs/equations.md E93; ARCHITECTURE.md, "Colliders"): before each step the
-//! host sets the collider to its body's pose and velocity; the step moves the collider with
-//! that velocity through its substeps; after the step the host reads the impulse the material
-//! put on the collider and gives it to its body, `v += J / M + g dt`, then moves the body.
-//! The coupling is explicit: the body answers the material one step late. It is stable while
-//! the body outweighs the material its contact nodes carry in a step (the added mass); a body
-//! much lighter than that overshoots and rings.
+//! The pattern (docs/equations.md E93, E96; README, "Colliders and rigid bodies"): give the
+//! collider the body's mass and moments of inertia (2D: per metre of thickness, as the
+//! impulse). The world then owns the pose through each `step`: it moves the body every
+//! substep by the impulse of that substep and by gravity, so the body answers the material
+//! within the stable step, at any frame rate. After the step the host reads the pose and
+//! velocities back (`collider(id).def`) and the frame's impulse and force; to push the body
+//! itself (a player's hand, a joint), it sets a new pose or velocity between steps with
+//! `set_collider`. A host that integrates the body itself from the impulse read back once a
+//! frame holds the body's velocity through the frame's substeps: stable only while the body
+//! outweighs the material its contact carries in a frame (a lighter one rings).
 //!
 //! `cargo run --release --example coupling` prints the body's height, speed and the force on
-//! it over 3 s: it bounces on the bed, lower each time as the foam's damping takes the energy.
+//! it over 3 s of 60 Hz frames: it bounces on the bed, lower each time as the foam's damping
+//! takes the energy.
 
 use mpm_gimp::{
     memory_requirements, Boundary, ColliderDef, ColliderShape, Contact, Damping, Effects, Face,
@@ -56,46 +60,35 @@ fn main() {
     // dropped from 0.6 m.
     let half = Vec3::new(0.1, 0.05, 0.5);
     let mass: Real = 60.0;
-    let g = def.gravity;
-    let (mut position, mut velocity) = (Vec3::new(0.5, 0.6, 0.0), Vec3::ZERO);
-    let body = |position: Vec3, velocity: Vec3| ColliderDef {
-        shape: ColliderShape::Box { half_extents: half },
-        position,
-        velocity,
-        contact: Contact::Separate,
-        friction: 0.3,
-        ..ColliderDef::DEFAULT
-    };
     let id = world
-        .add_collider(&body(position, velocity))
+        .add_collider(&ColliderDef {
+            shape: ColliderShape::Box { half_extents: half },
+            position: Vec3::new(0.5, 0.6, 0.0),
+            contact: Contact::Separate,
+            friction: 0.3,
+            mass,
+            // The moment about its centre, per metre of thickness: M (w^2 + h^2) / 12.
+            inertia: Vec3::new(0.0, 0.0, mass * (half.x * half.x + half.y * half.y) / 3.0),
+            ..ColliderDef::DEFAULT
+        })
         .expect("collider");
     println!(
         "# t[s]  height[m]  speed[m/s]  force_y[N/m]  weight[N/m] = {:.1}",
-        -mass * g.y
+        -mass * def.gravity.y
     );
-    // One stable substep per host step: the body answers the material every substep (a
-    // frame of many substeps with the body's velocity fixed through it drives it into the
-    // material as a piston would, and the impulse it then gets back overshoots).
+    let frame: Real = 1.0 / 60.0;
     let mut next_line = 0.0;
     while world.time() < 3.0 {
-        let dt = world.stable_dt();
-        // The host's step: the collider takes the body's state, the world steps, and the body
-        // takes the impulse back.
-        world
-            .set_collider(id, &body(position, velocity))
-            .expect("set");
-        world.step(dt).expect("step");
-        let state = world.collider(id).expect("collider");
-        velocity += state.impulse / mass + g * dt;
-        position += velocity * dt;
+        world.step(frame).expect("step");
+        let body = world.collider(id).expect("collider");
         if world.time() >= next_line {
             next_line += 0.1;
             println!(
                 "{:.3}  {:.4}  {:+.4}  {:.1}",
                 world.time(),
-                position.y - half.y,
-                velocity.y,
-                state.force().y
+                body.def.position.y - half.y,
+                body.def.velocity.y,
+                body.force().y
             );
         }
     }

@@ -32,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 14;
+const VERSION: u64 = 15;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -379,6 +379,9 @@ pub(crate) struct ColliderRecord {
     pub pose_time: f64,
     /// A distance field's first sample and its samples along x, y, z (zeros otherwise).
     pub grid: [u64; 4],
+    /// A dynamic solid's mass and principal moments of inertia (zeros: kinematic).
+    pub mass: f64,
+    pub inertia: [f64; 3],
 }
 
 // SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.
@@ -388,15 +391,16 @@ unsafe impl Pod for ColliderRecord {}
 
 /// What the material put on one collider over the last step: the impulse (N s; per unit
 /// thickness in plane strain, per radian axisymmetric) and the angular impulse about the
-/// collider's position where the step began (N m s), summed node by node in node order, and
-/// the step's length.
+/// collider's position where each substep began (N m s), summed node by node in node order,
+/// the step's length, and what of those sums a dynamic collider has taken into its velocity
+/// (E96).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct ColliderImpulse {
     pub linear: [f64; 3],
     pub angular: [f64; 3],
     pub duration: f64,
-    pub pad: f64,
+    pub taken: [f64; 6],
 }
 
 // SAFETY: repr(C), 8-byte fields only: no padding; every bit pattern is valid.

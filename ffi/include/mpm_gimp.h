@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.8.0"
+#define MPM_GIMP_VERSION "0.9.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 800
+#define MPM_GIMP_ABI_VERSION 900
 
 
 // Most points an `MpmSchedule` holds.
@@ -977,7 +977,7 @@ typedef struct MpmParticleState {
   const mpm_real *concentration_source;
 } MpmParticleState;
 
-// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
+// A collider, kinematic or dynamic: the C form of `mpm_gimp::ColliderDef`. Get one from
 // `mpm_collider_def_default()` (a frictionless separating floor through the origin).
 typedef struct MpmColliderDef {
   // Default `MPM_COLLIDER_SHAPE_HALF_SPACE`.
@@ -1014,6 +1014,16 @@ typedef struct MpmColliderDef {
   struct MpmVec3 angular_velocity;
   // Coulomb friction coefficient, >= 0. Default 0.
   mpm_real friction;
+  // The solid's mass, kg (per metre of thickness in plane strain, as the impulse), >= 0.
+  // Default 0: kinematic, the host moves it and its velocity holds through the step.
+  // Above 0: dynamic, each substep moves it by the impulse the material puts on it and
+  // the world's gravity, from the pose and velocity last set; read the pose back after
+  // the step (`mpm_world_get_collider`).
+  mpm_real mass;
+  // A dynamic solid's principal moments of inertia about its origin along its frame's
+  // axes, kg m^2 (2D: only z is read), each >= 0; 0 keeps that turn as set. Default
+  // (0, 0, 0).
+  struct MpmVec3 inertia;
   // Set by `mpm_collider_def_default`; do not change.
   uint32_t internal_cookie;
 } MpmColliderDef;

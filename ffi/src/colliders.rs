@@ -48,7 +48,7 @@ pub type MpmColliderShapeValue = u32;
 /// An `MpmContact` as C passes it.
 pub type MpmContactValue = u32;
 
-/// A kinematic collider: the C form of `mpm_gimp::ColliderDef`. Get one from
+/// A collider, kinematic or dynamic: the C form of `mpm_gimp::ColliderDef`. Get one from
 /// `mpm_collider_def_default()` (a frictionless separating floor through the origin).
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
@@ -87,6 +87,16 @@ pub struct MpmColliderDef {
     pub angular_velocity: MpmVec3,
     /// Coulomb friction coefficient, >= 0. Default 0.
     pub friction: mpm_real,
+    /// The solid's mass, kg (per metre of thickness in plane strain, as the impulse), >= 0.
+    /// Default 0: kinematic, the host moves it and its velocity holds through the step.
+    /// Above 0: dynamic, each substep moves it by the impulse the material puts on it and
+    /// the world's gravity, from the pose and velocity last set; read the pose back after
+    /// the step (`mpm_world_get_collider`).
+    pub mass: mpm_real,
+    /// A dynamic solid's principal moments of inertia about its origin along its frame's
+    /// axes, kg m^2 (2D: only z is read), each >= 0; 0 keeps that turn as set. Default
+    /// (0, 0, 0).
+    pub inertia: MpmVec3,
     /// Set by `mpm_collider_def_default`; do not change.
     pub internal_cookie: u32,
 }
@@ -164,6 +174,8 @@ fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
         velocity: c_vec3(d.velocity),
         angular_velocity: c_vec3(d.angular_velocity),
         friction: d.friction,
+        mass: d.mass,
+        inertia: c_vec3(d.inertia),
         internal_cookie: COLLIDER_COOKIE,
     }
 }
@@ -210,6 +222,8 @@ fn collider_def_from_c(d: &MpmColliderDef) -> Result<ColliderDef, MpmStatus> {
         angular_velocity: vec3(d.angular_velocity),
         contact,
         friction: d.friction,
+        mass: d.mass,
+        inertia: vec3(d.inertia),
     })
 }
 

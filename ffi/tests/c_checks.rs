@@ -310,6 +310,8 @@ fn rust_layout() -> String {
         velocity,
         angular_velocity,
         friction,
+        mass,
+        inertia,
         internal_cookie,
     }));
     lines.extend(struct_lines!(MpmColliderState {

@@ -506,8 +506,10 @@ pub enum Contact {
     Separate,
 }
 
-/// A kinematic collider: its solid, its pose and velocity, and how the material meets it
-/// ([`crate::World::add_collider`]). [`ColliderDef::DEFAULT`] is a floor through the origin.
+/// A collider: its solid, its pose and velocity, how the material meets it, and whether the
+/// host moves it (kinematic, `mass` 0) or the step does (dynamic, `mass` > 0)
+/// ([`crate::World::add_collider`]). [`ColliderDef::DEFAULT`] is a kinematic floor through
+/// the origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColliderDef {
     /// The solid in the collider's frame.
@@ -529,6 +531,18 @@ pub struct ColliderDef {
     pub contact: Contact,
     /// Coulomb friction coefficient of slip and separating contact, >= 0 (0: frictionless).
     pub friction: Real,
+    /// The solid's mass, kg (per metre of thickness in plane strain, per radian
+    /// axisymmetric, as the impulse), >= 0. 0 (the default): kinematic, the host moves it
+    /// and the velocity it sets holds through the step. Above 0: dynamic, the step moves it
+    /// each substep by the impulse the material puts on it and the world's gravity (E96),
+    /// from the pose and velocity last set, so that a host coupling a rigid body steps it
+    /// at any frame rate; read the pose back after the step.
+    pub mass: Real,
+    /// A dynamic solid's principal moments of inertia about its origin, along its frame's
+    /// axes, kg m^2 (per metre of thickness in plane strain: only z is read), each >= 0; a
+    /// moment of 0 keeps the angular velocity about that axis as set (a solid that does
+    /// not turn). Not read while `mass` is 0.
+    pub inertia: Vec3,
 }
 
 impl ColliderDef {
@@ -541,6 +555,8 @@ impl ColliderDef {
         angular_velocity: Vec3::ZERO,
         contact: Contact::Separate,
         friction: 0.0,
+        mass: 0.0,
+        inertia: Vec3::ZERO,
     };
 
     /// The components of [`ColliderDef::position`], [`ColliderDef::velocity`] and
@@ -601,6 +617,9 @@ impl ColliderDef {
             && q2 > 1e-12
             && self.friction >= 0.0
             && self.friction.is_finite()
+            && self.mass >= 0.0
+            && self.mass.is_finite()
+            && (0..3).all(|a| !omega[a] || (self.inertia[a] >= 0.0 && self.inertia[a].is_finite()))
     }
 }
 

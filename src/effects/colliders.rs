@@ -9,7 +9,7 @@
 //! order on the calling thread, so that it has one worker's bits for any number of workers.
 
 use crate::def::{ColliderDef, ColliderShape, Contact};
-use crate::layout::ColliderRecord;
+use crate::layout::{ColliderImpulse, ColliderRecord};
 use crate::Real;
 use glam::{DQuat, DVec3};
 
@@ -157,6 +157,8 @@ impl ColliderRecord {
             angular_velocity: v(self.angular_velocity),
             contact: contact_of(self.contact)?,
             friction: self.friction as Real,
+            mass: self.mass as Real,
+            inertia: v(self.inertia),
         })
     }
 
@@ -164,9 +166,11 @@ impl ColliderRecord {
     /// could have written, and steps moved on since, in a world of time `time`, `samples`
     /// distance samples and `planar` (2D) motion or not: the definition it holds passes
     /// `add_collider`'s checks ([`ColliderDef::is_valid`]: every value the world reads finite
-    /// as a [`Real`], lengths positive, friction >= 0, a rotation of non-zero length); what
-    /// no step changes (shape, lengths, contact, friction, velocities, the components the
-    /// world does not read) is what `add_collider` makes of that definition, bit for bit; the
+    /// as a [`Real`], lengths positive, friction and mass >= 0, a rotation of non-zero
+    /// length); what no step changes (shape, lengths, contact, friction, mass, inertia, the
+    /// components the world does not read) and the velocities (which a dynamic collider's
+    /// substeps store as [`Real`]s) are what `add_collider` makes of that definition, bit for
+    /// bit; the
     /// rotation is of unit length; the pose is of the world's time (the calls pose a record
     /// then, and a step moves it on to the step's end); a distance field lies within the
     /// samples.
@@ -181,12 +185,16 @@ impl ColliderRecord {
             again.friction,
             again.size,
             again.grid,
+            again.mass,
+            again.inertia,
         ) == (
             self.shape,
             self.contact,
             self.friction,
             self.size,
             self.grid,
+            self.mass,
+            self.inertia,
         ) && again.velocity == self.velocity
             && again.angular_velocity == self.angular_velocity;
         let read = ColliderDef::read_components(planar)[0];
@@ -212,6 +220,53 @@ pub(crate) fn pose_at(r: &ColliderRecord, t: f64) -> (DVec3, DQuat) {
     let turn = DQuat::from_scaled_axis(DVec3::from_array(r.angular_velocity) * tau);
     let rotation = (turn * DQuat::from_array(r.rotation)).normalize();
     (position, rotation)
+}
+
+/// A dynamic collider (mass > 0) after a substep that ends at world time `end` (E96): its
+/// pose moved on with the velocities the substep held, then those velocities changed by what
+/// the material put on it in the substep (its impulse sums less what it has `taken`) and by
+/// `gravity` over `dt`. Semi-implicit Euler, as the particles: the pose the next substep
+/// meets was reached with the velocities this one's contact used. A moment of inertia of 0
+/// keeps the turn about that axis; in `planar` motion only the plane's components change.
+/// The velocities are stored as [`Real`]s, as the API writes them. A kinematic collider is
+/// left as it is (the step moves it at its end).
+pub(crate) fn drive(
+    r: &mut ColliderRecord,
+    sums: &mut ColliderImpulse,
+    end: f64,
+    dt: f64,
+    gravity: DVec3,
+    planar: bool,
+) {
+    if !r.mass.is_finite() || r.mass <= 0.0 {
+        return;
+    }
+    let (position, rotation) = pose_at(r, end);
+    r.position = position.to_array();
+    r.rotation = rotation.to_array();
+    r.pose_time = end;
+    let [x, y, z] = sums.linear;
+    let [p, q, s] = sums.angular;
+    let t = sums.taken;
+    let linear = DVec3::new(x - t[0], y - t[1], z - t[2]);
+    let angular = DVec3::new(p - t[3], q - t[4], s - t[5]);
+    sums.taken = [x, y, z, p, q, s];
+    // The angular impulse in the solid's frame, over its principal moments.
+    let local = rotation.inverse() * angular;
+    let inv = |l: f64, i: f64| if i > 0.0 { l / i } else { 0.0 };
+    let inertia = r.inertia;
+    let spin = rotation
+        * DVec3::new(
+            inv(local.x, inertia[0]),
+            inv(local.y, inertia[1]),
+            inv(local.z, inertia[2]),
+        );
+    let v = DVec3::from_array(r.velocity) + linear / r.mass + gravity * dt;
+    let w = DVec3::from_array(r.angular_velocity) + spin;
+    let [_, read_v, read_w] = ColliderDef::read_components(planar);
+    let stored = |x: f64, read: bool| if read { x as Real as f64 } else { 0.0 };
+    r.velocity = core::array::from_fn(|a| stored(v[a], read_v[a]));
+    r.angular_velocity = core::array::from_fn(|a| stored(w[a], read_w[a]));
 }
 
 impl<'s> Collider<'s> {
@@ -453,6 +508,8 @@ impl ColliderDef {
             angular_velocity: w(self.angular_velocity, omega),
             pose_time,
             grid,
+            mass: self.mass as f64,
+            inertia: w(self.inertia, omega),
         }
     }
 

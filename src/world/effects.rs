@@ -383,6 +383,23 @@ impl World<'_> {
         }
     }
 
+    /// After a substep of `dt` that ends at world time `end`: each dynamic collider moved by
+    /// what the material put on it and by `gravity` (E96, [`colliders::drive`]).
+    pub(super) fn drive_colliders(&mut self, end: f64, dt: Real, gravity: Vec3) {
+        let h = self.header();
+        let (n, planar, tables) = (h.collider_count as usize, h.planar(), h.tables());
+        let (head, rest) = self.buf.split_at_mut(tables.impulses);
+        let records: &mut [ColliderRecord] = bytemuck::cast_slice_mut(
+            &mut head[tables.colliders..tables.colliders + n * size_of::<ColliderRecord>()],
+        );
+        let sums: &mut [ColliderImpulse] =
+            bytemuck::cast_slice_mut(&mut rest[..n * size_of::<ColliderImpulse>()]);
+        let g = glam::DVec3::new(gravity.x as f64, gravity.y as f64, gravity.z as f64);
+        for (r, sum) in records.iter_mut().zip(sums) {
+            colliders::drive(r, sum, end, dt as f64, g, planar);
+        }
+    }
+
     /// At the end of a step, at world time `end`: each collider's pose moved on to then (E90).
     pub(super) fn move_colliders(&mut self, end: f64) {
         for id in 0..self.header().collider_count as u32 {

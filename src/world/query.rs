@@ -104,7 +104,8 @@ impl<'a> WorldRef<'a> {
         let impulses: &[ColliderImpulse] =
             bytemuck::cast_slice(&self.buf[at..at + colliders * size_of::<ColliderImpulse>()]);
         let finite = |i: &ColliderImpulse| {
-            (i.linear.iter().chain(&i.angular)).all(|c| c.is_finite()) && i.duration >= 0.0
+            (i.linear.iter().chain(&i.angular).chain(&i.taken)).all(|c| c.is_finite())
+                && i.duration >= 0.0
         };
         let valid = |r: &ColliderRecord| r.is_valid(h.sdf_count, h.planar(), h.time);
         if !records.iter().all(valid) || !impulses.iter().all(finite) {

@@ -116,6 +116,9 @@ impl<'a> World<'a> {
                 report: &mut report,
             };
             self.dispatch((plan.dt, time), &mut substep, simd, tasks);
+            if fx.collider_capacity > 0 {
+                self.drive_colliders(time + plan.dt as f64, plan.dt, def.gravity);
+            }
             k += 1;
         }
         report.substeps = plan.count;

@@ -215,43 +215,54 @@ fn colliders_give_one_workers_bits_and_travel_with_a_snapshot() {
     let mut def = def(Vec3::new(0.0, -G, 0.0), 0.0);
     def.workers = 4;
     let bytes = memory_requirements(&def).expect("valid").bytes;
-    let drum = ColliderDef {
-        shape: ColliderShape::Sphere { radius: 0.1 },
-        position: Vec3::new(0.5, 0.53, 0.0),
-        velocity: Vec3::new(0.0, -0.5, 0.0),
-        angular_velocity: Vec3::new(0.0, 0.0, 3.0),
-        contact: Contact::Slip,
-        friction: 0.4,
-        ..ColliderDef::DEFAULT
-    };
-    let run = |workers: usize| {
-        let mut buf = HeapBuffer::new(bytes);
-        let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
-        block_on_floor(&mut world, floor(Contact::Stick, 0.0));
-        world.add_collider(&drum).expect("drum");
-        let tasks = mpm_gimp_rayon::RayonTasks::new(workers).expect("pool");
-        for _ in 0..40 {
-            world.step_with_tasks(2.0e-4, &tasks).expect("step");
+    // Kinematic, and dynamic (E96): the step moves it by what the block puts on it.
+    for mass in [0.0, 2.0] {
+        let drum = ColliderDef {
+            shape: ColliderShape::Sphere { radius: 0.1 },
+            position: Vec3::new(0.5, 0.53, 0.0),
+            velocity: Vec3::new(0.0, -0.5, 0.0),
+            angular_velocity: Vec3::new(0.0, 0.0, 3.0),
+            contact: Contact::Slip,
+            friction: 0.4,
+            mass,
+            inertia: Vec3::new(0.0, 0.0, 0.01 * mass),
+            ..ColliderDef::DEFAULT
+        };
+        let run = |workers: usize| {
+            let mut buf = HeapBuffer::new(bytes);
+            let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+            block_on_floor(&mut world, floor(Contact::Stick, 0.0));
+            world.add_collider(&drum).expect("drum");
+            let tasks = mpm_gimp_rayon::RayonTasks::new(workers).expect("pool");
+            for _ in 0..40 {
+                world.step_with_tasks(2.0e-4, &tasks).expect("step");
+            }
+            let state = world.state_bytes().to_vec();
+            (
+                state,
+                world.as_bytes().to_vec(),
+                world.collider(1).expect("drum"),
+            )
+        };
+        let (state_one, one, drum_one) = run(1);
+        for workers in [2, 3, 4] {
+            let (state, _, drum) = run(workers);
+            assert!(state_one == state, "{workers} workers: the state differs");
+            assert_eq!(drum_one, drum);
         }
-        let state = world.state_bytes().to_vec();
-        (
-            state,
-            world.as_bytes().to_vec(),
-            world.collider(1).expect("drum"),
-        )
-    };
-    let (state_one, one, drum_one) = run(1);
-    for workers in [2, 3, 4] {
-        let (state, _, drum) = run(workers);
-        assert!(state_one == state, "{workers} workers: the state differs");
-        assert_eq!(drum_one, drum);
+        assert!(drum_one.impulse.length() > 0.0, "the drum met the block");
+        let mut copy = HeapBuffer::new(bytes);
+        copy.as_mut_bytes()[..one.len()].copy_from_slice(&one);
+        let mut world = World::open(copy.as_mut_bytes()).expect("a snapshot opens");
+        assert_eq!(world.collider(1).expect("drum"), drum_one);
+        world.step(2.0e-4).expect("step");
+        if mass > 0.0 {
+            assert!(
+                drum_one.def.velocity.y != -0.5,
+                "the block moved the dynamic drum"
+            );
+        }
     }
-    assert!(drum_one.impulse.length() > 0.0, "the drum met the block");
-    let mut copy = HeapBuffer::new(bytes);
-    copy.as_mut_bytes()[..one.len()].copy_from_slice(&one);
-    let mut world = World::open(copy.as_mut_bytes()).expect("a snapshot opens");
-    assert_eq!(world.collider(1).expect("drum"), drum_one);
-    world.step(2.0e-4).expect("step");
 }
 
 /// In 2D a collider's position z, its velocity's z and its turns about x and y are not read,

@@ -18,6 +18,8 @@ mod conservation;
 #[cfg(feature = "effects")]
 mod contact_work;
 #[cfg(feature = "effects")]
+mod dynamic_colliders;
+#[cfg(feature = "effects")]
 mod effects;
 #[cfg(feature = "effects")]
 mod eigenstrain;

@@ -301,6 +301,8 @@ int main(void) {
     FIELD(MpmColliderDef, velocity);
     FIELD(MpmColliderDef, angular_velocity);
     FIELD(MpmColliderDef, friction);
+    FIELD(MpmColliderDef, mass);
+    FIELD(MpmColliderDef, inertia);
     FIELD(MpmColliderDef, internal_cookie);
 
     TYPE(MpmColliderState);
