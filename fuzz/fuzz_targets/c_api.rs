@@ -742,7 +742,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 15 => {
                     // Colliders: any shape and contact number (one past them too), sizes,
-                    // poses and velocities in and out of range, a def not from the default
+                    // poses, velocities and masses in and out of range, a def not from the default
                     // now and then; set one, or read one back (a read changes nothing).
                     let mut c = mpm_collider_def_default_f32();
                     c.shape = inp.u32_below(7);
@@ -759,6 +759,11 @@ fuzz_target!(|data: &[u8]| {
                     c.velocity = inp.vec3_in(-5.0, 5.0);
                     c.angular_velocity = inp.vec3_in(-20.0, 20.0);
                     c.friction = inp.real_in(-0.5, 2.0);
+                    // Kinematic or dynamic (a mass, moments of inertia; some out of range).
+                    if inp.byte() % 2 == 0 {
+                        c.mass = inp.real_in(-1.0, 50.0);
+                        c.inertia = inp.vec3_in(-0.1, 1.0);
+                    }
                     if inp.byte() % 32 == 0 {
                         c.internal_cookie ^= 1;
                     }
@@ -796,8 +801,8 @@ fuzz_target!(|data: &[u8]| {
                 }
                 16 => {
                     // Particles after they are in: moved, sped up, given an affine matrix or a
-                    // material (values in and out of range, some not finite), or removed by
-                    // range, list, box or status.
+                    // material (values in and out of range, some not finite), their whole
+                    // state set or added, or removed by range, list, box or status.
                     let (first, count) = particle_range(&mut inp, world);
                     let n = (count as usize).min(512);
                     let values = |inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real| {
@@ -808,7 +813,7 @@ fuzz_target!(|data: &[u8]| {
                             })
                             .collect::<Vec<mpm_real>>()
                     };
-                    match inp.byte() % 8 {
+                    match inp.byte() % 9 {
                         0 | 1 => {
                             let c: [Vec<mpm_real>; 3] = core::array::from_fn(|_| values(&mut inp, -0.2, 1.2));
                             let (x, y, z) = (c[0].as_ptr(), c[1].as_ptr(), c[2].as_ptr());
@@ -841,9 +846,46 @@ fuzz_target!(|data: &[u8]| {
                             let mut removed = 0;
                             mpm_world_remove_particles_in_box(world, lo, hi, &mut removed)
                         }
-                        _ => {
+                        7 => {
                             let mut removed = 0;
                             mpm_world_remove_inactive_particles(world, &mut removed)
+                        }
+                        _ => {
+                            // A particle's whole state, set or added: each column given or
+                            // NULL, values in and out of range (F, stress, statuses and
+                            // materials among them), some not finite.
+                            let reals: Vec<Vec<mpm_real>> =
+                                (0..40).map(|_| values(&mut inp, -2.0, 2.0)).collect();
+                            let words: [Vec<u32>; 2] =
+                                core::array::from_fn(|_| (0..n).map(|_| inp.u32_below(6)).collect());
+                            let mut next = 0;
+                            let mut col = |inp: &mut Input<'_>| {
+                                next += 1;
+                                if inp.byte() % 4 == 0 {
+                                    core::ptr::null()
+                                } else {
+                                    reals[next - 1].as_ptr()
+                                }
+                            };
+                            let mut st = core::mem::zeroed::<MpmParticleState>();
+                            st.position = core::array::from_fn(|_| col(&mut inp));
+                            st.position_low = core::array::from_fn(|_| col(&mut inp));
+                            st.velocity = core::array::from_fn(|_| col(&mut inp));
+                            st.mass = col(&mut inp);
+                            st.volume0 = col(&mut inp);
+                            st.displacement_gradient = core::array::from_fn(|_| col(&mut inp));
+                            st.stress = core::array::from_fn(|_| col(&mut inp));
+                            st.plastic = col(&mut inp);
+                            st.temperature = col(&mut inp);
+                            st.affine = core::array::from_fn(|_| col(&mut inp));
+                            st.material = words[0].as_ptr();
+                            st.status = if inp.byte() % 2 == 0 { words[1].as_ptr() } else { core::ptr::null() };
+                            if inp.byte() % 2 == 0 {
+                                let mut ids = MpmIdRange::default();
+                                mpm_world_add_particles_with_state(world, &st, n, &mut ids)
+                            } else {
+                                mpm_world_set_particle_state(world, first, &st, n)
+                            }
                         }
                     }
                 }
