@@ -1,5 +1,5 @@
-//! Colliders (E90-E93): kinematic solids that the material meets at the grid, and the impulse
-//! it puts on them.
+//! Colliders (E90-E93, E96): solids that the material meets at the grid, moved by the host
+//! (kinematic) or by the step (dynamic, `drive`), and the impulse it puts on them.
 //!
 //! A collider is a solid in its own frame ([`crate::ColliderShape`]) with a pose that moves
 //! with its velocities (E90). At each node inside the solid (signed distance `phi <= 0`) that
