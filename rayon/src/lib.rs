@@ -62,6 +62,11 @@ pub const RANGES_PER_WORKER: usize = 4;
 pub struct RayonTasks {
     /// The pool of its own; `None` for rayon's global pool.
     pool: Option<ThreadPool>,
+    /// Held by [`RayonTasks::install`] while it occupies the pool from outside: a second
+    /// caller's broadcast would run, on the spinning threads, on top of the first one's
+    /// stolen ranges and wait for a thread 0 that waits for those ranges (a deadlock two
+    /// viewer tests stepping on one pool met).
+    outside: Mutex<()>,
 }
 
 impl RayonTasks {
@@ -77,7 +82,10 @@ impl RayonTasks {
             .num_threads(threads)
             .thread_name(|i| format!("mpm-gimp-{i}"))
             .build()?;
-        Ok(RayonTasks { pool: Some(pool) })
+        Ok(RayonTasks {
+            pool: Some(pool),
+            outside: Mutex::new(()),
+        })
     }
 
     /// A task system on rayon's global pool, shared with the host's other rayon work (its
@@ -87,7 +95,10 @@ impl RayonTasks {
     /// is then that pool's thread count, so size [`WorldDef::workers`](mpm_gimp::WorldDef::workers)
     /// from the thread that steps.
     pub fn global() -> RayonTasks {
-        RayonTasks { pool: None }
+        RayonTasks {
+            pool: None,
+            outside: Mutex::new(()),
+        }
     }
 
     /// Runs `f` on a thread of the pool and returns its result: a host that steps inside it
@@ -110,6 +121,9 @@ impl RayonTasks {
         if pool.current_num_threads() < 2 || pool.current_thread_index().is_some() {
             return pool.install(f);
         }
+        // One caller from outside at a time (a poisoned lock only says another caller's `f`
+        // panicked: the pool is free again).
+        let _outside = self.outside.lock().unwrap_or_else(|e| e.into_inner());
         // Thread 0 runs `f`; the others take the passes' ranges as rayon's threads do
         // (`yield_now` steals them), spinning in between rather than sleeping, until `f`
         // returns or unwinds.
