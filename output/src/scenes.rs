@@ -15,7 +15,7 @@ use crate::stiffness::{modulus_for_substeps, youngs_modulus};
 use crate::tap::Tap;
 use mpm_gimp::{
     memory_requirements, Boundary, ColliderDef, ColliderShape, Contact, Dimension, Error, Face,
-    HeapBuffer, MaterialDef, MaterialModel, Real, ScalarBoundary, ScalarField, StepReport,
+    HeapBuffer, MaterialDef, MaterialModel, Real, Removal, ScalarBoundary, ScalarField, StepReport,
     Transfer, Transport, Vec3, World, WorldDef,
 };
 
@@ -457,6 +457,61 @@ fn heat_fill(world: &mut World) -> Result<usize, Error> {
     let cold = vec![HEAT_COLD; ids.len()];
     world.set_particle_scalar(ScalarField::Temperature, ids.start, &cold)?;
     Ok(ids.len())
+}
+
+/// Fills `world` from wall to wall with still water `depth` m deep above its floor (the
+/// water scenes' fluid, with bulk modulus `k`, Pa, and a little viscosity), and returns the
+/// water's material and the height of its surface, m.
+pub fn still_water(world: &mut World, k: Real, depth: Real) -> Result<(u32, Real), Error> {
+    let def = world.def();
+    let margin = def.shape.margin_cells() as Real * def.cell_size;
+    let (left, right) = (
+        def.origin.x + margin,
+        def.origin.x + def.cells[0] as Real * def.cell_size - margin,
+    );
+    let surface = floor(&def) + depth;
+    let water = world.add_material(&MaterialDef {
+        bulk_modulus: k,
+        ..water(&def)
+    })?;
+    world.fill_box(
+        Vec3::new(left, floor(&def), 0.0),
+        Vec3::new(right, surface, 0.0),
+        water,
+        Vec3::ZERO,
+    )?;
+    Ok((water, surface))
+}
+
+/// Floats a box `width` by `height` m of `density` kg/m^3 (2D, per metre of thickness) at
+/// Archimedes' depth below still water whose surface is at `surface` (m), its centre at x =
+/// 0.5 m, tilted `tilt` rad: cuts the water out of its place and adds it as a dynamic collider
+/// that the step moves (free to turn with `turn`), and returns the collider's id.
+pub fn floating_box(
+    world: &mut World,
+    surface: Real,
+    [width, height]: [Real; 2],
+    density: Real,
+    tilt: Real,
+    turn: bool,
+) -> Result<u32, Error> {
+    let draft = density / 1000.0 * height;
+    let centre = Vec3::new(0.5, surface - draft + height / 2.0, 0.0);
+    let half = Vec3::new(width / 2.0, height / 2.0, 0.5);
+    world.remove_particles(Removal::Box {
+        min: centre - half,
+        max: centre + half,
+    })?;
+    let mass = density * width * height;
+    let inertia = mass * (width * width + height * height) / 12.0;
+    world.add_collider(&ColliderDef {
+        shape: ColliderShape::Box { half_extents: half },
+        position: centre,
+        rotation: [0.0, 0.0, (tilt / 2.0).sin(), (tilt / 2.0).cos()],
+        mass,
+        inertia: Vec3::new(0.0, 0.0, if turn { inertia } else { 0.0 }),
+        ..ColliderDef::DEFAULT
+    })
 }
 
 /// The floor of a world: its lower y wall plane, m.

@@ -5,7 +5,7 @@
 
 use mpm_gimp::{
     memory_requirements, Boundary, ColliderDef, ColliderShape, Damping, Effects, HeapBuffer,
-    MaterialDef, MaterialModel, Real, Removal, Schedule, Transfer, Vec3, World, WorldDef,
+    MaterialDef, Real, Schedule, Transfer, Vec3, World, WorldDef,
 };
 
 /// A box 0.2 m by 0.1 m of `mass` (per metre of thickness) and its moment about z.
@@ -173,39 +173,19 @@ fn a_dynamic_box_floats_at_a_games_frame_rate() {
         let h = def.cell_size;
         let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
         let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
-        let water = world
-            .add_material(&MaterialDef {
-                model: MaterialModel::Fluid,
-                bulk_modulus: 90.0e3,
-                viscosity: 1.0,
-                density: 1000.0,
-                ..MaterialDef::DEFAULT
-            })
-            .expect("water");
-        let lo = def.shape.margin_cells() as Real * h;
-        let surface = lo + 0.35;
-        world
-            .fill_box(
-                Vec3::new(lo, lo, 0.0),
-                Vec3::new(1.0 - lo, surface, 0.0),
-                water,
-                Vec3::ZERO,
-            )
-            .expect("tank");
+        let (_, surface) =
+            mpm_gimp_output::scenes::still_water(&mut world, 90.0e3, 0.35).expect("tank");
         let (bw, bh) = (0.2 as Real, 0.1 as Real);
         let draft = density / 1000.0 * bh;
-        let centre = Vec3::new(0.5, surface - draft + bh / 2.0, 0.0);
-        let half = Vec3::new(bw / 2.0, bh / 2.0, 0.0);
-        world
-            .remove_particles(Removal::Box {
-                min: centre - half,
-                max: centre + half,
-            })
-            .expect("room for the box");
-        let mass = density * bw * bh;
-        let mut body = crate_box(centre, Vec3::ZERO, mass);
-        body.rotation = [0.0, 0.0, (0.025 as Real).sin(), (0.025 as Real).cos()];
-        let id = world.add_collider(&body).expect("box");
+        let id = mpm_gimp_output::scenes::floating_box(
+            &mut world,
+            surface,
+            [bw, bh],
+            density,
+            0.05,
+            true,
+        )
+        .expect("box");
         let frame: Real = 1.0 / 60.0;
         let mut speeds = Vec::new();
         while world.time() < 20.0 {
