@@ -6,8 +6,9 @@
 //! particles are inside it; then the largest error after the first 2 s. Options: `--width`
 //! (m, default 0.2) and `--height` (0.1) of the box, `--density` (kg/m^3, 500), `--cells` a
 //! metre (50, the viewer's), `--seconds` (20), `--turn` (the box may turn; it starts tilted
-//! 0.05 rad), `--apic` (APIC in place of the default FLIP blend). The tank is 1 m wide, the
-//! water 0.35 m deep (bulk modulus 90 kPa, grid damping 20/s); 60 Hz frames.
+//! 0.05 rad, or level with `--level`), `--apic` (APIC in place of the default FLIP blend).
+//! The tank is 1 m wide, the water 0.35 m deep (bulk modulus 90 kPa, grid damping 20/s);
+//! 60 Hz frames.
 //!
 //! A node in contact is a node inside the solid (E91): along each edge of the box's bottom the
 //! row of nodes under it changes from the bottom's to the side's, and the water near the edge
@@ -22,12 +23,12 @@ use mpm_gimp_output::scenes;
 use std::process::exit;
 
 const USAGE: &str = "usage: float [--width M] [--height M] [--density KG_M3] [--cells N] \
-                     [--seconds S] [--turn] [--apic]";
+                     [--seconds S] [--turn [--level]] [--apic]";
 
 fn main() {
     let (mut width, mut height, mut density, mut cells, mut seconds) =
         (0.2 as Real, 0.1 as Real, 500.0 as Real, 50u32, 20.0f64);
-    let (mut turn, mut apic) = (false, false);
+    let (mut turn, mut apic, mut tilt) = (false, false, 0.05 as Real);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = || -> f64 {
@@ -46,6 +47,7 @@ fn main() {
             "--cells" => cells = value() as u32,
             "--seconds" => seconds = value(),
             "--turn" => turn = true,
+            "--level" => tilt = 0.0,
             "--apic" => apic = true,
             _ => {
                 eprintln!("unknown option {a}\n{USAGE}");
@@ -75,7 +77,7 @@ fn main() {
     let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
     let (_, surface) = scenes::still_water(&mut world, 90.0e3, 0.35).expect("tank");
     let archimedes = density / 1000.0 * height;
-    let tilt: Real = if turn { 0.05 } else { 0.0 };
+    let tilt = if turn { tilt } else { 0.0 };
     let id = scenes::floating_box(&mut world, surface, [width, height], density, tilt, turn)
         .expect("box");
     let frame: Real = 1.0 / 60.0;
