@@ -55,11 +55,12 @@ fn main() {
             }
         }
     }
-    let h = 1.0 / cells.max(8) as Real;
-    let mut def = WorldDef {
-        cells: [cells.max(8), cells.max(8), 1],
+    let n = cells.max(8);
+    let h = 1.0 / n as Real;
+    let def = WorldDef {
+        cells: [n, n, 1],
         cell_size: h,
-        particle_capacity: 8 * cells.max(8) * cells.max(8),
+        particle_capacity: (8 * n * n).max(20_000),
         transfer: if apic { Transfer::Apic } else { Transfer::Flip },
         faces: [Boundary::Slip; 6],
         effects: Effects {
@@ -72,14 +73,13 @@ fn main() {
         },
         ..WorldDef::DEFAULT
     };
-    def.particle_capacity = def.particle_capacity.max(20_000);
     let mut storage = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
     let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
     let (_, surface) = scenes::still_water(&mut world, 90.0e3, 0.35).expect("tank");
-    let archimedes = density / 1000.0 * height;
     let tilt = if turn { tilt } else { 0.0 };
-    let id = scenes::floating_box(&mut world, surface, [width, height], density, tilt, turn)
-        .expect("box");
+    let (id, archimedes) =
+        scenes::floating_box(&mut world, surface, [width, height], density, tilt, turn)
+            .expect("box");
     let frame: Real = 1.0 / 60.0;
     let (mut next, mut worst) = (0.0f64, 0.0f64);
     while world.time() < seconds {

@@ -1,6 +1,7 @@
 //! Colliders from C (`mpm_gimp::ColliderDef`, E90-E93 and E96 of docs/equations.md): solids
 //! the material meets at the grid, moved by the host (kinematic) or by the step (dynamic), and
-//! what the material puts on them, read back for the host's rigid bodies. Declared with `MpmEffects::collider_capacity`.
+//! what the material puts on them, read back for the host's rigid bodies. Declared with
+//! `MpmEffects::collider_capacity`.
 
 use crate::defs::c_vec3;
 use crate::defs::vec3;

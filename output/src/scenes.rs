@@ -486,7 +486,8 @@ pub fn still_water(world: &mut World, k: Real, depth: Real) -> Result<(u32, Real
 /// Floats a box `width` by `height` m of `density` kg/m^3 (2D, per metre of thickness) at
 /// Archimedes' depth below still water whose surface is at `surface` (m), its centre at x =
 /// 0.5 m, tilted `tilt` rad: cuts the water out of its place and adds it as a dynamic collider
-/// that the step moves (free to turn with `turn`), and returns the collider's id.
+/// that the step moves (free to turn with `turn`), and returns the collider's id and
+/// Archimedes' depth (m) it was placed at, for water of 1000 kg/m^3 ([`still_water`]'s).
 pub fn floating_box(
     world: &mut World,
     surface: Real,
@@ -494,7 +495,7 @@ pub fn floating_box(
     density: Real,
     tilt: Real,
     turn: bool,
-) -> Result<u32, Error> {
+) -> Result<(u32, Real), Error> {
     let draft = density / 1000.0 * height;
     let centre = Vec3::new(0.5, surface - draft + height / 2.0, 0.0);
     let half = Vec3::new(width / 2.0, height / 2.0, 0.5);
@@ -504,14 +505,15 @@ pub fn floating_box(
     })?;
     let mass = density * width * height;
     let inertia = mass * (width * width + height * height) / 12.0;
-    world.add_collider(&ColliderDef {
+    let id = world.add_collider(&ColliderDef {
         shape: ColliderShape::Box { half_extents: half },
         position: centre,
         rotation: [0.0, 0.0, (tilt / 2.0).sin(), (tilt / 2.0).cos()],
         mass,
         inertia: Vec3::new(0.0, 0.0, if turn { inertia } else { 0.0 }),
         ..ColliderDef::DEFAULT
-    })
+    })?;
+    Ok((id, draft))
 }
 
 /// The floor of a world: its lower y wall plane, m.

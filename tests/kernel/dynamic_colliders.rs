@@ -176,8 +176,7 @@ fn a_dynamic_box_floats_at_a_games_frame_rate() {
         let (_, surface) =
             mpm_gimp_output::scenes::still_water(&mut world, 90.0e3, 0.35).expect("tank");
         let (bw, bh) = (0.2 as Real, 0.1 as Real);
-        let draft = density / 1000.0 * bh;
-        let id = mpm_gimp_output::scenes::floating_box(
+        let (id, draft) = mpm_gimp_output::scenes::floating_box(
             &mut world,
             surface,
             [bw, bh],
