@@ -6,9 +6,10 @@
   added, so a new one must raise the budget here, with its measured price in
   benches/PERFORMANCE.md ("Compiled forms");
 - the size of the kernel's release library (its object code grows with every compiled form);
-- the wall time cargo took for the kernel's library in that build (`--timings`), a ceiling
-  well above its usual time on CI's two shared cores, that catches a form or an inlining
-  that multiplies the build, not the machine's noise.
+- the wall time cargo took for the kernel's library in that build (`--timings`) over the
+  time it took for all the dependencies in the same build: a ratio, so that a slow or busy
+  machine, which slows both, does not fail it, and a form or an inlining that multiplies the
+  kernel's build does.
 
 Run from the repository root after `cargo test --release --workspace --no-run --timings`:
 python3 .ci/budgets.py"""
@@ -31,9 +32,12 @@ import sys
 # tables and the metadata; 2 workers went from 0.59-0.61 to 0.54 of one worker's time), and
 # to 14.5 MB with a particle's whole state read and written, a collider's speed in the
 # substep plan and its contact modes (14.31 MB, no compiled form added: 155/155/128).
+# The kernel's build time was a ceiling of 240 s until a CI machine two to three times as slow
+# as usual built it in 264 s with nothing changed; in a build where another build ran beside
+# it, the kernel took 570 s and its dependencies 380 s (1.5).
 FUNCTIONS = {"avx2": 155, "avx512": 155, "baseline": 128}
 LIBRARY_BYTES = 14_500_000
-KERNEL_BUILD_SECONDS = 240.0
+KERNEL_BUILD_OVER_DEPENDENCIES = 2.0
 
 failed = []
 libs = sorted(glob.glob("target/release/deps/libmpm_gimp-*.rlib"), key=os.path.getmtime)
@@ -65,18 +69,27 @@ if os.path.exists(report):
     text = open(report).read()
     start = text.index("UNIT_DATA = ") + len("UNIT_DATA = ")
     units, _ = json.JSONDecoder().raw_decode(text[start:])
+    workspace = {"mpm-gimp", "mpm-gimp-ffi", "mpm-gimp-output", "mpm-gimp-viewer", "mpm-gimp-rayon"}
     kernel = [
         u["duration"]
         for u in units
         if u["name"] == "mpm-gimp" and u["target"] == "" and u["mode"] == "todo"
     ]
-    if kernel:
+    dependencies = sum(u["duration"] for u in units if u["name"] not in workspace)
+    if kernel and dependencies > 0:
         seconds = max(kernel)
-        print(f"kernel library built in {seconds:.1f} s (budget {KERNEL_BUILD_SECONDS:.0f} s)")
-        if seconds > KERNEL_BUILD_SECONDS:
-            failed.append(f"kernel build {seconds:.1f} s, budget {KERNEL_BUILD_SECONDS:.0f} s")
+        ratio = seconds / dependencies
+        print(
+            f"kernel library built in {seconds:.1f} s, its dependencies in {dependencies:.1f} s: "
+            f"{ratio:.2f} (budget {KERNEL_BUILD_OVER_DEPENDENCIES:.2f})"
+        )
+        if ratio > KERNEL_BUILD_OVER_DEPENDENCIES:
+            failed.append(
+                f"kernel build {ratio:.2f} of its dependencies', "
+                f"budget {KERNEL_BUILD_OVER_DEPENDENCIES:.2f}"
+            )
     else:
-        print("the timing report has no kernel library unit (nothing rebuilt)")
+        print("the timing report has no kernel library or no dependency unit (nothing rebuilt)")
 else:
     print("no timing report: the build time is not checked")
 
