@@ -69,7 +69,14 @@ if os.path.exists(report):
     text = open(report).read()
     start = text.index("UNIT_DATA = ") + len("UNIT_DATA = ")
     units, _ = json.JSONDecoder().raw_decode(text[start:])
-    workspace = {"mpm-gimp", "mpm-gimp-ffi", "mpm-gimp-output", "mpm-gimp-viewer", "mpm-gimp-rayon"}
+    # The workspace's own crates, as cargo lists them; every other unit is a dependency.
+    metadata = subprocess.run(
+        ["cargo", "metadata", "--no-deps", "--format-version", "1"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    workspace = {p["name"] for p in json.loads(metadata)["packages"]}
     kernel = [
         u["duration"]
         for u in units
