@@ -31,6 +31,9 @@ pub(crate) struct GridCols<'a, const D: usize> {
     /// (thermal mass `m_T`, or volume), momentum (`m_T T`), value (`T_i`, with the fixed
     /// faces), flow then rate (`Q_i`, then `Q_i / m_T`).
     pub scalar: [[&'a mut [Real]; 4]; 2],
+    /// Colliders (empty without): the nodes that material touching the collider being applied
+    /// reaches, marked 1 (E91).
+    pub contact: &'a mut [Real],
     /// Entries per column (`nodes + ROW`, or a tile's window); a column not reserved is empty.
     pub len: usize,
     /// The nodes these columns hold and whose rows a scatter adds to them.
@@ -76,6 +79,8 @@ enum Column {
     Value(usize),
     /// A transported field's other columns.
     Scalar,
+    /// The colliders' contact marks.
+    Contact,
 }
 
 impl Part {
@@ -303,6 +308,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             acc: none(),
             remap: none(),
             scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
+            contact: &mut [][..],
             len: 0,
             tile: Tile::ALL,
             reach: &[],
@@ -319,6 +325,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             acc,
             remap,
             scalar,
+            contact,
             len,
             tile,
             reach,
@@ -331,6 +338,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             acc: acc.each_mut().map(|c| &mut **c),
             remap: none(),
             scalar: scalar.each_mut().map(|f| f.each_mut().map(|c| &mut **c)),
+            contact,
             len: *len,
             tile: *tile,
             reach,
@@ -342,6 +350,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             acc: none(),
             remap: remap.each_mut().map(|c| &mut **c),
             scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
+            contact: &mut [][..],
             len: *len,
             tile: *tile,
             reach,
@@ -439,7 +448,8 @@ impl<'a, const D: usize> GridCols<'a, D> {
     fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, part: Part) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
         let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
-        let has_remap = layout.grid_columns > 1 + 2 * D + 4 * scalars;
+        let has_remap =
+            layout.grid_columns > 1 + 2 * D + 4 * scalars + layout.contact_grid as usize;
         // The next column, or nothing where `part` leaves it out.
         let take = |c: &mut Carver<'a>, column: Column| {
             if part.holds(column) {
@@ -473,6 +483,11 @@ impl<'a, const D: usize> GridCols<'a, D> {
                 }
             })
         });
+        let contact = if layout.contact_grid {
+            take(&mut c, Column::Contact)
+        } else {
+            &mut [][..]
+        };
         let vel: [&mut [Real]; D] = vel;
         let remap: [&mut [Real]; D] = remap;
         GridCols {
@@ -482,6 +497,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             acc,
             remap,
             scalar,
+            contact,
             tile,
             reach: &[],
             whole: &[],

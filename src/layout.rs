@@ -462,10 +462,12 @@ pub(crate) struct Layout {
     pub plastic: ColumnGroup,
     /// Whether each transported scalar (heat, diffusion) has its 4 grid columns.
     pub scalar_grid: [bool; 2],
+    /// Whether the grid has the colliders' contact column (a collider capacity).
+    pub contact_grid: bool,
     pub grid_offset: usize,
     pub node_column_bytes: usize,
     /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
-    /// (USF and MUSL).
+    /// (USF and MUSL), the transported scalars' and the colliders' contact column.
     pub grid_columns: usize,
     /// The parallel step's scratch after the grid: one [`Partial`] per item of a pass,
     /// [`SLOTS_PER_WORKER`] per worker of [`WorldDef::workers`] (none for one worker).
@@ -559,10 +561,12 @@ impl Layout {
             column_stride(round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>());
         let stress_velocity = def.update_order != UpdateOrder::Usl;
         let scalar_grid = [def.effects.heat.is_some(), def.effects.diffusion.is_some()];
+        let contact_grid = def.effects.collider_capacity > 0;
         let grid_columns = 1
             + 2 * d
             + if stress_velocity { d } else { 0 }
-            + 4 * scalar_grid.iter().filter(|&&b| b).count();
+            + 4 * scalar_grid.iter().filter(|&&b| b).count()
+            + contact_grid as usize;
         let traction_capacity = def.effects.traction_capacity as usize;
         let tables = Tables::of(
             def.material_capacity as usize,
@@ -612,6 +616,7 @@ impl Layout {
             stretch,
             plastic,
             scalar_grid,
+            contact_grid,
             grid_offset,
             node_column_bytes,
             grid_columns,

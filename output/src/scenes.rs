@@ -499,10 +499,6 @@ pub fn floating_box(
     let draft = density / 1000.0 * height;
     let centre = Vec3::new(0.5, surface - draft + height / 2.0, 0.0);
     let half = Vec3::new(width / 2.0, height / 2.0, 0.5);
-    world.remove_particles(Removal::Box {
-        min: centre - half,
-        max: centre + half,
-    })?;
     let mass = density * width * height;
     let inertia = mass * (width * width + height * height) / 12.0;
     let id = world.add_collider(&ColliderDef {
@@ -513,6 +509,29 @@ pub fn floating_box(
         inertia: Vec3::new(0.0, 0.0, if turn { inertia } else { 0.0 }),
         ..ColliderDef::DEFAULT
     })?;
+    // The water whose particles' domains (squares of half-width `l`) reach into the box or
+    // touch it, tilted or not: any of 5 x 5 points across the square within a thousandth of
+    // a cell of the solid (a domain that only touches the box is cut, whatever the rounding).
+    let def = world.def();
+    let l = def.cell_size / (2 * def.particles_per_cell) as Real;
+    let p = world.particles();
+    let inside: Vec<u32> = (0..p.count)
+        .filter(|&i| {
+            (0..25).any(|k| {
+                let at = |j: usize| (j as Real / 2.0 - 1.0) * l;
+                let x = Vec3::new(
+                    p.position[0][i] + at(k % 5),
+                    p.position[1][i] + at(k / 5),
+                    0.0,
+                );
+                world
+                    .collider_distance(id, x)
+                    .is_ok_and(|d| d <= def.cell_size / 1024.0)
+            })
+        })
+        .map(|i| i as u32)
+        .collect();
+    world.remove_particles(Removal::List(&inside))?;
     Ok((id, draft))
 }
 

@@ -102,6 +102,17 @@ impl ShapeFunction {
         }
     }
 
+    /// How far a grid function reaches from its node, in cells: 1 for the linear hats (which
+    /// the GIMP families integrate), 1.5 and 2 for the quadratic and cubic B-splines. The
+    /// colliders' contact band (E91).
+    pub const fn grid_function_reach(self) -> f32 {
+        match self {
+            ShapeFunction::QuadraticBspline => 1.5,
+            ShapeFunction::CubicBspline => 2.0,
+            _ => 1.0,
+        }
+    }
+
     /// Width of the layer of cells, at each face of the grid, that particles may not enter:
     /// the nodes of a particle's stencil must exist. 0 for linear, 1 for the others.
     pub const fn margin_cells(self) -> u32 {

@@ -2,14 +2,17 @@
 //! (kinematic) or by the step (dynamic, `drive`), and the impulse it puts on them.
 //!
 //! A collider is a solid in its own frame ([`crate::ColliderShape`]) with a pose that moves
-//! with its velocities (E90). At each node inside the solid (signed distance `phi <= 0`) that
-//! carries mass, the grid update replaces the node's updated velocity by what the contact law
-//! leaves (E91, E92), relative to the solid's velocity at the node; the momentum it takes from
-//! the node is what the material puts on the collider (E93), summed node by node in node
-//! order on the calling thread, so that it has one worker's bits for any number of workers.
+//! with its velocities (E90). A node is in contact with it where material touches the solid:
+//! a particle whose domain reaches the surface marks the nodes its weights reach, and each
+//! marked node inside the solid or within a band outside it (the grid functions' reach) that
+//! carries mass has its updated velocity replaced by what the contact law leaves (E91, E92),
+//! relative to the solid's velocity at the node; the momentum it takes from the node is what
+//! the material puts on the collider (E93), summed node by node in node order on the calling
+//! thread, so that it has one worker's bits for any number of workers.
 
 use crate::def::{ColliderDef, ColliderShape, Contact};
 use crate::layout::{ColliderImpulse, ColliderRecord};
+use crate::math::{ceil, floor};
 use crate::Real;
 use glam::{DQuat, DVec3};
 
@@ -64,9 +67,6 @@ pub(crate) struct Collider<'s> {
     axes: [V3; 3],
     velocity: V3,
     omega: V3,
-    /// The distance outside the surface within which a point counts as in contact (0, or
-    /// [`Collider::with_skin`]'s).
-    skin: Real,
 }
 
 /// The shape number of `s` in a [`ColliderRecord`], its lengths, and a distance field's
@@ -269,6 +269,162 @@ pub(crate) fn drive(
     r.angular_velocity = core::array::from_fn(|a| stored(w[a], read_w[a]));
 }
 
+/// The velocities a dynamic collider shares with the nodes its contact holds in a substep
+/// (E96): `K xi' = M xi + sum_i m_i G_i^T P_i u_i`, `K = M + sum_i m_i G_i^T P_i G_i`, with
+/// `xi = (v, omega)` the body's velocities and mass matrix `M`, `G_i xi = v + omega x r_i` the
+/// solid's velocity at node `i`, `u_i` the node's updated velocity and `P_i` what the law
+/// holds of it (`n n^T`, all of it for stick). The contact then takes the nodes to the body's
+/// new velocities, and the impulse it reads back takes the body there: body and nodes end
+/// the substep together, however light the body, as an inelastic collision does.
+pub(crate) struct Shared {
+    k: [[f64; 6]; 6],
+    rhs: [f64; 6],
+    /// The velocities the body keeps: off the plane in 2D, about an axis of no moment.
+    fixed: [bool; 6],
+    xi: [f64; 6],
+    /// The nodes held so far, their count and the sum of their masses' bits: which set of
+    /// nodes the system holds, to tell when it no longer changes.
+    held: (u32, u64),
+}
+
+impl Shared {
+    /// The body's velocities at the start of the substep, gravity's `g dt` added: what it
+    /// would move at without the material, as a node's updated velocity is without contact.
+    pub fn new(c: &Collider<'_>, r: &ColliderRecord, planar: bool, g_dt: V3) -> Shared {
+        let xi: [f64; 6] = core::array::from_fn(|a| {
+            if a < 3 {
+                (c.velocity[a] + g_dt[a]) as f64
+            } else {
+                c.omega[a - 3] as f64
+            }
+        });
+        let mut k = [[0.0; 6]; 6];
+        let mut fixed = [false; 6];
+        for (a, row) in k.iter_mut().enumerate().take(3) {
+            row[a] = r.mass;
+        }
+        // The inertia about the world axes, `A I A^T` (the frame's axes `A`); an axis of no
+        // moment keeps its turn.
+        for a in 0..3 {
+            for b in 0..3 {
+                k[3 + a][3 + b] = (0..3)
+                    .map(|j| c.axes[j][a] as f64 * r.inertia[j] * c.axes[j][b] as f64)
+                    .sum();
+            }
+        }
+        let read = ColliderDef::read_components(planar);
+        for a in 0..3 {
+            fixed[a] = !read[1][a];
+            let moment = k[3 + a][3 + a];
+            fixed[3 + a] = !read[2][a] || moment.is_nan() || moment <= 0.0;
+        }
+        let mut rhs = [0.0; 6];
+        for a in 0..6 {
+            rhs[a] = (0..6).map(|b| k[a][b] * xi[b]).sum();
+        }
+        Shared {
+            k,
+            rhs,
+            fixed,
+            xi,
+            held: (0, 0),
+        }
+    }
+
+    /// Adds a node of mass `m` at `x` whose updated velocity is `u`, the surface's normal
+    /// there `n`, where the contact holds it: any stick or slip contact, and a separating one
+    /// where the node presses on the body moving at `at`'s velocities.
+    pub fn add(&mut self, at: &Collider<'_>, x: V3, m: Real, u: V3, n: V3) {
+        let c = at;
+        let rel = sub(u, c.velocity_at(x));
+        if c.contact == Contact::Separate && dot(rel, n) >= 0.0 {
+            return;
+        }
+        self.held.0 += 1;
+        self.held.1 = self.held.1.wrapping_add((m as f64).to_bits());
+        let r = sub(x, c.centre);
+        // G's columns: the point's velocity per unit of each of the body's velocities.
+        let g: [V3; 6] = core::array::from_fn(|a| {
+            let mut e = [0.0; 3];
+            e[a % 3] = 1.0;
+            if a < 3 {
+                e
+            } else {
+                cross(e, r)
+            }
+        });
+        let held = |v: V3| match c.contact {
+            Contact::Stick => v,
+            _ => scale(n, dot(v, n)),
+        };
+        let m = m as f64;
+        let pg: [V3; 6] = core::array::from_fn(|a| held(g[a]));
+        let pu = held(u);
+        for a in 0..6 {
+            self.rhs[a] += m * dot(g[a], pu) as f64;
+            for b in 0..6 {
+                self.k[a][b] += m * dot(g[a], pg[b]) as f64;
+            }
+        }
+    }
+
+    /// Which nodes the system holds (their count and a sum over them).
+    pub fn held(&self) -> (u32, u64) {
+        self.held
+    }
+
+    /// The collider `c` at the shared velocities (its own where the system is singular).
+    pub fn solve<'s>(mut self, c: Collider<'s>) -> Collider<'s> {
+        // A velocity the body keeps: its row says so, and the other rows take it as known.
+        for a in 0..6 {
+            if self.fixed[a] {
+                for r in 0..6 {
+                    self.rhs[r] -= self.k[r][a] * self.xi[a];
+                    self.k[r][a] = 0.0;
+                }
+                self.k[a] = [0.0; 6];
+                self.k[a][a] = 1.0;
+                self.rhs[a] = self.xi[a];
+            }
+        }
+        // Gaussian elimination with partial pivoting.
+        let (mut k, mut x) = (self.k, self.rhs);
+        for col in 0..6 {
+            let pivot = (col..6).fold(col, |p, r| {
+                if k[r][col].abs() > k[p][col].abs() {
+                    r
+                } else {
+                    p
+                }
+            });
+            if k[pivot][col] == 0.0 || k[pivot][col].is_nan() {
+                return c;
+            }
+            k.swap(col, pivot);
+            x.swap(col, pivot);
+            for r in col + 1..6 {
+                let f = k[r][col] / k[col][col];
+                for j in col..6 {
+                    k[r][j] -= f * k[col][j];
+                }
+                x[r] -= f * x[col];
+            }
+        }
+        for col in (0..6).rev() {
+            let tail: f64 = (col + 1..6).map(|j| k[col][j] * x[j]).sum();
+            x[col] = (x[col] - tail) / k[col][col];
+        }
+        if x.iter().any(|v| !v.is_finite()) {
+            return c;
+        }
+        Collider {
+            velocity: core::array::from_fn(|a| x[a] as Real),
+            omega: core::array::from_fn(|a| x[3 + a] as Real),
+            ..c
+        }
+    }
+}
+
 impl<'s> Collider<'s> {
     /// The collider of record `r` at world time `t`, a distance field's samples in `samples`
     /// (the world's); `None` for a record no build writes or a field past the samples.
@@ -301,16 +457,7 @@ impl<'s> Collider<'s> {
             axes: [axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z)],
             velocity: r.velocity.map(|c| c as Real),
             omega: r.angular_velocity.map(|c| c as Real),
-            skin: 0.0,
         })
-    }
-
-    /// This collider with points up to `skin` (m) outside its surface in contact: the grid
-    /// update's, so that a node on a face, which the distance puts a rounding error to either
-    /// side of it, is in contact (E91).
-    pub fn with_skin(mut self, skin: Real) -> Self {
-        self.skin = skin;
-        self
     }
 
     /// The signed distance from the solid's surface at `x` (negative inside), m, and the
@@ -356,15 +503,11 @@ impl<'s> Collider<'s> {
         add(self.velocity, cross(self.omega, sub(x, self.centre)))
     }
 
-    /// The velocity the contact leaves a node at `x` whose updated velocity is `v` (E92),
-    /// or `None` where it leaves `v` as it is (the node outside the solid, or separating).
-    pub fn contact(&self, x: V3, v: V3) -> Option<V3> {
-        self.law(self.contact, x, v)
-    }
-
-    /// Whether `x` is in contact: inside the solid or within its skin (E91).
-    pub fn touches(&self, x: V3) -> bool {
-        self.distance_and(x, false).0 <= self.skin
+    /// The velocity the contact leaves a node in contact at `x`, where the surface's outward
+    /// normal is `n`, whose updated velocity is `v` (E92), or `None` where it leaves `v` as it
+    /// is (separating).
+    pub fn contact(&self, x: V3, v: V3, n: V3) -> Option<V3> {
+        self.law(self.contact, x, v, n)
     }
 
     /// [`Collider::contact`] on USF's lagged velocity, which the stress update reads and no
@@ -373,23 +516,86 @@ impl<'s> Collider<'s> {
     /// presses, a node would keep the noise that moves it apart and drop the noise that
     /// presses: a ratchet that turns the particles' velocity noise into strain energy no
     /// impulse accounts for.
-    pub fn hold(&self, x: V3, v: V3) -> Option<V3> {
+    pub fn hold(&self, x: V3, v: V3, n: V3) -> Option<V3> {
         let law = match self.contact {
             Contact::Separate => Contact::Slip,
             law => law,
         };
-        self.law(law, x, v)
+        self.law(law, x, v, n)
     }
 
-    fn law(&self, law: Contact, x: V3, v: V3) -> Option<V3> {
-        if !self.touches(x) {
-            return None;
+    /// Sets `contact` to 1 at the nodes of the box `lo..hi` (node indices per axis) that an
+    /// active particle of `p` (of the first `count`) reaches whose domain, of half-width `l`,
+    /// touches the solid (its centre within `l` of the surface, or inside), and to 0 at the
+    /// box's other nodes (E91). A particle reaches the nodes within `band + l` of its centre
+    /// along each axis: those whose grid functions, `band` wide, reach its domain.
+    #[allow(clippy::too_many_arguments)]
+    pub fn mark_reached<const D: usize>(
+        &self,
+        geom: &crate::grid::Geom<D>,
+        p: &crate::particles::ParticleCols<'_, D>,
+        count: usize,
+        l: Real,
+        band: Real,
+        (lo, hi): ([usize; D], [usize; D]),
+        contact: &mut [Real],
+    ) {
+        let layers = if D == 3 { lo[D - 1]..hi[D - 1] } else { 0..1 };
+        for z in layers {
+            for j in lo[1]..hi[1] {
+                let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
+                if let Some(row) = contact.get_mut(line + lo[0]..line + hi[0]) {
+                    row.fill(0.0);
+                }
+            }
         }
-        let (_, n) = self.distance_and(x, true);
-        self.law_at(law, x, v, n)
+        let bounds = self.bounds();
+        let reach = band + l;
+        for i in 0..count.min(p.status.len()) {
+            if p.status[i] != crate::particles::ACTIVE {
+                continue;
+            }
+            let x: V3 = core::array::from_fn(|a| {
+                if a < D {
+                    p.x[a][i] + p.x_low[a][i]
+                } else {
+                    0.0
+                }
+            });
+            if let Some((min, max)) = bounds {
+                if (0..D).any(|a| !(x[a] >= min[a] - l && x[a] <= max[a] + l)) {
+                    continue;
+                }
+            }
+            let phi = self.distance_and(x, false).0;
+            if phi > l || phi.is_nan() {
+                continue;
+            }
+            // The box's nodes within `reach` of the particle, per axis.
+            let mut from = [0usize; D];
+            let mut to = [0usize; D];
+            for a in 0..D {
+                let u = (x[a] - geom.origin[a]) * geom.inv_h;
+                let r = reach * geom.inv_h;
+                from[a] = (ceil(u - r).max(0.0) as usize).max(lo[a]);
+                to[a] = ((floor(u + r).max(-1.0) + 1.0) as usize).min(hi[a]);
+            }
+            if (0..D).any(|a| from[a] >= to[a]) {
+                continue;
+            }
+            let layers = if D == 3 { from[D - 1]..to[D - 1] } else { 0..1 };
+            for z in layers {
+                for j in from[1]..to[1] {
+                    let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
+                    if let Some(row) = contact.get_mut(line + from[0]..line + to[0]) {
+                        row.fill(1.0);
+                    }
+                }
+            }
+        }
     }
 
-    fn law_at(&self, law: Contact, x: V3, v: V3, n: V3) -> Option<V3> {
+    fn law(&self, law: Contact, x: V3, v: V3, n: V3) -> Option<V3> {
         let vc = self.velocity_at(x);
         let rel = sub(v, vc);
         let vn = dot(rel, n);
@@ -646,25 +852,25 @@ mod tests {
         let mut r = record(ColliderShape::HalfSpace);
         let inside = [0.0, -0.1, 0.0];
         let v = [2.0, -1.0, 0.0];
+        let up = [0.0, 1.0, 0.0];
         r.contact = contact_code(Contact::Stick);
         assert_eq!(
-            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v, up),
             Some([0.0; 3])
         );
         r.contact = contact_code(Contact::Slip);
         assert_eq!(
-            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v, up),
             Some([2.0, 0.0, 0.0])
         );
         // Coulomb with mu = 0.5: the tangential speed 2 falls by 0.5 * 1.
         r.friction = 0.5;
         assert_eq!(
-            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v),
+            Collider::at(&r, 0.0, &[]).unwrap().contact(inside, v, up),
             Some([1.5, 0.0, 0.0])
         );
         r.contact = contact_code(Contact::Separate);
         let c = Collider::at(&r, 0.0, &[]).unwrap();
-        assert_eq!(c.contact(inside, [2.0, 1.0, 0.0]), None, "separating");
-        assert_eq!(c.contact([0.0, 0.1, 0.0], v), None, "outside");
+        assert_eq!(c.contact(inside, [2.0, 1.0, 0.0], up), None, "separating");
     }
 }

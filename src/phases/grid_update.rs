@@ -8,11 +8,12 @@
 
 use super::Ctx;
 use crate::def::UpdateOrder;
-use crate::effects::colliders::Collider;
+use crate::effects::colliders::{Collider, Shared};
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
-use crate::layout::ColliderImpulse;
+use crate::layout::{ColliderImpulse, ColliderRecord};
 use crate::math::{ceil, floor};
+use crate::particles::ParticleCols;
 use crate::Real;
 
 /// The node columns of a substep, as the grid passes take them: whole, or in slabs of whole
@@ -23,8 +24,9 @@ pub(crate) trait Nodes<const D: usize> {
     fn whole(&mut self) -> GridCols<'_, D>;
     /// Runs `f` on each slab, in any order or at once.
     fn each_slab(&mut self, f: &(dyn Fn(&mut GridCols<'_, D>) + Sync));
-    /// The whole grid and the colliders' impulses of the step ([`ColliderImpulse`]).
-    fn with_impulses(&mut self) -> (GridCols<'_, D>, &mut [ColliderImpulse]);
+    /// The whole grid, the particles (which the colliders' contact reads, E91) and the
+    /// colliders' impulses of the step ([`ColliderImpulse`]).
+    fn with_impulses(&mut self) -> (GridCols<'_, D>, ParticleCols<'_, D>, &mut [ColliderImpulse]);
 }
 
 /// Zeroes every nodal column the step accumulates into, on the nodes of the substep
@@ -119,8 +121,8 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
             damp_nodes(ctx, nodal, g);
         }
     });
-    let (g, impulses) = &mut nodes.with_impulses();
-    collide(ctx, g, On::Updated(impulses));
+    let (g, p, impulses) = &mut nodes.with_impulses();
+    collide(ctx, g, p, On::Updated(impulses));
     let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
     ctx.geom
         .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
@@ -196,7 +198,8 @@ pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl 
         let window = g.window();
         divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D], window)
     });
-    constrain_remap(ctx, &mut nodes.whole());
+    let (g, p, _) = &mut nodes.with_impulses();
+    constrain_remap(ctx, g, p);
 }
 
 /// USF: the lagged velocity with the walls applied, for the stress update; the unconstrained
@@ -213,15 +216,20 @@ pub(crate) fn constrained_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut
             }
         });
     });
-    constrain_remap(ctx, &mut nodes.whole());
+    let (g, p, _) = &mut nodes.with_impulses();
+    constrain_remap(ctx, g, p);
 }
 
-fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+fn constrain_remap<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    p: &ParticleCols<'_, D>,
+) {
     let on = match ctx.order {
         UpdateOrder::Musl => On::Remapped,
         _ => On::Lagged,
     };
-    collide(ctx, g, on);
+    collide(ctx, g, p, on);
     ctx.geom
         .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
             let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
@@ -237,10 +245,78 @@ fn constrain_remap<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     mirror_vector(ctx, &mut g.remap, false);
 }
 
-/// The distance outside a collider's surface, in cells, within which a node is in contact
-/// (E91): a node on a face (a box's face on a grid line) is then in contact whichever side of
-/// it the distance's rounding puts it, not one cell further in.
-const NODE_SKIN: Real = 1.0e-3;
+/// Runs `f` on each node of the box `lo..hi` in contact with `c` (E91), in node order: its
+/// index, position, mass and the surface's outward normal there.
+fn each_contact<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    c: &Collider<'_>,
+    (lo, hi): ([usize; D], [usize; D]),
+    mut f: impl FnMut(&mut GridCols<'_, D>, usize, [Real; 3], Real, [Real; 3]),
+) {
+    let geom = &ctx.geom;
+    let n = g.len();
+    let at = |a: usize, index: usize| geom.origin[a] + index as Real * geom.h;
+    let layers = if D == 3 { lo[D - 1]..hi[D - 1] } else { 0..1 };
+    for z in layers {
+        for j in lo[1]..hi[1] {
+            let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
+            let (y, zz) = (at(1, j), if D == 3 { at(D - 1, z) } else { 0.0 });
+            for i in lo[0]..hi[0] {
+                let node = line + i;
+                let m = g.mass.get(node).copied().unwrap_or(0.0);
+                if m <= ctx.mass_cutoff || m.is_nan() || node >= n || g.contact[node] == 0.0 {
+                    continue;
+                }
+                let x = [at(0, i), y, zz];
+                let (phi, normal) = c.distance(x);
+                if phi < ctx.contact_band {
+                    f(g, node, x, m, normal);
+                }
+            }
+        }
+    }
+}
+
+/// Node `node`'s updated velocity `v_i + a_i dt`, in three components.
+fn updated<const D: usize>(g: &GridCols<'_, D>, node: usize, dt: Real) -> [Real; 3] {
+    core::array::from_fn(|a| {
+        if a < D {
+            g.vel[a][node] + g.acc[a][node] * dt
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The dynamic collider `c` (of record `record`) at the velocities it shares with the nodes of
+/// the box `lo..hi` its contact holds in this substep (E96, [`Shared`]). A separating contact
+/// holds the nodes that press on the body at those velocities: the set is found again at each
+/// solution, a few times at most, until it no longer changes.
+fn shared<'s, const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    c: Collider<'s>,
+    record: &ColliderRecord,
+    node_box: ([usize; D], [usize; D]),
+) -> Collider<'s> {
+    let g_dt = core::array::from_fn(|a| if a < D { ctx.gravity[a] * ctx.dt } else { 0.0 });
+    let mut at = c;
+    let mut held = None;
+    for _ in 0..4 {
+        let mut system = Shared::new(&c, record, D == 2, g_dt);
+        each_contact(ctx, g, &c, node_box, |g, node, x, m, normal| {
+            system.add(&at, x, m, updated(g, node, ctx.dt), normal);
+        });
+        let set = system.held();
+        at = system.solve(c);
+        if held == Some(set) {
+            break;
+        }
+        held = Some(set);
+    }
+    at
+}
 
 /// What a pass of the colliders acts on (E92).
 enum On<'i> {
@@ -257,99 +333,95 @@ enum On<'i> {
 }
 
 /// The colliders on the nodes of the substep's node box that carry mass, one collider after
-/// the other, node by node (E92), on the velocity `on` says. On the calling thread, in node
-/// order: the impulses' sums have one worker's bits.
-fn collide<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>, mut on: On<'_>) {
+/// the other, node by node (E92), on the velocity `on` says: at the nodes in contact with each
+/// (E91), those within [`Ctx::contact_band`] outside its surface, or inside it, that the
+/// particles of `p` whose domains touch it reach ([`Collider::mark_reached`]). On the calling
+/// thread, in node order: the impulses' sums have one worker's bits.
+fn collide<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    p: &ParticleCols<'_, D>,
+    mut on: On<'_>,
+) {
     let (geom, dt) = (&ctx.geom, ctx.dt);
     let n = g.len();
     if !matches!(on, On::Updated(_)) && g.remap[0].len() != n {
         return; // Unreachable: USF and MUSL reserve the remap columns.
     }
+    if g.contact.len() != n {
+        return; // Unreachable: a world with colliders reserves the contact column.
+    }
+    let band = ctx.contact_band;
     for (k, record) in ctx.colliders.iter().enumerate() {
         let Some(c) = Collider::at(record, ctx.time, ctx.sdf) else {
             continue;
         };
-        // A node on a face is in contact wherever rounding puts it.
-        let c = c.with_skin(NODE_SKIN * geom.h);
-        // The node box's nodes within the solid's bounds (a half-space: all of them).
+        // The node box's nodes within the band around the solid's bounds (a half-space: all).
         let (mut lo, mut hi) = (ctx.active.lo, ctx.active.hi);
         if let Some((min, max)) = c.bounds() {
             for a in 0..D {
-                // One node past each end: a node on the solid's face is in contact, and the
-                // product may round it out of `ceil`'s reach.
-                let from = (ceil((min[a] - geom.origin[a]) * geom.inv_h) - 1.0).max(0.0);
-                let to = floor((max[a] - geom.origin[a]) * geom.inv_h) + 2.0;
+                // One node more at each end: the product may round a node on the band's edge
+                // out of `ceil`'s reach.
+                let from = (ceil((min[a] - band - geom.origin[a]) * geom.inv_h) - 1.0).max(0.0);
+                let to = floor((max[a] + band - geom.origin[a]) * geom.inv_h) + 2.0;
                 lo[a] = lo[a].max(from as usize);
                 hi[a] = hi[a].min(to.max(0.0) as usize);
             }
         }
+        if (0..D).any(|a| lo[a] >= hi[a]) {
+            continue;
+        }
+        c.mark_reached(
+            geom,
+            p,
+            ctx.particles,
+            ctx.half_width,
+            band,
+            (lo, hi),
+            g.contact,
+        );
+        // A dynamic collider meets the material at the velocities it shares with the nodes it
+        // holds (E96): solved for first, so that a light body under heavy material does not
+        // overshoot.
+        let c = match &on {
+            On::Updated(_) if record.mass > 0.0 && record.mass.is_finite() => {
+                shared(ctx, g, c, record, (lo, hi))
+            }
+            _ => c,
+        };
         let (mut linear, mut angular) = ([0.0f64; 3], [0.0f64; 3]);
-        let layers = if D == 3 { lo[D - 1]..hi[D - 1] } else { 0..1 };
-        for z in layers {
-            for j in lo[1]..hi[1] {
-                let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
-                let at = |a: usize, index: usize| geom.origin[a] + index as Real * geom.h;
-                let y = at(1, j);
-                let zz = if D == 3 { at(D - 1, z) } else { 0.0 };
-                for i in lo[0]..hi[0] {
-                    let node = line + i;
-                    let m = g.mass.get(node).copied().unwrap_or(0.0);
-                    if m <= ctx.mass_cutoff || m.is_nan() || node >= n {
-                        continue;
-                    }
-                    let x = [at(0, i), y, zz];
-                    match &mut on {
-                        On::Updated(_) => {
-                            let v: [Real; 3] = core::array::from_fn(|a| {
-                                if a < D {
-                                    g.vel[a][node] + g.acc[a][node] * dt
-                                } else {
-                                    0.0
-                                }
-                            });
-                            let Some(w) = c.contact(x, v) else {
-                                continue;
-                            };
-                            for a in 0..D {
-                                g.acc[a][node] = (w[a] - g.vel[a][node]) / dt;
-                            }
-                            let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
-                            let arm: [f64; 3] =
-                                core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
-                            for a in 0..3 {
-                                let (b, e) = ((a + 1) % 3, (a + 2) % 3);
-                                linear[a] -= dp[a];
-                                angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
-                            }
-                        }
-                        On::Remapped => {
-                            if c.touches(x) {
-                                for a in 0..D {
-                                    g.remap[a][node] = g.vel[a][node] + g.acc[a][node] * dt;
-                                }
-                            }
-                        }
-                        On::Lagged => {
-                            let v: [Real; 3] =
-                                core::array::from_fn(
-                                    |a| {
-                                        if a < D {
-                                            g.remap[a][node]
-                                        } else {
-                                            0.0
-                                        }
-                                    },
-                                );
-                            if let Some(w) = c.hold(x, v) {
-                                for a in 0..D {
-                                    g.remap[a][node] = w[a];
-                                }
-                            }
-                        }
+        each_contact(ctx, g, &c, (lo, hi), |g, node, x, m, normal| match &on {
+            On::Updated(_) => {
+                let v = updated(g, node, dt);
+                let Some(w) = c.contact(x, v, normal) else {
+                    return;
+                };
+                for a in 0..D {
+                    g.acc[a][node] = (w[a] - g.vel[a][node]) / dt;
+                }
+                let dp: [f64; 3] = core::array::from_fn(|a| (m * (w[a] - v[a])) as f64);
+                let arm: [f64; 3] = core::array::from_fn(|a| (x[a] - c.centre[a]) as f64);
+                for a in 0..3 {
+                    let (b, e) = ((a + 1) % 3, (a + 2) % 3);
+                    linear[a] -= dp[a];
+                    angular[a] -= arm[b] * dp[e] - arm[e] * dp[b];
+                }
+            }
+            On::Remapped => {
+                for a in 0..D {
+                    g.remap[a][node] = g.vel[a][node] + g.acc[a][node] * dt;
+                }
+            }
+            On::Lagged => {
+                let v: [Real; 3] =
+                    core::array::from_fn(|a| if a < D { g.remap[a][node] } else { 0.0 });
+                if let Some(w) = c.hold(x, v, normal) {
+                    for a in 0..D {
+                        g.remap[a][node] = w[a];
                     }
                 }
             }
-        }
+        });
         if let Some(sum) = match &mut on {
             On::Updated(impulses) => impulses.get_mut(k),
             _ => None,

@@ -61,8 +61,13 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// The damping the grid update subtracts from the nodal acceleration (the grid rate on
     /// the force, the zones), if any.
     pub nodal_damping: Option<crate::effects::damping::NodalDamping>,
-    /// Half-width of an undeformed particle domain, `h / (2 n)`, m (tractions).
+    /// Half-width of an undeformed particle domain, `h / (2 n)`, m (tractions, colliders).
     pub half_width: Real,
+    /// How far outside a collider's surface a node may be in contact, m: the grid functions'
+    /// reach (E91, [`crate::ShapeFunction::grid_function_reach`]).
+    pub contact_band: Real,
+    /// The world's particles (`0..particles`): the colliders' contact reads them (E91).
+    pub particles: usize,
     pub exp_terms: u32,
     /// The runaway band of `J - 1`, `[1 / r - 1, r - 1]` with `r` the definition's
     /// `max_volume_ratio`: a particle whose `J - 1` leaves it in a stress update freezes.

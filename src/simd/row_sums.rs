@@ -875,6 +875,7 @@ mod tests {
             acc: core::array::from_fn(|_| acc.next().expect("three axes")),
             remap: core::array::from_fn(|_| remap.next().expect("three axes")),
             scalar: Default::default(),
+            contact: Default::default(),
             len: LEN,
             tile: crate::grid::Tile::ALL,
             reach: &[],

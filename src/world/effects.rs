@@ -383,6 +383,66 @@ impl World<'_> {
         }
     }
 
+    /// After a substep that ends at world time `end`, the colliders posed there: each active
+    /// particle whose centre lies inside a solid is put back out, moved along the surface's
+    /// normal to a thousandth of a cell outside it, its velocity kept (E91). The contact holds
+    /// the nodes, not the particles: a particle that the grid's interpolation carried a little
+    /// into the solid (its stencil reaches nodes inside, which carry no mass and no velocity)
+    /// would otherwise stay there and build up. A move that would leave the admissible region
+    /// is not made. Positions only: no momentum changes hands.
+    pub(super) fn put_out_of_colliders(&mut self, end: f64) {
+        let count = self.header().collider_count as u32;
+        if count == 0 {
+            return;
+        }
+        let def = self.def();
+        let (layout, geom) = (Layout::of(&def), super::GeomAny::new(&def));
+        let (d, n, margin) = (layout.d, self.particle_count(), def.cell_size / 1024.0);
+        for id in 0..count {
+            // 64 particles at a time: where to move them, read from the world, then written.
+            for from in (0..n).step_by(64) {
+                let to = (from + 64).min(n);
+                let mut moves = [(0usize, [0.0 as Real; 3]); 64];
+                let mut k = 0;
+                {
+                    let w = self.read();
+                    let Ok(c) = w.collider_at(id, end) else {
+                        break;
+                    };
+                    let p = w.particles();
+                    for i in from..to {
+                        if p.status[i] != crate::particles::ACTIVE {
+                            continue;
+                        }
+                        let x: [Real; 3] =
+                            core::array::from_fn(|a| if a < d { p.position[a][i] } else { 0.0 });
+                        let (phi, normal) = c.distance(x);
+                        if phi >= 0.0 || phi.is_nan() {
+                            continue;
+                        }
+                        let out: [Real; 3] = core::array::from_fn(|a| {
+                            if a < d {
+                                x[a] + (margin - phi) * normal[a]
+                            } else {
+                                0.0
+                            }
+                        });
+                        if geom.admits(out) {
+                            moves[k] = (i, out);
+                            k += 1;
+                        }
+                    }
+                }
+                for &(i, out) in &moves[..k] {
+                    for (a, &x) in out.iter().enumerate().take(d) {
+                        self.real_col_mut(&layout, crate::layout::col::x(a), n)[i] = x;
+                        self.real_col_mut(&layout, crate::layout::col::x_low(d, a), n)[i] = 0.0;
+                    }
+                }
+            }
+        }
+    }
+
     /// After a substep of `dt` that ends at world time `end`: each dynamic collider moved by
     /// what the material put on it and by `gravity` (E96, [`colliders::drive`]).
     pub(super) fn drive_colliders(&mut self, end: f64, dt: Real, gravity: Vec3) {

@@ -673,11 +673,17 @@ impl<const D: usize> Nodes<D> for GridPasses<'_, '_, '_, D> {
         self.cols.grid()
     }
 
-    fn with_impulses(&mut self) -> (GridCols<'_, D>, &mut [ColliderImpulse]) {
+    fn with_impulses(&mut self) -> (GridCols<'_, D>, ParticleCols<'_, D>, &mut [ColliderImpulse]) {
         let cols = &mut *self.cols;
-        // SAFETY: `&mut self` excludes every other view of the grid (as `Columns::full`).
-        let g = unsafe { GridCols::carve_tile(&cols.grid, cols.layout, Tile::ALL) };
-        (g, &mut *cols.impulses)
+        // SAFETY: `&mut self` excludes every other view of the grid and the particles (as
+        // `Columns::full`).
+        let (g, p) = unsafe {
+            (
+                GridCols::carve_tile(&cols.grid, cols.layout, Tile::ALL),
+                ParticleCols::carve_window(&cols.particles, cols.layout, 0..usize::MAX),
+            )
+        };
+        (g, p, &mut *cols.impulses)
     }
 
     fn each_slab(&mut self, f: &(dyn Fn(&mut GridCols<'_, D>) + Sync)) {

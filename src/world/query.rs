@@ -267,11 +267,21 @@ impl<'a> WorldRef<'a> {
     /// Collider `id` in its pose of now, as the step meets it, found from the header alone.
     fn collider_now(&self, id: u32) -> Result<crate::effects::colliders::Collider<'a>, Error> {
         let (r, _) = self.collider_record(id)?;
+        self.collider_at(id, r.pose_time)
+    }
+
+    /// Collider `id` posed at world time `t` (E90).
+    pub(crate) fn collider_at(
+        &self,
+        id: u32,
+        t: f64,
+    ) -> Result<crate::effects::colliders::Collider<'a>, Error> {
+        let (r, _) = self.collider_record(id)?;
         let h = self.header();
         let at = h.tables().sdf;
         let samples: &[Real] =
             bytemuck::cast_slice(&self.buf[at..at + h.sdf_count as usize * size_of::<Real>()]);
-        crate::effects::colliders::Collider::at(r, r.pose_time, samples).ok_or(Error::InvalidState)
+        crate::effects::colliders::Collider::at(r, t, samples).ok_or(Error::InvalidState)
     }
 
     /// The box `(min, max)` (world axes, m) that holds collider `id`'s solid in its pose of

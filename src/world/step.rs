@@ -118,6 +118,7 @@ impl<'a> World<'a> {
             self.dispatch((plan.dt, time), &mut substep, simd, tasks);
             if fx.collider_capacity > 0 {
                 self.drive_colliders(time + plan.dt as f64, plan.dt, def.gravity);
+                self.put_out_of_colliders(time + plan.dt as f64);
             }
             k += 1;
         }
@@ -289,6 +290,8 @@ impl<'a> World<'a> {
             alpha_p,
             nodal_damping,
             half_width: def.cell_size / (2 * def.particles_per_cell) as Real,
+            contact_band: def.shape.grid_function_reach() as Real * def.cell_size,
+            particles: count,
             exp_terms: def.exp_terms,
             jm1_band: [1.0 / def.max_volume_ratio - 1.0, def.max_volume_ratio - 1.0],
             speed_scale: (Real::MAX as f64 / def.resolvable().speed) as Real,

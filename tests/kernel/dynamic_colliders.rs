@@ -157,14 +157,25 @@ fn a_dynamic_collider_and_the_material_trade_momentum_exactly() {
 
 /// A box floating on water (the fluid model, K = 90 kPa), dynamic, stepped in frames of
 /// 1/60 s with the grid damping a game declares for water, at the viewer's resolution
-/// (h = 0.02 m), densities 500 and 800, free to turn: it comes to rest (no frame-to-frame
-/// ringing: the coupling is per substep, inside the step) upright, and its draft is
-/// Archimedes' to within the grid contact's error, a cell (README, "Known limits": a node
-/// line inside the solid holds the material, so the water's boundary lies up to a cell
-/// inside the surface, E91).
+/// (h = 0.02 m), densities 500 and 800, held level or free to turn, started level or tilted
+/// 0.05 rad: for a minute (half a minute tilted) after the first 2 s its depth below the far
+/// surface stays within 3 % of Archimedes', it comes to rest (no frame-to-frame ringing: the
+/// coupling is per substep, inside the step), no water is inside it (the water it cut out is
+/// every particle whose domain reaches or touches it), and it stays upright: a level box
+/// within 0.02 rad of level, a tilted one no further over than it started (measured: level
+/// boxes end within 0.006 rad; tilted ones at 0.037 rad (500) and 0.011 rad (800): the water
+/// under a box rights it slowly, if at all, at this resolution).
 #[test]
-fn a_dynamic_box_floats_at_a_games_frame_rate() {
-    for density in [500.0 as Real, 800.0] {
+fn a_dynamic_box_floats_at_archimedes_depth_for_a_minute() {
+    for (density, tilt, turn, seconds) in [
+        (500.0 as Real, 0.0, false, 60.0),
+        (800.0, 0.0, false, 60.0),
+        (500.0, 0.0, true, 60.0),
+        (800.0, 0.0, true, 60.0),
+        (500.0, 0.05, true, 30.0),
+        (800.0, 0.05, true, 30.0),
+    ] {
+        let case = format!("density {density}, free to turn {turn}, tilted {tilt}");
         let mut def = world_def(50, 9.81);
         def.effects.damping = Some(Damping {
             grid: Schedule::constant(20.0),
@@ -181,34 +192,48 @@ fn a_dynamic_box_floats_at_a_games_frame_rate() {
             surface,
             [bw, bh],
             density,
-            0.05,
-            true,
+            tilt,
+            turn,
         )
         .expect("box");
         let frame: Real = 1.0 / 60.0;
-        let mut speeds = Vec::new();
-        while world.time() < 20.0 {
+        let (mut speeds, mut worst) = (Vec::new(), 0.0 as Real);
+        while world.time() < seconds {
             world.step(frame).expect("step");
             let c = world.collider(id).expect("box").def;
             speeds.push(c.velocity.length());
+            // The surface away from the box: the highest particle's top; the box's depth below
+            // it at its centre line.
+            let p = world.particles();
+            let top = (0..p.count)
+                .filter(|&i| (p.position[0][i] - c.position.x).abs() > 0.25)
+                .map(|i| p.position[1][i])
+                .fold(Real::MIN, Real::max)
+                + h / 4.0;
+            let angle = 2.0 * c.rotation[2].atan2(c.rotation[3]);
+            let depth = top - (c.position.y - bh / 2.0 * angle.cos());
+            if world.time() > 2.0 {
+                worst = worst.max((depth / draft - 1.0).abs());
+            }
         }
-        let c = world.collider(id).expect("box").def;
+        assert!(worst <= 0.03, "{case}: depth off Archimedes' by {worst}");
+        let r = world.collider(id).expect("box").def.rotation;
+        let angle = 2.0 * r[2].atan2(r[3]);
+        let upright = if tilt > 0.0 { tilt } else { 0.02 };
+        assert!(
+            angle.abs() <= upright,
+            "{case}: tilted {angle} rad at the end"
+        );
         let tail = &speeds[speeds.len() - 120..];
         let fastest = tail.iter().cloned().fold(0.0, Real::max);
-        assert!(fastest < 2.0e-3, "{density}: still moving at {fastest} m/s");
-        let angle = 2.0 * c.rotation[2].atan2(c.rotation[3]);
-        assert!(angle.abs() < 0.05, "{density}: tilted {angle} rad");
-        // The surface away from the box: the highest particle's top.
+        assert!(fastest < 2.0e-3, "{case}: still moving at {fastest} m/s");
         let p = world.particles();
-        let top = (0..p.count)
-            .filter(|&i| (p.position[0][i] - 0.5).abs() > 0.25)
-            .map(|i| p.position[1][i])
-            .fold(Real::MIN, Real::max)
-            + h / 4.0;
-        let depth = top - (c.position.y - bh / 2.0);
-        assert!(
-            (depth - draft).abs() <= h,
-            "{density}: draft {depth} m, Archimedes {draft} m"
-        );
+        let inside = (0..p.count)
+            .filter(|&i| {
+                let x = Vec3::new(p.position[0][i], p.position[1][i], 0.0);
+                world.collider_distance(id, x).expect("box") < 0.0
+            })
+            .count();
+        assert_eq!(inside, 0, "{case}: water inside the box");
     }
 }

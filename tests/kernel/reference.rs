@@ -175,6 +175,8 @@ struct Collider {
     mu: f64,
     impulse: [f64; 3],
     angular: [f64; 3],
+    /// The nodes in contact this substep, where material touching it reaches ([`reached`]).
+    reached: Vec<bool>,
 }
 
 impl Collider {
@@ -211,6 +213,7 @@ impl Collider {
             mu: d.friction as f64,
             impulse: [0.0; 3],
             angular: [0.0; 3],
+            reached: Vec::new(),
         }
     }
 
@@ -302,10 +305,41 @@ fn node_x(m: &Method, i: usize) -> [f64; 3] {
     })
 }
 
-/// Whether node `x` is in a collider's contact (E91: within `10^-3 h` of its surface).
-fn in_contact(m: &Method, c: &Collider, x: [f64; 3]) -> Option<[f64; 3]> {
+/// How far outside a collider's surface a node may be in contact (E91): the grid functions'
+/// reach.
+fn contact_band(m: &Method) -> f64 {
+    m.h * match m.shape {
+        ShapeFunction::QuadraticBspline => 1.5,
+        ShapeFunction::CubicBspline => 2.0,
+        _ => 1.0,
+    }
+}
+
+/// The nodes that a particle whose domain touches collider `c` reaches (E91): its centre
+/// within its half-width of the surface (or inside), the nodes within the band and the
+/// half-width of it along each axis.
+fn reached(m: &Method, c: &Collider, ps: &[Particle]) -> Vec<bool> {
+    let mut marks = vec![false; m.nodes[0] * m.nodes[1] * m.nodes[2]];
+    let reach = contact_band(m) + m.lp;
+    for p in ps {
+        if c.distance(p.x).0 > m.lp {
+            continue;
+        }
+        for (i, mark) in marks.iter_mut().enumerate() {
+            let x = node_x(m, i);
+            if (0..m.d).all(|a| (x[a] - p.x[a]).abs() <= reach) {
+                *mark = true;
+            }
+        }
+    }
+    marks
+}
+
+/// Node `i` at `x` is in a collider's contact where it lies inside the solid or within the
+/// band outside it, and material touching the solid reaches it (E91): its outward normal.
+fn in_contact(m: &Method, c: &Collider, marks: &[bool], i: usize, x: [f64; 3]) -> Option<[f64; 3]> {
     let (phi, n) = c.distance(x);
-    (phi <= 1e-3 * m.h).then_some(n)
+    (marks[i] && phi < contact_band(m)).then_some(n)
 }
 
 /// The colliders on the updated velocity `v_i + a_i dt` of every node that carries mass,
@@ -314,12 +348,13 @@ fn in_contact(m: &Method, c: &Collider, x: [f64; 3]) -> Option<[f64; 3]> {
 fn colliders(m: &mut Method, grid: &mut [Node], dt: f64) {
     let mut colliders = std::mem::take(&mut m.colliders);
     for c in colliders.iter_mut() {
+        let marks = std::mem::take(&mut c.reached);
         for (i, n) in grid.iter_mut().enumerate() {
             let x = node_x(m, i);
             if n.m <= m.mass_cutoff {
                 continue;
             }
-            let Some(normal) = in_contact(m, c, x) else {
+            let Some(normal) = in_contact(m, c, &marks, i, x) else {
                 continue;
             };
             let u: [f64; 3] =
@@ -346,15 +381,16 @@ fn colliders(m: &mut Method, grid: &mut [Node], dt: f64) {
 /// The colliders on the velocity the stress update differentiates (E92): MUSL's re-mapped
 /// velocity takes, at a node in contact, the updated velocity the contact left (paid for by
 /// its impulse); USF's lagged velocity takes the law, a separating contact as slip.
-fn colliders_on_stress_velocity(m: &Method, grid: &mut [Node], dt: f64) {
+fn colliders_on_stress_velocity(m: &Method, ps: &[Particle], grid: &mut [Node], dt: f64) {
     use mpm_gimp::Contact;
     for c in &m.colliders {
+        let marks = reached(m, c, ps);
         for (i, n) in grid.iter_mut().enumerate() {
             let x = node_x(m, i);
             if n.m <= m.mass_cutoff {
                 continue;
             }
-            let Some(normal) = in_contact(m, c, x) else {
+            let Some(normal) = in_contact(m, c, &marks, i, x) else {
                 continue;
             };
             if m.order == UpdateOrder::Musl {
@@ -1899,6 +1935,51 @@ fn carried_kinetic_energy(m: &Method, p: &Particle) -> f64 {
 
 /// One substep of length `dt` in the method's update order.
 fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
+    phases(m, ps, dt);
+    put_out_of_colliders(m, ps, dt);
+}
+
+/// Each particle whose centre lies inside a collider's solid, the colliders posed where the
+/// substep ends (`dt` on), moved along the surface's normal to `h / 1024` outside it (E91).
+fn put_out_of_colliders(m: &Method, ps: &mut [Particle], dt: f64) {
+    for c in &m.colliders {
+        // The pose a substep on: moved by `v dt`, turned by `omega dt` (Rodrigues).
+        let w: [f64; 3] = std::array::from_fn(|a| c.omega[a] * dt);
+        let angle = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let k = if angle > 0.0 {
+            w.map(|x| x / angle)
+        } else {
+            [0.0; 3]
+        };
+        let (sin, cos) = angle.sin_cos();
+        let turn: Mat = std::array::from_fn(|i| {
+            std::array::from_fn(|j| {
+                let cross = [[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]][i][j];
+                let identity = if i == j { 1.0 } else { 0.0 };
+                identity * cos + sin * cross + (1.0 - cos) * k[i] * k[j]
+            })
+        });
+        let posed = Collider {
+            c: std::array::from_fn(|a| c.c[a] + c.v[a] * dt),
+            r: std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|l| turn[i][l] * c.r[l][j]).sum())
+            }),
+            reached: Vec::new(),
+            ..*c
+        };
+        for p in ps.iter_mut() {
+            let (phi, n) = posed.distance(p.x);
+            if phi < 0.0 {
+                for a in 0..m.d {
+                    p.x[a] += (m.h / 1024.0 - phi) * n[a];
+                }
+            }
+        }
+    }
+}
+
+/// The phases of a substep, up to the particles' new state.
+fn phases(m: &mut Method, ps: &mut [Particle], dt: f64) {
     if m.thermostat.is_some() && m.damping.is_some() {
         let mass: f64 = ps.iter().map(|p| p.m).sum();
         // With APIC, the kinetic energy the transfer carries, affine fields included.
@@ -1917,6 +1998,12 @@ fn substep(m: &mut Method, ps: &mut [Particle], dt: f64) {
     for p in ps.iter_mut() {
         p.lp = half_widths(m, p);
     }
+    // The nodes in each collider's contact, from the particles where the substep starts.
+    let mut colliders = std::mem::take(&mut m.colliders);
+    for c in colliders.iter_mut() {
+        c.reached = reached(m, c, ps);
+    }
+    m.colliders = colliders;
     // Heat and diffusion first, with the particles where the substep starts.
     for f in 0..2 {
         transport(m, ps, f, dt);
@@ -1970,7 +2057,7 @@ fn lagged_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node], dt: f64) {
     for n in grid.iter_mut() {
         n.remap = n.v;
     }
-    colliders_on_stress_velocity(m, grid, dt);
+    colliders_on_stress_velocity(m, ps, grid, dt);
     constrain(m, grid, |n| &mut n.remap);
     for p in ps.iter_mut() {
         let st = stencil(m, &p.x, &p.lp);
@@ -2001,7 +2088,7 @@ fn musl_particles_and_stress(m: &Method, ps: &mut [Particle], grid: &mut [Node],
     }
     fold_wall_images(m, grid, |n| &mut n.remap);
     divide_by_mass(m, grid, |n| &mut n.remap, [0.0; 3]);
-    colliders_on_stress_velocity(m, grid, dt);
+    colliders_on_stress_velocity(m, ps, grid, dt);
     constrain(m, grid, |n| &mut n.remap);
     for (p, x0) in ps.iter_mut().zip(&start) {
         let st = stencil(m, x0, &p.lp);
