@@ -11,7 +11,9 @@ use mpm_gimp::{Error, ParticleBatch, Real, Removal, Vec3, World};
 /// A stream of particles leaving a nozzle, and a drain box.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tap {
-    /// Centre of the nozzle's mouth, m: the stream's first row starts there.
+    /// Centre of the nozzle's mouth, m: the stream leaves it along -y. The rows a frame adds
+    /// start in the nozzle above it, up to `speed` times the frame's length (the world must
+    /// admit them there).
     pub nozzle: Vec3,
     /// Width of the stream across x, m (2D: the stream is a sheet in plane strain).
     pub width: Real,
@@ -30,19 +32,25 @@ pub struct Tap {
 
 impl Tap {
     /// Before the frame that takes the world from its time `t` to `t + dt`: removes what the
-    /// drain holds, then adds the rows the stream delivers in the frame, `floor(speed (t + dt)
-    /// / spacing) - floor(speed t / spacing)` of them (a function of the world's time: the tap
-    /// keeps no state, and a snapshot resumes it), each row placed where the stream has
-    /// carried it by the frame's end. Adds the rows that fit in the room left and skips the
-    /// rest (a full world pours less). Returns how many particles it removed and added.
+    /// drain holds, then adds the rows the stream delivers in the frame: row `k` leaves the
+    /// nozzle at `t_k = k spacing / speed`, for every `t < t_k <= t + dt` (a function of the
+    /// world's time: the tap keeps no state, and a snapshot resumes it). Each row is placed
+    /// where the stream has it at `t`: `speed (t_k - t)` above the mouth, moving at `speed`,
+    /// so that the step brings it out at `t_k` and the rows of one frame join the last
+    /// frame's at the stream's spacing (placed at the mouth at once, a frame's rows left a gap
+    /// or an overlap behind the last frame's, and the stream fell as a dotted line). Adds the
+    /// rows that fit in the room left and skips the rest (a full world pours less). Returns
+    /// how many particles it removed and added.
     pub fn frame(&self, world: &mut World, dt: Real) -> Result<(usize, usize), Error> {
         let removed = world.remove_particles(Removal::Box {
             min: self.drain.0,
             max: self.drain.1,
         })?;
         let t = world.time();
-        let rows_by = |t: f64| (self.speed as f64 * t / self.spacing as f64).floor() as i64;
-        let rows = (rows_by(t + dt as f64) - rows_by(t)).max(0) as usize;
+        let (speed, spacing) = (self.speed as f64, self.spacing as f64);
+        let rows_by = |t: f64| (speed * t / spacing).floor() as i64;
+        let first = rows_by(t) + 1;
+        let rows = (rows_by(t + dt as f64) + 1 - first).max(0) as usize;
         let across = ((self.width / self.spacing).round() as usize).max(1);
         let room = world.def().particle_capacity as usize - world.particle_count();
         let rows = rows.min(room / across);
@@ -50,13 +58,13 @@ impl Tap {
         let mut x = Vec::with_capacity(n);
         let mut y = Vec::with_capacity(n);
         for row in 0..rows {
-            // Row `row` left the nozzle `row` spacings after the frame's first: it has fallen
-            // the rest of the frame's rows since.
-            let drop = (rows - 1 - row) as Real * self.spacing;
+            // Row `first + row` leaves the mouth `t_k - t` into the frame.
+            let t_k = (first + row as i64) as f64 * spacing / speed;
+            let above = (speed * (t_k - t)) as Real;
             for k in 0..across {
                 let offset = (k as Real + 0.5 - 0.5 * across as Real) * self.spacing;
                 x.push(self.nozzle.x + offset);
-                y.push(self.nozzle.y - drop);
+                y.push(self.nozzle.y + above);
             }
         }
         let vy = vec![-self.speed; n];

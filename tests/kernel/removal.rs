@@ -1,6 +1,7 @@
 //! Particles that come and go: removal (by range, list, box and status), which frees room and
 //! leaves the rest as a world built with them alone; the setters of position, velocity, affine
-//! matrix and material; a tap that pours for ten minutes with its particle count bounded.
+//! matrix and material; a tap that pours for ten minutes with its particle count bounded, and
+//! the viewer's tap, whose stream stays continuous.
 
 use crate::common::*;
 use mpm_gimp::{
@@ -477,4 +478,47 @@ fn a_tap_pours_for_ten_minutes_with_its_particle_count_bounded() {
     assert_eq!(added - removed, w.particle_count());
     eprintln!("tap: at most {most} particles, {removed} drained");
     assert!(most <= 200, "{most} particles");
+}
+
+/// The viewer's tap scene pours a continuous stream: from its second second to its third, at
+/// every frame, the particles of the stream between 0.2 m above the floor and the nozzle lie
+/// less than a cell apart along it (each row a cell or less behind the last: rows joined
+/// across frames, and a fall that stretches them at most 1.9 times, E26's free flight).
+#[test]
+fn the_tap_scene_pours_a_continuous_stream() {
+    let scene = mpm_gimp_output::scenes::find("tap").expect("the tap scene");
+    let def = (scene.def)();
+    let mut storage = mpm_gimp_output::scenes::Scene::storage(&def).expect("valid");
+    let mut w = World::init(&def, storage.as_mut_bytes()).expect("fits");
+    (scene.fill)(&mut w).expect("basin");
+    let (h, floor) = (
+        def.cell_size,
+        def.origin.y + def.shape.margin_cells() as Real * def.cell_size,
+    );
+    for f in 0..180 {
+        scene.frame(&mut w, scene.frame_dt).expect("frame");
+        if f < 120 {
+            continue;
+        }
+        let p = w.particles();
+        let mut ys: Vec<Real> = (0..p.count)
+            .filter(|&i| {
+                (p.position[0][i] - 0.3).abs() < 0.05
+                    && p.position[1][i] > floor + 0.2
+                    && p.position[1][i] < floor + 0.78
+            })
+            .map(|i| p.position[1][i])
+            .collect();
+        ys.sort_by(Real::total_cmp);
+        let gap = ys.windows(2).map(|w| w[1] - w[0]).fold(0.0, Real::max);
+        assert!(
+            ys.len() > 50,
+            "frame {f}: {} particles in the stream",
+            ys.len()
+        );
+        assert!(
+            gap < h,
+            "frame {f}: a gap of {gap} m in the stream (cell {h} m)"
+        );
+    }
 }
