@@ -50,7 +50,7 @@ impl Tap {
         let (speed, spacing) = (self.speed as f64, self.spacing as f64);
         let rows_by = |t: f64| (speed * t / spacing).floor() as i64;
         let first = rows_by(t) + 1;
-        let rows = (rows_by(t + dt as f64) + 1 - first).max(0) as usize;
+        let rows = (rows_by(t + dt as f64) - rows_by(t)).max(0) as usize;
         let across = ((self.width / self.spacing).round() as usize).max(1);
         let room = world.def().particle_capacity as usize - world.particle_count();
         let rows = rows.min(room / across);

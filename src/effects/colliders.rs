@@ -11,6 +11,7 @@
 //! thread, so that it has one worker's bits for any number of workers.
 
 use crate::def::{ColliderDef, ColliderShape, Contact};
+use crate::grid::{Geom, NodeBox};
 use crate::layout::{ColliderImpulse, ColliderRecord};
 use crate::math::{ceil, floor};
 use crate::Real;
@@ -333,9 +334,8 @@ impl Shared {
 
     /// Adds a node of mass `m` at `x` whose updated velocity is `u`, the surface's normal
     /// there `n`, where the contact holds it: any stick or slip contact, and a separating one
-    /// where the node presses on the body moving at `at`'s velocities.
-    pub fn add(&mut self, at: &Collider<'_>, x: V3, m: Real, u: V3, n: V3) {
-        let c = at;
+    /// where the node presses on the body moving at `c`'s velocities.
+    pub fn add(&mut self, c: &Collider<'_>, x: V3, m: Real, u: V3, n: V3) {
         let rel = sub(u, c.velocity_at(x));
         if c.contact == Contact::Separate && dot(rel, n) >= 0.0 {
             return;
@@ -532,7 +532,7 @@ impl<'s> Collider<'s> {
     #[allow(clippy::too_many_arguments)]
     pub fn mark_reached<const D: usize>(
         &self,
-        geom: &crate::grid::Geom<D>,
+        geom: &Geom<D>,
         p: &crate::particles::ParticleCols<'_, D>,
         count: usize,
         l: Real,
@@ -540,15 +540,11 @@ impl<'s> Collider<'s> {
         (lo, hi): ([usize; D], [usize; D]),
         contact: &mut [Real],
     ) {
-        let layers = if D == 3 { lo[D - 1]..hi[D - 1] } else { 0..1 };
-        for z in layers {
-            for j in lo[1]..hi[1] {
-                let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
-                if let Some(row) = contact.get_mut(line + lo[0]..line + hi[0]) {
-                    row.fill(0.0);
-                }
-            }
-        }
+        let mut fill = |lo: [usize; D], hi: [usize; D], value: Real| {
+            let len = contact.len();
+            NodeBox { lo, hi, tail: 0 }.for_each_line(geom.stride, len, |r| contact[r].fill(value));
+        };
+        fill(lo, hi, 0.0);
         let bounds = self.bounds();
         let reach = band + l;
         for i in 0..count.min(p.status.len()) {
@@ -580,18 +576,7 @@ impl<'s> Collider<'s> {
                 from[a] = (ceil(u - r).max(0.0) as usize).max(lo[a]);
                 to[a] = ((floor(u + r).max(-1.0) + 1.0) as usize).min(hi[a]);
             }
-            if (0..D).any(|a| from[a] >= to[a]) {
-                continue;
-            }
-            let layers = if D == 3 { from[D - 1]..to[D - 1] } else { 0..1 };
-            for z in layers {
-                for j in from[1]..to[1] {
-                    let line = j * geom.stride[1] + if D == 3 { z * geom.stride[D - 1] } else { 0 };
-                    if let Some(row) = contact.get_mut(line + from[0]..line + to[0]) {
-                        row.fill(1.0);
-                    }
-                }
-            }
+            fill(from, to, 1.0);
         }
     }
 
