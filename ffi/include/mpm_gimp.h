@@ -742,6 +742,9 @@ typedef struct MpmMaterialDef {
   mpm_real reference_concentration;
   // Dynamic viscosity eta, Pa s, >= 0: Newtonian stress added to any model's. Default 0.
   mpm_real viscosity;
+  // Bulk viscosity zeta, Pa s, >= 0: the stress `zeta tr(sym grad v) I` added to any
+  // model's, which damps sound (a fluid's acoustic modes). Default 0.
+  mpm_real bulk_viscosity;
   // Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
   mpm_real bulk_modulus;
   // Tait exponent gamma of the fluid model, >= 1. Default 7.

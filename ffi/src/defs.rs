@@ -470,6 +470,9 @@ pub struct MpmMaterialDef {
     pub reference_concentration: mpm_real,
     /// Dynamic viscosity eta, Pa s, >= 0: Newtonian stress added to any model's. Default 0.
     pub viscosity: mpm_real,
+    /// Bulk viscosity zeta, Pa s, >= 0: the stress `zeta tr(sym grad v) I` added to any
+    /// model's, which damps sound (a fluid's acoustic modes). Default 0.
+    pub bulk_viscosity: mpm_real,
     /// Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
     pub bulk_modulus: mpm_real,
     /// Tait exponent gamma of the fluid model, >= 1. Default 7.
@@ -821,6 +824,7 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         swelling: d.swelling,
         reference_concentration: d.reference_concentration,
         viscosity: d.viscosity,
+        bulk_viscosity: d.bulk_viscosity,
         bulk_modulus: d.bulk_modulus,
         pressure_exponent: d.pressure_exponent,
         yield_stress: d.yield_stress,
@@ -886,6 +890,7 @@ fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
         swelling: d.swelling,
         reference_concentration: d.reference_concentration,
         viscosity: d.viscosity,
+        bulk_viscosity: d.bulk_viscosity,
         bulk_modulus: d.bulk_modulus,
         pressure_exponent: d.pressure_exponent,
         yield_stress: d.yield_stress,

@@ -533,6 +533,7 @@ fuzz_target!(|data: &[u8]| {
                     // defaults), each from below its range to past it.
                     if inp.byte() % 2 == 0 {
                         m.viscosity = inp.real_in(-1.0, 50.0);
+                        m.bulk_viscosity = inp.real_in(-1.0, 50.0);
                         m.bulk_modulus = inp.real_in(-1.0e3, 1.0e7);
                         m.pressure_exponent = inp.real_in(0.0, 10.0);
                         m.yield_stress = inp.real_in(-1.0e3, 1.0e6);

@@ -417,8 +417,13 @@ pub struct MaterialDef {
     pub reference_concentration: Real,
     /// Dynamic viscosity eta, Pa s, >= 0: the Newtonian stress `2 eta dev(sym grad v)` added
     /// to the model's (a fluid's viscosity; with a solid model, a Kelvin-Voigt damper).
-    /// Default 0. Integrated explicitly: the step keeps `dt <= h^2 rho / (2 d eta)`.
+    /// Default 0. Integrated explicitly: the step keeps `dt <= h^2 rho / (2 d (eta +
+    /// zeta))`, with the bulk viscosity zeta.
     pub viscosity: Real,
+    /// Bulk (volume) viscosity zeta, Pa s, >= 0: the stress `zeta tr(sym grad v) I` added to
+    /// the model's (E46), which resists a change of volume at a rate and so damps sound: a
+    /// fluid's acoustic modes, which its shear viscosity does not reach. Default 0.
+    pub bulk_viscosity: Real,
     /// Bulk modulus K of [`MaterialModel::Fluid`], Pa, > 0 (other models take theirs from E
     /// and nu). Default 1e5 Pa: a sound speed of 10 m/s in a fluid of water's density, which
     /// keeps a 1 m deep tank within about 1 % of its volume under gravity (the usual weakly
@@ -470,6 +475,7 @@ impl MaterialDef {
         swelling: 0.0,
         reference_concentration: 0.0,
         viscosity: 0.0,
+        bulk_viscosity: 0.0,
         bulk_modulus: 1.0e5,
         pressure_exponent: 7.0,
         yield_stress: 1.0e4,

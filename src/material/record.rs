@@ -27,6 +27,8 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         && m.reference_concentration.is_finite()
         && m.viscosity.is_finite()
         && m.viscosity >= 0.0
+        && m.bulk_viscosity.is_finite()
+        && m.bulk_viscosity >= 0.0
         && m.bulk_modulus.is_finite()
         && m.bulk_modulus > 0.0
         && m.pressure_exponent.is_finite()
@@ -72,6 +74,7 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         swelling: m.swelling,
         reference_concentration: m.reference_concentration,
         viscosity: m.viscosity,
+        bulk_viscosity: m.bulk_viscosity,
         bulk_modulus: m.bulk_modulus,
         pressure_exponent: m.pressure_exponent,
         yield_stress: m.yield_stress,
@@ -90,8 +93,9 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
 
 /// The largest diffusivity of material `rec` that a step of a world of `def` integrates
 /// explicitly, m^2/s: its thermal diffusivity `k / (rho C_p)` with heat conduction declared,
-/// its diffusivity D with diffusion declared, and its kinematic viscosity `eta / rho0`
-/// (viscosity diffuses momentum; E87); the stable step keeps `dt <= h^2 / (2 d kappa)` (E88).
+/// its diffusivity D with diffusion declared, and its kinematic viscosities' sum `(eta + zeta)
+/// / rho0` (viscosity diffuses momentum; E87); the stable step keeps `dt <= h^2 / (2 d
+/// kappa)` (E88).
 pub(crate) fn explicit_diffusivity(rec: &MaterialRecord, def: &WorldDef) -> f64 {
     let fx = &def.effects;
     let rho = rec.density as f64;
@@ -105,7 +109,8 @@ pub(crate) fn explicit_diffusivity(rec: &MaterialRecord, def: &WorldDef) -> f64 
     } else {
         0.0
     };
-    thermal.max(solvent).max(rec.viscosity as f64 / rho)
+    let viscous = (rec.viscosity as f64 + rec.bulk_viscosity as f64) / rho;
+    thermal.max(solvent).max(viscous)
 }
 
 /// Whether a world of `def` resolves material `rec` in a stable step of at least

@@ -311,6 +311,7 @@ impl<'a> WorldRef<'a> {
             swelling: r.swelling,
             reference_concentration: r.reference_concentration,
             viscosity: r.viscosity,
+            bulk_viscosity: r.bulk_viscosity,
             bulk_modulus: r.bulk_modulus,
             pressure_exponent: r.pressure_exponent,
             yield_stress: r.yield_stress,

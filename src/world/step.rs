@@ -308,7 +308,9 @@ impl<'a> World<'a> {
                 fx.diffusion.is_some() && materials.iter().any(|m| m.swelling != 0.0),
             ],
             plastic: fx.plasticity,
-            viscous: materials.iter().any(|m| m.viscosity != 0.0),
+            viscous: materials
+                .iter()
+                .any(|m| m.viscosity != 0.0 || m.bulk_viscosity != 0.0),
         };
         run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut cols, count);
     }

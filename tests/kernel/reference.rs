@@ -421,6 +421,8 @@ struct Material {
     rho0: f64,
     /// Newtonian viscosity eta, Pa s.
     viscosity: f64,
+    /// Bulk viscosity zeta, Pa s.
+    bulk_viscosity: f64,
     /// Tait's exponent gamma (fluid).
     gamma: f64,
     /// Von Mises: the initial yield stress and the linear hardening modulus, Pa.
@@ -1376,8 +1378,12 @@ fn material(m: &Method, p: &mut Particle, l: &Mat, lzz: f64) {
             } else {
                 continue;
             };
-            let trace = if a == b { 2.0 / 3.0 * tr_l } else { 0.0 };
-            tau[a][b] += j * mat.viscosity * (rate - trace);
+            let (trace, bulk) = if a == b {
+                (2.0 / 3.0 * tr_l, mat.bulk_viscosity * tr_l)
+            } else {
+                (0.0, 0.0)
+            };
+            tau[a][b] += j * (mat.viscosity * (rate - trace) + bulk);
         }
     }
     p.tau = tau.map(|row| row.map(|t| t / mat.rho0));
@@ -2175,6 +2181,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             },
             rho0: material.density as f64,
             viscosity: material.viscosity as f64,
+            bulk_viscosity: material.bulk_viscosity as f64,
             gamma: material.pressure_exponent as f64,
             yield_stress: material.yield_stress as f64,
             hardening: material.hardening_modulus as f64,
@@ -2790,7 +2797,7 @@ fn check(
         1.0
     };
     let c2 = hardened * (mat.lambda + 2.0 * mat.mu) / mat.rho0;
-    let viscous = mat.viscosity / mat.rho0;
+    let viscous = (mat.viscosity + mat.bulk_viscosity) / mat.rho0;
     // The eigenstrain `alpha (T - T_0)` is a difference of operands `alpha T` (and `beta c`):
     // the strain carries their round-off, and the stress that times `c^2`.
     let eigen: f64 = (0..2)
@@ -3346,8 +3353,8 @@ fn every_model_steps_as_the_reference_does() {
     }
 }
 
-/// Checks each of `models` with a Newtonian viscosity of 50 Pa s (a tenth to a twentieth of
-/// the block's stress), in 2D, the axisymmetric form and 3D, every order (each with its own
+/// Checks each of `models` with a Newtonian viscosity of 50 Pa s and a bulk viscosity of 30 Pa
+/// s (a tenth to a twentieth of the block's stress), in 2D, the axisymmetric form and 3D, every order (each with its own
 /// shape family), FLIP and APIC, in every instance of the passes this CPU runs. The stress's
 /// bound adds the velocity gradient's round-off times `eta / rho0` (the viscous stress is
 /// `eta` times a sum over the stencil that cancels, as the elastic increment is `c^2 dt`
@@ -3364,6 +3371,7 @@ fn check_viscosity(models: &[MaterialModel]) {
         }
         let material = MaterialDef {
             viscosity: 50.0,
+            bulk_viscosity: 30.0,
             ..model_material(model)
         };
         for dim in dims() {
@@ -3396,7 +3404,7 @@ fn viscosity_on_every_model_steps_as_the_reference_does() {
     check_viscosity(&MODELS[..6]);
 }
 
-/// Snow's viscous stress, `J eta (L + L^T - 2/3 tr L I)` with its volume ratio `J = J_e J_p`
+/// Snow's viscous stress, `J (eta (L + L^T - 2/3 tr L I) + zeta tr L I)` with its volume ratio `J = J_e J_p`
 /// ([`volume_ratio`]), agrees with the reference step to round-off ([`check_viscosity`]).
 #[test]
 fn viscosity_on_snow_steps_as_the_reference_does() {
