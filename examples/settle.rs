@@ -74,16 +74,17 @@ fn main() {
             ..MaterialDef::DEFAULT
         })
         .expect("water");
-    // The tank's floor and walls are one cell in (the slip walls' planes).
+    // The tank's floor and walls: the slip walls' planes, the shape's margin in.
+    let wall = def.shape.margin_cells() as Real * h;
     world
         .fill_box(
-            Vec3::new(h, h, 0.0),
-            Vec3::new(1.0 - h, h + depth, 0.0),
+            Vec3::new(wall, wall, 0.0),
+            Vec3::new(1.0 - wall, wall + depth, 0.0),
             water,
             Vec3::ZERO,
         )
         .expect("tank");
-    let mgh = world.diagnostics().mass * 9.81 * depth as f64;
+    let mgh = world.diagnostics().mass * def.gravity.length() as f64 * depth as f64;
     println!("bulk viscosity {zeta:.1} Pa s, grid damping {damping} /s");
     let (mut next, mut quiet, mut substeps, mut frames) = (1.0, None, 0u64, 0u64);
     while world.time() < seconds {

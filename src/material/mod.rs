@@ -629,6 +629,8 @@ pub(crate) fn add_viscous_lanes<const D: usize, const W: usize>(
         for a in 0..D {
             tr += l[a][a][ln];
         }
+        // The bulk part is added on its own, before the shear part: with `zeta = 0` it adds
+        // 0 and the shear viscosity's stress keeps its bits.
         let (third, bulk) = (tr * (2.0 / 3.0), kb * tr);
         for (c, &(a, b)) in crate::layout::sym_pairs(D).iter().enumerate() {
             let mut s = l[a][b][ln] + l[b][a][ln];

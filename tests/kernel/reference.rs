@@ -3353,12 +3353,12 @@ fn every_model_steps_as_the_reference_does() {
     }
 }
 
-/// Checks each of `models` with a Newtonian viscosity of 50 Pa s and a bulk viscosity of 30 Pa
-/// s (a tenth to a twentieth of the block's stress), in 2D, the axisymmetric form and 3D, every order (each with its own
-/// shape family), FLIP and APIC, in every instance of the passes this CPU runs. The stress's
-/// bound adds the velocity gradient's round-off times `eta / rho0` (the viscous stress is
-/// `eta` times a sum over the stencil that cancels, as the elastic increment is `c^2 dt`
-/// times it).
+/// Checks each of `models` with a Newtonian viscosity of 50 Pa s and a bulk viscosity of 30
+/// Pa s (a tenth to a twentieth of the block's stress), in 2D, the axisymmetric form and 3D,
+/// every order (each with its own shape family), FLIP and APIC, in every instance of the
+/// passes this CPU runs. The stress's bound adds the velocity gradient's round-off times
+/// `(eta + zeta) / rho0` (the viscous stress is the viscosities times a sum over the stencil
+/// that cancels, as the elastic increment is `c^2 dt` times it).
 fn check_viscosity(models: &[MaterialModel]) {
     let shapes = [
         ShapeFunction::Gimp,
@@ -3404,8 +3404,8 @@ fn viscosity_on_every_model_steps_as_the_reference_does() {
     check_viscosity(&MODELS[..6]);
 }
 
-/// Snow's viscous stress, `J (eta (L + L^T - 2/3 tr L I) + zeta tr L I)` with its volume ratio `J = J_e J_p`
-/// ([`volume_ratio`]), agrees with the reference step to round-off ([`check_viscosity`]).
+/// Snow's viscous stress, `J (eta (L + L^T - 2/3 tr L I) + zeta tr L I)` with its volume
+/// ratio `J = J_e J_p` ([`volume_ratio`]), agrees with the reference step to round-off ([`check_viscosity`]).
 #[test]
 fn viscosity_on_snow_steps_as_the_reference_does() {
     check_viscosity(&[MaterialModel::Snow]);
