@@ -7,14 +7,15 @@
 //! (m, default 0.2) and `--height` (0.1) of the box, `--density` (kg/m^3, 500), `--cells` a
 //! metre (50, the viewer's), `--seconds` (20), `--turn` (the box may turn; it starts tilted
 //! `--tilt` rad, 0.05, or level with `--level`), `--apic` (APIC in place of the default
-//! FLIP blend).
+//! FLIP blend), `--cut-centres` (cut only the water whose particle centres lie inside the box,
+//! in place of every particle whose domain reaches it).
 //! The tank is 1 m wide, the water 0.35 m deep (bulk modulus 90 kPa, grid damping 20/s);
 //! 60 Hz frames.
 //!
-//! The box shares its velocities with the water its contact holds each substep (E96), and a
-//! water particle carried into it is put back out (E91). What remains is where the box's edges
-//! fall between nodes: about a cell's width of support either way, so the error scales as
-//! `h / width`.
+//! The box shares its velocities with the water its contact holds each substep (E96), a water
+//! particle carried into it is put back out (E91), and water packed against it relaxes its
+//! volume (E97). What remains is where the box's edges fall between nodes: about a cell's
+//! width of support either way, so the error scales as `h / width`.
 
 use mpm_gimp::{
     memory_requirements, Boundary, Damping, Effects, HeapBuffer, Real, Schedule, Transfer, Vec3,
@@ -24,12 +25,13 @@ use mpm_gimp_output::scenes;
 use std::process::exit;
 
 const USAGE: &str = "usage: float [--width M] [--height M] [--density KG_M3] [--cells N] \
-                     [--seconds S] [--turn [--level | --tilt RAD]] [--apic]";
+                     [--seconds S] [--turn [--level | --tilt RAD]] [--apic] [--cut-centres]";
 
 fn main() {
     let (mut width, mut height, mut density, mut cells, mut seconds) =
         (0.2 as Real, 0.1 as Real, 500.0 as Real, 50u32, 20.0f64);
     let (mut turn, mut apic, mut tilt) = (false, false, 0.05 as Real);
+    let mut cut = scenes::Cut::Domains;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = || -> f64 {
@@ -51,6 +53,7 @@ fn main() {
             "--level" => tilt = 0.0,
             "--tilt" => tilt = value() as Real,
             "--apic" => apic = true,
+            "--cut-centres" => cut = scenes::Cut::Centres,
             _ => {
                 eprintln!("unknown option {a}\n{USAGE}");
                 exit(2)
@@ -79,9 +82,16 @@ fn main() {
     let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
     let (_, surface) = scenes::still_water(&mut world, 90.0e3, 0.35).expect("tank");
     let tilt = if turn { tilt } else { 0.0 };
-    let (id, archimedes) =
-        scenes::floating_box(&mut world, surface, [width, height], density, tilt, turn)
-            .expect("box");
+    let (id, archimedes) = scenes::floating_box(
+        &mut world,
+        surface,
+        [width, height],
+        density,
+        tilt,
+        turn,
+        cut,
+    )
+    .expect("box");
     let frame: Real = 1.0 / 60.0;
     let (mut next, mut worst) = (0.0f64, 0.0f64);
     while world.time() < seconds {

@@ -32,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 16;
+const VERSION: u64 = 17;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -293,6 +293,7 @@ pub(crate) struct MaterialRecord {
     pub reference_concentration: Real,
     pub viscosity: Real,
     pub bulk_viscosity: Real,
+    pub volume_relaxation: Real,
     pub bulk_modulus: Real,
     pub pressure_exponent: Real,
     pub yield_stress: Real,
@@ -311,7 +312,7 @@ pub(crate) struct MaterialRecord {
     pub log_stretch: Real,
 }
 
-// SAFETY: MaterialRecord is repr(C) with twenty-nine values of one float type: no padding, and every
+// SAFETY: MaterialRecord is repr(C) with thirty values of one float type: no padding, and every
 // bit pattern is a valid float.
 unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.

@@ -745,6 +745,10 @@ typedef struct MpmMaterialDef {
   // Bulk viscosity zeta, Pa s, >= 0: the stress `zeta tr(sym grad v) I` added to any
   // model's, which damps sound (a fluid's acoustic modes). Default 0.
   mpm_real bulk_viscosity;
+  // Rate at which the fluid model relaxes a crowd, 1/s, >= 0: where its particles fill more
+  // than the space around them, their volume ratio shrinks toward it (E97). Default 20;
+  // 0 turns it off. Other models ignore it.
+  mpm_real volume_relaxation;
   // Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
   mpm_real bulk_modulus;
   // Tait exponent gamma of the fluid model, >= 1. Default 7.

@@ -473,6 +473,10 @@ pub struct MpmMaterialDef {
     /// Bulk viscosity zeta, Pa s, >= 0: the stress `zeta tr(sym grad v) I` added to any
     /// model's, which damps sound (a fluid's acoustic modes). Default 0.
     pub bulk_viscosity: mpm_real,
+    /// Rate at which the fluid model relaxes a crowd, 1/s, >= 0: where its particles fill more
+    /// than the space around them, their volume ratio shrinks toward it (E97). Default 20;
+    /// 0 turns it off. Other models ignore it.
+    pub volume_relaxation: mpm_real,
     /// Bulk modulus K of the fluid model, Pa, > 0. Default 1e5.
     pub bulk_modulus: mpm_real,
     /// Tait exponent gamma of the fluid model, >= 1. Default 7.
@@ -825,6 +829,7 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         reference_concentration: d.reference_concentration,
         viscosity: d.viscosity,
         bulk_viscosity: d.bulk_viscosity,
+        volume_relaxation: d.volume_relaxation,
         bulk_modulus: d.bulk_modulus,
         pressure_exponent: d.pressure_exponent,
         yield_stress: d.yield_stress,
@@ -891,6 +896,7 @@ fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
         reference_concentration: d.reference_concentration,
         viscosity: d.viscosity,
         bulk_viscosity: d.bulk_viscosity,
+        volume_relaxation: d.volume_relaxation,
         bulk_modulus: d.bulk_modulus,
         pressure_exponent: d.pressure_exponent,
         yield_stress: d.yield_stress,

@@ -201,6 +201,7 @@ fn rust_layout() -> String {
         reference_concentration,
         viscosity,
         bulk_viscosity,
+        volume_relaxation,
         bulk_modulus,
         pressure_exponent,
         yield_stress,
@@ -1377,6 +1378,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(md.reference_concentration, m.reference_concentration);
     assert_eq!(md.viscosity, m.viscosity);
     assert_eq!(md.bulk_viscosity, m.bulk_viscosity);
+    assert_eq!(md.volume_relaxation, m.volume_relaxation);
     assert_eq!(md.bulk_modulus, m.bulk_modulus);
     assert_eq!(md.pressure_exponent, m.pressure_exponent);
     assert_eq!(md.yield_stress, m.yield_stress);

@@ -534,6 +534,7 @@ fuzz_target!(|data: &[u8]| {
                     if inp.byte() % 2 == 0 {
                         m.viscosity = inp.real_in(-1.0, 50.0);
                         m.bulk_viscosity = inp.real_in(-1.0, 50.0);
+                        m.volume_relaxation = inp.real_in(-1.0, 100.0);
                         m.bulk_modulus = inp.real_in(-1.0e3, 1.0e7);
                         m.pressure_exponent = inp.real_in(0.0, 10.0);
                         m.yield_stress = inp.real_in(-1.0e3, 1.0e6);

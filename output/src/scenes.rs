@@ -483,11 +483,23 @@ pub fn still_water(world: &mut World, k: Real, depth: Real) -> Result<(u32, Real
     Ok((water, surface))
 }
 
+/// Which water [`floating_box`] cuts out to make room for the box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cut {
+    /// Every particle whose domain reaches into the box or touches it: the water starts clear
+    /// of the box.
+    Domains,
+    /// The particles whose centre lies inside the box, as a host that tests points would cut:
+    /// the water next to the box overlaps it by up to half a particle's width.
+    Centres,
+}
+
 /// Floats a box `width` by `height` m of `density` kg/m^3 (2D, per metre of thickness) at
 /// Archimedes' depth below still water whose surface is at `surface` (m), its centre at x =
-/// 0.5 m, tilted `tilt` rad: cuts the water out of its place and adds it as a dynamic collider
-/// that the step moves (free to turn with `turn`), and returns the collider's id and
+/// 0.5 m, tilted `tilt` rad: cuts the water out of its place (`cut`) and adds it as a dynamic
+/// collider that the step moves (free to turn with `turn`), and returns the collider's id and
 /// Archimedes' depth (m) it was placed at, for water of 1000 kg/m^3 ([`still_water`]'s).
+#[allow(clippy::too_many_arguments)]
 pub fn floating_box(
     world: &mut World,
     surface: Real,
@@ -495,6 +507,7 @@ pub fn floating_box(
     density: Real,
     tilt: Real,
     turn: bool,
+    cut: Cut,
 ) -> Result<(u32, Real), Error> {
     let draft = density / 1000.0 * height;
     let centre = Vec3::new(0.5, surface - draft + height / 2.0, 0.0);
@@ -509,14 +522,19 @@ pub fn floating_box(
         inertia: Vec3::new(0.0, 0.0, if turn { inertia } else { 0.0 }),
         ..ColliderDef::DEFAULT
     })?;
-    // The water whose particles' domains (squares of half-width `l`) reach into the box or
-    // touch it, tilted or not: any of 5 x 5 points across the square within a thousandth of
-    // a cell of the solid (a domain that only touches the box is cut, whatever the rounding).
+    // `Cut::Domains`: the water whose particles' domains (squares of half-width `l`) reach
+    // into the box or touch it, tilted or not: any of 5 x 5 points across the square within a
+    // thousandth of a cell of the solid (a domain that only touches the box is cut, whatever
+    // the rounding).
     let def = world.def();
     let l = def.cell_size / (2 * def.particles_per_cell) as Real;
     let p = world.particles();
     let inside: Vec<u32> = (0..p.count)
         .filter(|&i| {
+            if cut == Cut::Centres {
+                let x = Vec3::new(p.position[0][i], p.position[1][i], 0.0);
+                return world.collider_distance(id, x).is_ok_and(|d| d < 0.0);
+            }
             (0..25).any(|k| {
                 let at = |j: usize| (j as Real / 2.0 - 1.0) * l;
                 let x = Vec3::new(

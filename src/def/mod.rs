@@ -424,6 +424,13 @@ pub struct MaterialDef {
     /// the model's (E46), which resists a change of volume at a rate and so damps sound: a
     /// fluid's acoustic modes, which its shear viscosity does not reach. Default 0.
     pub bulk_viscosity: Real,
+    /// Rate k at which [`MaterialModel::Fluid`] relaxes a crowd, 1/s, >= 0 (E97): where its
+    /// particles fill more than the space around them (the fill `phi > 1`, from the particles'
+    /// volumes `J V0` on the grid), `J <- J / phi^min(1, k dt)`, so that the pressure pushes
+    /// them apart. Without it, particles packed by a collider's contact keep their `J` and a
+    /// floating body sinks. Default 20/s; 0 turns it off (the step then does no such pass).
+    /// Other models ignore it.
+    pub volume_relaxation: Real,
     /// Bulk modulus K of [`MaterialModel::Fluid`], Pa, > 0 (other models take theirs from E
     /// and nu). Default 1e5 Pa: a sound speed of 10 m/s in a fluid of water's density, which
     /// keeps a 1 m deep tank within about 1 % of its volume under gravity (the usual weakly
@@ -476,6 +483,7 @@ impl MaterialDef {
         reference_concentration: 0.0,
         viscosity: 0.0,
         bulk_viscosity: 0.0,
+        volume_relaxation: 20.0,
         bulk_modulus: 1.0e5,
         pressure_exponent: 7.0,
         yield_stress: 1.0e4,

@@ -29,6 +29,8 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         && m.viscosity >= 0.0
         && m.bulk_viscosity.is_finite()
         && m.bulk_viscosity >= 0.0
+        && m.volume_relaxation.is_finite()
+        && m.volume_relaxation >= 0.0
         && m.bulk_modulus.is_finite()
         && m.bulk_modulus > 0.0
         && m.pressure_exponent.is_finite()
@@ -75,6 +77,7 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         reference_concentration: m.reference_concentration,
         viscosity: m.viscosity,
         bulk_viscosity: m.bulk_viscosity,
+        volume_relaxation: m.volume_relaxation,
         bulk_modulus: m.bulk_modulus,
         pressure_exponent: m.pressure_exponent,
         yield_stress: m.yield_stress,

@@ -16,6 +16,7 @@ pub(crate) mod stress;
 pub(crate) mod tractions;
 pub(crate) mod transport;
 pub(crate) mod update;
+pub(crate) mod volume;
 
 pub(crate) use kernels::Kernels;
 
@@ -97,6 +98,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     pub plastic: bool,
     /// Some material has a viscosity: the stress update adds the viscous stress.
     pub viscous: bool,
+    /// Some material is a fluid that relaxes its volume: each substep starts with that (E97,
+    /// [`volume`]).
+    pub fluid: bool,
 }
 
 /// Replaces `st` by the stencils of the chunk (particles `start..start + W` of `p`) at

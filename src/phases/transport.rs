@@ -60,7 +60,7 @@ use crate::Real;
 /// pending store waits for the store to complete instead of taking its value from the store
 /// buffer). A table, not a formula per lane: the scatter loop is not unrolled, and the formula
 /// cost 10 instructions per particle-step (callgrind); the passes evaluate it at compile time.
-const fn scatter_order<const W: usize>() -> [usize; W] {
+pub(super) const fn scatter_order<const W: usize>() -> [usize; W] {
     let mut order = [0; W];
     let mut t = 0;
     while t < W {
@@ -93,6 +93,14 @@ pub(crate) enum FieldPass<'v, 'g, const D: usize> {
         on_grid: &'v mut [Real],
         fixed: bool,
     },
+    /// The fluids' volume relaxation ([`super::volume`], not a field's): the volumes' scatter
+    /// onto the nodes of `g`.
+    Volumes(&'v mut GridCols<'g, D>),
+    /// The fluid particles' volume relaxation, from the fills of `g`.
+    Relax {
+        g: &'v GridCols<'g, D>,
+        state: super::volume::FluidState<'v, D>,
+    },
 }
 
 /// The particle loop `pass` of field `f` (HEAT or DIFFUSION) over the particles `0..count`
@@ -112,6 +120,15 @@ pub(crate) fn particles<
     f: usize,
     pass: FieldPass<'_, '_, D>,
 ) {
+    let pass = match pass {
+        FieldPass::Volumes(g) => {
+            return super::volume::scatter::<I, D, K, S, W>(shape, ctx, p, count, g)
+        }
+        FieldPass::Relax { g, state } => {
+            return super::volume::relax::<I, D, K, S, W>(shape, ctx, p, count, g, state)
+        }
+        pass => pass,
+    };
     let stride = ctx.geom.stride;
     let mut st = Stencils::<D, K, W>::default();
     // The scatters read the particles' values, the update writes them.
@@ -262,6 +279,8 @@ pub(crate) fn particles<
                 }
             }
         }
+        // Handled above.
+        FieldPass::Volumes(_) | FieldPass::Relax { .. } => {}
     }
 }
 
@@ -277,7 +296,7 @@ pub(crate) fn reset<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; 4
 }
 
 /// Zeroes `col` on the substep's node box.
-fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
+pub(crate) fn zero_lines<const D: usize>(ctx: &Ctx<'_, D>, col: &mut [Real]) {
     ctx.active.for_each_line(ctx.geom.stride, col.len(), |r| {
         if let Some(c) = col.get_mut(r) {
             c.fill(0.0);
@@ -409,7 +428,13 @@ pub(crate) fn nodal_rates<const D: usize>(
 /// particles below `count` whose every stencil row fits in node columns of length `len`
 /// (always, by construction; the unchecked row accesses rely on it).
 #[inline(always)]
-fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(super) fn chunk_stencils<
+    I: Kernels,
+    const D: usize,
+    const K: usize,
+    S: Shape1D<K>,
+    const W: usize,
+>(
     st: &mut Stencils<D, K, W>,
     shape: &S,
     ctx: &Ctx<'_, D>,
@@ -435,7 +460,7 @@ fn chunk_stencils<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, con
 /// # Safety
 /// Every row of the stencil fits in every column ([`rows_fit`]), or `tile` is a tile's.
 #[inline(always)]
-unsafe fn scatter_rows<
+pub(super) unsafe fn scatter_rows<
     const D: usize,
     const K: usize,
     const W: usize,
@@ -472,7 +497,7 @@ unsafe fn scatter_rows<
 /// # Safety
 /// Every row of the stencil fits in every column ([`rows_fit`]).
 #[inline(always)]
-unsafe fn gather_rows<
+pub(super) unsafe fn gather_rows<
     const D: usize,
     const K: usize,
     const W: usize,
@@ -568,7 +593,11 @@ fn face_area<const D: usize>(
 /// `J V0` of particle `i` of material `rec` (with `F_thetatheta` when axisymmetric, and the
 /// volume change a model keeps in its history: snow's `J_p`).
 #[inline(always)]
-fn current_volume<const D: usize>(rec: &MaterialRecord, p: &ParticleCols<'_, D>, i: usize) -> Real {
+pub(super) fn current_volume<const D: usize>(
+    rec: &MaterialRecord,
+    p: &ParticleCols<'_, D>,
+    i: usize,
+) -> Real {
     let h: Mat<D> = core::array::from_fn(|a| core::array::from_fn(|b| p.h[a][b][i]));
     let hoop = p.hoop.get(i).copied().unwrap_or(0.0);
     let plastic = p.plastic.get(i).copied().unwrap_or(0.0);

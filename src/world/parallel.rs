@@ -35,6 +35,7 @@ use crate::particles::{ParticleCols, RemapCols, StepReport};
 use crate::phases::grid_update::Nodes;
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::transport::{self, FieldPass};
+use crate::phases::volume;
 use crate::phases::Ctx;
 use crate::shape::{Shape1D, ROW};
 use crate::tasks::{self, Shared, TaskSystem};
@@ -463,6 +464,26 @@ impl<'b, const D: usize> Columns<'b, D> {
         let axisymmetric = S::AXISYMMETRIC;
         self.transport_loops(ctx, count, f, t, axisymmetric, &|p, n, pass| {
             I::transport::<D, K, S, W>(shape, ctx, p, n, f, pass)
+        });
+    }
+
+    /// The fluids' volume relaxation (E97, [`crate::phases::volume`]): the volumes' scatter by
+    /// tiles, the fills on the calling thread, the relaxation by ranges. Its nodal column is
+    /// the first acceleration column: it runs before the grid's reset.
+    pub fn relax_volumes<I: Passes, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        count: usize,
+    ) {
+        transport::zero_lines(ctx, self.grid().acc[0]);
+        self.scatter_tiles(None, &|p, g| {
+            I::transport::<D, K, S, W>(shape, ctx, p, count, 0, FieldPass::Volumes(g))
+        });
+        volume::fills(ctx, self.grid().acc[0], S::AXISYMMETRIC);
+        self.particle_ranges(count, &mut StepReport::default(), &|p, n, g, _| {
+            let state = volume::FluidState::take(p);
+            I::transport::<D, K, S, W>(shape, ctx, p, n, 0, FieldPass::Relax { g, state })
         });
     }
 

@@ -312,6 +312,7 @@ impl<'a> WorldRef<'a> {
             reference_concentration: r.reference_concentration,
             viscosity: r.viscosity,
             bulk_viscosity: r.bulk_viscosity,
+            volume_relaxation: r.volume_relaxation,
             bulk_modulus: r.bulk_modulus,
             pressure_exponent: r.pressure_exponent,
             yield_stress: r.yield_stress,

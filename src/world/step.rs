@@ -311,6 +311,7 @@ impl<'a> World<'a> {
             viscous: materials
                 .iter()
                 .any(|m| m.viscosity != 0.0 || m.bulk_viscosity != 0.0),
+            fluid: materials.iter().any(crate::phases::volume::relaxes),
         };
         run_kernel::<D, K, S, W>(kernel, simd, &shape, &ctx, &mut cols, count);
     }
@@ -404,6 +405,10 @@ impl Kernel for Substep<'_> {
             if let Some(t) = t {
                 cols.transport::<I, K, S, W>(s, ctx, count, f, t);
             }
+        }
+        // The fluids' volumes toward the space they fill, with the grid as scratch (E97).
+        if ctx.fluid {
+            cols.relax_volumes::<I, K, S, W>(s, ctx, count);
         }
         grid_update::reset(ctx, &mut GridPasses { cols, ctx });
         let (usf, musl) = (

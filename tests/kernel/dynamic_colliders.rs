@@ -159,15 +159,14 @@ fn a_dynamic_collider_and_the_material_trade_momentum_exactly() {
 /// 1/60 s with the grid damping a game declares for water, at the viewer's resolution
 /// (h = 0.02 m), densities 500 and 800, held level or free to turn, started level or tilted
 /// 0.05 rad: for a minute (half a minute tilted) after the first 2 s its depth below the far
-/// surface stays within 4 % of Archimedes', it comes to rest (no frame-to-frame ringing: the
+/// surface stays within 3 % of Archimedes', it comes to rest (no frame-to-frame ringing: the
 /// coupling is per substep, inside the step), no water is inside it (the water it cut out is
 /// every particle whose domain reaches or touches it), and it stays upright: a level box
-/// within 0.02 rad of level, a tilted one no further over than it started. Measured: in f32
-/// at most 1.2 % (level boxes end within 0.006 rad; tilted ones at 0.037 rad for 500 and
-/// 0.011 for 800: the water under a box rights it slowly, if at all); in f64 up to 3.0 %
-/// held and 3.9 % free to turn at 800. The aim is 3 %: what remains is the water's (the
-/// water cut out beside the box leaves voids that stay as the gap closes, and the surface
-/// next to the box stands a few mm high), and the path it takes to rest sets it.
+/// within 0.02 rad of level, a tilted one no further over than it started. Measured
+/// (`examples/float.rs`, the same scene and measure): in f32 at most 1.5 % (tilted), 0.5 %
+/// level; in f64 at most 2.5 % (800, held). Before the water's volume relaxation (E97), f64
+/// reached 3.0 % held and 3.9 % free to turn: particles packed against the box kept their
+/// `J`. What remains is where the box's edges fall between nodes and the path to rest.
 #[test]
 fn a_dynamic_box_floats_at_archimedes_depth_for_a_minute() {
     for (density, tilt, turn, seconds) in [
@@ -197,6 +196,7 @@ fn a_dynamic_box_floats_at_archimedes_depth_for_a_minute() {
             density,
             tilt,
             turn,
+            mpm_gimp_output::scenes::Cut::Domains,
         )
         .expect("box");
         let frame: Real = 1.0 / 60.0;
@@ -219,7 +219,7 @@ fn a_dynamic_box_floats_at_archimedes_depth_for_a_minute() {
                 worst = worst.max((depth / draft - 1.0).abs());
             }
         }
-        assert!(worst <= 0.04, "{case}: depth off Archimedes' by {worst}");
+        assert!(worst <= 0.03, "{case}: depth off Archimedes' by {worst}");
         let r = world.collider(id).expect("box").def.rotation;
         let angle = 2.0 * r[2].atan2(r[3]);
         let upright = if tilt > 0.0 { tilt } else { 0.02 };

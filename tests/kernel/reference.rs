@@ -423,6 +423,8 @@ struct Material {
     viscosity: f64,
     /// Bulk viscosity zeta, Pa s.
     bulk_viscosity: f64,
+    /// The fluid's volume relaxation rate k, 1/s (E97).
+    volume_relaxation: f64,
     /// Tait's exponent gamma (fluid).
     gamma: f64,
     /// Von Mises: the initial yield stress and the linear hardening modulus, Pa.
@@ -1351,26 +1353,11 @@ fn material(m: &Method, p: &mut Particle, l: &Mat, lzz: f64) {
     let (mat, d) = (&m.material, m.d);
     let eigen = eigenstrain(m, p);
     inelastic(m, p, eigen);
-    // F_e = F / (1 + d): H_e = (H - d I) / (1 + d), with the out-of-plane axis in 2D.
-    let mut h_e = [[0.0; 3]; 3];
-    for a in 0..d {
-        for b in 0..d {
-            let dh = if a == b { eigen } else { 0.0 };
-            h_e[a][b] = (p.h[a][b] - dh) / (1.0 + eigen);
-        }
-    }
-    let hzz_e = if d == 2 {
-        (p.hzz - eigen) / (1.0 + eigen)
-    } else {
-        0.0
-    };
-    let mut tau = elastic_stress(m, &h_e, hzz_e, p.plastic);
-    let cube = (1.0 + eigen).powi(3);
+    let mut tau = stress_of_elastic_part(m, p, eigen);
     let j = volume_ratio(m, p);
     let tr_l = (0..d).map(|a| l[a][a]).sum::<f64>() + if d == 2 { lzz } else { 0.0 };
     for a in 0..3 {
         for b in 0..3 {
-            tau[a][b] *= cube;
             let rate = if a < d && b < d {
                 l[a][b] + l[b][a]
             } else if a == 2 && b == 2 {
@@ -1387,6 +1374,85 @@ fn material(m: &Method, p: &mut Particle, l: &Mat, lzz: f64) {
         }
     }
     p.tau = tau.map(|row| row.map(|t| t / mat.rho0));
+}
+
+/// The Kirchhoff stress of a particle's elastic part `F_e = F / (1 + d)` under the isotropic
+/// eigenstrain `d`, scaled back by `(1 + d)^3` (E47).
+fn stress_of_elastic_part(m: &Method, p: &Particle, eigen: f64) -> Mat {
+    let d = m.d;
+    // F_e = F / (1 + d): H_e = (H - d I) / (1 + d), with the out-of-plane axis in 2D.
+    let mut h_e = [[0.0; 3]; 3];
+    for a in 0..d {
+        for b in 0..d {
+            let dh = if a == b { eigen } else { 0.0 };
+            h_e[a][b] = (p.h[a][b] - dh) / (1.0 + eigen);
+        }
+    }
+    let hzz_e = if d == 2 {
+        (p.hzz - eigen) / (1.0 + eigen)
+    } else {
+        0.0
+    };
+    let cube = (1.0 + eigen).powi(3);
+    elastic_stress(m, &h_e, hzz_e, p.plastic).map(|row| row.map(|t| t * cube))
+}
+
+/// The fluid's volume relaxation (E97), with the particles where the substep starts: the
+/// particles' volumes `J V0` on the nodes, over each node's cell (`h^d`; axisymmetric `h^2
+/// max(r_i, h / 2)`), the fill at each particle `phi`, and where it exceeds 1 + 1e-4 `J <- J /
+/// phi^min(1, k dt)` with `F = J^(1/n) I`; the stored stress takes the change of the elastic
+/// part's.
+fn relax_volumes(m: &Method, ps: &mut [Particle], dt: f64) {
+    let k = m.material.volume_relaxation;
+    if m.material.model != MaterialModel::Fluid || k == 0.0 {
+        return;
+    }
+    let n = m.nodes[0] * m.nodes[1] * m.nodes[2];
+    let mut fill = vec![0.0; n];
+    for p in ps.iter() {
+        for &(i, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
+            fill[i] += s * volume_ratio(m, p) * p.vol0;
+        }
+    }
+    periodic_scalar(m, &mut fill, true);
+    let cell = m.h.powi(m.d as i32);
+    for (i, f) in fill.iter_mut().enumerate() {
+        *f /= if m.axisymmetric {
+            cell * node_x(m, i)[0].max(0.5 * m.h)
+        } else {
+            cell
+        };
+    }
+    periodic_scalar(m, &mut fill, false);
+    let dims = if m.d == 3 || m.axisymmetric { 3.0 } else { 2.0 };
+    for p in ps.iter_mut() {
+        let phi: f64 = stencil(m, &p.x, &p.lp)
+            .nodes
+            .iter()
+            .map(|&(i, s, _, _)| s * fill[i])
+            .sum();
+        if phi.is_nan() || phi <= 1.0 + 1.0e-4 {
+            continue;
+        }
+        let eigen = eigenstrain(m, p);
+        let before = stress_of_elastic_part(m, p, eigen);
+        let j = volume_ratio(m, p) / phi.powf((k * dt).min(1.0));
+        let e = (j.ln() / dims).exp_m1();
+        for a in 0..m.d {
+            for b in 0..m.d {
+                p.h[a][b] = if a == b { e } else { 0.0 };
+            }
+        }
+        if m.axisymmetric {
+            p.hzz = e;
+        }
+        let after = stress_of_elastic_part(m, p, eigen);
+        for a in 0..3 {
+            for b in 0..3 {
+                p.tau[a][b] += (after[a][b] - before[a][b]) / m.material.rho0;
+            }
+        }
+    }
 }
 
 /// The isotropic eigenstrain `d` of a particle: thermal expansion `alpha (T - T_0)` where heat
@@ -2014,6 +2080,7 @@ fn phases(m: &mut Method, ps: &mut [Particle], dt: f64) {
     for f in 0..2 {
         transport(m, ps, f, dt);
     }
+    relax_volumes(m, ps, dt);
     let mut grid = vec![Node::default(); m.nodes[0] * m.nodes[1] * m.nodes[2]];
     if m.momentum {
         // The momentum approach: the force with the complete masses' weights.
@@ -2182,6 +2249,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             rho0: material.density as f64,
             viscosity: material.viscosity as f64,
             bulk_viscosity: material.bulk_viscosity as f64,
+            volume_relaxation: material.volume_relaxation as f64,
             gamma: material.pressure_exponent as f64,
             yield_stress: material.yield_stress as f64,
             hardening: material.hardening_modulus as f64,

@@ -186,6 +186,7 @@ int main(void) {
     FIELD(MpmMaterialDef, reference_concentration);
     FIELD(MpmMaterialDef, viscosity);
     FIELD(MpmMaterialDef, bulk_viscosity);
+    FIELD(MpmMaterialDef, volume_relaxation);
     FIELD(MpmMaterialDef, bulk_modulus);
     FIELD(MpmMaterialDef, pressure_exponent);
     FIELD(MpmMaterialDef, yield_stress);

@@ -1156,6 +1156,9 @@ static void material_misuse(void) {
     BAD_MAT("material: bulk viscosity NaN", bulk_viscosity, R(NAN));
     BAD_MAT("material: bulk viscosity -1", bulk_viscosity, R(-1.0));
     BAD_MAT("material: bulk viscosity +inf", bulk_viscosity, R(INFINITY));
+    BAD_MAT("material: volume relaxation NaN", volume_relaxation, R(NAN));
+    BAD_MAT("material: volume relaxation -1", volume_relaxation, R(-1.0));
+    BAD_MAT("material: volume relaxation +inf", volume_relaxation, R(INFINITY));
     BAD_MAT("material: bulk_modulus 0", bulk_modulus, R(0.0));
     BAD_MAT("material: bulk_modulus NaN", bulk_modulus, R(NAN));
     BAD_MAT("material: pressure_exponent 0.5", pressure_exponent, R(0.5));
