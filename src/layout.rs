@@ -32,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 17;
+const VERSION: u64 = 18;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -299,6 +299,8 @@ pub(crate) struct MaterialRecord {
     pub yield_stress: Real,
     pub hardening_modulus: Real,
     pub friction_angle: Real,
+    /// [`crate::FrictionFit`] as a number.
+    pub friction_fit: Real,
     pub cohesion: Real,
     pub critical_compression: Real,
     pub critical_stretch: Real,
@@ -312,7 +314,7 @@ pub(crate) struct MaterialRecord {
     pub log_stretch: Real,
 }
 
-// SAFETY: MaterialRecord is repr(C) with thirty values of one float type: no padding, and every
+// SAFETY: MaterialRecord is repr(C) with thirty-one values of one float type: no padding, and every
 // bit pattern is a valid float.
 unsafe impl Zeroable for MaterialRecord {}
 // SAFETY: as above; it is Copy and 'static.

@@ -86,8 +86,9 @@ pub mod tasks;
 mod world;
 
 pub use def::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, Resolvable, ShapeFunction, Transfer,
-    UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS, MIN_STABLE_DT,
+    Boundary, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, Resolvable, ShapeFunction,
+    Transfer, UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS,
+    MIN_STABLE_DT,
 };
 pub use def::{
     ColliderDef, ColliderShape, Contact, Damping, DampingZone, Effects, Feedback, ScalarBoundary,

@@ -406,6 +406,26 @@ enum MpmMaterialModel
 typedef uint32_t MpmMaterialModel;
 #endif // __cplusplus
 
+// How the Drucker-Prager cone is fitted to the friction angle (`mpm_gimp::FrictionFit`).
+enum MpmFrictionFit
+#ifdef __cplusplus
+  : uint32_t
+#endif // __cplusplus
+ {
+  // Through Mohr-Coulomb's compression corners (Klar et al. 2016); the default. In plane
+  // strain: Rankine's Ka 0.368 and Kp 2.717 at 30 degrees (Mohr-Coulomb: 1/3 and 3).
+  MPM_FRICTION_FIT_COMPRESSION = 0,
+  // Through the extension corners.
+  MPM_FRICTION_FIT_EXTENSION = 1,
+  // Inscribed in Mohr-Coulomb's pyramid.
+  MPM_FRICTION_FIT_INSCRIBED = 2,
+  // Mohr-Coulomb exactly in plane strain (Rankine's earth pressures).
+  MPM_FRICTION_FIT_PLANE_STRAIN = 3,
+};
+#ifndef __cplusplus
+typedef uint32_t MpmFrictionFit;
+#endif // __cplusplus
+
 // Status of a particle in the status column (`mpm_gimp::ParticleStatus`).
 enum MpmParticleStatus
 #ifdef __cplusplus
@@ -759,6 +779,9 @@ typedef struct MpmMaterialDef {
   mpm_real hardening_modulus;
   // Friction angle of the Drucker-Prager model, degrees, in [0, 90). Default 30.
   mpm_real friction_angle;
+  // How the Drucker-Prager cone is fitted to the friction angle (an `MpmFrictionFit`).
+  // Default `MPM_FRICTION_FIT_COMPRESSION`.
+  MpmFrictionFit friction_fit;
   // Cohesion of the Drucker-Prager model, Pa, >= 0 (> 0 needs a friction angle > 0).
   // Default 0.
   mpm_real cohesion;

@@ -13,9 +13,9 @@
 use crate::status::MpmStatus;
 use crate::{mpm_real, MpmVec3};
 use kernel::{
-    Boundary, Damping, DampingZone, Dimension, Effects, Face, Feedback, MaterialDef, MaterialModel,
-    ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer, Transport, UpdateOrder,
-    WorldDef,
+    Boundary, Damping, DampingZone, Dimension, Effects, Face, Feedback, FrictionFit, MaterialDef,
+    MaterialModel, ScalarBoundary, ScalarField, Schedule, ShapeFunction, Transfer, Transport,
+    UpdateOrder, WorldDef,
 };
 
 /// Spatial dimension and kinematic assumption (`mpm_gimp::Dimension`).
@@ -183,6 +183,21 @@ pub enum MpmMaterialModel {
     Snow = 6,
 }
 
+/// How the Drucker-Prager cone is fitted to the friction angle (`mpm_gimp::FrictionFit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum MpmFrictionFit {
+    /// Through Mohr-Coulomb's compression corners (Klar et al. 2016); the default. In plane
+    /// strain: Rankine's Ka 0.368 and Kp 2.717 at 30 degrees (Mohr-Coulomb: 1/3 and 3).
+    Compression = 0,
+    /// Through the extension corners.
+    Extension = 1,
+    /// Inscribed in Mohr-Coulomb's pyramid.
+    Inscribed = 2,
+    /// Mohr-Coulomb exactly in plane strain (Rankine's earth pressures).
+    PlaneStrain = 3,
+}
+
 /// Status of a particle in the status column (`mpm_gimp::ParticleStatus`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -210,6 +225,8 @@ pub type MpmFaceValue = u32;
 pub type MpmBoundaryValue = u32;
 /// An `MpmMaterialModel` value as stored in a definition.
 pub type MpmMaterialModelValue = u32;
+/// An `MpmFrictionFit` value as stored in a definition.
+pub type MpmFrictionFitValue = u32;
 /// An `MpmScalarBoundaryKind` value as stored in a definition.
 pub type MpmScalarBoundaryKindValue = u32;
 /// An `MpmScalarField` value as passed to a function.
@@ -487,6 +504,9 @@ pub struct MpmMaterialDef {
     pub hardening_modulus: mpm_real,
     /// Friction angle of the Drucker-Prager model, degrees, in [0, 90). Default 30.
     pub friction_angle: mpm_real,
+    /// How the Drucker-Prager cone is fitted to the friction angle (an `MpmFrictionFit`).
+    /// Default `MPM_FRICTION_FIT_COMPRESSION`.
+    pub friction_fit: MpmFrictionFitValue,
     /// Cohesion of the Drucker-Prager model, Pa, >= 0 (> 0 needs a friction angle > 0).
     /// Default 0.
     pub cohesion: mpm_real,
@@ -815,7 +835,9 @@ pub(crate) fn material_def_from_c(d: &MpmMaterialDef) -> Result<MaterialDef, Mpm
         return Err(MpmStatus::DefNotFromDefault);
     }
     let model = MaterialModel::from_code(d.model).ok_or(MpmStatus::InvalidEnum)?;
+    let friction_fit = FrictionFit::from_code(d.friction_fit).ok_or(MpmStatus::InvalidEnum)?;
     Ok(MaterialDef {
+        friction_fit,
         model,
         youngs_modulus: d.youngs_modulus,
         poisson_ratio: d.poisson_ratio,
@@ -902,6 +924,7 @@ fn material_def_to_c(d: &MaterialDef) -> MpmMaterialDef {
         yield_stress: d.yield_stress,
         hardening_modulus: d.hardening_modulus,
         friction_angle: d.friction_angle,
+        friction_fit: d.friction_fit as u32,
         cohesion: d.cohesion,
         critical_compression: d.critical_compression,
         critical_stretch: d.critical_stretch,

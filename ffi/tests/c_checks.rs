@@ -109,6 +109,7 @@ fn rust_layout() -> String {
         type_line!("MpmBoundary", MpmBoundary),
         type_line!("MpmFace", MpmFace),
         type_line!("MpmMaterialModel", MpmMaterialModel),
+        type_line!("MpmFrictionFit", MpmFrictionFit),
         type_line!("MpmParticleStatus", MpmParticleStatus),
         type_line!("MpmScalarBoundaryKind", MpmScalarBoundaryKind),
         type_line!("MpmScalarField", MpmScalarField),
@@ -207,6 +208,7 @@ fn rust_layout() -> String {
         yield_stress,
         hardening_modulus,
         friction_angle,
+        friction_fit,
         cohesion,
         critical_compression,
         critical_stretch,
@@ -1384,6 +1386,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(md.yield_stress, m.yield_stress);
     assert_eq!(md.hardening_modulus, m.hardening_modulus);
     assert_eq!(md.friction_angle, m.friction_angle);
+    assert_eq!(md.friction_fit, m.friction_fit as u32);
     assert_eq!(md.cohesion, m.cohesion);
     assert_eq!(md.critical_compression, m.critical_compression);
     assert_eq!(md.critical_stretch, m.critical_stretch);

@@ -540,6 +540,7 @@ fuzz_target!(|data: &[u8]| {
                         m.yield_stress = inp.real_in(-1.0e3, 1.0e6);
                         m.hardening_modulus = inp.real_in(-1.0e3, 1.0e7);
                         m.friction_angle = inp.real_in(-5.0, 95.0);
+                        m.friction_fit = (inp.byte() % 6) as u32;
                         m.cohesion = inp.real_in(-1.0e2, 1.0e4);
                         m.critical_compression = inp.real_in(-0.1, 1.1);
                         m.critical_stretch = inp.real_in(-0.1, 0.5);

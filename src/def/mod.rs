@@ -382,6 +382,52 @@ impl MaterialModel {
     }
 }
 
+/// How [`MaterialModel::DruckerPrager`]'s cone is fitted to Mohr-Coulomb's friction angle phi
+/// (E40): the cone `|dev tau| + alpha tr tau <= 0` meets Mohr-Coulomb's pyramid where the fit
+/// says. In plane strain the cone reads the two in-plane principal stresses alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum FrictionFit {
+    /// Through the pyramid's compression corners (triaxial compression), `alpha = sqrt(2/3) 2
+    /// sin(phi) / (3 - sin(phi))` (Klar et al. 2016): the default, as animation uses it. In
+    /// plane strain its in-plane cone is wider than Mohr-Coulomb's: Rankine's coefficients at
+    /// phi = 30 deg come out Ka 0.368 and Kp 2.717 (Mohr-Coulomb: 1/3 and 3).
+    Compression = 0,
+    /// Through the extension corners, `alpha = sqrt(2/3) 2 sin(phi) / (3 + sin(phi))`.
+    Extension = 1,
+    /// Inscribed in the pyramid, `alpha = sqrt(2) sin(phi) / sqrt(9 + 3 sin^2(phi))`.
+    Inscribed = 2,
+    /// Mohr-Coulomb exactly in plane strain: with the in-plane cone, `alpha = sin(phi) /
+    /// sqrt(2)` gives `|s1 - s2| = -sin(phi) (s1 + s2)`, so Rankine's `Ka = (1 - sin phi) / (1
+    /// + sin phi)` and `Kp = 1 / Ka`. In 3D and axisymmetric (three axes) it is the cone
+    /// through `sqrt(J2) = sin(phi) |p|`, between the extension and inscribed fits.
+    PlaneStrain = 3,
+}
+
+impl FrictionFit {
+    /// The variant stored as `code`, if any.
+    pub const fn from_code(code: u32) -> Option<FrictionFit> {
+        match code {
+            0 => Some(FrictionFit::Compression),
+            1 => Some(FrictionFit::Extension),
+            2 => Some(FrictionFit::Inscribed),
+            3 => Some(FrictionFit::PlaneStrain),
+            _ => None,
+        }
+    }
+
+    /// The cone's `alpha` for the friction angle `phi`, radians.
+    pub fn alpha(self, phi: f64) -> f64 {
+        let s = libm::sin(phi);
+        match self {
+            FrictionFit::Compression => libm::sqrt(2.0 / 3.0) * 2.0 * s / (3.0 - s),
+            FrictionFit::Extension => libm::sqrt(2.0 / 3.0) * 2.0 * s / (3.0 + s),
+            FrictionFit::Inscribed => libm::sqrt(2.0) * s / libm::sqrt(9.0 + 3.0 * s * s),
+            FrictionFit::PlaneStrain => s / libm::sqrt(2.0),
+        }
+    }
+}
+
 /// A material: model and isotropic elastic constants.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MaterialDef {
@@ -449,6 +495,10 @@ pub struct MaterialDef {
     /// Friction angle phi of [`MaterialModel::DruckerPrager`], degrees, in [0, 90). Default 30,
     /// a typical dry sand.
     pub friction_angle: Real,
+    /// How the Drucker-Prager cone is fitted to `friction_angle` ([`FrictionFit`]). Default
+    /// [`FrictionFit::Compression`]; [`FrictionFit::PlaneStrain`] gives Mohr-Coulomb's (and
+    /// Rankine's) earth pressures in plane strain.
+    pub friction_fit: FrictionFit,
     /// Cohesion c of [`MaterialModel::DruckerPrager`], Pa, >= 0: the tension the material holds
     /// (its yield surface's apex is shifted by it). Default 0, dry sand.
     pub cohesion: Real,
@@ -489,6 +539,7 @@ impl MaterialDef {
         yield_stress: 1.0e4,
         hardening_modulus: 0.0,
         friction_angle: 30.0,
+        friction_fit: FrictionFit::Compression,
         cohesion: 0.0,
         critical_compression: 0.025,
         critical_stretch: 0.0075,

@@ -3,9 +3,10 @@
 //! 7.3) extended by a cohesion. In the principal log strains `eps` of the trial `F_e`, with
 //! `n` axes, trace `tr` and deviator `e`, the Kirchhoff stress has the deviator `2 mu e` and
 //! trace `(2 mu + n lambda) tr`. The yield condition is
-//! `|dev tau| + alpha (tr tau - n p_t) <= 0` with `alpha = sqrt(2/3) 2 sin(phi) / (3 -
-//! sin(phi))` (phi the friction angle) and the apex at the mean tension `p_t = c cot(phi)`
-//! (c the cohesion; 0 for dry sand). Then:
+//! `|dev tau| + alpha (tr tau - n p_t) <= 0` with `alpha` fitted to the friction angle phi as
+//! [`crate::FrictionFit`] says (E40; Klar's `sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` by
+//! default, Mohr-Coulomb's in plane strain `sin(phi) / sqrt(2)`) and the apex at the mean
+//! tension `p_t = c cot(phi)` (c the cohesion; 0 for dry sand). Then:
 //! - past the apex (`tr tau >= n p_t`, the material pulled apart): `F_e` returns to the apex,
 //!   an isotropic stretch carrying the tension `p_t` (no stress for dry sand);
 //! - else `dgamma = |e| + alpha (2 mu + n lambda) / (2 mu) (tr - tr_t)` and, where it is
@@ -29,7 +30,7 @@ pub(crate) struct DruckerPragerParams {
     pub lambda: Real,
     /// The shear modulus mu, Pa.
     pub mu: Real,
-    /// `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))`.
+    /// The cone's `alpha` ([`crate::FrictionFit::alpha`]).
     pub friction: Real,
     /// The apex's mean tension `p_t = c cot(phi)`, Pa.
     pub apex_tension: Real,

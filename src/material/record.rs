@@ -83,11 +83,15 @@ pub(crate) fn material_record(m: &MaterialDef) -> Result<MaterialRecord, Error> 
         yield_stress: m.yield_stress,
         hardening_modulus: m.hardening_modulus,
         friction_angle: m.friction_angle,
+        friction_fit: m.friction_fit as u32 as Real,
         cohesion: m.cohesion,
         critical_compression: m.critical_compression,
         critical_stretch: m.critical_stretch,
         hardening_coefficient: m.hardening_coefficient,
-        friction_coefficient: friction_coefficient(m.friction_angle),
+        friction_coefficient: m
+            .friction_fit
+            .alpha(m.friction_angle as f64 * core::f64::consts::PI / 180.0)
+            as Real,
         apex_tension: apex_tension(m.friction_angle, m.cohesion),
         log_compression: libm::log1p(-(m.critical_compression as f64)) as Real,
         log_stretch: libm::log1p(m.critical_stretch as f64) as Real,
@@ -122,13 +126,6 @@ pub(crate) fn explicit_diffusivity(rec: &MaterialRecord, def: &WorldDef) -> f64 
 pub(crate) fn material_resolvable(rec: &MaterialRecord, def: &WorldDef) -> bool {
     let limits = def.resolvable();
     rec.wave_speed as f64 <= limits.speed && explicit_diffusivity(rec, def) <= limits.diffusivity
-}
-
-/// Drucker-Prager's `alpha = sqrt(2/3) 2 sin(phi) / (3 - sin(phi))` of a friction angle in
-/// degrees (E40; Klar et al. 2016, eq 28: the cone that touches the Mohr-Coulomb pyramid).
-fn friction_coefficient(degrees: Real) -> Real {
-    let sin = libm::sin(degrees as f64 * core::f64::consts::PI / 180.0);
-    (libm::sqrt(2.0 / 3.0) * 2.0 * sin / (3.0 - sin)) as Real
 }
 
 /// The mean tension `c cot(phi)` the Drucker-Prager cone's apex sits at, Pa (0 without a

@@ -318,6 +318,8 @@ impl<'a> WorldRef<'a> {
             yield_stress: r.yield_stress,
             hardening_modulus: r.hardening_modulus,
             friction_angle: r.friction_angle,
+            friction_fit: crate::FrictionFit::from_code(r.friction_fit as u32)
+                .unwrap_or(crate::FrictionFit::Compression),
             cohesion: r.cohesion,
             critical_compression: r.critical_compression,
             critical_stretch: r.critical_stretch,

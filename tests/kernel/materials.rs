@@ -8,8 +8,8 @@
 
 use crate::common::{buffer_for, free_space, max_stress, moving_block, quarter_turn, total_mass};
 use mpm_gimp::{
-    Boundary, Damping, Dimension, Face, MaterialDef, MaterialModel, ParticleStatus, Real, Schedule,
-    Transfer, Vec3, World, WorldDef,
+    Boundary, Damping, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, ParticleStatus,
+    Real, Schedule, Transfer, Vec3, World, WorldDef,
 };
 
 /// The models added with the materials issue.
@@ -603,6 +603,262 @@ fn snow_clamps_its_stretches_and_hardens_as_exp_xi_one_minus_jp() {
             (got - tau).abs() <= 1e-4 * tau.abs() + 1e-3,
             "s = {s}: tau {got} vs {tau}"
         );
+    }
+}
+
+/// Dry sand (phi = 30 deg, no cohesion, E = 1 MPa) whose cone has the fit `fit`.
+fn dry_sand(fit: FrictionFit) -> MaterialDef {
+    MaterialDef {
+        model: MaterialModel::DruckerPrager,
+        youngs_modulus: 1.0e6,
+        poisson_ratio: 0.3,
+        density: 1600.0,
+        friction_angle: 30.0,
+        friction_fit: fit,
+        ..MaterialDef::DEFAULT
+    }
+}
+
+/// The Drucker-Prager cone's `alpha` of each fit at `sin(phi)` (E40), stated here as the
+/// tests' own.
+fn cone_alpha(fit: FrictionFit, sin: f64) -> f64 {
+    match fit {
+        FrictionFit::Compression => (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 - sin),
+        FrictionFit::Extension => (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 + sin),
+        FrictionFit::Inscribed => 2.0f64.sqrt() * sin / (9.0 + 3.0 * sin * sin).sqrt(),
+        FrictionFit::PlaneStrain => sin / 2.0f64.sqrt(),
+    }
+}
+
+/// Drucker-Prager's cone fitted to Mohr-Coulomb (E40), through one step of sand particles at
+/// rest given a trial strain well past yield by `set_displacement_gradient` (free space, no
+/// gravity, phi = 30 deg, no cohesion): the return leaves the stress on the fitted cone, and
+/// where the fit meets Mohr-Coulomb the principal stresses `s_a <= s_b <= s_c` (compression
+/// negative) satisfy `s_c - s_a = -sin(phi) (s_a + s_c)` exactly:
+/// - plane strain, [`FrictionFit::PlaneStrain`]: the in-plane stresses stand in Rankine's
+///   ratio `Ka = (1 - sin phi) / (1 + sin phi) = 1/3`, in a compression along x or along y;
+///   [`FrictionFit::Compression`] (the default) gives its own, wider `Ka` (0.368);
+/// - 3D, triaxial compression (`s_a < s_b = s_c`) on [`FrictionFit::Compression`] and
+///   triaxial extension (`s_a = s_b < s_c`) on [`FrictionFit::Extension`]: Mohr-Coulomb;
+/// - 3D, every fit: `sqrt(J2) = 3 alpha / sqrt(2) |p|` with the fit's `alpha`.
+///
+/// Relative 1e-4 (f32's round-off through the logarithms of the return).
+#[test]
+fn sand_cone_meets_mohr_coulomb_where_its_fit_says() {
+    let phi = 30.0f64.to_radians();
+    let sin = phi.sin();
+    let rankine = (1.0 - sin) / (1.0 + sin);
+    let alpha = |fit: FrictionFit| cone_alpha(fit, sin);
+    // The stresses of particles given the diagonal trial strains `strains` (one per particle)
+    // and stepped once: each particle's principal stresses xx, yy and zz.
+    let returned = |dim: Dimension, fit: FrictionFit, strains: &[[Real; 3]]| -> Vec<[f64; 3]> {
+        let def = plastic(free_space(dim, 8, 0.1));
+        let d = def.axes();
+        let mut buf = buffer_for(&def);
+        let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+        let sand = dry_sand(fit);
+        let id = w.add_material(&sand).unwrap();
+        for k in 0..strains.len() {
+            w.add_particle(&mpm_gimp::ParticleDef {
+                position: Vec3::new(0.2 + 0.1 * k as Real, 0.4, if d == 3 { 0.4 } else { 0.0 }),
+                velocity: Vec3::ZERO,
+                mass: 1.0e-3,
+                volume: 1.0e-6,
+                material: id,
+            })
+            .unwrap();
+        }
+        let mut h: [Vec<Real>; 9] = Default::default();
+        for s in strains {
+            for a in 0..3 {
+                for b in 0..3 {
+                    h[3 * a + b].push(if a == b { s[a] } else { 0.0 });
+                }
+            }
+        }
+        let none: Vec<Real> = Vec::new();
+        let refs: [[&[Real]; 3]; 3] = core::array::from_fn(|a| {
+            core::array::from_fn(|b| {
+                if a < d && b < d {
+                    &h[3 * a + b][..]
+                } else {
+                    &none[..]
+                }
+            })
+        });
+        w.set_displacement_gradient(0, refs).unwrap();
+        w.step(1.0e-6).unwrap();
+        let v = w.particles();
+        (0..strains.len())
+            .map(|i| {
+                let t = |k: usize| v.stress[k][i] as f64;
+                // 2D: xx, yy, xy, zz; 3D: xx, yy, zz, ...
+                if d == 2 {
+                    [t(0), t(1), t(3)]
+                } else {
+                    [t(0), t(1), t(2)]
+                }
+            })
+            .collect()
+    };
+    let sorted = |mut s: [f64; 3]| {
+        s.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        s
+    };
+    let close = |got: f64, exact: f64, what: &str| {
+        assert!(
+            (got - exact).abs() <= 1e-4 * exact.abs(),
+            "{what}: {got}, exact {exact}"
+        );
+    };
+    // Plane strain: a compression along x, then along y; the in-plane pair is (x, y).
+    let plane: [[Real; 3]; 2] = [[-0.02, 0.01, 0.0], [0.01, -0.02, 0.0]];
+    for (fit, ka) in [
+        (FrictionFit::PlaneStrain, rankine),
+        (FrictionFit::Compression, {
+            // The in-plane cone `|s1 - s2| / sqrt(2) = -alpha (s1 + s2)`.
+            let r = 2.0f64.sqrt() * alpha(FrictionFit::Compression);
+            (1.0 - r) / (1.0 + r)
+        }),
+    ] {
+        for s in returned(Dimension::Plane2D, fit, &plane) {
+            let (major, minor) = (s[0].min(s[1]), s[0].max(s[1]));
+            close(minor / major, ka, &format!("plane strain {fit:?}: Ka"));
+        }
+    }
+    // 3D: triaxial compression and extension on the fits through those corners.
+    let triaxial: [([Real; 3], FrictionFit); 2] = [
+        ([-0.02, 0.005, 0.005], FrictionFit::Compression),
+        ([-0.015, -0.015, 0.01], FrictionFit::Extension),
+    ];
+    for (strain, fit) in triaxial {
+        let s = sorted(returned(Dimension::ThreeD, fit, &[strain])[0]);
+        close(
+            s[2] - s[0],
+            -sin * (s[0] + s[2]),
+            &format!("3D {fit:?}: Mohr-Coulomb"),
+        );
+    }
+    for fit in [
+        FrictionFit::Compression,
+        FrictionFit::Extension,
+        FrictionFit::Inscribed,
+        FrictionFit::PlaneStrain,
+    ] {
+        for s in returned(Dimension::ThreeD, fit, &[[-0.03, 0.02, 0.0]]) {
+            let p = (s[0] + s[1] + s[2]) / 3.0;
+            let j2 = ((s[0] - p).powi(2) + (s[1] - p).powi(2) + (s[2] - p).powi(2)) / 2.0;
+            close(
+                j2.sqrt(),
+                3.0 * alpha(fit) / 2.0f64.sqrt() * p.abs(),
+                &format!("3D {fit:?}: the cone"),
+            );
+        }
+    }
+}
+
+/// A smooth wall moved away from or into dry sand (phi = 30 deg, no cohesion) carries Rankine's
+/// thrust `0.5 K gamma H^2` per metre (plane strain). The sand, 0.4 m long and `H` = 0.2 m
+/// deep, settles under gravity between the wall (a frictionless box collider) and a slip grid
+/// wall on a slip floor, so nothing holds it but its weight and the two walls: once the wall
+/// has moved far enough every point of it yields at the same ratio `K` of horizontal to
+/// vertical stress, and the thrust is exact. The wall moves at 2 mm/s, away (active, 1 mm) or
+/// into the sand (passive, 8 mm, past the few mm it takes to yield); the thrust is its
+/// impulse read back over the last 0.1 s, Rankine's taken in the sand's shape of then (pushed
+/// in, it heaps up: 4 % more thrust by the end). With [`FrictionFit::PlaneStrain`] the cone
+/// is Mohr-Coulomb's, `Ka = 1/3` and `Kp = 3`; with the default fit, its own 0.368 and 2.717.
+/// Within 5 %.
+#[test]
+fn a_smooth_wall_meets_rankines_earth_pressures() {
+    let sin = 30.0f64.to_radians().sin();
+    let rankine = (1.0 - sin) / (1.0 + sin);
+    let default_ka = {
+        let r = 2.0f64.sqrt() * cone_alpha(FrictionFit::Compression, sin);
+        (1.0 - r) / (1.0 + r)
+    };
+    for (fit, ka) in [
+        (FrictionFit::PlaneStrain, rankine),
+        (FrictionFit::Compression, default_ka),
+    ] {
+        for (speed, seconds, k) in [(-2.0e-3, 0.5, ka), (2.0e-3, 4.0, 1.0 / ka)] {
+            let label = format!("{fit:?}, wall at {speed} m/s");
+            let h: Real = 0.02;
+            let mut def = plastic(WorldDef {
+                cells: [32, 14, 1],
+                cell_size: h,
+                particle_capacity: 2000,
+                ..WorldDef::DEFAULT
+            });
+            def.effects.collider_capacity = 1;
+            def.effects.damping = Some(Damping {
+                grid: Schedule::constant(20.0),
+                ..Damping::NONE
+            });
+            let mut buf = buffer_for(&def);
+            let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+            let sand = dry_sand(fit);
+            let id = w.add_material(&sand).unwrap();
+            // Floor and right wall planes at one cell in; the wall's face at x0.
+            let (depth, x0, right) = (0.2 as Real, 0.2 as Real, 31.0 * h);
+            w.fill_box(
+                Vec3::new(x0, h, 0.0),
+                Vec3::new(right, h + depth, 0.0),
+                id,
+                Vec3::ZERO,
+            )
+            .unwrap();
+            let mut wall = mpm_gimp::ColliderDef {
+                shape: mpm_gimp::ColliderShape::Box {
+                    half_extents: Vec3::new(0.05, 0.2, 0.5),
+                },
+                position: Vec3::new(x0 - 0.05, h + 0.2, 0.0),
+                contact: mpm_gimp::Contact::Slip,
+                ..mpm_gimp::ColliderDef::DEFAULT
+            };
+            let c = w.add_collider(&wall).unwrap();
+            let frame: Real = 1.0 / 60.0;
+            for _ in 0..60 {
+                w.step(frame).unwrap();
+            }
+            wall = w.collider(c).unwrap().def;
+            wall.velocity = Vec3::new(speed, 0.0, 0.0);
+            w.set_collider(c, &wall).unwrap();
+            let frames = (seconds / frame as f64).round() as usize;
+            let (mut impulse, mut time) = (0.0f64, 0.0f64);
+            for f in 0..frames {
+                w.step(frame).unwrap();
+                if f + 6 >= frames {
+                    let s = w.collider(c).unwrap();
+                    impulse += s.impulse.x as f64;
+                    time += s.duration as f64;
+                }
+            }
+            // The sand pushes the wall toward -x. Rankine's thrust in the sand's configuration
+            // of now: `0.5 K sigma_v,floor H`, the floor's stress its weight over its length
+            // `L` and the depth its volume over `L` (a wall pushed in heaps the sand up).
+            let thrust = -impulse / time;
+            let p = w.particles();
+            let (mut mass, mut volume) = (0.0f64, 0.0f64);
+            for i in 0..p.count {
+                let f = |a: usize, b: usize| {
+                    p.displacement_gradient[a][b][i] as f64 + if a == b { 1.0 } else { 0.0 }
+                };
+                mass += p.mass[i] as f64;
+                volume += (f(0, 0) * f(1, 1) - f(0, 1) * f(1, 0)) * p.mass[i] as f64
+                    / sand.density as f64;
+            }
+            let face = w.collider(c).unwrap().def.position.x as f64 + 0.05;
+            let length = right as f64 - face;
+            let exact = 0.5 * k * (mass * 9.81 / length) * (volume / length);
+            eprintln!(
+                "{label}: thrust {thrust:.1} N/m, exact {exact:.1} ({:.4})",
+                thrust / exact
+            );
+            assert!(
+                (thrust / exact - 1.0).abs() < 0.05,
+                "{label}: thrust {thrust} N/m, Rankine's {exact}"
+            );
+        }
     }
 }
 

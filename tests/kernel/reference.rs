@@ -39,8 +39,8 @@
 use crate::common::{buffer_for, free_space, moving_block, soft_neo_hookean};
 use mpm_gimp::simd::Simd;
 use mpm_gimp::{
-    Boundary, Dimension, Face, MaterialDef, MaterialModel, Real, ScalarBoundary, ShapeFunction,
-    Transfer, UpdateOrder, World, WorldDef,
+    Boundary, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, Real, ScalarBoundary,
+    ShapeFunction, Transfer, UpdateOrder, World, WorldDef,
 };
 #[cfg(feature = "effects")]
 use mpm_gimp::{Damping, Effects, Feedback, ScalarField, Schedule, Transport};
@@ -430,8 +430,9 @@ struct Material {
     /// Von Mises: the initial yield stress and the linear hardening modulus, Pa.
     yield_stress: f64,
     hardening: f64,
-    /// Drucker-Prager: the friction angle phi (radians) and the cohesion c, Pa.
+    /// Drucker-Prager: the friction angle phi (radians), the cone's fit and the cohesion c, Pa.
     friction_angle: f64,
+    friction_fit: FrictionFit,
     cohesion: f64,
     /// Snow: critical compression and stretch theta_c, theta_s, hardening coefficient xi.
     theta_c: f64,
@@ -1604,7 +1605,14 @@ fn inelastic(m: &Method, p: &mut Particle, eigen: f64) {
         }
         MaterialModel::DruckerPrager => {
             let sin = mat.friction_angle.sin();
-            let alpha = (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 - sin);
+            // The cone through Mohr-Coulomb's compression or extension corners, inscribed, or
+            // matching it in plane strain (E40).
+            let alpha = match mat.friction_fit {
+                FrictionFit::Compression => (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 - sin),
+                FrictionFit::Extension => (2.0f64 / 3.0).sqrt() * 2.0 * sin / (3.0 + sin),
+                FrictionFit::Inscribed => 2.0f64.sqrt() * sin / (9.0 + 3.0 * sin * sin).sqrt(),
+                FrictionFit::PlaneStrain => sin / 2.0f64.sqrt(),
+            };
             let k = 2.0 * mu + n as f64 * lambda;
             let apex_tension = if mat.cohesion > 0.0 {
                 mat.cohesion / mat.friction_angle.tan()
@@ -2254,6 +2262,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             yield_stress: material.yield_stress as f64,
             hardening: material.hardening_modulus as f64,
             friction_angle: (material.friction_angle as f64).to_radians(),
+            friction_fit: material.friction_fit,
             cohesion: material.cohesion as f64,
             theta_c: material.critical_compression as f64,
             theta_s: material.critical_stretch as f64,
@@ -3416,6 +3425,41 @@ fn every_model_steps_as_the_reference_does() {
                         check(dim, shape, order, transfer, &material, simd, Scene::Free);
                     }
                 }
+            }
+        }
+    }
+}
+
+/// Drucker-Prager with each fit of its cone to the friction angle (E40), its return acting on
+/// parts of a prestrained block, in 2D, the axisymmetric form and 3D, uGIMP and the quadratic
+/// B-spline, MUSL and USL, agrees with the reference step to round-off.
+#[cfg(feature = "effects")]
+#[test]
+fn every_friction_fit_steps_as_the_reference_does() {
+    for fit in [
+        FrictionFit::Compression,
+        FrictionFit::Extension,
+        FrictionFit::Inscribed,
+        FrictionFit::PlaneStrain,
+    ] {
+        let material = MaterialDef {
+            friction_fit: fit,
+            ..model_material(MaterialModel::DruckerPrager)
+        };
+        for dim in dims() {
+            for (shape, order) in [
+                (ShapeFunction::Gimp, UpdateOrder::Musl),
+                (ShapeFunction::QuadraticBspline, UpdateOrder::Usl),
+            ] {
+                check(
+                    dim,
+                    shape,
+                    order,
+                    Transfer::Flip,
+                    &material,
+                    Simd::Detect,
+                    Scene::Free,
+                );
             }
         }
     }

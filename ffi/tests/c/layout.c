@@ -29,6 +29,7 @@ PROBE(MpmTransfer)
 PROBE(MpmBoundary)
 PROBE(MpmFace)
 PROBE(MpmMaterialModel)
+PROBE(MpmFrictionFit)
 PROBE(MpmParticleStatus)
 PROBE(MpmScalarBoundaryKind)
 PROBE(MpmScalarField)
@@ -87,6 +88,7 @@ int main(void) {
     TYPE(MpmBoundary);
     TYPE(MpmFace);
     TYPE(MpmMaterialModel);
+    TYPE(MpmFrictionFit);
     TYPE(MpmParticleStatus);
     TYPE(MpmScalarBoundaryKind);
     TYPE(MpmScalarField);
@@ -192,6 +194,7 @@ int main(void) {
     FIELD(MpmMaterialDef, yield_stress);
     FIELD(MpmMaterialDef, hardening_modulus);
     FIELD(MpmMaterialDef, friction_angle);
+    FIELD(MpmMaterialDef, friction_fit);
     FIELD(MpmMaterialDef, cohesion);
     FIELD(MpmMaterialDef, critical_compression);
     FIELD(MpmMaterialDef, critical_stretch);

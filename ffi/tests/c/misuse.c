@@ -1108,6 +1108,10 @@ static void material_misuse(void) {
         m.model = bad_model[k];
         snprintf(name, sizeof name, "material: model %u", (unsigned)bad_model[k]);
         REFUSED(name, MPM_STATUS_INVALID_ENUM, mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
+        m = mpm_material_def_default();
+        m.friction_fit = bad_model[k] - 3;
+        snprintf(name, sizeof name, "material: friction fit %u", (unsigned)m.friction_fit);
+        REFUSED(name, MPM_STATUS_INVALID_ENUM, mpm_world_add_material(g_w2, &m, OUT(uint32_t)));
     }
 
 #define BAD_MAT(name, field, value) \
