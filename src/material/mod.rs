@@ -367,6 +367,20 @@ pub(crate) fn particle_stress<const D: usize>(
     )
 }
 
+/// [`particle_stress`] of a particle of the fluid model alone (material `r` a fluid): what
+/// the fluid's volume relaxation (E97) recomputes, without every model's stress compiled in.
+pub(crate) fn fluid_stress<const D: usize>(
+    r: &MaterialRecord,
+    f: &Deformation<D>,
+    d: Real,
+) -> Option<[Real; 6]> {
+    if !(f.jm1 > -1.0 && d > -1.0) {
+        return None;
+    }
+    let p = 1.0 / r.density;
+    Some(stress_of::<fluid::Fluid, D, Real>(&fluid::Fluid::params(r), p, f, Some(d)).stored())
+}
+
 /// A chunk's deformation as lane arrays (borrowed within one chunk's update), `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D),
 /// `jm1[lane]` and the plastic history `plastic[lane]`, which the material update changes in
 /// place.

@@ -93,14 +93,6 @@ pub(crate) enum FieldPass<'v, 'g, const D: usize> {
         on_grid: &'v mut [Real],
         fixed: bool,
     },
-    /// The fluids' volume relaxation ([`super::volume`], not a field's): the volumes' scatter
-    /// onto the nodes of `g`.
-    Volumes(&'v mut GridCols<'g, D>),
-    /// The fluid particles' volume relaxation, from the fills of `g`.
-    Relax {
-        g: &'v GridCols<'g, D>,
-        state: super::volume::FluidState<'v, D>,
-    },
 }
 
 /// The particle loop `pass` of field `f` (HEAT or DIFFUSION) over the particles `0..count`
@@ -120,15 +112,6 @@ pub(crate) fn particles<
     f: usize,
     pass: FieldPass<'_, '_, D>,
 ) {
-    let pass = match pass {
-        FieldPass::Volumes(g) => {
-            return super::volume::scatter::<I, D, K, S, W>(shape, ctx, p, count, g)
-        }
-        FieldPass::Relax { g, state } => {
-            return super::volume::relax::<I, D, K, S, W>(shape, ctx, p, count, g, state)
-        }
-        pass => pass,
-    };
     let stride = ctx.geom.stride;
     let mut st = Stencils::<D, K, W>::default();
     // The scatters read the particles' values, the update writes them.
@@ -279,8 +262,6 @@ pub(crate) fn particles<
                 }
             }
         }
-        // Handled above.
-        FieldPass::Volumes(_) | FieldPass::Relax { .. } => {}
     }
 }
 
@@ -443,10 +424,48 @@ pub(super) fn chunk_stencils<
     count: usize,
     len: usize,
 ) -> Lanes<W> {
+    chunk_stencils_with(
+        I::stencils::<D, K, S, W>,
+        st,
+        shape,
+        ctx,
+        p,
+        start,
+        count,
+        len,
+    )
+}
+
+/// An instance's stencils of a chunk ([`super::Kernels::stencils`]).
+pub(crate) type StencilsFn<const D: usize, const K: usize, S, const W: usize> = fn(
+    &mut Stencils<D, K, W>,
+    &S,
+    &Ctx<'_, D>,
+    &[&[Real]; D],
+    usize,
+    &[Lane<W>; D],
+    bool,
+    bool,
+    bool,
+);
+
+/// [`chunk_stencils`] with the instance's stencils `stencils`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn chunk_stencils_with<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+    stencils: StencilsFn<D, K, S, W>,
+    st: &mut Stencils<D, K, W>,
+    shape: &S,
+    ctx: &Ctx<'_, D>,
+    p: &ParticleCols<'_, D>,
+    start: usize,
+    count: usize,
+    len: usize,
+) -> Lanes<W> {
     let x: [Lane<W>; D] = core::array::from_fn(|a| load(p.x[a], start));
     // The shape functions' gradients, with MLS-MPM too.
     let stretch = p.stretch_columns();
-    I::stencils::<D, K, S, W>(st, shape, ctx, &stretch, start, &x, false, true, false);
+    stencils(st, shape, ctx, &stretch, start, &x, false, true, false);
     let last = Stencil::<D, K>::last_row_offset(ctx.geom.stride);
     live_lanes(p, start, count) & Lanes::from_fn(|ln| rows_fit(st.lane(ln).base(), last, len))
 }

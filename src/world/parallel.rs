@@ -478,12 +478,12 @@ impl<'b, const D: usize> Columns<'b, D> {
     ) {
         transport::zero_lines(ctx, self.grid().acc[0]);
         self.scatter_tiles(None, &|p, g| {
-            I::transport::<D, K, S, W>(shape, ctx, p, count, 0, FieldPass::Volumes(g))
+            volume::scatter::<D, K, S, W>(I::stencils::<D, K, S, W>, shape, ctx, p, count, g)
         });
         volume::fills(ctx, self.grid().acc[0], S::AXISYMMETRIC);
         self.particle_ranges(count, &mut StepReport::default(), &|p, n, g, _| {
             let state = volume::FluidState::take(p);
-            I::transport::<D, K, S, W>(shape, ctx, p, n, 0, FieldPass::Relax { g, state })
+            volume::relax::<D, K, S, W>(I::stencils::<D, K, S, W>, shape, ctx, p, n, g, state)
         });
     }
 
