@@ -357,14 +357,7 @@ pub(crate) fn particle_stress<const D: usize>(
     f: &Deformation<D>,
     d: Real,
 ) -> Option<[Real; 6]> {
-    // NaN-safe: a NaN is not > -1.
-    if !(f.jm1 > -1.0 && d > -1.0) {
-        return None;
-    }
-    let p = 1.0 / r.density;
-    Some(
-        by_model!(model_of(r), M => stress_of::<M, D, Real>(&M::params(r), p, f, Some(d))).stored(),
-    )
+    by_model!(model_of(r), M => stress_as::<M, D>(r, f, d))
 }
 
 /// [`particle_stress`] of a particle of the fluid model alone (material `r` a fluid): what
@@ -374,11 +367,21 @@ pub(crate) fn fluid_stress<const D: usize>(
     f: &Deformation<D>,
     d: Real,
 ) -> Option<[Real; 6]> {
+    stress_as::<fluid::Fluid, D>(r, f, d)
+}
+
+/// [`particle_stress`] with the model `M`.
+#[inline(always)]
+fn stress_as<M: Model, const D: usize>(
+    r: &MaterialRecord,
+    f: &Deformation<D>,
+    d: Real,
+) -> Option<[Real; 6]> {
+    // NaN-safe: a NaN is not > -1.
     if !(f.jm1 > -1.0 && d > -1.0) {
         return None;
     }
-    let p = 1.0 / r.density;
-    Some(stress_of::<fluid::Fluid, D, Real>(&fluid::Fluid::params(r), p, f, Some(d)).stored())
+    Some(stress_of::<M, D, Real>(&M::params(r), 1.0 / r.density, f, Some(d)).stored())
 }
 
 /// A chunk's deformation as lane arrays (borrowed within one chunk's update), `h[a][b][lane]`, the out-of-plane `hzz[lane]` (2D),

@@ -114,6 +114,7 @@ pub(crate) fn particles<
 ) {
     let stride = ctx.geom.stride;
     let mut st = Stencils::<D, K, W>::default();
+    let stencils = I::stencils::<D, K, S, W>;
     // The scatters read the particles' values, the update writes them.
     let values = match &pass {
         FieldPass::Update { value, .. } => value.len(),
@@ -133,8 +134,7 @@ pub(crate) fn particles<
             // A tile's rows are clipped to it (`Tile::own`); the whole grid's must fit.
             let fit = if whole_grid { n } else { usize::MAX };
             for start in chunks {
-                let live =
-                    chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, fit);
+                let live = chunk_stencils(stencils, &mut st, shape, ctx, p, start, count, fit);
                 for ln in const { scatter_order::<W>() } {
                     if live.has(ln) {
                         let i = start + ln;
@@ -169,15 +169,8 @@ pub(crate) fn particles<
                 return; // Unreachable, as above.
             }
             for start in chunks {
-                let live = chunk_stencils::<I, D, K, S, W>(
-                    &mut st,
-                    shape,
-                    ctx,
-                    p,
-                    start,
-                    count,
-                    values.len(),
-                );
+                let live =
+                    chunk_stencils(stencils, &mut st, shape, ctx, p, start, count, values.len());
                 for ln in const { scatter_order::<W>() } {
                     if !live.has(ln) {
                         continue;
@@ -223,7 +216,7 @@ pub(crate) fn particles<
                 return; // Unreachable, as above.
             }
             for start in (0..count).step_by(W) {
-                let live = chunk_stencils::<I, D, K, S, W>(&mut st, shape, ctx, p, start, count, n);
+                let live = chunk_stencils(stencils, &mut st, shape, ctx, p, start, count, n);
                 for ln in live.iter() {
                     let i = start + ln;
                     // SAFETY: `chunk_stencils` checked the rows of a live lane.
@@ -405,37 +398,6 @@ pub(crate) fn nodal_rates<const D: usize>(
     fixed
 }
 
-/// Replaces `st` by the stencils of the chunk at `start` and returns its live lanes: active
-/// particles below `count` whose every stencil row fits in node columns of length `len`
-/// (always, by construction; the unchecked row accesses rely on it).
-#[inline(always)]
-pub(super) fn chunk_stencils<
-    I: Kernels,
-    const D: usize,
-    const K: usize,
-    S: Shape1D<K>,
-    const W: usize,
->(
-    st: &mut Stencils<D, K, W>,
-    shape: &S,
-    ctx: &Ctx<'_, D>,
-    p: &ParticleCols<'_, D>,
-    start: usize,
-    count: usize,
-    len: usize,
-) -> Lanes<W> {
-    chunk_stencils_with(
-        I::stencils::<D, K, S, W>,
-        st,
-        shape,
-        ctx,
-        p,
-        start,
-        count,
-        len,
-    )
-}
-
 /// An instance's stencils of a chunk ([`super::Kernels::stencils`]).
 pub(crate) type StencilsFn<const D: usize, const K: usize, S, const W: usize> = fn(
     &mut Stencils<D, K, W>,
@@ -449,10 +411,13 @@ pub(crate) type StencilsFn<const D: usize, const K: usize, S, const W: usize> = 
     bool,
 );
 
-/// [`chunk_stencils`] with the instance's stencils `stencils`.
+/// Replaces `st` by the stencils of the chunk at `start`, computed by the instance's
+/// `stencils`, and returns its live lanes: active particles below `count` whose every stencil
+/// row fits in node columns of length `len` (always, by construction; the unchecked row
+/// accesses rely on it).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(super) fn chunk_stencils_with<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
+pub(super) fn chunk_stencils<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     stencils: StencilsFn<D, K, S, W>,
     st: &mut Stencils<D, K, W>,
     shape: &S,

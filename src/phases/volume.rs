@@ -32,7 +32,7 @@
 //! the first acceleration column, before the grid's reset.
 
 use super::transport::{
-    chunk_stencils_with, current_volume, gather_rows, scatter_order, scatter_rows, StencilsFn,
+    chunk_stencils, current_volume, gather_rows, scatter_order, scatter_rows, StencilsFn,
 };
 use super::Ctx;
 use crate::def::MaterialModel;
@@ -77,7 +77,7 @@ pub(crate) fn scatter<const D: usize, const K: usize, S: Shape1D<K>, const W: us
     let fit = if tile == Tile::ALL { n } else { usize::MAX };
     let mut st = Stencils::<D, K, W>::default();
     for start in chunks {
-        let live = chunk_stencils_with(stencils, &mut st, shape, ctx, p, start, count, fit);
+        let live = chunk_stencils(stencils, &mut st, shape, ctx, p, start, count, fit);
         for ln in const { scatter_order::<W>() } {
             if !live.has(ln) {
                 continue;
@@ -178,7 +178,7 @@ pub(crate) fn relax<const D: usize, const K: usize, S: Shape1D<K>, const W: usiz
         if !(start..(start + W).min(count)).any(|i| relaxing(i).is_some()) {
             continue;
         }
-        let live = chunk_stencils_with(stencils, &mut st, shape, ctx, p, start, count, n);
+        let live = chunk_stencils(stencils, &mut st, shape, ctx, p, start, count, n);
         for ln in live.iter() {
             let i = start + ln;
             let Some(rec) = relaxing(i) else {
