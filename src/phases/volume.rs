@@ -8,7 +8,7 @@
 //! their `J` says, the sum of their volumes `J V0` exceeds the space they fill, and the
 //! pressure, which reads `J` alone, does not push back. A box floating on such water sinks by
 //! the volume the packed particles lose (7 % of its depth within a minute, `examples/float.rs`
-//! with the water cut where particle centres lie inside the box).
+//! `--cut-centres`).
 //!
 //! Each substep, before the scatter, with the particles where the substep starts:
 //! 1. scatter: the nodal volume `V_i = sum_p S_ip J_p V0_p` of every active particle, of
@@ -149,7 +149,7 @@ impl<'a, const D: usize> FluidState<'a, D> {
 /// `stencils`. Like [`scatter`], one copy per form, not one per instance: the two loops are
 /// scalar per particle but for their stencils, which they call through the instance's table;
 /// compiled into every instance they added 0.58 MB to the library, and in the baseline
-/// instance alone they made a fluid's step 1.88 times as long, not 1.63.
+/// instance alone they made a fluid's step 1.88 times as long, not 1.65.
 #[inline(never)]
 pub(crate) fn relax<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     stencils: StencilsFn<D, K, S, W>,
