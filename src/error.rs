@@ -22,7 +22,7 @@ pub enum Error {
     InvalidCellCount = 6,
     /// Particle or material capacity is zero or too large to index.
     InvalidCapacity = 7,
-    /// FLIP fraction outside [0, 1].
+    /// FLIP fraction outside [0, 1], or a PIC rate negative or not finite.
     InvalidFlipBeta = 8,
     /// Courant number outside (0, 1].
     InvalidCfl = 9,
@@ -141,7 +141,7 @@ impl Error {
             Error::InvalidCellSize => c"cell size must be finite and > 0",
             Error::InvalidCellCount => c"too few cells for the shape margin, or too many nodes",
             Error::InvalidCapacity => c"capacity must be > 0 and small enough to index",
-            Error::InvalidFlipBeta => c"FLIP fraction beta must be in [0, 1]",
+            Error::InvalidFlipBeta => c"FLIP fraction beta must be in [0, 1] and the PIC rate finite and >= 0",
             Error::InvalidCfl => c"Courant number must be in (0, 1]",
             Error::InvalidExpTerms => c"exp(grad v dt) series terms must be in 1..=8",
             Error::InvalidParticlesPerCell => c"particles per cell must be in 1..=8",

@@ -32,7 +32,7 @@ pub const CHUNK: usize = 32;
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 18;
+const VERSION: u64 = 19;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,6 +112,8 @@ pub(crate) struct Header {
     /// `WorldDef::wall_friction`, `WorldDef::wall_velocity`.
     pub wall_friction: [f64; 6],
     pub wall_velocity: [[f64; 3]; 6],
+    /// `WorldDef::pic_rate`.
+    pub pic_rate: f64,
     /// `Effects::sdf_capacity`, and the distance samples added.
     pub sdf_capacity: u64,
     pub sdf_count: u64,
@@ -268,7 +270,7 @@ const _: () = assert!(
             + 2 * 14
             + 4
             + 6 * 4
-            + 2
+            + 3
             + 8 * DAMPING_ZONES)
 );
 
@@ -801,7 +803,8 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     {
         return Err(Error::InvalidCapacity);
     }
-    if !(0.0..=1.0).contains(&def.flip_beta) {
+    let rate_ok = def.pic_rate >= 0.0 && def.pic_rate.is_finite();
+    if !((0.0..=1.0).contains(&def.flip_beta) && rate_ok) {
         return Err(Error::InvalidFlipBeta);
     }
     if !(def.cfl > 0.0 && def.cfl <= 1.0) {
@@ -924,6 +927,7 @@ impl Header {
             collider_count: 0,
             wall_friction: def.wall_friction.map(|f| f as f64),
             wall_velocity: def.wall_velocity.map(w),
+            pic_rate: def.pic_rate as f64,
             sdf_capacity: fx.sdf_capacity as u64,
             sdf_count: 0,
         }
@@ -1030,6 +1034,7 @@ impl Header {
             faces,
             wall_friction: self.wall_friction.map(|f| f as Real),
             wall_velocity: self.wall_velocity.map(v),
+            pic_rate: self.pic_rate as Real,
             exp_terms: small(self.exp_terms)?,
             cfl: self.cfl as Real,
             max_substeps: small(self.max_substeps)?,

@@ -696,6 +696,9 @@ typedef struct MpmWorldDef {
   uint32_t particles_per_cell;
   // FLIP fraction beta in [0, 1]. Default 0.99.
   mpm_real flip_beta;
+  // PIC share as a rate, 1/s, finite and >= 0: a substep of length dt blends with FLIP
+  // fraction `flip_beta * exp(-pic_rate * dt)`. Default 0.
+  mpm_real pic_rate;
   // Default `MPM_TRANSFER_FLIP`.
   MpmTransfer transfer;
   // Default `MPM_UPDATE_ORDER_MUSL`.

@@ -419,6 +419,9 @@ pub struct MpmWorldDef {
     pub particles_per_cell: u32,
     /// FLIP fraction beta in [0, 1]. Default 0.99.
     pub flip_beta: mpm_real,
+    /// PIC share as a rate, 1/s, finite and >= 0: a substep of length dt blends with FLIP
+    /// fraction `flip_beta * exp(-pic_rate * dt)`. Default 0.
+    pub pic_rate: mpm_real,
     /// Default `MPM_TRANSFER_FLIP`.
     pub transfer: MpmTransferValue,
     /// Default `MPM_UPDATE_ORDER_MUSL`.
@@ -551,6 +554,7 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         shape: d.shape as u32,
         particles_per_cell: d.particles_per_cell,
         flip_beta: d.flip_beta,
+        pic_rate: d.pic_rate,
         transfer: d.transfer as u32,
         update_order: d.update_order as u32,
         gravity: c_vec3(d.gravity),
@@ -814,6 +818,7 @@ pub(crate) fn world_def_from_c(d: &MpmWorldDef) -> Result<WorldDef, MpmStatus> {
         shape,
         particles_per_cell: d.particles_per_cell,
         flip_beta: d.flip_beta,
+        pic_rate: d.pic_rate,
         transfer,
         update_order,
         gravity: vec3(d.gravity),

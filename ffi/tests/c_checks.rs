@@ -174,6 +174,7 @@ fn rust_layout() -> String {
         shape,
         particles_per_cell,
         flip_beta,
+        pic_rate,
         transfer,
         update_order,
         gravity,
@@ -833,6 +834,7 @@ fn rust_same_state() -> String {
         shape: ShapeFunction::QuadraticBspline,
         update_order: UpdateOrder::Usl,
         flip_beta: 0.875,
+        pic_rate: 12.5,
         gravity: Vec3::new(0.5, -10.0, 0.25),
         faces,
         exp_terms: 3,
@@ -1316,6 +1318,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(wd.shape, k.shape as u32);
     assert_eq!(wd.particles_per_cell, k.particles_per_cell);
     assert_eq!(wd.flip_beta, k.flip_beta);
+    assert_eq!(wd.pic_rate, k.pic_rate);
     assert_eq!(wd.transfer, k.transfer as u32);
     assert_eq!(wd.transfer, MpmTransfer::Flip as u32);
     assert_eq!(wd.update_order, k.update_order as u32);

@@ -407,6 +407,7 @@ fn new_def(inp: &mut Input<'_>) -> MpmWorldDef {
     def.shape = inp.u32_below(6); // 0..=4 the shapes (cpGIMP 4), 5 out of range
     def.particles_per_cell = inp.u32_below(5);
     def.flip_beta = inp.real_in(0.0, 1.0);
+    def.pic_rate = inp.real_in(0.0, 100.0);
     def.update_order = inp.u32_below(4);
     def.gravity = inp.vec3_in(-20.0, 20.0);
     for f in def.faces.iter_mut() {

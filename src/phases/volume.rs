@@ -16,7 +16,7 @@
 //! 2. the nodal fill `phi_i = V_i / V_cell,i` (`h^d`; axisymmetric, per radian,
 //!    `h^2 max(r_i, h / 2)`), the axis and periodic images folded and read;
 //! 3. per fluid particle the fill at its place `phi_p = sum_i S_ip phi_i`, and where
-//!    `phi_p > 1` (by more than 1e-4), `J <- J / phi_p^min(1, k dt)`, `k` the material's
+//!    `phi_p > c = 1 + 1e-4`, `J <- J / (phi_p / c)^min(1, k dt)`, `k` the material's
 //!    [`crate::MaterialDef::volume_relaxation`]: the deformation becomes `J^(1/n) I` (as the
 //!    fluid's own projection keeps it, E45) and the stored stress takes the change of the
 //!    pressure (the viscous part stays).
@@ -199,7 +199,9 @@ pub(crate) fn relax<const D: usize, const K: usize, S: Shape1D<K>, const W: usiz
                 .filter(|&f| ctx.eigenstrain[f])
                 .map(|f| eigenstrain_part(rec, f, p.scalar[f][1].get(i).copied().unwrap_or(0.0)))
                 .sum();
-            let phim1 = exp_m1(ln_1p(phi - 1.0) * share);
+            // Relaxed toward the least crowd, not to 1: the map stays continuous where the
+            // fill crosses it, so the round-off of the sums cannot switch a particle's J.
+            let phim1 = exp_m1((ln_1p(phi - 1.0) - ln_1p(CROWD)) * share);
             let Some((new, change)) =
                 squeeze(rec, &old, phim1, S::AXISYMMETRIC, eigen, ctx.jm1_band[0])
             else {

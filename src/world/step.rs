@@ -8,7 +8,7 @@ use crate::def::{Transfer, UpdateOrder, WorldDef};
 use crate::effects::damping::NodalDamping;
 use crate::grid::Geom;
 use crate::layout::{ColliderImpulse, ColliderRecord, Layout, MaterialRecord, TractionRecord};
-use crate::math::ceil;
+use crate::math::{ceil, exp_m1};
 use crate::particles::FROZEN;
 use crate::phases::p2g::{Adds, Mode};
 use crate::phases::{grid_update, Ctx};
@@ -285,7 +285,7 @@ impl<'a> World<'a> {
             forces: fx.particle_forces,
             damp: fx.damping.is_some_and(|d| d.on_particles()),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
-            beta: def.flip_beta,
+            beta: def.flip_beta * (1.0 + exp_m1(-def.pic_rate * dt)),
             alpha_g,
             alpha_p,
             nodal_damping,

@@ -808,6 +808,21 @@ fn bad_definitions() -> Vec<(&'static str, WorldDef, Error)> {
             with(&|d| d.flip_beta = Real::NAN),
             Error::InvalidFlipBeta,
         ),
+        (
+            "pic_rate -1",
+            with(&|d| d.pic_rate = -1.0),
+            Error::InvalidFlipBeta,
+        ),
+        (
+            "pic_rate NaN",
+            with(&|d| d.pic_rate = Real::NAN),
+            Error::InvalidFlipBeta,
+        ),
+        (
+            "pic_rate inf",
+            with(&|d| d.pic_rate = Real::INFINITY),
+            Error::InvalidFlipBeta,
+        ),
         ("cfl 0", with(&|d| d.cfl = 0.0), Error::InvalidCfl),
         ("cfl 1.5", with(&|d| d.cfl = 1.5), Error::InvalidCfl),
         ("cfl NaN", with(&|d| d.cfl = Real::NAN), Error::InvalidCfl),

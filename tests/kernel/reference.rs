@@ -118,6 +118,8 @@ struct Method {
     /// The momentum approach ([`weights`]).
     momentum: bool,
     beta: f64,
+    /// The PIC share's rate in time: a substep's FLIP fraction is `beta exp(-pic_rate dt)`.
+    pic_rate: f64,
     h: f64,
     origin: [f64; 3],
     /// Nodes per axis.
@@ -1437,7 +1439,7 @@ fn relax_volumes(m: &Method, ps: &mut [Particle], dt: f64) {
         }
         let eigen = eigenstrain(m, p);
         let before = stress_of_elastic_part(m, p, eigen);
-        let j = volume_ratio(m, p) / phi.powf((k * dt).min(1.0));
+        let j = volume_ratio(m, p) / (phi / (1.0 + 1.0e-4)).powf((k * dt).min(1.0));
         let e = (j.ln() / dims).exp_m1();
         for a in 0..m.d {
             for b in 0..m.d {
@@ -1940,7 +1942,8 @@ fn particles(m: &Method, ps: &mut [Particle], grid: &[Node], dt: f64, fused_stre
                 p.v[a] = v_gp[a] + a_gp[a] * dt - damp * dt;
                 p.x[a] += p.v[a] * dt;
             } else {
-                let inversion = (1.0 - m.beta) * (p.v[a] - v_gp[a]);
+                let beta = m.beta * (-m.pic_rate * dt).exp();
+                let inversion = (1.0 - beta) * (p.v[a] - v_gp[a]);
                 let v = p.v[a] + a_gp[a] * dt - inversion - damp * dt;
                 p.x[a] += if m.particle_velocity {
                     v * dt
@@ -2219,6 +2222,7 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
         particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
         momentum: def.transfer == Transfer::FlipMomentum,
         beta: def.flip_beta as f64,
+        pic_rate: def.pic_rate as f64,
         h: def.cell_size as f64,
         origin: [
             def.origin.x as f64,
@@ -2593,6 +2597,7 @@ fn check(
         update_order: order,
         transfer,
         flip_beta: 0.95,
+        pic_rate: 40.0,
         gravity: mpm_gimp::Vec3::new(0.3, -9.81, 0.2),
         // The block's 1000 particles and a few: a buffer of free space's capacity took most
         // of a check's time to clear.

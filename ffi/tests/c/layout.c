@@ -160,6 +160,7 @@ int main(void) {
     FIELD(MpmWorldDef, shape);
     FIELD(MpmWorldDef, particles_per_cell);
     FIELD(MpmWorldDef, flip_beta);
+    FIELD(MpmWorldDef, pic_rate);
     FIELD(MpmWorldDef, transfer);
     FIELD(MpmWorldDef, update_order);
     FIELD(MpmWorldDef, gravity);

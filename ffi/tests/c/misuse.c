@@ -992,6 +992,9 @@ static void init_misuse(void) {
     BAD_DEF("init: flip_beta NaN", flip_beta, R(NAN), MPM_STATUS_INVALID_FLIP_BETA);
     BAD_DEF("init: flip_beta -0.5", flip_beta, R(-0.5), MPM_STATUS_INVALID_FLIP_BETA);
     BAD_DEF("init: flip_beta 1.5", flip_beta, R(1.5), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: pic_rate -1", pic_rate, R(-1.0), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: pic_rate NaN", pic_rate, R(NAN), MPM_STATUS_INVALID_FLIP_BETA);
+    BAD_DEF("init: pic_rate inf", pic_rate, R(INFINITY), MPM_STATUS_INVALID_FLIP_BETA);
     BAD_DEF("init: cfl NaN", cfl, R(NAN), MPM_STATUS_INVALID_CFL);
     BAD_DEF("init: cfl +inf", cfl, R(INFINITY), MPM_STATUS_INVALID_CFL);
     BAD_DEF("init: cfl 0", cfl, R(0.0), MPM_STATUS_INVALID_CFL);

@@ -388,6 +388,7 @@ static void space3d(void) {
     def.shape = MPM_SHAPE_QUADRATIC_BSPLINE;
     def.update_order = MPM_UPDATE_ORDER_USL;
     def.flip_beta = (mpm_real)0.875;
+    def.pic_rate = (mpm_real)12.5;
     def.gravity = v3(0.5f, -10.0f, 0.25f);
     def.faces[MPM_FACE_Y_MIN] = MPM_BOUNDARY_STICK;
     def.faces[MPM_FACE_X_MAX] = MPM_BOUNDARY_OPEN;
