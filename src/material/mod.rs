@@ -600,23 +600,6 @@ fn per_rho0<const D: usize, T: Num>(
     tau
 }
 
-/// The material update of one particle of material `r` (the inelastic part, then the stress;
-/// see [`chunk_lanes`], whose lanes get the same bits) with the isotropic eigenstrain `d`:
-/// what a chunk whose lanes mix materials runs lane by lane. The deformation after the
-/// inelastic part, and `tau / rho0` in the stored component order unless the deformation or
-/// the eigenstrain inverts the material.
-pub(crate) fn particle_update<const D: usize>(
-    r: &MaterialRecord,
-    f: &Deformation<D>,
-    hoop: bool,
-    d: Option<Real>,
-) -> (Deformation<D>, Option<[Real; 6]>) {
-    let g = by_model!(model_of(r), M => update::<M, D, Real>(&M::params(r), 1.0 / r.density, f, hoop, d));
-    // NaN-safe: a NaN is not > -1.
-    let admissible = g.f.jm1 > -1.0 && d.is_none_or(|d| d > -1.0);
-    (g.f, admissible.then(|| g.tau.stored()))
-}
-
 /// Adds the Newtonian viscous stress of each lane's material to the chunk's `tau / rho0` (E46):
 /// `tau_visc = J sigma_visc`, `sigma_visc = eta (L + L^T - 2/3 tr(L) I) + zeta tr(L) I` with
 /// `L = grad v` (`l[a][b][lane]`) and, in 2D, the out-of-plane rate `lzz` (`v_r / r`
@@ -872,8 +855,8 @@ mod tests {
         }
     }
 
-    /// One particle's material update: the path of the reference step and of a chunk whose
-    /// lanes mix materials.
+    /// One particle's material update: the path of the reference step, which every lane of a
+    /// chunk must match.
     fn one_particle<const D: usize>(
         r: &MaterialRecord,
         f: &Deformation<D>,

@@ -14,9 +14,7 @@ use super::g2p::{commit_gradient_affine, Gathered, Grad, LaneMat};
 use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
-use crate::material::{
-    add_viscous_lanes, eigenstrain_part, particle_update, Deformation, LaneDeformation,
-};
+use crate::material::{add_viscous_lanes, eigenstrain_part, Deformation};
 use crate::math::exp_series_minus_identity;
 use crate::num::matrix;
 use crate::particles::StepReport;
@@ -121,58 +119,66 @@ pub(crate) fn update_stress<
     } else {
         [0.0; W]
     };
-    // Material: the model's chunk path when every lane shares one material (the common case,
-    // vectorised); otherwise lane by lane.
-    // Without `Option` combinators: their closures were left out of line (a profile showed
-    // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
+    // Material: the model's chunk path on the instance's vectors, once per material of the
+    // chunk's lanes. Most chunks hold one material and run it once in place. A chunk that
+    // mixes them runs each material's model on all its lanes from the same start and keeps
+    // that material's lanes ([`Mixed`]): every lane gets the bits of its own material's path,
+    // at the cost of one vector pass per material (lane by lane on the one-particle path, a
+    // scene whose materials mix as they flow spent a third of its step there).
     // The ids stay u32 here and are widened only where a lane's record is looked up (widening
     // all sixteen up front cost 2 instructions per 2D particle-step).
     let ids = load(p.material, start);
-    let mut uniform = None;
-    if let Some(l0) = update.first() {
-        let id = ids[l0];
-        // Compared four lanes at a time (`Lanes::equal`, exact: ids are below the material
-        // capacity, at most 2^16; one lane at a time it held 6 % of the stress pass's samples).
-        let same = update.minus(Lanes::equal(&ids, id)).is_empty();
-        if let Some(r) = ctx.materials.get(id as usize) {
-            if same {
-                uniform = Some(r);
-            }
-        }
-    }
     let ns = crate::layout::stress_components(D);
     // The isotropic eigenstrain of each lane (thermal expansion, swelling), when declared.
     let eigen = eigenstrain(ctx, p, start, &ids);
-    let ok = if let Some(rec) = uniform {
-        // The inelastic part first (a return mapping, a fluid's projection): the stress is
-        // that of the state it leaves. It acts on the elastic part: with an eigenstrain, on
-        // `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
-        // expansion neither yields nor flows.
-        let (axi, eigen) = (S::AXISYMMETRIC, eigen.as_ref());
-        let (hzz, jm1, plastic) = (&mut hzz, &mut jm1, &mut plastic);
-        I::material::<D, W>(rec, h, hzz, jm1, plastic, axi, eigen, tau);
-        // The eigenstrain must not invert the material either.
-        let admissible = match &eigen {
-            Some(d) => rows::above::<I, W>(d, -1.0),
-            None => Lanes::ALL,
-        };
-        admissible & update & rows::above::<I, W>(jm1, -1.0)
-    } else {
-        stress_lane_by_lane(
-            ctx.materials,
-            &ids,
-            LaneDeformation {
-                h,
-                hzz: &mut hzz,
-                jm1: &mut jm1,
-                plastic: &mut plastic,
-            },
-            S::AXISYMMETRIC,
-            eigen.as_ref(),
-            update,
-            tau,
-        )
+    let (axi, eigen) = (S::AXISYMMETRIC, eigen.as_ref());
+    // The eigenstrain must not invert the material either.
+    let admissible = match eigen {
+        Some(d) => rows::above::<I, W>(d, -1.0),
+        None => Lanes::ALL,
     };
+    // Compared four lanes at a time (`Lanes::equal`, exact: ids are below the material
+    // capacity, at most 2^16; one lane at a time it held 6 % of the stress pass's samples),
+    // once per material.
+    // Without `Option` combinators: their closures were left out of line (a profile showed
+    // `update_stress::{{closure}}` comparing the ids one lane at a time in baseline code).
+    let mut id = match update.first() {
+        Some(l0) => ids[l0],
+        None => 0,
+    };
+    let mut these = update & Lanes::equal(&ids, id);
+    let mut mixed = None;
+    if !update.minus(these).is_empty() {
+        mixed = Some(Mixed::take(h, &hzz, &jm1, &plastic));
+    }
+    let (mut left, mut ok) = (update, Lanes::NONE);
+    while !these.is_empty() {
+        left = left.minus(these);
+        if let Some(rec) = ctx.materials.get(id as usize) {
+            if let Some(m) = &mixed {
+                m.start(h, &mut hzz, &mut jm1, &mut plastic);
+            }
+            // The inelastic part first (a return mapping, a fluid's projection): the stress is
+            // that of the state it leaves. It acts on the elastic part: with an eigenstrain,
+            // on `F / (1 + d)`, which then takes the eigenstrain back (E47), so that a free
+            // expansion neither yields nor flows.
+            I::material::<D, W>(rec, h, &mut hzz, &mut jm1, &mut plastic, axi, eigen, tau);
+            ok = ok | (these & admissible & rows::above::<I, W>(&jm1, -1.0));
+            if let Some(m) = &mut mixed {
+                m.keep(these, h, &hzz, &jm1, &plastic, tau);
+            }
+        }
+        these = match left.first() {
+            Some(l0) => {
+                id = ids[l0];
+                left & Lanes::equal(&ids, id)
+            }
+            None => Lanes::NONE,
+        };
+    }
+    if let Some(m) = &mixed {
+        m.finish(h, &mut hzz, &mut jm1, &mut plastic, tau);
+    }
     if ctx.viscous {
         let zero = [0.0; W];
         let lzz = if S::AXISYMMETRIC {
@@ -253,51 +259,78 @@ fn eigenstrain<const D: usize, const W: usize>(
     Some(d)
 }
 
-/// The material update of the lanes in `update` of a chunk whose lanes do not share one
-/// material, one lane at a time ([`particle_update`]: the inelastic part on `f` in place, then
-/// the stress); returns the lanes it updated (not those inverted or
-/// of an unknown material). A function of its own per dimension, not inlined into every pass
-/// form: chunks that mix materials are few, and each inlined copy cost build time and size.
-#[inline(never)]
-fn stress_lane_by_lane<const D: usize, const W: usize>(
-    materials: &[crate::layout::MaterialRecord],
-    ids: &[u32; W],
-    f: LaneDeformation<'_, D, W>,
-    hoop: bool,
-    eigen: Option<&Lane<W>>,
-    update: Lanes<W>,
-    tau: &mut [Lane<W>; 6],
-) -> Lanes<W> {
-    let mut ok = Lanes::NONE;
-    for ln in update.iter() {
-        let Some(rec) = materials.get(ids[ln] as usize) else {
-            continue;
-        };
-        let one = Deformation::<D> {
-            h: matrix(|r, c| f.h[r][c][ln]),
-            hzz: f.hzz[ln],
-            jm1: f.jm1[ln],
-            plastic: f.plastic[ln],
-        };
-        let (one, stress) = particle_update(rec, &one, hoop, eigen.map(|d| d[ln]));
-        for r in 0..D {
-            for c in 0..D {
-                f.h[r][c][ln] = one.h[r][c];
-            }
-        }
-        (f.hzz[ln], f.jm1[ln], f.plastic[ln]) = (one.hzz, one.jm1, one.plastic);
-        if let Some(s) = stress {
-            for (row, &v) in tau
-                .iter_mut()
-                .zip(&s)
-                .take(crate::layout::stress_components(D))
-            {
-                row[ln] = v;
-            }
-            ok = ok | Lanes::one(ln);
+/// A chunk whose lanes mix materials: the deformation its materials start from, and what each
+/// material's pass left in its own lanes. Not inlined: one copy per dimension and width, not
+/// one per pass form (chunks that mix materials are few).
+struct Mixed<const D: usize, const W: usize> {
+    start: ([[Lane<W>; D]; D], [Lane<W>; 3]),
+    kept: ([[Lane<W>; D]; D], [Lane<W>; 3], [Lane<W>; 6]),
+}
+
+impl<const D: usize, const W: usize> Mixed<D, W> {
+    #[inline(never)]
+    fn take(h: &[[Lane<W>; D]; D], hzz: &Lane<W>, jm1: &Lane<W>, plastic: &Lane<W>) -> Self {
+        let start = (*h, [*hzz, *jm1, *plastic]);
+        Mixed {
+            start,
+            kept: (start.0, start.1, [[0.0; W]; 6]),
         }
     }
-    ok
+
+    /// Puts the start back before a material's pass.
+    #[inline(never)]
+    fn start(
+        &self,
+        h: &mut [[Lane<W>; D]; D],
+        hzz: &mut Lane<W>,
+        jm1: &mut Lane<W>,
+        plastic: &mut Lane<W>,
+    ) {
+        *h = self.start.0;
+        [*hzz, *jm1, *plastic] = self.start.1;
+    }
+
+    /// Keeps lanes `these` of a material's pass.
+    #[inline(never)]
+    fn keep(
+        &mut self,
+        these: Lanes<W>,
+        h: &[[Lane<W>; D]; D],
+        hzz: &Lane<W>,
+        jm1: &Lane<W>,
+        plastic: &Lane<W>,
+        tau: &[Lane<W>; 6],
+    ) {
+        let (kh, ks, kt) = &mut self.kept;
+        for ln in these.iter() {
+            for r in 0..D {
+                for c in 0..D {
+                    kh[r][c][ln] = h[r][c][ln];
+                }
+            }
+            for (k, v) in ks.iter_mut().zip([hzz, jm1, plastic]) {
+                k[ln] = v[ln];
+            }
+            for (k, v) in kt.iter_mut().zip(tau) {
+                k[ln] = v[ln];
+            }
+        }
+    }
+
+    /// Every material's lanes, as their passes left them.
+    #[inline(never)]
+    fn finish(
+        &self,
+        h: &mut [[Lane<W>; D]; D],
+        hzz: &mut Lane<W>,
+        jm1: &mut Lane<W>,
+        plastic: &mut Lane<W>,
+        tau: &mut [Lane<W>; 6],
+    ) {
+        *h = self.kept.0;
+        [*hzz, *jm1, *plastic] = self.kept.1;
+        *tau = self.kept.2;
+    }
 }
 
 /// Stress update in its own pass (USF before the momentum update, MUSL after the re-map),

@@ -114,12 +114,6 @@ impl<const W: usize> Lanes<W> {
         }
     }
 
-    /// Lane `ln` alone.
-    #[inline(always)]
-    pub fn one(ln: usize) -> Self {
-        Lanes(1 << ln)
-    }
-
     #[inline(always)]
     pub fn has(self, ln: usize) -> bool {
         self.0 >> ln & 1 != 0

@@ -865,6 +865,111 @@ fn a_smooth_wall_meets_rankines_earth_pressures() {
 /// Every model, the elastic ones too.
 const ALL_MODELS: [MaterialModel; 7] = MaterialModel::ALL;
 
+/// Two blocks far apart (each 0.15 m, deforming: a shear plus a squeeze about its centre) whose
+/// particles alternate in the world's order: block `a` of material `ma`, block `b` of `mb`
+/// (or, `None`, of `ma` too), so that with two materials every chunk of the stress update
+/// mixes them. Stepped 20 times by 1e-4 s, one substep each (shorter than either material's
+/// stable step); returns each block's columns (position, velocity, displacement gradient,
+/// stress).
+fn interleaved_blocks(
+    dim: Dimension,
+    ma: &MaterialDef,
+    mb: Option<&MaterialDef>,
+) -> [Vec<Vec<Real>>; 2] {
+    let def = plastic(free_space(dim, 32, 1.0 / 32.0));
+    let mut buf = buffer_for(&def);
+    let mut w = World::init(&def, buf.as_mut_bytes()).unwrap();
+    let d = def.axes();
+    let spacing = def.cell_size / 2.0;
+    let block = |at: Real| {
+        let mut cols: [Vec<Real>; 6] = Default::default();
+        crate::common::block_lattice(&mut cols, d, [at; 3], 0.15, spacing, |x| {
+            let c = at + 0.075;
+            [
+                3.0 * (x[1] - c) - 2.0 * (x[0] - c),
+                -2.0 * (x[1] - c),
+                -2.0 * (x[2] - c),
+            ]
+        });
+        cols
+    };
+    let (a, b) = (block(0.15), block(0.65));
+    let ia = w.add_material(ma).unwrap();
+    let ib = mb.map_or(ia, |m| w.add_material(m).unwrap());
+    let mut cols: [Vec<Real>; 6] = Default::default();
+    let mut ids = Vec::new();
+    for i in 0..a[0].len() {
+        for (id, block) in [(ia, &a), (ib, &b)] {
+            for (c, col) in cols.iter_mut().enumerate() {
+                col.push(block[c][i]);
+            }
+            ids.push(id);
+        }
+    }
+    // Equal densities (every default material's), so that both worlds' nodal mass cutoffs
+    // agree.
+    assert_eq!(ma.density, mb.unwrap_or(ma).density);
+    let vol = spacing.powi(d as i32);
+    w.add_particles(&mpm_gimp::ParticleBatch {
+        position: [&cols[0], &cols[1], &cols[2]],
+        velocity: [&cols[3], &cols[4], &cols[5]],
+        mass: &vec![ma.density * vol; ids.len()],
+        volume: &vec![vol; ids.len()],
+        material: &ids,
+    })
+    .unwrap();
+    for _ in 0..20 {
+        assert_eq!(w.step(1.0e-4).unwrap().substeps, 1);
+    }
+    let v = w.particles();
+    let mut columns: Vec<&[Real]> = Vec::new();
+    for a in 0..3 {
+        columns.extend([v.position[a], v.velocity[a]]);
+        columns.extend(v.displacement_gradient[a]);
+    }
+    columns.extend(v.stress);
+    core::array::from_fn(|k| {
+        columns
+            .iter()
+            .filter(|c| !c.is_empty())
+            .map(|c| c.iter().skip(k).step_by(2).copied().collect())
+            .collect()
+    })
+}
+
+/// A chunk whose lanes mix materials gives each lane its own material's update, the bits of
+/// a chunk of that material alone: every model, 2D and 3D, a block of it interleaved with a
+/// block of the next model (far apart, so that the grid does not couple them: every chunk
+/// mixes the two), each block against the same two blocks both of its own model (every chunk
+/// of one material). Every column of each block equal, bit for bit.
+#[test]
+fn a_chunk_that_mixes_materials_gives_each_lane_its_own() {
+    for (k, model) in ALL_MODELS.into_iter().enumerate() {
+        let other = ALL_MODELS[(k + 1) % ALL_MODELS.len()];
+        for dim in [Dimension::Plane2D, Dimension::ThreeD] {
+            let (ma, mb) = (material(model), material(other));
+            let mixed = interleaved_blocks(dim, &ma, Some(&mb));
+            let alone = [
+                interleaved_blocks(dim, &ma, None),
+                interleaved_blocks(dim, &mb, None),
+            ];
+            for (b, (label, alone)) in [(model, &alone[0][0]), (other, &alone[1][1])]
+                .into_iter()
+                .enumerate()
+            {
+                assert_eq!(alone.len(), mixed[b].len());
+                for (c, (x, y)) in alone.iter().zip(&mixed[b]).enumerate() {
+                    let same = x.iter().zip(y).all(|(p, q)| p.to_bits() == q.to_bits());
+                    assert!(
+                        same,
+                        "{model:?} beside {other:?}, {dim:?}: {label:?}'s column {c} differs"
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// Finite everywhere, mass exact, nothing frozen (unless `may_freeze`), and kinetic plus strain
 /// energy below its start plus what gravity released by more than 1 % (every model conserves
 /// or dissipates).
