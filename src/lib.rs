@@ -88,7 +88,7 @@ mod world;
 pub use def::{
     Boundary, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, Resolvable, ShapeFunction,
     Transfer, UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS,
-    MIN_STABLE_DT,
+    MIN_STABLE_DT, PARALLEL_FROM,
 };
 pub use def::{
     ColliderDef, ColliderShape, Contact, Damping, DampingZone, Effects, Feedback, ScalarBoundary,

@@ -72,6 +72,10 @@
 // `MpmStepReport::flags`: some particle froze because its volume ran away.
 #define MPM_STEP_FLAG_RUNAWAY 2
 
+// The fewest particles at which two workers step a world faster than one (measured; the
+// kernel's `PARALLEL_FROM`): below it `mpm_world_step` is the faster call.
+#define MPM_PARALLEL_FROM 4096
+
 // Result of a C call. The numbers are stable: the kernel's errors keep the numbers of
 // `mpm_gimp::Error`, and the conditions only the C interface can meet start at 64.
 // A call that returns anything but `MPM_STATUS_OK` has written nothing and changed nothing.
@@ -1733,7 +1737,9 @@ MpmStatus mpm_world_get_collider(const struct MpmWorld *world,
 // `tasks`, with the same results, bit for bit, for any `worker_count` and however the host
 // cuts and spreads the ranges. `tasks->worker_count` must lie in 1..=the definition's
 // `workers` (`MPM_STATUS_INVALID_LIMIT`); NULL `tasks` or a NULL callback is
-// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins.
+// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins. The loops go to the
+// host at any size: below `MPM_PARALLEL_FROM` particles two workers take longer than one,
+// and `mpm_world_step` is the faster call.
 //
 // A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
 // `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that

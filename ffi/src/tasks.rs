@@ -22,6 +22,12 @@ use core::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use kernel::tasks::{Task, MAX_ITEMS};
 use kernel::{TaskSystem, MAX_WORKERS};
 
+/// The fewest particles at which two workers step a world faster than one (measured; the
+/// kernel's `PARALLEL_FROM`): below it `mpm_world_step` is the faster call.
+pub const MPM_PARALLEL_FROM: usize = 4096;
+
+const _: () = assert!(MPM_PARALLEL_FROM == kernel::PARALLEL_FROM);
+
 /// Words of a loop's item bits ([`Loop::taken`]): one bit for each of the most items a loop of
 /// the kernel has ([`MAX_ITEMS`]).
 const TAKEN_WORDS: usize = MAX_ITEMS.div_ceil(64);
@@ -280,7 +286,9 @@ impl HostTasks {
 /// `tasks`, with the same results, bit for bit, for any `worker_count` and however the host
 /// cuts and spreads the ranges. `tasks->worker_count` must lie in 1..=the definition's
 /// `workers` (`MPM_STATUS_INVALID_LIMIT`); NULL `tasks` or a NULL callback is
-/// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins.
+/// `MPM_STATUS_NULL_POINTER`. The struct is copied when the call begins. The loops go to the
+/// host at any size: below `MPM_PARALLEL_FROM` particles two workers take longer than one,
+/// and `mpm_world_step` is the faster call.
 ///
 /// A task system that breaks the contract of `MpmEnqueueTaskCallback` makes the call answer
 /// `MPM_STATUS_TASK_CONTRACT` once its task is finished, without the report; the ranges that
@@ -321,7 +329,9 @@ pub unsafe extern "C" fn mpm_world_step_tasks(
             in_loop: AtomicBool::new(false),
         };
         let stepped = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            w.step_with_tasks(dt, &host)
+            // Every loop to the host at any size, so that its contract is checked each step
+            // (`step_with_tasks` keeps a small world on the calling thread).
+            w.step_on(dt, kernel::simd::Simd::Detect, &host)
         }));
         // First: items left out or run twice may break what the step expects of them further
         // on (a panic there is the host's doing, not the library's).

@@ -42,14 +42,22 @@ impl<'a> World<'a> {
     /// [`World::step`] on the host's task system (see [`crate::tasks`]): every pass of the
     /// step is cut into items the workers share. The state after the step is bit-identical
     /// to [`World::step`]'s, for any number of workers and however the system spreads the
-    /// items. Fails with [`Error::InvalidLimit`] (changing nothing) where the system has more
-    /// workers than the definition's [`WorldDef::workers`].
+    /// items. A world of fewer than [`crate::PARALLEL_FROM`] particles steps on the calling
+    /// thread, as [`World::step`] does, handing the system nothing. Fails with
+    /// [`Error::InvalidLimit`] (changing nothing) where the system has more workers than the
+    /// definition's [`WorldDef::workers`].
     pub fn step_with_tasks(
         &mut self,
         dt: Real,
         tasks: &dyn TaskSystem,
     ) -> Result<StepReport, Error> {
-        self.step_on(dt, Simd::Detect, tasks)
+        if self.particle_count() >= crate::PARALLEL_FROM {
+            return self.step_on(dt, Simd::Detect, tasks);
+        }
+        if !(1..=self.def().workers as usize).contains(&tasks.worker_count()) {
+            return Err(Error::InvalidLimit);
+        }
+        self.step_on(dt, Simd::Detect, &Serial)
     }
 
     /// [`World::step`] with a chosen instruction set (see [`crate::simd`]). Not part of the

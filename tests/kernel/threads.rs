@@ -391,3 +391,72 @@ fn more_workers_than_the_definition_allows_is_refused_and_changes_nothing() {
     assert!(world.state_bytes() == before.as_slice());
     assert!(world.step_with_tasks(1.0 / 240.0, &Hostile::new(2)).is_ok());
 }
+
+/// A task system of two workers that runs every loop on the calling thread and counts the
+/// loops it was handed.
+struct Counting(AtomicU64);
+
+// SAFETY: one range, `0..items`, on the calling thread, returning when it has run.
+unsafe impl TaskSystem for Counting {
+    fn worker_count(&self) -> usize {
+        2
+    }
+
+    fn parallel_for(&self, items: usize, _min_range: usize, task: &mpm_gimp::tasks::Task<'_>) {
+        self.0.fetch_add(1, Ordering::Relaxed);
+        if items > 0 {
+            task(0, items, 0);
+        }
+    }
+}
+
+/// A world too small to share ([`mpm_gimp::PARALLEL_FROM`] particles) steps on the calling
+/// thread and hands the task system nothing; one at that size hands it the passes. Both with
+/// the bits of [`World::step`].
+#[test]
+fn a_world_shares_its_step_only_from_the_size_where_it_pays() {
+    for n in [mpm_gimp::PARALLEL_FROM - 1, mpm_gimp::PARALLEL_FROM] {
+        let def = WorldDef {
+            workers: 2,
+            particle_capacity: n as u32,
+            ..base(Dimension::Plane2D)
+        };
+        let bytes = memory_requirements(&def).expect("valid").bytes;
+        let (mut a, mut b) = (HeapBuffer::new(bytes), HeapBuffer::new(bytes));
+        let add = |w: &mut World| {
+            let m = w.add_material(&RUBBER).expect("material");
+            // A row of `n` particles along x, 0.03 mm apart: the count exact.
+            let x: Vec<Real> = (0..n).map(|i| 0.3 + i as Real * 3.0e-5).collect();
+            let y = vec![0.5; n];
+            let zero = vec![0.0; n];
+            let v = vec![1.0e-4; n];
+            w.add_particles(&mpm_gimp::ParticleBatch {
+                position: [&x, &y, &[]],
+                velocity: [&zero, &zero, &[]],
+                mass: &v,
+                volume: &v,
+                material: &vec![m; n],
+            })
+            .expect("particles");
+        };
+        let mut serial = World::init(&def, a.as_mut_bytes()).expect("init");
+        let mut shared = World::init(&def, b.as_mut_bytes()).expect("init");
+        add(&mut serial);
+        add(&mut shared);
+        let tasks = Counting(AtomicU64::new(0));
+        for _ in 0..3 {
+            let expected = serial.step(1.0 / 240.0).expect("step");
+            assert_eq!(shared.step_with_tasks(1.0 / 240.0, &tasks), Ok(expected));
+        }
+        assert!(
+            shared.state_bytes() == serial.state_bytes(),
+            "{n} particles"
+        );
+        let loops = tasks.0.load(Ordering::Relaxed);
+        assert_eq!(
+            loops > 0,
+            n >= mpm_gimp::PARALLEL_FROM,
+            "{n} particles: {loops} loops handed to the system"
+        );
+    }
+}
