@@ -1,7 +1,10 @@
 //! A dam break against Martin and Moyce (1952): a water column `a` = 0.2 m wide and `2a` high
 //! collapses along the floor; prints the surge front `Z = x / a` (the farthest particle)
 //! against `T = t sqrt(2 g / a)` beside their data, the front's speed, and the shift of the
-//! time origin (the experiment's release, see `tests/kernel/materials.rs`) that fits best.
+//! time origin (the experiment's release, see `tests/kernel/materials.rs`) that fits best;
+//! and the sound speed over the fastest flow, the substeps a 60 Hz frame and the least volume
+//! ratio, what `--bulk` trades (`mpm_gimp_output::stiffness::bulk_modulus_for_speed_ratio`
+//! tabulates it).
 //!
 //! `cargo run --release --example dambreak` (20 cells across the column, APIC, slip floor).
 //! Options: `--cells N`, `--flip`, `--stick` (a no-slip floor), `--friction MU` (the floor's
@@ -100,14 +103,16 @@ fn main() {
     // The front (farthest particle, in a) every 1/240 s up to T = 3.5.
     let mut fronts = vec![(0.0f64, 0.0f64)];
     let frame = 1.0 / 240.0;
+    let (mut substeps, mut j_min) = (0u64, 1.0f64);
     while world.time() < 3.5 / scale {
         if gate > 0.0 {
             let mut c = world.collider(0).expect("gate").def;
             c.position.y = (wall + 1.5 * a + gate * (world.time() + frame)) as Real;
             world.set_collider(0, &c).expect("gate moves");
         }
-        world.step(frame as Real).expect("step");
+        substeps += world.step(frame as Real).expect("step").substeps as u64;
         let v = world.particles();
+        j_min = (0..v.count).fold(j_min, |j, i| j.min(v.jacobian(i) as f64));
         let front = (0..v.count)
             .map(|i| v.position[0][i] as f64 - wall)
             .fold(0.0, f64::max)
@@ -121,6 +126,13 @@ fn main() {
         let ((t0, z0), (t1, z1)) = (fronts[k - 1], fronts[k]);
         z0 + (z1 - z0) * (t - t0) / (t1 - t0)
     };
+    let c = (bulk / 1000.0).sqrt();
+    println!(
+        "sound speed {c:.1} m/s, {:.2} times Ritter's front speed 2 sqrt(2 g a); substeps a \
+         60 Hz frame {:.1}; least volume ratio J {j_min:.3}",
+        c / (2.0 * (2.0 * 9.81 * a).sqrt()),
+        substeps as f64 * 4.0 / (fronts.len() - 1) as f64
+    );
     let ((t0, z0), (t1, z1)) = (DATA[2], DATA[4]);
     println!(
         "front speed dZ/dT over T {t0}-{t1}: {:.3} (Martin and Moyce {:.3}, Ritter 2)",
