@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.9.0"
+#define MPM_GIMP_VERSION "0.10.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 900
+#define MPM_GIMP_ABI_VERSION 1000
 
 
 // Most points an `MpmSchedule` holds.
