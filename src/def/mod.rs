@@ -471,10 +471,10 @@ pub struct MaterialDef {
     /// fluid's acoustic modes, which its shear viscosity does not reach. Default 0.
     pub bulk_viscosity: Real,
     /// Rate k at which [`MaterialModel::Fluid`] relaxes a crowd, 1/s, >= 0 (E97): where its
-    /// particles fill more than the space around them (the fill `phi > 1`, from the particles'
-    /// volumes `J V0` on the grid), `J <- J / phi^min(1, k dt)`, so that the pressure pushes
-    /// them apart. Without it, particles packed by a collider's contact keep their `J` and a
-    /// floating body sinks. Default 20/s; 0 turns it off (the step then does no such pass).
+    /// particles fill more than the space around them (the fill `phi > c = 1 + 1e-4`, from the
+    /// particles' volumes `J V0` on the grid), `J <- J / (phi / c)^min(1, k dt)`, so that the
+    /// pressure pushes them apart. Without it, particles packed by a collider's contact keep
+    /// their `J` and a floating body sinks. Default 20/s; 0 turns it off (the step then does no such pass).
     /// Other models ignore it.
     pub volume_relaxation: Real,
     /// Bulk modulus K of [`MaterialModel::Fluid`], Pa, > 0 (other models take theirs from E

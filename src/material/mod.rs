@@ -172,6 +172,20 @@ pub(crate) fn eigenstrain_part(r: &MaterialRecord, field: usize, value: Real) ->
     }
 }
 
+/// The isotropic eigenstrain `d` of a particle of material `r` whose transported fields have
+/// the grid values `values` there (heat, diffusion; `None` for a field not declared): the sum
+/// of their [`eigenstrain_part`]s.
+#[inline(always)]
+pub(crate) fn eigenstrain_at(r: &MaterialRecord, values: [Option<Real>; 2]) -> Real {
+    let mut d = 0.0;
+    for (field, value) in values.into_iter().enumerate() {
+        if let Some(v) = value {
+            d += eigenstrain_part(r, field, v);
+        }
+    }
+    d
+}
+
 /// Lamé's lambda and mu (E33): all the elastic models (corotated linear, neo-Hookean,
 /// fixed-corotated) read of a material record.
 #[derive(Clone, Copy, Debug)]

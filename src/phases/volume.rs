@@ -38,7 +38,7 @@ use super::Ctx;
 use crate::def::MaterialModel;
 use crate::grid::{GridCols, Tile};
 use crate::layout::MaterialRecord;
-use crate::material::{eigenstrain_part, fluid_stress, model_of, Deformation};
+use crate::material::{eigenstrain_at, fluid_stress, model_of, Deformation};
 use crate::math::{exp_m1, ln_1p};
 use crate::particles::ParticleCols;
 use crate::shape::{Shape1D, Stencils};
@@ -172,6 +172,9 @@ pub(crate) fn relax<const D: usize, const K: usize, S: Shape1D<K>, const W: usiz
             .get(p.material[i] as usize)
             .filter(|r| relaxes(r))
     };
+    // Relaxed toward the least crowd, not to 1: the map stays continuous where the fill
+    // crosses it, so the round-off of the sums cannot switch a particle's J.
+    let ln_crowd = ln_1p(CROWD);
     let mut st = Stencils::<D, K, W>::default();
     for start in (0..count).step_by(W) {
         // A chunk without a fluid computes no stencils.
@@ -195,13 +198,13 @@ pub(crate) fn relax<const D: usize, const K: usize, S: Shape1D<K>, const W: usiz
                 core::array::from_fn(|a| core::array::from_fn(|b| h[a][b][i])),
                 if S::AXISYMMETRIC { hoop[i] } else { 0.0 },
             );
-            let eigen = (0..2)
-                .filter(|&f| ctx.eigenstrain[f])
-                .map(|f| eigenstrain_part(rec, f, p.scalar[f][1].get(i).copied().unwrap_or(0.0)))
-                .sum();
-            // Relaxed toward the least crowd, not to 1: the map stays continuous where the
-            // fill crosses it, so the round-off of the sums cannot switch a particle's J.
-            let phim1 = exp_m1((ln_1p(phi - 1.0) - ln_1p(CROWD)) * share);
+            let eigen = eigenstrain_at(
+                rec,
+                core::array::from_fn(|f| {
+                    ctx.eigenstrain[f].then(|| p.scalar[f][1].get(i).copied().unwrap_or(0.0))
+                }),
+            );
+            let phim1 = exp_m1((ln_1p(phi - 1.0) - ln_crowd) * share);
             let Some((new, change)) =
                 squeeze(rec, &old, phim1, S::AXISYMMETRIC, eigen, ctx.jm1_band[0])
             else {

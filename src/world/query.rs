@@ -8,7 +8,7 @@ use crate::layout::{
     col, ColliderImpulse, ColliderRecord, Header, Layout, MaterialRecord, TractionRecord,
 };
 use crate::material::{
-    eigenstrain_part, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
+    eigenstrain_at, elastic_part, energy_density, explicit_diffusivity, hardens, material_record,
     material_resolvable, model_of, particle_stress, wave_speed, Deformation,
 };
 use crate::particles::ACTIVE;
@@ -791,11 +791,11 @@ impl WorldRef<'_> {
 }
 
 fn eigenstrain_of(rec: &MaterialRecord, view: &ParticlesView<'_>, i: usize) -> Real {
-    [view.grid_temperature, view.grid_concentration]
-        .iter()
-        .enumerate()
-        .filter_map(|(f, col)| col.get(i).map(|&v| eigenstrain_part(rec, f, v)))
-        .sum()
+    let at = |col: &[Real]| col.get(i).copied();
+    eigenstrain_at(
+        rec,
+        [at(view.grid_temperature), at(view.grid_concentration)],
+    )
 }
 
 /// What bounds a substep: [`WorldRef::stable_dt`], and the largest damping rate besides the

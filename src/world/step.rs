@@ -51,13 +51,8 @@ impl<'a> World<'a> {
         dt: Real,
         tasks: &dyn TaskSystem,
     ) -> Result<StepReport, Error> {
-        if self.particle_count() >= crate::PARALLEL_FROM {
-            return self.step_on(dt, Simd::Detect, tasks);
-        }
-        if !(1..=self.def().workers as usize).contains(&tasks.worker_count()) {
-            return Err(Error::InvalidLimit);
-        }
-        self.step_on(dt, Simd::Detect, &Serial)
+        let shares = self.particle_count() >= crate::PARALLEL_FROM;
+        self.step_sharing(dt, Simd::Detect, tasks, shares)
     }
 
     /// [`World::step`] with a chosen instruction set (see [`crate::simd`]). Not part of the
@@ -67,13 +62,26 @@ impl<'a> World<'a> {
         self.step_on(dt, simd, &Serial)
     }
 
-    /// [`World::step_with_tasks`] with a chosen instruction set. Not part of the stable API.
+    /// [`World::step_with_tasks`] with a chosen instruction set, on `tasks` at any particle
+    /// count. Not part of the stable API.
     #[doc(hidden)]
     pub fn step_on(
         &mut self,
         dt: Real,
         simd: Simd,
         tasks: &dyn TaskSystem,
+    ) -> Result<StepReport, Error> {
+        self.step_sharing(dt, simd, tasks, true)
+    }
+
+    /// The step on `tasks`, which must fit the definition's workers, and on the calling thread
+    /// unless `shares`.
+    fn step_sharing(
+        &mut self,
+        dt: Real,
+        simd: Simd,
+        tasks: &dyn TaskSystem,
+        shares: bool,
     ) -> Result<StepReport, Error> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::InvalidTimeStep);
@@ -82,6 +90,7 @@ impl<'a> World<'a> {
         if !(1..=def.workers as usize).contains(&tasks.worker_count()) {
             return Err(Error::InvalidLimit);
         }
+        let tasks: &dyn TaskSystem = if shares { tasks } else { &Serial };
         let scan = Scan {
             tasks,
             workers: tasks.worker_count(),

@@ -1402,8 +1402,8 @@ fn stress_of_elastic_part(m: &Method, p: &Particle, eigen: f64) -> Mat {
 
 /// The fluid's volume relaxation (E97), with the particles where the substep starts: the
 /// particles' volumes `J V0` on the nodes, over each node's cell (`h^d`; axisymmetric `h^2
-/// max(r_i, h / 2)`), the fill at each particle `phi`, and where it exceeds 1 + 1e-4 `J <- J /
-/// phi^min(1, k dt)` with `F = J^(1/n) I`; the stored stress takes the change of the elastic
+/// max(r_i, h / 2)`), the fill at each particle `phi`, and where it exceeds `c = 1 + 1e-4`
+/// `J <- J / (phi / c)^min(1, k dt)` with `F = J^(1/n) I`; the stored stress takes the change of the elastic
 /// part's.
 fn relax_volumes(m: &Method, ps: &mut [Particle], dt: f64) {
     let k = m.material.volume_relaxation;
