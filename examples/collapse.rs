@@ -29,7 +29,9 @@ use mpm_gimp::{
     memory_requirements, Boundary, Face, HeapBuffer, MaterialDef, MaterialModel, Real, Transfer,
     Vec3, World, WorldDef,
 };
-use std::process::exit;
+
+#[path = "common/args.rs"]
+mod args;
 
 const USAGE: &str = "usage: collapse [--aspect A] [--cells N] [--phi DEG] [--youngs E] [--apic] \
                      [--flip-beta B] [--pic-rate R] [--seconds S]";
@@ -39,29 +41,17 @@ fn main() {
     let (mut aspect, mut cells, mut phi, mut youngs, mut seconds) = (2.0, 20.0, 30.0, 1.0e6, 3.0);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        if a == "--apic" {
-            def.transfer = Transfer::Apic;
-            continue;
-        }
-        let value = match args.next().and_then(|v| v.parse::<f64>().ok()) {
-            Some(v) if v >= 0.0 && v.is_finite() => v,
-            _ => {
-                eprintln!("{a} needs a number >= 0\n{USAGE}");
-                exit(2)
-            }
-        };
+        let mut value = || args::number(&mut args, &a, false, USAGE);
         match a.as_str() {
-            "--aspect" => aspect = value,
-            "--cells" => cells = value.round().max(4.0),
-            "--phi" => phi = value,
-            "--youngs" => youngs = value,
-            "--flip-beta" => def.flip_beta = value as Real,
-            "--pic-rate" => def.pic_rate = value as Real,
-            "--seconds" => seconds = value,
-            _ => {
-                eprintln!("unknown option {a}\n{USAGE}");
-                exit(2)
-            }
+            "--apic" => def.transfer = Transfer::Apic,
+            "--aspect" => aspect = value(),
+            "--cells" => cells = value().round().max(4.0),
+            "--phi" => phi = value(),
+            "--youngs" => youngs = value(),
+            "--flip-beta" => def.flip_beta = value() as Real,
+            "--pic-rate" => def.pic_rate = value() as Real,
+            "--seconds" => seconds = value(),
+            _ => args::unknown(&a, USAGE),
         }
     }
     let l0 = 0.2f64;

@@ -15,7 +15,9 @@ use mpm_gimp::{
     memory_requirements, Boundary, ColliderDef, ColliderShape, Contact, Face, HeapBuffer,
     MaterialDef, MaterialModel, Real, Transfer, Vec3, World, WorldDef,
 };
-use std::process::exit;
+
+#[path = "common/args.rs"]
+mod args;
 
 const USAGE: &str =
     "usage: dambreak [--cells N] [--flip] [--stick] [--friction MU] [--gate SPEED] [--bulk K]";
@@ -37,28 +39,15 @@ fn main() {
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
+        let mut value = || args::number(&mut args, &a, false, USAGE);
         match a.as_str() {
             "--flip" => def.transfer = Transfer::Flip,
             "--stick" => def.faces[Face::YMin as usize] = Boundary::Stick,
-            _ => {
-                let value = match args.next().and_then(|v| v.parse::<f64>().ok()) {
-                    Some(v) if v >= 0.0 && v.is_finite() => v,
-                    _ => {
-                        eprintln!("{a} needs a number >= 0\n{USAGE}");
-                        exit(2)
-                    }
-                };
-                match a.as_str() {
-                    "--cells" => cells = value.round().max(4.0) as u32,
-                    "--friction" => def.wall_friction[Face::YMin as usize] = value as Real,
-                    "--gate" => gate = value,
-                    "--bulk" => bulk = value,
-                    _ => {
-                        eprintln!("unknown option {a}\n{USAGE}");
-                        exit(2)
-                    }
-                }
-            }
+            "--cells" => cells = value().round().max(4.0) as u32,
+            "--friction" => def.wall_friction[Face::YMin as usize] = value() as Real,
+            "--gate" => gate = value(),
+            "--bulk" => bulk = value(),
+            _ => args::unknown(&a, USAGE),
         }
     }
     let a: f64 = 0.2;

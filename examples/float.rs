@@ -22,7 +22,9 @@ use mpm_gimp::{
     World, WorldDef,
 };
 use mpm_gimp_output::scenes;
-use std::process::exit;
+
+#[path = "common/args.rs"]
+mod args;
 
 const USAGE: &str = "usage: float [--width M] [--height M] [--density KG_M3] [--cells N] \
                      [--seconds S] [--turn [--level | --tilt RAD]] [--apic] [--cut-centres]";
@@ -34,15 +36,7 @@ fn main() {
     let mut cut = scenes::Cut::Domains;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        let mut value = || -> f64 {
-            match args.next().and_then(|v| v.parse::<f64>().ok()) {
-                Some(v) if v > 0.0 && v.is_finite() => v,
-                _ => {
-                    eprintln!("{a} needs a positive number\n{USAGE}");
-                    exit(2)
-                }
-            }
-        };
+        let mut value = || args::number(&mut args, &a, true, USAGE);
         match a.as_str() {
             "--width" => width = value() as Real,
             "--height" => height = value() as Real,
@@ -54,10 +48,7 @@ fn main() {
             "--tilt" => tilt = value() as Real,
             "--apic" => apic = true,
             "--cut-centres" => cut = scenes::Cut::Centres,
-            _ => {
-                eprintln!("unknown option {a}\n{USAGE}");
-                exit(2)
-            }
+            _ => args::unknown(&a, USAGE),
         }
     }
     let n = cells.max(8);

@@ -19,7 +19,9 @@ use mpm_gimp::{
     memory_requirements, Boundary, Damping, HeapBuffer, MaterialDef, MaterialModel, Real, Schedule,
     Transfer, Vec3, World, WorldDef,
 };
-use std::process::exit;
+
+#[path = "common/args.rs"]
+mod args;
 
 const USAGE: &str = "usage: settle [--xi X] [--grid-damping RATE] [--seconds S]";
 
@@ -27,21 +29,12 @@ fn main() {
     let (mut xi, mut damping, mut seconds) = (0.0 as Real, 0.0 as Real, 10.0f64);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
-        let value = match args.next().and_then(|v| v.parse::<f64>().ok()) {
-            Some(v) if v >= 0.0 && v.is_finite() => v,
-            _ => {
-                eprintln!("{a} needs a number >= 0\n{USAGE}");
-                exit(2)
-            }
-        };
+        let value = args::number(&mut args, &a, false, USAGE);
         match a.as_str() {
             "--xi" => xi = value as Real,
             "--grid-damping" => damping = value as Real,
             "--seconds" => seconds = value,
-            _ => {
-                eprintln!("unknown option {a}\n{USAGE}");
-                exit(2)
-            }
+            _ => args::unknown(&a, USAGE),
         }
     }
     let n = 50;
