@@ -439,6 +439,25 @@ pub struct Input {
 const MENU_TOP: usize = 72;
 /// Height of a menu line, pixels.
 const MENU_LINE: usize = 26;
+/// Left margin of the panel's text, pixels.
+const PANEL_MARGIN: usize = 16;
+
+/// The title of scene `k` as the menu shows it beside the scene's number and name: in at most
+/// two lines that end before the panel's right margin; and whether they hold all of it.
+pub fn menu_title(k: usize) -> (Vec<String>, bool) {
+    let name = format!("{} {}", k + 1, ALL.get(k).map_or("", |s| s.name));
+    let start = PANEL_MARGIN + name.chars().count() * 2 * text::GLYPH + 12;
+    let title = ALL.get(k).map_or("", |s| s.title);
+    text::wrap(title, PANEL.saturating_sub(PANEL_MARGIN / 2 + start), 1, 2)
+}
+
+/// The keys the panel lists at its foot.
+pub const HELP: [&str; 4] = [
+    "space pause/run    n or . single step    r reset",
+    "c next colour, or s speed  p stress  t temp  m material",
+    "drag on the picture: push material or move a collider",
+    "esc or q: quit",
+];
 
 /// The scene menu's line at window pixel (`x`, `y`), if any.
 pub fn menu_line_at(x: f32, y: f32) -> Option<usize> {
@@ -630,7 +649,7 @@ impl App {
     }
 
     fn draw_panel(&mut self, frame: &mut Frame, range: (f64, f64)) {
-        let x = 16;
+        let x = PANEL_MARGIN;
         text::draw(frame, x, 16, 3, HIGHLIGHT, "mpm-gimp samples");
         text::draw(frame, x, 52, 1, DIM, "scenes: 1-9, up/down or click");
         for (k, s) in ALL.iter().enumerate() {
@@ -641,8 +660,12 @@ impl App {
             }
             let colour = if current { HIGHLIGHT } else { TEXT };
             let line = format!("{} {}", k + 1, s.name);
-            let end = text::draw(frame, x, y + 5, 2, colour, &line);
-            text::draw(frame, end + 12, y + 9, 1, DIM, s.title);
+            let end = text::draw(frame, x, y + 5, 2, colour, &line) + 12;
+            let (lines, _) = menu_title(k);
+            let top = if lines.len() == 1 { y + 9 } else { y + 4 };
+            for (k, l) in lines.iter().enumerate() {
+                text::draw(frame, end, top + 10 * k, 1, DIM, l);
+            }
         }
         let mut y = MENU_TOP + ALL.len() * MENU_LINE + 20;
         let mut line = |frame: &mut Frame, colour: u32, s: &str| {
@@ -700,14 +723,12 @@ impl App {
         text::draw(frame, x + 256 - 8 * hi.len(), y, 1, DIM, &hi);
         y += 24;
         if let Some(m) = &self.message {
-            text::draw(frame, x, y, 1, ALERT, m);
+            let (lines, _) = text::wrap(m, PANEL - 2 * x, 1, 3);
+            for (k, l) in lines.iter().enumerate() {
+                text::draw(frame, x, y + 10 * k, 1, ALERT, l);
+            }
         }
-        let help = [
-            "space pause/run    n or . single step    r reset",
-            "c next colour, or s speed  p stress  t temp  m material",
-            "drag (left button) on the picture: push material, or move a collider",
-            "esc or q: quit",
-        ];
+        let help = HELP;
         for (k, h) in help.iter().enumerate() {
             text::draw(
                 frame,

@@ -225,3 +225,22 @@ fn timings_are_measured() {
     assert!(ns > 0.0 && ns < 1e6, "{ns} ns");
     assert!(app.sim.last.substeps >= 1);
 }
+
+/// The panel's text fits the panel: every scene's title whole in the menu's two lines beside
+/// its name, the help lines within the panel's margins, and a long line wrapped to its width.
+#[test]
+fn the_panel_text_fits_the_panel() {
+    use mpm_gimp_viewer::{menu_title, text, HELP};
+    for (k, scene) in ALL.iter().enumerate() {
+        let (lines, whole) = menu_title(k);
+        assert!(whole && lines.len() <= 2, "{}: {lines:?}", scene.name);
+        assert_eq!(lines.join(" "), scene.title);
+    }
+    for h in HELP {
+        assert!(16 + h.len() * text::GLYPH <= PANEL - 8, "{h}");
+    }
+    let (lines, whole) = text::wrap("a bb ccc dddd eeeee", 5 * text::GLYPH, 1, 2);
+    assert_eq!((lines, whole), (vec!["a bb".into(), "ccc..".into()], false));
+    let (lines, whole) = text::wrap("abcdefgh ij", 4 * text::GLYPH, 1, 3);
+    assert_eq!((lines, whole), (vec!["abcd".into(), "ij".into()], false));
+}
