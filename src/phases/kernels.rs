@@ -8,7 +8,7 @@
 // already holds apart.
 #![allow(clippy::too_many_arguments)]
 
-use super::{g2p, p2g, Ctx};
+use super::{gather, Ctx};
 use crate::grid::GridCols;
 use crate::layout::MaterialRecord;
 use crate::shape::{Shape1D, Stencils};
@@ -19,7 +19,7 @@ crate::simd::instances! {
     /// The chunk kernels of one instance; a pass generic over it calls them as `I::gather(..)`.
     trait Kernels: Isa;
 
-    /// [`g2p::gather_chunk`]: one chunk's gather, a function of its own, so that a pass does
+    /// [`gather::gather_chunk`]: one chunk's gather, a function of its own, so that a pass does
     /// not hold a copy of each of the gather's kinds it may run.
     fn gather [
         const D: usize, const K: usize, S: Shape1D<K>, const W: usize,
@@ -29,8 +29,8 @@ crate::simd::instances! {
         g: &GridCols<'_, D>,
         st: &Stencils<D, K, W>,
         affine: &mut [[Lane<W>; D]; D],
-        out: &mut g2p::Gathered<D, W>,
-    ) => g2p::gather_chunk;
+        out: &mut gather::Gathered<D, W>,
+    ) => gather::gather_chunk;
 
     /// [`super::stencils_of`]: one chunk's stencils, for the transport and momentum passes
     /// and MUSL's re-map of particles another item updated (one function rather than a copy
@@ -49,16 +49,16 @@ crate::simd::instances! {
         mls: bool,
     ) => crate::phases::stencils_of;
 
-    /// [`p2g::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
+    /// [`crate::simd::row_sums::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
     /// particle pass's re-map).
     fn scatter_chunk [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8]
         [I] [D, K, S, W, MODE] (
         st: &mut Stencils<D, K, W>,
-        pr: &p2g::Products<D, W>,
+        pr: &crate::simd::row_sums::Products<D, W>,
         live: Lanes<W>,
         stride: [usize; D],
         g: &mut GridCols<'_, D>,
-        adds: p2g::Adds,
+        adds: crate::simd::row_sums::Adds,
     ) => crate::simd::row_sums::scatter_chunk;
 
     /// [`crate::material::chunk_lanes`]: one chunk's material update (the inelastic part,

@@ -8,6 +8,7 @@
 //! once per chunk of lanes, never per particle.
 
 pub(crate) mod g2p;
+pub(crate) mod gather;
 pub(crate) mod grid_update;
 pub(crate) mod kernels;
 pub(crate) mod momentum;

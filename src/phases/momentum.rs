@@ -43,7 +43,7 @@
 //! many lanes at once as the instance's vectors hold, each stencil row's nodal masses (and
 //! velocities) read as one vector per node and summed along x with the x factors, the row's
 //! sums weighted by the row's factors (`S = wx r_0`, `G = (dwx r_0, wx r_1, ..)`, as in
-//! [`super::g2p::gather_chunk`]). What a particle reads the grid with ([`Weights`]: `m_gp`,
+//! [`super::gather::gather_chunk`]). What a particle reads the grid with ([`Weights`]: `m_gp`,
 //! `g_p`, `A_p^-T`) is formed once per chunk and pass; a particle that falls back takes
 //! `g_p = 0`, `A_p^-T = I` and no mass factor, so every lane runs the same arithmetic.
 //!
@@ -54,8 +54,7 @@
 //! factor; the particles that fall back (`-m_p (tau_p / rho0) G_ip`) and the particle forces
 //! are scattered after that.
 
-use super::g2p::{read_row, row_factors, sum_x, Gathered, LaneMat};
-use super::p2g::{rows, Adds, Mode, Products};
+use super::gather::{read_row, row_factors, sum_x, Gathered, LaneMat};
 use super::{Ctx, Kernels};
 use crate::grid::GridCols;
 use crate::layout::sym_pairs;
@@ -64,7 +63,7 @@ use crate::num::{matrix, Num};
 use crate::particles::ParticleCols;
 use crate::shape::{first_node, row_start, Shape1D, Stencil, Stencils, ROW};
 use crate::simd::lanes::{live_lanes, load_into, Block, Lane, Lanes};
-use crate::simd::row_sums::scatter_chunk;
+use crate::simd::row_sums::{rows, scatter_chunk, Adds, Mode, Products};
 use crate::simd::rows::{self, Compare};
 use crate::simd::wide::Wide;
 use crate::Real;
@@ -371,7 +370,7 @@ pub(crate) enum Differentiate {
 }
 
 /// The momentum approach's gather for a chunk with weights `w`, in place of
-/// [`super::g2p::gather_chunk`]: the velocity gradient `sum_i u_i (x) B_ip` of the velocity
+/// [`super::gather::gather_chunk`]: the velocity gradient `sum_i u_i (x) B_ip` of the velocity
 /// `which` says into `out.l` (nothing for [`Differentiate::Nothing`]) and, when `moving` is
 /// given, `v_gp = sum_i S_ip v_i` and `a_gp = sum_i S_ip a_i` into `out` (the velocity
 /// update's, E21) and the mass-weighted grid velocity and acceleration the particle moves

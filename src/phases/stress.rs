@@ -10,7 +10,7 @@
 //! new state is not finite, whose F inverts, or whose volume ratio `J` leaves `[1 / r, r]` (`r`
 //! the definition's `max_volume_ratio`) is frozen.
 
-use super::g2p::{commit_gradient_affine, Gathered, Grad, LaneMat};
+use super::gather::{commit_gradient_affine, Gathered, Grad, LaneMat};
 use super::{Ctx, Kernels};
 use crate::def::UpdateOrder;
 use crate::grid::GridCols;
