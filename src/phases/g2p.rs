@@ -144,8 +144,8 @@ pub(crate) unsafe fn read_row<I: Compare, const W: usize>(
 /// `affine` (not for a family that keeps the gradient form, [`Shape1D::GRADIENT_AFFINE`]:
 /// see `commit_gradient_affine`).
 ///
-/// Lane-major, [`Rows::N`] lanes at a time in the instance's vectors: each stencil row of
-/// those lanes is read as one vector per node ([`Rows::rows`]), summed along x with the x
+/// Lane-major, [`rows::Rows::N`] lanes at a time in the instance's vectors: each stencil row of
+/// those lanes is read as one vector per node ([`rows::Rows::rows`]), summed along x with the x
 /// weights (`X = sum_i w_i u_i`, `DX = sum_i dw_i u_i`, the moments or hoop factors in place
 /// of `w` where needed), and the sums weighted by the row's factors into sums held in
 /// registers (E6, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and
@@ -306,8 +306,9 @@ pub(crate) fn commit_gradient_affine<const D: usize, const W: usize>(
 /// start of the step in the `x_start` columns, for the stress pass, and, where `remap` holds
 /// the remap columns ([`GridCols::split_remap`]), scatters the new momenta to them (E30) with
 /// the stencils already computed (particles contribute as in the scatter pass:
-/// [`scatter_chunk`]). The parallel step gives it a tile's re-map columns, or none for the
-/// particles it updates before the tiles, whose rows [`remap`] adds (the same values).
+/// [`crate::simd::row_sums::scatter_chunk`]). The parallel step gives it a tile's re-map
+/// columns, or none for the particles it updates before the tiles, whose rows [`remap`] adds
+/// (the same values).
 /// Declared damping adds the damping of the module docs; APIC replaces FLIP. Each of these is
 /// a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
@@ -512,7 +513,7 @@ pub(crate) fn particles<
 
 /// MUSL's re-map of one chunk (E30): its new momenta (and APIC's affine momenta) weighed with
 /// the stencils `st` where the substep started, added to the re-map columns of `remap` for
-/// the lanes `active` (the products of a scatter: [`scatter_chunk`]).
+/// the lanes `active` (the products of a scatter: [`crate::simd::row_sums::scatter_chunk`]).
 #[inline(always)]
 fn remap_rows<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,
