@@ -698,7 +698,7 @@ impl Header {
 /// Particles per entry of the reach table ([`Layout::reach_groups`]): a multiple of every
 /// chunk width. Particles in fill order (bins along x) span one line of cells per 256 in the
 /// default scenes, so a tile takes few chunks it does not need; per 16 the table took 5 % of
-/// the 2D step to fill (benches/PERFORMANCE.md, "Threads").
+/// the 2D step to fill (benches/PERFORMANCE.md, "Decisions").
 pub(crate) const REACH_GROUP: usize = 256;
 
 /// The parallel step's items per worker ([`Layout::scratch_slots`]): the particle passes cut

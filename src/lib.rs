@@ -28,9 +28,9 @@
 //!   frozen and escaped particles in a [`StepReport`].
 //! - A C interface (`mpm-gimp-ffi`, a cbindgen header) exposes all of it to C and C++ hosts.
 //!
-//! **Debug builds.** The step is written to be optimised: unoptimised, it runs about 170 times
-//! slower (`step_cost --dim 2`: 4,162 ns per particle-step in a debug build, 24.2 in release).
-//! Keep the kernel optimised in the host's debug profile:
+//! **Debug builds.** The step is written to be optimised: unoptimised, it measured about 170
+//! times slower (benches/PERFORMANCE.md in the repository, "What a step costs", which also has
+//! the release figures). Keep the kernel optimised in the host's debug profile:
 //!
 //! ```toml
 //! [profile.dev.package.mpm-gimp]

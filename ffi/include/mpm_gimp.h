@@ -327,7 +327,7 @@ enum MpmTransfer
   // `mpm_gimp::Transfer::FlipMomentum`): the velocity gradient of the mass-weighted grid
   // velocity field, exact for affine fields, with its work-conjugate internal force, and the
   // particles moving with the mass-weighted grid velocity. Plane strain and 3D only
-  // (otherwise `MPM_STATUS_INVALID_TRANSFER`). Same columns as `MPM_TRANSFER_FLIP`, 8 to 10
+  // (otherwise `MPM_STATUS_INVALID_TRANSFER`). Same columns as `MPM_TRANSFER_FLIP`, 1.4 to 2
   // times its cost per step. For dynamics: at rest, stresses next to a free or loaded face
   // are off (up to 28 % in a block pulled by a traction, against 0.2 % with FLIP).
   MPM_TRANSFER_FLIP_MOMENTUM = 4,

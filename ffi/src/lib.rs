@@ -4,14 +4,19 @@
 //! Where to find an entry point:
 //! - [`status`]: `MpmStatus` and `mpm_status_string`.
 //! - [`defs`]: `MpmWorldDef`, `MpmMaterialDef`, their `*_default()` functions and the enums.
-//! - [`world`]: memory requirements, init, open, add material and particles, seeding, stable
-//!   dt, step.
+//! - [`world`]: memory requirements, init, open, the world's bytes and definition, add
+//!   material and particles, seeding, the displacement gradient, stable dt, step, and the
+//!   instruction-set choice (`mpm_simd_use_*`); `mpm_abi_version` is at the crate root.
 //! - [`particles`]: setting particles' position, velocity, affine matrix and material, or
 //!   their whole state (`MpmParticleState`, also what particles are added with), and removing
 //!   particles (by range, list, box or status).
 //! - [`effects`]: the declared effects' data: per-particle forces and damping, tractions, the
 //!   thermostat's alpha, temperatures, concentrations and their sources.
 //! - [`read`]: the borrowed particle view, copy-out functions and diagnostics.
+//! - [`colliders`]: `MpmColliderDef` and `mpm_collider_def_default` (`_f32` / `_f64`),
+//!   `mpm_world_add_collider`, `mpm_world_add_distance_field`, `mpm_world_set_collider` (a
+//!   new definition: how a host moves a collider) and `mpm_world_get_collider` (its state, and
+//!   the impulse, force and torque the material put on it).
 //! - [`tasks`]: the host's task system (`MpmTaskSystem`) and `mpm_world_step_tasks`.
 //!
 //! Conventions (Box2D v3 and rustls-ffi): inputs first, outputs last as `*_out`, every buffer

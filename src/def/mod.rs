@@ -207,9 +207,9 @@ pub enum Transfer {
     /// velocity (E76). The particle velocity takes [`Transfer::Flip`]'s update (E77: read
     /// with the particle's share of each nodal force, which conserves momentum). Plane strain
     /// and 3D, every shape function; the axisymmetric form is
-    /// [`crate::Error::InvalidTransfer`]. Same columns as [`Transfer::Flip`]; its force and
-    /// gradient passes are plain loops, 8 to 10 times the cost of the velocity approach's
-    /// (benches/PERFORMANCE.md). See `phases/momentum.rs` for why E73 is not used.
+    /// [`crate::Error::InvalidTransfer`]. Same columns as [`Transfer::Flip`]; a step costs 1.4
+    /// to 2 times the velocity approach's (benches/PERFORMANCE.md, "What an effect costs").
+    /// See `phases/momentum.rs` for why E73 is not used.
     ///
     /// For dynamics, not for stresses at rest next to a free or loaded face: the conjugate
     /// force does not balance a uniform stress there particle by particle. A plane-strain

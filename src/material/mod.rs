@@ -216,9 +216,8 @@ pub(crate) fn model_of(r: &MaterialRecord) -> MaterialModel {
 
 /// A constitutive model (E3, E33-E46): the deformation in, Kirchhoff stress out; an
 /// inelastic model (a fluid, plasticity) also changes the deformation each step before its
-/// stress is taken ([`Model::inelastic`]). Adding a model is one file implementing this trait
-/// (with its parameters' struct), one arm of [`MaterialModel`] (and of the C enum) and of
-/// [`by_model!`], and its tests.
+/// stress is taken ([`Model::inelastic`]). Adding a model takes the four steps of the module's
+/// "Adding a material"; the first is its own file implementing this trait.
 pub(crate) trait Model {
     /// The parameters the model reads: its own fields of a material record, no more.
     type Params: Copy;

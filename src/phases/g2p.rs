@@ -40,8 +40,9 @@ use crate::Real;
 /// start of the step in the `x_start` columns, for the stress pass, and, where `remap` holds
 /// the remap columns ([`GridCols::split_remap`]), scatters the new momenta to them (E30) with
 /// the stencils already computed (particles contribute as in the scatter pass:
-/// [`scatter_chunk`]). The parallel step gives it a tile's re-map columns, or none for the
-/// particles it updates before the tiles, whose rows [`remap`] adds (the same values).
+/// [`crate::simd::row_sums::scatter_chunk`]). The parallel step gives it a tile's re-map
+/// columns, or none for the particles it updates before the tiles, whose rows [`remap`] adds
+/// (the same values).
 /// Declared damping adds the damping of the module docs; APIC replaces FLIP. Each of these is
 /// a value of the substep ([`Ctx`]), tested once per chunk.
 #[inline(always)]
@@ -246,7 +247,7 @@ pub(crate) fn particles<
 
 /// MUSL's re-map of one chunk (E30): its new momenta (and APIC's affine momenta) weighed with
 /// the stencils `st` where the substep started, added to the re-map columns of `remap` for
-/// the lanes `active` (the products of a scatter: [`scatter_chunk`]).
+/// the lanes `active` (the products of a scatter: [`crate::simd::row_sums::scatter_chunk`]).
 #[inline(always)]
 fn remap_rows<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     ctx: &Ctx<'_, D>,

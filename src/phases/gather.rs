@@ -122,8 +122,8 @@ pub(crate) unsafe fn read_row<I: Compare, const W: usize>(
 /// `affine` (not for a family that keeps the gradient form, [`Shape1D::GRADIENT_AFFINE`]:
 /// see `commit_gradient_affine`).
 ///
-/// Lane-major, [`Rows::N`] lanes at a time in the instance's vectors: each stencil row of
-/// those lanes is read as one vector per node ([`Rows::rows`]), summed along x with the x
+/// Lane-major, [`rows::Rows::N`] lanes at a time in the instance's vectors: each stencil row of
+/// those lanes is read as one vector per node ([`rows::Rows::rows`]), summed along x with the x
 /// weights (`X = sum_i w_i u_i`, `DX = sum_i dw_i u_i`, the moments or hoop factors in place
 /// of `w` where needed), and the sums weighted by the row's factors into sums held in
 /// registers (E6, separable: node (i, j, k) has `S = wx_i wy_j wz_k` and

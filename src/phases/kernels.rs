@@ -49,8 +49,8 @@ crate::simd::instances! {
         mls: bool,
     ) => crate::phases::stencils_of;
 
-    /// [`crate::simd::row_sums::scatter_chunk`]: one chunk's scatter with the row configuration `MODE` (the
-    /// particle pass's re-map).
+    /// [`crate::simd::row_sums::scatter_chunk`]: one chunk's scatter with the row
+    /// configuration `MODE` (the particle pass's re-map).
     fn scatter_chunk [const D: usize, const K: usize, S: Shape1D<K>, const W: usize, const MODE: u8]
         [I] [D, K, S, W, MODE] (
         st: &mut Stencils<D, K, W>,

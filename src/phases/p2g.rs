@@ -4,7 +4,7 @@
 //!
 //! Declared effects add, in the same pass: the particle force `S_ip F_p` (E14) and the APIC
 //! affine momentum `S_ip m_p C_p (x_i - x_p)` (E79). Tractions (E15, E16) are a pass of
-//! their own over the traction table ([`tractions`]).
+//! their own over the traction table ([`super::tractions`]).
 //!
 //! The row-sum engine that adds a chunk's products to the grid, and the modes and products it
 //! is compiled for, are the SIMD floor's ([`crate::simd::row_sums`]).

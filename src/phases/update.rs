@@ -2,7 +2,7 @@
 //! [`super::g2p::particles`] computes for each vector of a chunk's lanes, from the velocity
 //! `v_gp = sum S_ip v_i` and acceleration `a_gp = sum S_ip a_i` it gathered.
 //!
-//! - [`damping`]: the damping acceleration (E24, E53).
+//! - the damping acceleration (E24, E53): [`crate::effects::damping::acceleration`].
 //! - [`flip`]: FLIP with PIC damping and the position update (E25-E26, or E27).
 //! - [`apic`]: the APIC update (E80).
 //! - [`advance`]: the position plus the step's displacement, without rounding error (E28).

@@ -1,6 +1,7 @@
 //! A chunk of particles seen as lanes: the chunk width ([`width`]), one value per lane ([`Lane`]), a
 //! set of lanes ([`Lanes`]), a chunk's slice of a column loaded ([`load`]) and written back
-//! lane by lane ([`commit`]), its live lanes ([`live_lanes`]) and its stencils ([`stencils`]).
+//! lane by lane ([`commit`]) and its live lanes ([`live_lanes`]); its stencils come from
+//! [`crate::phases::stencils`].
 //! The particle passes work chunk by chunk with these; what the scatter and the gathers share
 //! lives here, so the phases do not import each other for it.
 

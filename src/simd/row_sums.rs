@@ -203,9 +203,10 @@ fn last_row<const D: usize, const K: usize>(stride: [usize; D]) -> usize {
 /// so the choice changes no result. The whole default step against the group scatter alone,
 /// in the same runs (`benches/compare.sh`, 3 to 5 rounds): AVX-512 0.90 in 2D but 1.22 in 3D
 /// with 16 lanes per vector (not pinned down; the four particles' x factors alone are 52
-/// vectors there, for 32 registers), 0.97 with 8 (0.956 of 64397a5 against 0.989, 5
-/// rounds); AVX2 0.93 (2D) and 0.96 (3D); the baseline instance, one block per vector, 1.03
-/// and 1.02 (so it scatters group by group).
+/// vectors there, for 32 registers), 0.97 with 8 (MUSL 0.956 and USL 0.989 of the kernel
+/// before the block scatter, 5 rounds); AVX2 0.93 (2D) and 0.96 (3D); the baseline instance,
+/// one block per vector, 1.03 and 1.02, so it scatters group by group (benches/PERFORMANCE.md,
+/// "Decisions").
 #[inline(always)]
 pub(crate) fn scatter_chunk<
     I: Rows,

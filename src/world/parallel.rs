@@ -244,7 +244,7 @@ impl<'b, const D: usize> Columns<'b, D> {
             // The pass's frame 1.5 KiB further down the stack: called right below this frame,
             // a store of the particle pass's and the loads of this frame's view were 4 KiB
             // apart (4K aliasing), and the pass took twice as long on rayon's threads
-            // (benches/PERFORMANCE.md, "Threads").
+            // (benches/PERFORMANCE.md, "Decisions").
             let pad = [0u8; 1536];
             core::hint::black_box(&pad);
             pass(&mut p, r.len(), g, &mut part);

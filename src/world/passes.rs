@@ -59,7 +59,7 @@ crate::simd::instances! {
         remap: &mut GridCols<'_, D>,
     ) => g2p::remap;
 
-    /// [`g2p::stress`].
+    /// [`crate::phases::stress::stress`].
     fn stress [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
@@ -88,7 +88,7 @@ crate::simd::instances! {
         reach: &mut [[u32; 2]],
     ) -> ([i32; D], [i32; D]) => crate::grid::first_nodes;
 
-    /// [`crate::world::fastest_squared`].
+    /// [`crate::particles::fastest_squared`].
     fn fastest_squared [] [] [] (v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
         => crate::particles::fastest_squared;
 
@@ -101,15 +101,15 @@ crate::simd::instances! {
 /// the instance `I`: picks the scatter function compiled for the row configuration ([`rows`]).
 ///
 /// An instance has five per form, one per configuration, except one compiled for size
-/// ([`crate::simd::Isa::FULL_ROWS`], the baseline), which has two: every scatter but USF's force scatter
-/// runs the full row configuration (mass, momentum with APIC's affine part, force), what it
-/// does not add entering as products left zero ([`Products::set`]): finite factors times
-/// zero. Those zeros change no bit of the grid: x + 0 is x for every x but -0, and a column
-/// they reach holds its reset +0 plus sums, which are -0 only if every term is, so it ends the
-/// same either way. USF's force scatter keeps its own rows: it runs after the grid velocities
-/// are formed, and a zero added to a velocity of -0 would make it +0. Every instance on full
-/// rows would have saved a fifth of the build, but made the USF step 1.2 to 1.5 times as long
-/// in 3D (benches/PERFORMANCE.md).
+/// ([`crate::simd::Isa::FULL_ROWS`], the baseline), which has two: every scatter but USF's
+/// force scatter runs the full row configuration (mass, momentum with APIC's affine part,
+/// force), what it does not add entering as products left zero
+/// ([`crate::simd::row_sums::Products::set`]): finite factors times zero. Those zeros change no
+/// bit of the grid: x + 0 is x for every x but -0, and a column they reach holds its reset +0
+/// plus sums, which are -0 only if every term is, so it ends the same either way. USF's force
+/// scatter keeps its own rows: it runs after the grid velocities are formed, and a zero added
+/// to a velocity of -0 would make it +0. Every instance on full rows would have saved a fifth
+/// of the build, but made the USF step 1.2 to 1.5 times as long in 3D (benches/PERFORMANCE.md).
 ///
 /// MUSL's re-map scatter is part of the particle pass (`g2p::particles`, and `g2p::remap` for
 /// the particles another item of the parallel step updated), never a scatter of its own.
@@ -229,7 +229,7 @@ pub(crate) fn least_plastic(
     })
 }
 
-/// The largest squared speed of the active particles ([`crate::world::fastest_squared`]),
+/// The largest squared speed of the active particles ([`crate::particles::fastest_squared`]),
 /// scanned in the instruction set `simd` on `scan`'s task system (a maximum: the same for any
 /// cut).
 pub(crate) fn fastest_squared(
