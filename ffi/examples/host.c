@@ -11,8 +11,9 @@
  *   cargo build --release -p mpm-gimp-ffi
  *   gcc -std=c99 -Wall -Wextra -Werror -pedantic -I ffi/include ffi/examples/host.c \
  *       target/release/libmpm_gimp.a -lpthread -ldl -lm -o host
- * For the double-precision library (cargo build --release -p mpm-gimp-ffi --features f64)
- * add -DMPM_GIMP_F64.
+ * For the double-precision library, built beside it (cargo build --release -p mpm-gimp-ffi
+ * --features f64 --target-dir target/f64), add -DMPM_GIMP_F64 and link
+ * target/f64/release/libmpm_gimp.a. Against an installed library: ffi/README.md.
  *
  * Output, one line at t = 0 and every 10 frames (the last one at t = 1 s):
  *   t=<s> com_y=<m> kinetic=<J> strain=<J> potential=<J> total=<J>

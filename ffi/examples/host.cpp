@@ -8,8 +8,10 @@
  *   cargo build --release -p mpm-gimp-ffi
  *   g++ -std=c++17 -Wall -Wextra -Werror -pedantic -I ffi/include ffi/examples/host.cpp \
  *       target/release/libmpm_gimp.a -lpthread -ldl -lm -o host_cpp
- * For the double-precision library (cargo build --release -p mpm-gimp-ffi --features f64)
- * add -DMPM_GIMP_F64.
+ * For the double-precision library, built beside it (cargo build --release -p mpm-gimp-ffi
+ * --features f64 --target-dir target/f64), add -DMPM_GIMP_F64 and link
+ * target/f64/release/libmpm_gimp.a. Against an installed library: ffi/README.md and
+ * ffi/examples/cmake.
  */
 #include <algorithm>
 #include <condition_variable>
