@@ -2,8 +2,8 @@
 //!
 //! Particle update: from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i` (E21), FLIP with PIC
 //! damping and the second-order position update (E25, E26), or APIC (E78, E80: the grid's
-//! velocity, and the moment matrix `B_p` gathered with it, [`super::gather::gather_chunk`]), less the damping
-//! acceleration when damping is declared, then the walls: the equations are
+//! velocity, and the moment matrix `B_p` gathered with it, [`super::gather::gather_chunk`]),
+//! less the damping acceleration when damping is declared, then the walls: the equations are
 //! [`super::update`]'s, on the lane type [`crate::simd::wide::Wide`].
 //!
 //! The gathers ([`super::gather`]) also give the velocity gradient the stress update reads

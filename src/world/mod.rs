@@ -5,6 +5,7 @@
 mod add;
 mod edit;
 mod effects;
+mod open;
 mod parallel;
 mod passes;
 mod query;
