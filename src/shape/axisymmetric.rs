@@ -1,6 +1,6 @@
 //! The axisymmetric form (E65-E72): any family, with its first axis the radius `r` and its
 //! second the axis `z`. The radial weights are r-weighted (E66, E67) and the stencil carries
-//! the hoop factors `T_ip` (E68); see [`super::radial_stencil`].
+//! the hoop factors `T_ip` (E68); see [`super::family::radial_stencil`].
 
 use super::{Shape1D, Visit};
 use crate::Real;

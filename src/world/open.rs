@@ -132,6 +132,8 @@ impl<'a> WorldRef<'a> {
 #[cfg(all(test, feature = "std"))]
 mod tests {
     use super::*;
+    use crate::def::WorldDef;
+    use crate::layout::{Header, Layout, MaterialRecord};
     use crate::{HeapBuffer, MaterialDef, Vec3};
 
     /// A world of `def` in `mem` with one block of the default material, 0.4 m to 0.8 m.
