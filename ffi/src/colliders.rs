@@ -32,6 +32,31 @@ pub enum MpmColliderShape {
     Sdf = 5,
 }
 
+// The C values are the kernel's shape numbers (`ColliderShape::number`, the one table).
+const _: () = {
+    let (l, e) = (0.0, kernel::Vec3::ZERO);
+    assert!(MpmColliderShape::HalfSpace as u32 == ColliderShape::HalfSpace.number());
+    assert!(MpmColliderShape::Sphere as u32 == ColliderShape::Sphere { radius: l }.number());
+    assert!(MpmColliderShape::Box as u32 == ColliderShape::Box { half_extents: e }.number());
+    let capsule = ColliderShape::Capsule {
+        half_length: l,
+        radius: l,
+    };
+    assert!(MpmColliderShape::Capsule as u32 == capsule.number());
+    let cylinder = ColliderShape::Cylinder {
+        half_length: l,
+        radius: l,
+        inner_radius: l,
+    };
+    assert!(MpmColliderShape::Cylinder as u32 == cylinder.number());
+    let sdf = ColliderShape::Sdf {
+        first: 0,
+        dims: [2, 2, 1],
+        spacing: l,
+    };
+    assert!(MpmColliderShape::Sdf as u32 == sdf.number());
+};
+
 /// How the material meets a collider (`mpm_gimp::Contact`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -130,38 +155,30 @@ const COLLIDER_COOKIE: u32 =
 /// The C form of a Rust collider (with the cookie).
 fn collider_def_to_c(d: &ColliderDef) -> MpmColliderDef {
     let (mut sdf_first, mut sdf_dims, mut sdf_spacing) = (0, [2, 2, 1], 1.0);
-    let (shape, radius, half_length, half_extents, inner_radius) = match d.shape {
+    let (radius, half_length, half_extents, inner_radius) = match d.shape {
         ColliderShape::Sdf {
             first,
             dims,
             spacing,
         } => {
             (sdf_first, sdf_dims, sdf_spacing) = (first, dims, spacing);
-            (MpmColliderShape::Sdf, 0.5, 0.5, None, 0.0)
+            (0.5, 0.5, None, 0.0)
         }
-        ColliderShape::HalfSpace => (MpmColliderShape::HalfSpace, 0.5, 0.5, None, 0.0),
-        ColliderShape::Sphere { radius } => (MpmColliderShape::Sphere, radius, 0.5, None, 0.0),
-        ColliderShape::Box { half_extents } => {
-            (MpmColliderShape::Box, 0.5, 0.5, Some(half_extents), 0.0)
-        }
+        ColliderShape::HalfSpace => (0.5, 0.5, None, 0.0),
+        ColliderShape::Sphere { radius } => (radius, 0.5, None, 0.0),
+        ColliderShape::Box { half_extents } => (0.5, 0.5, Some(half_extents), 0.0),
         ColliderShape::Capsule {
             half_length,
             radius,
-        } => (MpmColliderShape::Capsule, radius, half_length, None, 0.0),
+        } => (radius, half_length, None, 0.0),
         ColliderShape::Cylinder {
             half_length,
             radius,
             inner_radius,
-        } => (
-            MpmColliderShape::Cylinder,
-            radius,
-            half_length,
-            None,
-            inner_radius,
-        ),
+        } => (radius, half_length, None, inner_radius),
     };
     MpmColliderDef {
-        shape: shape as u32,
+        shape: d.shape.number(),
         contact: d.contact as u32,
         radius,
         half_length,
@@ -187,28 +204,31 @@ fn collider_def_from_c(d: &MpmColliderDef) -> Result<ColliderDef, MpmStatus> {
     if d.internal_cookie != COLLIDER_COOKIE {
         return Err(MpmStatus::DefNotFromDefault);
     }
-    let shape = match d.shape {
-        0 => ColliderShape::HalfSpace,
-        1 => ColliderShape::Sphere { radius: d.radius },
-        2 => ColliderShape::Box {
+    // The shape whose number (`ColliderShape::number`, the one table) is the C value.
+    let shape = [
+        ColliderShape::HalfSpace,
+        ColliderShape::Sphere { radius: d.radius },
+        ColliderShape::Box {
             half_extents: vec3(d.half_extents),
         },
-        3 => ColliderShape::Capsule {
+        ColliderShape::Capsule {
             half_length: d.half_length,
             radius: d.radius,
         },
-        4 => ColliderShape::Cylinder {
+        ColliderShape::Cylinder {
             half_length: d.half_length,
             radius: d.radius,
             inner_radius: d.inner_radius,
         },
-        5 => ColliderShape::Sdf {
+        ColliderShape::Sdf {
             first: d.sdf_first,
             dims: d.sdf_dims,
             spacing: d.sdf_spacing,
         },
-        _ => return Err(MpmStatus::InvalidEnum),
-    };
+    ]
+    .into_iter()
+    .find(|s| s.number() == d.shape)
+    .ok_or(MpmStatus::InvalidEnum)?;
     let contact = match d.contact {
         0 => Contact::Stick,
         1 => Contact::Slip,

@@ -493,6 +493,76 @@ pub enum ColliderShape {
     },
 }
 
+impl ColliderShape {
+    /// The shape's number: what a collider record stores and the C interface's
+    /// `MpmColliderShape` calls it. The one table of the shapes' numbers.
+    pub const fn number(&self) -> u32 {
+        match self {
+            ColliderShape::HalfSpace => 0,
+            ColliderShape::Sphere { .. } => 1,
+            ColliderShape::Box { .. } => 2,
+            ColliderShape::Capsule { .. } => 3,
+            ColliderShape::Cylinder { .. } => 4,
+            ColliderShape::Sdf { .. } => 5,
+        }
+    }
+
+    /// The shape's lengths, m, as [`ColliderShape::from_parts`] reads them (a sphere's radius;
+    /// a box's half-extents; a capsule's half-length and radius; a cylinder's half-length,
+    /// radius and inner radius; a distance field's spacing; 0 where unused), and a distance
+    /// field's first sample and points per axis (0 for the other shapes).
+    pub(crate) fn parts(&self) -> ([Real; 3], [u32; 4]) {
+        match *self {
+            ColliderShape::HalfSpace => ([0.0; 3], [0; 4]),
+            ColliderShape::Sphere { radius } => ([radius, 0.0, 0.0], [0; 4]),
+            ColliderShape::Box { half_extents: e } => ([e.x, e.y, e.z], [0; 4]),
+            ColliderShape::Capsule {
+                half_length,
+                radius,
+            } => ([half_length, radius, 0.0], [0; 4]),
+            ColliderShape::Cylinder {
+                half_length,
+                radius,
+                inner_radius,
+            } => ([half_length, radius, inner_radius], [0; 4]),
+            ColliderShape::Sdf {
+                first,
+                dims,
+                spacing,
+            } => ([spacing, 0.0, 0.0], [first, dims[0], dims[1], dims[2]]),
+        }
+    }
+
+    /// The shape of `number` ([`ColliderShape::number`]) with the `lengths` and `grid` that
+    /// [`ColliderShape::parts`] gives; `None` for a number no shape has.
+    pub(crate) fn from_parts(number: u32, lengths: [Real; 3], grid: [u32; 4]) -> Option<Self> {
+        let [a, b, c] = lengths;
+        [
+            ColliderShape::HalfSpace,
+            ColliderShape::Sphere { radius: a },
+            ColliderShape::Box {
+                half_extents: Vec3::new(a, b, c),
+            },
+            ColliderShape::Capsule {
+                half_length: a,
+                radius: b,
+            },
+            ColliderShape::Cylinder {
+                half_length: a,
+                radius: b,
+                inner_radius: c,
+            },
+            ColliderShape::Sdf {
+                first: grid[0],
+                dims: [grid[1], grid[2], grid[3]],
+                spacing: a,
+            },
+        ]
+        .into_iter()
+        .find(|s| s.number() == number)
+    }
+}
+
 /// How the material meets a collider at a node inside it (E91).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Contact {

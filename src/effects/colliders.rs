@@ -71,67 +71,26 @@ pub(crate) struct Collider<'s> {
 }
 
 /// The shape number of `s` in a [`ColliderRecord`], its lengths, and a distance field's
-/// first sample and points per axis.
+/// first sample and points per axis ([`ColliderShape::parts`]).
 pub(crate) fn shape_record(s: &ColliderShape) -> (u64, [f64; 3], [u64; 4]) {
-    let none = [0; 4];
-    match *s {
-        ColliderShape::HalfSpace => (0, [0.0; 3], none),
-        ColliderShape::Sphere { radius } => (1, [radius as f64, 0.0, 0.0], none),
-        ColliderShape::Box { half_extents: e } => (2, [e.x as f64, e.y as f64, e.z as f64], none),
-        ColliderShape::Capsule {
-            half_length,
-            radius,
-        } => (3, [half_length as f64, radius as f64, 0.0], none),
-        ColliderShape::Cylinder {
-            half_length,
-            radius,
-            inner_radius,
-        } => (
-            4,
-            [half_length as f64, radius as f64, inner_radius as f64],
-            none,
-        ),
-        ColliderShape::Sdf {
-            first,
-            dims,
-            spacing,
-        } => (
-            5,
-            [spacing as f64, 0.0, 0.0],
-            [first as u64, dims[0] as u64, dims[1] as u64, dims[2] as u64],
-        ),
-    }
+    let (lengths, grid) = s.parts();
+    (
+        s.number() as u64,
+        lengths.map(|l| l as f64),
+        grid.map(|g| g as u64),
+    )
 }
 
-/// The shape of a record's number, lengths and grid (`None`: a number no build writes).
+/// The shape of a record's number, lengths and grid (`None`: a number no build writes, or a
+/// distance field's numbers past `u32`).
 pub(crate) fn shape_of(code: u64, size: [f64; 3], grid: [u64; 4]) -> Option<ColliderShape> {
-    let r = |k: usize| size[k] as Real;
-    Some(match code {
-        5 => ColliderShape::Sdf {
-            first: u32::try_from(grid[0]).ok()?,
-            dims: [
-                u32::try_from(grid[1]).ok()?,
-                u32::try_from(grid[2]).ok()?,
-                u32::try_from(grid[3]).ok()?,
-            ],
-            spacing: r(0),
-        },
-        0 => ColliderShape::HalfSpace,
-        1 => ColliderShape::Sphere { radius: r(0) },
-        2 => ColliderShape::Box {
-            half_extents: crate::Vec3::new(r(0), r(1), r(2)),
-        },
-        3 => ColliderShape::Capsule {
-            half_length: r(0),
-            radius: r(1),
-        },
-        4 => ColliderShape::Cylinder {
-            half_length: r(0),
-            radius: r(1),
-            inner_radius: r(2),
-        },
-        _ => return None,
-    })
+    let grid = [
+        u32::try_from(grid[0]).ok()?,
+        u32::try_from(grid[1]).ok()?,
+        u32::try_from(grid[2]).ok()?,
+        u32::try_from(grid[3]).ok()?,
+    ];
+    ColliderShape::from_parts(u32::try_from(code).ok()?, size.map(|l| l as Real), grid)
 }
 
 /// The contact's number in a record, and back.
@@ -430,23 +389,32 @@ impl<'s> Collider<'s> {
     /// (the world's); `None` for a record no build writes or a field past the samples.
     pub fn at(r: &ColliderRecord, t: f64, samples: &'s [Real]) -> Option<Collider<'s>> {
         let (position, rotation) = pose_at(r, t);
-        let lengths = r.size.map(|l| l as Real);
-        let solid = match r.shape {
-            0 => Solid::HalfSpace,
-            1 => Solid::Sphere(lengths[0]),
-            2 => Solid::Box(lengths),
-            3 => Solid::Capsule(lengths[0], lengths[1]),
-            4 => Solid::Cylinder(lengths[0], lengths[1], lengths[2]),
-            5 => {
-                let [first, nx, ny, nz] = r.grid.map(|g| g as usize);
+        let solid = match shape_of(r.shape, r.size, r.grid)? {
+            ColliderShape::HalfSpace => Solid::HalfSpace,
+            ColliderShape::Sphere { radius } => Solid::Sphere(radius),
+            ColliderShape::Box { half_extents: e } => Solid::Box([e.x, e.y, e.z]),
+            ColliderShape::Capsule {
+                half_length,
+                radius,
+            } => Solid::Capsule(half_length, radius),
+            ColliderShape::Cylinder {
+                half_length,
+                radius,
+                inner_radius,
+            } => Solid::Cylinder(half_length, radius, inner_radius),
+            ColliderShape::Sdf {
+                first,
+                dims,
+                spacing,
+            } => {
+                let [nx, ny, nz] = dims.map(|g| g as usize);
                 if nx < 2 || ny < 2 || nz < 1 {
                     return None;
                 }
-                let n = nx.checked_mul(ny)?.checked_mul(nz)?;
+                let (first, n) = (first as usize, nx.checked_mul(ny)?.checked_mul(nz)?);
                 let field = samples.get(first..first.checked_add(n)?)?;
-                Solid::Sdf(field, [nx, ny, nz], lengths[0])
+                Solid::Sdf(field, [nx, ny, nz], spacing)
             }
-            _ => return None,
         };
         let axis = |a: DVec3| (rotation * a).to_array().map(|c| c as Real);
         Some(Collider {
