@@ -276,7 +276,7 @@ fn scatter_lanes<const D: usize, const K: usize, S: Shape1D<K>, const W: usize, 
     }
 }
 
-/// The arithmetic of the scatter's row values ([`XFactors`], [`YFactors`]), on one of two
+/// The arithmetic of the scatter's row values ([`XProducts`], [`YFactors`]), on one of two
 /// kinds of row: one particle's row, a [`Row4`] over the row's nodes along x scaled by the
 /// particle's own reals ([`scatter_group`]), or the rows of one particle of each four-lane
 /// block of a vector of lanes, [`BlockRow`], scaled by each block's particle's reals
@@ -355,10 +355,10 @@ struct XRow<T> {
     t: T,
 }
 
-/// The particles' factors along x, the part of their row values that does not depend on the
-/// row.
+/// The particles' products with their factors along x: the part of their row values that
+/// does not depend on the row.
 #[derive(Clone, Copy)]
-struct XFactors<T, const D: usize> {
+struct XProducts<T, const D: usize> {
     /// m wx.
     mass: T,
     /// Momentum on a node: m S (v_a + sum_b C_ab (x_b,i - x_b,p)) (APIC); S (x_b,i - x_b,p)
@@ -371,7 +371,7 @@ struct XFactors<T, const D: usize> {
     force: [[T; D]; D],
 }
 
-impl<T: RowMath, const D: usize> XFactors<T, D> {
+impl<T: RowMath, const D: usize> XProducts<T, D> {
     /// From the x factors `x` and the products `pr` of particle `n` of `pick`.
     ///
     /// # Safety
@@ -389,7 +389,7 @@ impl<T: RowMath, const D: usize> XFactors<T, D> {
         let at = |c: &Lane<W>| pick.at(n, c);
         // Loops, not `core::array::from_fn`, whose closures are not always inlined: one left
         // out of line runs the target's baseline code (benches/PERFORMANCE.md).
-        let mut f = XFactors {
+        let mut f = XProducts {
             mass: x.w * at(&pr.m),
             mom: [[zero; D]; D],
             force: [[zero; D]; D],
@@ -437,7 +437,7 @@ impl<T: RowMath, const D: usize> YFactors<T, D> {
     /// # Safety
     /// As for [`RowMath::zero`].
     #[inline(always)]
-    unsafe fn new<const MODE: u8>(x: &XFactors<T, D>, (wy, dwy, ey): AxisFactors<T::S>) -> Self {
+    unsafe fn new<const MODE: u8>(x: &XProducts<T, D>, (wy, dwy, ey): AxisFactors<T::S>) -> Self {
         let apic = apic_rows(MODE);
         // SAFETY: as required of the caller.
         let zero = unsafe { T::zero() };
@@ -660,7 +660,7 @@ unsafe fn for_each_row<
     const MODE: u8,
     const N: usize,
 >(
-    x: &[XFactors<T, D>; N],
+    x: &[XProducts<T, D>; N],
     st: &Stencils<D, K, W>,
     pick: &impl Pick<T, W>,
     sink: &mut impl RowSink<T>,
@@ -669,7 +669,7 @@ unsafe fn for_each_row<
     // SAFETY (every unsafe block below): as required of the caller.
     let zero = unsafe { T::zero() };
     for j in 0..K {
-        // Loops over the particles, not `core::array::from_fn` (see `XFactors::new`).
+        // Loops over the particles, not `core::array::from_fn` (see `XProducts::new`).
         let mut y = [unsafe { YFactors::new::<MODE>(&x[0], pick.axis(st, 1, j, 0)) }; N];
         for n in 1..N {
             y[n] = unsafe { YFactors::new::<MODE>(&x[n], pick.axis(st, 1, j, n)) };
@@ -717,9 +717,9 @@ fn scatter_group<
         }
     };
     // SAFETY (every unsafe block): Row4 is the target's baseline, which every instance has.
-    let mut x = [unsafe { XFactors::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds) }; N];
+    let mut x = [unsafe { XProducts::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds) }; N];
     for n in 1..N {
-        x[n] = unsafe { XFactors::new::<K, S, W, MODE>(&xrow(n), pr, &pick, n, adds) };
+        x[n] = unsafe { XProducts::new::<K, S, W, MODE>(&xrow(n), pr, &pick, n, adds) };
     }
     unsafe { for_each_row::<Row4, D, K, W, MODE, N>(&x, st, &pick, sink) };
 }
@@ -773,10 +773,10 @@ fn scatter_blocks<
         // SAFETY: as for `pick`.
         unsafe {
             let x = [
-                XFactors::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds),
-                XFactors::new::<K, S, W, MODE>(&xrow(1), pr, &pick, 1, adds),
-                XFactors::new::<K, S, W, MODE>(&xrow(2), pr, &pick, 2, adds),
-                XFactors::new::<K, S, W, MODE>(&xrow(3), pr, &pick, 3, adds),
+                XProducts::new::<K, S, W, MODE>(&xrow(0), pr, &pick, 0, adds),
+                XProducts::new::<K, S, W, MODE>(&xrow(1), pr, &pick, 1, adds),
+                XProducts::new::<K, S, W, MODE>(&xrow(2), pr, &pick, 2, adds),
+                XProducts::new::<K, S, W, MODE>(&xrow(3), pr, &pick, 3, adds),
             ];
             for_each_row::<BlockRow<I>, D, K, W, MODE, 4>(&x, st, &pick, &mut sums);
         }
