@@ -16,8 +16,8 @@
 //! friction angle and no volume correction (Tampubolon et al. 2017): the volume a return
 //! removes from `F_e` at the apex is not given back.
 
-use super::principal::{hencky_energy, plastic_axes, Principal, Split};
-use super::{Deformation, Model, Stress};
+use super::model::Lame;
+use super::principal::{HenckyReturn, Principal, Split};
 use crate::layout::MaterialRecord;
 use crate::num::Num;
 use crate::Real;
@@ -26,10 +26,8 @@ use crate::Real;
 /// cone's (E40), derived from the friction angle and cohesion when the material was added.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct DruckerPragerParams {
-    /// Lamé's lambda, Pa.
-    pub lambda: Real,
-    /// The shear modulus mu, Pa.
-    pub mu: Real,
+    /// Hencky elasticity's Lamé constants.
+    pub lame: Lame,
     /// The cone's `alpha` ([`crate::FrictionFit::alpha`]).
     pub friction: Real,
     /// The apex's mean tension `p_t = c cot(phi)`, Pa.
@@ -39,66 +37,44 @@ pub(crate) struct DruckerPragerParams {
 /// Drucker-Prager plasticity.
 pub(crate) struct DruckerPrager;
 
-impl Model for DruckerPrager {
+impl HenckyReturn for DruckerPrager {
     type Params = DruckerPragerParams;
 
     #[inline(always)]
     fn params(r: &MaterialRecord) -> DruckerPragerParams {
         DruckerPragerParams {
-            lambda: r.lambda,
-            mu: r.mu,
+            lame: Lame::of(r),
             friction: r.friction_coefficient,
             apex_tension: r.apex_tension,
         }
     }
 
-    const INELASTIC: bool = true;
-
-    /// On vectors: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
-    /// loop over lanes ran 4 times as long (measured, von Mises 3D).
     #[inline(always)]
-    fn on_vectors(_d: usize) -> bool {
-        true
+    fn lame(p: &DruckerPragerParams) -> Lame {
+        p.lame
     }
 
+    /// Past the apex, to the apex; else `e` shrinks by `dgamma` where it is positive (E41).
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(
+    fn principal_return<const D: usize, T: Num>(
         p: &DruckerPragerParams,
-        f: &Deformation<D, T>,
-    ) -> Stress<D, T> {
-        Principal::of(f).hencky(T::splat(p.mu), T::splat(p.lambda))
-    }
-
-    fn energy<const D: usize>(p: &DruckerPragerParams, f: &Deformation<D>) -> Real {
-        hencky_energy(p.lambda, p.mu, f)
-    }
-
-    /// The accumulated plastic strain never decreases from 0.
-    fn history_in_range(plastic: Real) -> bool {
-        plastic >= 0.0
-    }
-
-    /// The return, and the stress from its principal strains.
-    #[inline(always)]
-    fn inelastic<const D: usize, T: Num>(
-        p: &DruckerPragerParams,
-        f: &Deformation<D, T>,
-        hoop: bool,
-    ) -> (Deformation<D, T>, Stress<D, T>) {
-        let n = plastic_axes(D, hoop);
+        pr: &Principal<D, T>,
+        split: Split<T>,
+        n: usize,
+        plastic: T,
+    ) -> ([T; 3], T) {
         let nr = n as Real;
-        let pr = Principal::of(f);
         let Split {
             trace: tr,
             dev: e,
             norm,
-        } = pr.split(n);
+        } = split;
         // The apex: the strain trace that carries the mean tension p_t.
-        let bulk = 2.0 * p.mu + nr * p.lambda;
+        let bulk = 2.0 * p.lame.mu + nr * p.lame.lambda;
         let tr_apex = nr * p.apex_tension / bulk;
         let zero = T::splat(0.0);
         let beyond = tr.ge(T::splat(tr_apex));
-        let dgamma = norm + (tr - tr_apex) * (p.friction * bulk / (2.0 * p.mu));
+        let dgamma = norm + (tr - tr_apex) * (p.friction * bulk / (2.0 * p.lame.mu));
         let flows = dgamma.gt(zero);
         let along = T::select(flows, dgamma, zero) / (norm + Real::MIN_POSITIVE);
         // A loop, not `vector` (whose closure this size was left out of line).
@@ -108,9 +84,7 @@ impl Model for DruckerPrager {
             let apex = T::splat(tr_apex / nr) - pr.eps[i];
             delta[i] = T::select(beyond, apex, cone);
         }
-        let (mut g, changed) = pr.change(f, &delta, n);
-        g.plastic = f.plastic + T::select(beyond, norm, T::select(flows, dgamma, zero));
-        let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));
-        (g, tau)
+        let plastic = plastic + T::select(beyond, norm, T::select(flows, dgamma, zero));
+        (delta, plastic)
     }
 }

@@ -8,7 +8,7 @@
 //! principal (R turns in the plane only): `(F - R)_zz = hzz`.
 //! [`super::snow`] is this model with moduli that harden.
 
-use super::{Deformation, Lame, Model, Stress};
+use super::model::{Deformation, Lame, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::polar_rotation_minus_identity;
 use crate::num::{matrix, MatOf, Num};

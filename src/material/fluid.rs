@@ -1,13 +1,13 @@
 //! Weakly compressible fluid (E44): an isotropic pressure from the volume ratio alone, Tait's
 //! equation of state `p = K / gamma (J^-gamma - 1)` (K the bulk modulus, gamma the exponent: 7
 //! for water), so `tau = -p J I`; no elastic shear stress (a fluid's shear stress is its
-//! viscosity's, added by [`super::add_viscous_lanes`]).
+//! viscosity's, added by [`super::viscous::add_viscous_lanes`]).
 //!
 //! Only `J` matters, so the return ([`Model::inelastic`], E45) keeps the deformation as
 //! `F = J^(1/n) I` (n = 3, or 2 in plane strain where `F_zz = 1`): `J` is carried exactly as
 //! the step's `det dF` makes it, and no shear accumulates in F to lose precision.
 
-use super::{Deformation, Model, Stress};
+use super::model::{Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::{exp_m1, exp_m1_fast, ln_1p, ln_1p_fast};
 use crate::num::{matrix, Num};

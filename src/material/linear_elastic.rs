@@ -8,7 +8,7 @@
 //!
 //! Written in `H = F - I` and `Q = R - I`: `e = sym(R^T F) - I = sym(Q^T + H + Q^T H)`.
 
-use super::{Deformation, Lame, Model, Stress};
+use super::model::{Deformation, Lame, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::{mul, polar_rotation_minus_identity};
 use crate::num::{matrix, MatOf, Num};

@@ -6,7 +6,7 @@
 //! and `J - 1` from [`crate::math::det_identity_plus_parts`], so small strains keep full
 //! precision in f32.
 
-use super::{Deformation, Lame, Model, Stress};
+use super::model::{Deformation, Lame, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::{det_identity_plus_parts, ln_1p, ln_1p_fast, x_minus_ln_1p};
 use crate::num::{matrix, Num};

@@ -6,8 +6,9 @@
 //! history is `J_p - 1`: `J_p` gains the trial's volume the clamp removes, `J_p' = J_p J_e /
 //! J_e'`. The clamp acts on the principal log strains (singular values `exp(eps_i)`).
 
+use super::fixed_corotated;
+use super::model::{Deformation, Model, Stress};
 use super::principal::{plastic_axes, Principal};
-use super::{fixed_corotated, Deformation, Model, Stress};
 use crate::layout::MaterialRecord;
 use crate::math::exp_m1_fast;
 use crate::num::Num;

@@ -12,8 +12,8 @@
 //! In plane strain the return acts on the two in-plane strains with the deviator taken over
 //! them (the 2D form; see [`super::principal`]).
 
-use super::principal::{abs, hencky_energy, plastic_axes, Principal, Split};
-use super::{Deformation, Model, Stress};
+use super::model::Lame;
+use super::principal::{abs, HenckyReturn, Principal, Split};
 use crate::layout::MaterialRecord;
 use crate::num::{vector, Num};
 use crate::Real;
@@ -25,10 +25,8 @@ const SQRT_2_3: Real = 0.816_496_580_927_726_f64 as Real;
 /// (E39).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct VonMisesParams {
-    /// Lamé's lambda, Pa.
-    pub lambda: Real,
-    /// The shear modulus mu, Pa.
-    pub mu: Real,
+    /// Hencky elasticity's Lamé constants.
+    pub lame: Lame,
     /// The initial yield stress `sigma_y`, Pa.
     pub yield_stress: Real,
     /// The hardening modulus H, Pa.
@@ -38,74 +36,50 @@ pub(crate) struct VonMisesParams {
 /// J2 plasticity with linear isotropic hardening.
 pub(crate) struct VonMises;
 
-impl Model for VonMises {
+impl HenckyReturn for VonMises {
     type Params = VonMisesParams;
 
     #[inline(always)]
     fn params(r: &MaterialRecord) -> VonMisesParams {
         VonMisesParams {
-            lambda: r.lambda,
-            mu: r.mu,
+            lame: Lame::of(r),
             yield_stress: r.yield_stress,
             hardening_modulus: r.hardening_modulus,
         }
     }
 
-    const INELASTIC: bool = true;
-
-    /// On vectors: its stress takes logarithms, exponentials or a Jacobi decomposition, which a
-    /// loop over lanes ran 4 times as long (measured, von Mises 3D).
     #[inline(always)]
-    fn on_vectors(_d: usize) -> bool {
-        true
+    fn lame(p: &VonMisesParams) -> Lame {
+        p.lame
     }
 
+    /// The radial return (E39): `e` back to the yield surface along itself.
     #[inline(always)]
-    fn kirchhoff<const D: usize, T: Num>(
+    fn principal_return<const D: usize, T: Num>(
         p: &VonMisesParams,
-        f: &Deformation<D, T>,
-    ) -> Stress<D, T> {
-        Principal::of(f).hencky(T::splat(p.mu), T::splat(p.lambda))
-    }
-
-    fn energy<const D: usize>(p: &VonMisesParams, f: &Deformation<D>) -> Real {
-        hencky_energy(p.lambda, p.mu, f)
-    }
-
-    /// The accumulated plastic strain never decreases from 0.
-    fn history_in_range(plastic: Real) -> bool {
-        plastic >= 0.0
-    }
-
-    /// The return, and the stress from its principal strains.
-    #[inline(always)]
-    fn inelastic<const D: usize, T: Num>(
-        p: &VonMisesParams,
-        f: &Deformation<D, T>,
-        hoop: bool,
-    ) -> (Deformation<D, T>, Stress<D, T>) {
-        let pr = Principal::of(f);
-        let n = plastic_axes(D, hoop);
-        let Split { dev: e, norm, .. } = pr.split(n);
-        let yield_radius = (f.plastic * p.hardening_modulus + p.yield_stress) * SQRT_2_3;
-        let excess = norm * (2.0 * p.mu) - yield_radius;
+        _pr: &Principal<D, T>,
+        split: Split<T>,
+        _n: usize,
+        plastic: T,
+    ) -> ([T; 3], T) {
+        let Split { dev: e, norm, .. } = split;
+        let yield_radius = (plastic * p.hardening_modulus + p.yield_stress) * SQRT_2_3;
+        let excess = norm * (2.0 * p.lame.mu) - yield_radius;
         let zero = T::splat(0.0);
         let dgamma = T::select(excess.gt(zero), excess, zero)
-            * (1.0 / (2.0 * p.mu + 2.0 / 3.0 * p.hardening_modulus));
+            * (1.0 / (2.0 * p.lame.mu + 2.0 / 3.0 * p.hardening_modulus));
         // e's direction; dgamma is 0 where the norm is (no excess), so the tiny real only keeps
         // 0 / 0 away.
         let along = dgamma / (norm + Real::MIN_POSITIVE);
         let delta: [T; 3] = vector(|i| -(e[i] * along));
-        let (mut g, changed) = pr.change(f, &delta, n);
-        g.plastic = f.plastic + abs(dgamma) * SQRT_2_3;
-        let tau = changed.hencky(T::splat(p.mu), T::splat(p.lambda));
-        (g, tau)
+        (delta, plastic + abs(dgamma) * SQRT_2_3)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::{Deformation, Model};
     use crate::{MaterialDef, MaterialModel};
 
     /// The plastic work equals the dissipation: along a strain path with fixed principal axes
@@ -125,7 +99,7 @@ mod tests {
             hardening_modulus: 2.0e6,
             ..MaterialDef::DEFAULT
         };
-        let p = VonMises::params(&crate::material::material_record(&metal).unwrap());
+        let p = <VonMises as Model>::params(&crate::material::material_record(&metal).unwrap());
         let mut f = Deformation::<3>::new([[0.0; 3]; 3], 0.0);
         let (mut eps, mut work) = (0.0f64, 0.0f64);
         let mut tau_old = [0.0f64; 3];
