@@ -30,9 +30,9 @@ pub trait Shape1D<const K: usize>: Copy + Sync {
     /// is unbounded, while the gradient form, equal to `B_p D_p^-1` at the old one, is not
     /// (E78, E81).
     const GRADIENT_AFFINE: bool = false;
-    /// Whether the first axis is the radius of the axisymmetric form (E65-E72); set
-    /// by [`Axisymmetric`] only, which then gives that axis r-weighted weights and the hoop
-    /// factors `T_ip` ([`Stencil::t`]).
+    /// Whether the first axis is the radius of the axisymmetric form (E65-E72); set by
+    /// [`Axisymmetric`](super::Axisymmetric) only, which then gives that axis r-weighted
+    /// weights and the hoop factors `T_ip` ([`Stencil::t`](super::Stencil::t)).
     const AXISYMMETRIC: bool = false;
     /// Whether the weights integrate the grid functions over a particle domain (uGIMP) rather
     /// than sample them at a point: then the r-weighted weights of the axisymmetric form differ
@@ -40,7 +40,8 @@ pub trait Shape1D<const K: usize>: Copy + Sync {
     const FINITE_DOMAIN: bool = false;
 
     /// Axisymmetric only: the radius of a particle at `s` (cell units on the first axis), and
-    /// the smallest radius the weights are evaluated at (see [`Axisymmetric`]).
+    /// the smallest radius the weights are evaluated at (see
+    /// [`Axisymmetric`](super::Axisymmetric)).
     #[inline(always)]
     fn radius(&self, _s: Real) -> Real {
         0.0
@@ -65,8 +66,9 @@ pub trait Shape1D<const K: usize>: Copy + Sync {
     }
 
     /// Runs `v` on the family as a concrete type: `self`, except for a family chosen at run
-    /// time ([`ThreeNode`]), which passes the family it holds. The stencil computations go
-    /// through it once per chunk, so their lane loops always see one concrete family.
+    /// time ([`ThreeNode`](super::ThreeNode)), which passes the family it holds. The stencil
+    /// computations go through it once per chunk, so their lane loops always see one concrete
+    /// family.
     #[inline(always)]
     fn visit<V: Visit<K>>(&self, v: V) -> V::Out {
         v.visit(self)
