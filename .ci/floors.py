@@ -14,7 +14,7 @@ import sys
 FLOORS = [
     ["world"],
     ["phases"],
-    ["effects"],
+    ["effects", "boundary"],
     ["material"],
     ["simd"],
     ["grid"],

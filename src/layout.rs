@@ -369,7 +369,7 @@ unsafe impl Pod for TractionRecord {}
 /// `pose_time` (world time, s), which the step moves on with its velocities. `shape` and
 /// `contact` are the enums' numbers; `size` the shape's lengths (radius; half-extents;
 /// half-length then radius, and a cylinder's inner radius). What it holds and whether a
-/// record is one the API writes: `effects/colliders.rs` (`ColliderRecord::def`,
+/// record is one the API writes: `boundary/colliders.rs` (`ColliderRecord::def`,
 /// `ColliderRecord::is_valid`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]

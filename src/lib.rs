@@ -68,6 +68,7 @@
 #[cfg(feature = "std")]
 extern crate std;
 
+mod boundary;
 mod def;
 mod effects;
 mod error;

@@ -1,7 +1,6 @@
 //! The terms the declared effects ([`crate::Effects`]) add to a step. An effect that is not
-//! declared reserves no column and runs no loop.
-//! - [`colliders`]: the colliders' solids, poses and contact law (E90-E93), which the grid
-//!   update applies;
+//! declared reserves no column and runs no loop. Colliders are the boundary's
+//! ([`crate::boundary`]).
 //! - [`damping`]: the damping acceleration of the particle update, the nodal damping of the
 //!   grid update, the per-particle rates of a chunk (E48-E53).
 //!
@@ -9,5 +8,4 @@
 //! [`crate::phases::tractions`] and [`crate::phases::transport`]. The declarations are in [`crate::def`], the setters of the
 //! effects' per-particle data on [`crate::World`].
 
-pub(crate) mod colliders;
 pub(crate) mod damping;

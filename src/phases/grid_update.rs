@@ -1,14 +1,14 @@
 //! Grid update (E17-E20): nodal velocity `v_i = p_i / m_i`, acceleration
 //! `a_i = f_i / m_i + g`, so that `p_i(n+1) = p_i + (f_i + m_i g) dt` is `m_i (v_i + a_i dt)`;
-//! then each face's boundary condition on both.
+//! then the boundary, colliders and walls, from one function ([`boundary`]).
 //!
 //! The node-by-node parts run on slabs of the grid ([`Nodes::each_slab`], in parallel where
-//! the step has several workers: a node's new value depends on that node alone); the walls,
-//! which fold nodes onto their images across lines, on the whole grid.
+//! the step has several workers: a node's new value depends on that node alone); the
+//! boundary, whose walls fold nodes onto their images across lines, on the whole grid.
 
 use super::Ctx;
+use crate::boundary::colliders::{Collider, Shared};
 use crate::def::UpdateOrder;
-use crate::effects::colliders::{Collider, Shared};
 use crate::effects::damping::NodalDamping;
 use crate::grid::GridCols;
 use crate::layout::{ColliderImpulse, ColliderRecord};
@@ -108,10 +108,9 @@ pub(crate) fn velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<
     mirror_vector(ctx, &mut nodes.whole().vel, false);
 }
 
-/// Force to acceleration `a_i = f_i / m_i + g` (E19), then the colliders (E92) and the walls
-/// on the updated velocity: where a wall fixes a component of `v_i + a_i dt` to zero, the acceleration becomes
-/// the wall's reaction `-v_i / dt` (E20). The particle update then sees the wall stop the material
-/// (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
+/// Force to acceleration `a_i = f_i / m_i + g` (E19), the nodal damping, then the boundary
+/// on the updated velocity ([`boundary`]). The particle update then sees a wall stop the
+/// material (FLIP adds `sum S_ip a_i dt`), instead of keeping velocity the grid no longer has.
 pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     mirror_vector(ctx, &mut nodes.whole().acc, true);
     nodes.each_slab(&|g| {
@@ -122,10 +121,38 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
         }
     });
     let (g, p, impulses) = &mut nodes.with_impulses();
-    collide(ctx, g, p, On::Updated(impulses));
+    boundary(ctx, g, p, On::Updated(impulses));
+}
+
+/// The boundary on the nodes of the substep ([`crate::boundary`]), the one place the grid
+/// update applies it: the colliders (E92), then the walls of stick and slip faces, then the
+/// nodes past the wall planes take their images' values. On the updated velocity
+/// `v_i + a_i dt` through the acceleration: where a wall fixes a component to `w`, the
+/// acceleration becomes the wall's reaction `(w - v_i) / dt` (E20). On the re-mapped (MUSL) or
+/// lagged (USF) velocity the stress update reads: the wall's values themselves.
+fn boundary<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    g: &mut GridCols<'_, D>,
+    p: &ParticleCols<'_, D>,
+    on: On<'_>,
+) {
+    let updated = matches!(on, On::Updated(_));
+    collide(ctx, g, p, on);
     let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
     ctx.geom
         .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
+            if !updated {
+                let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
+                match ctx.geom.wall_law(axis, side, v) {
+                    Some(w) => {
+                        for a in 0..D {
+                            g.remap[a][i] = w[a];
+                        }
+                    }
+                    None => g.remap[axis][i] = 0.0,
+                }
+                return;
+            }
             let v: [Real; D] = core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt);
             match ctx.geom.wall_law(axis, side, v) {
                 Some(w) => {
@@ -142,7 +169,7 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
             }
         });
     // Past the wall planes the nodes take their images' values.
-    mirror_vector(ctx, &mut g.acc, false);
+    mirror_vector(ctx, if updated { &mut g.acc } else { &mut g.remap }, false);
 }
 
 /// Nodal damping (E49, E50): `a_i -= alpha_g(t, x_i) v_i`, with the rate of the grid
@@ -229,20 +256,7 @@ fn constrain_remap<const D: usize>(
         UpdateOrder::Musl => On::Remapped,
         _ => On::Lagged,
     };
-    collide(ctx, g, p, on);
-    ctx.geom
-        .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
-            let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
-            match ctx.geom.wall_law(axis, side, v) {
-                Some(w) => {
-                    for a in 0..D {
-                        g.remap[a][i] = w[a];
-                    }
-                }
-                None => g.remap[axis][i] = 0.0,
-            }
-        });
-    mirror_vector(ctx, &mut g.remap, false);
+    boundary(ctx, g, p, on);
 }
 
 /// Runs `f` on each node of the box `lo..hi` in contact with `c` (E91), in node order: its

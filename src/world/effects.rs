@@ -4,9 +4,9 @@
 //! [`crate::effects`].
 
 use super::World;
+use crate::boundary::colliders;
 use crate::def::ScalarField;
 use crate::def::{ColliderDef, Feedback};
-use crate::effects::colliders;
 use crate::layout::{ColliderImpulse, ColliderRecord, Layout, TractionRecord};
 use crate::{Error, Real, Vec3};
 use core::mem::size_of;

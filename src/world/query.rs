@@ -146,7 +146,7 @@ impl<'a> WorldRef<'a> {
     }
 
     /// Collider `id` in its pose of now, as the step meets it, found from the header alone.
-    fn collider_now(&self, id: u32) -> Result<crate::effects::colliders::Collider<'a>, Error> {
+    fn collider_now(&self, id: u32) -> Result<crate::boundary::colliders::Collider<'a>, Error> {
         let (r, _) = self.collider_record(id)?;
         self.collider_at(id, r.pose_time)
     }
@@ -156,13 +156,13 @@ impl<'a> WorldRef<'a> {
         &self,
         id: u32,
         t: f64,
-    ) -> Result<crate::effects::colliders::Collider<'a>, Error> {
+    ) -> Result<crate::boundary::colliders::Collider<'a>, Error> {
         let (r, _) = self.collider_record(id)?;
         let h = self.header();
         let at = h.tables().sdf;
         let samples: &[Real] =
             bytemuck::cast_slice(&self.buf[at..at + h.sdf_count as usize * size_of::<Real>()]);
-        crate::effects::colliders::Collider::at(r, t, samples).ok_or(Error::InvalidState)
+        crate::boundary::colliders::Collider::at(r, t, samples).ok_or(Error::InvalidState)
     }
 
     /// The box `(min, max)` (world axes, m) that holds collider `id`'s solid in its pose of
@@ -312,7 +312,7 @@ impl<'a> WorldRef<'a> {
     /// the solid travels in the step); infinite where none may touch. A solid moved faster
     /// than the grid resolves would tear through the material without a word.
     pub(super) fn collider_substep(&self, dt: Real) -> Real {
-        use crate::effects::colliders::Collider;
+        use crate::boundary::colliders::Collider;
         let count = self.header().collider_count as usize;
         if count == 0 {
             return Real::INFINITY;
