@@ -139,22 +139,13 @@ fn boundary<const D: usize>(
     let updated = matches!(on, On::Updated(_));
     collide(ctx, g, p, on);
     let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
-    ctx.geom
-        .for_each_wall_node(&ctx.active, &mut |i, axis, side| {
-            if !updated {
-                let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
-                match ctx.geom.wall_law(axis, side, v) {
-                    Some(w) => {
-                        for a in 0..D {
-                            g.remap[a][i] = w[a];
-                        }
-                    }
-                    None => g.remap[axis][i] = 0.0,
-                }
-                return;
-            }
+    // The law chosen once: on the updated velocity through the acceleration, or on the
+    // stress update's velocity itself.
+    let (walls, geom) = (&ctx.active, &ctx.geom);
+    if updated {
+        geom.for_each_wall_node(walls, &mut |i, axis, side| {
             let v: [Real; D] = core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt);
-            match ctx.geom.wall_law(axis, side, v) {
+            match geom.wall_law(axis, side, v) {
                 Some(w) => {
                     for a in 0..D {
                         // A wall at rest gives `-v / dt`, the bits of the walls before they moved.
@@ -168,6 +159,19 @@ fn boundary<const D: usize>(
                 None => g.acc[axis][i] = -g.vel[axis][i] * inv_dt,
             }
         });
+    } else {
+        geom.for_each_wall_node(walls, &mut |i, axis, side| {
+            let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
+            match geom.wall_law(axis, side, v) {
+                Some(w) => {
+                    for a in 0..D {
+                        g.remap[a][i] = w[a];
+                    }
+                }
+                None => g.remap[axis][i] = 0.0,
+            }
+        });
+    }
     // Past the wall planes the nodes take their images' values.
     mirror_vector(ctx, if updated { &mut g.acc } else { &mut g.remap }, false);
 }
