@@ -30,14 +30,14 @@ class MpmError(Exception):
         super().__init__(f"{function}: {description} (MPM_STATUS_{self.name})")
 
 
-def _error_class(name):
+def _error_class(name, doc):
     camel = "".join(part.capitalize() for part in name.split("_")) + "Error"
-    doc = f"MpmError for MPM_STATUS_{name}."
     return type(camel, (MpmError,), {"__doc__": doc, "__module__": "mpm_gimp"})
 
 
-#: The exception class of each status but OK.
-ERRORS = {s: _error_class(s.name) for s in Status if s != Status.OK}
+_STATUS_DOCS = {n: d for e in _native._header.ENUMS if e[0] == "MpmStatus" for _, n, d in e[2]}
+#: The exception class of each status but OK, documented as the header documents the status.
+ERRORS = {s: _error_class(s.name, _STATUS_DOCS[s]) for s in Status if s != Status.OK}
 
 
 def _check(precision, function, status):

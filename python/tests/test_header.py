@@ -1,6 +1,6 @@
-"""The package's C declarations are the header's: the generated _header.py is current (as
-ffi/tests/header.rs checks the header against ffi/src), the installed package holds it, and
-the libraries are the header's ABI."""
+"""The package's C declarations are the header's: the generated _header.py and the stubs
+_types.pyi are current (as ffi/tests/header.rs checks the header against ffi/src), the
+installed package holds them, and the libraries are the header's ABI."""
 
 import importlib.util
 from pathlib import Path
@@ -20,6 +20,7 @@ def test_the_generated_declarations_are_the_headers():
     assert fresh == committed, "stale: run python3 python/gen_header.py"
     installed = Path(_header.__file__).read_text()
     assert installed == committed, "the installed package is older: pip install ./python"
+    assert gen.stubs() == (PYTHON / "mpm_gimp" / "_types.pyi").read_text(), "stale stubs"
 
 
 def test_the_libraries_are_the_headers_abi():
