@@ -72,7 +72,9 @@ def _cargo(target_dir, features):
 
 def _libraries():
     if not (ROOT / "ffi" / "include" / "mpm_gimp.h").is_file():
-        raise RuntimeError("mpm_gimp builds from a clone of the mpm-gimp repository (pip install ./python)")
+        raise RuntimeError(
+            "mpm_gimp builds from a clone of the mpm-gimp repository (pip install ./python)"
+        )
     target = Path(os.environ.get("CARGO_TARGET_DIR") or ROOT / "target")
     if not target.is_absolute():
         target = ROOT / target
@@ -91,6 +93,20 @@ def get_requires_for_build_wheel(config_settings=None):
     return []
 
 
+def _wheel_text():
+    lines = ["Wheel-Version: 1.0", "Generator: mpm-gimp build_backend", "Root-Is-Purelib: false"]
+    return "\n".join(lines + [f"Tag: {_tag()}"]) + "\n"
+
+
+def prepare_metadata_for_build_wheel(metadata_directory, config_settings=None):
+    """The metadata alone, without a build (pip asks for it first)."""
+    info = Path(metadata_directory) / f"mpm_gimp-{_version()}.dist-info"
+    info.mkdir(parents=True, exist_ok=True)
+    (info / "METADATA").write_text(_metadata())
+    (info / "WHEEL").write_text(_wheel_text())
+    return info.name
+
+
 def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     version = _version()
     files = {}
@@ -101,8 +117,7 @@ def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
         files[f"{PACKAGE}/{name}"] = path.read_bytes()
     info = f"mpm_gimp-{version}.dist-info"
     files[f"{info}/METADATA"] = _metadata().encode()
-    wheel = ["Wheel-Version: 1.0", "Generator: mpm-gimp build_backend", "Root-Is-Purelib: false"]
-    files[f"{info}/WHEEL"] = ("\n".join(wheel + [f"Tag: {_tag()}"]) + "\n").encode()
+    files[f"{info}/WHEEL"] = _wheel_text().encode()
     record = [_record_line(n, d) for n, d in files.items()] + [f"{info}/RECORD,,"]
     files[f"{info}/RECORD"] = ("\n".join(record) + "\n").encode()
     name = f"mpm_gimp-{version}-{_tag()}.whl"

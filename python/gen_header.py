@@ -81,7 +81,9 @@ def parse(text):
                     fcomment = []
                 i += 1
             structs.append((name, doc, fields))
-        elif re.match(r"(MpmStatus|void|uint32_t|struct \w+|const char \*)\s*\*?\s*mpm_\w+\(", line):
+        elif re.match(
+            r"(MpmStatus|void|uint32_t|struct \w+|const char \*)\s*\*?\s*mpm_\w+\(", line
+        ):
             decl = line
             while not decl.endswith(";"):
                 i += 1
@@ -174,7 +176,7 @@ def stubs():
             out += [f"    {field}: {_stub_type(ctype, size)}", f'    """{fdoc}"""']
     for _, _, values in [e for e in enums if e[0] == "MpmStatus"]:
         for v, n, doc in values[1:]:
-            camel = "".join(p.capitalize() for p in v[len("MPM_STATUS_"):].split("_"))
+            camel = "".join(p.capitalize() for p in v[len("MPM_STATUS_") :].split("_"))
             out += ["", f"class {camel}Error(MpmError):", f'    """{doc}"""']
     return "\n".join(out) + "\n"
 

@@ -95,8 +95,10 @@ def _input(array, what, dtype, shape):
             f"{what}: dtype {array.dtype}, expected {np.dtype(dtype).name} "
             f"(convert with .astype(np.{np.dtype(dtype).name}))"
         )
-    if array.shape != shape:
-        raise ValueError(f"{what}: shape {array.shape}, expected {shape}")
+    want = tuple(a if n is None else n for a, n in zip(array.shape, shape))
+    if array.shape != want or len(shape) != array.ndim:
+        text = str(tuple("n" if n is None else n for n in shape)).replace("'", "")
+        raise ValueError(f"{what}: shape {array.shape}, expected {text}")
     if not array.flags.c_contiguous:
         raise ValueError(f"{what}: not C-contiguous (pass np.ascontiguousarray({what}))")
     return array.ctypes.data
@@ -119,8 +121,8 @@ class Particles:
     writeable, and writeable cannot be turned back on; change particles with the World's
     setters. A step changes what they show (they show the world, not a copy); they keep the
     world's memory alive, so a view outlives the World object and particle removal (it then
-    shows memory that no longer holds those particles, never memory that is gone).
-    `World.copy()`-style snapshots: `np.array(view)`.
+    shows memory that no longer holds those particles, never memory that is gone). A copy
+    that a step does not change: `np.array(column)`.
 
     Units: position m, velocity m/s, mass kg, volume0 m^3 (2D: per unit thickness; axisymmetric
     per radian), stress the Kirchhoff stress over the initial density m^2/s^2, temperature K,
@@ -132,6 +134,17 @@ class Particles:
         self.dimension = ENUMS["MpmDimension"](dimension)
         for name, value in columns.items():
             setattr(self, name, value)
+
+    def copy(self):
+        """Every column the world has, copied (a dict of C-contiguous arrays): the state
+        `World.add_particles_with_state` and `World.set_particle_state` take back, bit for
+        bit."""
+        out = {}
+        for name in Particles.COLUMNS:
+            column = getattr(self, name)
+            if column is not None:
+                out[name] = np.array(np.stack(column) if isinstance(column, tuple) else column)
+        return out
 
     def __repr__(self):
         have = [n for n in Particles.COLUMNS if getattr(self, n) is not None]
@@ -180,7 +193,9 @@ def _columns(view, buffer, base, real, nbytes):
             if p and not (base <= p and p - base + count * np.dtype(dtype).itemsize <= nbytes):
                 raise MpmError(Status.INTERNAL, "mpm_world_particles", "a column outside the world")
         if size is None:
-            out[name] = None if not pointers[0] else _strided(buffer, base, dtype, count, pointers, [])
+            out[name] = (
+                None if not pointers[0] else _strided(buffer, base, dtype, count, pointers, [])
+            )
             continue
         if size == 9:
             d = 3 if pointers[8] else 2
@@ -201,6 +216,8 @@ def _columns(view, buffer, base, real, nbytes):
         out[name] = array
     return out
 
+
+_PARTICLE_STATE = next(s[2] for s in _native._header.STRUCTS if s[0] == "MpmParticleState")
 
 _POOLS = {}
 _POOLS_LOCK = threading.Lock()
@@ -288,12 +305,20 @@ def namespace(name):
 
         def __init__(self, definition, memory=None):
             if not isinstance(definition, S["MpmWorldDef"]):
-                raise TypeError(f"definition: expected a {name} WorldDef, got {type(definition).__name__}")
+                raise TypeError(
+                    f"definition: expected a {name} WorldDef, got {type(definition).__name__}"
+                )
             req = S["MpmMemoryRequirements"]()
-            _check(P, "mpm_memory_requirements", P.lib.mpm_memory_requirements(ctypes.byref(definition), ctypes.byref(req)))
+            _check(
+                P,
+                "mpm_memory_requirements",
+                P.lib.mpm_memory_requirements(ctypes.byref(definition), ctypes.byref(req)),
+            )
             mem = _aligned(req.bytes, req.align) if memory is None else _memory(memory)
             world = ctypes.c_void_p()
-            status = P.lib.mpm_world_init(ctypes.byref(definition), mem.ctypes.data, mem.nbytes, ctypes.byref(world))
+            status = P.lib.mpm_world_init(
+                ctypes.byref(definition), mem.ctypes.data, mem.nbytes, ctypes.byref(world)
+            )
             _check(P, "mpm_world_init", status)
             self._adopt(memory if memory is not None else mem, mem, world.value)
 
@@ -317,12 +342,18 @@ def namespace(name):
             mem = _memory(memory) if not copy else None
             if copy:
                 if not isinstance(memory, np.ndarray):
-                    raise TypeError(f"memory: expected a numpy.ndarray, got {type(memory).__name__}")
+                    raise TypeError(
+                        f"memory: expected a numpy.ndarray, got {type(memory).__name__}"
+                    )
                 src = np.ascontiguousarray(memory).reshape(-1).view(np.uint8)
-                mem = _aligned(src.nbytes, 4096)
+                mem = _aligned(src.nbytes, 4096)  # a page: more than any world asks
                 mem[:] = src
             world = ctypes.c_void_p()
-            _check(P, "mpm_world_open", P.lib.mpm_world_open(mem.ctypes.data, mem.nbytes, ctypes.byref(world)))
+            _check(
+                P,
+                "mpm_world_open",
+                P.lib.mpm_world_open(mem.ctypes.data, mem.nbytes, ctypes.byref(world)),
+            )
             self = cls.__new__(cls)
             self._adopt(mem if copy else memory, mem, world.value)
             return self
@@ -368,8 +399,12 @@ def namespace(name):
         def add_material(self, material):
             """Adds a `MaterialDef`; returns its id."""
             if not isinstance(material, S["MpmMaterialDef"]):
-                raise TypeError(f"material: expected a {name} MaterialDef, got {type(material).__name__}")
-            return self._out("mpm_world_add_material", ctypes.c_uint32, ctypes.byref(material)).value
+                raise TypeError(
+                    f"material: expected a {name} MaterialDef, got {type(material).__name__}"
+                )
+            return self._out(
+                "mpm_world_add_material", ctypes.c_uint32, ctypes.byref(material)
+            ).value
 
         def _range(self, function, *args):
             ids = self._out(function, S["MpmIdRange"], *args)
@@ -380,25 +415,42 @@ def namespace(name):
             `velocity` (m/s), `particles_per_cell` per cell per axis; returns their ids (a
             range). Particles come in stencil-bin order: find a face's by position."""
             V = S["MpmVec3"]
-            return self._range("mpm_world_fill_box", V(*_vec3(min, "min")), V(*_vec3(max, "max")), _u32(material, "material"), V(*_vec3(velocity, "velocity")))
+            return self._range(
+                "mpm_world_fill_box",
+                V(*_vec3(min, "min")),
+                V(*_vec3(max, "max")),
+                _u32(material, "material"),
+                V(*_vec3(velocity, "velocity")),
+            )
 
         def fill_disk(self, center, radius, material, velocity=(0, 0, 0)):
             """Fills a disk (2D worlds) like `fill_box`; radius m."""
             V = S["MpmVec3"]
-            return self._range("mpm_world_fill_disk", V(*_vec3(center, "center")), float(radius), _u32(material, "material"), V(*_vec3(velocity, "velocity")))
+            return self._range(
+                "mpm_world_fill_disk",
+                V(*_vec3(center, "center")),
+                float(radius),
+                _u32(material, "material"),
+                V(*_vec3(velocity, "velocity")),
+            )
 
         def fill_sphere(self, center, radius, material, velocity=(0, 0, 0)):
             """Fills a sphere (3D worlds) like `fill_box`; radius m."""
             V = S["MpmVec3"]
-            return self._range("mpm_world_fill_sphere", V(*_vec3(center, "center")), float(radius), _u32(material, "material"), V(*_vec3(velocity, "velocity")))
+            return self._range(
+                "mpm_world_fill_sphere",
+                V(*_vec3(center, "center")),
+                float(radius),
+                _u32(material, "material"),
+                V(*_vec3(velocity, "velocity")),
+            )
 
         def add_particles(self, position, mass, volume, material, velocity=None):
             """Adds particles from arrays: `position` (D, n) m, `velocity` (D, n) m/s (zero if
             None), `mass` (n,) kg, `volume` (n,) m^3, of `dtype`; `material` (n,) uint32 or one
             id for all. Returns their ids (a range); all or nothing."""
             d = self._dim()
-            if not isinstance(position, np.ndarray) or position.ndim != 2:
-                _input(position, "position", real, (d, -1))
+            _input(position, "position", real, (d, None))
             n = position.shape[1]
             if velocity is None:
                 velocity = np.zeros((d, n), dtype=real)
@@ -454,7 +506,11 @@ def namespace(name):
             (`Particles`): no copy; see `Particles` for shapes and lifetime."""
             with self._lock:
                 view = S["MpmParticlesView"]()
-                _check(P, "mpm_world_particles", P.lib.mpm_world_particles(self._world, ctypes.byref(view)))
+                _check(
+                    P,
+                    "mpm_world_particles",
+                    P.lib.mpm_world_particles(self._world, ctypes.byref(view)),
+                )
                 # A new object per call over the world's memory, which every column's base
                 # chain ends in (a ctypes array: numpy does not collapse it, as it collapses
                 # views of arrays), so that a weak reference to it says whether a view is
@@ -475,7 +531,9 @@ def namespace(name):
             """J = det F of every particle, a new (n,) array."""
             n = self._out("mpm_world_diagnostics", S["MpmDiagnostics"]).particle_count
             out = np.empty(n, dtype=real)
-            self._call("mpm_world_copy_jacobians", out.ctypes.data, n, ctypes.byref(ctypes.c_size_t()))
+            self._call(
+                "mpm_world_copy_jacobians", out.ctypes.data, n, ctypes.byref(ctypes.c_size_t())
+            )
             return out
 
         # -- edits ---------------------------------------------------------------------
@@ -484,7 +542,9 @@ def namespace(name):
             d = self._dim()
             n = values.shape[-1] if isinstance(values, np.ndarray) and values.ndim == 2 else 0
             rows = _rows(values, what, real, d, n) + [None]
-            self._call(function, _u32(first, "first"), rows[0], rows[1], rows[2] if d == 3 else None, n)
+            self._call(
+                function, _u32(first, "first"), rows[0], rows[1], rows[2] if d == 3 else None, n
+            )
 
         def set_particle_positions(self, first, position):
             """Moves particles `first .. first + n` to `position` (D, n), m."""
@@ -502,52 +562,148 @@ def namespace(name):
         def set_particle_materials(self, first, material):
             """Gives particles `first .. first + n` the materials `material` (n,) uint32."""
             n = len(material) if isinstance(material, np.ndarray) else 0
-            self._call("mpm_world_set_particle_materials", _u32(first, "first"), _input(material, "material", np.uint32, (n,)), n)
+            self._call(
+                "mpm_world_set_particle_materials",
+                _u32(first, "first"),
+                _input(material, "material", np.uint32, (n,)),
+                n,
+            )
 
         def set_particle_damping(self, first, alpha_g, alpha_p):
             """Sets per-particle grid and particle damping (n,) each, 1/s
             (`effects.damping.per_particle`)."""
             n = len(alpha_g) if isinstance(alpha_g, np.ndarray) else 0
-            self._call("mpm_world_set_particle_damping", _u32(first, "first"), _input(alpha_g, "alpha_g", real, (n,)), _input(alpha_p, "alpha_p", real, (n,)), n)
+            self._call(
+                "mpm_world_set_particle_damping",
+                _u32(first, "first"),
+                _input(alpha_g, "alpha_g", real, (n,)),
+                _input(alpha_p, "alpha_p", real, (n,)),
+                n,
+            )
 
         def set_particle_scalar(self, field, first, values):
             """Sets the temperatures (K) or concentration potentials of particles `first ..
             first + n` (`field`: a `ScalarField`; `values` (n,))."""
             n = len(values) if isinstance(values, np.ndarray) else 0
-            self._call("mpm_world_set_particle_scalar", _u32(field, "field"), _u32(first, "first"), _input(values, "values", real, (n,)), n)
+            self._call(
+                "mpm_world_set_particle_scalar",
+                _u32(field, "field"),
+                _u32(first, "first"),
+                _input(values, "values", real, (n,)),
+                n,
+            )
 
         def set_particle_sources(self, field, first, values):
             """Sets the sources (W/m^3 for heat, 1/s for the concentration) of particles."""
             n = len(values) if isinstance(values, np.ndarray) else 0
-            self._call("mpm_world_set_particle_sources", _u32(field, "field"), _u32(first, "first"), _input(values, "values", real, (n,)), n)
+            self._call(
+                "mpm_world_set_particle_sources",
+                _u32(field, "field"),
+                _u32(first, "first"),
+                _input(values, "values", real, (n,)),
+                n,
+            )
 
-        def set_displacement_gradient(self, first, h):
-            """Gives particles `first .. first + n` the displacement gradient `h` (D, D, n),
-            H = F - I, and the stress of their material."""
+        def _matrix(self, m, what, n=None):
+            """The 9 entry pointers (row-major, 3 a + b) of a (D, D, n) input array."""
             d = self._dim()
-            n = h.shape[-1] if isinstance(h, np.ndarray) and h.ndim == 3 else 0
-            base = _input(h, "h", real, (d, d, n))
+            if n is None:
+                n = m.shape[-1] if isinstance(m, np.ndarray) and m.ndim == 3 else 0
+            base = _input(m, what, real, (d, d, n))
             item = np.dtype(real).itemsize
             ptrs = (ctypes.c_void_p * 9)()
             for a in range(d):
                 for b in range(d):
                     ptrs[3 * a + b] = base + (a * d + b) * n * item
-            self._call("mpm_world_set_displacement_gradient", _u32(first, "first"), ctypes.byref(ptrs), n)
+            return ptrs, n
+
+        def set_displacement_gradient(self, first, h):
+            """Gives particles `first .. first + n` the displacement gradient `h` (D, D, n),
+            H = F - I, and the stress of their material."""
+            ptrs, n = self._matrix(h, "h")
+            self._call(
+                "mpm_world_set_displacement_gradient", _u32(first, "first"), ctypes.byref(ptrs), n
+            )
+
+        def set_particle_affine(self, first, affine):
+            """Sets the affine matrix (D, D, n) of particles `first .. first + n`, as the
+            view's `affine` holds it (APIC's B_p; C_p with MLS-MPM)."""
+            ptrs, n = self._matrix(affine, "affine")
+            self._call("mpm_world_set_particle_affine", _u32(first, "first"), ctypes.byref(ptrs), n)
+
+        def _state(self, state, n):
+            """An `MpmParticleState` over the columns of `state` (a dict, as
+            `Particles.copy()` makes, or an object with those attributes); missing: NULL."""
+            d = self._dim()
+            rows = {3: d, 6: 6 if d == 3 else 4, 2: 2}
+            get = state.get if isinstance(state, dict) else lambda k: getattr(state, k, None)
+            out = S["MpmParticleState"]()
+            for field, ctype, size, _ in _PARTICLE_STATE:
+                value = get(field)
+                if value is None:
+                    continue
+                dtype = np.uint32 if ctype.startswith("uint32_t") else real
+                if size is None:
+                    setattr(out, field, _input(value, field, dtype, (n,)))
+                elif size == 9:
+                    ptrs, _ = self._matrix(value, field, n)
+                    getattr(out, field)[:] = list(ptrs)
+                else:
+                    for i, p in enumerate(_rows(value, field, dtype, rows[size], n)):
+                        getattr(out, field)[i] = p
+            return out
+
+        def add_particles_with_state(self, state):
+            """Adds particles with every column `state` gives (a dict of arrays shaped as the
+            view's columns, as `Particles.copy()` makes; position, mass, volume0 and material
+            required, others a new particle's value); returns their ids (a range). A world's
+            particles so copied and added to a world of the same materials and effects are
+            those particles, bit for bit."""
+            position = state.get("position") if isinstance(state, dict) else state.position
+            n = position.shape[-1] if isinstance(position, np.ndarray) and position.ndim == 2 else 0
+            return self._range(
+                "mpm_world_add_particles_with_state", ctypes.byref(self._state(state, n)), n
+            )
+
+        def set_particle_state(self, first, state, count):
+            """Sets the columns `state` gives (as `add_particles_with_state` takes them) of
+            particles `first .. first + count`, as given, bit for bit; the others stay."""
+            self._call(
+                "mpm_world_set_particle_state",
+                _u32(first, "first"),
+                ctypes.byref(self._state(state, _u32(count, "count"))),
+                count,
+            )
 
         def remove_particles(self, first, count):
             """Removes particles `first .. first + count`; later ones move down. Returns the
             number removed."""
-            return self._out("mpm_world_remove_particles", ctypes.c_uint32, _u32(first, "first"), _u32(count, "count")).value
+            return self._out(
+                "mpm_world_remove_particles",
+                ctypes.c_uint32,
+                _u32(first, "first"),
+                _u32(count, "count"),
+            ).value
 
         def remove_particle_list(self, ids):
             """Removes the particles of `ids` (uint32 array, any order)."""
             n = len(ids) if isinstance(ids, np.ndarray) else 0
-            return self._out("mpm_world_remove_particle_list", ctypes.c_uint32, _input(ids, "ids", np.uint32, (n,)), n).value
+            return self._out(
+                "mpm_world_remove_particle_list",
+                ctypes.c_uint32,
+                _input(ids, "ids", np.uint32, (n,)),
+                n,
+            ).value
 
         def remove_particles_in_box(self, min, max):
             """Removes every particle in the box `[min, max]`, m: a sink."""
             V = S["MpmVec3"]
-            return self._out("mpm_world_remove_particles_in_box", ctypes.c_uint32, V(*_vec3(min, "min")), V(*_vec3(max, "max"))).value
+            return self._out(
+                "mpm_world_remove_particles_in_box",
+                ctypes.c_uint32,
+                V(*_vec3(min, "min")),
+                V(*_vec3(max, "max")),
+            ).value
 
         def remove_inactive_particles(self):
             """Removes every escaped or frozen particle."""
@@ -559,16 +715,34 @@ def namespace(name):
             """Loads `face` (a `Face`) of the domains of particles `first .. first + count`
             with `traction` (Pa, per deformed area); returns the traction ids."""
             V = S["MpmVec3"]
-            return self._range("mpm_world_add_tractions", _u32(first, "first"), _u32(count, "count"), _u32(face, "face"), V(*_vec3(traction, "traction")))
+            return self._range(
+                "mpm_world_add_tractions",
+                _u32(first, "first"),
+                _u32(count, "count"),
+                _u32(face, "face"),
+                V(*_vec3(traction, "traction")),
+            )
 
         def add_surface_tractions(self, first, count, normal, area, traction):
             """Loads a face of outward `normal` and `area` (m^2) of each particle; returns ids."""
             V = S["MpmVec3"]
-            return self._range("mpm_world_add_surface_tractions", _u32(first, "first"), _u32(count, "count"), V(*_vec3(normal, "normal")), float(area), V(*_vec3(traction, "traction")))
+            return self._range(
+                "mpm_world_add_surface_tractions",
+                _u32(first, "first"),
+                _u32(count, "count"),
+                V(*_vec3(normal, "normal")),
+                float(area),
+                V(*_vec3(traction, "traction")),
+            )
 
         def set_traction_schedule(self, first, count, schedule):
             """Makes tractions `first .. first + count` follow `effects.traction_schedules[schedule]`."""
-            self._call("mpm_world_set_traction_schedule", _u32(first, "first"), _u32(count, "count"), _u32(schedule, "schedule"))
+            self._call(
+                "mpm_world_set_traction_schedule",
+                _u32(first, "first"),
+                _u32(count, "count"),
+                _u32(schedule, "schedule"),
+            )
 
         def remove_tractions(self, first, count):
             """Removes tractions `first .. first + count`."""
@@ -591,13 +765,19 @@ def namespace(name):
         def add_collider(self, collider):
             """Adds a `ColliderDef` (`effects.collider_capacity`); returns its id."""
             if not isinstance(collider, S["MpmColliderDef"]):
-                raise TypeError(f"collider: expected a {name} ColliderDef, got {type(collider).__name__}")
-            return self._out("mpm_world_add_collider", ctypes.c_uint32, ctypes.byref(collider)).value
+                raise TypeError(
+                    f"collider: expected a {name} ColliderDef, got {type(collider).__name__}"
+                )
+            return self._out(
+                "mpm_world_add_collider", ctypes.c_uint32, ctypes.byref(collider)
+            ).value
 
         def set_collider(self, id, collider):
             """Replaces collider `id`'s definition (how a host moves a kinematic collider)."""
             if not isinstance(collider, S["MpmColliderDef"]):
-                raise TypeError(f"collider: expected a {name} ColliderDef, got {type(collider).__name__}")
+                raise TypeError(
+                    f"collider: expected a {name} ColliderDef, got {type(collider).__name__}"
+                )
             self._call("mpm_world_set_collider", _u32(id, "id"), ctypes.byref(collider))
 
         def collider(self, id):
@@ -608,7 +788,12 @@ def namespace(name):
         def add_distance_field(self, samples):
             """Adds signed-distance samples (n,), m; returns the first one's index."""
             n = len(samples) if isinstance(samples, np.ndarray) else 0
-            return self._out("mpm_world_add_distance_field", ctypes.c_uint32, _input(samples, "samples", real, (n,)), n).value
+            return self._out(
+                "mpm_world_add_distance_field",
+                ctypes.c_uint32,
+                _input(samples, "samples", real, (n,)),
+                n,
+            ).value
 
     World.__module__ = "mpm_gimp"
     ns.update({cls.__name__: cls for cls in S.values()})

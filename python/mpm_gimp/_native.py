@@ -37,10 +37,10 @@ def _make_enums():
     for name, doc, values in _header.ENUMS:
         short = name[3:]
         prefix = "MPM_" + _camel_to_upper(short) + "_"
-        members = {v[len(prefix):] if v.startswith(prefix) else v: n for v, n, _ in values}
+        members = {v[len(prefix) :] if v.startswith(prefix) else v: n for v, n, _ in values}
         cls = enum.IntEnum(short, members)
-        cls.__doc__ = doc + "\n\n" + "\n".join(
-            f"{v[len(prefix):]} = {n}: {d}" for v, n, d in values
+        cls.__doc__ = (
+            doc + "\n\n" + "\n".join(f"{v[len(prefix):]} = {n}: {d}" for v, n, d in values)
         )
         cls.__module__ = "mpm_gimp"
         enums[name] = cls
@@ -98,9 +98,7 @@ class Precision:
             body = {"_fields_": cfields, "__module__": "mpm_gimp"}
             body["_names"] = frozenset(f for f, _ in cfields)
             body["__doc__"] = (
-                doc
-                + "\n\nFields:\n\n"
-                + "\n".join("- " + _field_doc(*f) for f in fields)
+                doc + "\n\nFields:\n\n" + "\n".join("- " + _field_doc(*f) for f in fields)
             )
             self.structs[sname] = type(sname[3:], (Struct,), body)
         for fname, ret, args, doc in _header.FUNCTIONS:

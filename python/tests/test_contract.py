@@ -11,7 +11,6 @@ from conftest import block_world
 
 import mpm_gimp
 
-
 # -- definitions and their documentation ---------------------------------------------------
 
 
@@ -354,3 +353,29 @@ def test_effects_setters_and_removal(mpm):
     h[0, 0] = 0.01
     w.set_displacement_gradient(0, h)
     assert np.allclose(w.jacobians()[:3], 1.01)
+
+
+def test_a_particles_state_goes_back_bit_for_bit(mpm):
+    d = mpm.WorldDef(cells=(40, 40, 1), cell_size=0.025, transfer=mpm.Transfer.APIC)
+    d.effects.heat.declared = 1
+    d.effects.plasticity = 1
+    a, b = mpm.World(d), mpm.World(d)
+    for w in (a, b):
+        w.add_material(mpm.MaterialDef(model=mpm.MaterialModel.VON_MISES, conductivity=1))
+    a.fill_box((0.3, 0.4), (0.7, 0.7), 0, (0.5, -1))
+    for _ in range(3):
+        a.step(1 / 60)
+    state = a.particles().copy()
+    assert set(state) >= {"affine", "temperature", "plastic", "position_low"}
+    assert b.add_particles_with_state(state) == range(0, a.particles().count)
+    a.step(1 / 60)
+    b.step(1 / 60)
+    pa, pb = a.particles(), b.particles()
+    for column in state:
+        assert np.array_equal(getattr(pa, column), getattr(pb, column)), column
+    b.set_particle_state(0, {"velocity": np.zeros((2, 4), mpm.dtype)}, 4)
+    assert np.all(pb.velocity[:, :4] == 0) and np.array_equal(pb.position, pa.position)
+    b.set_particle_affine(0, np.zeros((2, 2, 4), mpm.dtype))
+    assert np.all(pb.affine[..., :4] == 0)
+    with pytest.raises(ValueError, match="shape"):
+        b.set_particle_state(0, {"velocity": np.zeros((2, 4), mpm.dtype)}, 5)

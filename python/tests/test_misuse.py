@@ -34,7 +34,9 @@ def world(mpm):
     cfl=floats,
     ppc=ints,
 )
-def test_any_definition_makes_a_world_or_an_error(mpm, cells, cell_size, capacity, dimension, shape, cfl, ppc):
+def test_any_definition_makes_a_world_or_an_error(
+    mpm, cells, cell_size, capacity, dimension, shape, cfl, ppc
+):
     d = mpm.WorldDef()
     try:
         d.cells = tuple(max(0, min(c, 64)) for c in cells)
