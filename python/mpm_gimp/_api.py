@@ -7,6 +7,7 @@ Where to look:
 """
 
 import ctypes
+import os
 import threading
 import weakref
 
@@ -224,11 +225,12 @@ _POOLS_LOCK = threading.Lock()
 
 
 def _pool(precision, workers):
-    """The package's pool of `workers` threads for this precision (made once, kept)."""
+    """The package's pool of `workers` threads for this precision (made once per process,
+    kept: a child of `fork` has none of its parent's threads, so it makes its own)."""
     if not isinstance(workers, int) or not 1 <= workers <= 256:
         raise ValueError(f"workers: expected an int in 1..=256, got {workers!r}")
     with _POOLS_LOCK:
-        key = (precision.name, workers)
+        key = (precision.name, workers, os.getpid())
         if key not in _POOLS:
             pool = precision.lib.mpm_py_pool_new(workers)
             if not pool:

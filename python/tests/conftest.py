@@ -1,8 +1,23 @@
 """Fixtures: `mpm` runs a test in both precisions (the `mpm_gimp` and `mpm_gimp.f64` names)."""
 
+import atexit
+import os
+import shutil
+import tempfile
+
 import pytest
 
+# Hypothesis keeps its files out of the source tree (before it is imported).
+if "HYPOTHESIS_STORAGE_DIRECTORY" not in os.environ:
+    os.environ["HYPOTHESIS_STORAGE_DIRECTORY"] = tempfile.mkdtemp(prefix="hypothesis-")
+    atexit.register(shutil.rmtree, os.environ["HYPOTHESIS_STORAGE_DIRECTORY"], True)
+from hypothesis import settings  # noqa: E402
+
 import mpm_gimp
+
+# No example database: each run draws afresh.
+settings.register_profile("mpm", database=None)
+settings.load_profile("mpm")
 
 
 @pytest.fixture(params=["f32", "f64"])

@@ -379,3 +379,21 @@ def test_a_particles_state_goes_back_bit_for_bit(mpm):
     assert np.all(pb.affine[..., :4] == 0)
     with pytest.raises(ValueError, match="shape"):
         b.set_particle_state(0, {"velocity": np.zeros((2, 4), mpm.dtype)}, 5)
+
+
+def test_a_forked_child_steps_on_threads_of_its_own(mpm):
+    """multiprocessing's fork copies no thread: a child makes its own pool (one taken over from
+    the parent would wait for threads that do not exist)."""
+    import multiprocessing
+
+    w, _ = block_world(mpm, workers=2)
+    w.step(1 / 60, workers=2)  # the parent's pool exists
+    context = multiprocessing.get_context("fork")
+    with context.Pool(1) as pool:
+        assert pool.apply_async(_child_steps, (mpm.precision,)).get(timeout=60) > 0
+
+
+def _child_steps(precision):
+    mpm = mpm_gimp if precision == "f32" else mpm_gimp.f64
+    w, _ = block_world(mpm, workers=2)
+    return w.step(1 / 60, workers=2).substeps
