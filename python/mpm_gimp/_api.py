@@ -8,6 +8,7 @@ Where to look:
 
 import ctypes
 import os
+import textwrap
 import threading
 import weakref
 
@@ -258,7 +259,7 @@ def namespace(name):
                 setattr(self, field, value)
 
         cls = type(base.__name__, (base,), {"__init__": __init__, "__module__": "mpm_gimp"})
-        cls.__doc__ = doc + "\n\n" + base.__doc__
+        cls.__doc__ = textwrap.fill(doc, 92) + "\n\n" + base.__doc__
         return cls
 
     WorldDef = definition(

@@ -11,6 +11,7 @@ import ctypes
 import enum
 import keyword
 import os
+import textwrap
 
 from . import _header
 
@@ -69,6 +70,10 @@ def _plain(value):
     return value
 
 
+def _wrap(text, indent=""):
+    return textwrap.fill(text, 92, subsequent_indent=indent)
+
+
 def _name(field):
     return field + "_" if keyword.iskeyword(field) else field
 
@@ -97,8 +102,9 @@ class Precision:
             cfields = [(_name(f), self._ctype(t, n)) for f, t, n, _ in fields]
             body = {"_fields_": cfields, "__module__": "mpm_gimp"}
             body["_names"] = frozenset(f for f, _ in cfields)
-            body["__doc__"] = (
-                doc + "\n\nFields:\n\n" + "\n".join("- " + _field_doc(*f) for f in fields)
+            body["__doc__"] = "\n\n".join(
+                [_wrap(doc), "Fields:"]
+                + ["\n".join(_wrap("- " + _field_doc(*f), "  ") for f in fields)]
             )
             self.structs[sname] = type(sname[3:], (Struct,), body)
         for fname, ret, args, doc in _header.FUNCTIONS:
