@@ -397,3 +397,31 @@ def _child_steps(precision):
     mpm = mpm_gimp if precision == "f32" else mpm_gimp.f64
     w, _ = block_world(mpm, workers=2)
     return w.step(1 / 60, workers=2).substeps
+
+
+@pytest.mark.parametrize("model", list(mpm_gimp.MaterialModel))
+def test_every_material_model_steps(mpm, model):
+    d = mpm.WorldDef(cells=(24, 24, 1), cell_size=0.05, shape=mpm.Shape.QUADRATIC_BSPLINE)
+    d.transfer = mpm.Transfer.MLS
+    d.effects.plasticity = 1
+    d.faces[mpm.Face.Y_MIN] = mpm.Boundary.STICK
+    w = mpm.World(d)
+    m = w.add_material(mpm.MaterialDef(model=model, youngs_modulus=1e5))
+    w.fill_box((0.3, 0.1), (0.6, 0.5), m)
+    for _ in range(5):
+        assert w.step(1 / 60).frozen == 0
+    assert np.isfinite(w.particles().stress).all()
+
+
+def test_a_3d_world_has_three_axes_and_six_stresses(mpm):
+    d = mpm.WorldDef(dimension=mpm.Dimension.SPACE3D, cells=(12, 12, 12), cell_size=0.1)
+    w = mpm.World(d)
+    ids = w.fill_sphere((0.6, 0.6, 0.6), 0.25, w.add_material(mpm.MaterialDef()))
+    w.step(1 / 60)
+    p = w.particles()
+    n = len(ids)
+    assert p.position.shape == (3, n) and p.velocity.shape == (3, n)
+    assert p.displacement_gradient.shape == (3, 3, n) and p.stress.shape == (6, n)
+    assert p.position[2].ctypes.data == c_view(mpm, w).position[2]
+    with pytest.raises(mpm_gimp.InvalidRegionError):
+        w.fill_disk((0.6, 0.6, 0.6), 0.2, 0)
