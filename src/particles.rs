@@ -356,17 +356,18 @@ impl StepReport {
         }
     }
 
-    /// Adds a parallel item's part, whose particle 0 is particle `first`: the items merged
-    /// in particle order give the report one worker gives.
-    pub(crate) fn merge(&mut self, part: &crate::layout::Partial, first: u32) {
-        self.stopped += part.stopped;
-        self.escaped += part.escaped;
-        self.frozen += part.frozen;
-        self.runaway += part.runaway;
-        let n = (part.first_count as usize).min(part.first_frozen.len());
-        for &id in &part.first_frozen[..n] {
+    /// Adds what one parallel pass did, its items' parts absorbed into one
+    /// ([`crate::layout::Partial::absorb`], the one merge of parts): the counts, and the pass's
+    /// frozen ids after those of the passes before, as one worker notes them.
+    pub(crate) fn merge(&mut self, pass: &crate::layout::Partial) {
+        self.stopped += pass.stopped;
+        self.escaped += pass.escaped;
+        self.frozen += pass.frozen;
+        self.runaway += pass.runaway;
+        let n = (pass.first_count as usize).min(pass.first_frozen.len());
+        for &id in &pass.first_frozen[..n] {
             // A full list only means more than 8 froze; the count says how many.
-            let _ = self.first_frozen.push(first + id);
+            let _ = self.first_frozen.push(id);
         }
     }
 
@@ -381,7 +382,7 @@ impl StepReport {
 impl crate::layout::Partial {
     /// Adds `part`, whose particle 0 is particle `first`, in any order: the counts add and
     /// the frozen ids keep the least 8 in order, so the parts of a pass absorbed in any order
-    /// give the report one worker gives ([`StepReport::merge`] of the result). Each part's
+    /// give the part one worker gives (which [`StepReport::merge`] adds). Each part's
     /// ids are its least, in order (an item updates its particles in order).
     pub(crate) fn absorb(&mut self, part: &crate::layout::Partial, first: u32) {
         self.stopped += part.stopped;
@@ -483,23 +484,28 @@ pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
 mod tests {
     use super::*;
 
-    /// Parts absorbed in any order keep the least 8 frozen ids in order and every count:
-    /// what [`StepReport::merge`] of the parts in particle order keeps.
+    /// Parts absorbed in any order keep the least 8 frozen ids in order and every count: the
+    /// report one worker notes, updating the particles in order.
     #[test]
     fn absorbed_parts_keep_the_least_frozen_ids_in_order() {
         use crate::layout::Partial;
-        // Parts of particles 0..100, 100..200, ..: part k froze ids k*100 + (3 j + k) % 40.
+        // Parts of particles 0..100, 100..200, ..: part k froze ids (3 j + k) % 40 + j of
+        // its own, in order.
+        let ids = |k: u32| (0..(k % 5 + 3)).map(move |j| ((3 * j + k) % 40 + j, j % 2 == 0));
         let part = |k: u32| {
             let mut r = StepReport::default();
-            for j in 0..(k % 5 + 3) {
-                r.note_frozen((3 * j + k) % 40 + j, j % 2 == 0);
+            for (id, runaway) in ids(k) {
+                r.note_frozen(id, runaway);
             }
             r.stopped = k;
             r.to_partial()
         };
-        let mut in_order = StepReport::default();
+        let mut one_worker = StepReport::default();
         for k in 0..6 {
-            in_order.merge(&part(k), k * 100);
+            for (id, runaway) in ids(k) {
+                one_worker.note_frozen(k * 100 + id, runaway);
+            }
+            one_worker.stopped += k;
         }
         for order in [[5, 4, 3, 2, 1, 0], [2, 0, 5, 1, 4, 3], [0, 1, 2, 3, 4, 5]] {
             let mut acc = Partial::default();
@@ -507,8 +513,8 @@ mod tests {
                 acc.absorb(&part(k), k * 100);
             }
             let mut merged = StepReport::default();
-            merged.merge(&acc, 0);
-            assert_eq!(merged, in_order, "{order:?}");
+            merged.merge(&acc);
+            assert_eq!(merged, one_worker, "{order:?}");
         }
     }
 

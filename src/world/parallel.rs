@@ -189,7 +189,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         // SAFETY: the particle columns are only read while the tiles run.
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
         // SAFETY: the table is only read while the tiles run (the node box wrote it).
-        let reach: &[[u32; 2]] = unsafe { self.reach.window(0..usize::MAX) };
+        let reach: &[[u32; 2]] = unsafe { self.reach.read(0..usize::MAX) };
         // The column the tiles read whole and leave out of their own.
         let read: &[crate::Real] = match whole {
             // SAFETY: the tiles carve no view of this column, and nothing else runs.
@@ -254,11 +254,13 @@ impl<'b, const D: usize> Columns<'b, D> {
             }
         };
         tasks::for_each(self.tasks, items, &item);
-        // SAFETY: the items are done; this is the only view of the slots.
-        let slots = unsafe { self.partials.window(0..items) };
+        // SAFETY: the items are done; no window of the slots is alive.
+        let slots = unsafe { self.partials.read(0..items) };
+        let mut merged = Partial::default();
         for (i, slot) in slots.iter().enumerate() {
-            report.merge(slot, range(i).start as u32);
+            merged.absorb(slot, range(i).start as u32);
         }
+        report.merge(&merged);
     }
 
     /// The particle update ([`passes::Passes::particles`]), with MUSL's re-map scatter inside
@@ -323,7 +325,7 @@ impl<'b, const D: usize> Columns<'b, D> {
     ) {
         let groups = count.div_ceil(REACH_GROUP);
         // SAFETY: the node box wrote the table; it is only read here.
-        let reach: &[[u32; 2]] = unsafe { self.reach.window(0..groups) };
+        let reach: &[[u32; 2]] = unsafe { self.reach.read(0..groups) };
         // The tile that updates group `k`, if one does.
         let owner = |k: usize| -> Option<usize> {
             let &[lo, hi] = reach.get(k)?;
@@ -374,8 +376,8 @@ impl<'b, const D: usize> Columns<'b, D> {
                     *slot = part;
                 }
             });
-            // SAFETY: the items are done; this is the only view of the slots.
-            for slot in unsafe { self.partials.window(0..items) }.iter() {
+            // SAFETY: the items are done; no window of the slots is alive.
+            for slot in unsafe { self.partials.read(0..items) } {
                 merged.absorb(slot, 0);
             }
         }
@@ -410,11 +412,11 @@ impl<'b, const D: usize> Columns<'b, D> {
                 }
             });
         }
-        // SAFETY: the items are done; this is the only view of the slots.
-        for slot in unsafe { self.partials.window(0..tiles.n) }.iter() {
+        // SAFETY: the items are done; no window of the slots is alive.
+        for slot in unsafe { self.partials.read(0..tiles.n) } {
             merged.absorb(slot, 0);
         }
-        report.merge(&merged, 0);
+        report.merge(&merged);
     }
 
     /// Runs `f` on the grid cut into `slabs` slabs of whole lines along the slowest axis (the
