@@ -341,11 +341,11 @@ impl StepReport {
         let _ = self.first_frozen.push(id);
     }
 
-    /// This report as a parallel item's part of one ([`crate::layout::Partial`]).
-    pub(crate) fn to_partial(&self) -> crate::layout::Partial {
+    /// This report as a parallel item's part of one ([`crate::cut::Partial`]).
+    pub(crate) fn to_partial(&self) -> crate::cut::Partial {
         let mut first_frozen = [0; 8];
         first_frozen[..self.first_frozen.len()].copy_from_slice(&self.first_frozen);
-        crate::layout::Partial {
+        crate::cut::Partial {
             stopped: self.stopped,
             escaped: self.escaped,
             frozen: self.frozen,
@@ -357,9 +357,9 @@ impl StepReport {
     }
 
     /// Adds what one parallel pass did, its items' parts absorbed into one
-    /// ([`crate::layout::Partial::absorb`], the one merge of parts): the counts, and the pass's
+    /// ([`crate::cut::Partial::absorb`], the one merge of parts): the counts, and the pass's
     /// frozen ids after those of the passes before, as one worker notes them.
-    pub(crate) fn merge(&mut self, pass: &crate::layout::Partial) {
+    pub(crate) fn merge(&mut self, pass: &crate::cut::Partial) {
         self.stopped += pass.stopped;
         self.escaped += pass.escaped;
         self.frozen += pass.frozen;
@@ -376,32 +376,6 @@ impl StepReport {
     /// rest of the world goes on.
     pub fn went_bad(&self) -> bool {
         self.frozen > 0
-    }
-}
-
-impl crate::layout::Partial {
-    /// Adds `part`, whose particle 0 is particle `first`, in any order: the counts add and
-    /// the frozen ids keep the least 8 in order, so the parts of a pass absorbed in any order
-    /// give the part one worker gives (which [`StepReport::merge`] adds). Each part's
-    /// ids are its least, in order (an item updates its particles in order).
-    pub(crate) fn absorb(&mut self, part: &crate::layout::Partial, first: u32) {
-        self.stopped += part.stopped;
-        self.escaped += part.escaped;
-        self.frozen += part.frozen;
-        self.runaway += part.runaway;
-        let cap = self.first_frozen.len();
-        let n = (part.first_count as usize).min(part.first_frozen.len());
-        for &id in &part.first_frozen[..n] {
-            let id = first + id;
-            let len = (self.first_count as usize).min(cap);
-            let at = self.first_frozen[..len].partition_point(|&k| k < id);
-            if at == cap {
-                break; // The rest of the part's ids are larger still.
-            }
-            self.first_frozen.copy_within(at..cap - 1, at + 1);
-            self.first_frozen[at] = id;
-            self.first_count = (len + 1).min(cap) as u32;
-        }
     }
 }
 
@@ -488,7 +462,7 @@ mod tests {
     /// report one worker notes, updating the particles in order.
     #[test]
     fn absorbed_parts_keep_the_least_frozen_ids_in_order() {
-        use crate::layout::Partial;
+        use crate::cut::Partial;
         // Parts of particles 0..100, 100..200, ..: part k froze ids (3 j + k) % 40 + j of
         // its own, in order.
         let ids = |k: u32| (0..(k % 5 + 3)).map(move |j| ((3 * j + k) % 40 + j, j % 2 == 0));
