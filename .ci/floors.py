@@ -21,6 +21,7 @@ FLOORS = [
     ["particles"],
     ["storage"],
     ["layout"],
+    ["cut"],
     ["shape"],
     ["def"],
     ["math"],

@@ -9,8 +9,9 @@
 //! particle's stencil exists. The walls of stick and slip faces act at that region's faces: all
 //! nodes in the layer from the grid face to the wall plane are constrained.
 
+use crate::cut::{Chunks, Tile, REACH_GROUP};
 use crate::def::{Boundary, WorldDef};
-use crate::layout::{Layout, REACH_GROUP};
+use crate::layout::Layout;
 use crate::particles::Carver;
 use crate::shape::{Row4, ROW};
 use crate::tasks::Shared;
@@ -39,7 +40,7 @@ pub(crate) struct GridCols<'a, const D: usize> {
     pub len: usize,
     /// The nodes these columns hold and whose rows a scatter adds to them.
     pub tile: Tile,
-    /// A tile's: the grid lines along the slowest axis that each [`crate::layout::REACH_GROUP`]
+    /// A tile's: the grid lines along the slowest axis that each [`crate::cut::REACH_GROUP`]
     /// particles' stencils may reach ([`reach_lines`]), so that its scatter passes over the
     /// chunks that reach none of its lines; empty otherwise.
     pub reach: &'a [[u32; 2]],
@@ -93,113 +94,6 @@ impl Part {
             Part::AllButRemap => column != Column::Remap,
             Part::Remap => column == Column::Remap,
         }
-    }
-}
-
-/// The nodes a view of the node columns holds ([`GridCols::tile`]): entry 0 of each column is
-/// node `first`, and the stencil rows that start at nodes `first..first + rows` are the view's
-/// to add to ([`Tile::ALL`]: the whole grid). A tile of the parallel scatter is a slab of whole
-/// grid lines (rows run along x, so a row never straddles two), its columns `rows + ROW - 1`
-/// long: a row of the slab's last line may reach the first entries of the next line (zeros;
-/// `world::parallel` then never runs neighbouring tiles at once), unless no row reaches past
-/// its line's end ([`Tile::within_lines`]: the columns are the slab's alone).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Tile {
-    pub first: usize,
-    pub rows: usize,
-    /// The nodes of the tile's slab, whose sums it completes (`first..first + nodes`).
-    pub nodes: usize,
-}
-
-impl Tile {
-    /// The whole grid: every row whose stencil fits ([`rows_fit`]).
-    pub const ALL: Tile = Tile {
-        first: 0,
-        rows: usize::MAX,
-        nodes: usize::MAX,
-    };
-
-    /// The tile of the grid lines `lines` along the slowest axis, whose stride is `stride`
-    /// (nodes per line in 2D, per plane in 3D).
-    pub fn of_lines(lines: core::ops::Range<usize>, stride: usize) -> Tile {
-        Tile {
-            first: lines.start * stride,
-            rows: lines.len() * stride,
-            nodes: lines.len() * stride,
-        }
-    }
-
-    /// [`Tile::of_lines`] for rows that never reach past their line's end: the rows that
-    /// start in the slab's last `ROW - 1` nodes are left out (none start there), so that the
-    /// columns (`rows + ROW - 1` entries) are the slab's alone and neighbouring tiles can
-    /// run at once.
-    pub fn within_lines(lines: core::ops::Range<usize>, stride: usize) -> Tile {
-        let t = Tile::of_lines(lines, stride);
-        Tile {
-            rows: t.rows.saturating_sub(ROW - 1),
-            ..t
-        }
-    }
-
-    /// The last entry past the tile's columns: rows added from its last row start reach
-    /// `ROW - 1` entries past it.
-    pub fn end(&self) -> usize {
-        self.first.saturating_add(self.rows).saturating_add(ROW - 1)
-    }
-
-    /// Where the stencil row that starts at node `row` starts in the tile's columns, if it is
-    /// the tile's to add to: every row for the whole grid, the rows of its slab for a tile of
-    /// the parallel scatter, which adds each row in the order the whole grid's scatter does. A
-    /// row added at the place returned fits: for the whole grid, the caller checked the
-    /// stencil's rows ([`rows_fit`]); a tile's columns hold `rows + ROW - 1` entries
-    /// ([`GridCols::lengths_consistent`]).
-    #[inline(always)]
-    pub fn own(&self, row: usize) -> Option<usize> {
-        let at = row.wrapping_sub(self.first);
-        (at < self.rows).then_some(at)
-    }
-
-    /// The lines along the slowest axis this tile holds (stride as in [`Tile::of_lines`]);
-    /// `None` for the whole grid.
-    pub fn slab(&self, stride: usize) -> Option<core::ops::Range<usize>> {
-        (*self != Tile::ALL && stride > 0)
-            .then(|| self.first / stride..(self.first + self.nodes) / stride)
-    }
-}
-
-/// The first particles of the chunks a view's scatter takes ([`GridCols::chunks`]).
-pub(crate) struct Chunks<'a> {
-    next: usize,
-    count: usize,
-    w: usize,
-    reach: &'a [[u32; 2]],
-    /// A tile's lines; `None` for the whole grid.
-    slab: Option<core::ops::Range<usize>>,
-}
-
-impl Iterator for Chunks<'_> {
-    type Item = usize;
-
-    #[inline(always)]
-    fn next(&mut self) -> Option<usize> {
-        while self.next < self.count {
-            let start = self.next;
-            if let Some(slab) = &self.slab {
-                // A group whose particles reach no line of the slab: past all its chunks (a
-                // chunk across two groups, which no chunk width makes, is taken).
-                let group = start / REACH_GROUP;
-                if let Some(&[lo, hi]) = self.reach.get(group) {
-                    let in_group = (start + self.w - 1) / REACH_GROUP == group;
-                    if in_group && ((lo as usize) >= slab.end || (hi as usize) < slab.start) {
-                        self.next = (group + 1) * REACH_GROUP;
-                        continue;
-                    }
-                }
-            }
-            self.next = start + self.w;
-            return Some(start);
-        }
-        None
     }
 }
 
@@ -267,13 +161,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
     /// the groups of the reach table ([`GridCols::reach`]) that reach its slab, a group
     /// passed over at once. `stride`: the slowest axis's (see [`Tile::slab`]).
     pub fn chunks(&self, count: usize, w: usize, stride: usize) -> Chunks<'a> {
-        Chunks {
-            next: 0,
-            count,
-            w,
-            reach: self.reach,
-            slab: self.tile.slab(stride),
-        }
+        Chunks::new(count, w, self.reach, self.tile.slab(stride))
     }
 
     /// The nodal masses by node index: the whole mass column (a force scatter's tile reads

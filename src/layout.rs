@@ -16,6 +16,7 @@
 //! Nothing in the buffer is a pointer: every column is found from the definition stored in the
 //! header, so a byte copy of the buffer is a second, independent world.
 
+use crate::cut::{Partial, REACH_GROUP, SLOTS_PER_WORKER};
 use crate::def::{Boundary, Dimension, Face, ShapeFunction, Transfer, UpdateOrder, WorldDef};
 use crate::def::{
     Damping, DampingZone, Effects, Feedback, ScalarBoundary, Schedule, Transport, DAMPING_ZONES,
@@ -694,39 +695,6 @@ impl Header {
         self.dimension != Dimension::ThreeD as u64
     }
 }
-
-/// Particles per entry of the reach table ([`Layout::reach_groups`]): a multiple of every
-/// chunk width. Particles in fill order (bins along x) span one line of cells per 256 in the
-/// default scenes, so a tile takes few chunks it does not need; per 16 the table took 5 % of
-/// the 2D step to fill (benches/PERFORMANCE.md, "Decisions").
-pub(crate) const REACH_GROUP: usize = 256;
-
-/// The parallel step's items per worker ([`Layout::scratch_slots`]): the particle passes cut
-/// their chunks into this many ranges per worker (so that a slow range does not hold the
-/// others up), the scatter its grid into this many slabs per worker (two colours, half of
-/// them at a time).
-pub(crate) const SLOTS_PER_WORKER: usize = 4;
-
-/// What one item of a parallel pass leaves for the step to merge, in item order: its part of
-/// the [`crate::StepReport`] (the frozen ids local to the item's first particle). Plain data
-/// in the world's buffer ([`Layout::scratch_slots`] of them).
-#[derive(Clone, Copy, Debug, Default)]
-#[repr(C)]
-pub(crate) struct Partial {
-    pub stopped: u32,
-    pub escaped: u32,
-    pub frozen: u32,
-    pub runaway: u32,
-    /// How many of `first_frozen` hold ids.
-    pub first_count: u32,
-    pub first_frozen: [u32; 8],
-    pub _pad: [u32; 3],
-}
-
-// SAFETY: repr(C), u32 fields only (no padding: 16 of them), any bit pattern valid.
-unsafe impl Zeroable for Partial {}
-// SAFETY: as above; Partial is Copy and 'static.
-unsafe impl Pod for Partial {}
 
 /// Largest count of particles or nodes a world may index (u32 ids, and room for padding).
 const MAX_ITEMS: u64 = 1 << 30;

@@ -69,6 +69,7 @@
 extern crate std;
 
 mod boundary;
+mod cut;
 mod def;
 mod effects;
 mod error;

@@ -341,11 +341,11 @@ impl StepReport {
         let _ = self.first_frozen.push(id);
     }
 
-    /// This report as a parallel item's part of one ([`crate::layout::Partial`]).
-    pub(crate) fn to_partial(&self) -> crate::layout::Partial {
+    /// This report as a parallel item's part of one ([`crate::cut::Partial`]).
+    pub(crate) fn to_partial(&self) -> crate::cut::Partial {
         let mut first_frozen = [0; 8];
         first_frozen[..self.first_frozen.len()].copy_from_slice(&self.first_frozen);
-        crate::layout::Partial {
+        crate::cut::Partial {
             stopped: self.stopped,
             escaped: self.escaped,
             frozen: self.frozen,
@@ -356,17 +356,18 @@ impl StepReport {
         }
     }
 
-    /// Adds a parallel item's part, whose particle 0 is particle `first`: the items merged
-    /// in particle order give the report one worker gives.
-    pub(crate) fn merge(&mut self, part: &crate::layout::Partial, first: u32) {
-        self.stopped += part.stopped;
-        self.escaped += part.escaped;
-        self.frozen += part.frozen;
-        self.runaway += part.runaway;
-        let n = (part.first_count as usize).min(part.first_frozen.len());
-        for &id in &part.first_frozen[..n] {
+    /// Adds what one parallel pass did, its items' parts absorbed into one
+    /// ([`crate::cut::Partial::absorb`], the one merge of parts): the counts, and the pass's
+    /// frozen ids after those of the passes before, as one worker notes them.
+    pub(crate) fn merge(&mut self, pass: &crate::cut::Partial) {
+        self.stopped += pass.stopped;
+        self.escaped += pass.escaped;
+        self.frozen += pass.frozen;
+        self.runaway += pass.runaway;
+        let n = (pass.first_count as usize).min(pass.first_frozen.len());
+        for &id in &pass.first_frozen[..n] {
             // A full list only means more than 8 froze; the count says how many.
-            let _ = self.first_frozen.push(first + id);
+            let _ = self.first_frozen.push(id);
         }
     }
 
@@ -375,32 +376,6 @@ impl StepReport {
     /// rest of the world goes on.
     pub fn went_bad(&self) -> bool {
         self.frozen > 0
-    }
-}
-
-impl crate::layout::Partial {
-    /// Adds `part`, whose particle 0 is particle `first`, in any order: the counts add and
-    /// the frozen ids keep the least 8 in order, so the parts of a pass absorbed in any order
-    /// give the report one worker gives ([`StepReport::merge`] of the result). Each part's
-    /// ids are its least, in order (an item updates its particles in order).
-    pub(crate) fn absorb(&mut self, part: &crate::layout::Partial, first: u32) {
-        self.stopped += part.stopped;
-        self.escaped += part.escaped;
-        self.frozen += part.frozen;
-        self.runaway += part.runaway;
-        let cap = self.first_frozen.len();
-        let n = (part.first_count as usize).min(part.first_frozen.len());
-        for &id in &part.first_frozen[..n] {
-            let id = first + id;
-            let len = (self.first_count as usize).min(cap);
-            let at = self.first_frozen[..len].partition_point(|&k| k < id);
-            if at == cap {
-                break; // The rest of the part's ids are larger still.
-            }
-            self.first_frozen.copy_within(at..cap - 1, at + 1);
-            self.first_frozen[at] = id;
-            self.first_count = (len + 1).min(cap) as u32;
-        }
     }
 }
 
@@ -483,23 +458,28 @@ pub(crate) fn fastest_squared(v: &[&[Real]; 3], status: &[u32], d: usize) -> f64
 mod tests {
     use super::*;
 
-    /// Parts absorbed in any order keep the least 8 frozen ids in order and every count:
-    /// what [`StepReport::merge`] of the parts in particle order keeps.
+    /// Parts absorbed in any order keep the least 8 frozen ids in order and every count: the
+    /// report one worker notes, updating the particles in order.
     #[test]
     fn absorbed_parts_keep_the_least_frozen_ids_in_order() {
-        use crate::layout::Partial;
-        // Parts of particles 0..100, 100..200, ..: part k froze ids k*100 + (3 j + k) % 40.
+        use crate::cut::Partial;
+        // Parts of particles 0..100, 100..200, ..: part k froze ids (3 j + k) % 40 + j of
+        // its own, in order.
+        let ids = |k: u32| (0..(k % 5 + 3)).map(move |j| ((3 * j + k) % 40 + j, j % 2 == 0));
         let part = |k: u32| {
             let mut r = StepReport::default();
-            for j in 0..(k % 5 + 3) {
-                r.note_frozen((3 * j + k) % 40 + j, j % 2 == 0);
+            for (id, runaway) in ids(k) {
+                r.note_frozen(id, runaway);
             }
             r.stopped = k;
             r.to_partial()
         };
-        let mut in_order = StepReport::default();
+        let mut one_worker = StepReport::default();
         for k in 0..6 {
-            in_order.merge(&part(k), k * 100);
+            for (id, runaway) in ids(k) {
+                one_worker.note_frozen(k * 100 + id, runaway);
+            }
+            one_worker.stopped += k;
         }
         for order in [[5, 4, 3, 2, 1, 0], [2, 0, 5, 1, 4, 3], [0, 1, 2, 3, 4, 5]] {
             let mut acc = Partial::default();
@@ -507,8 +487,8 @@ mod tests {
                 acc.absorb(&part(k), k * 100);
             }
             let mut merged = StepReport::default();
-            merged.merge(&acc, 0);
-            assert_eq!(merged, in_order, "{order:?}");
+            merged.merge(&acc);
+            assert_eq!(merged, one_worker, "{order:?}");
         }
     }
 

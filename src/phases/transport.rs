@@ -43,8 +43,9 @@
 //! runs the momentum passes.
 
 use super::{Ctx, Kernels};
+use crate::cut::Tile;
 use crate::def::{ScalarBoundary, Transport};
-use crate::grid::{add_row, load_row, rows_fit, GridCols, Tile};
+use crate::grid::{add_row, load_row, rows_fit, GridCols};
 use crate::layout::MaterialRecord;
 use crate::material::{volume_ratio_minus_one, Deformation};
 use crate::math::Mat;

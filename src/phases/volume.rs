@@ -35,8 +35,9 @@ use super::transport::{
     chunk_stencils, current_volume, gather_rows, scatter_order, scatter_rows, StencilsFn,
 };
 use super::Ctx;
+use crate::cut::Tile;
 use crate::def::MaterialModel;
-use crate::grid::{GridCols, Tile};
+use crate::grid::GridCols;
 use crate::layout::MaterialRecord;
 use crate::material::{eigenstrain_at, fluid_stress, model_of, Deformation};
 use crate::math::{exp_m1, ln_1p};

@@ -9,7 +9,8 @@
 
 use super::lanes::{Lane, Lanes};
 use super::rows::{self, Rows};
-use crate::grid::{add_row, rows_fit, GridCols, Tile};
+use crate::cut::Tile;
+use crate::grid::{add_row, rows_fit, GridCols};
 use crate::shape::{Row4, Shape1D, Stencil, Stencils, ROW};
 use crate::Real;
 use core::mem::MaybeUninit;
@@ -878,7 +879,7 @@ mod tests {
             scalar: Default::default(),
             contact: Default::default(),
             len: LEN,
-            tile: crate::grid::Tile::ALL,
+            tile: crate::cut::Tile::ALL,
             reach: &[],
             whole: &[],
         }

@@ -1,5 +1,5 @@
 //! The substep's passes on the host's task system ([`crate::tasks`]), bit-identical to one
-//! worker's for any number of workers.
+//! worker's for any number of workers, on the pieces of the cut ([`crate::cut`]).
 //!
 //! - **Particle passes** (the particle update, the stress update, a transported field's
 //!   update): items are ranges of whole
@@ -28,9 +28,10 @@
 //! transported field's nodal values and rates run on the calling thread.
 
 use super::passes::{self, Passes};
+use crate::cut::{runs, Partial, Tile, Tiles, MAX_TILES, REACH_GROUP};
 use crate::def::Transport;
-use crate::grid::{GridCols, Tile, Whole};
-use crate::layout::{ColliderImpulse, Layout, Partial, CHUNK, REACH_GROUP};
+use crate::grid::{GridCols, Whole};
+use crate::layout::{ColliderImpulse, Layout, CHUNK};
 use crate::particles::{ParticleCols, RemapCols, StepReport};
 use crate::phases::grid_update::Nodes;
 use crate::phases::p2g::{Adds, Mode};
@@ -81,7 +82,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         } else {
             tasks
                 .worker_count()
-                .clamp(1, slots / crate::layout::SLOTS_PER_WORKER)
+                .clamp(1, slots / crate::cut::SLOTS_PER_WORKER)
         };
         Columns {
             particles: Shared::new(particles),
@@ -189,7 +190,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         // SAFETY: the particle columns are only read while the tiles run.
         let p = unsafe { ParticleCols::carve_window(&self.particles, self.layout, 0..usize::MAX) };
         // SAFETY: the table is only read while the tiles run (the node box wrote it).
-        let reach: &[[u32; 2]] = unsafe { self.reach.window(0..usize::MAX) };
+        let reach: &[[u32; 2]] = unsafe { self.reach.read(0..usize::MAX) };
         // The column the tiles read whole and leave out of their own.
         let read: &[crate::Real] = match whole {
             // SAFETY: the tiles carve no view of this column, and nothing else runs.
@@ -225,7 +226,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         report: &mut StepReport,
         pass: &(dyn Fn(&mut ParticleCols<'_, D>, usize, &GridCols<'_, D>, &mut StepReport) + Sync),
     ) {
-        let items = (crate::layout::SLOTS_PER_WORKER * self.workers).min(count.div_ceil(CHUNK));
+        let items = (crate::cut::SLOTS_PER_WORKER * self.workers).min(count.div_ceil(CHUNK));
         if self.workers == 1 || items < 2 {
             let (mut p, g) = self.full();
             return pass(&mut p, count, &g, report);
@@ -254,11 +255,13 @@ impl<'b, const D: usize> Columns<'b, D> {
             }
         };
         tasks::for_each(self.tasks, items, &item);
-        // SAFETY: the items are done; this is the only view of the slots.
-        let slots = unsafe { self.partials.window(0..items) };
+        // SAFETY: the items are done; no window of the slots is alive.
+        let slots = unsafe { self.partials.read(0..items) };
+        let mut merged = Partial::default();
         for (i, slot) in slots.iter().enumerate() {
-            report.merge(slot, range(i).start as u32);
+            merged.absorb(slot, range(i).start as u32);
         }
+        report.merge(&merged);
     }
 
     /// The particle update ([`passes::Passes::particles`]), with MUSL's re-map scatter inside
@@ -323,7 +326,7 @@ impl<'b, const D: usize> Columns<'b, D> {
     ) {
         let groups = count.div_ceil(REACH_GROUP);
         // SAFETY: the node box wrote the table; it is only read here.
-        let reach: &[[u32; 2]] = unsafe { self.reach.window(0..groups) };
+        let reach: &[[u32; 2]] = unsafe { self.reach.read(0..groups) };
         // The tile that updates group `k`, if one does.
         let owner = |k: usize| -> Option<usize> {
             let &[lo, hi] = reach.get(k)?;
@@ -358,7 +361,7 @@ impl<'b, const D: usize> Columns<'b, D> {
         let mut merged = Partial::default();
         // The groups no tile owns, by ranges of groups.
         if (0..groups).any(|k| owner(k).is_none()) {
-            let items = (crate::layout::SLOTS_PER_WORKER * self.workers).min(groups);
+            let items = (crate::cut::SLOTS_PER_WORKER * self.workers).min(groups);
             tasks::for_each(self.tasks, items, &|i| {
                 let mut part = Partial::default();
                 let mine = runs(tasks::part(groups, items, 1, i), |k| owner(k).is_none());
@@ -374,8 +377,8 @@ impl<'b, const D: usize> Columns<'b, D> {
                     *slot = part;
                 }
             });
-            // SAFETY: the items are done; this is the only view of the slots.
-            for slot in unsafe { self.partials.window(0..items) }.iter() {
+            // SAFETY: the items are done; no window of the slots is alive.
+            for slot in unsafe { self.partials.read(0..items) } {
                 merged.absorb(slot, 0);
             }
         }
@@ -410,11 +413,11 @@ impl<'b, const D: usize> Columns<'b, D> {
                 }
             });
         }
-        // SAFETY: the items are done; this is the only view of the slots.
-        for slot in unsafe { self.partials.window(0..tiles.n) }.iter() {
+        // SAFETY: the items are done; no window of the slots is alive.
+        for slot in unsafe { self.partials.read(0..tiles.n) } {
             merged.absorb(slot, 0);
         }
-        report.merge(&merged, 0);
+        report.merge(&merged);
     }
 
     /// Runs `f` on the grid cut into `slabs` slabs of whole lines along the slowest axis (the
@@ -526,159 +529,6 @@ type Update<'a, const D: usize> = dyn Fn(&mut ParticleCols<'_, D>, usize, &GridC
     + Sync
     + 'a;
 
-/// The most tiles a scatter is cut into: two per worker up to 64 workers.
-const MAX_TILES: usize = 128;
-
-// Every loop of the parallel step has at most `tasks::MAX_ITEMS` items (a task system may keep
-// a bit per item): tiles, the particle passes' and the grid's ranges, reductions' parts.
-const _: () = assert!(
-    MAX_TILES <= tasks::MAX_ITEMS
-        && crate::layout::SLOTS_PER_WORKER * crate::def::MAX_WORKERS as usize <= tasks::MAX_ITEMS
-        && tasks::MAX_PARTS <= tasks::MAX_ITEMS
-);
-
-/// The tiles of the parallel scatter: `n` slabs of whole lines along the slowest axis, the
-/// first from line 0 and the last to the grid's end (no stencil reaches past the node box).
-/// Where no row reaches past its line's end, every tile's columns are its slab's alone
-/// ([`Tile::within_lines`]) and they all run at once (`apart`). Else a tile's rows may add
-/// zeros to the next tile's first entries: tiles `0, 2, 4, ..` are the first colour, `1, 3,
-/// ..` the second, and tiles of one colour, a tile between them, run at once.
-#[derive(Clone, Copy)]
-struct Tiles {
-    n: usize,
-    apart: bool,
-    /// Nodes per line.
-    stride: usize,
-    /// The first line of each tile, then the grid's lines.
-    bounds: [u32; MAX_TILES + 1],
-}
-
-impl Tiles {
-    /// `n` tiles (at least 2, at most [`MAX_TILES`]; `apart` or in two colours) of the node
-    /// box's lines `box_lines`, cut
-    /// where about as many groups of particles reach each (`reach`, [`GridCols::reach`]; the
-    /// lines evenly without one): the lines at the box's ends, which the stencils' edges
-    /// reach, carry less work than the others. The results do not depend on the cut.
-    fn balanced(
-        n: usize,
-        apart: bool,
-        box_lines: Range<usize>,
-        lines: usize,
-        stride: usize,
-        reach: &[[u32; 2]],
-    ) -> Tiles {
-        const BINS: usize = 256;
-        let (lo, span) = (box_lines.start, box_lines.len());
-        // Bins of `per` lines of the box, each with the groups that reach it.
-        let per = span.div_ceil(BINS).max(1);
-        let mut weight = [0u32; BINS];
-        for &[a, b] in reach {
-            let (a, b) = (a as usize, b as usize);
-            if a > b || b < lo || a >= lo + span {
-                continue;
-            }
-            let (a, b) = (a.max(lo) - lo, b.min(lo + span - 1) - lo);
-            for w in &mut weight[a / per..=b / per] {
-                *w += 1;
-            }
-        }
-        let total: u64 = weight.iter().map(|&w| w as u64).sum();
-        let mut bounds = [lines as u32; MAX_TILES + 1];
-        bounds[0] = 0;
-        let (mut bin, mut sum) = (0, 0u64);
-        for t in 1..n {
-            let cut = if total == 0 {
-                lo + tasks::part(span, n, 1, t).start
-            } else {
-                // After the bin where the groups reached so far pass t / n of all.
-                while bin < BINS && sum * (n as u64) < total * t as u64 {
-                    sum += weight[bin] as u64;
-                    bin += 1;
-                }
-                lo + bin * per
-            };
-            // At least one line per tile, and room for the rest.
-            let least = if t == 1 {
-                lo + 1
-            } else {
-                bounds[t - 1] as usize + 1
-            };
-            bounds[t] = cut.max(least).min(lo + span - (n - t)) as u32;
-        }
-        Tiles {
-            n,
-            apart,
-            stride,
-            bounds,
-        }
-    }
-
-    /// The first line of tile `t` (the grid's lines for `t == n`).
-    fn bound(&self, t: usize) -> usize {
-        self.bounds[t.min(self.n)] as usize
-    }
-
-    fn tile(&self, t: usize) -> Tile {
-        let lines = self.bound(t)..self.bound(t + 1);
-        if self.apart {
-            Tile::within_lines(lines, self.stride)
-        } else {
-            Tile::of_lines(lines, self.stride)
-        }
-    }
-
-    /// The colours the tiles run in, one after the other: 1 where they are apart, else 2.
-    fn colours(&self) -> usize {
-        if self.apart {
-            1
-        } else {
-            2
-        }
-    }
-
-    /// Tile `i` of colour `c`.
-    fn nth(&self, c: usize, i: usize) -> usize {
-        if self.apart {
-            i
-        } else {
-            2 * i + c
-        }
-    }
-
-    /// The tile that holds line `line` (the last for a line past the grid).
-    fn of_line(&self, line: usize) -> usize {
-        self.bounds[1..self.n].partition_point(|&b| b as usize <= line)
-    }
-
-    /// How many tiles colour `c` has.
-    fn of_colour(&self, c: usize) -> usize {
-        if self.apart {
-            self.n
-        } else {
-            (self.n - c).div_ceil(2)
-        }
-    }
-}
-
-/// The runs of consecutive indices of `range` that `class` puts in one class, in order, each
-/// with its class.
-fn runs<T: PartialEq + Copy>(
-    range: Range<usize>,
-    class: impl Fn(usize) -> T,
-) -> impl Iterator<Item = (T, Range<usize>)> {
-    let mut next = range.start;
-    core::iter::from_fn(move || {
-        let start = next;
-        (start < range.end).then(|| {
-            let c = class(start);
-            next = (start + 1..range.end)
-                .find(|&k| class(k) != c)
-                .unwrap_or(range.end);
-            (c, start..next)
-        })
-    })
-}
-
 /// The fewest nodes a slab of a grid pass holds: the grid passes are a few operations per
 /// node, and a slab of fewer nodes took less time than handing it to a worker.
 const MIN_SLAB_NODES: usize = 1 << 14;
@@ -712,82 +562,12 @@ impl<const D: usize> Nodes<D> for GridPasses<'_, '_, '_, D> {
         let lines = b.hi[D - 1].saturating_sub(b.lo[D - 1]);
         let nodes: usize = (0..D).map(|a| b.hi[a].saturating_sub(b.lo[a])).product();
         // A slab of fewer nodes costs less than waking a worker for it.
-        let slabs = (crate::layout::SLOTS_PER_WORKER * self.cols.workers)
+        let slabs = (crate::cut::SLOTS_PER_WORKER * self.cols.workers)
             .min(lines)
             .min(nodes / MIN_SLAB_NODES);
         if self.cols.workers == 1 || slabs < 2 {
             return f(&mut self.cols.grid());
         }
         self.cols.slabs(self.ctx, slabs, f);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    extern crate std;
-    use std::vec::Vec;
-
-    /// Balanced tiles cover the grid's lines in order, one line each at least, and cut where
-    /// the groups' reach is even: a box of 40 lines whose first 10 lines are reached by nine
-    /// times as many groups as the rest gives its first tiles a few lines each.
-    #[test]
-    fn balanced_tiles_cover_the_lines_and_even_out_the_groups() {
-        let mut reach = Vec::new();
-        for line in 10..50u32 {
-            let groups = if line < 20 { 9 } else { 1 };
-            reach.extend((0..groups).map(|_| [line, line + 2]));
-        }
-        reach.push([u32::MAX, 0]); // A group without an active particle.
-        for n in 2..=12 {
-            let t = Tiles::balanced(n, false, 10..52, 60, 7, &reach);
-            assert_eq!((t.bound(0), t.bound(n)), (0, 60), "{n}");
-            for k in 0..n {
-                assert!(t.bound(k) < t.bound(k + 1), "{n}: tile {k} empty");
-                for line in t.bound(k)..t.bound(k + 1) {
-                    assert_eq!(t.of_line(line), k, "{n}: line {line}");
-                }
-            }
-            // Each tile's share of the reached lines is within one line's worth of 1 / n.
-            let total: usize = reach.iter().filter(|r| r[0] <= r[1]).map(|_| 3).sum();
-            for k in 0..n {
-                let lines = t.bound(k)..t.bound(k + 1);
-                let work: usize = reach
-                    .iter()
-                    .filter(|r| r[0] <= r[1])
-                    .map(|r| {
-                        (r[0]..=r[1])
-                            .filter(|l| lines.contains(&(*l as usize)))
-                            .count()
-                    })
-                    .sum();
-                assert!(
-                    work <= total / n + 3 * 9 * 3,
-                    "{n}: tile {k} takes {work} of {total}"
-                );
-            }
-        }
-        // Without a reached group: the box's lines evenly.
-        let t = Tiles::balanced(4, false, 10..50, 60, 7, &[]);
-        assert_eq!((1..4).map(|k| t.bound(k)).collect::<Vec<_>>(), [20, 30, 40]);
-    }
-
-    /// The runs of a class cover the range in order, each of one class and longest.
-    #[test]
-    fn runs_are_the_longest_of_one_class() {
-        let class = |k: usize| (k / 3).is_multiple_of(2) || k == 10;
-        let got: Vec<_> = runs(1..12, class).collect();
-        assert_eq!(
-            got,
-            [
-                (true, 1..3),
-                (false, 3..6),
-                (true, 6..9),
-                (false, 9..10),
-                (true, 10..11),
-                (false, 11..12)
-            ]
-        );
-        assert_eq!(runs(5..5, class).count(), 0);
     }
 }

@@ -11,8 +11,9 @@
 // A pass takes the substep's columns and context.
 #![allow(clippy::too_many_arguments)]
 
+use crate::cut::{REACH_GROUP, SLOTS_PER_WORKER};
 use crate::grid::{Geom, GridCols, NodeBox};
-use crate::layout::{CHUNK, REACH_GROUP, SLOTS_PER_WORKER};
+use crate::layout::CHUNK;
 use crate::particles::{ParticleCols, RemapCols, StepReport};
 use crate::phases::kernels::Kernels;
 use crate::phases::p2g::{self, rows, Adds, Mode};
