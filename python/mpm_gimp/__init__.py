@@ -17,25 +17,9 @@ Definitions (`WorldDef`, `MaterialDef`, `ColliderDef`) start from the C library'
 """
 
 from . import _api
-from ._api import ERRORS, MpmError, Particles, Status
-from ._native import ENUMS
 
-__all__ = ["MpmError", "Particles", "Status", "f64"]
-
-# The enums (`Dimension`, `Shape`, `Face`, ...) and one exception class per status.
-for _enum in ENUMS.values():
-    globals()[_enum.__name__] = _enum
-    __all__.append(_enum.__name__)
-for _error in ERRORS.values():
-    globals()[_error.__name__] = _error
-    __all__.append(_error.__name__)
-
-# The f32 classes: World, WorldDef, MaterialDef, ColliderDef, Vec3, Schedule, StepReport, ...
-for _name, _value in _api.namespace("f32").items():
-    globals()[_name] = _value
-    if not _name.startswith("_"):
-        __all__.append(_name)
+# The f32 names: World, WorldDef, MaterialDef, ColliderDef, Vec3, Schedule, StepReport, the
+# enums (`Dimension`, `Shape`, `Face`, ...) and one exception class per status.
+__all__ = _api.export(globals(), "f32") + ["f64"]
 
 from . import f64  # noqa: E402  (after the f32 names: it re-exports the shared ones)
-
-del _enum, _error, _name, _value

@@ -240,6 +240,18 @@ def _pool(precision, workers):
         return _POOLS[key]
 
 
+def export(scope, precision):
+    """Puts the names of `precision` ('f32' or 'f64') in a module's `scope`: the enums
+    (`Dimension`, `Shape`, `Face`, ...), one exception class per status, and the classes
+    (`World`, `WorldDef`, `MaterialDef`, ...); returns the public ones, for `__all__`."""
+    names = {"MpmError": MpmError, "Particles": Particles, "Status": Status}
+    names.update((e.__name__, e) for e in ENUMS.values())
+    names.update((e.__name__, e) for e in ERRORS.values())
+    names.update(namespace(precision))
+    scope.update(names)
+    return [k for k in names if not k.startswith("_")]
+
+
 def namespace(name):
     """The classes of one precision ('f32' or 'f64')."""
     P = _native.Precision(name)
