@@ -416,6 +416,9 @@ impl World<'_> {
                         }
                         let x: [Real; 3] =
                             core::array::from_fn(|a| if a < d { p.position[a][i] } else { 0.0 });
+                        if c.farther_than(x, 0.0) {
+                            continue;
+                        }
                         let (phi, normal) = c.distance(x);
                         if phi >= 0.0 || phi.is_nan() {
                             continue;
