@@ -1,27 +1,36 @@
-"""The examples in python/examples run (briefly) and say what they should."""
+"""The examples in python/examples and the benchmark benches/python_overhead.py run (briefly)
+and say what they should."""
 
 import subprocess
 import sys
 from pathlib import Path
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+BENCHES = Path(__file__).resolve().parents[2] / "benches"
 
 
-def run(name, *args):
+def run(path, *args):
     done = subprocess.run(
-        [sys.executable, str(EXAMPLES / name), *args], capture_output=True, text=True, timeout=300
+        [sys.executable, str(path), *args], capture_output=True, text=True, timeout=300
     )
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 0, done.stdout + done.stderr
     return done.stdout
 
 
 def test_drop_runs():
-    out = run("drop.py", "--frames", "20")
+    out = run(EXAMPLES / "drop.py", "--frames", "20")
     assert "frozen 0" in out and "lowest y" in out
 
 
 def test_the_convergence_study_finds_first_order():
     """uGIMP's bar converges at first order in h (the Rust tests' refinement test)."""
-    out = run("convergence.py", "--cells", "8", "16")
+    out = run(EXAMPLES / "convergence.py", "--cells", "8", "16")
     order = float(out.splitlines()[-1].split()[-1])
     assert 0.8 < order < 1.2, out
+
+
+def test_the_overhead_benchmark_runs():
+    """The benchmark's table (its figures are in benches/PERFORMANCE.md; none is checked
+    here: a test machine's load would decide them)."""
+    out = run(BENCHES / "python_overhead.py", "--particles", "400", "--seconds", "0.3")
+    assert "| 400 | 4 |" in out and "no particles" in out, out
