@@ -1,6 +1,7 @@
 """The examples in python/examples and the benchmark benches/python_overhead.py run (briefly)
 and say what they should."""
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -23,6 +24,14 @@ def run(path, *args):
 def test_drop_runs():
     out = run(EXAMPLES / "drop.py", "--frames", "20")
     assert "frozen 0" in out and "lowest y" in out
+
+
+def test_drop_animates(tmp_path):
+    if importlib.util.find_spec("matplotlib") is None:
+        pytest.skip("matplotlib is not installed (the animation needs it)")
+    gif = tmp_path / "drop.gif"
+    run(EXAMPLES / "drop.py", "--frames", "6", "--gif", str(gif))
+    assert gif.read_bytes()[:6] in (b"GIF87a", b"GIF89a")
 
 
 def test_the_convergence_study_finds_first_order():
