@@ -5,14 +5,15 @@
   packages, and every script, source or C file a doc names by path exists (relative to the
   repository or to the doc).
 - Every section of benches/PERFORMANCE.md that holds a table of figures names the command
-  that measures them (`cargo ...`, `bash ...`, `target/...`), so a reader can run it again.
+  that measures them (`cargo ...`, `bash ...`, `target/...`, `python ...`), so a reader can
+  run it again.
 
 Run from the repository root: python3 .ci/docs.py"""
 import pathlib
 import re
 import sys
 
-DOCS = ["README.md", "ARCHITECTURE.md", "ffi/README.md", "tests/README.md"]
+DOCS = ["README.md", "ARCHITECTURE.md", "ffi/README.md", "tests/README.md", "python/README.md"]
 DOCS += [str(p) for p in sorted(pathlib.Path("benches").glob("*.md"))]
 DOCS += [str(p) for p in sorted(pathlib.Path("docs").glob("*.md"))]
 PACKAGES = [".", "ffi", "output", "rayon", "viewer"]
@@ -33,13 +34,13 @@ for doc in DOCS:
     for name in re.findall(r"--example ([A-Za-z0-9_]+)", text):
         if name not in examples:
             failed.append(f"{doc}: `--example {name}` is no example of the workspace")
-    for file in set(re.findall(r"(?<![\w/.-])((?:[\w.-]+/)+[\w.-]+\.(?:sh|py|rs|c|cpp|h|toml))", text)):
+    for file in set(re.findall(r"(?<![\w/.-])((?:[\w.-]+/)+[\w.-]+\.(?:sh|py|rs|c|cpp|h|toml))(?!\w)", text)):
         bases = [pathlib.Path("."), path.parent, pathlib.Path("src")]
         if not any((base / file).exists() for base in bases):
             failed.append(f"{doc}: `{file}` does not exist")
 
 performance = pathlib.Path("benches/PERFORMANCE.md").read_text()
-command = re.compile(r"`(cargo |bash |target/|perf |valgrind |MPM_GIMP_)[^`]*`")
+command = re.compile(r"`(cargo |bash |target/|perf |valgrind |MPM_GIMP_|python3? )[^`]*`")
 sections = re.split(r"\n(?=#{2,3} )", performance)
 tables = 0
 for section in sections:

@@ -219,6 +219,8 @@ def _columns(view, buffer, base, real, nbytes):
     return out
 
 
+_NUMBERS = (int, float, np.integer, np.floating)
+
 _PARTICLE_STATE = next(s[2] for s in _native._header.STRUCTS if s[0] == "MpmParticleState")
 
 _POOLS = {}
@@ -304,6 +306,7 @@ def namespace(name):
         return s
 
     S["MpmSchedule"].from_points = staticmethod(schedule)
+    StepReport = S["MpmStepReport"]
 
     class World:
         """A world in memory this object owns, or that you pass (a numpy array, an
@@ -494,15 +497,22 @@ def namespace(name):
             step holds it, so no Python code can read a view of a half-stepped world (numpy
             code that itself releases the lock, on another thread, still can: share a world
             between threads through the World's calls, which a lock serialises)."""
-            if not isinstance(dt, (int, float, np.integer, np.floating)):
+            # As little Python as can be around the C call (benches/python_overhead.py
+            # measures what it adds).
+            if type(dt) is not float and not isinstance(dt, _NUMBERS):
                 raise TypeError(f"dt: expected a number of seconds, got {type(dt).__name__}")
-            lib = P.pylib if self.views_alive() else P.lib
-            report = S["MpmStepReport"]()
-            if workers == 1:
-                self._call("mpm_world_step", dt, ctypes.byref(report), lib=lib)
-            else:
-                pool = _pool(P, workers)
-                self._call("mpm_py_world_step_pool", dt, pool, ctypes.byref(report), lib=lib)
+            report = StepReport()
+            pool = None if workers == 1 else _pool(P, workers)
+            with self._lock:
+                if self._anchors:  # forget the views that are gone
+                    self._anchors = [r for r in self._anchors if r() is not None]
+                lib = P.pylib if self._anchors else P.lib  # a view alive: hold the GIL
+                if pool is None:
+                    status = lib.mpm_world_step(self._world, dt, ctypes.byref(report))
+                else:
+                    status = lib.mpm_py_world_step_pool(self._world, dt, pool, ctypes.byref(report))
+            if status:
+                _check(P, "mpm_world_step" if pool is None else "mpm_py_world_step_pool", status)
             return report
 
         def views_alive(self):
