@@ -714,7 +714,7 @@ def namespace(name):
 
         def sort_particles(self):
             """Reorders the particles by cell, between frames: a step of particles that lost
-            their order (a stirred fluid, particles added in the host's order) costs up to 3.4
+            their order (a stirred fluid, particles added in the host's order) costs 2 to 3.6
             times one of sorted particles. Returns the permutation, a new (n,) uint32 array:
             `order[new]` is the particle's index before the call. The state is the state
             before, permuted, to the bit; later steps agree with the unsorted world's to

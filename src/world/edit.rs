@@ -326,8 +326,9 @@ impl World<'_> {
     /// so the result is a function of the state alone). A step reads and adds a particle's
     /// stencil rows four lanes at a time, summed in registers where the lanes start at one
     /// node: particles that lost that order (a scene that stirs, a host adding them in its own
-    /// order) step slower, up to 3.4x in 3D; a host calls this between frames, every so many
-    /// steps (benches/PERFORMANCE.md, "Reordering particles").
+    /// order) step slower, shuffled 2 (2D) to 3.6 (3D) times as long; a host calls this between
+    /// frames, every so many steps (benches/PERFORMANCE.md, "Reordering particles"), at the
+    /// cost of one or two steps.
     ///
     /// `order` receives, for each new index, the particle's index before the call
     /// (`order[new] = old`), which is how a host follows its ids. Every particle column
@@ -336,7 +337,8 @@ impl World<'_> {
     /// bit for bit. Later steps add the particles' shares to the nodes in the new order, so they
     /// agree with the unsorted world's to round-off, not to the bit.
     ///
-    /// O(n + nodes) for n particles, no memory but the grid's (scratch between steps):
+    /// O(n + nodes) for n particles, no memory but the grid's (scratch between steps, so a
+    /// snapshot, [`World::state_bytes`], is unaffected):
     /// `LengthMismatch` if `order` is shorter than [`World::particle_count`]; nothing is
     /// changed then (entries of `order` past the count are never written).
     pub fn sort_particles(&mut self, order: &mut [u32]) -> Result<(), Error> {
@@ -434,8 +436,8 @@ impl World<'_> {
     /// Applies the permutation `order` (`order[new] = old`) to every particle column the layout
     /// holds, Real then u32, one column at a time; `order` is as it came when this returns.
     /// Where the grid (scratch between steps) holds a column, each column is gathered into it
-    /// and copied back (reads that do not wait on each other: 2 to 4 times faster on a
-    /// shuffled scene); else each column follows the permutation's cycles in place.
+    /// and copied back (reads that do not wait on each other: on a shuffled scene a seventh of
+    /// the cost of the cycles); else each column follows the permutation's cycles in place.
     fn permute_columns(&mut self, layout: &Layout, order: &mut [u32]) {
         let n = order.len();
         let (particles, grid) = self.buf[..layout.scratch_offset].split_at_mut(layout.grid_offset);
