@@ -52,6 +52,11 @@
 //! (`"removal_ns_per_particle"`); `half_rebuilt` then builds a new world from the remaining
 //! particles alone, as a host would add them, and times that one: the same state (the
 //! `state_hash` agrees with `half`'s), so the same step cost (`benches/compare.sh` of the two).
+//! `--sort off|on` (default off; one thread): `on` reorders the particles by cell
+//! (`World::sort_particles`) once before the timing, as a host does between frames, and the
+//! JSON line gives that call's cost per particle (`"sort_ns_per_particle"`); with
+//! `--particle-order shuffled`, the mixed scene after a reorder (`benches/sort.sh` tabulates
+//! fill, shuffled and shuffled then sorted).
 //! Unknown options or values: a message on stderr and exit code 2.
 
 use mpm_gimp::simd::Simd;
@@ -65,7 +70,7 @@ use std::process::exit;
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
-[--particle-order fill|rows|shuffled] [--threads N (1..=256)] [--remove none|half|half_rebuilt] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
+[--particle-order fill|rows|shuffled] [--sort off|on] [--threads N (1..=256)] [--remove none|half|half_rebuilt] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
 body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)|colliders|sdf_colliders]";
 
 #[path = "../benches/common/scene.rs"]
@@ -89,6 +94,7 @@ struct Options {
     particle_order: ParticleOrder,
     threads: u32,
     remove: Remove,
+    sort: bool,
 }
 
 /// What `--remove` does before the timing.
@@ -120,6 +126,7 @@ fn parse_options() -> Options {
         particle_order: ParticleOrder::Fill,
         threads: 1,
         remove: Remove::None,
+        sort: false,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -146,6 +153,7 @@ fn parse_options() -> Options {
             "--particle-order",
             "--threads",
             "--remove",
+            "--sort",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -248,6 +256,13 @@ fn parse_options() -> Options {
                     "none" => Remove::None,
                     "half" => Remove::Half,
                     "half_rebuilt" => Remove::HalfRebuilt,
+                    _ => bad(),
+                }
+            }
+            "--sort" => {
+                o.sort = match value.as_str() {
+                    "off" => false,
+                    "on" => true,
                     _ => bad(),
                 }
             }
@@ -415,6 +430,18 @@ pub fn main() {
             world = fresh;
         }
     }
+    let mut sort_ns = 0.0;
+    if o.sort {
+        if o.threads != 1 {
+            usage_error("--sort takes one thread");
+        }
+        let mut order = vec![0u32; world.particle_count()];
+        let start = std::time::Instant::now();
+        world
+            .sort_particles(&mut order)
+            .expect("room for the order");
+        sort_ns = start.elapsed().as_nanos() as f64 / order.len() as f64;
+    }
     let particles = world.particle_count() as u32;
     // One thread: the calling thread, as `World::step`; more: a rayon pool of that many, the
     // steps run on one of its threads (`RayonTasks::install`), as a host with a job system
@@ -456,7 +483,7 @@ pub fn main() {
     println!(
         "{{\"dim\":{},\"particles\":{},\"cells\":[{}],\"shape\":\"{}\",\"material\":\"{}\",\
 \"order\":\"{}\",\"precision\":\"{}\",\"simd\":\"{}\",\"threads\":{},\"ns_per_particle_step\":{:.3},\"runs\":[{}],\
-\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"removal_ns_per_particle\":{:.3},\"state_hash\":\"{:016x}\"}}",
+\"reference_ns\":{:.3},\"relative_to_reference\":{:.3},\"effect\":\"{}\",\"bytes_per_particle\":{:.1},\"particle_order\":\"{}\",\"removal_ns_per_particle\":{:.3},\"sort_ns_per_particle\":{:.3},\"state_hash\":\"{:016x}\"}}",
         o.dim,
         particles,
         cells,
@@ -474,6 +501,7 @@ pub fn main() {
         bytes_per_particle,
         o.particle_order.name(),
         removal_ns,
+        sort_ns,
         state_hash
     );
     eprintln!(

@@ -582,8 +582,9 @@ impl Layout {
             def.effects.sdf_capacity as usize,
         );
         let particle_offset = tables.end;
-        let grid_offset =
-            particle_offset + particle_real_columns * real_column_bytes + 2 * u32_column_bytes;
+        let grid_offset = particle_offset
+            + particle_real_columns * real_column_bytes
+            + col::U32_COLUMNS * u32_column_bytes;
         let scratch_offset = grid_offset + grid_columns * node_column_bytes;
         let scratch_slots = if def.workers > 1 {
             SLOTS_PER_WORKER * def.workers as usize
@@ -1042,6 +1043,8 @@ pub(crate) mod col {
     /// u32 columns.
     pub const MATERIAL: usize = 0;
     pub const STATUS: usize = 1;
+    /// How many u32 columns a particle has.
+    pub const U32_COLUMNS: usize = 2;
 }
 
 impl Layout {

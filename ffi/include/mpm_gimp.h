@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.10.0"
+#define MPM_GIMP_VERSION "0.10.1"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 1000
+#define MPM_GIMP_ABI_VERSION 1001
 
 
 // Most points an `MpmSchedule` holds.
@@ -1672,6 +1672,22 @@ MpmStatus mpm_world_remove_particles_in_box(struct MpmWorld *world,
 // # Safety
 // `world` is NULL or a world; `removed_out` is NULL or valid.
 MpmStatus mpm_world_remove_inactive_particles(struct MpmWorld *world, uint32_t *removed_out);
+
+// Reorders the particles by cell, in place (`World::sort_particles`): by the node their
+// stencil starts at, each cell's groups of four first, those of one cell keeping their order.
+// A host calls it between frames, every so many steps, on a scene whose particles lost their
+// order (a stirred fluid, particles added in the host's order): the step then reads and adds
+// the grid's rows four particles at a time again. `order_out` receives, for each new index,
+// the particle's index before the call (`order_out[new] = old`), which is how a host follows
+// its ids. Every particle's whole state moves with it and tractions follow their particle:
+// right after the call the world is the world before, permuted, to the bit; later steps sum
+// the nodes in another order, so they agree with the unsorted world's to round-off only.
+// O(n + nodes). `MPM_STATUS_OUTPUT_TOO_SMALL` if `order_len` is below the particle count
+// (nothing changed, nothing written); only the first count entries are written.
+//
+// # Safety
+// `world` is NULL or a world; `order_out` is NULL or valid for `order_len` writes.
+MpmStatus mpm_world_sort_particles(struct MpmWorld *world, uint32_t *order_out, size_t order_len);
 
 #if !defined(MPM_GIMP_F64)
 // The documented collider defaults (`mpm_gimp::ColliderDef::DEFAULT`, a frictionless

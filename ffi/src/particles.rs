@@ -590,3 +590,40 @@ pub unsafe extern "C" fn mpm_world_remove_inactive_particles(
     // SAFETY: forwarded contract.
     unsafe { remove(world, removed_out, |_| Ok(Removal::Inactive)) }
 }
+
+/// Reorders the particles by cell, in place (`World::sort_particles`): by the node their
+/// stencil starts at, each cell's groups of four first, those of one cell keeping their order.
+/// A host calls it between frames, every so many steps, on a scene whose particles lost their
+/// order (a stirred fluid, particles added in the host's order): the step then reads and adds
+/// the grid's rows four particles at a time again. `order_out` receives, for each new index,
+/// the particle's index before the call (`order_out[new] = old`), which is how a host follows
+/// its ids. Every particle's whole state moves with it and tractions follow their particle:
+/// right after the call the world is the world before, permuted, to the bit; later steps sum
+/// the nodes in another order, so they agree with the unsorted world's to round-off only.
+/// O(n + nodes). `MPM_STATUS_OUTPUT_TOO_SMALL` if `order_len` is below the particle count
+/// (nothing changed, nothing written); only the first count entries are written.
+///
+/// # Safety
+/// `world` is NULL or a world; `order_out` is NULL or valid for `order_len` writes.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_sort_particles(
+    world: *mut MpmWorld,
+    order_out: *mut u32,
+    order_len: usize,
+) -> MpmStatus {
+    guard(|| {
+        non_null(order_out)?;
+        // SAFETY: the caller promises a world.
+        let mut w = unsafe { world_at(world) }?;
+        let n = w.particle_count();
+        if order_len < n {
+            return Err(MpmStatus::OutputTooSmall);
+        }
+        apart(w.as_bytes(), order_out, n)?;
+        // SAFETY: non-NULL, the caller promises `order_len >= n` writable values, and they lie
+        // outside the world's memory (checked).
+        let order = unsafe { core::slice::from_raw_parts_mut(order_out, n) };
+        w.sort_particles(order)?;
+        Ok(())
+    })
+}

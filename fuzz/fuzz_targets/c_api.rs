@@ -806,7 +806,8 @@ fuzz_target!(|data: &[u8]| {
                 16 => {
                     // Particles after they are in: moved, sped up, given an affine matrix or a
                     // material (values in and out of range, some not finite), their whole
-                    // state set or added, or removed by range, list, box or status.
+                    // state set or added, removed by range, list, box or status, or reordered
+                    // by cell.
                     let (first, count) = particle_range(&mut inp, world);
                     let n = (count as usize).min(512);
                     let values = |inp: &mut Input<'_>, lo: mpm_real, hi: mpm_real| {
@@ -817,7 +818,7 @@ fuzz_target!(|data: &[u8]| {
                             })
                             .collect::<Vec<mpm_real>>()
                     };
-                    match inp.byte() % 9 {
+                    match inp.byte() % 10 {
                         0 | 1 => {
                             let c: [Vec<mpm_real>; 3] = core::array::from_fn(|_| values(&mut inp, -0.2, 1.2));
                             let (x, y, z) = (c[0].as_ptr(), c[1].as_ptr(), c[2].as_ptr());
@@ -853,6 +854,11 @@ fuzz_target!(|data: &[u8]| {
                         7 => {
                             let mut removed = 0;
                             mpm_world_remove_inactive_particles(world, &mut removed)
+                        }
+                        8 => {
+                            // An order as long as the range: short of the count or not.
+                            let mut order = vec![0u32; (count as usize).min(1 << 16)];
+                            mpm_world_sort_particles(world, order.as_mut_ptr(), order.len())
                         }
                         _ => {
                             // A particle's whole state, set or added: each column given or

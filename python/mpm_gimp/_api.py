@@ -734,6 +734,18 @@ def namespace(name):
             """Removes every escaped or frozen particle."""
             return self._out("mpm_world_remove_inactive_particles", ctypes.c_uint32).value
 
+        def sort_particles(self):
+            """Reorders the particles by cell, between frames: a step of particles that lost
+            their order (a stirred fluid, particles added in the host's order) costs 2 to 3.6
+            times one of sorted particles. Returns the permutation, a new (n,) uint32 array:
+            `order[new]` is the particle's index before the call. The state is the state
+            before, permuted, to the bit; later steps agree with the unsorted world's to
+            round-off."""
+            n = self._out("mpm_world_diagnostics", S["MpmDiagnostics"]).particle_count
+            order = np.empty(n, dtype=np.uint32)
+            self._call("mpm_world_sort_particles", order.ctypes.data, n)
+            return order
+
         # -- effects ---------------------------------------------------------------------
 
         def add_tractions(self, first, count, face, traction):

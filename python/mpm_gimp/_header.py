@@ -3,7 +3,7 @@ do not edit."""
 
 # name: value
 CONSTANTS = {'MPM_DAMPING_ZONES': 4,
- 'MPM_GIMP_ABI_VERSION': 1000,
+ 'MPM_GIMP_ABI_VERSION': 1001,
  'MPM_MAX_HARDENING_COEFFICIENT': 100.0,
  'MPM_MIN_STABLE_DT': 1e-15,
  'MPM_PARALLEL_FROM': 4096,
@@ -1515,6 +1515,21 @@ FUNCTIONS = [('mpm_abi_version',
   'Removes every particle that no longer takes part (escaped through an open face, or frozen), '
   'as `mpm_world_remove_particles` does.  # Safety `world` is NULL or a world; `removed_out` '
   'is NULL or valid.'),
+ ('mpm_world_sort_particles',
+  'MpmStatus',
+  [('world', 'MpmWorld*'), ('order_out', 'uint32_t*'), ('order_len', 'size_t')],
+  'Reorders the particles by cell, in place (`World::sort_particles`): by the node their '
+  "stencil starts at, each cell's groups of four first, those of one cell keeping their order. "
+  'A host calls it between frames, every so many steps, on a scene whose particles lost their '
+  "order (a stirred fluid, particles added in the host's order): the step then reads and adds "
+  "the grid's rows four particles at a time again. `order_out` receives, for each new index, "
+  "the particle's index before the call (`order_out[new] = old`), which is how a host follows "
+  "its ids. Every particle's whole state moves with it and tractions follow their particle: "
+  'right after the call the world is the world before, permuted, to the bit; later steps sum '
+  "the nodes in another order, so they agree with the unsorted world's to round-off only. O(n "
+  '+ nodes). `MPM_STATUS_OUTPUT_TOO_SMALL` if `order_len` is below the particle count (nothing '
+  'changed, nothing written); only the first count entries are written.  # Safety `world` is '
+  'NULL or a world; `order_out` is NULL or valid for `order_len` writes.'),
  ('mpm_collider_def_default_f32',
   'MpmColliderDef',
   [],

@@ -1,18 +1,25 @@
 //! Changing particles after they are in: their position, velocity, affine matrix and material
 //! (each validated as [`World::add_particles`] validates, all or nothing), and removing them,
-//! which frees their room for later additions.
+//! which frees their room for later additions; and reordering them by cell
+//! ([`World::sort_particles`]).
 
 use super::add::speed_resolvable;
 use super::{GeomAny, Removal, World};
+use crate::grid::Geom;
 use crate::layout::{col, Layout, TractionRecord};
 use crate::material::Deformation;
 use crate::particles::ACTIVE;
+use crate::shape::{first_node, Shape1D};
 use crate::{Error, Real};
-use core::mem::size_of;
+use core::mem::{size_of, size_of_val};
 
 /// The status a particle the removal takes out carries during the call (no stored status has
 /// it: [`crate::ParticleStatus`] uses 0 to 2).
 const REMOVED: u32 = 3;
+
+/// The top bit of an entry of the sort's permutation, flipped when the entry's particle is put
+/// in place (no index has it: the capacity is at most 2^30).
+const MOVED: u32 = 1 << 31;
 
 impl World<'_> {
     /// Moves particles `first..first + n` to `position` (one slice per axis, `n` values each;
@@ -310,4 +317,183 @@ fn compact_column<T: Copy + Default>(column: &mut [T], status: &[u32]) -> usize 
     }
     column[kept..].fill(T::default());
     kept
+}
+
+impl World<'_> {
+    /// Reorders the particles by cell, in place: by the node their stencil starts at, in the
+    /// grid's node order (x fastest), each cell's whole groups of four first and the rest of
+    /// every cell after them, those of one cell keeping their order (a stable counting sort,
+    /// so the result is a function of the state alone). A step reads and adds a particle's
+    /// stencil rows four lanes at a time, summed in registers where the lanes start at one
+    /// node: particles that lost that order (a scene that stirs, a host adding them in its own
+    /// order) step slower, shuffled 2 (2D) to 3.6 (3D) times as long; a host calls this between
+    /// frames, every so many steps (benches/PERFORMANCE.md, "Reordering particles"), at the
+    /// cost of one or two steps.
+    ///
+    /// `order` receives, for each new index, the particle's index before the call
+    /// (`order[new] = old`), which is how a host follows its ids. Every particle column
+    /// (statuses, materials and every effect's columns included) moves with its particle, and
+    /// tractions follow theirs: right after the call the state is the state before, permuted,
+    /// bit for bit. Later steps add the particles' shares to the nodes in the new order, so they
+    /// agree with the unsorted world's to round-off, not to the bit.
+    ///
+    /// O(n + nodes) for n particles, no memory but the grid's (scratch between steps, so a
+    /// snapshot, [`World::state_bytes`], is unaffected):
+    /// `LengthMismatch` if `order` is shorter than [`World::particle_count`]; nothing is
+    /// changed then (entries of `order` past the count are never written).
+    pub fn sort_particles(&mut self, order: &mut [u32]) -> Result<(), Error> {
+        let def = self.def();
+        let order = order
+            .get_mut(..self.particle_count())
+            .ok_or(Error::LengthMismatch)?;
+        let layout = Layout::of(&def);
+        crate::shape::with_form!(&def, shape => self.order_by_cell::<D, K, _>(&shape, &layout, order));
+        self.renumber_tractions(&layout, order);
+        self.permute_columns(&layout, order);
+        Ok(())
+    }
+
+    /// Fills `order` (`particle_count` long) with the particles' indices sorted, stably, by the
+    /// flat index of their stencil's first node, in two parts: first the whole groups of four
+    /// of each cell (the first `4 * floor(count / 4)` of its particles), then each cell's rest.
+    /// So every group of four starts a 4-lane block: the blocks of the step's chunks share their
+    /// stencil rows (as `fill_box` writes its particles), which a plain sort by cell would
+    /// break at the first cell whose count is not a multiple of 4. Counts in the grid.
+    fn order_by_cell<const D: usize, const K: usize, S: Shape1D<K>>(
+        &mut self,
+        _shape: &S,
+        layout: &Layout,
+        order: &mut [u32],
+    ) {
+        let geom = Geom::<D>::new(&self.def());
+        let (n, nodes) = (order.len(), layout.nodes);
+        let (particles, grid) = self.buf.split_at_mut(layout.grid_offset);
+        let x: [&[Real]; D] = core::array::from_fn(|a| {
+            bytemuck::cast_slice(&particles[layout.real_col(col::x(a), n)])
+        });
+        let cell = |i: usize| -> usize {
+            (0..D)
+                .map(|a| {
+                    let s = (x[a][i] - geom.origin[a]) * geom.inv_h;
+                    first_node::<K, S>(s, geom.nodes[a]) as usize * geom.stride[a]
+                })
+                .sum()
+        };
+        // The grid is scratch between steps ("Memory layout"); its first columns (at least
+        // 5 of `nodes` Reals each) hold per cell: how many of its particles still go to the
+        // whole groups, and where its next particle goes in each part.
+        let scratch: &mut [u32] = bytemuck::cast_slice_mut(&mut grid[..12 * nodes]);
+        let (quota, next) = scratch.split_at_mut(nodes);
+        let (whole, rest) = next.split_at_mut(nodes);
+        quota.fill(0);
+        for i in 0..n {
+            quota[cell(i)] += 1;
+        }
+        let (mut w, mut r) = (0, quota.iter().map(|&c| c & !3).sum::<u32>());
+        for c in 0..nodes {
+            (whole[c], rest[c]) = (w, r);
+            (w, r) = (w + (quota[c] & !3), r + (quota[c] & 3));
+            quota[c] &= !3;
+        }
+        for i in 0..n {
+            let c = cell(i);
+            let next = if quota[c] > 0 {
+                quota[c] -= 1;
+                &mut whole[c]
+            } else {
+                &mut rest[c]
+            };
+            order[*next as usize] = i as u32;
+            *next += 1;
+        }
+    }
+
+    /// Points each traction at its particle's new index (`order[new] = old`), which each
+    /// particle's status carries above its two bits meanwhile (as in [`World::remove_particles`]).
+    fn renumber_tractions(&mut self, layout: &Layout, order: &[u32]) {
+        let used = self.header().traction_count as usize;
+        if used == 0 {
+            return;
+        }
+        let (head, particles) = self.buf[..layout.grid_offset].split_at_mut(layout.particle_offset);
+        let status = layout.u32_col(col::STATUS, order.len());
+        let status: &mut [u32] = bytemuck::cast_slice_mut(
+            &mut particles
+                [status.start - layout.particle_offset..status.end - layout.particle_offset],
+        );
+        for (new, &old) in order.iter().enumerate() {
+            status[old as usize] |= (new as u32) << 2;
+        }
+        let start = layout.tractions_offset;
+        let records: &mut [TractionRecord] =
+            bytemuck::cast_slice_mut(&mut head[start..start + used * size_of::<TractionRecord>()]);
+        for r in records {
+            r.particle = status[r.particle as usize] >> 2;
+        }
+        status.iter_mut().for_each(|s| *s &= 3);
+    }
+
+    /// Applies the permutation `order` (`order[new] = old`) to every particle column the layout
+    /// holds, Real then u32, one column at a time; `order` is as it came when this returns.
+    /// Where the grid (scratch between steps) holds a column, each column is gathered into it
+    /// and copied back (reads that do not wait on each other: on a shuffled scene a seventh of
+    /// the cost of the cycles); else each column follows the permutation's cycles in place.
+    fn permute_columns(&mut self, layout: &Layout, order: &mut [u32]) {
+        let n = order.len();
+        let (particles, grid) = self.buf[..layout.scratch_offset].split_at_mut(layout.grid_offset);
+        let mut copy = (n * size_of::<Real>() <= grid.len()).then_some(grid);
+        let mut marked = false;
+        for j in 0..layout.particle_real_columns {
+            let column: &mut [Real] =
+                bytemuck::cast_slice_mut(&mut particles[layout.real_col(j, n)]);
+            marked = permute(column, order, marked, copy.as_deref_mut());
+        }
+        for j in 0..col::U32_COLUMNS {
+            let column: &mut [u32] = bytemuck::cast_slice_mut(&mut particles[layout.u32_col(j, n)]);
+            marked = permute(column, order, marked, copy.as_deref_mut());
+        }
+        if marked {
+            order.iter_mut().for_each(|o| *o &= !MOVED);
+        }
+    }
+}
+
+/// Puts `column[order[i]]` at `i` for every `i` (`order`, as long, a permutation of its indices
+/// whose [`MOVED`] bits are all `marked`), and returns how the [`MOVED`] bits are left. With
+/// `copy` (room for the column): gathered there and copied back, the bits left alone. Without:
+/// following the permutation's cycles, each entry moved once, the cycle's first held aside,
+/// every bit flipped.
+fn permute<T: bytemuck::Pod>(
+    column: &mut [T],
+    order: &mut [u32],
+    marked: bool,
+    copy: Option<&mut [u8]>,
+) -> bool {
+    if let Some(bytes) = copy {
+        let copy: &mut [T] = bytemuck::cast_slice_mut(&mut bytes[..size_of_val(column)]);
+        for (c, &o) in copy.iter_mut().zip(order.iter()) {
+            *c = column[o as usize];
+        }
+        column.copy_from_slice(copy);
+        return marked;
+    }
+    let done = if marked { 0 } else { MOVED };
+    for start in 0..column.len() {
+        if order[start] & MOVED == done {
+            continue;
+        }
+        let held = column[start];
+        let mut j = start;
+        loop {
+            let k = (order[j] & !MOVED) as usize;
+            order[j] ^= MOVED;
+            if k == start {
+                column[j] = held;
+                break;
+            }
+            column[j] = column[k];
+            j = k;
+        }
+    }
+    !marked
 }

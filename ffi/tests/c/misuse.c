@@ -2608,8 +2608,10 @@ static void particle_edit_misuse(void) {
     MpmWorld *w = NULL;
     MpmMaterialDef m = mpm_material_def_default();
     MpmIdRange ids;
-    uint32_t id = 7, removed = 7, n, list[3];
-    mpm_real x[2], y[2], nan_, far[2], fast[2];
+    uint32_t id = 7, removed = 7, n, list[3], order[64], k;
+    mpm_real x[2], y[2], nan_, far[2], fast[2], before[128], after[128];
+    size_t written = 0;
+    int permuted = 1;
     const mpm_real *affine[9] = {NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     uint32_t mats[2] = {0, 0}, bad_mats[2] = {0, 9};
 
@@ -2674,6 +2676,14 @@ static void particle_edit_misuse(void) {
             mpm_world_remove_particles_in_box(w, v3(NAN, 0, 0), v3(1, 1, 0), OUT(uint32_t)));
     REFUSED("particles: remove a box inside out", MPM_STATUS_INVALID_REGION,
             mpm_world_remove_particles_in_box(w, v3(1, 1, 0), v3(0, 0, 0), OUT(uint32_t)));
+    REFUSED("particles: sort a NULL world", MPM_STATUS_NULL_POINTER,
+            mpm_world_sort_particles(NULL, OUT(uint32_t), n));
+    REFUSED("particles: sort into NULL", MPM_STATUS_NULL_POINTER,
+            mpm_world_sort_particles(w, NULL, n));
+    REFUSED("particles: sort into too short an order", MPM_STATUS_OUTPUT_TOO_SMALL,
+            mpm_world_sort_particles(w, OUT(uint32_t), n - 1));
+    REFUSED("particles: sort into the world's memory", MPM_STATUS_OVERLAPPING_MEMORY,
+            mpm_world_sort_particles(w, (uint32_t *)(void *)w, n));
     REFUSED("particles: the world is full", MPM_STATUS_PARTICLE_CAPACITY_EXCEEDED,
             mpm_world_fill_box(w, v3(0.6, 0.3, 0), v3(0.65, 0.35, 0), 0, v3(0, 0, 0), &ids));
 
@@ -2694,6 +2704,18 @@ static void particle_edit_misuse(void) {
     expect_true("particles: nothing inactive to remove", removed == 0);
     ACCEPTED("particles: the room is free again", 1,
              mpm_world_fill_box(w, v3(0.6, 0.3, 0), v3(0.65, 0.35, 0), 0, v3(0, 0, 0), &ids));
+    /* The second box after the first, out of cell order: the sort moves them, each particle's
+     * position with it (order[new] = old). */
+    ACCEPTED("particles: positions before the sort", 0,
+             mpm_world_copy_positions(w, before, 128, &written));
+    ACCEPTED("particles: sort", 1, mpm_world_sort_particles(w, order, 64));
+    ACCEPTED("particles: positions after the sort", 0,
+             mpm_world_copy_positions(w, after, 128, &written));
+    for (k = 0; k < n; k++) {
+        permuted &= order[k] < n && after[2 * k] == before[2 * order[k]] &&
+                    after[2 * k + 1] == before[2 * order[k] + 1];
+    }
+    expect_true("particles: the sort permutes the particles", written == 2 * n && permuted);
     untrack(w);
     free(mem.raw);
 }
