@@ -459,12 +459,7 @@ impl<'s> Collider<'s> {
             // A shell's distance is at least its radial and its axial part's (E91).
             Solid::Cylinder(h, r, inner) => {
                 let rho = crate::math::sqrt(p[0] * p[0] + p[2] * p[2]);
-                let dr = if inner > 0.0 && inner - rho > rho - r {
-                    inner - rho
-                } else {
-                    rho - r
-                };
-                (dr.max(p[1].abs() - h), h.max(r))
+                (shell_radial(rho, r, inner).0.max(p[1].abs() - h), h.max(r))
             }
             // A box's, its farthest face's.
             Solid::Box(e) => {
@@ -603,6 +598,17 @@ impl<'s> Collider<'s> {
     }
 }
 
+/// A cylindrical shell's radial distance at `rho` from its axis (outer radius `r`, hollow
+/// within `inner` when above 0): past the outer face, or inside the inner one (`true`: the
+/// nearer face is the inner, its outward normal pointing to the axis).
+fn shell_radial(rho: Real, r: Real, inner: Real) -> (Real, bool) {
+    if inner > 0.0 && inner - rho > rho - r {
+        (inner - rho, true)
+    } else {
+        (rho - r, false)
+    }
+}
+
 /// The signed distance and outward normal of `solid` at `p` in its own frame (E91).
 fn local_distance(solid: Solid<'_>, p: V3, with_normal: bool) -> (Real, V3) {
     let up = [0.0, 1.0, 0.0];
@@ -656,12 +662,8 @@ fn local_distance(solid: Solid<'_>, p: V3, with_normal: bool) -> (Real, V3) {
         Solid::Cylinder(h, r, inner) => {
             let rho = crate::math::sqrt(p[0] * p[0] + p[2] * p[2]);
             let radial = unit([p[0], 0.0, p[2]], [1.0, 0.0, 0.0]);
-            // The shell's radial distance: past the outer face, or (hollow) inside the inner.
-            let (dr, radial) = if inner > 0.0 && inner - rho > rho - r {
-                (inner - rho, scale(radial, -1.0))
-            } else {
-                (rho - r, radial)
-            };
+            let (dr, inward) = shell_radial(rho, r, inner);
+            let radial = if inward { scale(radial, -1.0) } else { radial };
             let axial = [0.0, if p[1] < 0.0 { -1.0 } else { 1.0 }, 0.0];
             let dy = p[1].abs() - h;
             if dr > 0.0 || dy > 0.0 {
