@@ -51,6 +51,8 @@ def parse(text):
             constants[m.group(1)] = float(value) if "." in value else int(value)
         elif line.startswith("enum Mpm"):
             name, doc, values = line.split()[1], _comment(comment), []
+            # Members are named without the enum's prefix: MPM_SHAPE_GIMP -> GIMP.
+            prefix = "MPM_" + _camel_to_upper(name[3:]) + "_"
             i += 1
             vcomment = []
             while not lines[i].startswith("};"):
@@ -60,7 +62,9 @@ def parse(text):
                 else:
                     vm = re.match(r"([A-Z0-9_]+) = (\d+),", item)
                     if vm:
-                        values.append((vm.group(1), int(vm.group(2)), _comment(vcomment)))
+                        v = vm.group(1)
+                        member = v[len(prefix) :] if v.startswith(prefix) else v
+                        values.append((member, int(vm.group(2)), _comment(vcomment)))
                         vcomment = []
                 i += 1
             enums.append((name, doc, values))
@@ -110,7 +114,7 @@ def generate():
         "# name: value",
         "CONSTANTS = " + pprint.pformat(constants, width=96),
         "",
-        "# (name, doc, [(variant, value, doc)])",
+        "# (name, doc, [(member, value, doc)]): a member is the C name less the enum's prefix",
         "ENUMS = " + pprint.pformat(enums, width=96),
         "",
         "# (name, doc, [(field, type, array length or None, doc)]); 'mpm_real' is float or double",
@@ -162,9 +166,8 @@ def stubs():
         "",
     ]
     for name, doc, values in enums:
-        prefix = "MPM_" + _camel_to_upper(name[3:]) + "_"
         out += ["", f"class {name[3:]}(enum.IntEnum):", f'    """{doc}"""', ""]
-        out += [f"    {v[len(prefix):]} = {n}" for v, n, _ in values]
+        out += [f"    {v} = {n}" for v, n, _ in values]
     for name, doc, fields in structs:
         out += ["", f"class {name[3:]}(ctypes.Structure):", f'    """{doc}"""', ""]
         if name in ("MpmWorldDef", "MpmMaterialDef", "MpmColliderDef"):
@@ -176,7 +179,7 @@ def stubs():
             out += [f"    {field}: {_stub_type(ctype, size)}", f'    """{fdoc}"""']
     for _, _, values in [e for e in enums if e[0] == "MpmStatus"]:
         for v, n, doc in values[1:]:
-            camel = "".join(p.capitalize() for p in v[len("MPM_STATUS_") :].split("_"))
+            camel = "".join(p.capitalize() for p in v.split("_"))
             out += ["", f"class {camel}Error(MpmError):", f'    """{doc}"""']
     return "\n".join(out) + "\n"
 

@@ -24,25 +24,11 @@ _SCALARS = {
 }
 
 
-def _camel_to_upper(name):
-    out = ""
-    for i, c in enumerate(name):
-        if c.isupper() and i > 0 and not name[i - 1].isupper():
-            out += "_"
-        out += c.upper()
-    return out
-
-
 def _make_enums():
     enums = {}
     for name, doc, values in _header.ENUMS:
-        short = name[3:]
-        prefix = "MPM_" + _camel_to_upper(short) + "_"
-        members = {v[len(prefix) :] if v.startswith(prefix) else v: n for v, n, _ in values}
-        cls = enum.IntEnum(short, members)
-        cls.__doc__ = (
-            doc + "\n\n" + "\n".join(f"{v[len(prefix):]} = {n}: {d}" for v, n, d in values)
-        )
+        cls = enum.IntEnum(name[3:], {v: n for v, n, _ in values})
+        cls.__doc__ = doc + "\n\n" + "\n".join(f"{v} = {n}: {d}" for v, n, d in values)
         cls.__module__ = "mpm_gimp"
         enums[name] = cls
     return enums
