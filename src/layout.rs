@@ -334,7 +334,12 @@ unsafe impl Pod for MaterialRecord {}
 pub(crate) struct TractionRecord {
     pub particle: u32,
     pub schedule: u32,
+    /// The traction (Pa) in the world's axes, or for a load that follows the face
+    /// ([`TractionRecord::follows`]) along the deformed face's normal and tangents; then the
+    /// face's reference area.
     pub traction: [Real; 4],
+    /// The face's reference unit normal (its first `d` entries; 0 past them), then
+    /// [`TractionRecord::FOLLOWS`] or 0 (a traction in the world's axes).
     pub normal: [Real; 4],
 }
 
@@ -350,13 +355,23 @@ impl TractionRecord {
             .chain(&self.normal)
             .all(|c| c.is_finite());
         let norm2: Real = self.normal[..d].iter().map(|c| c * c).sum();
-        let off_plane = self.normal[d..].iter().any(|&c| c != 0.0);
+        let off_plane = self.normal[d..3].iter().any(|&c| c != 0.0);
         (self.particle as usize) < count
             && (self.schedule as usize) < TRACTION_SCHEDULES
             && finite
             && self.traction[3] > 0.0
             && (norm2 - 1.0).abs() < 1.0e-3
             && !off_plane
+            && (self.normal[3] == 0.0 || self.follows())
+    }
+
+    /// The value of `normal[3]` that marks a load following its face
+    /// ([`crate::World::add_follower_tractions`]).
+    pub const FOLLOWS: Real = 1.0;
+
+    /// Whether the traction's components are along the deformed face's normal and tangents.
+    pub fn follows(&self) -> bool {
+        self.normal[3] == Self::FOLLOWS
     }
 }
 

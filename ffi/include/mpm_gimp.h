@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.10.1"
+#define MPM_GIMP_VERSION "0.10.2"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 1001
+#define MPM_GIMP_ABI_VERSION 1002
 
 
 // Most points an `MpmSchedule` holds.
@@ -1272,6 +1272,25 @@ MpmStatus mpm_world_add_surface_tractions(struct MpmWorld *world,
                                           mpm_real area,
                                           struct MpmVec3 traction,
                                           struct MpmIdRange *ids_out);
+
+// Adds one load per particle of `first_particle .. first_particle + particle_count` on a face
+// given as for `mpm_world_add_surface_tractions` (reference `normal` and `area`) that turns and
+// stretches with the face: `load` is the traction (Pa, per area of the deformed face) along
+// the face's current outward normal, then its current tangents (z ignored in 2D), so a
+// pressure `p` is `{-p, 0, 0}`. The tangents are the reference ones carried by the particle's
+// deformation: in 2D `(-N_y, N_x)`; in 3D `T1 = N x e / |N x e|` (`e` the axis of `N`'s
+// smallest component) and `n x t1`. Ids, schedules, removal and errors are those of
+// `mpm_world_add_surface_tractions`.
+//
+// # Safety
+// `world` is NULL or a world; `ids_out` is NULL or valid.
+MpmStatus mpm_world_add_follower_tractions(struct MpmWorld *world,
+                                           uint32_t first_particle,
+                                           uint32_t particle_count,
+                                           struct MpmVec3 normal,
+                                           mpm_real area,
+                                           struct MpmVec3 load,
+                                           struct MpmIdRange *ids_out);
 
 // Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
 // table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions

@@ -281,6 +281,36 @@ pub unsafe extern "C" fn mpm_world_add_surface_tractions(
     }
 }
 
+/// Adds one load per particle of `first_particle .. first_particle + particle_count` on a face
+/// given as for `mpm_world_add_surface_tractions` (reference `normal` and `area`) that turns and
+/// stretches with the face: `load` is the traction (Pa, per area of the deformed face) along
+/// the face's current outward normal, then its current tangents (z ignored in 2D), so a
+/// pressure `p` is `{-p, 0, 0}`. The tangents are the reference ones carried by the particle's
+/// deformation: in 2D `(-N_y, N_x)`; in 3D `T1 = N x e / |N x e|` (`e` the axis of `N`'s
+/// smallest component) and `n x t1`. Ids, schedules, removal and errors are those of
+/// `mpm_world_add_surface_tractions`.
+///
+/// # Safety
+/// `world` is NULL or a world; `ids_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_add_follower_tractions(
+    world: *mut MpmWorld,
+    first_particle: u32,
+    particle_count: u32,
+    normal: MpmVec3,
+    area: mpm_real,
+    load: MpmVec3,
+    ids_out: *mut MpmIdRange,
+) -> MpmStatus {
+    let range = (first_particle, particle_count);
+    // SAFETY: forwarded contract.
+    unsafe {
+        add_tractions_by(world, range, ids_out, |w, particles| {
+            Ok(w.add_follower_tractions(particles, vec3(normal), area, vec3(load))?)
+        })
+    }
+}
+
 /// Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
 /// table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions
 /// follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if

@@ -715,16 +715,20 @@ fuzz_target!(|data: &[u8]| {
                         let (first, count) = particle_range(&mut inp, world);
                         let traction = inp.vec3_in(-1.0e4, 1.0e4);
                         let mut ids = MpmIdRange::default();
-                        let s = if inp.byte() % 2 == 0 {
+                        let kind = inp.byte() % 3;
+                        let s = if kind == 0 {
                             let face = inp.u32_below(7);
                             mpm_world_add_tractions(world, first, count, face, traction, &mut ids)
                         } else {
                             // Any normal (zero and non-finite ones included) and any area.
                             let normal = inp.vec3_in(-1.0, 1.0);
                             let area = inp.real();
-                            mpm_world_add_surface_tractions(
-                                world, first, count, normal, area, traction, &mut ids,
-                            )
+                            let add = if kind == 1 {
+                                mpm_world_add_surface_tractions
+                            } else {
+                                mpm_world_add_follower_tractions
+                            };
+                            add(world, first, count, normal, area, traction, &mut ids)
                         };
                         if s == MpmStatus::Ok {
                             let mut n = 0;

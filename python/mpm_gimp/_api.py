@@ -762,14 +762,23 @@ def namespace(name):
 
         def add_surface_tractions(self, first, count, normal, area, traction):
             """Loads a face of outward `normal` and `area` (m^2) of each particle; returns ids."""
+            return self._face_loads("surface", first, count, normal, area, traction)
+
+        def add_follower_tractions(self, first, count, normal, area, load):
+            """Loads a face of each particle, given as for `add_surface_tractions`, with a
+            traction that turns with it: `load` (Pa) along the deformed face's outward normal,
+            then its tangents (a pressure p is (-p, 0, 0)); returns ids."""
+            return self._face_loads("follower", first, count, normal, area, load)
+
+        def _face_loads(self, kind, first, count, normal, area, load):
             V = S["MpmVec3"]
             return self._range(
-                "mpm_world_add_surface_tractions",
+                f"mpm_world_add_{kind}_tractions",
                 _u32(first, "first"),
                 _u32(count, "count"),
                 V(*_vec3(normal, "normal")),
                 float(area),
-                V(*_vec3(traction, "traction")),
+                V(*_vec3(load, "load" if kind == "follower" else "traction")),
             )
 
         def set_traction_schedule(self, first, count, schedule):

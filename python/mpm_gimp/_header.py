@@ -3,7 +3,7 @@ do not edit."""
 
 # name: value
 CONSTANTS = {'MPM_DAMPING_ZONES': 4,
- 'MPM_GIMP_ABI_VERSION': 1001,
+ 'MPM_GIMP_ABI_VERSION': 1002,
  'MPM_MAX_HARDENING_COEFFICIENT': 100.0,
  'MPM_MIN_STABLE_DT': 1e-15,
  'MPM_PARALLEL_FROM': 4096,
@@ -1139,6 +1139,24 @@ FUNCTIONS = [('mpm_abi_version',
   '`MPM_STATUS_INVALID_EFFECT`; more tractions than the remaining capacity '
   '`MPM_STATUS_TRACTION_CAPACITY_EXCEEDED`.  # Safety `world` is NULL or a world; `ids_out` is '
   'NULL or valid.'),
+ ('mpm_world_add_follower_tractions',
+  'MpmStatus',
+  [('world', 'MpmWorld*'),
+   ('first_particle', 'uint32_t'),
+   ('particle_count', 'uint32_t'),
+   ('normal', 'MpmVec3'),
+   ('area', 'mpm_real'),
+   ('load', 'MpmVec3'),
+   ('ids_out', 'MpmIdRange*')],
+  'Adds one load per particle of `first_particle .. first_particle + particle_count` on a face '
+  'given as for `mpm_world_add_surface_tractions` (reference `normal` and `area`) that turns '
+  'and stretches with the face: `load` is the traction (Pa, per area of the deformed face) '
+  "along the face's current outward normal, then its current tangents (z ignored in 2D), so a "
+  "pressure `p` is `{-p, 0, 0}`. The tangents are the reference ones carried by the particle's "
+  "deformation: in 2D `(-N_y, N_x)`; in 3D `T1 = N x e / |N x e|` (`e` the axis of `N`'s "
+  'smallest component) and `n x t1`. Ids, schedules, removal and errors are those of '
+  '`mpm_world_add_surface_tractions`.  # Safety `world` is NULL or a world; `ids_out` is NULL '
+  'or valid.'),
  ('mpm_world_set_traction_schedule',
   'MpmStatus',
   [('world', 'MpmWorld*'),

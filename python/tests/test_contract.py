@@ -339,13 +339,16 @@ def test_effects_setters_and_removal(mpm):
     w.set_particle_scalar(mpm.ScalarField.TEMPERATURE, 0, np.full(n, 300, mpm.dtype))
     tr = w.add_tractions(0, 4, mpm.Face.X_MAX, (1e3, 0))
     assert tr == range(0, 4) and w.traction_count() == 4
+    assert w.add_follower_tractions(4, 2, (0, 1), 0.01, (-1e3, 0)) == range(4, 6)
+    with pytest.raises(mpm.InvalidEffectError):
+        w.add_follower_tractions(4, 1, (0, 0), 0.01, (-1e3, 0))
     p = w.particles()
     assert np.all(p.force == 1) and np.all(p.temperature == 300) and p.plastic.shape == (n,)
     w.step(1 / 120)
     w.set_particle_velocities(0, np.zeros((2, n), mpm.dtype))
     assert np.all(w.particles().velocity == 0)
     w.remove_tractions(0, 2)
-    assert w.traction_count() == 2
+    assert w.traction_count() == 4
     assert w.remove_particles_in_box((0.3, 0.3), (0.4, 0.5)) > 0
     assert w.remove_particle_list(np.array([0, 1, 1], np.uint32)) == 2
     assert w.remove_inactive_particles() == 0

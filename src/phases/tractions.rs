@@ -1,5 +1,6 @@
 //! The tractions' pass (E15-E16, E72): each traction a host set, integrated over its
-//! particle's deformed face ([`Face`]), into the nodal force. (Particle forces enter the nodal
+//! particle's deformed face ([`Face`]), into the nodal force; a follower load along the
+//! face's current normal and tangents ([`Face::along_frame`]). (Particle forces enter the nodal
 //! force in the scatter's rows, `S_ip F_p`, [`super::p2g`]; the body force is added to gravity
 //! for the substep, [`crate::Effects::body_force`].)
 
@@ -44,7 +45,12 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
         });
         let face = Face::<D>::of(rec, x, &f, ctx.half_width, S::AXISYMMETRIC);
         let scale = ctx.traction_scales.get(rec.schedule as usize).copied();
-        let t: [Real; D] = core::array::from_fn(|a| rec.traction[a] * scale.unwrap_or(0.0));
+        let load = if rec.follows() {
+            face.along_frame(&rec.traction)
+        } else {
+            core::array::from_fn(|a| rec.traction[a])
+        };
+        let t: [Real; D] = load.map(|c| c * scale.unwrap_or(0.0));
         let s: [Real; D] = core::array::from_fn(|a| (x[a] - geom.origin[a]) * geom.inv_h);
         let stretch = p.domain_stretch(i);
         let half: [Real; D] = core::array::from_fn(|a| shape.domain_half_width(stretch[a]));
@@ -111,10 +117,13 @@ pub(crate) fn tractions<const D: usize, const K: usize, S: Shape1D<K>>(
 }
 
 /// A loaded face as Gauss points (2 in 2D, 2 x 2 in 3D) and their weights, the deformed area
-/// (per radian axisymmetric) each stands for.
+/// (per radian axisymmetric) each stands for, and its current frame.
 pub(crate) struct Face<const D: usize> {
     pub points: [[Real; D]; 4],
     pub weights: [Real; 4],
+    /// The deformed face's unit outward normal `n` (along `F^-T N`), then its unit tangents
+    /// `t1` (along `F T1`) and `t2 = n x t1` (zero in 2D).
+    pub frame: [[Real; D]; 3],
 }
 
 impl<const D: usize> Face<D> {
@@ -173,7 +182,32 @@ impl<const D: usize> Face<D> {
                     1.0
                 };
         }
-        Face { points, weights }
+        // The deformed frame: in 2D the normal is the carried tangent turned back by a right
+        // angle (as `T1 = (-N_y, N_x)` is `N` turned forward), in 3D `F T1 x F T2`, which is
+        // `cof(F) N` because `T1 x T2 = N`.
+        let unit = |v: [Real; D]| {
+            let len = crate::math::sqrt(v.iter().map(|c| c * c).sum());
+            v.map(|c| c / len)
+        };
+        let t1 = unit(ft[0]);
+        let n = if D == 3 {
+            unit(cross(ft[0], ft[1]))
+        } else {
+            let mut n = [0.0; D];
+            (n[0], n[1]) = (t1[1], -t1[0]);
+            n
+        };
+        let frame = [n, t1, cross(n, t1)];
+        Face {
+            points,
+            weights,
+            frame,
+        }
+    }
+
+    /// A load given along the frame (normal, then tangents) in the world's axes.
+    pub fn along_frame(&self, load: &[Real; 4]) -> [Real; D] {
+        core::array::from_fn(|a| (0..3).map(|k| load[k] * self.frame[k][a]).sum())
     }
 }
 

@@ -79,6 +79,38 @@ impl World<'_> {
         area: Real,
         traction: Vec3,
     ) -> Result<Range<u32>, Error> {
+        self.add_face_loads(particles, normal, area, traction, false)
+    }
+
+    /// Adds one load per particle of `particles` on a face given as for
+    /// [`World::add_surface_tractions`] (reference normal and area), that turns and stretches
+    /// with the face: `load` is the traction (Pa, per area of the deformed face) along the
+    /// face's current outward normal, then along its current tangents, so that a pressure `p`
+    /// is `Vec3::new(-p, 0.0, 0.0)`: the force on an element `dA` of the reference face is
+    /// `load_n n da + load_1 t1 da + load_2 t2 da` with `n da = J F^-T N dA` (Nanson). The
+    /// tangents are the reference ones carried by `F`: in 2D `t1 = F (-N_y, N_x) / |..|`; in
+    /// 3D `t1 = F T1 / |F T1|`, `T1 = N x e / |N x e|` with `e` the axis of `N`'s smallest
+    /// component, and `t2 = n x t1`. Its id, schedule and removal are a traction's; the same
+    /// errors as [`World::add_surface_tractions`].
+    pub fn add_follower_tractions(
+        &mut self,
+        particles: Range<u32>,
+        normal: Vec3,
+        area: Real,
+        load: Vec3,
+    ) -> Result<Range<u32>, Error> {
+        self.add_face_loads(particles, normal, area, load, true)
+    }
+
+    /// The two adders' one path: `load` in the world's axes, or along the face (`follows`).
+    fn add_face_loads(
+        &mut self,
+        particles: Range<u32>,
+        normal: Vec3,
+        area: Real,
+        traction: Vec3,
+        follows: bool,
+    ) -> Result<Range<u32>, Error> {
         let def = self.def();
         let layout = Layout::of(&def);
         if layout.traction_capacity == 0 {
@@ -106,7 +138,10 @@ impl World<'_> {
             particle: 0,
             schedule: 0,
             traction: core::array::from_fn(|a| if a == 3 { area } else { in_plane(traction, a) }),
-            normal: core::array::from_fn(|a| in_plane(normal, a) / length),
+            normal: core::array::from_fn(|a| match a {
+                3 if follows => TractionRecord::FOLLOWS,
+                _ => in_plane(normal, a) / length,
+            }),
         };
         let table = self.traction_records_mut(&layout, used, n);
         for (rec, particle) in table.iter_mut().zip(particles) {

@@ -89,6 +89,8 @@ struct Traction {
     area: f64,
     traction: [f64; 3],
     schedule: usize,
+    /// The traction is along the deformed face's normal and tangents (a follower load).
+    follows: bool,
 }
 
 /// A grid node's accumulators and values.
@@ -1197,8 +1199,9 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
         particle: i,
         normal: n,
         area,
-        traction: t,
+        traction: load,
         schedule,
+        follows,
     } in &m.tractions
     {
         let p = &ps[i];
@@ -1221,9 +1224,14 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
         };
         let norm = |v: [f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
         let delta = m.lp / n[..d].iter().fold(0.0f64, |a, c| a.max(c.abs()));
-        let (tangents, side, element) = if d == 2 {
+        let unit = |v: [f64; 3]| v.map(|x| x / norm(v));
+        // The face's tangents, side, deformed area per Gauss point and deformed frame
+        // (normal, tangents): a follower load's directions.
+        let (tangents, side, element, frame) = if d == 2 {
             let t = [-n[1], n[0], 0.0];
-            (vec![t], area, norm(times_f(t)) * area / 2.0)
+            let t1 = unit(times_f(t));
+            let frame = [[t1[1], -t1[0], 0.0], t1, [0.0; 3]];
+            (vec![t], area, norm(times_f(t)) * area / 2.0, frame)
         } else {
             let e = (0..3).fold(0, |k, a| if n[a].abs() < n[k].abs() { a } else { k });
             let mut axis = [0.0; 3];
@@ -1232,7 +1240,14 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
             let t1 = c.map(|x| x / norm(c));
             let t2 = cross(n, t1);
             let ft = cross(times_f(t1), times_f(t2));
-            (vec![t1, t2], area.sqrt(), norm(ft) * area / 4.0)
+            let (nn, tt) = (unit(ft), unit(times_f(t1)));
+            let frame = [nn, tt, cross(nn, tt)];
+            (vec![t1, t2], area.sqrt(), norm(ft) * area / 4.0, frame)
+        };
+        let t: [f64; 3] = if follows {
+            std::array::from_fn(|a| (0..3).map(|k| load[k] * frame[k][a]).sum())
+        } else {
+            load
         };
         let g = side / (2.0 * 3f64.sqrt());
         let mut points = Vec::new();
@@ -2780,8 +2795,17 @@ fn check(
                 0.7 * face_area,
                 [-600.0, 300.0, 800.0],
             ),
+            // A follower load: a pressure and two shears along the deformed face.
+            (
+                50..56,
+                None,
+                [0.0, 0.6, -0.8],
+                1.3 * face_area,
+                [-700.0, 200.0, -350.0],
+            ),
         ];
         for (range, face, normal, area, t) in loads {
+            let follows = range.start == 50;
             let v = mpm_gimp::Vec3::new(t[0] as Real, t[1] as Real, t[2] as Real);
             let nv = mpm_gimp::Vec3::new(normal[0] as Real, normal[1] as Real, normal[2] as Real);
             let area = match face {
@@ -2790,9 +2814,12 @@ fn check(
                     face_area
                 }
                 None => {
-                    let ids = world
-                        .add_surface_tractions(range.clone(), nv, area as Real, v)
-                        .unwrap();
+                    let ids = if follows {
+                        world.add_follower_tractions(range.clone(), nv, area as Real, v)
+                    } else {
+                        world.add_surface_tractions(range.clone(), nv, area as Real, v)
+                    }
+                    .unwrap();
                     world.set_traction_schedule(ids, 1).unwrap();
                     // The kernel's area is a float of the working precision.
                     area as Real as f64
@@ -2810,6 +2837,7 @@ fn check(
                     area,
                     traction: t,
                     schedule,
+                    follows,
                 });
             }
         }

@@ -831,6 +831,9 @@ static void not_a_world_at_page_end(void) {
         NAW("mpm_world_add_surface_tractions",
             mpm_world_add_surface_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(0, -1, 0),
                                             OUT(MpmIdRange)));
+        NAW("mpm_world_add_follower_tractions",
+            mpm_world_add_follower_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(-1, 0, 0),
+                                             OUT(MpmIdRange)));
         NAW("mpm_world_set_traction_schedule", mpm_world_set_traction_schedule(w, 0, 1, 1));
         NAW("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         NAW("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));

@@ -365,6 +365,11 @@ static void null_pointers(void) {
                                                 OUT(MpmIdRange)));
         REFUSED("null: mpm_world_add_surface_tractions ids_out", MPM_STATUS_NULL_POINTER,
                 mpm_world_add_surface_tractions(g_we2, 0, 1, v3(0, 1, 0), R(0.1), zero, NULL));
+        REFUSED("null: mpm_world_add_follower_tractions world", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_follower_tractions(NULL, 0, 1, v3(0, 1, 0), R(0.1), zero,
+                                                 OUT(MpmIdRange)));
+        REFUSED("null: mpm_world_add_follower_tractions ids_out", MPM_STATUS_NULL_POINTER,
+                mpm_world_add_follower_tractions(g_we2, 0, 1, v3(0, 1, 0), R(0.1), zero, NULL));
         REFUSED("null: mpm_world_set_traction_schedule world", MPM_STATUS_NULL_POINTER,
                 mpm_world_set_traction_schedule(NULL, 0, 1, 1));
         REFUSED("null: mpm_world_clear_tractions world", MPM_STATUS_NULL_POINTER,
@@ -473,6 +478,9 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_add_surface_tractions",
                   mpm_world_add_surface_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(0, -1, 0),
                                                   OUT(MpmIdRange)));
+        BAD_WORLD("mpm_world_add_follower_tractions",
+                  mpm_world_add_follower_tractions(w, 0, 1, v3(0, 1, 0), R(0.1), v3(-1, 0, 0),
+                                                   OUT(MpmIdRange)));
         BAD_WORLD("mpm_world_set_traction_schedule", mpm_world_set_traction_schedule(w, 0, 1, 1));
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         BAD_WORLD("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
@@ -1571,6 +1579,9 @@ static void effects_misuse(void) {
     REFUSED("effects: add_surface_tractions without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_surface_tractions(g_w2, 0, 1, v3(0, 1, 0), R(0.1), down,
                                             OUT(MpmIdRange)));
+    REFUSED("effects: add_follower_tractions without tractions", MPM_STATUS_EFFECT_NOT_DECLARED,
+            mpm_world_add_follower_tractions(g_w2, 0, 1, v3(0, 1, 0), R(0.1), down,
+                                             OUT(MpmIdRange)));
     REFUSED("effects: add_tractions without tractions, unknown ids",
             MPM_STATUS_EFFECT_NOT_DECLARED,
             mpm_world_add_tractions(g_w2, 0xFFFFFFFFu, 0xFFFFFFFFu, MPM_FACE_Y_MAX, down,
