@@ -105,7 +105,7 @@ pub enum Error {
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
     /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric.
     InvalidTransfer = 32,
-    /// A traction id at or past the number of tractions ([`crate::World::remove_tractions`]).
+    /// A traction id past the table or removed ([`crate::World::remove_tractions`]).
     UnknownTraction = 33,
     /// A value whose own stable time step would be shorter than
     /// [`MIN_STABLE_DT`](crate::MIN_STABLE_DT) (see [`crate::Resolvable`]): a material's wave
@@ -183,7 +183,7 @@ impl Error {
             Error::InvalidDeformation => {
                 c"deformation gradient, stress or plastic history not finite or out of range (F inverted, volume ratio past max_volume_ratio)"
             }
-            Error::UnknownTraction => c"traction id at or past the number of tractions",
+            Error::UnknownTraction => c"traction id past the table or removed",
             Error::StableStepTooShort => {
                 c"a wave speed, diffusivity or damping rate needs a stable step below 1e-15 s"
             }

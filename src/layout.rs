@@ -347,8 +347,11 @@ impl TractionRecord {
     /// Whether the record is one [`crate::World::add_tractions`] or
     /// [`crate::World::add_surface_tractions`] could have written for a world of `count`
     /// particles in `d` dimensions: finite, a positive area, a unit normal in the plane of the
-    /// first `d` axes.
+    /// first `d` axes, a known frame; or a removed one ([`TractionRecord::REMOVED`]).
     pub fn is_valid(&self, count: usize, d: usize) -> bool {
+        if *self == Self::REMOVED {
+            return true;
+        }
         let finite = self
             .traction
             .iter()
@@ -363,6 +366,28 @@ impl TractionRecord {
             && (norm2 - 1.0).abs() < 1.0e-3
             && !off_plane
             && (self.normal[3] == 0.0 || self.follows())
+    }
+
+    /// A removed traction's record ([`crate::World::remove_tractions`]): its id names no
+    /// load until an adder takes its room; the other ids stay.
+    pub const REMOVED: TractionRecord = TractionRecord {
+        particle: u32::MAX,
+        schedule: 0,
+        traction: [0.0; 4],
+        normal: [0.0; 4],
+    };
+
+    /// Whether the record is [`TractionRecord::REMOVED`]'s id (a removed traction).
+    pub fn is_removed(&self) -> bool {
+        self.particle == u32::MAX
+    }
+
+    /// How long a table of `records` is without the removed ones at its end.
+    pub fn end_of(records: &[TractionRecord]) -> usize {
+        records
+            .iter()
+            .rposition(|r| !r.is_removed())
+            .map_or(0, |last| last + 1)
     }
 
     /// The value of `normal[3]` that marks a load following its face

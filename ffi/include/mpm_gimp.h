@@ -186,7 +186,7 @@ enum MpmStatus
   // needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not
   // axisymmetric.
   MPM_STATUS_INVALID_TRANSFER = 32,
-  // A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
+  // A traction id past the table or removed (`mpm_world_remove_tractions`).
   MPM_STATUS_UNKNOWN_TRACTION = 33,
   // A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`):
   // a material's wave speed `c > cfl h / 1e-15` (`mpm_world_add_material`), its thermal
@@ -1295,7 +1295,7 @@ MpmStatus mpm_world_add_follower_tractions(struct MpmWorld *world,
 // Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
 // table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions
 // follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if
-// the range is not within the table, `MPM_STATUS_INVALID_EFFECT` for a schedule past
+// the range is not within the table or holds a removed id, `MPM_STATUS_INVALID_EFFECT` for a schedule past
 // `MPM_TRACTION_SCHEDULES` (nothing changes).
 //
 // # Safety
@@ -1312,16 +1312,16 @@ MpmStatus mpm_world_set_traction_schedule(struct MpmWorld *world,
 MpmStatus mpm_world_clear_tractions(struct MpmWorld *world);
 
 // Removes the `count` tractions from id `first` (a range `mpm_world_add_tractions` gave, or
-// any part of the table), so that loads applied together can be taken off together; the
-// tractions after them move down by `count`, in their order. Needs
-// `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range is not within
-// the table (nothing is removed).
+// any part of the table), so that loads applied together can be taken off together. Every
+// other id stays the traction it was; the removed ids' room is free for a later adder that
+// fits it. Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range
+// is not within the table or holds an id already removed (nothing is removed).
 //
 // # Safety
 // `world` is NULL or a world.
 MpmStatus mpm_world_remove_tractions(struct MpmWorld *world, uint32_t first, uint32_t count);
 
-// Number of tractions the world holds (0 if it declares none).
+// Number of tractions the world holds, added and not removed (0 if it declares none).
 //
 // # Safety
 // `world` is NULL or a world; `count_out` is NULL or valid.

@@ -314,7 +314,7 @@ pub unsafe extern "C" fn mpm_world_add_follower_tractions(
 /// Makes the `count` tractions from id `first` (a range an adder gave, or any part of the
 /// table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions
 /// follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if
-/// the range is not within the table, `MPM_STATUS_INVALID_EFFECT` for a schedule past
+/// the range is not within the table or holds a removed id, `MPM_STATUS_INVALID_EFFECT` for a schedule past
 /// `MPM_TRACTION_SCHEDULES` (nothing changes).
 ///
 /// # Safety
@@ -378,10 +378,10 @@ pub unsafe extern "C" fn mpm_world_clear_tractions(world: *mut MpmWorld) -> MpmS
 }
 
 /// Removes the `count` tractions from id `first` (a range `mpm_world_add_tractions` gave, or
-/// any part of the table), so that loads applied together can be taken off together; the
-/// tractions after them move down by `count`, in their order. Needs
-/// `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range is not within
-/// the table (nothing is removed).
+/// any part of the table), so that loads applied together can be taken off together. Every
+/// other id stays the traction it was; the removed ids' room is free for a later adder that
+/// fits it. Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range
+/// is not within the table or holds an id already removed (nothing is removed).
 ///
 /// # Safety
 /// `world` is NULL or a world.
@@ -400,7 +400,7 @@ pub unsafe extern "C" fn mpm_world_remove_tractions(
     })
 }
 
-/// Number of tractions the world holds (0 if it declares none).
+/// Number of tractions the world holds, added and not removed (0 if it declares none).
 ///
 /// # Safety
 /// `world` is NULL or a world; `count_out` is NULL or valid.

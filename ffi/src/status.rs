@@ -110,7 +110,7 @@ pub enum MpmStatus {
     /// needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not
     /// axisymmetric.
     InvalidTransfer = 32,
-    /// A traction id at or past the number of tractions (`mpm_world_remove_tractions`).
+    /// A traction id past the table or removed (`mpm_world_remove_tractions`).
     UnknownTraction = 33,
     /// A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`):
     /// a material's wave speed `c > cfl h / 1e-15` (`mpm_world_add_material`), its thermal

@@ -791,7 +791,7 @@ def namespace(name):
             )
 
         def remove_tractions(self, first, count):
-            """Removes tractions `first .. first + count`."""
+            """Removes tractions `first .. first + count`; the other ids stay."""
             self._call("mpm_world_remove_tractions", _u32(first, "first"), _u32(count, "count"))
 
         def clear_tractions(self):

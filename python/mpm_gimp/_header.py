@@ -132,7 +132,7 @@ ENUMS = [('MpmStatus',
     'axisymmetric.'),
    ('UNKNOWN_TRACTION',
     33,
-    'A traction id at or past the number of tractions (`mpm_world_remove_tractions`).'),
+    'A traction id past the table or removed (`mpm_world_remove_tractions`).'),
    ('STABLE_STEP_TOO_SHORT',
     34,
     'A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`): a '
@@ -1166,8 +1166,9 @@ FUNCTIONS = [('mpm_abi_version',
   'Makes the `count` tractions from id `first` (a range an adder gave, or any part of the '
   'table) follow the schedule `schedule` of `MpmEffects::traction_schedules` (new tractions '
   'follow the first). Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if '
-  'the range is not within the table, `MPM_STATUS_INVALID_EFFECT` for a schedule past '
-  '`MPM_TRACTION_SCHEDULES` (nothing changes).  # Safety `world` is NULL or a world.'),
+  'the range is not within the table or holds a removed id, `MPM_STATUS_INVALID_EFFECT` for a '
+  'schedule past `MPM_TRACTION_SCHEDULES` (nothing changes).  # Safety `world` is NULL or a '
+  'world.'),
  ('mpm_world_clear_tractions',
   'MpmStatus',
   [('world', 'MpmWorld*')],
@@ -1177,15 +1178,16 @@ FUNCTIONS = [('mpm_abi_version',
   'MpmStatus',
   [('world', 'MpmWorld*'), ('first', 'uint32_t'), ('count', 'uint32_t')],
   'Removes the `count` tractions from id `first` (a range `mpm_world_add_tractions` gave, or '
-  'any part of the table), so that loads applied together can be taken off together; the '
-  'tractions after them move down by `count`, in their order. Needs '
-  '`MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range is not within '
-  'the table (nothing is removed).  # Safety `world` is NULL or a world.'),
+  'any part of the table), so that loads applied together can be taken off together. Every '
+  "other id stays the traction it was; the removed ids' room is free for a later adder that "
+  'fits it. Needs `MpmEffects::traction_capacity`; `MPM_STATUS_UNKNOWN_TRACTION` if the range '
+  'is not within the table or holds an id already removed (nothing is removed).  # Safety '
+  '`world` is NULL or a world.'),
  ('mpm_world_traction_count',
   'MpmStatus',
   [('world', 'MpmWorld*'), ('count_out', 'size_t*')],
-  'Number of tractions the world holds (0 if it declares none).  # Safety `world` is NULL or a '
-  'world; `count_out` is NULL or valid.'),
+  'Number of tractions the world holds, added and not removed (0 if it declares none).  # '
+  'Safety `world` is NULL or a world; `count_out` is NULL or valid.'),
  ('mpm_world_feedback_alpha',
   'MpmStatus',
   [('world', 'MpmWorld*'), ('alpha_out', 'double*')],

@@ -713,7 +713,7 @@ class InvalidTransferError(MpmError):
     """A transfer that does not go with the shape function or dimension: `MPM_TRANSFER_MLS` needs the quadratic or cubic B-spline, in 2D or 3D; `MPM_TRANSFER_FLIP_MOMENTUM` is not axisymmetric."""
 
 class UnknownTractionError(MpmError):
-    """A traction id at or past the number of tractions (`mpm_world_remove_tractions`)."""
+    """A traction id past the table or removed (`mpm_world_remove_tractions`)."""
 
 class StableStepTooShortError(MpmError):
     """A value whose own stable time step would be shorter than 1e-15 s (`MPM_MIN_STABLE_DT`): a material's wave speed `c > cfl h / 1e-15` (`mpm_world_add_material`), its thermal diffusivity, diffusivity or kinematic viscosity above `cfl h^2 / (2 d 1e-15)` where it acts, the definition's damping rates summed above `cfl / 1e-15` (`mpm_world_init`, `mpm_memory_requirements`), or a per-particle damping rate above half of what that sum leaves (`mpm_world_set_particle_damping`). Nothing was added or set."""

@@ -349,6 +349,9 @@ def test_effects_setters_and_removal(mpm):
     assert np.all(w.particles().velocity == 0)
     w.remove_tractions(0, 2)
     assert w.traction_count() == 4
+    w.set_traction_schedule(4, 2, 1)  # the other ids stay
+    with pytest.raises(mpm.UnknownTractionError):
+        w.remove_tractions(0, 1)
     assert w.remove_particles_in_box((0.3, 0.3), (0.4, 0.5)) > 0
     assert w.remove_particle_list(np.array([0, 1, 1], np.uint32)) == 2
     assert w.remove_inactive_particles() == 0

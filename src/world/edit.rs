@@ -171,8 +171,9 @@ impl World<'_> {
     /// their order and every column of theirs (so the step that follows is the step of a
     /// world built with them alone, to the bit): a particle moves down by the number removed
     /// before it, which is how a host follows its ids. The room they held is free for later
-    /// additions. Tractions on removed particles are removed too (those after them move down,
-    /// as with [`World::remove_tractions`]); the others follow their particle.
+    /// additions. Tractions on removed particles are removed too (as by
+    /// [`World::remove_tractions`]: the other tractions keep their ids); the others follow
+    /// their particle.
     ///
     /// O(n) for n particles: one pass over each particle column. `UnknownParticle` for a
     /// range or an id not in the world, `NonFiniteInput` for a box corner that is not finite,
@@ -261,16 +262,15 @@ impl World<'_> {
             let records: &mut [TractionRecord] = bytemuck::cast_slice_mut(
                 &mut head[start..start + used * size_of::<TractionRecord>()],
             );
-            tractions = 0;
-            for t in 0..used {
-                let mut r = records[t];
+            for r in records.iter_mut().filter(|r| !r.is_removed()) {
                 let s = status[r.particle as usize];
-                if s & 3 != REMOVED {
+                if s & 3 == REMOVED {
+                    *r = TractionRecord::REMOVED;
+                } else {
                     r.particle -= s >> 2;
-                    records[tractions] = r;
-                    tractions += 1;
                 }
             }
+            tractions = TractionRecord::end_of(records);
         }
         let column_bytes = count * size_of::<Real>();
         let d = layout.d;
@@ -427,7 +427,7 @@ impl World<'_> {
         let start = layout.tractions_offset;
         let records: &mut [TractionRecord] =
             bytemuck::cast_slice_mut(&mut head[start..start + used * size_of::<TractionRecord>()]);
-        for r in records {
+        for r in records.iter_mut().filter(|r| !r.is_removed()) {
             r.particle = status[r.particle as usize] >> 2;
         }
         status.iter_mut().for_each(|s| *s &= 3);

@@ -130,7 +130,16 @@ impl World<'_> {
         let n = (particles.end - particles.start) as usize;
         self.particle_range(particles.start, n)?;
         let used = self.header().traction_count as usize;
-        if n > layout.traction_capacity - used {
+        // The first run of `n` removed records, else the table's end.
+        let records = self.read().traction_records();
+        let start = used
+            .checked_sub(n)
+            .filter(|_| n > 0)
+            .and_then(|last| {
+                (0..=last).find(|&s| records[s..s + n].iter().all(TractionRecord::is_removed))
+            })
+            .unwrap_or(used);
+        if start == used && n > layout.traction_capacity - used {
             return Err(Error::TractionCapacityExceeded);
         }
         let in_plane = |v: Vec3, a: usize| if a < d { v[a] } else { 0.0 };
@@ -143,18 +152,19 @@ impl World<'_> {
                 _ => in_plane(normal, a) / length,
             }),
         };
-        let table = self.traction_records_mut(&layout, used, n);
+        let table = self.traction_records_mut(&layout, start, n);
         for (rec, particle) in table.iter_mut().zip(particles) {
             *rec = TractionRecord { particle, ..record };
         }
-        self.header_mut().traction_count += n as u64;
-        Ok(used as u32..(used + n) as u32)
+        let h = self.header_mut();
+        h.traction_count = h.traction_count.max((start + n) as u64);
+        Ok(start as u32..(start + n) as u32)
     }
 
     /// Makes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of the
     /// table) follow the schedule `schedule` of [`crate::Effects::traction_schedules`] (new
     /// tractions follow the first). All or nothing: `UnknownTraction` if the range is not
-    /// within the table, `InvalidEffect` for a schedule past the list (nothing changes);
+    /// within the table or holds a removed id, `InvalidEffect` for a schedule past the list (nothing changes);
     /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
     pub fn set_traction_schedule(&mut self, ids: Range<u32>, schedule: u32) -> Result<(), Error> {
         let (start, end, used) = self.traction_range(ids)?;
@@ -174,32 +184,36 @@ impl World<'_> {
     }
 
     /// Removes the tractions `ids` (a range [`World::add_tractions`] returned, or any part of
-    /// the table), so that loads applied together can be taken off together; the tractions
-    /// after them move down by `ids.len()`, in their order, and their room is free again.
-    /// `UnknownTraction` if the range is not within the table (nothing is removed);
-    /// `EffectNotDeclared` without [`crate::Effects::traction_capacity`].
+    /// the table), so that loads applied together can be taken off together. Every other id
+    /// stays the traction it was; the removed ids' room is free again, for a later adder that
+    /// fits it (or the capacity's end). `UnknownTraction` if the range is not within the
+    /// table or holds an id already removed (nothing is removed); `EffectNotDeclared` without
+    /// [`crate::Effects::traction_capacity`].
     pub fn remove_tractions(&mut self, ids: Range<u32>) -> Result<(), Error> {
         let (start, end, used) = self.traction_range(ids)?;
         let layout = Layout::of(&self.def());
-        self.traction_records_mut(&layout, 0, used)
-            .copy_within(end..used, start);
-        self.header_mut().traction_count = (used - (end - start)) as u64;
+        let records = self.traction_records_mut(&layout, 0, used);
+        records[start..end].fill(TractionRecord::REMOVED);
+        self.header_mut().traction_count = TractionRecord::end_of(records) as u64;
         Ok(())
     }
 
     /// `ids` as indices of the traction table, `(start, end, used)`, if it lies within the
-    /// `used` entries: `EffectNotDeclared` without [`crate::Effects::traction_capacity`],
-    /// else `UnknownTraction`.
+    /// `used` entries and names no removed traction: `EffectNotDeclared` without
+    /// [`crate::Effects::traction_capacity`], else `UnknownTraction`.
     fn traction_range(&self, ids: Range<u32>) -> Result<(usize, usize, usize), Error> {
         if self.def().effects.traction_capacity == 0 {
             return Err(Error::EffectNotDeclared);
         }
-        let used = self.header().traction_count as usize;
+        let records = self.read().traction_records();
         let (start, end) = (ids.start as usize, ids.end as usize);
-        if start > end || end > used {
+        if start > end || end > records.len() {
             return Err(Error::UnknownTraction);
         }
-        Ok((start, end, used))
+        if records[start..end].iter().any(TractionRecord::is_removed) {
+            return Err(Error::UnknownTraction);
+        }
+        Ok((start, end, records.len()))
     }
 }
 

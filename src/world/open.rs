@@ -3,7 +3,7 @@
 //! too, so that a snapshot no call of this API could have written is refused.
 
 use super::{check_buffer, World, WorldRef};
-use crate::layout::{col, ColliderImpulse, ColliderRecord, TractionRecord};
+use crate::layout::{col, ColliderImpulse, ColliderRecord};
 use crate::material::{material_record, material_resolvable, model_of};
 use crate::{Error, Real};
 use core::mem::size_of;
@@ -69,11 +69,7 @@ impl<'a> WorldRef<'a> {
                 return invalid;
             }
         }
-        let trac_start = layout.tractions_offset;
-        let trac_bytes = self.traction_count() * size_of::<TractionRecord>();
-        let tractions: &[TractionRecord] =
-            bytemuck::cast_slice(&self.buf[trac_start..trac_start + trac_bytes]);
-        if !tractions.iter().all(|t| t.is_valid(n, d)) {
+        if !self.traction_records().iter().all(|t| t.is_valid(n, d)) {
             return invalid;
         }
         let colliders = h.collider_count as usize;
@@ -133,7 +129,7 @@ impl<'a> WorldRef<'a> {
 mod tests {
     use super::*;
     use crate::def::WorldDef;
-    use crate::layout::{Header, Layout, MaterialRecord};
+    use crate::layout::{Header, Layout, MaterialRecord, TractionRecord};
     use crate::{HeapBuffer, MaterialDef, Vec3};
 
     /// A world of `def` in `mem` with one block of the default material, 0.4 m to 0.8 m.

@@ -5,7 +5,9 @@
 use super::{Diagnostics, ParticlesView};
 use crate::def::{MaterialDef, ShapeFunction, WorldDef};
 use crate::grid::Geom;
-use crate::layout::{col, ColliderImpulse, ColliderRecord, Header, Layout, MaterialRecord};
+use crate::layout::{
+    col, ColliderImpulse, ColliderRecord, Header, Layout, MaterialRecord, TractionRecord,
+};
 use crate::material::{
     eigenstrain_at, elastic_part, energy_density, explicit_diffusivity, hardens, model_of,
     particle_stress, wave_speed, Deformation,
@@ -480,9 +482,21 @@ impl<'a> WorldRef<'a> {
         self.header().feedback_alpha
     }
 
-    /// Number of tractions added.
+    /// Number of tractions the world holds (added and not removed). Their ids run below
+    /// the table's length, the removed ones' ids among them ([`crate::World::remove_tractions`]).
     pub fn traction_count(&self) -> usize {
-        self.header().traction_count as usize
+        self.traction_records()
+            .iter()
+            .filter(|r| !r.is_removed())
+            .count()
+    }
+
+    /// The traction table's entries in use, removed ones among them.
+    pub(crate) fn traction_records(&self) -> &'a [TractionRecord] {
+        let layout = Layout::of(&self.def());
+        let start = layout.tractions_offset;
+        let bytes = self.header().traction_count as usize * size_of::<TractionRecord>();
+        bytemuck::cast_slice(&self.buf[start..start + bytes])
     }
 
     /// Mass, momentum, centre of mass and energies of the active particles.

@@ -939,6 +939,22 @@ fn tractions_follow_their_schedule_and_come_off_by_group() {
     w.remove_tractions(groups[1].clone()).unwrap();
     assert_eq!(w.traction_count(), 20);
     run(&mut w, &[0, 2]);
+    // The other groups keep their ids; the removed ones name nothing until their room is
+    // taken again, by a group that fits it.
+    let unknown = Err(mpm_gimp::Error::UnknownTraction);
+    assert_eq!(w.remove_tractions(groups[1].clone()), unknown);
+    assert_eq!(w.set_traction_schedule(15..16, 0), unknown);
+    w.set_traction_schedule(groups[2].clone(), 2).unwrap();
+    let t = Vec3::new(1.0, 0.0, 0.0);
+    assert_eq!(w.add_tractions(0..11, Face::XMax, t), Ok(30..41));
+    assert_eq!(w.add_tractions(0..10, Face::XMax, t), Ok(10..20));
+    w.remove_tractions(30..41).unwrap();
+    w.remove_tractions(10..20).unwrap();
+    run(&mut w, &[0, 2]);
+    w.remove_tractions(groups[2].clone()).unwrap();
+    assert_eq!(w.traction_count(), 10);
+    // The table ends after its last traction: the next group takes the ids after group 0.
+    assert_eq!(w.add_tractions(0..5, Face::XMax, t), Ok(10..15));
 }
 
 /// Traction: a bar fixed at x = wall, loaded at its free end by a traction T along x, settles
