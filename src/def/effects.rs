@@ -113,9 +113,8 @@ pub struct Effects {
     /// [`crate::World::set_particle_forces`].
     pub particle_forces: bool,
     /// Most tractions the world holds (0: none). A traction loads one face of one particle's
-    /// domain; its resultant enters `f_iT` (E16) spread with the particle's weights (see
-    /// [`crate::World::add_tractions`] and the traction pass for why not with `N_i` on the
-    /// face).
+    /// domain, integrated over the deformed face into `f_iT` (E15, E16; see
+    /// [`crate::World::add_tractions`]).
     pub traction_capacity: u32,
     /// A uniform body force per unit mass besides gravity, m/s^2, scaled by
     /// `body_force_scale(t)`: added to every node as `m_i b(t)` (E14). Unlike gravity it is

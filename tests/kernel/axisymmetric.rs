@@ -165,8 +165,7 @@ fn pressurised(
 /// uGIMP and cpGIMP: every particle within 0.5 % of exact, the loaded ones included (measured
 /// 0.16 %: the traction is integrated over the faces on the surface, E72; applied at the
 /// outer particles' centres, `l_p` inside the surface, as before, it put 0.6 % on the
-/// interior). Linear: every particle but the loaded outermost cell's within 1 % (measured
-/// 0.8 %; a point family takes the load at the particle, see `effects::forces::tractions`).
+/// interior). Linear: every particle but the loaded outermost cell's within 1 %.
 /// B-splines: their nodes past a wall plane make a uniformly stressed block off by a few
 /// percent next to the z walls and the free surface, as in plane strain (measured here 2.5 %
 /// quadratic, 4 % cubic in the interior), so for them the check is that the axis adds nothing:
@@ -311,22 +310,37 @@ fn radial_heat_mode_decays_at_the_bessel_rate() {
 /// `A = p a^2 / (b^2 - a^2)` and `B = p a^2 b^2 / (b^2 - a^2)`. The traction is integrated over
 /// the bore faces (E72, `dS = r dL` per radian), where the load acts.
 ///
-/// uGIMP and cpGIMP, `a = 48 h`: the innermost particles' `sigma_rr` and `sigma_thetatheta`
-/// within 2 % of `p` of Lamé's at their radius (measured 1.0 to 1.3 %, f32 and f64), every
-/// particle within 3 % (measured 2.6 %). The linear hat
-/// gives each cell one radial strain, so a particle's stress is off by about
-/// `|d sigma / dr| h / 4`, first order in `h`: at the bore (measured, `sigma_rr`) 13 % at
-/// `a = 6 h`, 6.7 % at `12 h`, 3.4 % at `24 h`, 1.0 % at `48 h`. The mean over the innermost
-/// cell's particles is within 1 % at every one of these. Applying the load at the particles'
-/// centres instead (the kernel's former rule) left the bore 28 to 37 % off at all four, the
-/// cell mean 24 to 26 %: an error of the load's placement, which refining does not remove.
-/// The point families (linear, B-splines) still apply the load at the particle (see
-/// `effects::forces::tractions`), and the B-splines carry their own error at a free surface;
-/// they are not held to this bound (measured at `a = 24 h`, bore `sigma_rr`: linear 31 %,
-/// quadratic 100 %, cubic 79 %).
+/// Every family at `a = 48 h`, the innermost particles' `sigma_rr` and `sigma_thetatheta`
+/// against Lamé's at their radius, and every particle's, as fractions of `p` (bounds, then
+/// what was measured, f32):
+///
+/// | family | bore rr | bore thetatheta | any particle |
+/// |---|---|---|---|
+/// | uGIMP, cpGIMP | 2 % (1.0-1.3 %) | 2 % (1.2 %) | 3 % (2.6 %) |
+/// | quadratic B-spline | 6 % (5.0 %) | 2 % (1.4 %) | 7 % (6.4 %) |
+/// | cubic B-spline | 12 % (10.6 %) | 5 % (3.9 %) | 16 % (15.3 %) |
+/// | linear | 10 % (8.7 %) | 5 % (4.4 %) | 10 % (8.7 %) |
+///
+/// The linear hat gives each cell one radial strain, so a particle's stress is off by about
+/// `|d sigma / dr| h / 4`, first order in `h`: uGIMP at the bore (`sigma_rr`) 13 % at `a = 6
+/// h`, 6.7 % at `12 h`, 3.4 % at `24 h`, 1.0 % at `48 h`. The B-splines carry their own error
+/// at a free surface (nodes past it with part of a particle's mass), the radial stress most.
+/// Applying the load at the particles' centres instead (the kernel's former rule for uGIMP)
+/// left the bore 28 to 37 % off at every `h`; spreading the face's resultant with the
+/// particle's own weights (the former rule for the point families) left the quadratic
+/// B-spline's bore `sigma_thetatheta` 36 % off at `a = 48 h` and its `sigma_rr` 82 %.
 #[test]
 fn thick_cylinder_under_bore_pressure_settles_to_lames_stress() {
-    for shape in [ShapeFunction::Gimp, ShapeFunction::CpGimp] {
+    use ShapeFunction::*;
+    // Bounds on the errors at the bore (rr, thetatheta) and anywhere, over p.
+    let families = [
+        (Gimp, [0.02, 0.02], 0.03),
+        (CpGimp, [0.02, 0.02], 0.03),
+        (QuadraticBspline, [0.06, 0.02], 0.07),
+        (CubicBspline, [0.12, 0.05], 0.16),
+        (Linear, [0.10, 0.05], 0.10),
+    ];
+    for (shape, bore_bound, bound) in families {
         let cells_to_bore = 48;
         let h: Real = 0.3 / cells_to_bore as Real;
         let margin = shape.margin_cells();
@@ -352,17 +366,20 @@ fn thick_cylinder_under_bore_pressure_settles_to_lames_stress() {
         };
         let error =
             |k: usize, i: usize| (cauchy(k, i) - exact(k, v.position[0][i] as f64)).abs() / p;
-        for (k, name) in [(0, "rr"), (3, "thetatheta")] {
+        for (k, name, bore_bound) in [(0, "rr", bore_bound[0]), (3, "thetatheta", bore_bound[1])] {
             let at_bore = bore
                 .iter()
                 .map(|&i| error(k, i as usize))
                 .fold(0.0, f64::max);
             let all = (0..v.count).map(|i| error(k, i)).fold(0.0, f64::max);
+            println!(
+                "{shape:?}: sigma_{name} off by {at_bore:.4} p at the bore, {all:.4} p anywhere"
+            );
             assert!(
-                at_bore < 0.02,
+                at_bore < bore_bound,
                 "{shape:?}: sigma_{name} at the bore off by {at_bore} p"
             );
-            assert!(all < 0.03, "{shape:?}: sigma_{name} off by {all} p");
+            assert!(all < bound, "{shape:?}: sigma_{name} off by {all} p");
         }
     }
 }

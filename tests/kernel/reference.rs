@@ -1191,8 +1191,8 @@ fn for_each_fixed_image(
 /// `(-N_y, N_x)` or a square along two unit tangents, moved by `F`; two Gauss points per side,
 /// each standing for the deformed area `|F t| A / 2` (2D) or `|F t1 x F t2| A / 4` (3D), times
 /// its radius axisymmetric. uGIMP and cpGIMP: `f_i += N_i(x_q) T dS_q` with the grid's linear
-/// hat, the point kept within the particle's domain; the point families:
-/// `f_i += S_ip sum_q T dS_q`.
+/// hat, the point kept within the particle's domain; the point families: the family's own
+/// weight at the point on the particle's nodes, per axis scaled to add up to 1.
 fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
     let d = m.d;
     for &Traction {
@@ -1288,10 +1288,40 @@ fn tractions(m: &Method, ps: &[Particle], grid: &mut [Node]) {
                 }
             }
         } else {
-            let total: f64 = points.iter().map(|&(_, w)| w).sum();
-            for &(node, s, _, _) in &stencil(m, &p.x, &p.lp).nodes {
-                for a in 0..d {
-                    grid[node].f[a] += s * total * t[a] * scale;
+            for (x, w) in points {
+                // Per axis, the particle's own nodes (its weight not zero) and the family's
+                // weight at the point on them, scaled to add up to 1.
+                let per_axis: Vec<Vec<(usize, f64)>> = (0..d)
+                    .map(|a| {
+                        let at = |i: usize| m.origin[a] + i as f64 * m.h;
+                        let s = ((p.x[a] - m.origin[a]) / m.h).floor() as i64;
+                        let own: Vec<usize> = ((s - 2).max(0) as usize..=((s + 3) as usize))
+                            .filter(|&i| i < m.nodes[a])
+                            .filter(|&i| weight_1d(m, p.x[a] - at(i), p.lp[a]).0 != 0.0)
+                            .collect();
+                        let ws: Vec<f64> = own
+                            .iter()
+                            .map(|&i| weight_1d(m, x[a] - at(i), p.lp[a]).0)
+                            .collect();
+                        let sum: f64 = ws.iter().sum();
+                        let scaled = ws.iter().map(|&v| if sum > 0.0 { v / sum } else { 0.0 });
+                        own.iter().copied().zip(scaled).collect()
+                    })
+                    .collect();
+                let z = if d == 3 {
+                    per_axis[2].clone()
+                } else {
+                    vec![(0, 1.0)]
+                };
+                for &(k, wz) in &z {
+                    for &(j, wy) in &per_axis[1] {
+                        for &(i, wx) in &per_axis[0] {
+                            let node = i + m.nodes[0] * (j + m.nodes[1] * k);
+                            for a in 0..d {
+                                grid[node].f[a] += wx * wy * wz * w * t[a] * scale;
+                            }
+                        }
+                    }
                 }
             }
         }
