@@ -25,8 +25,6 @@ use core::ops::Range;
 /// has that world's chunks and blocks, and a node all of whose particles it holds gets that
 /// world's sums, bit for bit.
 pub const REACH_GROUP: usize = 256;
-// Whole groups keep chunks whole: a multiple of every chunk width.
-const _: () = assert!(REACH_GROUP.is_multiple_of(crate::layout::CHUNK));
 
 /// The parallel step's items per worker ([`crate::layout::Layout::scratch_slots`]): the particle passes cut
 /// their chunks into this many ranges per worker (so that a slow range does not hold the
