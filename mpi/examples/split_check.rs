@@ -11,8 +11,10 @@
 //!
 //! Options: `--case NAME` (every case unless given; `--list` names them), `--substeps M`
 //! (40), `--halo H` (cell lines: thinner than the definition's must give a difference, so
-//! `--halo 1 --expect-difference` checks that the comparison can fail), `--cost` (times the
-//! split step and prints the halo's bytes and messages per substep; no comparison).
+//! `--halo 1 --expect-difference` checks that the comparison can fail), `--scale S` (the
+//! block S times as long along the split axis), `--cost` (times the split step and prints
+//! the halo's bytes and messages per substep; no comparison), `--threads N` (times the scene
+//! as one world on N threads instead, on rank 0).
 
 use mpi::traits::*;
 use mpm_gimp::{
@@ -98,7 +100,13 @@ const CASES: &[Case] = &[
 /// another, so that consecutive particles (the groups a rank holds whole) lie near each other
 /// along it.
 fn scene<'b>(case: &Case, scale: u32, storage: &'b mut HeapBuffer) -> World<'b> {
+    scene_on(case, scale, 1, storage)
+}
+
+/// [`scene`] for `workers` workers.
+fn scene_on<'b>(case: &Case, scale: u32, workers: u32, storage: &'b mut HeapBuffer) -> World<'b> {
     let mut def = WorldDef::DEFAULT;
+    def.workers = workers;
     let h: Real = 0.01;
     def.cell_size = h;
     def.shape = case.shape;
@@ -179,7 +187,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let (mut only, mut substeps, mut halo, mut expect_difference, mut cost) =
         (None, 40u32, None, false, false);
-    let mut scale = 1u32;
+    let (mut scale, mut threads) = (1u32, 0u32);
     while let Some(a) = args.next() {
         let mut value = || args.next().unwrap_or_else(|| usage(&a));
         match a.as_str() {
@@ -187,6 +195,7 @@ fn main() {
             "--substeps" => substeps = value().parse().unwrap_or_else(|_| usage(&a)),
             "--halo" => halo = Some(value().parse().unwrap_or_else(|_| usage(&a))),
             "--scale" => scale = value().parse().unwrap_or_else(|_| usage(&a)),
+            "--threads" => threads = value().parse().unwrap_or_else(|_| usage(&a)),
             "--expect-difference" => expect_difference = true,
             "--cost" => cost = true,
             "--list" => {
@@ -207,6 +216,12 @@ fn main() {
     }
     let mut failed = false;
     for case in cases {
+        if threads > 0 {
+            if rank == 0 {
+                one_world_cost(case, scale, threads, substeps);
+            }
+            continue;
+        }
         let mut storage = HeapBuffer::new(0);
         let scene_world = scene(case, scale, &mut storage);
         let split = match halo {
@@ -365,10 +380,34 @@ fn scene_at_start_x(case: &Case, scale: u32, i: usize) -> Real {
     })
 }
 
+/// Times `substeps` substeps of `case`'s scene alone on `threads` workers (a rayon pool,
+/// `World::step_with_tasks`), each at the stable step, and prints the mean.
+fn one_world_cost(case: &Case, scale: u32, threads: u32, substeps: u32) {
+    let mut storage = HeapBuffer::new(0);
+    let mut world = scene_on(case, scale, threads, &mut storage);
+    let tasks = mpm_gimp_rayon::RayonTasks::new(threads as usize).expect("a rayon pool");
+    let mut seconds = 0.0;
+    for _ in 0..substeps {
+        let dt = world.stable_dt();
+        let start = Instant::now();
+        tasks
+            .install(|| world.step_with_tasks(dt, &tasks))
+            .expect("the scene steps");
+        seconds += start.elapsed().as_secs_f64();
+    }
+    println!(
+        "{}: {} particles, one world on {threads} threads: {:.3} ms per substep",
+        case.name,
+        world.particle_count(),
+        seconds * 1e3 / substeps as f64
+    );
+}
+
 fn usage(flag: &str) -> ! {
     eprintln!(
         "split_check: bad or incomplete option {flag}\nusage: split_check [--case NAME] \
-         [--substeps M] [--halo H] [--expect-difference] [--scale S] [--cost] [--list]"
+         [--substeps M] [--halo H] [--expect-difference] [--scale S] [--cost] [--threads N] \
+         [--list]"
     );
     std::process::exit(2);
 }
