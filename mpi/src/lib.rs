@@ -689,8 +689,11 @@ impl Split {
     }
 
     /// After a step: the groups each rank now needs (from the owners' positions), the owned
-    /// states sent to every rank that holds their groups, each rank's list rebuilt from what
-    /// it receives. Returns the bytes and messages this rank sent to others.
+    /// states sent to every rank that holds their groups. A rank that holds the same groups
+    /// as before keeps its own particles as stepped and overwrites its ghosts in place, run
+    /// by run ([`World::set_particle_state`]); one whose groups changed (migration) rebuilds
+    /// its list, in id order, from what it receives, its own particles included. Returns the
+    /// bytes and messages this rank sent to others.
     fn exchange(&mut self) -> Result<(u64, u32), SplitError> {
         let groups = self.groups();
         let axis = self.axis;
@@ -710,17 +713,23 @@ impl Split {
             .all_reduce_into(&hi[..], &mut ghi[..], SystemOperation::max());
         // A group no rank owns a particle of means an owner lost track of it.
         let owned_all = glo.iter().zip(&ghi).all(|(l, h)| l <= h);
+        let needs = |r: usize, g: usize| owned_all && self.needs(r, glo[g], ghi[g]);
+        let held: Vec<u32> = (0..self.total as u32)
+            .filter(|&i| needs(self.rank, i as usize / REACH_GROUP))
+            .collect();
+        // The same groups as before: this rank's own particles stay as stepped.
+        let in_place = held == self.ids;
         let mut send = Vec::new();
         let mut counts = vec![0 as Count; self.size];
         for (r, count) in counts.iter_mut().enumerate() {
+            if r == self.rank && in_place {
+                continue;
+            }
             let to: Vec<u32> = self
                 .owned
                 .iter()
                 .copied()
-                .filter(|&i| {
-                    let g = self.ids[i as usize] as usize / REACH_GROUP;
-                    self.needs(r, glo[g], ghi[g])
-                })
+                .filter(|&i| needs(r, self.ids[i as usize] as usize / REACH_GROUP))
                 .collect();
             let bytes = self.encode(&to);
             *count = bytes.len() as Count;
@@ -728,7 +737,11 @@ impl Split {
         }
         let mut rcounts = vec![0 as Count; self.size];
         self.comm.all_to_all_into(&counts[..], &mut rcounts[..]);
-        let mut recv = vec![0u8; rcounts.iter().map(|&c| c as usize).sum()];
+        let received: usize = rcounts.iter().map(|&c| c as usize).sum();
+        // Buffers of one byte at least: Open MPI refuses two empty ones (the same dangling
+        // address for sending and receiving reads as an exchange in place).
+        send.push(0);
+        let mut recv = vec![0u8; received + 1];
         {
             let sdispls = displacements(&counts);
             let rdispls = displacements(&rcounts);
@@ -736,13 +749,18 @@ impl Split {
             let mut rpart = PartitionMut::new(&mut recv[..], &rcounts[..], &rdispls[..]);
             self.comm.all_to_all_varcount_into(&part, &mut rpart);
         }
-        let held: Vec<u32> = (0..self.total as u32)
-            .filter(|&i| {
-                let g = i as usize / REACH_GROUP;
-                owned_all && self.needs(self.rank, glo[g], ghi[g])
-            })
-            .collect();
-        let decoded = self.decode(&recv, &held);
+        // What this rank must receive: every particle it holds, or only its ghosts.
+        let (expect, local): (Vec<u32>, Vec<u32>) = if in_place {
+            let mut own = vec![false; held.len()];
+            self.owned.iter().for_each(|&i| own[i as usize] = true);
+            (0..held.len() as u32)
+                .filter(|&i| !own[i as usize])
+                .map(|i| (held[i as usize], i))
+                .unzip()
+        } else {
+            (held.clone(), (0..held.len() as u32).collect())
+        };
+        let decoded = self.decode(&recv[..received], &expect);
         if !self.agree(owned_all && decoded.is_ok()) {
             return Err(match decoded {
                 Err(e) => e,
@@ -753,15 +771,31 @@ impl Split {
             });
         }
         let (reals, material, status) = decoded?;
-        let state = state_of(held.len(), &reals, &material, &status);
+        let state = state_of(expect.len(), &reals, &material, &status);
         let mut w = self.world();
-        let n = w.particle_count() as u32;
-        w.remove_particles(Removal::Range(0..n))?;
-        let added = w.add_particles_with_state(&state);
-        if !self.agree(added.is_ok()) {
-            added?;
+        let written = if in_place {
+            // Runs of consecutive local indices, each set as one.
+            let mut result = Ok(());
+            let mut k = 0;
+            while k < local.len() && result.is_ok() {
+                let mut end = k + 1;
+                while end < local.len() && local[end] == local[end - 1] + 1 {
+                    end += 1;
+                }
+                let rows = state.rows(k..end).expect("the run lies within the state");
+                result = w.set_particle_state(local[k], &rows);
+                k = end;
+            }
+            result
+        } else {
+            let n = w.particle_count() as u32;
+            w.remove_particles(Removal::Range(0..n))
+                .and_then(|_| w.add_particles_with_state(&state).map(drop))
+        };
+        if !self.agree(written.is_ok()) {
+            written?;
             return Err(SplitError::Message(
-                "another rank could not add what it received".into(),
+                "another rank could not write what it received".into(),
             ));
         }
         self.ids = held;
