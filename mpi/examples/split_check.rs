@@ -14,14 +14,15 @@
 //! `--halo 1 --expect-difference` checks that the comparison can fail), `--scale S` (the
 //! block S times as long along the split axis), `--cost` (times the split step and prints
 //! the halo's bytes and messages per substep; no comparison), `--threads N` (times the scene
-//! as one world on N threads instead, on rank 0).
+//! as one world on N threads instead, on rank 0), `--check-errors` (bad input: the same
+//! clear error on every rank).
 
 use mpi::traits::*;
 use mpm_gimp::{
     memory_requirements, Boundary, Dimension, Face, HeapBuffer, MaterialDef, MaterialModel, Real,
     ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
 };
-use mpm_gimp_mpi::{real_columns, Split};
+use mpm_gimp_mpi::{real_columns, Split, SplitError};
 use std::time::Instant;
 
 /// A scene of the check: its definition and what fills it.
@@ -100,11 +101,17 @@ const CASES: &[Case] = &[
 /// another, so that consecutive particles (the groups a rank holds whole) lie near each other
 /// along it.
 fn scene<'b>(case: &Case, scale: u32, storage: &'b mut HeapBuffer) -> World<'b> {
-    scene_on(case, scale, 1, storage)
+    scene_on(case, scale, 1, storage, |_| ())
 }
 
 /// [`scene`] for `workers` workers.
-fn scene_on<'b>(case: &Case, scale: u32, workers: u32, storage: &'b mut HeapBuffer) -> World<'b> {
+fn scene_on<'b>(
+    case: &Case,
+    scale: u32,
+    workers: u32,
+    storage: &'b mut HeapBuffer,
+    tweak: impl Fn(&mut WorldDef),
+) -> World<'b> {
     let mut def = WorldDef::DEFAULT;
     def.workers = workers;
     let h: Real = 0.01;
@@ -126,6 +133,7 @@ fn scene_on<'b>(case: &Case, scale: u32, workers: u32, storage: &'b mut HeapBuff
     };
     def.cells = core::array::from_fn(|a| if a < dims { block[a] + room[a] } else { 1 });
     def.particle_capacity = (block.iter().product::<u32>() * 8 + 64).next_multiple_of(1024);
+    tweak(&mut def);
     *storage = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
     let mut world = World::init(&def, storage.as_mut_bytes()).expect("buffer fits");
     let material = world
@@ -198,6 +206,10 @@ fn main() {
             "--threads" => threads = value().parse().unwrap_or_else(|_| usage(&a)),
             "--expect-difference" => expect_difference = true,
             "--cost" => cost = true,
+            "--check-errors" => {
+                check_errors(&comm);
+                return;
+            }
             "--list" => {
                 if rank == 0 {
                     CASES.iter().for_each(|c| println!("{}", c.name));
@@ -380,11 +392,58 @@ fn scene_at_start_x(case: &Case, scale: u32, i: usize) -> Real {
     })
 }
 
+/// Checks that bad input gives the same clear error on every rank: more ranks than cell
+/// lines (a 2D scene split along z, which has none), a scene with colliders, a step above the
+/// stable one. Exits nonzero on this rank where its error is not the one expected.
+fn check_errors(comm: &mpi::topology::SimpleCommunicator) {
+    let rank = comm.rank();
+    let case = &CASES[0];
+    let mut failed = false;
+    let mut expect =
+        |what: &str, got: Result<(), SplitError>, ok: fn(&SplitError) -> bool| match got {
+            Err(e) if ok(&e) => {
+                if rank == 0 {
+                    println!("bad input, {what}: {e}");
+                }
+            }
+            other => {
+                eprintln!("rank {rank}: bad input, {what}: {other:?}");
+                failed = true;
+            }
+        };
+    let mut storage = HeapBuffer::new(0);
+    let world = scene(case, 1, &mut storage);
+    let too_many = Split::new(comm.duplicate(), &world, 2).map(drop);
+    expect("ranks past the lines", too_many, |e| {
+        matches!(e, SplitError::RanksDoNotFit { lines: 0, .. })
+    });
+    let mut storage = HeapBuffer::new(0);
+    let world = scene_on(case, 1, 1, &mut storage, |d| {
+        d.effects.collider_capacity = 1
+    });
+    let colliders = Split::new(comm.duplicate(), &world, 0).map(drop);
+    expect("colliders", colliders, |e| {
+        matches!(e, SplitError::Unsupported(_))
+    });
+    let mut storage = HeapBuffer::new(0);
+    let world = scene(case, 1, &mut storage);
+    let mut split = Split::new(comm.duplicate(), &world, 0).expect("the scene splits");
+    let dt = split.stable_dt() * 2.0;
+    expect(
+        "a step above the stable one",
+        split.step(dt).map(drop),
+        |e| matches!(e, SplitError::TimeStepAboveStable { .. }),
+    );
+    if failed {
+        std::process::exit(1);
+    }
+}
+
 /// Times `substeps` substeps of `case`'s scene alone on `threads` workers (a rayon pool,
 /// `World::step_with_tasks`), each at the stable step, and prints the mean.
 fn one_world_cost(case: &Case, scale: u32, threads: u32, substeps: u32) {
     let mut storage = HeapBuffer::new(0);
-    let mut world = scene_on(case, scale, threads, &mut storage);
+    let mut world = scene_on(case, scale, threads, &mut storage, |_| ());
     let tasks = mpm_gimp_rayon::RayonTasks::new(threads as usize).expect("a rayon pool");
     let mut seconds = 0.0;
     for _ in 0..substeps {
@@ -407,7 +466,7 @@ fn usage(flag: &str) -> ! {
     eprintln!(
         "split_check: bad or incomplete option {flag}\nusage: split_check [--case NAME] \
          [--substeps M] [--halo H] [--expect-difference] [--scale S] [--cost] [--threads N] \
-         [--list]"
+         [--check-errors] [--list]"
     );
     std::process::exit(2);
 }

@@ -79,7 +79,9 @@ impl fmt::Display for SplitError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SplitError::Kernel(e) => write!(f, "the kernel refused a call: {e:?}"),
-            SplitError::Unsupported(what) => write!(f, "not supported split over ranks: {what}"),
+            SplitError::Unsupported(what) => {
+                write!(f, "a split over ranks does not support {what}")
+            }
             SplitError::RanksDoNotFit { ranks, lines } => write!(
                 f,
                 "{ranks} ranks do not fit {lines} cell lines along the split axis"
@@ -550,7 +552,7 @@ impl Split {
             root.gather_varcount_into_root(&send[..], &mut part);
         }
         let all: Vec<u32> = (0..self.total as u32).collect();
-        let (reals, material, status) = self.decode(&recv, &all)?;
+        let (reals, material, status) = decode(&self.present, &recv, &all)?;
         Ok(Some(Gathered {
             count: self.total,
             reals,
@@ -617,9 +619,9 @@ impl Split {
         Ok(())
     }
 
-    /// Bytes of one particle's record: id, the Real columns kept, material, status.
+    /// Bytes of one particle's record.
     fn record_bytes(&self) -> usize {
-        4 + self.present.len() * size_of::<Real>() + 8
+        record_bytes(&self.present)
     }
 
     /// The records of the local particles `local` (ascending).
@@ -640,52 +642,6 @@ impl Split {
             out.extend_from_slice(&view.status[i].to_ne_bytes());
         }
         out
-    }
-
-    /// The columns of the records in `bytes`, in id order, which must be exactly `expect`.
-    #[allow(clippy::type_complexity)]
-    fn decode(
-        &self,
-        bytes: &[u8],
-        expect: &[u32],
-    ) -> Result<(Vec<Vec<Real>>, Vec<u32>, Vec<u32>), SplitError> {
-        let rb = self.record_bytes();
-        if bytes.len() != expect.len() * rb {
-            return Err(SplitError::Message(format!(
-                "{} bytes received, {} expected ({} particles of {} bytes)",
-                bytes.len(),
-                expect.len() * rb,
-                expect.len(),
-                rb
-            )));
-        }
-        let u32_at = |at: usize| u32::from_ne_bytes(bytes[at..at + 4].try_into().unwrap());
-        let mut order: Vec<(u32, usize)> = (0..expect.len())
-            .map(|k| (u32_at(k * rb), k * rb))
-            .collect();
-        order.sort_unstable();
-        if order.iter().map(|&(id, _)| id).ne(expect.iter().copied()) {
-            return Err(SplitError::Message(
-                "the particle ids received are not the groups this rank holds".into(),
-            ));
-        }
-        let n = expect.len();
-        let mut reals = vec![Vec::new(); REAL_COLUMNS];
-        for &k in &self.present {
-            reals[k] = Vec::with_capacity(n);
-        }
-        let (mut material, mut status) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        const R: usize = size_of::<Real>();
-        for &(_, at) in &order {
-            let mut p = at + 4;
-            for &k in &self.present {
-                reals[k].push(Real::from_ne_bytes(bytes[p..p + R].try_into().unwrap()));
-                p += R;
-            }
-            material.push(u32_at(p));
-            status.push(u32_at(p + 4));
-        }
-        Ok((reals, material, status))
     }
 
     /// After a step: the groups each rank now needs (from the owners' positions), the owned
@@ -760,7 +716,7 @@ impl Split {
         } else {
             (held.clone(), (0..held.len() as u32).collect())
         };
-        let decoded = self.decode(&recv[..received], &expect);
+        let decoded = decode(&self.present, &recv[..received], &expect);
         if !self.agree(owned_all && decoded.is_ok()) {
             return Err(match decoded {
                 Err(e) => e,
@@ -810,6 +766,59 @@ impl Split {
     }
 }
 
+/// Bytes of one particle's record of the Real columns `present`: id, those columns, material,
+/// status.
+fn record_bytes(present: &[usize]) -> usize {
+    4 + present.len() * size_of::<Real>() + 8
+}
+
+/// The columns of the records in `bytes` (of the Real columns `present`), in id order: a
+/// [`SplitError::Message`] unless they are exactly the particles `expect` (ascending).
+#[allow(clippy::type_complexity)]
+fn decode(
+    present: &[usize],
+    bytes: &[u8],
+    expect: &[u32],
+) -> Result<(Vec<Vec<Real>>, Vec<u32>, Vec<u32>), SplitError> {
+    let rb = record_bytes(present);
+    if bytes.len() != expect.len() * rb {
+        return Err(SplitError::Message(format!(
+            "{} bytes received, {} expected ({} particles of {} bytes)",
+            bytes.len(),
+            expect.len() * rb,
+            expect.len(),
+            rb
+        )));
+    }
+    let u32_at = |at: usize| u32::from_ne_bytes(bytes[at..at + 4].try_into().unwrap());
+    let mut order: Vec<(u32, usize)> = (0..expect.len())
+        .map(|k| (u32_at(k * rb), k * rb))
+        .collect();
+    order.sort_unstable();
+    if order.iter().map(|&(id, _)| id).ne(expect.iter().copied()) {
+        return Err(SplitError::Message(
+            "the particle ids received are not the groups this rank holds".into(),
+        ));
+    }
+    let n = expect.len();
+    let mut reals = vec![Vec::new(); REAL_COLUMNS];
+    for &k in present {
+        reals[k] = Vec::with_capacity(n);
+    }
+    let (mut material, mut status) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    const R: usize = size_of::<Real>();
+    for &(_, at) in &order {
+        let mut p = at + 4;
+        for &k in present {
+            reals[k].push(Real::from_ne_bytes(bytes[p..p + R].try_into().unwrap()));
+            p += R;
+        }
+        material.push(u32_at(p));
+        status.push(u32_at(p + 4));
+    }
+    Ok((reals, material, status))
+}
+
 /// The offsets of consecutive blocks of `counts` bytes.
 fn displacements(counts: &[Count]) -> Vec<Count> {
     counts
@@ -836,6 +845,45 @@ mod tests {
         // Every particle on one line: the other ranks still get a line each.
         assert_eq!(cut_slabs(&[5; 40], 10, 3), vec![0, 5, 6, 10]);
         assert_eq!(cut_slabs(&[0; 4], 3, 3), vec![0, 1, 2, 3]);
+    }
+
+    /// Records of particles `ids` with Real columns 0 and 9 (value: the id), material 1,
+    /// status 0.
+    fn records(ids: &[u32]) -> Vec<u8> {
+        let mut out = Vec::new();
+        for &id in ids {
+            out.extend_from_slice(&id.to_ne_bytes());
+            for _ in 0..2 {
+                out.extend_from_slice(&(id as Real).to_ne_bytes());
+            }
+            out.extend_from_slice(&1u32.to_ne_bytes());
+            out.extend_from_slice(&0u32.to_ne_bytes());
+        }
+        out
+    }
+
+    #[test]
+    fn decode_sorts_by_id_and_refuses_a_wrong_message() {
+        let present = [0, 9];
+        let (reals, material, status) = decode(&present, &records(&[7, 5, 6]), &[5, 6, 7]).unwrap();
+        assert_eq!(reals[0], vec![5.0, 6.0, 7.0]);
+        assert_eq!(reals[9], vec![5.0, 6.0, 7.0]);
+        assert!(reals[1].is_empty());
+        assert_eq!((material, status), (vec![1; 3], vec![0; 3]));
+        // A byte short, a particle missing, one repeated, one not expected.
+        let mut short = records(&[5, 6, 7]);
+        short.pop();
+        for (bytes, expect) in [
+            (short, &[5u32, 6, 7][..]),
+            (records(&[5, 6]), &[5, 6, 7][..]),
+            (records(&[5, 5, 7]), &[5, 6, 7][..]),
+            (records(&[5, 6, 8]), &[5, 6, 7][..]),
+        ] {
+            assert!(matches!(
+                decode(&present, &bytes, expect),
+                Err(SplitError::Message(_))
+            ));
+        }
     }
 
     #[test]
