@@ -19,9 +19,13 @@
 //! **Each substep** ([`Split::step`]): every rank steps its world by the same `dt` (at most
 //! the scene's stable step, the minimum over ranks: exact); then each owner sends the whole
 //! state of its particles (every column, history, stress, low part of the position, status)
-//! to every rank that holds their groups, and each rank rebuilds its list from what it
-//! receives, in id order: ghosts take their owner's state, particles that crossed a slab
-//! boundary migrate, groups a rank no longer needs leave it. Ids stay the scene's.
+//! to every other rank that holds their groups. A rank whose groups stay overwrites its
+//! ghosts in place; one whose groups changed rebuilds its list in id order from what it
+//! receives, its own particles included: particles that crossed a slab boundary migrate,
+//! groups it no longer needs leave it. Ownership follows the positions after each substep;
+//! ids stay the scene's. The
+//! report ([`SplitReport`]) counts the owned particles that froze or escaped, summed over
+//! the ranks (integers: exact); walls' stops and runaways are not counted yet.
 //!
 //! **Not supported** (refused by [`Split::new`] with [`SplitError::Unsupported`]):
 //! colliders (their force and torque are float sums across ranks), tractions, damping (the
