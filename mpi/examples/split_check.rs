@@ -249,7 +249,7 @@ fn main() {
         };
         // The scene alone, on rank 0: the reference.
         let mut reference = (rank == 0).then_some(scene_world);
-        let (mut bytes, mut messages, mut seconds) = (0u64, 0u64, 0.0f64);
+        let (mut bytes, mut messages, mut rebuilt, mut seconds) = (0u64, 0u64, 0u64, 0.0f64);
         let mut report_differs = false;
         for _ in 0..substeps {
             let dt = split.stable_dt();
@@ -263,6 +263,7 @@ fn main() {
             seconds += start.elapsed().as_secs_f64();
             bytes += report.bytes_sent;
             messages += report.messages_sent as u64;
+            rebuilt += report.rebuilt as u64;
             if let Some(world) = reference.as_mut().filter(|_| !cost) {
                 report_differs |= world.stable_dt().to_bits() != dt.to_bits();
                 let one = world.step(dt).expect("the scene steps");
@@ -271,9 +272,9 @@ fn main() {
                     || one.escaped != report.escaped;
             }
         }
-        let mut sums = [0u64; 2];
+        let mut sums = [0u64; 3];
         comm.all_reduce_into(
-            &[bytes, messages][..],
+            &[bytes, messages, rebuilt][..],
             &mut sums[..],
             mpi::collective::SystemOperation::sum(),
         );
@@ -283,12 +284,15 @@ fn main() {
                 let ranks = comm.size();
                 println!(
                     "{}: {n} particles, {ranks} ranks, halo {} lines: {:.3} ms per substep, \
-                     {:.0} halo bytes and {:.1} messages per substep (all ranks)",
+                     {:.0} halo bytes and {:.1} messages per substep (all ranks), {} of {} \
+                     rank-substeps rebuilt",
                     case.name,
                     split.halo(),
                     seconds * 1e3 / substeps as f64,
                     sums[0] as f64 / substeps as f64,
                     sums[1] as f64 / substeps as f64,
+                    sums[2],
+                    substeps as usize * ranks as usize,
                 );
             }
             continue;

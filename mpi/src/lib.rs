@@ -119,6 +119,9 @@ pub struct SplitReport {
     pub bytes_sent: u64,
     /// Messages (non-empty sends) this rank sent to other ranks.
     pub messages_sent: u32,
+    /// Whether this rank's groups changed, so that it rebuilt its list (else it overwrote
+    /// its ghosts in place).
+    pub rebuilt: bool,
 }
 
 /// The particle columns of the whole scene gathered on rank 0, in id order.
@@ -527,12 +530,13 @@ impl Split {
             &mut counts[..],
             SystemOperation::sum(),
         );
-        let (bytes_sent, messages_sent) = self.exchange()?;
+        let (bytes_sent, messages_sent, rebuilt) = self.exchange()?;
         Ok(SplitReport {
             frozen: counts[0],
             escaped: counts[1],
             bytes_sent,
             messages_sent,
+            rebuilt,
         })
     }
 
@@ -653,8 +657,8 @@ impl Split {
     /// as before keeps its own particles as stepped and overwrites its ghosts in place, run
     /// by run ([`World::set_particle_state`]); one whose groups changed (migration) rebuilds
     /// its list, in id order, from what it receives, its own particles included. Returns the
-    /// bytes and messages this rank sent to others.
-    fn exchange(&mut self) -> Result<(u64, u32), SplitError> {
+    /// bytes and messages this rank sent to others, and whether it rebuilt.
+    fn exchange(&mut self) -> Result<(u64, u32, bool), SplitError> {
         let groups = self.groups();
         let axis = self.axis;
         let view = self.view();
@@ -766,7 +770,7 @@ impl Split {
             .enumerate()
             .filter(|&(r, &c)| r != self.rank && c > 0);
         let (bytes, messages) = others.fold((0u64, 0u32), |(b, m), (_, &c)| (b + c as u64, m + 1));
-        Ok((bytes, messages))
+        Ok((bytes, messages, !in_place))
     }
 }
 
