@@ -14,8 +14,9 @@
 //! `--halo 1 --expect-difference` checks that the comparison can fail), `--scale S` (the
 //! block S times as long along the split axis), `--cost` (times the split step and prints
 //! the halo's bytes and messages per substep; no comparison), `--threads N` (times the scene
-//! as one world on N threads instead, on rank 0), `--check-errors` (bad input: the same
-//! clear error on every rank).
+//! as one world on N threads instead, on rank 0), `--workers N` (each rank steps on a pool of
+//! N threads; the reference steps on one), `--check-errors` (bad input: the same clear error
+//! on every rank).
 
 use mpi::traits::*;
 use mpm_gimp::{
@@ -195,7 +196,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let (mut only, mut substeps, mut halo, mut expect_difference, mut cost) =
         (None, 40u32, None, false, false);
-    let (mut scale, mut threads) = (1u32, 0u32);
+    let (mut scale, mut threads, mut workers) = (1u32, 0u32, 1u32);
     while let Some(a) = args.next() {
         let mut value = || args.next().unwrap_or_else(|| usage(&a));
         match a.as_str() {
@@ -204,6 +205,7 @@ fn main() {
             "--halo" => halo = Some(value().parse().unwrap_or_else(|_| usage(&a))),
             "--scale" => scale = value().parse().unwrap_or_else(|_| usage(&a)),
             "--threads" => threads = value().parse().unwrap_or_else(|_| usage(&a)),
+            "--workers" => workers = value().parse().unwrap_or_else(|_| usage(&a)),
             "--expect-difference" => expect_difference = true,
             "--cost" => cost = true,
             "--check-errors" => {
@@ -235,7 +237,9 @@ fn main() {
             continue;
         }
         let mut storage = HeapBuffer::new(0);
-        let scene_world = scene(case, scale, &mut storage);
+        let scene_world = scene_on(case, scale, workers, &mut storage, |_| ());
+        // Each rank's world on a pool of `workers` threads (the reference steps serially).
+        let tasks = mpm_gimp_rayon::RayonTasks::new(workers as usize).expect("a rayon pool");
         let split = match halo {
             Some(h) => Split::with_halo(comm.duplicate(), &scene_world, case.axis, h),
             None => Split::new(comm.duplicate(), &scene_world, case.axis),
@@ -255,7 +259,7 @@ fn main() {
             let dt = split.stable_dt();
             comm.barrier();
             let start = Instant::now();
-            let report = split.step(dt).unwrap_or_else(|e| {
+            let report = split.step_with_tasks(dt, &tasks).unwrap_or_else(|e| {
                 eprintln!("rank {rank}: {}: {e}", case.name);
                 std::process::exit(2);
             });
@@ -335,8 +339,8 @@ fn main() {
                 })
                 .count();
             println!(
-                "{}: {} ranks, {} particles, {} substeps, halo {} lines, slabs {:?}, \
-                 {} particles changed owner: {}",
+                "{}: {} ranks x {workers} workers, {} particles, {} substeps, halo {} lines, \
+                 slabs {:?}, {} particles changed owner: {}",
                 case.name,
                 comm.size(),
                 view.count,
@@ -470,7 +474,7 @@ fn usage(flag: &str) -> ! {
     eprintln!(
         "split_check: bad or incomplete option {flag}\nusage: split_check [--case NAME] \
          [--substeps M] [--halo H] [--expect-difference] [--scale S] [--cost] [--threads N] \
-         [--check-errors] [--list]"
+         [--workers N] [--check-errors] [--list]"
     );
     std::process::exit(2);
 }

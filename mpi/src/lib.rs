@@ -496,6 +496,18 @@ impl Split {
     /// step then takes), then exchanges the owned particles' states and migrates. Collective;
     /// every rank returns the same result.
     pub fn step(&mut self, dt: Real) -> Result<SplitReport, SplitError> {
+        self.step_with_tasks(dt, &mpm_gimp::tasks::Serial)
+    }
+
+    /// [`Split::step`] with each rank's world stepped on `tasks`
+    /// ([`World::step_with_tasks`]: the same bits for any worker count, so ranks times
+    /// workers give one world's bits too). The scene's [`WorldDef::workers`] must be at
+    /// least its worker count.
+    pub fn step_with_tasks(
+        &mut self,
+        dt: Real,
+        tasks: &dyn mpm_gimp::TaskSystem,
+    ) -> Result<SplitReport, SplitError> {
         let stable = self.stable_dt();
         // NaN-safe: a NaN dt is not at most the stable step.
         if dt.partial_cmp(&stable).is_none_or(|o| o.is_gt()) {
@@ -505,7 +517,7 @@ impl Split {
             let status = self.view().particles().status;
             self.owned.iter().map(|&i| status[i as usize]).collect()
         };
-        let stepped = self.world().step(dt);
+        let stepped = self.world().step_with_tasks(dt, tasks);
         let ok = self.agree(stepped.is_ok());
         let stepped = stepped?;
         if !ok || stepped.substeps != 1 {
