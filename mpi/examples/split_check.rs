@@ -11,7 +11,7 @@
 //!
 //! Options: `--case NAME` (every case unless given; `--list` names them), `--substeps M`
 //! (40), `--halo H` (cell lines: thinner than the definition's must give a difference, so
-//! `--halo 1 --expect-difference` checks that the comparison can fail), `--scale S` (the
+//! `--halo 2 --expect-difference` checks that the comparison can fail), `--scale S` (the
 //! block S times as long along the split axis), `--cost` (times the split step and prints
 //! the halo's bytes and messages per substep; no comparison), `--threads N` (times the scene
 //! as one world on N threads instead, on rank 0), `--workers N` (each rank steps on a pool of

@@ -244,23 +244,25 @@ fn state_of<'s>(
 }
 
 /// The halo, in cell lines on each side of a slab, that a rank holds particles of, for a
-/// scene of definition `def`: a particle's stencil reaches `K` lines (its nodes along an
-/// axis) from its cell, so an owned particle's result depends on the particles within `2 K`
-/// lines of it per scatter whose sums it reads after they depend on values gathered in the
-/// same substep (one round for USL; two for MUSL's re-map, USF's second scatter and the
-/// momentum approach's force scatter), plus one line per round for a particle that moves
-/// within the substep.
+/// scene of definition `def`. A particle in cell line `c` reads and adds to the nodes of
+/// lines `c - 1 ..= c + 2` (linear shapes: `c ..= c + 1`), which other particles reach from
+/// lines up to 3 away (linear: 1). A round, a scatter whose sums a particle reads, so spans 3
+/// lines (1); a substep has one for USL and two for MUSL (the re-map), USF (the force
+/// scatter after the stress) and the momentum approach (the force scatter after the
+/// masses). Every stencil of a substep is taken where its particles start it, and the owners
+/// and groups are found again from the positions after each substep, so motion needs no
+/// room; one line more is kept all the same. `split_check` finds differences with a halo of
+/// 2 lines in each of its USL scenes, and of 4 in some of its MUSL and USF ones.
 pub fn halo_cells(def: &WorldDef) -> u32 {
-    let k = match def.shape {
-        ShapeFunction::Linear => 2,
-        ShapeFunction::CubicBspline => 4,
+    let span = match def.shape {
+        ShapeFunction::Linear => 1,
         _ => 3,
     };
     let rounds = match (def.update_order, def.transfer) {
         (UpdateOrder::Usl, t) if t != Transfer::FlipMomentum => 1,
         _ => 2,
     };
-    rounds * (2 * k + 1)
+    rounds * span + 1
 }
 
 /// Checks that a split keeps the bits of scene `scene`: [`SplitError::Unsupported`] naming
