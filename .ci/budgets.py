@@ -12,8 +12,8 @@
   machine, which slows both, does not fail it, and a form or an inlining that multiplies the
   kernel's build does.
 
-Run from the repository root after `cargo test --release --workspace --no-run --timings`:
-python3 .ci/budgets.py"""
+Run from the repository root after `cargo test --release --workspace --exclude mpm-gimp-mpi
+--no-run --timings` (CI's test build): python3 .ci/budgets.py"""
 import glob
 import json
 import os

@@ -15,11 +15,16 @@ use crate::tasks;
 use bytemuck::{Pod, Zeroable};
 use core::ops::Range;
 
-/// Particles per entry of the reach table ([`crate::layout::Layout::reach_groups`]): a multiple of every
+/// Particles per entry of the reach table (`Layout::reach_groups`): a multiple of every
 /// chunk width. Particles in fill order (bins along x) span one line of cells per 256 in the
 /// default scenes, so a tile takes few chunks it does not need; per 16 the table took 5 % of
 /// the 2D step to fill (benches/PERFORMANCE.md, "Decisions").
-pub(crate) const REACH_GROUP: usize = 256;
+///
+/// Public for hosts that step part of a scene (mpm-gimp-mpi): the step walks chunks from
+/// particle 0, so a world whose particles are whole groups of a larger world's, in its order,
+/// has that world's chunks and blocks, and a node all of whose particles it holds gets that
+/// world's sums, bit for bit.
+pub const REACH_GROUP: usize = 256;
 
 /// The parallel step's items per worker ([`crate::layout::Layout::scratch_slots`]): the particle passes cut
 /// their chunks into this many ranges per worker (so that a slow range does not hold the

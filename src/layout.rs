@@ -30,6 +30,8 @@ use core::mem::size_of;
 pub const ALIGN: usize = 64;
 /// Columns are padded to a multiple of this many entries so chunked loops need no remainder.
 pub const CHUNK: usize = 32;
+// Whole reach groups keep chunks whole (`REACH_GROUP`): a multiple of every chunk width.
+const _: () = assert!(REACH_GROUP.is_multiple_of(CHUNK));
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.

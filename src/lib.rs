@@ -87,6 +87,7 @@ mod storage;
 pub mod tasks;
 mod world;
 
+pub use cut::REACH_GROUP;
 pub use def::{
     Boundary, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, Resolvable, ShapeFunction,
     Transfer, UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS,
