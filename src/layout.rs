@@ -35,7 +35,7 @@ const _: () = assert!(REACH_GROUP.is_multiple_of(CHUNK));
 
 pub(crate) const MAGIC: u64 = u64::from_le_bytes(*b"MPMGIMP\0");
 /// Layout version: bumped whenever the buffer format changes.
-const VERSION: u64 = 19;
+const VERSION: u64 = 20;
 
 /// Bytes and alignment a world needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -120,6 +120,8 @@ pub(crate) struct Header {
     /// `Effects::sdf_capacity`, and the distance samples added.
     pub sdf_capacity: u64,
     pub sdf_count: u64,
+    /// `Effects::body_force_gradient`, by rows.
+    pub body_force_gradient: [[f64; 3]; 3],
 }
 
 /// A [`DampingZone`] widened to 8-byte fields; `ramp` is 0 for none, else the face's number
@@ -274,7 +276,8 @@ const _: () = assert!(
             + 4
             + 6 * 4
             + 3
-            + 8 * DAMPING_ZONES)
+            + 8 * DAMPING_ZONES
+            + 9)
 );
 
 /// One material in the buffer's table: parameters and what the step derives from them.
@@ -922,6 +925,7 @@ impl Header {
             traction_capacity: fx.traction_capacity as u64,
             body_force: w(fx.body_force),
             body_force_scale: ScheduleRecord::of(&fx.body_force_scale),
+            body_force_gradient: fx.body_force_gradient.map(w),
             heat: TransportRecord::of(&fx.heat),
             diffusion: TransportRecord::of(&fx.diffusion),
             traction_count: 0,
@@ -1012,6 +1016,7 @@ impl Header {
             traction_capacity: small(self.traction_capacity)?,
             body_force: v(self.body_force),
             body_force_scale: self.body_force_scale.schedule()?,
+            body_force_gradient: self.body_force_gradient.map(v),
             traction_schedules: {
                 let mut s = [Schedule::ZERO; TRACTION_SCHEDULES];
                 for (s, r) in s.iter_mut().zip(&self.traction_schedules) {

@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.10.2"
+#define MPM_GIMP_VERSION "0.11.0"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 1002
+#define MPM_GIMP_ABI_VERSION 1100
 
 
 // Most points an `MpmSchedule` holds.
@@ -654,8 +654,14 @@ typedef struct MpmEffects {
   // A uniform body force per unit mass besides gravity, m/s^2, times
   // `body_force_scale(t)`; not counted in the potential energy. Default (0, 0, 0).
   struct MpmVec3 body_force;
-  // Time factor of `body_force`; no point (default) is a factor of 0.
+  // Time factor of `body_force` and `body_force_gradient`; no point (default) is a factor
+  // of 0.
   struct MpmSchedule body_force_scale;
+  // The body force's change with position, 1/s^2, by rows: `b(x, t) = (body_force + G x)
+  // body_force_scale(t)` at each node's position `x` (m; `mpm_gimp::Effects::body_force_gradient`:
+  // a rotating frame's centrifugal force, a varying gravity). Default zero (nothing is
+  // computed); entries past the world's axes are ignored.
+  struct MpmVec3 body_force_gradient[3];
   // Time factors of the tractions (`mpm_gimp::Effects::traction_schedules`): each traction
   // follows one, the first unless `mpm_world_set_traction_schedule` chose another. The
   // default is the constant 1 for all; no point means a factor of 0.

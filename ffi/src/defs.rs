@@ -371,8 +371,14 @@ pub struct MpmEffects {
     /// A uniform body force per unit mass besides gravity, m/s^2, times
     /// `body_force_scale(t)`; not counted in the potential energy. Default (0, 0, 0).
     pub body_force: MpmVec3,
-    /// Time factor of `body_force`; no point (default) is a factor of 0.
+    /// Time factor of `body_force` and `body_force_gradient`; no point (default) is a factor
+    /// of 0.
     pub body_force_scale: MpmSchedule,
+    /// The body force's change with position, 1/s^2, by rows: `b(x, t) = (body_force + G x)
+    /// body_force_scale(t)` at each node's position `x` (m; `mpm_gimp::Effects::body_force_gradient`:
+    /// a rotating frame's centrifugal force, a varying gravity). Default zero (nothing is
+    /// computed); entries past the world's axes are ignored.
+    pub body_force_gradient: [MpmVec3; 3],
     /// Time factors of the tractions (`mpm_gimp::Effects::traction_schedules`): each traction
     /// follows one, the first unless `mpm_world_set_traction_schedule` chose another. The
     /// default is the constant 1 for all; no point means a factor of 0.
@@ -663,6 +669,7 @@ fn effects_to_c(e: &Effects) -> MpmEffects {
         traction_capacity: e.traction_capacity,
         body_force: c_vec3(e.body_force),
         body_force_scale: schedule_to_c(&e.body_force_scale),
+        body_force_gradient: e.body_force_gradient.map(c_vec3),
         traction_schedules: e.traction_schedules.each_ref().map(schedule_to_c),
         heat: transport_to_c(&e.heat),
         diffusion: transport_to_c(&e.diffusion),
@@ -772,6 +779,7 @@ fn effects_from_c(e: &MpmEffects) -> Result<Effects, MpmStatus> {
         sdf_capacity: e.sdf_capacity,
         body_force: vec3(e.body_force),
         body_force_scale: schedule_from_c(&e.body_force_scale),
+        body_force_gradient: e.body_force_gradient.map(vec3),
         traction_schedules: e.traction_schedules.each_ref().map(schedule_from_c),
         heat: transport_from_c(&e.heat)?,
         diffusion: transport_from_c(&e.diffusion)?,

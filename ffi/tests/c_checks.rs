@@ -157,6 +157,7 @@ fn rust_layout() -> String {
         traction_capacity,
         body_force,
         body_force_scale,
+        body_force_gradient,
         traction_schedules,
         heat,
         diffusion,
@@ -911,6 +912,11 @@ fn effects2d(t: &mut Text) {
             traction_capacity: 16,
             body_force: Vec3::new(0.5, 0.25, 0.0),
             body_force_scale: schedule(&[(0.0, 0.0), (0.03125, 1.0), (0.0625, 0.0)]),
+            body_force_gradient: [
+                Vec3::new(-2.0, 0.5, 0.0),
+                Vec3::new(0.25, 1.0, 0.0),
+                Vec3::ZERO,
+            ],
             traction_schedules: [
                 schedule(&[(0.0, 0.5), (0.0625, 1.5)]),
                 Schedule::constant(1.0),
@@ -1353,6 +1359,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(e.traction_capacity, 0);
     assert_eq!(e.body_force, MpmVec3::default());
     assert_eq!(e.body_force_scale, zero);
+    assert_eq!(e.body_force_gradient, [MpmVec3::default(); 3]);
     let one = schedules(&[(0.0, 1.0)]).0;
     for s in &e.traction_schedules {
         assert_eq!((s.points, s.values[0]), (one.points, one.values[0]));
@@ -1643,6 +1650,23 @@ fn effects_definition_round_trip() {
             z: 0.0,
         },
         body_force_scale: scale_c,
+        body_force_gradient: [
+            MpmVec3 {
+                x: -1.0,
+                y: 0.5,
+                z: 0.0,
+            },
+            MpmVec3 {
+                x: 0.25,
+                y: 2.0,
+                z: 0.0,
+            },
+            MpmVec3 {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+            },
+        ],
         traction_schedules: [traction_c, pulse_c, traction_c, pulse_c],
         heat: MpmTransport {
             declared: 1,
@@ -1731,6 +1755,11 @@ fn effects_definition_round_trip() {
             traction_capacity: 5,
             body_force: Vec3::new(1.5, -2.0, 0.0),
             body_force_scale: scale_k,
+            body_force_gradient: [
+                Vec3::new(-1.0, 0.5, 0.0),
+                Vec3::new(0.25, 2.0, 0.0),
+                Vec3::ZERO,
+            ],
             traction_schedules: [traction_k, pulse_k, traction_k, pulse_k],
             heat: Some(heat),
             diffusion: Some(diffusion),

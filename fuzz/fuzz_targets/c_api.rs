@@ -370,6 +370,9 @@ fn effects(inp: &mut Input<'_>) -> MpmEffects {
     };
     e.body_force = inp.vec3_in(-20.0, 20.0);
     e.body_force_scale = schedule(inp, -2.0, 2.0);
+    for row in &mut e.body_force_gradient {
+        *row = inp.vec3_in(-50.0, 50.0);
+    }
     for s in e.traction_schedules.iter_mut() {
         *s = schedule(inp, -2.0, 2.0);
     }

@@ -3,7 +3,7 @@ do not edit."""
 
 # name: value
 CONSTANTS = {'MPM_DAMPING_ZONES': 4,
- 'MPM_GIMP_ABI_VERSION': 1002,
+ 'MPM_GIMP_ABI_VERSION': 1100,
  'MPM_MAX_HARDENING_COEFFICIENT': 100.0,
  'MPM_MIN_STABLE_DT': 1e-15,
  'MPM_PARALLEL_FROM': 4096,
@@ -477,7 +477,15 @@ STRUCTS = [('MpmVec3',
    ('body_force_scale',
     'MpmSchedule',
     None,
-    'Time factor of `body_force`; no point (default) is a factor of 0.'),
+    'Time factor of `body_force` and `body_force_gradient`; no point (default) is a factor of '
+    '0.'),
+   ('body_force_gradient',
+    'MpmVec3',
+    3,
+    "The body force's change with position, 1/s^2, by rows: `b(x, t) = (body_force + G x) "
+    "body_force_scale(t)` at each node's position `x` (m; "
+    "`mpm_gimp::Effects::body_force_gradient`: a rotating frame's centrifugal force, a varying "
+    "gravity). Default zero (nothing is computed); entries past the world's axes are ignored."),
    ('traction_schedules',
     'MpmSchedule',
     4,

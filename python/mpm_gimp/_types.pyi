@@ -261,7 +261,9 @@ class Effects(ctypes.Structure):
     body_force: Vec3
     """A uniform body force per unit mass besides gravity, m/s^2, times `body_force_scale(t)`; not counted in the potential energy. Default (0, 0, 0)."""
     body_force_scale: Schedule
-    """Time factor of `body_force`; no point (default) is a factor of 0."""
+    """Time factor of `body_force` and `body_force_gradient`; no point (default) is a factor of 0."""
+    body_force_gradient: Any
+    """The body force's change with position, 1/s^2, by rows: `b(x, t) = (body_force + G x) body_force_scale(t)` at each node's position `x` (m; `mpm_gimp::Effects::body_force_gradient`: a rotating frame's centrifugal force, a varying gravity). Default zero (nothing is computed); entries past the world's axes are ignored."""
     traction_schedules: Any
     """Time factors of the tractions (`mpm_gimp::Effects::traction_schedules`): each traction follows one, the first unless `mpm_world_set_traction_schedule` chose another. The default is the constant 1 for all; no point means a factor of 0."""
     heat: Transport

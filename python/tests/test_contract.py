@@ -329,6 +329,8 @@ def test_effects_setters_and_removal(mpm):
     d = mpm.WorldDef(cells=(40, 40, 1), cell_size=0.025)
     d.effects.particle_forces = 1
     d.effects.traction_capacity = 100
+    d.effects.body_force_gradient[0].x = -0.5  # a field that changes along x
+    d.effects.body_force_scale = mpm.Schedule.from_points([(0, 1)])
     d.effects.heat.declared = 1
     d.effects.plasticity = 1
     w = mpm.World(d)

@@ -120,8 +120,18 @@ pub struct Effects {
     /// `body_force_scale(t)`: added to every node as `m_i b(t)` (E14). Unlike gravity it is
     /// not counted in the potential energy of [`crate::Diagnostics`].
     pub body_force: Vec3,
-    /// Time factor of `body_force` (a ramp, a pulse); no point means a factor of 0.
+    /// Time factor of `body_force` and `body_force_gradient` (a ramp, a pulse); no point
+    /// means a factor of 0.
     pub body_force_scale: Schedule,
+    /// The body force's change with position, 1/s^2: the rows of `G` in
+    /// `b(x, t) = (body_force + G x) body_force_scale(t)`, `x` the node's position in the
+    /// world's axes (m), added to every node as `m_i G x_i` (E14). An affine field: a
+    /// rotating frame's centrifugal force about an axis through `c` is
+    /// `G = w^2 (I - e e^T)`, `body_force = -G c`; a tidal or varying gravity its
+    /// gradient. Default zero (and then nothing is computed); entries past the world's axes
+    /// are ignored. A field is resolved while `|G| dt^2` stays well below 1 (its own
+    /// oscillation, `sqrt(-G)`, takes no part in the stable step).
+    pub body_force_gradient: [Vec3; 3],
     /// Time factors of the tractions (a ramp, a load cycle): each traction follows one of
     /// them, the first unless [`crate::World::set_traction_schedule`] chose another. Default
     /// the constant 1 for all. No point means a factor of 0.
@@ -161,6 +171,7 @@ impl Effects {
         traction_capacity: 0,
         body_force: Vec3::ZERO,
         body_force_scale: Schedule::ZERO,
+        body_force_gradient: [Vec3::ZERO; 3],
         traction_schedules: [Schedule::constant(1.0); TRACTION_SCHEDULES],
         heat: None,
         diffusion: None,
@@ -173,6 +184,7 @@ impl Effects {
     pub(crate) fn validate(&self, axes: usize) -> Result<(), Error> {
         let ok_damping = self.damping.is_none_or(|d| d.is_valid(axes));
         let ok_body = (0..axes).all(|a| self.body_force[a].is_finite())
+            && (0..axes).all(|a| (0..axes).all(|b| self.body_force_gradient[a][b].is_finite()))
             && self.body_force_scale.is_valid(false)
             && self.traction_schedules.iter().all(|s| s.is_valid(false));
         let ok_transport = [self.heat, self.diffusion]

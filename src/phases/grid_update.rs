@@ -72,6 +72,38 @@ fn divide_by_mass<const D: usize>(
     });
 }
 
+/// The body force's part that changes with position, `a_i += G x_i` (E14,
+/// [`crate::Effects::body_force_gradient`]), on the nodes of `window` with mass.
+fn add_body_gradient<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    mass: &[Real],
+    cols: &mut [&mut [Real]; D],
+    gradient: &[[Real; D]; D],
+    window: core::ops::Range<usize>,
+) {
+    let geom = &ctx.geom;
+    let first = window.start;
+    ctx.active.for_each_line_in(geom.stride, window, |r| {
+        // The position of the line's first node (lines run along x).
+        let n = first + r.start;
+        let x0: [Real; D] = core::array::from_fn(|a| {
+            geom.origin[a] + ((n / geom.stride[a]) % geom.nodes[a]) as Real * geom.h
+        });
+        for (t, node) in r.enumerate() {
+            if mass.get(node).is_none_or(|&m| m <= ctx.mass_cutoff) {
+                continue;
+            }
+            let mut x = x0;
+            x[0] += t as Real * geom.h;
+            for (a, col) in cols.iter_mut().enumerate() {
+                if let Some(c) = col.get_mut(node) {
+                    *c += (0..D).map(|b| gradient[a][b] * x[b]).sum::<Real>();
+                }
+            }
+        }
+    });
+}
+
 /// One line of [`divide_by_mass`]: a function of its own, whose slices the compiler knows
 /// apart, so that the loop vectorises (inlined into the closure of a grid pass, it stayed
 /// scalar, and the grid passes took four times as long).
@@ -115,7 +147,10 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
     mirror_vector(ctx, &mut nodes.whole().acc, true);
     nodes.each_slab(&|g| {
         let window = g.window();
-        divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity, window);
+        divide_by_mass(ctx, g.mass, &mut g.acc, ctx.gravity, window.clone());
+        if let Some(gradient) = &ctx.body_gradient {
+            add_body_gradient(ctx, g.mass, &mut g.acc, gradient, window);
+        }
         if let Some(nodal) = &ctx.nodal_damping {
             damp_nodes(ctx, nodal, g);
         }

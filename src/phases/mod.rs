@@ -55,6 +55,9 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// grid rate there): the particle update subtracts the damping acceleration.
     pub damp: bool,
     pub gravity: [Real; D],
+    /// The body force's change with position this substep, `G(t)` of `b = b0 + G x`
+    /// ([`crate::Effects::body_force_gradient`]); `None` where it is zero.
+    pub body_gradient: Option<[[Real; D]; D]>,
     pub beta: Real,
     /// Grid and particle damping this substep, `alpha_g(t)` (thermostat included) and
     /// `alpha_p(t)`, 1/s (0 unless damping is declared).

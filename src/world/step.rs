@@ -273,7 +273,9 @@ impl<'a> World<'a> {
         );
         let mut cols = Columns::<D>::new(pbytes, gbytes, scratch, impulses, layout, tasks);
         let fx = &def.effects;
-        let body = fx.body_force * fx.body_force_scale.at(time);
+        let body_scale = fx.body_force_scale.at(time);
+        let body = fx.body_force * body_scale;
+        let gradient = fx.body_force_gradient;
         // The grid rate (thermostat included) acts in the particle update or on the force.
         let (alpha_g, alpha_p, nodal_damping) = match fx.damping {
             Some(d) => {
@@ -302,6 +304,11 @@ impl<'a> World<'a> {
             forces: fx.particle_forces,
             damp: fx.damping.is_some_and(|d| d.on_particles()),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
+            body_gradient: (0..D)
+                .any(|a| (0..D).any(|b| gradient[a][b] != 0.0))
+                .then(|| {
+                    core::array::from_fn(|a| core::array::from_fn(|b| gradient[a][b] * body_scale))
+                }),
             beta: def.flip_beta * (1.0 + exp_m1(-def.pic_rate * dt)),
             alpha_g,
             alpha_p,

@@ -133,6 +133,8 @@ struct Method {
     margin: usize,
     /// Gravity plus the declared body force.
     gravity: [f64; 3],
+    /// The body force's change with position, `G` of `b = b0 + G x` (rows), 1/s^2.
+    body_gradient: [[f64; 3]; 3],
     /// The particles carry forces `F_p` (E14).
     forces: bool,
     /// Damping (E24): the substep's global grid and particle rates, 1/s.
@@ -926,6 +928,15 @@ fn grid_acceleration(m: &mut Method, grid: &mut [Node], dt: f64) {
         n.a = n.f;
     }
     divide_by_mass(m, grid, |n| &mut n.a, m.gravity);
+    // The body force's part that changes with position (E14), on the nodes with mass.
+    for (i, n) in grid.iter_mut().enumerate() {
+        if n.m > m.mass_cutoff {
+            let x = node_x(m, i);
+            for a in 0..m.d {
+                n.a[a] += (0..m.d).map(|b| m.body_gradient[a][b] * x[b]).sum::<f64>();
+            }
+        }
+    }
     // Nodal damping (E49, E50), before the walls: `a_i -= alpha_g(x_i) v_i`, the zones'
     // rates at the node (in the kernel's precision, as the kernel evaluates them) plus the
     // grid rate when it acts on the force.
@@ -2282,6 +2293,9 @@ fn read(world: &World, material: &MaterialDef) -> (Method, Vec<Particle>) {
             (def.gravity.y + body.y) as f64,
             (def.gravity.z + body.z) as f64,
         ],
+        body_gradient: fx
+            .body_force_gradient
+            .map(|row| [0, 1, 2].map(|b| (row[b] * fx.body_force_scale.at(world.time())) as f64)),
         forces: fx.particle_forces,
         damping,
         grid_on_force: fx.damping.is_some_and(|d| d.grid_on_force),
@@ -2442,6 +2456,11 @@ fn declared_effects() -> Effects {
         particle_forces: true,
         body_force: mpm_gimp::Vec3::new(0.4, 1.5, -0.6),
         body_force_scale: Schedule::constant(1.0),
+        body_force_gradient: [
+            mpm_gimp::Vec3::new(-3.0, 1.2, 0.5),
+            mpm_gimp::Vec3::new(0.7, -2.0, -0.4),
+            mpm_gimp::Vec3::new(0.3, 0.9, 1.5),
+        ],
         traction_capacity: 64,
         // Ramps, read at the time of the step the reference takes: the oblique faces follow
         // the second.

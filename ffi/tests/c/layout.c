@@ -143,6 +143,7 @@ int main(void) {
     FIELD(MpmEffects, traction_capacity);
     FIELD(MpmEffects, body_force);
     FIELD(MpmEffects, body_force_scale);
+    FIELD(MpmEffects, body_force_gradient);
     FIELD(MpmEffects, traction_schedules);
     FIELD(MpmEffects, heat);
     FIELD(MpmEffects, diffusion);

@@ -707,6 +707,10 @@ static void effects_def_misuse(void) {
         BAD_EFFECT(name, g_def2, d.effects.body_force.y = R(bad[j]));
         snprintf(name, sizeof name, "init: body_force.z %s (3D)", label[j]);
         BAD_EFFECT(name, def_3d(), d.effects.body_force.z = R(bad[j]));
+        snprintf(name, sizeof name, "init: body_force_gradient[1].x %s", label[j]);
+        BAD_EFFECT(name, g_def2, d.effects.body_force_gradient[1].x = R(bad[j]));
+        snprintf(name, sizeof name, "init: body_force_gradient[2].z %s (3D)", label[j]);
+        BAD_EFFECT(name, def_3d(), d.effects.body_force_gradient[2].z = R(bad[j]));
         snprintf(name, sizeof name, "init: body_force_scale value %s", label[j]);
         BAD_EFFECT(name, g_def2,
                    (d.effects.body_force_scale.points = 1,

@@ -461,6 +461,8 @@ static void effects2d(void) {
     def.effects.traction_capacity = 16;
     def.effects.body_force = v3(0.5f, 0.25f, 0);
     def.effects.body_force_scale = schedule(3, ramp_t, ramp_v);
+    def.effects.body_force_gradient[0] = v3(-2.0f, 0.5f, 0);
+    def.effects.body_force_gradient[1] = v3(0.25f, 1.0f, 0);
     def.effects.traction_schedules[0] = schedule(2, traction_t, traction_v);
     def.effects.heat.declared = 1;
     def.effects.heat.faces[MPM_FACE_Y_MIN].kind = MPM_SCALAR_BOUNDARY_KIND_FIXED;
