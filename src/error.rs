@@ -103,7 +103,9 @@ pub enum Error {
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or the dimension:
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
-    /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric.
+    /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric;
+    /// XPIC's order is in `1..=`[`crate::MAX_TRANSFER_ORDER`], FMPM's in
+    /// `1..=`[`crate::MAX_FMPM_ORDER`].
     InvalidTransfer = 32,
     /// A traction id at or past the number of tractions ([`crate::World::remove_tractions`]).
     UnknownTraction = 33,
@@ -188,7 +190,7 @@ impl Error {
                 c"a wave speed, diffusivity or damping rate needs a stable step below 1e-15 s"
             }
             Error::InvalidTransfer => {
-                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric)"
+                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric), or an XPIC order outside 1..=8 or FMPM outside 1..=2"
             }
             Error::ColliderCapacityExceeded => c"collider capacity exceeded",
             Error::UnknownCollider => c"collider id at or past the number of colliders",
