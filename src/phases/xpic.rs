@@ -20,7 +20,8 @@ use crate::grid::GridCols;
 use crate::Real;
 
 /// The series' first term `v*_1 = k u` into the series columns (order 2 and up), and the sum
-/// so far into the acceleration columns: XPIC `a + (k - 1) v^L / dt`, FMPM `k (v^L + a dt)`.
+/// so far into the acceleration columns: XPIC `a + (k - 1) v^L / dt`, FMPM `k (v^L + a dt)`;
+/// the re-map columns zeroed for the first projection.
 pub(crate) fn start<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     let Some((k, fmpm)) = ctx.series else { return };
     let (series, k, dt) = (k >= 2, k as Real, ctx.dt);
@@ -30,6 +31,8 @@ pub(crate) fn start<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>)
             let first = if fmpm { k * (v + acc * dt) } else { k * v };
             if series {
                 g.series[a][i] = first;
+                // USF's stress velocity was there: the projections add to zero.
+                g.remap[a][i] = 0.0;
             }
             g.acc[a][i] = if fmpm { first } else { acc + (first - v) / dt };
         });
