@@ -126,8 +126,8 @@ pub const SCHEMES: &[Scheme] = &[
         ..Scheme::DEFAULTS
     },
     Scheme {
-        label: "FMPM(3)",
-        transfer: Transfer::Fmpm(3),
+        label: "FMPM(2)",
+        transfer: Transfer::Fmpm(2),
         ..Scheme::DEFAULTS
     },
     // Update orders.
