@@ -338,8 +338,9 @@ enum MpmTransfer
   // from the grid: PIC for k = 1, FLIP's energy without its noise as k grows. `flip_beta`
   // is not used; k - 1 extra gather and scatter passes.
   MPM_TRANSFER_XPIC = 5,
-  // FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2; the
-  // same series on the updated lumped velocity, which the particle takes.
+  // FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2 (not
+  // k = 2 with `MPM_UPDATE_ORDER_USL`); the same series on the updated lumped velocity,
+  // which the particle takes.
   MPM_TRANSFER_FMPM = 6,
 };
 #ifndef __cplusplus

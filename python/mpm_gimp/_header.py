@@ -256,8 +256,9 @@ ENUMS = [('MpmStatus',
     'gather and scatter passes.'),
    ('MPM_TRANSFER_FMPM',
     6,
-    'FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2; the same '
-    'series on the updated lumped velocity, which the particle takes.')]),
+    'FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2 (not k = '
+    '2 with `MPM_UPDATE_ORDER_USL`); the same series on the updated lumped velocity, which the '
+    'particle takes.')]),
  ('MpmBoundary',
   'Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).',
   [('MPM_BOUNDARY_STICK', 0, 'Wall nodes have zero velocity.'),

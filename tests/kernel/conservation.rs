@@ -29,6 +29,9 @@ fn mass_exact_and_momentum_conserved_for_every_shape_order_and_dimension() {
                 .chain(ORDERS.iter().map(|&o| (o, Transfer::Xpic(3))))
                 .chain(ORDERS.iter().map(|&o| (o, Transfer::Fmpm(2))))
             {
+                if transfer == Transfer::Fmpm(2) && order == UpdateOrder::Usl {
+                    continue; // Refused (`Transfer::Fmpm`).
+                }
                 if shape == ShapeFunction::Linear && order == UpdateOrder::Usl {
                     // Classic MPM's cell-crossing instability: see the hard-case test
                     // `linear_usl_cell_crossing_instability_is_contained`.

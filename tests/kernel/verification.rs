@@ -416,3 +416,33 @@ fn xpic_of_order_one_is_pic() {
     eprintln!("XPIC(1) - PIC: {:e} cells, {:e} of v0", dx / h, du / v0);
     assert!(dx < 1e-6 * h && du < 1e-5 * v0, "{dx} m, {du} m/s");
 }
+
+/// An XPIC or FMPM order out of range, or FMPM(2) with USL, is `InvalidTransfer` before any
+/// memory is asked for; the orders in range are accepted.
+#[test]
+fn xpic_and_fmpm_orders_out_of_range_are_refused() {
+    use mpm_gimp::{memory_requirements, Error, UpdateOrder, MAX_FMPM_ORDER, MAX_TRANSFER_ORDER};
+    let def = |transfer: Transfer, update_order: UpdateOrder| mpm_gimp::WorldDef {
+        transfer,
+        update_order,
+        ..mpm_gimp::WorldDef::DEFAULT
+    };
+    let bad = [
+        (Transfer::Xpic(0), UpdateOrder::Musl),
+        (Transfer::Xpic(MAX_TRANSFER_ORDER + 1), UpdateOrder::Musl),
+        (Transfer::Fmpm(0), UpdateOrder::Musl),
+        (Transfer::Fmpm(MAX_FMPM_ORDER + 1), UpdateOrder::Usf),
+        (Transfer::Fmpm(2), UpdateOrder::Usl),
+    ];
+    for (t, o) in bad {
+        assert_eq!(
+            memory_requirements(&def(t, o)),
+            Err(Error::InvalidTransfer),
+            "{t:?} {o:?}"
+        );
+    }
+    for k in 1..=MAX_TRANSFER_ORDER {
+        assert!(memory_requirements(&def(Transfer::Xpic(k), UpdateOrder::Usl)).is_ok());
+    }
+    assert!(memory_requirements(&def(Transfer::Fmpm(1), UpdateOrder::Usl)).is_ok());
+}

@@ -548,6 +548,10 @@ static void effects_def_misuse(void) {
                  mpm_memory_requirements(&ramped, &req));
     }
 
+    d = g_def2;
+    d.transfer = MPM_TRANSFER_FMPM + 256u * 2u;
+    d.update_order = MPM_UPDATE_ORDER_USL;
+    init_refused("init: FMPM(2) with USL", MPM_STATUS_INVALID_TRANSFER, &d);
     for (k = 0; k < sizeof bad_flag / sizeof bad_flag[0]; k++) {
         char name[96];
         const uint32_t v = bad_flag[k];
