@@ -52,6 +52,8 @@
 //! (`"removal_ns_per_particle"`); `half_rebuilt` then builds a new world from the remaining
 //! particles alone, as a host would add them, and times that one: the same state (the
 //! `state_hash` agrees with `half`'s), so the same step cost (`benches/compare.sh` of the two).
+//! `--transfer flip|xpicK|fmpmK` (default flip) steps with XPIC(K) or FMPM(K) (their extra
+//! projections: `benches/PERFORMANCE.md`, "What an effect costs").
 //! `--sort off|on` (default off; one thread): `on` reorders the particles by cell
 //! (`World::sort_particles`) once before the timing, as a host does between frames, and the
 //! JSON line gives that call's cost per particle (`"sort_ns_per_particle"`); with
@@ -62,7 +64,7 @@
 use mpm_gimp::simd::Simd;
 use mpm_gimp::{
     memory_requirements, Dimension, HeapBuffer, MaterialModel, ParticleBatch, Real, Removal,
-    Serial, ShapeFunction, UpdateOrder, Vec3, World, WorldDef, MAX_WORKERS,
+    Serial, ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef, MAX_WORKERS,
 };
 use mpm_gimp_rayon::RayonTasks;
 use std::process::exit;
@@ -70,7 +72,7 @@ use std::process::exit;
 const USAGE: &str = "usage: step_cost [--dim 2|3] [--shape linear|gimp|quadratic|cubic] \
 [--material neo_hookean|linear_elastic|fixed_corotated|fluid|von_mises|drucker_prager|snow] [--order usf|usl|musl] [--runs N (>= 5)] [--steps S (>= 1)] \
 [--simd auto|avx2|baseline] [--grid-scale N (1..=16)] [--shrink 1|2|4|8] \
-[--particle-order fill|rows|shuffled] [--sort off|on] [--threads N (1..=256)] [--remove none|half|half_rebuilt] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
+[--particle-order fill|rows|shuffled] [--sort off|on] [--transfer flip|xpicK|fmpmK] [--threads N (1..=256)] [--remove none|half|half_rebuilt] [--effect none|damping|feedback|local_damping|damping_zones|particle_forces|tractions|\
 body_force|apic|mls (B-splines)|momentum|heat|diffusion|thermal_expansion|axisymmetric (2D only)|colliders|sdf_colliders]";
 
 #[path = "../benches/common/scene.rs"]
@@ -95,6 +97,7 @@ struct Options {
     threads: u32,
     remove: Remove,
     sort: bool,
+    transfer: Transfer,
 }
 
 /// What `--remove` does before the timing.
@@ -127,6 +130,7 @@ fn parse_options() -> Options {
         threads: 1,
         remove: Remove::None,
         sort: false,
+        transfer: WorldDef::DEFAULT.transfer,
     };
     let mut args = std::env::args().skip(1);
     while let Some(arg) = args.next() {
@@ -154,6 +158,7 @@ fn parse_options() -> Options {
             "--threads",
             "--remove",
             "--sort",
+            "--transfer",
         ];
         if !known.contains(&key.as_str()) {
             usage_error(&format!("unknown option `{arg}`"));
@@ -264,6 +269,18 @@ fn parse_options() -> Options {
                     "off" => false,
                     "on" => true,
                     _ => bad(),
+                }
+            }
+            "--transfer" => {
+                let order = |prefix: &str| value.strip_prefix(prefix)?.parse::<u32>().ok();
+                o.transfer = if value == "flip" {
+                    Transfer::Flip
+                } else if let Some(k) = order("xpic") {
+                    Transfer::Xpic(k)
+                } else if let Some(k) = order("fmpm") {
+                    Transfer::Fmpm(k)
+                } else {
+                    bad()
                 }
             }
             _ => unreachable!("checked against the known options"),
@@ -381,6 +398,7 @@ pub fn main() {
         effect: o.effect,
         particle_order: o.particle_order,
         workers: o.threads,
+        transfer: o.transfer,
         ..SceneDef::PLANE_2D
     }) {
         Ok(s) => s,

@@ -103,7 +103,9 @@ pub enum Error {
     InvalidDeformation = 31,
     /// A transfer that does not go with the shape function or the dimension:
     /// [`Transfer::Mls`](crate::Transfer::Mls) needs the quadratic or cubic B-spline, in 2D or
-    /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric.
+    /// 3D; [`Transfer::FlipMomentum`](crate::Transfer::FlipMomentum) is not axisymmetric;
+    /// XPIC's order is in `1..=`[`crate::MAX_TRANSFER_ORDER`], FMPM's in
+    /// `1..=`[`crate::MAX_FMPM_ORDER`], and FMPM(2) does not go with USL.
     InvalidTransfer = 32,
     /// A traction id past the table or removed ([`crate::World::remove_tractions`]).
     UnknownTraction = 33,
@@ -188,7 +190,7 @@ impl Error {
                 c"a wave speed, diffusivity or damping rate needs a stable step below 1e-15 s"
             }
             Error::InvalidTransfer => {
-                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric)"
+                c"transfer does not go with the shape function or dimension (MLS needs a B-spline, 2D or 3D; FLIP momentum is not axisymmetric), or an XPIC order outside 1..=8, FMPM outside 1..=2 or FMPM(2) with USL"
             }
             Error::ColliderCapacityExceeded => c"collider capacity exceeded",
             Error::UnknownCollider => c"collider id at or past the number of colliders",

@@ -27,8 +27,11 @@ pub(crate) struct GridCols<'a, const D: usize> {
     pub acc: [&'a mut [Real]; D],
     /// The nodal velocity the separate stress pass differentiates, with the walls applied: USF
     /// copies the lagged velocity here; MUSL accumulates the momentum of the updated particle
-    /// velocities here and divides by the mass. Empty with USL.
+    /// velocities here and divides by the mass. Empty with USL. XPIC's and FMPM's series
+    /// (order 2 and up) projects into them ([`crate::phases::xpic`]).
     pub remap: [&'a mut [Real]; D],
+    /// XPIC's and FMPM's series: the term the next projection gathers (empty below order 2).
+    pub series: [&'a mut [Real]; D],
     /// Transported scalars (heat, diffusion; empty when not declared), 4 columns each: capacity
     /// (thermal mass `m_T`, or volume), momentum (`m_T T`), value (`T_i`, with the fixed
     /// faces), flow then rate (`Q_i`, then `Q_i / m_T`).
@@ -77,6 +80,8 @@ enum Column {
     /// Velocity or acceleration.
     Motion,
     Remap,
+    /// XPIC's series.
+    Series,
     /// A transported field's nodal values.
     Value(usize),
     /// A transported field's other columns.
@@ -153,6 +158,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             && group(&self.vel)
             && group(&self.acc)
             && group(&self.remap)
+            && group(&self.series)
             && tile_fits
     }
 
@@ -196,6 +202,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             vel: none(),
             acc: none(),
             remap: none(),
+            series: none(),
             scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
             contact: &mut [][..],
             len: 0,
@@ -213,6 +220,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             vel,
             acc,
             remap,
+            series,
             scalar,
             contact,
             len,
@@ -226,6 +234,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             vel: vel.each_mut().map(|c| &mut **c),
             acc: acc.each_mut().map(|c| &mut **c),
             remap: none(),
+            series: series.each_mut().map(|c| &mut **c),
             scalar: scalar.each_mut().map(|f| f.each_mut().map(|c| &mut **c)),
             contact,
             len: *len,
@@ -238,6 +247,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             vel: none(),
             acc: none(),
             remap: remap.each_mut().map(|c| &mut **c),
+            series: none(),
             scalar: core::array::from_fn(|_| core::array::from_fn(|_| &mut [][..])),
             contact: &mut [][..],
             len: *len,
@@ -245,6 +255,15 @@ impl<'a, const D: usize> GridCols<'a, D> {
             reach,
             whole,
         };
+        (read, remap)
+    }
+
+    /// [`GridCols::split_remap`] with the series columns in place of the velocity ones in the
+    /// first view: what XPIC's projection gathers from, and the columns it adds to.
+    pub fn split_series(&mut self) -> (GridCols<'_, D>, GridCols<'_, D>) {
+        let (mut read, remap) = self.split_remap();
+        let none = core::array::from_fn(|_| &mut [][..]);
+        read.vel = core::mem::replace(&mut read.series, none);
         (read, remap)
     }
 
@@ -336,9 +355,12 @@ impl<'a, const D: usize> GridCols<'a, D> {
 
     fn carve_columns(mut c: Carver<'a>, layout: &Layout, tile: Tile, part: Part) -> Self {
         let (b, n) = (layout.node_column_bytes, layout.nodes + ROW);
-        let scalars = layout.scalar_grid.iter().filter(|&&b| b).count();
-        let has_remap =
-            layout.grid_columns > 1 + 2 * D + 4 * scalars + layout.contact_grid as usize;
+        let optional = (layout.remap_grid as usize + layout.series_grid as usize) * D;
+        let scalars = 4 * layout.scalar_grid.iter().filter(|&&b| b).count();
+        debug_assert_eq!(
+            layout.grid_columns,
+            1 + 2 * D + optional + scalars + layout.contact_grid as usize
+        );
         // The next column, or nothing where `part` leaves it out.
         let take = |c: &mut Carver<'a>, column: Column| {
             if part.holds(column) {
@@ -352,8 +374,15 @@ impl<'a, const D: usize> GridCols<'a, D> {
         let vel = core::array::from_fn(|_| take(&mut c, Column::Motion));
         let acc = core::array::from_fn(|_| take(&mut c, Column::Motion));
         let remap = core::array::from_fn(|_| {
-            if has_remap {
+            if layout.remap_grid {
                 take(&mut c, Column::Remap)
+            } else {
+                &mut [][..]
+            }
+        });
+        let series = core::array::from_fn(|_| {
+            if layout.series_grid {
+                take(&mut c, Column::Series)
             } else {
                 &mut [][..]
             }
@@ -385,6 +414,7 @@ impl<'a, const D: usize> GridCols<'a, D> {
             vel,
             acc,
             remap,
+            series,
             scalar,
             contact,
             tile,

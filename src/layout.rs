@@ -516,10 +516,16 @@ pub(crate) struct Layout {
     pub scalar_grid: [bool; 2],
     /// Whether the grid has the colliders' contact column (a collider capacity).
     pub contact_grid: bool,
+    /// Whether the grid has the stress-update velocity columns (USF, MUSL, and XPIC's or
+    /// FMPM's series from order 2, whose projections they take).
+    pub remap_grid: bool,
+    /// Whether the grid has XPIC's or FMPM's series columns (order 2 and up).
+    pub series_grid: bool,
     pub grid_offset: usize,
     pub node_column_bytes: usize,
     /// Grid columns: mass, velocity[D], acceleration[D], then the stress-update velocity[D]
-    /// (USF and MUSL), the transported scalars' and the colliders' contact column.
+    /// ([`Layout::remap_grid`]), XPIC's series[D] ([`Layout::series_grid`]), the transported
+    /// scalars' and the colliders' contact column.
     pub grid_columns: usize,
     /// The parallel step's scratch after the grid: one [`Partial`] per item of a pass,
     /// [`SLOTS_PER_WORKER`] per worker of [`WorldDef::workers`] (none for one worker).
@@ -611,12 +617,14 @@ impl Layout {
         // Stencil rows may reach past the last node: see `crate::shape::ROW`.
         let node_column_bytes =
             column_stride(round_up(nodes + crate::shape::ROW, CHUNK) * size_of::<Real>());
-        let stress_velocity = def.update_order != UpdateOrder::Usl;
+        let series_grid = def.transfer.series().is_some_and(|(k, _)| k >= 2);
+        let remap_grid = def.update_order != UpdateOrder::Usl || series_grid;
         let scalar_grid = [def.effects.heat.is_some(), def.effects.diffusion.is_some()];
         let contact_grid = def.effects.collider_capacity > 0;
         let grid_columns = 1
             + 2 * d
-            + if stress_velocity { d } else { 0 }
+            + if remap_grid { d } else { 0 }
+            + if series_grid { d } else { 0 }
             + 4 * scalar_grid.iter().filter(|&&b| b).count()
             + contact_grid as usize;
         let traction_capacity = def.effects.traction_capacity as usize;
@@ -670,6 +678,8 @@ impl Layout {
             plastic,
             scalar_grid,
             contact_grid,
+            remap_grid,
+            series_grid,
             grid_offset,
             node_column_bytes,
             grid_columns,
@@ -845,6 +855,19 @@ pub(crate) fn validate(def: &WorldDef) -> Result<(), Error> {
     {
         return Err(Error::InvalidTransfer);
     }
+    // XPIC's and FMPM's order.
+    if let Some((k, fmpm)) = def.transfer.series() {
+        let most = if fmpm {
+            crate::MAX_FMPM_ORDER
+        } else {
+            crate::MAX_TRANSFER_ORDER
+        };
+        // FMPM's stress from its own v* under USL: the bar's energy grew 18-fold in 5 periods.
+        let usl_series = fmpm && k >= 2 && def.update_order == UpdateOrder::Usl;
+        if !(1..=most).contains(&k) || usl_series {
+            return Err(Error::InvalidTransfer);
+        }
+    }
     // The momentum approach's gradient has no hoop term of its own yet.
     if def.transfer == Transfer::FlipMomentum && def.dimension == Dimension::Axisymmetric2D {
         return Err(Error::InvalidTransfer);
@@ -912,7 +935,7 @@ impl Header {
             time: 0.0,
             step_count: 0,
             min_particle_mass: f64::INFINITY,
-            transfer: def.transfer as u64,
+            transfer: def.transfer.code() as u64,
             damping_declared: fx.damping.is_some() as u64,
             damping_grid: ScheduleRecord::of(&damping.grid),
             damping_particle: ScheduleRecord::of(&damping.particle),

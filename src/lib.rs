@@ -90,8 +90,8 @@ mod world;
 pub use cut::REACH_GROUP;
 pub use def::{
     Boundary, Dimension, Face, FrictionFit, MaterialDef, MaterialModel, Resolvable, ShapeFunction,
-    Transfer, UpdateOrder, WorldDef, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS, MAX_WORKERS,
-    MIN_STABLE_DT, PARALLEL_FROM,
+    Transfer, UpdateOrder, WorldDef, MAX_FMPM_ORDER, MAX_HARDENING_COEFFICIENT, MAX_SUBSTEPS,
+    MAX_TRANSFER_ORDER, MAX_WORKERS, MIN_STABLE_DT, PARALLEL_FROM,
 };
 pub use def::{
     ColliderDef, ColliderShape, Contact, Damping, DampingZone, Effects, Feedback, ScalarBoundary,

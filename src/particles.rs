@@ -105,6 +105,19 @@ pub(crate) struct RemapCols<'a, const D: usize> {
 }
 
 impl<'a, const D: usize> RemapCols<'a, D> {
+    /// The columns of `p` with its current positions as `x_start`: what XPIC's projection
+    /// reads before the particle update ([`crate::phases::xpic`]).
+    pub fn at_current(p: &'a ParticleCols<'_, D>) -> Self {
+        RemapCols {
+            x_start: p.x.each_ref().map(|c| &**c),
+            v: p.v.each_ref().map(|c| &**c),
+            mass: p.mass,
+            affine: p.affine.each_ref().map(|r| r.each_ref().map(|c| &**c)),
+            stretch: p.stretch.each_ref().map(|c| &**c),
+            status: p.status,
+        }
+    }
+
     /// The particles `window` of the shared particle region, particle `window.start` their
     /// first value (the columns where [`ParticleCols::carve_window`] finds them: the layout's
     /// column order).

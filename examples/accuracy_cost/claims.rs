@@ -64,6 +64,12 @@ pub const FAR_FACTOR: f64 = 1.5;
 /// multiple of the velocity approach's (the defaults), at every level.
 pub const MOMENTUM_FACTOR: f64 = 1.05;
 
+/// XPIC(3)'s large-deformation error, past the coarsest level, is at most this multiple of
+/// the default blend's, and at most [`XPIC_OF_PARTICLE_VELOCITY`] of FLIP's with `x += v(n+1)
+/// dt`, which does not converge there.
+pub const XPIC_FACTOR: f64 = 1.5;
+pub const XPIC_OF_PARTICLE_VELOCITY: f64 = 0.1;
+
 /// Evaluates every claim on the errors `series` gives.
 pub fn check(series: Series) -> Vec<Claim> {
     let mut claims = vec![];
@@ -110,6 +116,31 @@ first refinement to the second; cpGIMP (pure FLIP) at every refinement",
             "errors {}; order over the series {overall:.2} (>= {CPGIMP_MIN_ORDER}), between \
 levels {orders:.2?} (each >= {CPGIMP_MIN_STEP_ORDER})",
             show(&cp)
+        ),
+    });
+    // XPIC(3) (Hammerquist and Nairn) against the blend and against FLIP moving the particles
+    // with their own velocity, the noise XPIC removes.
+    let (xpic, blend, own) = (
+        series("mms", 0, "XPIC(3)"),
+        series("mms", 0, "defaults"),
+        series("mms", 0, "FLIP x+=v dt"),
+    );
+    let paired = xpic.len() >= 2 && xpic.len() == blend.len() && xpic.len() == own.len();
+    claims.push(Claim {
+        text: "XPIC(3) is as accurate as the default blend on the large-deformation problem, \
+where FLIP with x += v(n+1) dt is not",
+        holds: paired
+            && xpic[1].1 < xpic[0].1
+            && (1..xpic.len()).all(|i| {
+                xpic[i].1 <= XPIC_FACTOR * blend[i].1
+                    && xpic[i].1 <= XPIC_OF_PARTICLE_VELOCITY * own[i].1
+            }),
+        detail: format!(
+            "XPIC(3) {}; defaults {}; FLIP x+=v dt {} (past the first level, <= \
+{XPIC_FACTOR} x the defaults' and <= {XPIC_OF_PARTICLE_VELOCITY} x FLIP x+=v dt's)",
+            show(&xpic),
+            show(&blend),
+            show(&own)
         ),
     });
     let finest = |label: &str| series("disk", 0, label).last().map_or(f64::NAN, |e| e.1);

@@ -53,6 +53,8 @@ impl Scheme {
             }
             Transfer::Mls => "MLS-MPM (APIC, MLS gradient)".to_string(),
             Transfer::FlipMomentum => format!("FLIP beta={}, momentum approach", self.flip_beta),
+            Transfer::Xpic(k) => format!("XPIC({k})"),
+            Transfer::Fmpm(k) => format!("FMPM({k})"),
         };
         format!(
             "{:?}, {transfer}, {:?}, exp terms {}",
@@ -116,6 +118,16 @@ pub const SCHEMES: &[Scheme] = &[
     Scheme {
         label: "momentum",
         transfer: Transfer::FlipMomentum,
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "XPIC(3)",
+        transfer: Transfer::Xpic(3),
+        ..Scheme::DEFAULTS
+    },
+    Scheme {
+        label: "FMPM(2)",
+        transfer: Transfer::Fmpm(2),
         ..Scheme::DEFAULTS
     },
     // Update orders.

@@ -331,6 +331,17 @@ enum MpmTransfer
   // times its cost per step. For dynamics: at rest, stresses next to a free or loaded face
   // are off (up to 28 % in a block pulled by a traction, against 0.2 % with FLIP).
   MPM_TRANSFER_FLIP_MOMENTUM = 4,
+  // XPIC(k) (`mpm_gimp::Transfer::Xpic`): the field `transfer` holds
+  // `MPM_TRANSFER_XPIC + 256 * k`, k in 1..=8 (otherwise `MPM_STATUS_INVALID_TRANSFER`). The
+  // particle velocity from the series `sum_{r=1..k} (-1)^(r+1) C(k, r) A^(r-1) v^L` of the
+  // step's lumped velocity, `A` the projection particles-to-grid of the velocity gathered
+  // from the grid: PIC for k = 1, FLIP's energy without its noise as k grows. `flip_beta`
+  // is not used; k - 1 extra gather and scatter passes.
+  MPM_TRANSFER_XPIC = 5,
+  // FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2 (not
+  // k = 2 with `MPM_UPDATE_ORDER_USL`); the same series on the updated lumped velocity,
+  // which the particle takes.
+  MPM_TRANSFER_FMPM = 6,
 };
 #ifndef __cplusplus
 typedef uint32_t MpmTransfer;

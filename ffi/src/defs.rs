@@ -97,6 +97,17 @@ pub enum MpmTransfer {
     /// times its cost per step. For dynamics: at rest, stresses next to a free or loaded face
     /// are off (up to 28 % in a block pulled by a traction, against 0.2 % with FLIP).
     FlipMomentum = 4,
+    /// XPIC(k) (`mpm_gimp::Transfer::Xpic`): the field `transfer` holds
+    /// `MPM_TRANSFER_XPIC + 256 * k`, k in 1..=8 (otherwise `MPM_STATUS_INVALID_TRANSFER`). The
+    /// particle velocity from the series `sum_{r=1..k} (-1)^(r+1) C(k, r) A^(r-1) v^L` of the
+    /// step's lumped velocity, `A` the projection particles-to-grid of the velocity gathered
+    /// from the grid: PIC for k = 1, FLIP's energy without its noise as k grows. `flip_beta`
+    /// is not used; k - 1 extra gather and scatter passes.
+    Xpic = 5,
+    /// FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2 (not
+    /// k = 2 with `MPM_UPDATE_ORDER_USL`); the same series on the updated lumped velocity,
+    /// which the particle takes.
+    Fmpm = 6,
 }
 
 /// Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).
@@ -561,7 +572,7 @@ pub(crate) fn world_def_to_c(d: &WorldDef) -> MpmWorldDef {
         particles_per_cell: d.particles_per_cell,
         flip_beta: d.flip_beta,
         pic_rate: d.pic_rate,
-        transfer: d.transfer as u32,
+        transfer: d.transfer.code(),
         update_order: d.update_order as u32,
         gravity: c_vec3(d.gravity),
         faces: d.faces.map(|f| f as u32),

@@ -1325,7 +1325,7 @@ fn defaults_match_the_kernel() {
     assert_eq!(wd.particles_per_cell, k.particles_per_cell);
     assert_eq!(wd.flip_beta, k.flip_beta);
     assert_eq!(wd.pic_rate, k.pic_rate);
-    assert_eq!(wd.transfer, k.transfer as u32);
+    assert_eq!(wd.transfer, k.transfer.code());
     assert_eq!(wd.transfer, MpmTransfer::Flip as u32);
     assert_eq!(wd.update_order, k.update_order as u32);
     assert_eq!(

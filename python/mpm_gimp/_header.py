@@ -239,7 +239,20 @@ ENUMS = [('MpmStatus',
     'particles moving with the mass-weighted grid velocity. Plane strain and 3D only '
     '(otherwise `MPM_STATUS_INVALID_TRANSFER`). Same columns as `MPM_TRANSFER_FLIP`, 1.4 to 2 '
     'times its cost per step. For dynamics: at rest, stresses next to a free or loaded face '
-    'are off (up to 28 % in a block pulled by a traction, against 0.2 % with FLIP).')]),
+    'are off (up to 28 % in a block pulled by a traction, against 0.2 % with FLIP).'),
+   ('XPIC',
+    5,
+    'XPIC(k) (`mpm_gimp::Transfer::Xpic`): the field `transfer` holds `MPM_TRANSFER_XPIC + 256 '
+    '* k`, k in 1..=8 (otherwise `MPM_STATUS_INVALID_TRANSFER`). The particle velocity from '
+    "the series `sum_{r=1..k} (-1)^(r+1) C(k, r) A^(r-1) v^L` of the step's lumped velocity, "
+    '`A` the projection particles-to-grid of the velocity gathered from the grid: PIC for k = '
+    "1, FLIP's energy without its noise as k grows. `flip_beta` is not used; k - 1 extra "
+    'gather and scatter passes.'),
+   ('FMPM',
+    6,
+    'FMPM(k) (`mpm_gimp::Transfer::Fmpm`): `MPM_TRANSFER_FMPM + 256 * k`, k in 1..=2 (not k = '
+    '2 with `MPM_UPDATE_ORDER_USL`); the same series on the updated lumped velocity, which the '
+    'particle takes.')]),
  ('MpmBoundary',
   'Boundary condition of one face of the grid box (`mpm_gimp::Boundary`).',
   [('STICK', 0, 'Wall nodes have zero velocity.'),

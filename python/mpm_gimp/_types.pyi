@@ -88,6 +88,8 @@ class Transfer(enum.IntEnum):
     FLIP_PARTICLE_VELOCITY = 2
     MLS = 3
     FLIP_MOMENTUM = 4
+    XPIC = 5
+    FMPM = 6
 
 class Boundary(enum.IntEnum):
     """Boundary condition of one face of the grid box (`mpm_gimp::Boundary`)."""

@@ -156,7 +156,8 @@ impl UpdateOrder {
     }
 }
 
-/// How velocity moves from the grid back to the particles.
+/// How velocity moves from the grid back to the particles. Stored and passed to C as its
+/// [`Transfer::code`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum Transfer {
@@ -216,7 +217,36 @@ pub enum Transfer {
     /// block pulled by a traction settles to the load's mean stress (within 0.1 %), but with
     /// particles by its faces up to 28 % off (uGIMP; 0.2 % with [`Transfer::Flip`]).
     FlipMomentum = 4,
+    /// XPIC(k) (Hammerquist and Nairn 2017; E98-E100), `k` in `1..=`[`MAX_TRANSFER_ORDER`]:
+    /// the particle takes `v(n+1) = S (v* + a dt)`, with `v*` the series `sum_{r=1..k}
+    /// (-1)^(r+1) C(k, r) A^(r-1) v^L` of the lumped nodal velocity `v^L` of the step's
+    /// start, `A = S+ S` (a gather to the particles, then their mass-weighted projection back
+    /// to the nodes), and moves by `x(n+1) = x_p + (S v^L + (v(n+1) - v_p) / 2) dt`. XPIC(1)
+    /// is PIC; as `k` grows it keeps more of what FLIP keeps, without FLIP's noise (the null
+    /// space of `S` is filtered out). `flip_beta` and `pic_rate` are not used. Costs `k - 1`
+    /// extra gather and scatter passes of the velocity alone, on the calling thread (2D: 17.2
+    /// ns per particle-step for XPIC(2), 27.8 for XPIC(5), against FLIP's 12.0;
+    /// benches/PERFORMANCE.md), and `D` extra grid columns (`2 D` with USL) where `k >= 2`.
+    Xpic(u32) = 5,
+    /// FMPM(k) (Nairn and Hammerquist 2021; E101), `k` in `1..=`[`MAX_FMPM_ORDER`]: the same
+    /// series applied to the updated lumped velocity `v^L+ = v^L + a dt`, an approximation of
+    /// order `k` of the full mass matrix's inverse; the particle takes `v(n+1) = S v*` and
+    /// moves by the mean of its velocities, `x(n+1) = x_p + (v_p + v(n+1)) dt / 2`. With MUSL
+    /// the re-mapped velocities pass through the series too (`k - 1` more passes). FMPM(2)
+    /// with USL, whose stress update reads `v*`, is [`crate::Error::InvalidTransfer`]: on the
+    /// vibrating bar its energy grew 18-fold in 5 periods at the default Courant number.
+    /// Otherwise the costs of [`Transfer::Xpic`].
+    Fmpm(u32) = 6,
 }
+
+/// Highest order `k` of [`Transfer::Xpic`]: each order past 1 costs a gather and scatter pass,
+/// and past 8 the series changes little (`C(k, r)` grows as `2^k`).
+pub const MAX_TRANSFER_ORDER: u32 = 8;
+
+/// Highest order `k` of [`Transfer::Fmpm`]: from FMPM(3) on, the vibrating bar's energy grows
+/// without bound at every Courant number tried (0.2 to 0.5), here with the stress from the
+/// re-mapped velocities through the series; FMPM(2) keeps it within 0.07 %.
+pub const MAX_FMPM_ORDER: u32 = 2;
 
 impl Transfer {
     /// Whether the transfer carries the affine matrix `C_p` (APIC and MLS-MPM).
@@ -224,15 +254,43 @@ impl Transfer {
         matches!(self, Transfer::Apic | Transfer::Mls)
     }
 
-    /// The variant stored as `code` (its `repr(u32)` value), if any: how a stored or C-side
-    /// number becomes the enum without undefined behaviour.
+    /// XPIC's or FMPM's order `k` and whether it is FMPM; `None` for the other transfers.
+    pub const fn series(self) -> Option<(u32, bool)> {
+        match self {
+            Transfer::Xpic(k) => Some((k, false)),
+            Transfer::Fmpm(k) => Some((k, true)),
+            _ => None,
+        }
+    }
+
+    /// The number that stores the transfer (the C `transfer` field): the variant's number
+    /// (0 to 6) in the low 8 bits, XPIC's or FMPM's order above them, `5 + 256 k` for
+    /// XPIC(k).
+    pub const fn code(self) -> u32 {
+        match self {
+            Transfer::Flip => 0,
+            Transfer::Apic => 1,
+            Transfer::FlipParticleVelocity => 2,
+            Transfer::Mls => 3,
+            Transfer::FlipMomentum => 4,
+            Transfer::Xpic(k) => 5 | k << 8,
+            Transfer::Fmpm(k) => 6 | k << 8,
+        }
+    }
+
+    /// The transfer stored as `code` ([`Transfer::code`]), if any: how a stored or C-side
+    /// number becomes the enum without undefined behaviour. An order out of range is kept
+    /// (the definition's validation refuses it).
     pub const fn from_code(code: u32) -> Option<Transfer> {
-        match code {
-            0 => Some(Transfer::Flip),
-            1 => Some(Transfer::Apic),
-            2 => Some(Transfer::FlipParticleVelocity),
-            3 => Some(Transfer::Mls),
-            4 => Some(Transfer::FlipMomentum),
+        let k = code >> 8;
+        match (code & 0xff, k) {
+            (0, 0) => Some(Transfer::Flip),
+            (1, 0) => Some(Transfer::Apic),
+            (2, 0) => Some(Transfer::FlipParticleVelocity),
+            (3, 0) => Some(Transfer::Mls),
+            (4, 0) => Some(Transfer::FlipMomentum),
+            (5, _) => Some(Transfer::Xpic(k)),
+            (6, _) => Some(Transfer::Fmpm(k)),
             _ => None,
         }
     }
@@ -823,8 +881,17 @@ mod tests {
                 Tr::FlipParticleVelocity,
                 Tr::Mls,
                 Tr::FlipMomentum,
+                // Every order a code below 1024 holds (the validation refuses 0).
+                Tr::Xpic(0),
+                Tr::Xpic(1),
+                Tr::Xpic(2),
+                Tr::Xpic(3),
+                Tr::Fmpm(0),
+                Tr::Fmpm(1),
+                Tr::Fmpm(2),
+                Tr::Fmpm(3),
             ],
-            |v| v as u32,
+            |v| v.code(),
             Tr::from_code,
         );
         use MaterialModel as Mm;

@@ -164,6 +164,8 @@ pub(crate) fn particles<
                 };
                 let (vn, dx) = if apic {
                     update::apic(&step, v_gp, a_gp, d)
+                } else if let Some((_, fmpm)) = ctx.series {
+                    update::xpic(&step, v_p, (v_gp, a_gp), d, fmpm)
                 } else {
                     let moves_with = (ld(&v_moves[a]), ld(&a_moves[a]));
                     update::flip(&step, v_p, (v_gp, a_gp), moves_with, d)
@@ -278,14 +280,25 @@ fn remap_rows<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W
 /// the rows of the chunks of `p` (its first `count` particles, updated, with the positions
 /// where the substep started) that `remap` holds, the same values [`particles`] adds when it
 /// re-maps them in its own pass.
+///
+/// Where `from` holds velocity columns, the momenta re-mapped are those of the velocities
+/// gathered from them, `m_p sum_i S_ip u_i`, not the particles' own: XPIC's projection
+/// `A u = S+ S u` ([`super::xpic`]), with the gather and scatter kernels the particle pass
+/// compiles already.
 #[inline(always)]
 pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
     shape: &S,
     ctx: &Ctx<'_, D>,
     p: &RemapCols<'_, D>,
     count: usize,
+    from: &GridCols<'_, D>,
     remap: &mut GridCols<'_, D>,
 ) {
+    let gathers = !from.vel[0].is_empty();
+    if gathers && !from.lengths_consistent() {
+        return; // Unreachable by construction; the unchecked row access relies on it.
+    }
+    let mut gathered = Gathered::zero();
     let mut st = Stencils::<D, K, W>::default();
     let (mut x, mut v) = (Block([[0.0; W]; D]), Block([[0.0; W]; D]));
     let mut mass = Block([0.0; W]);
@@ -296,7 +309,9 @@ pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, c
     for start in (0..count).step_by(W) {
         for a in 0..D {
             load_into(&mut x[a], p.x_start[a], start);
-            load_into(&mut v[a], p.v[a], start);
+            if !gathers {
+                load_into(&mut v[a], p.v[a], start);
+            }
         }
         load_into(&mut mass, p.mass, start);
         if load_affine {
@@ -308,6 +323,11 @@ pub(crate) fn remap<I: Kernels, const D: usize, const K: usize, S: Shape1D<K>, c
         }
         let (apic, mls) = (ctx.apic, ctx.mls);
         I::stencils::<D, K, S, W>(&mut st, shape, ctx, &p.stretch, start, &x, apic, false, mls);
+        if gathers {
+            const NONE: u8 = Grad::None as u8;
+            I::gather::<D, K, S, W, true, NONE, false>(ctx, from, &st, &mut affine, &mut gathered);
+            v.0 = gathered.v_gp;
+        }
         let active = active_lanes(p.status, start, count);
         let chunk = (&*mass, &*v, &*affine, active);
         remap_rows::<I, D, K, S, W>(ctx, &mut st, &mut products, chunk, remap);

@@ -55,7 +55,7 @@ fn zero(col: &mut [Real], r: core::ops::Range<usize>) {
 }
 
 /// `cols[a][i] /= m_i` (zero on nodes at or below the mass cutoff), plus `add[a]`.
-fn divide_by_mass<const D: usize>(
+pub(crate) fn divide_by_mass<const D: usize>(
     ctx: &Ctx<'_, D>,
     mass: &[Real],
     cols: &mut [&mut [Real]; D],
@@ -116,7 +116,11 @@ fn divide_line(col: &mut [Real], mass: &[Real], cutoff: Real, add: Real) {
 
 /// Folds the nodes past the wall planes onto their images, or reads the images back into them
 /// ([`crate::grid::Geom::for_each_wall_image`]), for every component of a nodal vector.
-fn mirror_vector<const D: usize>(ctx: &Ctx<'_, D>, cols: &mut [&mut [Real]; D], fold: bool) {
+pub(crate) fn mirror_vector<const D: usize>(
+    ctx: &Ctx<'_, D>,
+    cols: &mut [&mut [Real]; D],
+    fold: bool,
+) {
     if fold {
         ctx.geom.fold_wall_images::<D, false>(cols, &ctx.active);
     } else {
@@ -173,42 +177,50 @@ fn boundary<const D: usize>(
 ) {
     let updated = matches!(on, On::Updated(_));
     collide(ctx, g, p, on);
-    let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
-    // The law chosen once: on the updated velocity through the acceleration, or on the
-    // stress update's velocity itself.
-    let (walls, geom) = (&ctx.active, &ctx.geom);
     if updated {
-        geom.for_each_wall_node(walls, &mut |i, axis, side| {
-            let v: [Real; D] = core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt);
-            match geom.wall_law(axis, side, v) {
-                Some(w) => {
-                    for a in 0..D {
-                        // A wall at rest gives `-v / dt`, the bits of the walls before they moved.
-                        g.acc[a][i] = if w[a] == 0.0 {
-                            -g.vel[a][i] * inv_dt
-                        } else {
-                            (w[a] - g.vel[a][i]) * inv_dt
-                        };
-                    }
-                }
-                None => g.acc[axis][i] = -g.vel[axis][i] * inv_dt,
-            }
-        });
-    } else {
-        geom.for_each_wall_node(walls, &mut |i, axis, side| {
-            let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
-            match geom.wall_law(axis, side, v) {
-                Some(w) => {
-                    for a in 0..D {
-                        g.remap[a][i] = w[a];
-                    }
-                }
-                None => g.remap[axis][i] = 0.0,
-            }
-        });
+        return walls_on_updated(ctx, g);
     }
+    // On the stress update's velocity itself.
+    let (walls, geom) = (&ctx.active, &ctx.geom);
+    geom.for_each_wall_node(walls, &mut |i, axis, side| {
+        let v: [Real; D] = core::array::from_fn(|a| g.remap[a][i]);
+        match geom.wall_law(axis, side, v) {
+            Some(w) => {
+                for a in 0..D {
+                    g.remap[a][i] = w[a];
+                }
+            }
+            None => g.remap[axis][i] = 0.0,
+        }
+    });
     // Past the wall planes the nodes take their images' values.
-    mirror_vector(ctx, if updated { &mut g.acc } else { &mut g.remap }, false);
+    mirror_vector(ctx, &mut g.remap, false);
+}
+
+/// The walls of stick and slip faces on the updated velocity `v_i + a_i dt`, through the
+/// acceleration: where a wall fixes a component to `w`, the acceleration becomes the wall's
+/// reaction `(w - v_i) / dt` (E20); then the nodes past the wall planes take their images'
+/// accelerations. Also what XPIC's series ends with ([`super::xpic`]).
+pub(crate) fn walls_on_updated<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+    let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
+    let (walls, geom) = (&ctx.active, &ctx.geom);
+    geom.for_each_wall_node(walls, &mut |i, axis, side| {
+        let v: [Real; D] = core::array::from_fn(|a| g.vel[a][i] + g.acc[a][i] * dt);
+        match geom.wall_law(axis, side, v) {
+            Some(w) => {
+                for a in 0..D {
+                    // A wall at rest gives `-v / dt`, the bits of the walls before they moved.
+                    g.acc[a][i] = if w[a] == 0.0 {
+                        -g.vel[a][i] * inv_dt
+                    } else {
+                        (w[a] - g.vel[a][i]) * inv_dt
+                    };
+                }
+            }
+            None => g.acc[axis][i] = -g.vel[axis][i] * inv_dt,
+        }
+    });
+    mirror_vector(ctx, &mut g.acc, false);
 }
 
 /// Nodal damping (E49, E50): `a_i -= alpha_g(t, x_i) v_i`, with the rate of the grid
@@ -264,6 +276,11 @@ pub(crate) fn remap_velocity<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl 
         let window = g.window();
         divide_by_mass(ctx, g.mass, &mut g.remap, [0.0; D], window)
     });
+    constrain_remapped(ctx, nodes);
+}
+
+/// The walls (and colliders) on the re-mapped velocity.
+pub(crate) fn constrain_remapped<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     let (g, p, _) = &mut nodes.with_impulses();
     constrain_remap(ctx, g, p);
 }

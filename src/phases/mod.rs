@@ -18,6 +18,7 @@ pub(crate) mod tractions;
 pub(crate) mod transport;
 pub(crate) mod update;
 pub(crate) mod volume;
+pub(crate) mod xpic;
 
 pub(crate) use kernels::Kernels;
 
@@ -49,6 +50,8 @@ pub(crate) struct Ctx<'m, const D: usize> {
     /// The momentum approach ([`crate::Transfer::FlipMomentum`], [`momentum`]): its own
     /// gradient, force and position update.
     pub momentum: bool,
+    /// XPIC's or FMPM's order and whether it is FMPM ([`crate::Transfer::series`], [`xpic`]).
+    pub series: Option<(u32, bool)>,
     /// Particle forces declared: the scatter adds `S_ip F_p`.
     pub forces: bool,
     /// Damping in the particle update declared (a particle rate, per-particle rates, or the

@@ -5,6 +5,7 @@
 //! - the damping acceleration (E24, E53): [`crate::effects::damping::acceleration`].
 //! - [`flip`]: FLIP with PIC damping and the position update (E25-E26, or E27).
 //! - [`apic`]: the APIC update (E80).
+//! - [`xpic`]: XPIC(k) and FMPM(k) (E100, E101).
 //! - [`advance`]: the position plus the step's displacement, without rounding error (E28).
 //! - [`walls`]: a particle that leaves the admissible region is put back on a wall's plane
 //!   with its outward velocity zeroed, or escapes through an open face.
@@ -92,6 +93,28 @@ pub(crate) fn apic<I: Compare>(
         v -= d * k.dt;
     }
     (v, v * k.dt)
+}
+
+/// XPIC(k) and FMPM(k) (E100, E101), from the grid as [`crate::phases::xpic`] leaves it:
+/// `v_gp + a_gp dt = S (v* + a dt)` (XPIC) or `S v*` (FMPM), and `v_gp = S v^L` (XPIC) or
+/// `S v*` (FMPM). The particle takes `v(n+1) = v_gp + a_gp dt - d dt` and moves by
+/// `dx = (v_gp + (v(n+1) - v_p) / 2) dt` (XPIC) or `dx = (v_p + v(n+1)) dt / 2` (FMPM).
+/// Returns the new velocity and the displacement `dx` (see [`advance`]).
+#[inline(always)]
+pub(crate) fn xpic<I: Compare>(
+    k: &Step<I>,
+    v_p: Wide<I>,
+    (v_gp, a_gp): (Wide<I>, Wide<I>),
+    d: Option<Wide<I>>,
+    fmpm: bool,
+) -> (Wide<I>, Wide<I>) {
+    let (v, _) = apic(k, v_gp, a_gp, d);
+    let dx = if fmpm {
+        (v_p + v) * k.half * k.dt
+    } else {
+        (v_gp + (v - v_p) * k.half) * k.dt
+    };
+    (v, dx)
 }
 
 /// The position `x + x_low` moved by `dx`, kept as a new pair `(x, x_low)` (E28): `x` the sum

@@ -876,6 +876,7 @@ mod tests {
             vel: core::array::from_fn(|_| vel.next().expect("three axes")),
             acc: core::array::from_fn(|_| acc.next().expect("three axes")),
             remap: core::array::from_fn(|_| remap.next().expect("three axes")),
+            series: core::array::from_fn(|_| &mut [][..]),
             scalar: Default::default(),
             contact: Default::default(),
             len: LEN,

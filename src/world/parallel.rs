@@ -299,9 +299,30 @@ impl<'b, const D: usize> Columns<'b, D> {
             part.to_partial()
         };
         let read = |cols: &RemapCols<'_, D>, n: usize, remap: &mut GridCols<'_, D>| {
-            I::remap::<D, K, S, W>(shape, ctx, cols, n, remap)
+            I::remap::<D, K, S, W>(shape, ctx, cols, n, &GridCols::empty(), remap)
         };
         self.particles_by_tiles(count, &tiles, report, &update, &read);
+    }
+
+    /// XPIC's and FMPM's projection of the series columns (`A u = S+ S u`, E99): the velocity
+    /// gathered from them at each particle, its momentum scattered to the re-map columns
+    /// ([`passes::Passes::remap`]). On the calling thread, whatever the workers: its sums are
+    /// one worker's. With the stencils of the particles' current positions, or with
+    /// `at_start` of the positions MUSL kept where the substep started.
+    pub fn project<I: Passes, const K: usize, S: Shape1D<K>, const W: usize>(
+        &mut self,
+        shape: &S,
+        ctx: &Ctx<'_, D>,
+        count: usize,
+        at_start: bool,
+    ) {
+        let (p, mut g) = self.full();
+        let (from, mut remap) = g.split_series();
+        let mut cols = RemapCols::at_current(&p);
+        if at_start {
+            cols.x_start = p.x_start.each_ref().map(|c| &**c);
+        }
+        I::remap::<D, K, S, W>(shape, ctx, &cols, count, &from, &mut remap);
     }
 
     /// MUSL's particle pass on several workers, with the re-map scatter inside it as one

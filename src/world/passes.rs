@@ -51,12 +51,14 @@ crate::simd::instances! {
         report: &mut StepReport,
     ) => g2p::particles;
 
-    /// [`g2p::remap`]: MUSL's re-map of particles another item of the parallel step updated.
+    /// [`g2p::remap`]: MUSL's re-map of particles another item of the parallel step updated,
+    /// and XPIC's projection.
     fn remap [const D: usize, const K: usize, S: Shape1D<K>, const W: usize] [I] [D, K, S, W] (
         shape: &S,
         ctx: &Ctx<'_, D>,
         p: &RemapCols<'_, D>,
         count: usize,
+        from: &GridCols<'_, D>,
         remap: &mut GridCols<'_, D>,
     ) => g2p::remap;
 

@@ -11,7 +11,7 @@ use crate::layout::{ColliderImpulse, ColliderRecord, Layout, MaterialRecord, Tra
 use crate::math::{ceil, exp_m1};
 use crate::particles::FROZEN;
 use crate::phases::p2g::{Adds, Mode};
-use crate::phases::{grid_update, Ctx};
+use crate::phases::{grid_update, xpic, Ctx};
 use crate::shape::Shape1D;
 use crate::simd::lanes::width;
 use crate::simd::Simd;
@@ -301,6 +301,7 @@ impl<'a> World<'a> {
             mls: def.transfer == Transfer::Mls,
             particle_velocity: def.transfer == Transfer::FlipParticleVelocity,
             momentum: def.transfer == Transfer::FlipMomentum,
+            series: def.transfer.series(),
             forces: fx.particle_forces,
             damp: fx.damping.is_some_and(|d| d.on_particles()),
             gravity: core::array::from_fn(|a| def.gravity[a] + body[a]),
@@ -403,6 +404,7 @@ fn run_kernel<const D: usize, const K: usize, S: Shape1D<K>, const W: usize>(
 /// ```text
 /// USL : scatter(m, p, f) -> v -> tractions -> a -> particles(x, v, stress)
 /// MUSL: scatter(m, p, f) -> v -> tractions -> a -> particles(x, v; remap p) -> v' -> stress
+/// XPIC(k), FMPM(k): after a, k - 1 times project(gather v*, scatter m v) -> v*
 /// USF : scatter(m, p) -> v -> v with walls -> stress -> scatter(f) -> tractions -> a -> particles
 /// momentum approach: m and p first, masses mirrored at the walls, then its own scatter(f)
 /// ```
@@ -467,12 +469,32 @@ impl Kernel for Substep<'_> {
             crate::phases::tractions::tractions(s, ctx, &p, count, &mut g);
         }
         grid_update::acceleration(ctx, &mut GridPasses { cols, ctx });
+        // XPIC(k) and FMPM(k): the series of k - 1 projections (E98-E101).
+        if let Some((k, _)) = ctx.series.filter(|&(k, fmpm)| fmpm || k >= 2) {
+            xpic::start(ctx, &mut GridPasses { cols, ctx });
+            for r in 2..=k {
+                cols.project::<I, K, S, W>(s, ctx, count, false);
+                xpic::absorb(ctx, &mut GridPasses { cols, ctx }, r);
+            }
+            xpic::finish(ctx, &mut GridPasses { cols, ctx });
+        }
         // USL also updates the stress here, MUSL scatters the new momenta to the remap
         // columns (see g2p::particles).
         cols.particles::<I, K, S, W>(s, ctx, count, report);
         if musl {
-            // MUSL: the stress from the re-mapped velocities.
-            grid_update::remap_velocity(ctx, &mut GridPasses { cols, ctx });
+            // MUSL: the stress from the re-mapped velocities (FMPM(k): through its series).
+            match ctx.series {
+                Some((k, true)) if k >= 2 => {
+                    xpic::restart(ctx, &mut GridPasses { cols, ctx });
+                    for r in 2..=k {
+                        cols.project::<I, K, S, W>(s, ctx, count, true);
+                        xpic::absorb(ctx, &mut GridPasses { cols, ctx }, r);
+                    }
+                    xpic::into_remap(ctx, &mut GridPasses { cols, ctx });
+                    grid_update::constrain_remapped(ctx, &mut GridPasses { cols, ctx });
+                }
+                _ => grid_update::remap_velocity(ctx, &mut GridPasses { cols, ctx }),
+            }
             cols.stress::<I, K, S, W>(s, ctx, count, report);
         }
     }
@@ -512,6 +534,7 @@ impl Kernel for PhaseRun {
             mls: false,
             particle_velocity: false,
             momentum: false,
+            series: None,
             forces: false,
             damp: false,
             nodal_damping: None,

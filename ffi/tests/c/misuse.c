@@ -525,7 +525,11 @@ static void init_refused(const char *name, MpmStatus want, const MpmWorldDef *d)
 static void effects_def_misuse(void) {
     static const uint32_t bad_flag[] = {2u, 0x80000000u, 0xFFFFFFFFu};
     static const uint32_t bad_kind[] = {3u, 0x80000000u, 0xFFFFFFFFu};
-    static const uint32_t bad_transfer[] = {5u, 0x80000000u, 0xFFFFFFFFu};
+    /* 5 and 6 with an order above the low byte are XPIC and FMPM; 7 is no transfer. */
+    static const uint32_t bad_transfer[] = {7u, 0x80000000u, 0xFFFFFFFFu};
+    /* XPIC and FMPM of an order out of range: 0, XPIC(9), FMPM(3). */
+    static const uint32_t bad_order[] = {MPM_TRANSFER_XPIC, MPM_TRANSFER_XPIC + 256u * 9u,
+                                         MPM_TRANSFER_FMPM + 256u * 3u};
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     const char *label[3] = {"NaN", "+inf", "-inf"};
     MpmWorldDef d, damped = g_def2, fed, zoned, heated = g_def2, diffused = g_def2;
@@ -552,6 +556,10 @@ static void effects_def_misuse(void) {
                  mpm_memory_requirements(&ramped, &req));
     }
 
+    d = g_def2;
+    d.transfer = MPM_TRANSFER_FMPM + 256u * 2u;
+    d.update_order = MPM_UPDATE_ORDER_USL;
+    init_refused("init: FMPM(2) with USL", MPM_STATUS_INVALID_TRANSFER, &d);
     for (k = 0; k < sizeof bad_flag / sizeof bad_flag[0]; k++) {
         char name[96];
         const uint32_t v = bad_flag[k];
@@ -559,6 +567,10 @@ static void effects_def_misuse(void) {
         d.transfer = bad_transfer[k]; /* 2, 3 and 4 are FLIP_PARTICLE_VELOCITY, MLS, FLIP_MOMENTUM */
         snprintf(name, sizeof name, "init: transfer %u", (unsigned)bad_transfer[k]);
         init_refused(name, MPM_STATUS_INVALID_ENUM, &d);
+        d = g_def2;
+        d.transfer = bad_order[k];
+        snprintf(name, sizeof name, "init: transfer order %u", (unsigned)bad_order[k]);
+        init_refused(name, MPM_STATUS_INVALID_TRANSFER, &d);
         d = g_def2;
         d.effects.damping.declared = v;
         snprintf(name, sizeof name, "init: damping.declared %u", (unsigned)v);
@@ -861,6 +873,8 @@ static void axisymmetric_def_misuse(void) {
               d.shape = MPM_SHAPE_CUBIC_BSPLINE);
     GOOD_AXIS("init: axisymmetric cpGIMP, origin.x -1 cell", d.shape = MPM_SHAPE_CP_GIMP);
     GOOD_AXIS("init: axisymmetric APIC", d.transfer = MPM_TRANSFER_APIC);
+    GOOD_AXIS("init: axisymmetric XPIC(3)", d.transfer = MPM_TRANSFER_XPIC + 256u * 3u);
+    GOOD_AXIS("init: axisymmetric FMPM(2)", d.transfer = MPM_TRANSFER_FMPM + 256u * 2u);
     d = a;
     d.transfer = MPM_TRANSFER_FLIP_MOMENTUM;
     init_refused("init: axisymmetric FLIP momentum", MPM_STATUS_INVALID_TRANSFER, &d);
