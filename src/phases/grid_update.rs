@@ -82,24 +82,26 @@ fn add_body_gradient<const D: usize>(
     window: core::ops::Range<usize>,
 ) {
     let geom = &ctx.geom;
-    let first = window.start;
+    let offset = window.start;
     ctx.active.for_each_line_in(geom.stride, window, |r| {
-        // The position of the line's first node (lines run along x).
-        let n = first + r.start;
-        let x0: [Real; D] = core::array::from_fn(|a| {
-            geom.origin[a] + ((n / geom.stride[a]) % geom.nodes[a]) as Real * geom.h
-        });
-        for (t, node) in r.enumerate() {
-            if mass.get(node).is_none_or(|&m| m <= ctx.mass_cutoff) {
-                continue;
-            }
-            let mut x = x0;
-            x[0] += t as Real * geom.h;
-            for (a, col) in cols.iter_mut().enumerate() {
-                if let Some(c) = col.get_mut(node) {
-                    *c += (0..D).map(|b| gradient[a][b] * x[b]).sum::<Real>();
+        // A range may run past the end of its grid line (as in `damp_nodes`): one line at
+        // a time, each from its first node's position.
+        let mut start = r.start;
+        while start < r.end {
+            let along = (start + offset) % geom.nodes[0];
+            let end = r.end.min(start - along + geom.nodes[0]);
+            let mut x = geom.node_position(start + offset);
+            for node in start..end {
+                x[0] = geom.origin[0] + (along + node - start) as Real * geom.h;
+                if mass.get(node).is_some_and(|&m| m > ctx.mass_cutoff) {
+                    for (a, col) in cols.iter_mut().enumerate() {
+                        if let Some(c) = col.get_mut(node) {
+                            *c += (0..D).map(|b| gradient[a][b] * x[b]).sum::<Real>();
+                        }
+                    }
                 }
             }
+            start = end;
         }
     });
 }
