@@ -23,7 +23,7 @@ use mpm_gimp::{
     memory_requirements, Boundary, Dimension, Face, HeapBuffer, MaterialDef, MaterialModel, Real,
     ShapeFunction, Transfer, UpdateOrder, Vec3, World, WorldDef,
 };
-use mpm_gimp_mpi::{real_columns, Split, SplitError};
+use mpm_gimp_mpi::{Split, SplitError};
 use std::time::Instant;
 
 /// A scene of the check: its definition and what fills it.
@@ -309,7 +309,7 @@ fn main() {
         if let (Some(got), Some(world)) = (gathered, reference.as_ref()) {
             let view = world.particles();
             let (want, have) = (view.state(), got.state());
-            let (a, b) = (real_columns(&want), real_columns(&have));
+            let (a, b) = (want.real_columns(), have.real_columns());
             let mut first = None;
             let mut count = 0usize;
             for (k, (x, y)) in a.iter().zip(b.iter()).enumerate() {

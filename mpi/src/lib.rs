@@ -47,8 +47,8 @@ use mpm_gimp::{
 use std::fmt;
 
 /// Real columns a [`ParticleState`] may give (3D with every effect), in the order of
-/// [`real_columns`].
-pub const REAL_COLUMNS: usize = 48;
+/// [`ParticleState::real_columns`].
+pub const REAL_COLUMNS: usize = ParticleState::REAL_COLUMNS;
 
 /// Why a split could not be made or stepped. Every rank returns the same error.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,7 +129,8 @@ pub struct SplitReport {
 pub struct Gathered {
     /// Number of particles.
     pub count: usize,
-    /// Each Real column in the order of [`real_columns`]; empty where the scene keeps none.
+    /// Each Real column in the order of [`ParticleState::real_columns`]; empty where the scene
+    /// keeps none.
     pub reals: Vec<Vec<Real>>,
     /// Material ids.
     pub material: Vec<u32>,
@@ -144,103 +145,15 @@ impl Gathered {
     }
 }
 
-/// The Real columns of `s` in a fixed order ([`REAL_COLUMNS`] of them; those `s` does not
-/// give are empty): position, its low part and velocity per axis, mass, initial volume,
-/// `H` row by row, stress, force, damping, temperature, concentration, their grid values and
-/// sources, hoop stretch, plastic history, affine matrix row by row.
-pub fn real_columns<'s>(s: &ParticleState<'s>) -> [&'s [Real]; REAL_COLUMNS] {
-    let h = &s.displacement_gradient;
-    let b = &s.affine;
-    [
-        s.position[0],
-        s.position[1],
-        s.position[2],
-        s.position_low[0],
-        s.position_low[1],
-        s.position_low[2],
-        s.velocity[0],
-        s.velocity[1],
-        s.velocity[2],
-        s.mass,
-        s.volume0,
-        h[0][0],
-        h[0][1],
-        h[0][2],
-        h[1][0],
-        h[1][1],
-        h[1][2],
-        h[2][0],
-        h[2][1],
-        h[2][2],
-        s.stress[0],
-        s.stress[1],
-        s.stress[2],
-        s.stress[3],
-        s.stress[4],
-        s.stress[5],
-        s.force[0],
-        s.force[1],
-        s.force[2],
-        s.damping[0],
-        s.damping[1],
-        s.temperature,
-        s.concentration,
-        s.grid_temperature,
-        s.grid_concentration,
-        s.temperature_source,
-        s.concentration_source,
-        s.hoop,
-        s.plastic,
-        b[0][0],
-        b[0][1],
-        b[0][2],
-        b[1][0],
-        b[1][1],
-        b[1][2],
-        b[2][0],
-        b[2][1],
-        b[2][2],
-    ]
-}
-
-/// The state whose Real columns are `c` (in the order of [`real_columns`]).
+/// The state whose Real columns are `c` (in the order of [`ParticleState::real_columns`]).
 fn state_of<'s>(
     count: usize,
     c: &'s [Vec<Real>],
     material: &'s [u32],
     status: &'s [u32],
 ) -> ParticleState<'s> {
-    let g = |k: usize| c[k].as_slice();
-    let m = |k: usize| {
-        [
-            [g(k), g(k + 1), g(k + 2)],
-            [g(k + 3), g(k + 4), g(k + 5)],
-            [g(k + 6), g(k + 7), g(k + 8)],
-        ]
-    };
-    ParticleState {
-        count,
-        position: [g(0), g(1), g(2)],
-        position_low: [g(3), g(4), g(5)],
-        velocity: [g(6), g(7), g(8)],
-        mass: g(9),
-        volume0: g(10),
-        displacement_gradient: m(11),
-        stress: [g(20), g(21), g(22), g(23), g(24), g(25)],
-        material,
-        status,
-        force: [g(26), g(27), g(28)],
-        damping: [g(29), g(30)],
-        temperature: g(31),
-        concentration: g(32),
-        grid_temperature: g(33),
-        grid_concentration: g(34),
-        temperature_source: g(35),
-        concentration_source: g(36),
-        hoop: g(37),
-        plastic: g(38),
-        affine: m(39),
-    }
+    let columns = core::array::from_fn(|k| c[k].as_slice());
+    ParticleState::from_real_columns(count, columns, material, status)
 }
 
 /// The halo, in cell lines on each side of a slab, that a rank holds particles of, for a
@@ -391,7 +304,9 @@ impl Split {
         if total == 0 {
             return Err(SplitError::Unsupported("a scene without particles"));
         }
-        let present = real_columns(&view.state())
+        let present = view
+            .state()
+            .real_columns()
             .iter()
             .enumerate()
             .filter(|(_, c)| c.len() == total)
@@ -653,7 +568,7 @@ impl Split {
         let w = self.view();
         let view = w.particles();
         let state = view.state();
-        let cols = real_columns(&state);
+        let cols = state.real_columns();
         for &i in local {
             let i = i as usize;
             out.extend_from_slice(&ids[i].to_ne_bytes());
@@ -912,7 +827,7 @@ mod tests {
     fn columns_round_trip() {
         let reals: Vec<Vec<Real>> = (0..REAL_COLUMNS).map(|k| vec![k as Real]).collect();
         let s = state_of(1, &reals, &[0], &[0]);
-        let back = real_columns(&s);
+        let back = s.real_columns();
         for (k, c) in back.iter().enumerate() {
             assert_eq!(c[0], k as Real);
         }

@@ -128,6 +128,88 @@ pub struct ParticleState<'s> {
     pub affine: [[&'s [Real]; 3]; 3],
 }
 
+/// How many Real columns a state has ([`ParticleState::REAL_COLUMNS`]).
+const REAL_COLUMNS: usize = 48;
+
+impl<'s> ParticleState<'s> {
+    /// How many Real columns a state has ([`ParticleState::real_columns`]).
+    pub const REAL_COLUMNS: usize = REAL_COLUMNS;
+
+    /// Every Real column, those not given empty, in a fixed order: position, its low part and
+    /// velocity per axis (0-8), mass (9), initial volume (10), `H` row by row (11-19),
+    /// stress (20-25), force (26-28), damping (29-30), temperature, concentration, their
+    /// grid values and sources, hoop stretch, plastic history (31-38), affine matrix row by
+    /// row (39-47): how a host that keeps or sends a state as columns lays them out.
+    pub fn real_columns(&self) -> [&'s [Real]; REAL_COLUMNS] {
+        let (h, b) = (self.displacement_gradient, self.affine);
+        let scalars = [
+            self.temperature,
+            self.concentration,
+            self.grid_temperature,
+            self.grid_concentration,
+            self.temperature_source,
+            self.concentration_source,
+            self.hoop,
+            self.plastic,
+        ];
+        let mut c: [&'s [Real]; REAL_COLUMNS] = [&[]; REAL_COLUMNS];
+        let parts: [&[&'s [Real]]; 10] = [
+            &self.position,
+            &self.position_low,
+            &self.velocity,
+            &[self.mass, self.volume0],
+            h.as_flattened(),
+            &self.stress,
+            &self.force,
+            &self.damping,
+            &scalars,
+            b.as_flattened(),
+        ];
+        let mut at = 0;
+        for part in parts {
+            c[at..at + part.len()].copy_from_slice(part);
+            at += part.len();
+        }
+        c
+    }
+
+    /// The state of `count` particles whose Real columns are `c`, in the order of
+    /// [`ParticleState::real_columns`].
+    pub fn from_real_columns(
+        count: usize,
+        c: [&'s [Real]; REAL_COLUMNS],
+        material: &'s [u32],
+        status: &'s [u32],
+    ) -> ParticleState<'s> {
+        let matrix = |k: usize| -> [[&'s [Real]; 3]; 3] {
+            core::array::from_fn(|a| core::array::from_fn(|b| c[k + 3 * a + b]))
+        };
+        ParticleState {
+            count,
+            position: [c[0], c[1], c[2]],
+            position_low: [c[3], c[4], c[5]],
+            velocity: [c[6], c[7], c[8]],
+            mass: c[9],
+            volume0: c[10],
+            displacement_gradient: matrix(11),
+            stress: core::array::from_fn(|k| c[20 + k]),
+            material,
+            status,
+            force: [c[26], c[27], c[28]],
+            damping: [c[29], c[30]],
+            temperature: c[31],
+            concentration: c[32],
+            grid_temperature: c[33],
+            grid_concentration: c[34],
+            temperature_source: c[35],
+            concentration_source: c[36],
+            hoop: c[37],
+            plastic: c[38],
+            affine: matrix(39),
+        }
+    }
+}
+
 impl ParticleState<'_> {
     /// No particle, no column given: the start of a state built field by field
     /// (`ParticleState { count, mass, .. ParticleState::NONE }`).

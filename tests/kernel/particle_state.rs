@@ -144,8 +144,8 @@ fn scene<'b>(dimension: Dimension, model: MaterialModel, buf: &'b mut HeapBuffer
     w
 }
 
-/// The Real columns of a state, in a fixed order, with their names.
-const COLUMNS: usize = 48;
+/// The Real columns of a state ([`ParticleState::real_columns`]), with their names.
+const COLUMNS: usize = ParticleState::REAL_COLUMNS;
 
 fn name(k: usize) -> String {
     let axis = |base: &str, k: usize| format!("{base}[{k}]");
@@ -171,33 +171,6 @@ fn name(k: usize) -> String {
     }
 }
 
-/// Every Real column of `s` in the order [`name`] gives.
-fn columns<'s>(s: &ParticleState<'s>) -> [&'s [Real]; COLUMNS] {
-    let mut c: [&'s [Real]; COLUMNS] = [&[]; COLUMNS];
-    c[0..3].copy_from_slice(&s.position);
-    c[3..6].copy_from_slice(&s.position_low);
-    c[6..9].copy_from_slice(&s.velocity);
-    c[9] = s.mass;
-    c[10] = s.volume0;
-    c[11..20].copy_from_slice(s.displacement_gradient.as_flattened());
-    c[20..26].copy_from_slice(&s.stress);
-    c[26..29].copy_from_slice(&s.force);
-    c[29..31].copy_from_slice(&s.damping);
-    c[39..48].copy_from_slice(s.affine.as_flattened());
-    let scalars = [
-        s.temperature,
-        s.concentration,
-        s.grid_temperature,
-        s.grid_concentration,
-        s.temperature_source,
-        s.concentration_source,
-        s.hoop,
-        s.plastic,
-    ];
-    c[31..39].copy_from_slice(&scalars);
-    c
-}
-
 /// Some particles' state as a host keeps it: copies of every column.
 #[derive(Clone)]
 struct Rows {
@@ -212,7 +185,7 @@ impl Rows {
     fn of(s: &ParticleState<'_>) -> Rows {
         Rows {
             count: s.count,
-            real: columns(s).iter().map(|c| c.to_vec()).collect(),
+            real: s.real_columns().iter().map(|c| c.to_vec()).collect(),
             material: s.material.to_vec(),
             status: s.status.to_vec(),
         }
@@ -225,32 +198,8 @@ impl Rows {
 
     /// The state these columns hold.
     fn state(&self) -> ParticleState<'_> {
-        let c = |k: usize| &self.real[k][..];
-        ParticleState {
-            count: self.count,
-            position: [c(0), c(1), c(2)],
-            position_low: [c(3), c(4), c(5)],
-            velocity: [c(6), c(7), c(8)],
-            mass: c(9),
-            volume0: c(10),
-            displacement_gradient: core::array::from_fn(|a| {
-                core::array::from_fn(|b| c(11 + 3 * a + b))
-            }),
-            stress: core::array::from_fn(|k| c(20 + k)),
-            material: &self.material,
-            status: &self.status,
-            force: [c(26), c(27), c(28)],
-            damping: [c(29), c(30)],
-            temperature: c(31),
-            concentration: c(32),
-            grid_temperature: c(33),
-            grid_concentration: c(34),
-            temperature_source: c(35),
-            concentration_source: c(36),
-            hoop: c(37),
-            plastic: c(38),
-            affine: core::array::from_fn(|a| core::array::from_fn(|b| c(39 + 3 * a + b))),
-        }
+        let c = core::array::from_fn(|k| &self.real[k][..]);
+        ParticleState::from_real_columns(self.count, c, &self.material, &self.status)
     }
 }
 
@@ -259,7 +208,7 @@ impl Rows {
 fn assert_same(label: &str, a: &World<'_>, b: &World<'_>) {
     let (va, vb) = (a.particles(), b.particles());
     assert_eq!(va.count, vb.count, "{label}: particle count");
-    let (ca, cb) = (columns(&va.state()), columns(&vb.state()));
+    let (ca, cb) = (va.state().real_columns(), vb.state().real_columns());
     for k in 0..COLUMNS {
         let bits = |c: &[Real]| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert!(bits(ca[k]) == bits(cb[k]), "{label}: column {}", name(k));
@@ -572,7 +521,7 @@ fn offset_of(w: &World<'_>, column: Column, i: usize) -> usize {
     let v = w.particles();
     let start = w.as_bytes().as_ptr() as usize;
     let at = match column {
-        Column::Real(k) => columns(&v.state())[k][i..].as_ptr() as usize,
+        Column::Real(k) => v.state().real_columns()[k][i..].as_ptr() as usize,
         Column::Material => v.material[i..].as_ptr() as usize,
         Column::Status => v.status[i..].as_ptr() as usize,
     };
