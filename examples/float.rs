@@ -88,15 +88,10 @@ fn main() {
     while world.time() < seconds {
         world.step(frame).expect("step");
         let body = world.collider(id).expect("box").def;
-        let p = world.particles();
         // The surface away from the box, 15 cm past its edges (the water next to it stands a
-        // few mm higher and settles slowly): the highest particle's top; the box's depth
-        // below it at its centre line.
-        let top = (0..p.count)
-            .filter(|&i| (p.position[0][i] - body.position.x).abs() > width / 2.0 + 0.15)
-            .map(|i| p.position[1][i])
-            .fold(Real::MIN, Real::max)
-            + h / 4.0;
+        // few mm higher and settles slowly); the box's depth below it at its centre line.
+        let far = |x: Real| (x - body.position.x).abs() > width / 2.0 + 0.15;
+        let top = scenes::surface_height(&world, far).expect("water away from the box");
         let angle = 2.0 * body.rotation[2].atan2(body.rotation[3]);
         let depth = top - (body.position.y - height / 2.0 * angle.cos());
         let error = (depth / archimedes - 1.0) as f64;
@@ -104,6 +99,7 @@ fn main() {
             worst = worst.max(error.abs());
         }
         if world.time() >= next {
+            let p = world.particles();
             let inside = (0..p.count)
                 .filter(|&i| {
                     let x = Vec3::new(p.position[0][i], p.position[1][i], 0.0);

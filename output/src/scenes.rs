@@ -568,6 +568,28 @@ pub fn floating_box(
     Ok((id, draft))
 }
 
+/// The height of a 2D water surface, m, over the particles whose x `far` keeps (away from a
+/// floating body, say): the top of each column of particles one particle spacing wide (its
+/// highest centre plus half a spacing), and the median of those tops. The median, not the
+/// highest particle: a particle the wall or the transfer's noise lifts a fraction of a
+/// spacing above its neighbours is not the level (the highest one drifts up by 3 mm over
+/// four minutes in the floating-box tank while the median holds to 0.2 mm). `None` when
+/// `far` keeps no particle.
+pub fn surface_height(world: &World, far: impl Fn(Real) -> bool) -> Option<Real> {
+    let def = world.def();
+    let spacing = def.cell_size / def.particles_per_cell as Real;
+    let p = world.particles();
+    let mut tops = std::collections::BTreeMap::<i64, Real>::new();
+    for i in (0..p.count).filter(|&i| far(p.position[0][i])) {
+        let column = (p.position[0][i] / spacing).floor() as i64;
+        let top = tops.entry(column).or_insert(Real::MIN);
+        *top = top.max(p.position[1][i]);
+    }
+    let mut tops: Vec<Real> = tops.into_values().collect();
+    tops.sort_by(Real::total_cmp);
+    Some(*tops.get(tops.len() / 2)? + spacing / 2.0)
+}
+
 /// The floor of a world: its lower y wall plane, m.
 fn floor(def: &WorldDef) -> Real {
     def.origin.y + def.shape.margin_cells() as Real * def.cell_size
