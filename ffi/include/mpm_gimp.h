@@ -48,9 +48,9 @@
 #endif
 
 /* The version of this header, from the crate version. */
-#define MPM_GIMP_VERSION "0.11.0"
+#define MPM_GIMP_VERSION "0.11.1"
 /* major * 10000 + minor * 100 + patch; compare with mpm_abi_version(). */
-#define MPM_GIMP_ABI_VERSION 1100
+#define MPM_GIMP_ABI_VERSION 1101
 
 
 // Most points an `MpmSchedule` holds.
@@ -1701,6 +1701,21 @@ MpmStatus mpm_world_remove_particles_in_box(struct MpmWorld *world,
                                             struct MpmVec3 min,
                                             struct MpmVec3 max,
                                             uint32_t *removed_out);
+
+// Removes every particle whose domain reaches into collider `collider`'s solid, posed now,
+// or touches it: the material a solid placed into it displaces (`Removal::Collider`: a
+// domain is the square, cube in 3D, of half-width `cell_size / (2 particles_per_cell)`; it
+// reaches a flat face exactly where it would overlap it, and a curved one a little sooner).
+// The call a host makes after adding a body into water or sand, in place of testing the
+// particles' centres, which leaves half-particles pressed into the solid. As
+// `mpm_world_remove_particles` does; `MPM_STATUS_UNKNOWN_COLLIDER` for an id past the
+// colliders (nothing removed).
+//
+// # Safety
+// `world` is NULL or a world; `removed_out` is NULL or valid.
+MpmStatus mpm_world_remove_particles_in_collider(struct MpmWorld *world,
+                                                 uint32_t collider,
+                                                 uint32_t *removed_out);
 
 // Removes every particle that no longer takes part (escaped through an open face, or
 // frozen), as `mpm_world_remove_particles` does.

@@ -577,6 +577,27 @@ pub unsafe extern "C" fn mpm_world_remove_particles_in_box(
     }
 }
 
+/// Removes every particle whose domain reaches into collider `collider`'s solid, posed now,
+/// or touches it: the material a solid placed into it displaces (`Removal::Collider`: a
+/// domain is the square, cube in 3D, of half-width `cell_size / (2 particles_per_cell)`; it
+/// reaches a flat face exactly where it would overlap it, and a curved one a little sooner).
+/// The call a host makes after adding a body into water or sand, in place of testing the
+/// particles' centres, which leaves half-particles pressed into the solid. As
+/// `mpm_world_remove_particles` does; `MPM_STATUS_UNKNOWN_COLLIDER` for an id past the
+/// colliders (nothing removed).
+///
+/// # Safety
+/// `world` is NULL or a world; `removed_out` is NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn mpm_world_remove_particles_in_collider(
+    world: *mut MpmWorld,
+    collider: u32,
+    removed_out: *mut u32,
+) -> MpmStatus {
+    // SAFETY: forwarded contract.
+    unsafe { remove(world, removed_out, |_| Ok(Removal::Collider(collider))) }
+}
+
 /// Removes every particle that no longer takes part (escaped through an open face, or
 /// frozen), as `mpm_world_remove_particles` does.
 ///

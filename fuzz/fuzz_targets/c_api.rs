@@ -859,9 +859,14 @@ fuzz_target!(|data: &[u8]| {
                             let mut removed = 0;
                             mpm_world_remove_particles_in_box(world, lo, hi, &mut removed)
                         }
-                        7 => {
+                        7 if inp.u32_below(2) == 0 => {
                             let mut removed = 0;
                             mpm_world_remove_inactive_particles(world, &mut removed)
+                        }
+                        7 => {
+                            // A collider id in range or past it.
+                            let mut removed = 0;
+                            mpm_world_remove_particles_in_collider(world, inp.u32_below(4), &mut removed)
                         }
                         8 => {
                             // An order as long as the range: short of the count or not.

@@ -501,8 +501,8 @@ pub fn still_water(world: &mut World, k: Real, depth: Real) -> Result<(u32, Real
 /// Which water [`floating_box`] cuts out to make room for the box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cut {
-    /// Every particle whose domain reaches into the box or touches it: the water starts clear
-    /// of the box.
+    /// Every particle whose domain reaches into the box or touches it (`Removal::Collider`):
+    /// the water starts clear of the box.
     Domains,
     /// The particles whose centre lies inside the box, as a host that tests points would cut:
     /// the water next to the box overlaps it by up to half a particle's width.
@@ -537,30 +537,15 @@ pub fn floating_box(
         inertia: Vec3::new(0.0, 0.0, if turn { inertia } else { 0.0 }),
         ..ColliderDef::DEFAULT
     })?;
-    // `Cut::Domains`: the water whose particles' domains (squares of half-width `l`) reach
-    // into the box or touch it, tilted or not: any of 5 x 5 points across the square within a
-    // thousandth of a cell of the solid (a domain that only touches the box is cut, whatever
-    // the rounding).
-    let def = world.def();
-    let l = def.cell_size / (2 * def.particles_per_cell) as Real;
+    if cut == Cut::Domains {
+        world.remove_particles(Removal::Collider(id))?;
+        return Ok((id, draft));
+    }
     let p = world.particles();
     let inside: Vec<u32> = (0..p.count)
         .filter(|&i| {
-            if cut == Cut::Centres {
-                let x = Vec3::new(p.position[0][i], p.position[1][i], 0.0);
-                return world.collider_distance(id, x).is_ok_and(|d| d < 0.0);
-            }
-            (0..25).any(|k| {
-                let at = |j: usize| (j as Real / 2.0 - 1.0) * l;
-                let x = Vec3::new(
-                    p.position[0][i] + at(k % 5),
-                    p.position[1][i] + at(k / 5),
-                    0.0,
-                );
-                world
-                    .collider_distance(id, x)
-                    .is_ok_and(|d| d <= def.cell_size / 1024.0)
-            })
+            let x = Vec3::new(p.position[0][i], p.position[1][i], 0.0);
+            world.collider_distance(id, x).is_ok_and(|d| d < 0.0)
         })
         .map(|i| i as u32)
         .collect();

@@ -730,6 +730,13 @@ def namespace(name):
                 V(*_vec3(max, "max")),
             ).value
 
+        def remove_particles_in_collider(self, collider):
+            """Removes every particle whose domain reaches into collider `collider`'s solid:
+            the material a body placed into it displaces."""
+            return self._out(
+                "mpm_world_remove_particles_in_collider", ctypes.c_uint32, collider
+            ).value
+
         def remove_inactive_particles(self):
             """Removes every escaped or frozen particle."""
             return self._out("mpm_world_remove_inactive_particles", ctypes.c_uint32).value

@@ -3,7 +3,7 @@ do not edit."""
 
 # name: value
 CONSTANTS = {'MPM_DAMPING_ZONES': 4,
- 'MPM_GIMP_ABI_VERSION': 1100,
+ 'MPM_GIMP_ABI_VERSION': 1101,
  'MPM_MAX_HARDENING_COEFFICIENT': 100.0,
  'MPM_MIN_STABLE_DT': 1e-15,
  'MPM_PARALLEL_FROM': 4096,
@@ -1528,6 +1528,18 @@ FUNCTIONS = [('mpm_abi_version',
   '`MPM_STATUS_NON_FINITE_INPUT` for a corner that is not finite, `MPM_STATUS_INVALID_REGION` '
   'for `min > max` on an axis (nothing removed).  # Safety `world` is NULL or a world; '
   '`removed_out` is NULL or valid.'),
+ ('mpm_world_remove_particles_in_collider',
+  'MpmStatus',
+  [('world', 'MpmWorld*'), ('collider', 'uint32_t'), ('removed_out', 'uint32_t*')],
+  "Removes every particle whose domain reaches into collider `collider`'s solid, posed now, or "
+  'touches it: the material a solid placed into it displaces (`Removal::Collider`: a domain is '
+  'the square, cube in 3D, of half-width `cell_size / (2 particles_per_cell)`; it reaches a '
+  'flat face exactly where it would overlap it, and a curved one a little sooner). The call a '
+  "host makes after adding a body into water or sand, in place of testing the particles' "
+  'centres, which leaves half-particles pressed into the solid. As '
+  '`mpm_world_remove_particles` does; `MPM_STATUS_UNKNOWN_COLLIDER` for an id past the '
+  'colliders (nothing removed).  # Safety `world` is NULL or a world; `removed_out` is NULL or '
+  'valid.'),
  ('mpm_world_remove_inactive_particles',
   'MpmStatus',
   [('world', 'MpmWorld*'), ('removed_out', 'uint32_t*')],

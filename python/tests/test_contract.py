@@ -323,6 +323,16 @@ def test_colliders_are_added_set_and_read_back(mpm):
         w.collider(5)
     with pytest.raises(mpm_gimp.ColliderCapacityExceededError):
         w.add_collider(ball)
+    # A box pressed into the block takes the particles whose domains it reaches, once.
+    box = mpm.ColliderDef(
+        shape=mpm.ColliderShape.BOX, half_extents=(0.05, 0.05, 0.05), position=(0.5, 0.5, 0)
+    )
+    w.set_collider(1, box)
+    n = w.diagnostics().particle_count
+    assert w.remove_particles_in_collider(1) > 0
+    assert w.diagnostics().particle_count < n and w.remove_particles_in_collider(1) == 0
+    with pytest.raises(mpm_gimp.UnknownColliderError):
+        w.remove_particles_in_collider(2)
 
 
 def test_effects_setters_and_removal(mpm):

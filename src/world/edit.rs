@@ -10,7 +10,7 @@ use crate::layout::{col, Layout, TractionRecord};
 use crate::material::Deformation;
 use crate::particles::ACTIVE;
 use crate::shape::{first_node, Shape1D};
-use crate::{Error, Real};
+use crate::{Error, Real, WorldDef};
 use core::mem::{size_of, size_of_val};
 
 /// The status a particle the removal takes out carries during the call (no stored status has
@@ -177,7 +177,8 @@ impl World<'_> {
     ///
     /// O(n) for n particles: one pass over each particle column. `UnknownParticle` for a
     /// range or an id not in the world, `NonFiniteInput` for a box corner that is not finite,
-    /// `InvalidRegion` for a box with `min > max` on an axis; nothing is removed then.
+    /// `InvalidRegion` for a box with `min > max` on an axis, `UnknownCollider` for a collider
+    /// id past the colliders; nothing is removed then.
     pub fn remove_particles(&mut self, which: Removal<'_>) -> Result<usize, Error> {
         let def = self.def();
         let (d, count) = (def.axes(), self.particle_count());
@@ -196,10 +197,16 @@ impl World<'_> {
                     return Err(Error::InvalidRegion);
                 }
             }
+            Removal::Collider(id) => {
+                self.read().collider_now(id)?;
+            }
             _ => {}
         }
         let layout = Layout::of(&def);
-        self.mark_removed(&layout, count, &which);
+        match which {
+            Removal::Collider(id) => self.mark_in_collider(&def, &layout, count, id),
+            _ => self.mark_removed(&layout, count, &which),
+        }
         Ok(self.compact(&layout, count))
     }
 
@@ -229,6 +236,45 @@ impl World<'_> {
                 .iter_mut()
                 .filter(|s| **s != ACTIVE)
                 .for_each(|s| *s = REMOVED),
+            Removal::Collider(_) => {} // `mark_in_collider`
+        }
+    }
+
+    /// Gives the particles whose domains reach collider `id`'s solid ([`Removal::Collider`])
+    /// the status [`REMOVED`]: 64 at a time, found from the world, then marked.
+    fn mark_in_collider(&mut self, def: &WorldDef, layout: &Layout, count: usize, id: u32) {
+        let d = layout.d;
+        let l = def.cell_size / (2 * def.particles_per_cell) as Real;
+        let touch = def.cell_size / 1024.0;
+        for from in (0..count).step_by(64) {
+            let to = (from + 64).min(count);
+            let mut reached = 0u64;
+            {
+                let w = self.read();
+                let Ok(c) = w.collider_now(id) else {
+                    return; // Unreachable: `remove_particles` found the collider.
+                };
+                let p = w.particles();
+                for i in from..to {
+                    let x: [Real; 3] =
+                        core::array::from_fn(|a| if a < d { p.position[a][i] } else { 0.0 });
+                    // The farthest a domain reaches, `l` along each axis's diagonal.
+                    if c.farther_than(x, l * d as Real + touch) {
+                        continue;
+                    }
+                    let (phi, n) = c.distance(x);
+                    let reach = l * n[..d].iter().map(|v| v.abs()).sum::<Real>();
+                    if phi <= reach + touch {
+                        reached |= 1 << (i - from);
+                    }
+                }
+            }
+            let status = self.u32_col_mut(layout, col::STATUS, count);
+            for (k, s) in status[from..to].iter_mut().enumerate() {
+                if reached >> k & 1 == 1 {
+                    *s = REMOVED;
+                }
+            }
         }
     }
 

@@ -148,7 +148,10 @@ impl<'a> WorldRef<'a> {
     }
 
     /// Collider `id` in its pose of now, as the step meets it, found from the header alone.
-    fn collider_now(&self, id: u32) -> Result<crate::boundary::colliders::Collider<'a>, Error> {
+    pub(super) fn collider_now(
+        &self,
+        id: u32,
+    ) -> Result<crate::boundary::colliders::Collider<'a>, Error> {
         let (r, _) = self.collider_record(id)?;
         self.collider_at(id, r.pose_time)
     }

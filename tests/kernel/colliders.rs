@@ -794,3 +794,173 @@ fn a_sphere_pressed_into_an_elastic_half_space_follows_hertz() {
     let first = first_contact.expect("the sphere never touched");
     assert!(first.abs() < 1.0e-4, "contact began at depth {first} m");
 }
+
+/// `Removal::Collider` takes the particles whose domains (squares, cubes in 3D, of half-width
+/// `l = h / 4`) reach into a solid or touch it, in 2D and 3D:
+/// - an axis-aligned box: exactly the particles whose domain overlaps the closed box (by
+///   brute force over the domains, the box's faces put between domain edges so that no
+///   particle lies within 1e-3 h of the choice), and, with its faces on domain edges, the
+///   rows that only touch it as well;
+/// - a tilted box and a sphere: at least every particle with one of 9^d points of its domain
+///   inside the solid, and none whose centre lies farther than `l sqrt(d)` from it (a domain
+///   reaches no farther);
+/// - an unknown id: `UnknownCollider`, the world unchanged.
+#[test]
+fn a_collider_removes_the_material_it_displaces() {
+    for three_d in [false, true] {
+        let d = if three_d { 3 } else { 2 };
+        let mut def = def(Vec3::ZERO, 0.0);
+        if three_d {
+            def.dimension = mpm_gimp::Dimension::ThreeD;
+            def.cells = [16; 3];
+            def.cell_size = 1.0 / 16.0;
+            def.particle_capacity = 40_000;
+        }
+        let (h, l) = (def.cell_size, def.cell_size / 4.0);
+        let bytes = memory_requirements(&def).expect("valid").bytes;
+        let z = |v: Real| if three_d { v } else { 0.0 };
+        let boxed = |centre: Vec3, half: Vec3, angle: Real| ColliderDef {
+            shape: ColliderShape::Box { half_extents: half },
+            position: centre,
+            rotation: [0.0, 0.0, (angle / 2.0).sin(), (angle / 2.0).cos()],
+            ..ColliderDef::DEFAULT
+        };
+        // Each case: the solid, and whether particle centre x must go (`Some`) or is left to
+        // the bounds (`None`).
+        type Decide = Box<dyn Fn([Real; 3]) -> Option<bool>>;
+        let exact = |lo: [Real; 3], hi: [Real; 3]| -> Decide {
+            Box::new(move |x| Some((0..d).all(|a| x[a] + l >= lo[a] && x[a] - l <= hi[a])))
+        };
+        let (lo, hi) = ([0.4137, 0.3311, z(0.3719)], [0.6291, 0.5573, z(0.6043)]);
+        let mid = |a: usize| (lo[a] + hi[a]) / 2.0;
+        let half = |a: usize| (hi[a] - lo[a]) / 2.0;
+        // Domain edges of the lattice `fill_box` lays from 0.25: multiples of h / 2 from there.
+        let (elo, ehi) = ([0.375, 0.3125, z(0.375)], [0.625, 0.5625, z(0.625)]);
+        let cases: Vec<(ColliderDef, Decide)> = vec![
+            (
+                boxed(
+                    Vec3::new(mid(0), mid(1), z(mid(2))),
+                    Vec3::new(half(0), half(1), z(half(2)).max(0.1)),
+                    0.0,
+                ),
+                exact(lo, hi),
+            ),
+            (
+                boxed(
+                    Vec3::new(0.5, (elo[1] + ehi[1]) / 2.0, z(0.5)),
+                    Vec3::new(0.125, (ehi[1] - elo[1]) / 2.0, z(0.125).max(0.1)),
+                    0.0,
+                ),
+                // Domains that touch a face only are taken too.
+                exact(elo, ehi),
+            ),
+            (
+                boxed(
+                    Vec3::new(0.5, 0.45, z(0.5)),
+                    Vec3::new(0.1, 0.07, 0.08),
+                    0.3,
+                ),
+                Box::new(|_| None),
+            ),
+            (
+                ColliderDef {
+                    shape: ColliderShape::Sphere { radius: 0.13 },
+                    position: Vec3::new(0.52, 0.47, z(0.49)),
+                    ..ColliderDef::DEFAULT
+                },
+                Box::new(|_| None),
+            ),
+        ];
+        for (k, (solid, decide)) in cases.into_iter().enumerate() {
+            let case = format!("{d}D case {k}");
+            let mut buf = HeapBuffer::new(bytes);
+            let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+            let m = world.add_material(&BLOCK).expect("material");
+            world
+                .fill_box(
+                    Vec3::new(0.25, 0.25, z(0.25)),
+                    Vec3::new(0.75, 0.75, z(0.75)),
+                    m,
+                    Vec3::ZERO,
+                )
+                .expect("block");
+            let id = world.add_collider(&solid).expect("solid");
+            let before = world.state_bytes().to_vec();
+            assert_eq!(
+                world.remove_particles(mpm_gimp::Removal::Collider(id + 1)),
+                Err(Error::UnknownCollider),
+                "{case}"
+            );
+            assert!(
+                world.state_bytes() == &before[..],
+                "{case}: refused, yet changed"
+            );
+            let p = world.particles();
+            let centres: Vec<[Real; 3]> = (0..p.count)
+                .map(|i| core::array::from_fn(|a| if a < d { p.position[a][i] } else { 0.0 }))
+                .collect();
+            let distance = |x: [Real; 3]| {
+                world
+                    .collider_distance(id, Vec3::new(x[0], x[1], x[2]))
+                    .expect("distance")
+            };
+            let mut must_go = Vec::new();
+            let mut may_go = Vec::new();
+            for x in &centres {
+                match decide(*x) {
+                    Some(go) => {
+                        // No particle on the edge of the choice, but those meant to touch.
+                        must_go.push(go);
+                        may_go.push(go);
+                    }
+                    None => {
+                        let n = 9usize;
+                        let at = |j: usize| (j as Real / (n - 1) as Real * 2.0 - 1.0) * l;
+                        let inside = (0..n.pow(d as u32)).any(|s| {
+                            let q: [Real; 3] = core::array::from_fn(|a| {
+                                if a < d {
+                                    x[a] + at(s / n.pow(a as u32) % n)
+                                } else {
+                                    0.0
+                                }
+                            });
+                            distance(q) <= 0.0
+                        });
+                        must_go.push(inside);
+                        may_go.push(distance(*x) <= l * (d as Real).sqrt() + h / 1024.0);
+                    }
+                }
+            }
+            let taken = must_go.iter().filter(|&&g| g).count();
+            assert!(
+                taken > 0 && taken < centres.len(),
+                "{case}: {taken} to take"
+            );
+            let removed = world
+                .remove_particles(mpm_gimp::Removal::Collider(id))
+                .expect("removed");
+            // Which went: the survivors keep their order, so match them in turn.
+            let p = world.particles();
+            let mut next = 0;
+            let mut went = vec![true; centres.len()];
+            for i in 0..p.count {
+                while (0..d).any(|a| centres[next][a] != p.position[a][i]) {
+                    next += 1;
+                }
+                went[next] = false;
+                next += 1;
+            }
+            assert_eq!(removed, went.iter().filter(|&&g| g).count(), "{case}");
+            for (i, x) in centres.iter().enumerate() {
+                assert!(
+                    !must_go[i] || went[i],
+                    "{case}: particle at {x:?} reaches the solid and stayed"
+                );
+                assert!(
+                    !went[i] || may_go[i],
+                    "{case}: particle at {x:?} cannot reach the solid and went"
+                );
+            }
+        }
+    }
+}

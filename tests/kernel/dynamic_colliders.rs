@@ -183,7 +183,6 @@ fn a_dynamic_box_floats_at_archimedes_depth_for_a_minute() {
             grid: Schedule::constant(20.0),
             ..Damping::NONE
         });
-        let h = def.cell_size;
         let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
         let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
         let (_, surface) =

@@ -378,6 +378,10 @@ static void null_pointers(void) {
                 mpm_world_remove_tractions(NULL, 0, 0));
         REFUSED("null: mpm_world_traction_count world", MPM_STATUS_NULL_POINTER,
                 mpm_world_traction_count(NULL, OUT(size_t)));
+        REFUSED("null: mpm_world_remove_particles_in_collider world", MPM_STATUS_NULL_POINTER,
+                mpm_world_remove_particles_in_collider(NULL, 0, OUT(uint32_t)));
+        REFUSED("null: mpm_world_remove_particles_in_collider removed_out",
+                MPM_STATUS_NULL_POINTER, mpm_world_remove_particles_in_collider(g_we2, 0, NULL));
         REFUSED("null: mpm_world_traction_count count_out", MPM_STATUS_NULL_POINTER,
                 mpm_world_traction_count(g_we2, NULL));
         REFUSED("null: mpm_world_feedback_alpha world", MPM_STATUS_NULL_POINTER,
@@ -485,6 +489,8 @@ static void not_a_world(void) {
         BAD_WORLD("mpm_world_clear_tractions", mpm_world_clear_tractions(w));
         BAD_WORLD("mpm_world_remove_tractions", mpm_world_remove_tractions(w, 0, 1));
         BAD_WORLD("mpm_world_traction_count", mpm_world_traction_count(w, OUT(size_t)));
+        BAD_WORLD("mpm_world_remove_particles_in_collider",
+                  mpm_world_remove_particles_in_collider(w, 0, OUT(uint32_t)));
         BAD_WORLD("mpm_world_feedback_alpha", mpm_world_feedback_alpha(w, OUT(double)));
         BAD_WORLD("mpm_world_set_particle_scalar",
                   mpm_world_set_particle_scalar(w, MPM_SCALAR_FIELD_TEMPERATURE, 0, b.mass, 1));
@@ -2551,7 +2557,7 @@ static void collider_misuse(void) {
     MpmColliderState state;
     MpmStepReport report;
     MpmIdRange ids;
-    uint32_t id = 7;
+    uint32_t id = 7, removed = 0;
 
     d.effects.collider_capacity = 1;
     if (mpm_memory_requirements(&d, &req) != MPM_STATUS_OK) {
@@ -2610,6 +2616,8 @@ static void collider_misuse(void) {
             mpm_world_set_collider(w, 0, &floor));
     REFUSED("colliders: get into NULL", MPM_STATUS_NULL_POINTER,
             mpm_world_get_collider(w, 0, NULL));
+    REFUSED("colliders: remove what an id not added displaces", MPM_STATUS_UNKNOWN_COLLIDER,
+            mpm_world_remove_particles_in_collider(w, 0, OUT(uint32_t)));
 
     ACCEPTED("colliders: add the floor", 1, mpm_world_add_collider(w, &floor, &id));
     expect_true("colliders: the first id is 0", id == 0);
@@ -2624,6 +2632,10 @@ static void collider_misuse(void) {
                 state.force.y < R(0.0) && state.impulse.y < R(0.0));
     expect_true("colliders: the definition read back",
                 state.def.friction == R(0.5) && state.def.position.y == R(0.3));
+    /* The floor's plane at the block's base: the row of particles whose domains touch it. */
+    ACCEPTED("colliders: remove what the floor displaces", 1,
+             mpm_world_remove_particles_in_collider(w, 0, &removed));
+    expect_true("colliders: one row of the block removed", removed > 0 && removed < ids.count);
     untrack(w);
     free(mem.raw);
 }
