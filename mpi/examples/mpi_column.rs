@@ -14,7 +14,8 @@
 //! so that ParaView opens the whole scene as one. At the end rank 0 prints the run-out
 //! `(L - L0) / L0` and the final height over `L0` (Lube et al. 2005 and Lajeunesse et al. 2005
 //! measured 2.4 to 3.6 and about 1.3 at this aspect ratio), the substeps, and the halo: bytes
-//! and messages a rank sent per substep, and how many substeps rebuilt a rank's list.
+//! and messages a rank sent per substep, how many substeps rebuilt a rank's list, and how
+//! often the slabs were cut again as the sand spread (`Split::rebalance`).
 //! Options: `--seconds S` (2), `--every S`, `--out DIR`, `--cells N` (across the column).
 
 use mpi::collective::SystemOperation;
@@ -66,6 +67,7 @@ fn main() {
         Series::new(&out, &format!("column_rank{rank}")).expect("the output directory");
     let mut times = Vec::new();
     let (mut substeps, mut bytes, mut messages, mut rebuilt) = (0u64, 0u64, 0u64, 0u64);
+    let mut recuts = 0u64;
     let frames = (seconds / every).round().max(1.0) as usize;
     for frame in 0..=frames {
         let end = frame as f64 * every;
@@ -82,6 +84,7 @@ fn main() {
                     bytes += report.bytes_sent;
                     messages += report.messages_sent as u64;
                     rebuilt += report.rebuilt as u64;
+                    recuts += report.rebalanced as u64;
                 }
                 Err(e) => fail(rank, e),
             }
@@ -109,7 +112,8 @@ fn main() {
         println!(
             "{ranks} ranks, {} particles, {substeps} substeps to {:.2} s: run-out (L - L0) / L0 \
              {:.2} (measured 2.4 to 3.6), height / L0 {:.2}; per substep at most {:.0} bytes \
-             and {:.1} messages sent by a rank, {} substeps rebuilt a rank's list; {} (ParaView)",
+             and {:.1} messages sent by a rank, {} substeps rebuilt a rank's list, the slabs cut \
+             again {recuts} times, last {:?}; {} (ParaView)",
             split.total(),
             split.view().time(),
             (front - L0) / L0,
@@ -117,6 +121,7 @@ fn main() {
             halo[0] as f64 / substeps.max(1) as f64,
             halo[1] as f64 / substeps.max(1) as f64,
             halo[2],
+            split.bounds(),
             out.join("column.pvd").display(),
         );
     }

@@ -15,8 +15,10 @@
 //! block S times as long along the split axis), `--cost` (times the split step and prints
 //! the halo's bytes and messages per substep; no comparison), `--threads N` (times the scene
 //! as one world on N threads instead, on rank 0), `--workers N` (each rank steps on a pool of
-//! N threads; the reference steps on one), `--check-errors` (bad input: the same clear error
-//! on every rank).
+//! N threads; the reference steps on one), `--rebalance L` (cut the slabs again past L times
+//! the mean count, 1.25), `--no-rebalance` (keep the first slabs),
+//! `--expect-rebalance` (fail unless the slabs were cut again in every case), `--check-errors`
+//! (bad input: the same clear error on every rank).
 
 use mpi::traits::*;
 use mpm_gimp::{
@@ -197,6 +199,7 @@ fn main() {
     let (mut only, mut substeps, mut halo, mut expect_difference, mut cost) =
         (None, 40u32, None, false, false);
     let (mut scale, mut threads, mut workers) = (1u32, 0u32, 1u32);
+    let (mut rebalance, mut expect_rebalance) = (Some(mpm_gimp_mpi::DEFAULT_REBALANCE), false);
     while let Some(a) = args.next() {
         let mut value = || args.next().unwrap_or_else(|| usage(&a));
         match a.as_str() {
@@ -207,6 +210,9 @@ fn main() {
             "--threads" => threads = value().parse().unwrap_or_else(|_| usage(&a)),
             "--workers" => workers = value().parse().unwrap_or_else(|_| usage(&a)),
             "--expect-difference" => expect_difference = true,
+            "--no-rebalance" => rebalance = None,
+            "--rebalance" => rebalance = Some(value().parse().unwrap_or_else(|_| usage(&a))),
+            "--expect-rebalance" => expect_rebalance = true,
             "--cost" => cost = true,
             "--check-errors" => {
                 check_errors(&comm);
@@ -254,6 +260,8 @@ fn main() {
         // The scene alone, on rank 0: the reference.
         let mut reference = (rank == 0).then_some(scene_world);
         let (mut bytes, mut messages, mut rebuilt, mut seconds) = (0u64, 0u64, 0u64, 0.0f64);
+        let mut recuts = 0u32;
+        split.rebalance(rebalance);
         let mut report_differs = false;
         for _ in 0..substeps {
             let dt = split.stable_dt();
@@ -268,6 +276,7 @@ fn main() {
             bytes += report.bytes_sent;
             messages += report.messages_sent as u64;
             rebuilt += report.rebuilt as u64;
+            recuts += report.rebalanced as u32;
             if let Some(world) = reference.as_mut().filter(|_| !cost) {
                 report_differs |= world.stable_dt().to_bits() != dt.to_bits();
                 let one = world.step(dt).expect("the scene steps");
@@ -340,7 +349,7 @@ fn main() {
                 .count();
             println!(
                 "{}: {} ranks x {workers} workers, {} particles, {} substeps, halo {} lines, \
-                 slabs {:?}, {} particles changed owner: {}",
+                 slabs {:?} (cut again {recuts} times), {} particles changed owner: {}",
                 case.name,
                 comm.size(),
                 view.count,
@@ -364,6 +373,12 @@ fn main() {
         }
         comm.process_at_rank(0).broadcast_into(&mut differs);
         failed |= (differs == 1) != expect_difference;
+        if expect_rebalance && recuts == 0 {
+            if rank == 0 {
+                eprintln!("{}: the slabs were never cut again", case.name);
+            }
+            failed = true;
+        }
         if differs == 1 && expect_difference && rank == 0 {
             println!("{}: a difference, as expected with this halo", case.name);
         }

@@ -3,8 +3,9 @@
 //!
 //! The scene is defined once, as a [`World`] of the whole domain that every rank builds
 //! alike. [`Split::new`] cuts the grid's cell lines along the split axis into one slab per
-//! rank, balanced on the particle counts of the scene as given (not re-balanced later). A
-//! particle is owned by the rank whose slab holds its cell along the axis.
+//! rank, balanced on the particle counts of the scene as given, and cuts them again when a
+//! rank comes to own a quarter more than the mean ([`Split::rebalance`]). A particle is owned
+//! by the rank whose slab holds its cell along the axis.
 //!
 //! **Why the bits stay.** Within one world a node's sum is added in particle order, in
 //! chunks of lanes counted from particle 0, with the lanes of a chunk that share a stencil's
@@ -122,7 +123,12 @@ pub struct SplitReport {
     /// Whether this rank's groups changed, so that it rebuilt its list (else it overwrote
     /// its ghosts in place).
     pub rebuilt: bool,
+    /// Whether the slabs were cut again after this step ([`Split::rebalance`]).
+    pub rebalanced: bool,
 }
+
+/// The default of [`Split::rebalance`]: a rank owning a quarter more than the mean.
+pub const DEFAULT_REBALANCE: f64 = 1.25;
 
 /// The particle columns of the whole scene gathered on rank 0, in id order.
 #[derive(Clone, Debug, Default)]
@@ -221,7 +227,13 @@ fn cut_slabs(cells: &[u32], lines: u32, ranks: usize) -> Vec<u32> {
     for &c in cells {
         per_line[c as usize] += 1;
     }
-    let n = cells.len() as u64;
+    cut_lines(&per_line, ranks)
+}
+
+/// [`cut_slabs`] from the particle count of each cell line.
+fn cut_lines(per_line: &[u64], ranks: usize) -> Vec<u32> {
+    let lines = per_line.len() as u32;
+    let n: u64 = per_line.iter().sum();
     let mut bounds = vec![0u32; ranks + 1];
     bounds[ranks] = lines;
     let (mut line, mut below) = (0u32, 0u64);
@@ -258,6 +270,8 @@ pub struct Split {
     ids: Vec<u32>,
     /// The local indices of the particles this rank owns, ascending.
     owned: Vec<u32>,
+    /// Re-cut the slabs when a rank owns more than this times the mean ([`Split::rebalance`]).
+    rebalance: Option<f64>,
 }
 
 impl Split {
@@ -330,6 +344,7 @@ impl Split {
             buf,
             ids: (0..total as u32).collect(),
             owned: Vec::new(),
+            rebalance: Some(DEFAULT_REBALANCE),
         };
         let cells: Vec<u32> = view.position[axis].iter().map(|&x| split.cell(x)).collect();
         split.bounds = cut_slabs(&cells, lines, size);
@@ -383,6 +398,17 @@ impl Split {
     /// The slabs: rank `r` owns the cell lines `bounds()[r]..bounds()[r + 1]` along the axis.
     pub fn bounds(&self) -> &[u32] {
         &self.bounds
+    }
+
+    /// When the slabs are cut again: after a substep in which some rank owns more than
+    /// `limit` times the mean particle count (`None`: never; default
+    /// [`DEFAULT_REBALANCE`]). The test rides on the exchange's reduction (no extra message);
+    /// past the limit, one reduction of a count per cell line balances the slabs on the
+    /// particles' positions as [`Split::new`] does; where that moves a bound, the ranks whose
+    /// groups change rebuild their lists ([`SplitReport::rebalanced`]). The bits do not depend on the slabs. Collective: call
+    /// it alike on every rank.
+    pub fn rebalance(&mut self, limit: Option<f64>) {
+        self.rebalance = limit;
     }
 
     /// The halo, in cell lines on each side of a slab.
@@ -459,13 +485,14 @@ impl Split {
             &mut counts[..],
             SystemOperation::sum(),
         );
-        let (bytes_sent, messages_sent, rebuilt) = self.exchange()?;
+        let (bytes_sent, messages_sent, rebuilt, rebalanced) = self.exchange()?;
         Ok(SplitReport {
             frozen: counts[0],
             escaped: counts[1],
             bytes_sent,
             messages_sent,
             rebuilt,
+            rebalanced,
         })
     }
 
@@ -587,23 +614,43 @@ impl Split {
     /// by run ([`World::set_particle_state`]); one whose groups changed (migration) rebuilds
     /// its list, in id order, from what it receives, its own particles included. Returns the
     /// bytes and messages this rank sent to others, and whether it rebuilt.
-    fn exchange(&mut self) -> Result<(u64, u32, bool), SplitError> {
+    fn exchange(&mut self) -> Result<(u64, u32, bool, bool), SplitError> {
         let groups = self.groups();
         let axis = self.axis;
         let view = self.view();
         let x = view.particles().position[axis];
-        let (mut lo, mut hi) = (vec![u32::MAX; groups], vec![0u32; groups]);
+        let (mut lo, mut hi) = (vec![u32::MAX; groups], vec![0u32; groups + 1]);
         for &i in &self.owned {
             let g = self.ids[i as usize] as usize / REACH_GROUP;
             let c = self.cell(x[i as usize]);
             lo[g] = lo[g].min(c);
             hi[g] = hi[g].max(c);
         }
-        let (mut glo, mut ghi) = (vec![0u32; groups], vec![0u32; groups]);
+        // With the groups' highest lines, the most particles a rank owns.
+        hi[groups] = self.owned.len() as u32;
+        let (mut glo, mut ghi) = (vec![0u32; groups], vec![0u32; groups + 1]);
         self.comm
             .all_reduce_into(&lo[..], &mut glo[..], SystemOperation::min());
         self.comm
             .all_reduce_into(&hi[..], &mut ghi[..], SystemOperation::max());
+        let most = ghi.pop().unwrap_or(0) as f64;
+        let mean = self.total as f64 / self.size as f64;
+        let mut rebalanced = false;
+        if self.rebalance.is_some_and(|limit| most > limit * mean) {
+            // The slabs cut again on where the particles are now; the owners found before
+            // the step send to the ranks that need their groups under the new slabs.
+            let mut per_line = vec![0u64; self.def.cells[axis] as usize];
+            for &i in &self.owned {
+                per_line[self.cell(x[i as usize]) as usize] += 1;
+            }
+            let mut all = vec![0u64; per_line.len()];
+            self.comm
+                .all_reduce_into(&per_line[..], &mut all[..], SystemOperation::sum());
+            // Slabs as good as the lines allow already are left alone (no rebuild).
+            let bounds = cut_lines(&all, self.size);
+            rebalanced = bounds != self.bounds;
+            self.bounds = bounds;
+        }
         // A group no rank owns a particle of means an owner lost track of it.
         let owned_all = glo.iter().zip(&ghi).all(|(l, h)| l <= h);
         let needs = |r: usize, g: usize| owned_all && self.needs(r, glo[g], ghi[g]);
@@ -699,7 +746,7 @@ impl Split {
             .enumerate()
             .filter(|&(r, &c)| r != self.rank && c > 0);
         let (bytes, messages) = others.fold((0u64, 0u32), |(b, m), (_, &c)| (b + c as u64, m + 1));
-        Ok((bytes, messages, !in_place))
+        Ok((bytes, messages, !in_place, rebalanced))
     }
 }
 
