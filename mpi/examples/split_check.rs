@@ -18,7 +18,8 @@
 //! N threads; the reference steps on one), `--rebalance L` (cut the slabs again past L times
 //! the mean count, 1.25), `--no-rebalance` (keep the first slabs),
 //! `--expect-rebalance` (fail unless the slabs were cut again in every case), `--check-errors`
-//! (bad input: the same clear error on every rank).
+//! (bad input: the same clear error on every rank), `--check-time-out` (a stalled rank: the
+//! others abort the job within their time-out).
 
 use mpi::traits::*;
 use mpm_gimp::{
@@ -216,6 +217,10 @@ fn main() {
             "--cost" => cost = true,
             "--check-errors" => {
                 check_errors(&comm);
+                return;
+            }
+            "--check-time-out" => {
+                check_time_out(&comm);
                 return;
             }
             "--list" => {
@@ -418,6 +423,26 @@ fn scene_at_start_x(case: &Case, scale: u32, i: usize) -> Real {
 /// Checks that bad input gives the same clear error on every rank: more ranks than cell
 /// lines (a 2D scene split along z, which has none), a scene with colliders, a step above the
 /// stable one. Exits nonzero on this rank where its error is not the one expected.
+/// A rank that stalls (the last one sleeps 6 s before its first step): the others, with a
+/// time-out of 1 s, abort the job with `TIME_OUT_EXIT_CODE` and say why, instead of waiting.
+/// Returning from here is the failure.
+fn check_time_out(comm: &mpi::topology::SimpleCommunicator) {
+    let mut storage = HeapBuffer::new(0);
+    let world = scene(&CASES[0], 1, &mut storage);
+    let mut split = Split::new(comm.duplicate(), &world, 0).expect("the scene splits");
+    split.time_out(std::time::Duration::from_secs(1));
+    let dt = split.stable_dt();
+    if comm.rank() == comm.size() - 1 {
+        std::thread::sleep(std::time::Duration::from_secs(6));
+    }
+    let stepped = split.step(dt);
+    eprintln!(
+        "rank {}: the step returned ({stepped:?}) where the time-out should have aborted",
+        comm.rank()
+    );
+    std::process::exit(1);
+}
+
 fn check_errors(comm: &mpi::topology::SimpleCommunicator) {
     let rank = comm.rank();
     let case = &CASES[0];

@@ -28,6 +28,13 @@
 //! report ([`SplitReport`]) counts the owned particles that froze or escaped, summed over
 //! the ranks (integers: exact); walls' stops and runaways are not counted yet.
 //!
+//! **A rank that dies or stalls** does not hang the others: every collective is started
+//! immediate and polled; past [`Split::time_out`] (default [`DEFAULT_TIME_OUT`]) each rank
+//! still running prints which exchange it waited for and aborts the job (`MPI_Abort`, exit
+//! code [`TIME_OUT_EXIT_CODE`]). A started collective cannot be withdrawn, so the call does
+//! not return an error instead. A message of the wrong size or content is
+//! [`SplitError::Message`] on every rank.
+//!
 //! **Not supported** (refused by [`Split::new`] with [`SplitError::Unsupported`]):
 //! colliders (their force and torque are float sums across ranks), tractions, damping (the
 //! thermostat's feedback is a float sum; the rest is untested), heat and diffusion (their
@@ -38,6 +45,7 @@
 
 use mpi::collective::SystemOperation;
 use mpi::datatype::{Partition, PartitionMut};
+use mpi::request::{Request, Scope};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use mpi::Count;
@@ -46,6 +54,7 @@ use mpm_gimp::{
     ShapeFunction, Transfer, UpdateOrder, World, WorldDef, WorldRef, REACH_GROUP,
 };
 use std::fmt;
+use std::time::{Duration, Instant};
 
 /// Real columns a [`ParticleState`] may give (3D with every effect), in the order of
 /// [`ParticleState::real_columns`].
@@ -129,6 +138,57 @@ pub struct SplitReport {
 
 /// The default of [`Split::rebalance`]: a rank owning a quarter more than the mean.
 pub const DEFAULT_REBALANCE: f64 = 1.25;
+
+/// The default of [`Split::time_out`]: far above any exchange of a substep (milliseconds
+/// here), below a batch job's patience.
+pub const DEFAULT_TIME_OUT: Duration = Duration::from_secs(60);
+
+/// The exit code of a job a time-out aborts.
+pub const TIME_OUT_EXIT_CODE: i32 = 75;
+
+/// Waits for `request`, a collective this rank started on `comm`, polling; past `limit`
+/// prints what it waited for (`what`) and aborts the job.
+fn wait<'a, D: ?Sized, S: Scope<'a>>(
+    comm: &SimpleCommunicator,
+    limit: Duration,
+    request: Request<'a, D, S>,
+    what: &str,
+) {
+    let start = Instant::now();
+    let mut request = request;
+    loop {
+        match request.test() {
+            Ok(_) => return,
+            Err(pending) => request = pending,
+        }
+        if start.elapsed() > limit {
+            eprintln!(
+                "mpm-gimp-mpi: rank {} of {}: no answer in {:.1} s ({what}): a rank died or \
+                 stalled; aborting the job",
+                comm.rank(),
+                comm.size(),
+                limit.as_secs_f64()
+            );
+            comm.abort(TIME_OUT_EXIT_CODE);
+        }
+        std::thread::yield_now();
+    }
+}
+
+/// `recv` = `send` reduced by `op` over the ranks of `comm` ([`wait`]'s time-out).
+fn all_reduce<T: Equivalence>(
+    comm: &SimpleCommunicator,
+    limit: Duration,
+    send: &[T],
+    recv: &mut [T],
+    op: SystemOperation,
+    what: &str,
+) {
+    mpi::request::scope(|scope| {
+        let request = comm.immediate_all_reduce_into(scope, send, recv, op);
+        wait(comm, limit, request, what);
+    });
+}
 
 /// The particle columns of the whole scene gathered on rank 0, in id order.
 #[derive(Clone, Debug, Default)]
@@ -272,6 +332,8 @@ pub struct Split {
     owned: Vec<u32>,
     /// Re-cut the slabs when a rank owns more than this times the mean ([`Split::rebalance`]).
     rebalance: Option<f64>,
+    /// How long a collective may wait ([`Split::time_out`]).
+    time_out: Duration,
 }
 
 impl Split {
@@ -308,9 +370,18 @@ impl Split {
         }
         check_supported(scene, axis)?;
         let total = scene.particle_count();
-        let (mut low, mut high) = (0u64, 0u64);
-        comm.all_reduce_into(&(total as u64), &mut low, SystemOperation::min());
-        comm.all_reduce_into(&(total as u64), &mut high, SystemOperation::max());
+        let (mut low, mut high) = ([0u64], [0u64]);
+        let (limit, what) = (DEFAULT_TIME_OUT, "the scene's particle count");
+        let count = [total as u64];
+        all_reduce(&comm, limit, &count, &mut low, SystemOperation::min(), what);
+        all_reduce(
+            &comm,
+            limit,
+            &count,
+            &mut high,
+            SystemOperation::max(),
+            what,
+        );
         if low != high {
             return Err(SplitError::SceneDiffers);
         }
@@ -345,6 +416,7 @@ impl Split {
             ids: (0..total as u32).collect(),
             owned: Vec::new(),
             rebalance: Some(DEFAULT_REBALANCE),
+            time_out: DEFAULT_TIME_OUT,
         };
         let cells: Vec<u32> = view.position[axis].iter().map(|&x| split.cell(x)).collect();
         split.bounds = cut_slabs(&cells, lines, size);
@@ -411,6 +483,12 @@ impl Split {
         self.rebalance = limit;
     }
 
+    /// How long this rank waits for the others in an exchange before it aborts the job (see
+    /// the crate's docs; default [`DEFAULT_TIME_OUT`]).
+    pub fn time_out(&mut self, limit: Duration) {
+        self.time_out = limit;
+    }
+
     /// The halo, in cell lines on each side of a slab.
     pub fn halo(&self) -> u32 {
         self.halo
@@ -428,11 +506,18 @@ impl Split {
 
     /// The scene's stable step, s: the least over the ranks' worlds (exact). Collective.
     pub fn stable_dt(&mut self) -> Real {
-        let local = self.world().stable_dt();
+        let local = [self.world().stable_dt()];
         let mut stable = local;
-        self.comm
-            .all_reduce_into(&local, &mut stable, SystemOperation::min());
-        stable
+        let op = SystemOperation::min();
+        all_reduce(
+            &self.comm,
+            self.time_out,
+            &local,
+            &mut stable,
+            op,
+            "the stable step",
+        );
+        stable[0]
     }
 
     /// Advances the scene by `dt` (at most [`Split::stable_dt`]: one substep, as one world's
@@ -480,10 +565,13 @@ impl Split {
             }
         }
         let mut counts = [0u32; 2];
-        self.comm.all_reduce_into(
-            &[frozen, escaped][..],
-            &mut counts[..],
+        all_reduce(
+            &self.comm,
+            self.time_out,
+            &[frozen, escaped],
+            &mut counts,
             SystemOperation::sum(),
+            "the step's report",
         );
         let (bytes_sent, messages_sent, rebuilt, rebalanced) = self.exchange()?;
         Ok(SplitReport {
@@ -502,18 +590,28 @@ impl Split {
         let send = self.encode(&self.owned);
         let root = self.comm.process_at_rank(0);
         let n = send.len() as Count;
+        let (comm, limit, what) = (&self.comm, self.time_out, "the gather");
         if self.rank != 0 {
-            root.gather_into(&n);
-            root.gather_varcount_into(&send[..]);
+            mpi::request::scope(|scope| {
+                wait(comm, limit, root.immediate_gather_into(scope, &n), what);
+                let request = root.immediate_gather_varcount_into(scope, &send[..]);
+                wait(comm, limit, request, what);
+            });
             return Ok(None);
         }
         let mut counts = vec![0 as Count; self.size];
-        root.gather_into_root(&n, &mut counts[..]);
+        mpi::request::scope(|scope| {
+            let request = root.immediate_gather_into_root(scope, &n, &mut counts[..]);
+            wait(comm, limit, request, what);
+        });
         let displs = displacements(&counts);
         let mut recv = vec![0u8; counts.iter().map(|&c| c as usize).sum()];
         {
             let mut part = PartitionMut::new(&mut recv[..], &counts[..], &displs[..]);
-            root.gather_varcount_into_root(&send[..], &mut part);
+            mpi::request::scope(|scope| {
+                let request = root.immediate_gather_varcount_into_root(scope, &send[..], &mut part);
+                wait(comm, limit, request, what);
+            });
         }
         let all: Vec<u32> = (0..self.total as u32).collect();
         let (reals, material, status) = decode(&self.present, &recv, &all)?;
@@ -527,10 +625,17 @@ impl Split {
 
     /// Whether every rank's `ok` is true. Collective.
     fn agree(&self, ok: bool) -> bool {
-        let mut all = 0u8;
-        self.comm
-            .all_reduce_into(&(ok as u8), &mut all, SystemOperation::min());
-        all == 1
+        let mut all = [0u8];
+        let op = SystemOperation::min();
+        all_reduce(
+            &self.comm,
+            self.time_out,
+            &[ok as u8],
+            &mut all,
+            op,
+            "the ranks' agreement",
+        );
+        all[0] == 1
     }
 
     fn groups(&self) -> usize {
@@ -629,10 +734,9 @@ impl Split {
         // With the groups' highest lines, the most particles a rank owns.
         hi[groups] = self.owned.len() as u32;
         let (mut glo, mut ghi) = (vec![0u32; groups], vec![0u32; groups + 1]);
-        self.comm
-            .all_reduce_into(&lo[..], &mut glo[..], SystemOperation::min());
-        self.comm
-            .all_reduce_into(&hi[..], &mut ghi[..], SystemOperation::max());
+        let (comm, limit, what) = (&self.comm, self.time_out, "the groups' lines");
+        all_reduce(comm, limit, &lo, &mut glo, SystemOperation::min(), what);
+        all_reduce(comm, limit, &hi, &mut ghi, SystemOperation::max(), what);
         let most = ghi.pop().unwrap_or(0) as f64;
         let mean = self.total as f64 / self.size as f64;
         let mut rebalanced = false;
@@ -644,8 +748,15 @@ impl Split {
                 per_line[self.cell(x[i as usize]) as usize] += 1;
             }
             let mut all = vec![0u64; per_line.len()];
-            self.comm
-                .all_reduce_into(&per_line[..], &mut all[..], SystemOperation::sum());
+            let op = SystemOperation::sum();
+            all_reduce(
+                &self.comm,
+                self.time_out,
+                &per_line,
+                &mut all,
+                op,
+                "the slabs' counts",
+            );
             // Slabs as good as the lines allow already are left alone (no rebuild).
             let bounds = cut_lines(&all, self.size);
             rebalanced = bounds != self.bounds;
@@ -676,7 +787,11 @@ impl Split {
             send.extend_from_slice(&bytes);
         }
         let mut rcounts = vec![0 as Count; self.size];
-        self.comm.all_to_all_into(&counts[..], &mut rcounts[..]);
+        let (comm, limit, what) = (&self.comm, self.time_out, "the particles' exchange");
+        mpi::request::scope(|scope| {
+            let request = comm.immediate_all_to_all_into(scope, &counts[..], &mut rcounts[..]);
+            wait(comm, limit, request, what);
+        });
         let received: usize = rcounts.iter().map(|&c| c as usize).sum();
         // Buffers of one byte at least: Open MPI refuses two empty ones (the same dangling
         // address for sending and receiving reads as an exchange in place).
@@ -687,7 +802,10 @@ impl Split {
             let rdispls = displacements(&rcounts);
             let part = Partition::new(&send[..], &counts[..], &sdispls[..]);
             let mut rpart = PartitionMut::new(&mut recv[..], &rcounts[..], &rdispls[..]);
-            self.comm.all_to_all_varcount_into(&part, &mut rpart);
+            mpi::request::scope(|scope| {
+                let request = comm.immediate_all_to_all_varcount_into(scope, &part, &mut rpart);
+                wait(comm, limit, request, what);
+            });
         }
         // What this rank must receive: every particle it holds, or only its ghosts.
         let (expect, local): (Vec<u32>, Vec<u32>) = if in_place {
