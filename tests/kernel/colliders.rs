@@ -871,18 +871,17 @@ fn xpic_and_fmpm_keep_a_floor_colliders_contact() {
                         .map(|i| p.velocity[1][i].abs().max(p.velocity[0][i].abs()))
                         .fold(0.0, Real::max);
                     let tol = 64.0 * Real::EPSILON * speed;
-                    for i in 0..p.count {
-                        if start[i] - floor_y > lp {
+                    for (&y, &v) in start.iter().zip(p.velocity[1]) {
+                        if y - floor_y > lp {
                             continue;
                         }
                         checked += 1;
-                        let v = p.velocity[1][i];
                         assert!(
                             v >= -tol,
                             "{dim:?} {transfer:?} {order:?} {contact:?}, step {step}: a \
                              particle {} above the floor moves into it at {v} m/s (block's \
                              speed {speed})",
-                            start[i] - floor_y
+                            y - floor_y
                         );
                     }
                 }
