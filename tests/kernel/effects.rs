@@ -1815,6 +1815,15 @@ fn a_follower_pressure_turns_with_the_faces_it_loads() {
     }
 }
 
+/// The neo-Hookean material (E35) of the follower pressures' checks: E = 1 MPa, nu = 0.3.
+const NEO_HOOKEAN: MaterialDef = MaterialDef {
+    model: mpm_gimp::MaterialModel::NeoHookean,
+    youngs_modulus: 1.0e6,
+    poisson_ratio: 0.3,
+    density: 1000.0,
+    ..MaterialDef::DEFAULT
+};
+
 /// A follower pressure is per area of the deformed face. A neo-Hookean block (E = 1 MPa, nu =
 /// 0.3), turned as in [`pressed_turned_block`], pressed on every face by `p = 0.2 E`, shrinks
 /// by a stretch `s` in each loaded axis (`J = s^d`, `F_zz = 1` in plane strain) with
@@ -1827,13 +1836,7 @@ fn a_follower_pressure_turns_with_the_faces_it_loads() {
 fn a_follower_pressure_acts_on_the_deformed_area() {
     for dim in [Dimension::Plane2D, Dimension::ThreeD] {
         let d = if dim == Dimension::ThreeD { 3 } else { 2 };
-        let material = MaterialDef {
-            model: mpm_gimp::MaterialModel::NeoHookean,
-            youngs_modulus: 1.0e6,
-            poisson_ratio: 0.3,
-            density: 1000.0,
-            ..MaterialDef::DEFAULT
-        };
+        let material = NEO_HOOKEAN;
         let (lambda, mu) = material.lame();
         let (lambda, mu, p) = (lambda as f64, mu as f64, 0.2 * 1.0e6);
         // The stretch s in (0.3, 1) at which the Cauchy normal stress equals `-p / s^k` (k = 0:
@@ -1986,20 +1989,18 @@ fn thick_ring(
 /// cells per metre, 0.94 % at 120.) f32 and f64 agree to 3 digits.
 #[test]
 fn a_thick_ring_under_a_follower_pressure_takes_the_exact_large_deformation() {
-    let material = MaterialDef {
-        model: mpm_gimp::MaterialModel::NeoHookean,
-        youngs_modulus: 1.0e6,
-        poisson_ratio: 0.3,
-        density: 1000.0,
-        ..MaterialDef::DEFAULT
-    };
+    let material = NEO_HOOKEAN;
     let (lambda, mu) = material.lame();
-    let (a0, b0, nu, p) = (0.3f64, 0.6f64, 0.3f64, 0.1e6f64);
+    let (e, nu) = (
+        material.youngs_modulus as f64,
+        material.poisson_ratio as f64,
+    );
+    let (a0, b0, p) = (0.3f64, 0.6f64, 0.1 * e);
     let exact = thick_ring((lambda as f64, mu as f64), (a0, b0), p, true);
     let moved = exact(a0) - a0;
     let dead = thick_ring((lambda as f64, mu as f64), (a0, b0), p, false)(a0) - a0;
-    let lame = (1.0 + nu) / 1.0e6 * p * a0 * a0 / (b0 * b0 - a0 * a0)
-        * ((1.0 - 2.0 * nu) * a0 + b0 * b0 / a0);
+    let lame =
+        (1.0 + nu) / e * p * a0 * a0 / (b0 * b0 - a0 * a0) * ((1.0 - 2.0 * nu) * a0 + b0 * b0 / a0);
     for other in [dead, lame] {
         assert!(
             (other - moved).abs() > 0.1 * moved,
