@@ -172,6 +172,26 @@ impl ColliderRecord {
     }
 }
 
+impl ColliderImpulse {
+    /// The impulse and angular impulse summed so far in the step, as one list.
+    fn sums(&self) -> [f64; 6] {
+        core::array::from_fn(|a| {
+            if a < 3 {
+                self.linear[a]
+            } else {
+                self.angular[a - 3]
+            }
+        })
+    }
+
+    /// What of [`ColliderImpulse::sums`] a dynamic collider has not yet taken into its
+    /// velocities: what the material put on it in the substep so far (E96).
+    pub(crate) fn untaken(&self) -> [f64; 6] {
+        let sums = self.sums();
+        core::array::from_fn(|a| sums[a] - self.taken[a])
+    }
+}
+
 /// The pose of record `r` at world time `t` (E90): its position moved on by `v (t - t_0)`, its
 /// rotation turned by `omega (t - t_0)` about its origin.
 pub(crate) fn pose_at(r: &ColliderRecord, t: f64) -> (DVec3, DQuat) {
@@ -205,12 +225,10 @@ pub(crate) fn drive(
     r.position = position.to_array();
     r.rotation = rotation.to_array();
     r.pose_time = end;
-    let [x, y, z] = sums.linear;
-    let [p, q, s] = sums.angular;
-    let t = sums.taken;
-    let linear = DVec3::new(x - t[0], y - t[1], z - t[2]);
-    let angular = DVec3::new(p - t[3], q - t[4], s - t[5]);
-    sums.taken = [x, y, z, p, q, s];
+    let [x, y, z, p, q, s] = sums.untaken();
+    let linear = DVec3::new(x, y, z);
+    let angular = DVec3::new(p, q, s);
+    sums.taken = sums.sums();
     // The angular impulse in the solid's frame, over its principal moments.
     let local = rotation.inverse() * angular;
     let inv = |l: f64, i: f64| if i > 0.0 { l / i } else { 0.0 };
@@ -248,9 +266,17 @@ pub(crate) struct Shared {
 }
 
 impl Shared {
-    /// The body's velocities at the start of the substep, gravity's `g dt` added: what it
-    /// would move at without the material, as a node's updated velocity is without contact.
-    pub fn new(c: &Collider<'_>, r: &ColliderRecord, planar: bool, g_dt: V3) -> Shared {
+    /// The body's velocities at the start of the substep, with gravity's `g dt` and the
+    /// momenta it has `received` from the material so far in the substep (impulse, then
+    /// angular impulse: a second pass after XPIC's series, E100): what it would move at
+    /// without more contact, as a node's updated velocity is without contact.
+    pub fn new(
+        c: &Collider<'_>,
+        r: &ColliderRecord,
+        planar: bool,
+        g_dt: V3,
+        received: [f64; 6],
+    ) -> Shared {
         let xi: [f64; 6] = core::array::from_fn(|a| {
             if a < 3 {
                 (c.velocity[a] + g_dt[a]) as f64
@@ -280,7 +306,7 @@ impl Shared {
         }
         let mut rhs = [0.0; 6];
         for a in 0..6 {
-            rhs[a] = (0..6).map(|b| k[a][b] * xi[b]).sum();
+            rhs[a] = (0..6).map(|b| k[a][b] * xi[b]).sum::<f64>() + received[a];
         }
         Shared {
             k,

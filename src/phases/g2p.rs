@@ -1,7 +1,8 @@
 //! Grid to particle (E21-E32).
 //!
 //! Particle update: from `v_gp = sum S_ip v_i` and `a_gp = sum S_ip a_i` (E21), FLIP with PIC
-//! damping and the second-order position update (E25, E26), or APIC (E78, E80: the grid's
+//! damping and the position update with the acceleration's `dt^2 / 2` term (E25, E26; first
+//! order in time, as every position update here), or APIC (E78, E80: the grid's
 //! velocity, and the moment matrix `B_p` gathered with it, [`super::gather::gather_chunk`]),
 //! less the damping acceleration when damping is declared, then the walls: the equations are
 //! [`super::update`]'s, on the lane type [`crate::simd::wide::Wide`].

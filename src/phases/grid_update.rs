@@ -161,6 +161,15 @@ pub(crate) fn acceleration<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl No
             damp_nodes(ctx, nodal, g);
         }
     });
+    boundary_on_updated(ctx, nodes);
+}
+
+/// The boundary on the updated velocity `v_i + a_i dt` ([`boundary`]): the colliders, each
+/// impulse taking what its contact changes (E92, E93), then the walls (E20). After the
+/// lumped update, and again on XPIC's and FMPM's series ([`super::xpic::finish`], E100), so
+/// that the velocity the particles read keeps the contact: the second pass changes only what
+/// the series moved, and pays for it.
+pub(crate) fn boundary_on_updated<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     let (g, p, impulses) = &mut nodes.with_impulses();
     boundary(ctx, g, p, On::Updated(impulses));
 }
@@ -202,8 +211,8 @@ fn boundary<const D: usize>(
 /// The walls of stick and slip faces on the updated velocity `v_i + a_i dt`, through the
 /// acceleration: where a wall fixes a component to `w`, the acceleration becomes the wall's
 /// reaction `(w - v_i) / dt` (E20); then the nodes past the wall planes take their images'
-/// accelerations. Also what XPIC's series ends with ([`super::xpic`]).
-pub(crate) fn walls_on_updated<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
+/// accelerations.
+fn walls_on_updated<const D: usize>(ctx: &Ctx<'_, D>, g: &mut GridCols<'_, D>) {
     let (inv_dt, dt) = (1.0 / ctx.dt, ctx.dt);
     let (walls, geom) = (&ctx.active, &ctx.geom);
     geom.for_each_wall_node(walls, &mut |i, axis, side| {
@@ -362,21 +371,22 @@ fn updated<const D: usize>(g: &GridCols<'_, D>, node: usize, dt: Real) -> [Real;
 }
 
 /// The dynamic collider `c` (of record `record`) at the velocities it shares with the nodes of
-/// the box `lo..hi` its contact holds in this substep (E96, [`Shared`]). A separating contact
-/// holds the nodes that press on the body at those velocities: the set is found again at each
-/// solution, a few times at most, until it no longer changes.
+/// the box `lo..hi` its contact holds in this substep (E96, [`Shared`]), having `received` from
+/// the material so far in the substep. A separating contact holds the nodes that press on
+/// the body at those velocities: the set is found again at each solution, a few times at
+/// most, until it no longer changes.
 fn shared<'s, const D: usize>(
     ctx: &Ctx<'_, D>,
     g: &mut GridCols<'_, D>,
     c: Collider<'s>,
-    record: &ColliderRecord,
+    (record, received): (&ColliderRecord, [f64; 6]),
     node_box: ([usize; D], [usize; D]),
 ) -> Collider<'s> {
     let g_dt = core::array::from_fn(|a| if a < D { ctx.gravity[a] * ctx.dt } else { 0.0 });
     let mut at = c;
     let mut held = None;
     for _ in 0..4 {
-        let mut system = Shared::new(&c, record, D == 2, g_dt);
+        let mut system = Shared::new(&c, record, D == 2, g_dt, received);
         each_contact(ctx, g, &c, node_box, |g, node, x, m, normal| {
             system.add(&at, x, m, updated(g, node, ctx.dt), normal);
         });
@@ -456,8 +466,9 @@ fn collide<const D: usize>(
         // holds (E96): solved for first, so that a light body under heavy material does not
         // overshoot.
         let c = match &on {
-            On::Updated(_) if record.mass > 0.0 && record.mass.is_finite() => {
-                shared(ctx, g, c, record, (lo, hi))
+            On::Updated(impulses) if record.mass > 0.0 && record.mass.is_finite() => {
+                let received = impulses.get(k).map_or([0.0; 6], |s| s.untaken());
+                shared(ctx, g, c, (record, received), (lo, hi))
             }
             _ => c,
         };

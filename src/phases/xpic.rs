@@ -10,11 +10,12 @@
 //! The sum is kept where the particle update reads it ([`super::update::xpic`]), in the
 //! acceleration columns: XPIC keeps `v^L` in the velocity columns and makes the acceleration
 //! `a + (v* - v^L) / dt`, so that `v_gp = S v^L` and `v_gp + a_gp dt = S (v* + a dt)`; FMPM
-//! sums `v*` there and ends with `v*` as the velocity and zero acceleration. The walls then
-//! act on the new updated velocity as on the lumped one ([`super::grid_update`]; the colliders
-//! acted on the lumped velocity before the series and are not applied again).
+//! sums `v*` there and ends with `v*` as the velocity and zero acceleration. The colliders and
+//! the walls then act on the new updated velocity as on the lumped one
+//! ([`super::grid_update::boundary_on_updated`], E100): the series mixes the nodes' values, and
+//! a node in contact would otherwise hand the particles a velocity into the solid.
 
-use super::grid_update::{divide_by_mass, mirror_vector, walls_on_updated, Nodes};
+use super::grid_update::{boundary_on_updated, divide_by_mass, mirror_vector, Nodes};
 use super::Ctx;
 use crate::grid::GridCols;
 use crate::Real;
@@ -41,13 +42,16 @@ pub(crate) fn start<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>)
 
 /// FMPM(k) with MUSL (E101): the re-mapped momenta, folded at the walls, divided by the mass
 /// and read back past them, start the series again, `u` the re-mapped velocity: `k u` into
-/// the series and acceleration columns, the re-map columns zeroed for the projections.
+/// the series and acceleration columns, the re-map columns zeroed for the projections. The
+/// updated velocity the particles read, `v + a dt`, moves to the velocity columns first: the
+/// nodes in a collider's contact keep it for the stress update (E92).
 pub(crate) fn restart<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     let Some((k, _)) = ctx.series else { return };
     lumped_remap(ctx, nodes);
-    let k = k as Real;
+    let (k, dt) = (k as Real, ctx.dt);
     nodes.each_slab(&|g| {
         each_node(ctx, g, |g, a, i| {
+            g.vel[a][i] += g.acc[a][i] * dt;
             let first = k * g.remap[a][i];
             g.series[a][i] = first;
             g.acc[a][i] = first;
@@ -56,10 +60,15 @@ pub(crate) fn restart<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D
     });
 }
 
-/// The sum of [`restart`]'s series into the re-map columns, for the walls and the stress
-/// update.
+/// The sum of [`restart`]'s series into the re-map columns, for the boundary and the stress
+/// update; the acceleration back to zero, so that `v + a dt` is again the particles' velocity.
 pub(crate) fn into_remap<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
-    nodes.each_slab(&|g| each_node(ctx, g, |g, a, i| g.remap[a][i] = g.acc[a][i]));
+    nodes.each_slab(&|g| {
+        each_node(ctx, g, |g, a, i| {
+            g.remap[a][i] = g.acc[a][i];
+            g.acc[a][i] = 0.0;
+        })
+    });
 }
 
 /// The re-map columns' momenta folded at the walls, divided by the mass (zero at or below the
@@ -95,7 +104,8 @@ pub(crate) fn absorb<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>
 }
 
 /// The end of the series: FMPM's sum becomes the velocity, its acceleration zero; then the
-/// walls on the updated velocity (E20).
+/// colliders and the walls on the updated velocity (E92, E20), the colliders' impulses taking
+/// what this second pass changes (E93).
 pub(crate) fn finish<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>) {
     let Some((_, fmpm)) = ctx.series else { return };
     if fmpm {
@@ -106,7 +116,7 @@ pub(crate) fn finish<const D: usize>(ctx: &Ctx<'_, D>, nodes: &mut impl Nodes<D>
             });
         });
     }
-    walls_on_updated(ctx, &mut nodes.whole());
+    boundary_on_updated(ctx, nodes);
 }
 
 /// Runs `f(g, axis, entry)` on every entry of `g` within the node box, for each axis.
