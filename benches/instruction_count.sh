@@ -36,6 +36,6 @@ count() {
     echo $(( ${n:-0} / per_step ))
 }
 isa='(passes::avx2|passes::avx512|Baseline as mpm_gimp::world::passes::Passes>)'
-echo "$* (${simd} instance): $(count 'World::step_with_simd') instructions per particle-step;" \
+echo "$* (${simd} instance): $(count 'World>::step_on') instructions per particle-step;" \
     "scatter $(count "${isa}::scatter"), particle pass $(count "${isa}::particles")," \
     "stress pass $(count "${isa}::stress")"

@@ -14,22 +14,30 @@
 //!
 //! Timing: the step_cost measurement (`benches/common/timing.rs`) on the step_cost 2D scene
 //! (`benches/common/scene.rs`, 131072 particles) with the scheme and the problem's effect, 5
-//! runs of 4 steps, median. The accuracy runs use both cores; the timings run alone.
+//! runs of 4 steps, median, on one worker (the calling thread) and on two (a world sized for
+//! two workers on a rayon pool of two threads, as `step_cost --threads 2`). The accuracy runs
+//! use both cores; the timings run alone.
+//!
+//! The report names the kernel source it measured (`source::kernel_source_hash`), which CI
+//! checks against the source (`.ci/accuracy_source.py`).
 //!
 //! Options: `--quick` (the quick refinement series, no timing, checks the claims: exit code 1
-//! if one fails), `--out DIR`, `--precision both|this`.
+//! if one fails; with `--out`, it writes its report there too, without costs), `--out DIR`,
+//! `--precision both|this`, `--source-hash` (prints the kernel source's digest and exits).
 
 mod claims;
 mod problems;
 mod report;
 #[path = "../../benches/common/scene.rs"]
 mod scene;
+mod source;
 // Only the median and the reference of a timing are reported here.
 #[allow(dead_code)]
 #[path = "../../benches/common/timing.rs"]
 mod timing;
 
 use mpm_gimp::MaterialModel;
+use mpm_gimp_rayon::RayonTasks;
 use problems::{Declares, PROBLEMS, SCHEMES};
 use scene::{Effect, Scene, SceneDef};
 use std::collections::BTreeSet;
@@ -38,7 +46,8 @@ use std::process::{exit, Command};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-const USAGE: &str = "usage: accuracy_cost [--quick] [--out DIR] [--precision both|this]";
+const USAGE: &str =
+    "usage: accuracy_cost [--quick] [--out DIR] [--precision both|this] [--source-hash]";
 
 /// Timed runs and steps per run of each scheme's cost.
 const COST_RUNS: u32 = 5;
@@ -64,13 +73,15 @@ struct Row {
     steps: usize,
 }
 
-/// One cost measurement: ns per particle-step of a scheme with a problem's effect.
+/// One cost measurement: ns per particle-step of a scheme with a problem's effect, on one
+/// worker and on two.
 #[derive(Clone, Debug)]
 struct Cost {
     scheme: String,
     precision: String,
     declares: String,
     ns: f64,
+    ns_two: f64,
     reference: f64,
 }
 
@@ -134,8 +145,10 @@ fn accuracy(quick: bool) -> Vec<Row> {
     rows.into_inner().unwrap()
 }
 
-/// Times every scheme with every effect the problems declare, one at a time.
+/// Times every scheme with every effect the problems declare, one at a time: on the calling
+/// thread, then a world sized for two workers on a pool of two threads.
 fn costs() -> Vec<Cost> {
+    let pool = RayonTasks::new(2).expect("a pool of two threads");
     let mut declared: Vec<Declares> = PROBLEMS.iter().map(|p| p.declares).collect();
     declared.sort_by_key(|d| *d as u32);
     declared.dedup();
@@ -170,12 +183,28 @@ fn costs() -> Vec<Cost> {
                 mpm_gimp::simd::Simd::Detect,
                 &mpm_gimp::Serial,
             );
+            let def_two = SceneDef { workers: 2, ..def };
+            let mut s = Scene::new(&def_two).unwrap_or_else(|e| panic!("{}: {e}", scheme.label));
+            let mut world = s.world();
+            let w = &mut world;
+            let two = pool.install(|| {
+                timing::time_steps(
+                    w,
+                    particles,
+                    COST_RUNS,
+                    COST_STEPS,
+                    mpm_gimp::simd::Simd::Detect,
+                    &pool,
+                )
+            });
             eprintln!(
-                "accuracy_cost: cost {} {} {}: {:.2} ns per particle-step (reference {:.3})",
+                "accuracy_cost: cost {} {} {}: {:.2} ns per particle-step, {:.2} on two \
+workers (reference {:.3})",
                 scheme.label,
                 precision(),
                 declares_name(d),
                 t.median,
+                two.median,
                 t.reference
             );
             out.push(Cost {
@@ -183,6 +212,7 @@ fn costs() -> Vec<Cost> {
                 precision: precision().into(),
                 declares: declares_name(d).into(),
                 ns: t.median,
+                ns_two: two.median,
                 reference: t.reference,
             });
         }
@@ -210,8 +240,8 @@ fn to_lines(rows: &[Row], costs: &[Cost]) -> String {
     for c in costs {
         let _ = writeln!(
             s,
-            "cost\t{}\t{}\t{}\t{:e}\t{:e}",
-            c.scheme, c.precision, c.declares, c.ns, c.reference
+            "cost\t{}\t{}\t{}\t{:e}\t{:e}\t{:e}",
+            c.scheme, c.precision, c.declares, c.ns, c.ns_two, c.reference
         );
     }
     s
@@ -236,11 +266,12 @@ fn from_lines(text: &str) -> (Vec<Row>, Vec<Cost>) {
                         .collect(),
                 })
             }
-            ["cost", scheme, precision, declares, ns, reference] => costs.push(Cost {
+            ["cost", scheme, precision, declares, ns, ns_two, reference] => costs.push(Cost {
                 scheme: scheme.to_string(),
                 precision: precision.to_string(),
                 declares: declares.to_string(),
                 ns: ns.parse().expect("ns"),
+                ns_two: ns_two.parse().expect("ns on two workers"),
                 reference: reference.parse().expect("reference"),
             }),
             _ => panic!("unexpected line from the f64 run: {line}"),
@@ -282,6 +313,7 @@ fn f64_rows(quick: bool) -> (Vec<Row>, Vec<Cost>) {
 struct Options {
     quick: bool,
     out: String,
+    out_given: bool,
     both: bool,
     rows_only: Option<String>,
 }
@@ -290,6 +322,7 @@ fn options() -> Options {
     let mut o = Options {
         quick: false,
         out: "results/accuracy_cost".into(),
+        out_given: false,
         both: true,
         rows_only: None,
     };
@@ -304,7 +337,12 @@ fn options() -> Options {
             "--out" => {
                 o.out = args
                     .next()
-                    .unwrap_or_else(|| bad("--out needs a folder".into()))
+                    .unwrap_or_else(|| bad("--out needs a folder".into()));
+                o.out_given = true;
+            }
+            "--source-hash" => {
+                println!("{}", source_hash());
+                exit(0)
             }
             "--precision" => match args.next().as_deref() {
                 Some("both") => o.both = true,
@@ -325,6 +363,8 @@ fn options() -> Options {
 fn main() {
     let o = options();
     let wall = std::time::Instant::now();
+    // The source cargo built this run from, before the hours anyone may edit it in.
+    let source = source_hash();
     let mut rows = accuracy(o.quick);
     let mut costs = if o.quick { vec![] } else { costs() };
     if let Some(file) = &o.rows_only {
@@ -356,14 +396,22 @@ fn main() {
         );
         failed |= !c.holds;
     }
-    if !o.quick {
-        report::write(&o.out, &rows, &costs, &claims, wall.elapsed().as_secs_f64())
+    if !o.quick || o.out_given {
+        let seconds = wall.elapsed().as_secs_f64();
+        report::write(&o.out, &rows, &costs, &claims, seconds, &source)
             .expect("writing the report");
         eprintln!("accuracy_cost: report written to {}/", o.out);
     }
     if failed {
         exit(1);
     }
+}
+
+/// The digest of the kernel source this example was run from (its repository: where cargo
+/// builds it).
+fn source_hash() -> String {
+    source::kernel_source_hash(std::path::Path::new(env!("CARGO_MANIFEST_DIR")))
+        .expect("reading the kernel source")
 }
 
 /// Errors of one (problem, metric, scheme, precision) by level, coarsest first.
@@ -377,14 +425,21 @@ fn series(rows: &[Row], problem: &str, metric: usize, scheme: &str, prec: &str) 
     s
 }
 
-/// Cost (ns per particle-step) of a scheme, precision and effect.
+/// Cost (ns per particle-step on one worker) of a scheme, precision and effect.
 fn cost_of(costs: &[Cost], scheme: &str, prec: &str, declares: Declares) -> Option<f64> {
-    costs
-        .iter()
-        .find(|c| {
-            c.scheme == scheme && c.precision == prec && c.declares == declares_name(declares)
-        })
-        .map(|c| c.ns)
+    find_cost(costs, scheme, prec, declares).map(|c| c.ns)
+}
+
+/// The cost measurement of a scheme, precision and effect.
+fn find_cost<'a>(
+    costs: &'a [Cost],
+    scheme: &str,
+    prec: &str,
+    declares: Declares,
+) -> Option<&'a Cost> {
+    costs.iter().find(|c| {
+        c.scheme == scheme && c.precision == prec && c.declares == declares_name(declares)
+    })
 }
 
 /// The precisions present in the rows, f32 first.

@@ -2,7 +2,7 @@
 
 use super::claims::Claim;
 use super::problems::{order, Problem, PROBLEMS, SCHEMES};
-use super::{cost_of, precisions, series, Cost, Row};
+use super::{cost_of, find_cost, precisions, series, Cost, Row};
 use std::fmt::Write as _;
 
 /// Writes `README.md` and the plots into `dir`.
@@ -12,6 +12,7 @@ pub fn write(
     costs: &[Cost],
     claims: &[Claim],
     seconds: f64,
+    source: &str,
 ) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
     let precs = precisions(rows);
@@ -20,11 +21,14 @@ pub fn write(
     let _ = writeln!(
         md,
         "Written by `cargo run --release --example accuracy_cost` at {} ({seconds:.0} s for {}, \
-on {}). Errors are against exact solutions; ns per particle-step is the step_cost \
-measurement of each scheme (the 2D step_cost scene, 131072 particles, with the problem's \
-effect: median of 5 runs of 4 steps, one core, the AVX2 instance). The cost to reach an error \
-is one core's time for the whole run, `ns x particles x steps`, interpolated log-log along the \
-refinement series; `<=` when the coarsest run is already below it, `-` when the finest is not.\n",
+on {}), from kernel source sha256 `{source}` (every file under src/ and Cargo.toml; CI's \
+`python3 .ci/accuracy_source.py` fails when the source no longer matches). Errors are \
+against exact solutions; ns per particle-step is the step_cost measurement of each scheme \
+(the 2D step_cost scene, 131072 particles, with the problem's effect: median of 5 runs of 4 \
+steps, the widest instance the CPU has), on one worker and on two (`step_cost --threads 2`). \
+The cost to reach an error is one worker's time for the whole run, `ns x particles x steps`, \
+interpolated log-log along the refinement series; `<=` when the coarsest run is already below \
+it, `-` when the finest is not.\n",
         commit(),
         precs.join(" and "),
         cpu()
@@ -197,12 +201,13 @@ fn table(md: &mut String, p: &Problem, m: usize, rows: &[Row], costs: &[Cost], p
     let _ = writeln!(
         md,
         "| problem | scheme | precision | cells per unit length | {} error | order | ns per \
-particle-step | ms to reach {target:e} |\n|---|---|---|---:|---:|---:|---:|---:|",
+particle-step, 1 / 2 workers | ms to reach {target:e} |\n|---|---|---|---:|---:|---:|---:|---:|",
         p.metrics[m]
     );
     for s in SCHEMES {
         for prec in precs {
-            let ns = cost_of(costs, s.label, prec, p.declares);
+            let cost = find_cost(costs, s.label, prec, p.declares);
+            let ns = cost.map(|c| c.ns);
             let runs = runs_of(rows, p, s.label, prec);
             let reach = ns.map_or("n/a".into(), |ns| {
                 cost_to_reach(&work_series(&runs, m, ns), target)
@@ -228,7 +233,7 @@ particle-step | ms to reach {target:e} |\n|---|---|---|---:|---:|---:|---:|---:|
                     } else {
                         format!("{e:.3e}")
                     },
-                    ns.map_or("n/a".into(), |v| format!("{v:.1}")),
+                    cost.map_or("n/a".into(), |c| format!("{:.1} / {:.1}", c.ns, c.ns_two)),
                     if k == 0 { reach.as_str() } else { "" }
                 );
             }
