@@ -795,6 +795,105 @@ fn a_sphere_pressed_into_an_elastic_half_space_follows_hertz() {
     assert!(first.abs() < 1.0e-4, "contact began at depth {first} m");
 }
 
+/// XPIC(3) and FMPM(2) (E98-E101) keep a collider's contact: a block thrown at 0.5 m/s onto a
+/// floor collider under gravity, its bottom layer of particles on the floor, in 2D, the
+/// axisymmetric form and 3D, every update order each transfer takes, with a slip floor and
+/// a separating one. The floor's plane lies half-way between two node lines, so a particle
+/// within its half-width `l_p` of the plane reads only nodes inside the floor or within the
+/// contact band above it (E91), which the contact leaves at no velocity into the floor (E92):
+/// after every step a particle that was there when it began, whose new velocity is the
+/// grid's at its place then (E100, E101), has
+/// `v_y >= -64 eps |v|_max` (round-off of `v + a dt` summed over its stencil). The series mixes
+/// the velocities of the nodes above into those in contact; before the colliders acted
+/// again on its result, the bottom layer moved into the floor at 0.06 to 0.19 times the
+/// largest particle speed (f32, by run).
+#[test]
+fn xpic_and_fmpm_keep_a_floor_colliders_contact() {
+    use mpm_gimp::{Dimension, Transfer, UpdateOrder};
+    let h: Real = 1.0 / 16.0;
+    let floor_y = 4.5 * h;
+    let lp = h / 4.0;
+    let runs = [
+        (Transfer::Xpic(3), UpdateOrder::Usl),
+        (Transfer::Xpic(3), UpdateOrder::Usf),
+        (Transfer::Xpic(3), UpdateOrder::Musl),
+        (Transfer::Fmpm(2), UpdateOrder::Usf),
+        (Transfer::Fmpm(2), UpdateOrder::Musl),
+    ];
+    for dim in [
+        Dimension::Plane2D,
+        Dimension::Axisymmetric2D,
+        Dimension::ThreeD,
+    ] {
+        for (transfer, order) in runs {
+            for contact in [Contact::Slip, Contact::Separate] {
+                let mut def = WorldDef {
+                    transfer,
+                    update_order: order,
+                    gravity: Vec3::new(0.0, -G, 0.0),
+                    effects: Effects {
+                        collider_capacity: 1,
+                        ..Effects::NONE
+                    },
+                    ..crate::common::free_space(dim, 16, h)
+                };
+                if dim == Dimension::Axisymmetric2D {
+                    // The axis r = 0 on the lower x face's wall plane.
+                    def.origin.x = -h;
+                    def.faces[Face::XMin as usize] = Boundary::Slip;
+                }
+                let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
+                let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
+                let m = world.add_material(&BLOCK).expect("material");
+                world
+                    .add_collider(&ColliderDef {
+                        position: Vec3::new(0.0, floor_y, 0.0),
+                        contact,
+                        ..ColliderDef::DEFAULT
+                    })
+                    .expect("floor");
+                let z = |z: Real| if dim == Dimension::ThreeD { z } else { 0.0 };
+                world
+                    .fill_box(
+                        Vec3::new(0.3, floor_y, z(0.3)),
+                        Vec3::new(0.7, floor_y + 0.2, z(0.7)),
+                        m,
+                        Vec3::new(0.0, -0.5, 0.0),
+                    )
+                    .expect("block");
+                let mut checked = 0;
+                for step in 0..40 {
+                    // The stencils a particle reads are those of where the step starts.
+                    let start = world.particles().position[1].to_vec();
+                    world.step(world.stable_dt()).expect("step");
+                    let p = world.particles();
+                    let speed = (0..p.count)
+                        .map(|i| p.velocity[1][i].abs().max(p.velocity[0][i].abs()))
+                        .fold(0.0, Real::max);
+                    let tol = 64.0 * Real::EPSILON * speed;
+                    for (&y, &v) in start.iter().zip(p.velocity[1]) {
+                        if y - floor_y > lp {
+                            continue;
+                        }
+                        checked += 1;
+                        assert!(
+                            v >= -tol,
+                            "{dim:?} {transfer:?} {order:?} {contact:?}, step {step}: a \
+                             particle {} above the floor moves into it at {v} m/s (block's \
+                             speed {speed})",
+                            y - floor_y
+                        );
+                    }
+                }
+                assert!(
+                    checked > 0,
+                    "{dim:?} {transfer:?} {order:?} {contact:?}: no contact"
+                );
+            }
+        }
+    }
+}
+
 /// `Removal::Collider` takes the particles whose domains (squares, cubes in 3D, of half-width
 /// `l = h / 4`) reach into a solid or touch it, in 2D and 3D:
 /// - an axis-aligned box: exactly the particles whose domain overlaps the closed box (by
@@ -959,100 +1058,6 @@ fn a_collider_removes_the_material_it_displaces() {
                 assert!(
                     !went[i] || may_go[i],
                     "{case}: particle at {x:?} cannot reach the solid and went"
-
-/// XPIC(3) and FMPM(2) (E98-E101) keep a collider's contact: a block thrown at 0.5 m/s onto a
-/// floor collider under gravity, its bottom layer of particles on the floor, in 2D, the
-/// axisymmetric form and 3D, every update order each transfer takes, with a slip floor and
-/// a separating one. The floor's plane lies half-way between two node lines, so a particle
-/// within its half-width `l_p` of the plane reads only nodes inside the floor or within the
-/// contact band above it (E91), which the contact leaves at no velocity into the floor (E92):
-/// after every step a particle that was there when it began, whose new velocity is the
-/// grid's at its place then (E100, E101), has
-/// `v_y >= -64 eps |v|_max` (round-off of `v + a dt` summed over its stencil). The series mixes
-/// the velocities of the nodes above into those in contact; before the colliders acted
-/// again on its result, the bottom layer moved into the floor at 0.06 to 0.19 times the
-/// largest particle speed (f32, by run).
-#[test]
-fn xpic_and_fmpm_keep_a_floor_colliders_contact() {
-    use mpm_gimp::{Dimension, Transfer, UpdateOrder};
-    let h: Real = 1.0 / 16.0;
-    let floor_y = 4.5 * h;
-    let lp = h / 4.0;
-    let runs = [
-        (Transfer::Xpic(3), UpdateOrder::Usl),
-        (Transfer::Xpic(3), UpdateOrder::Usf),
-        (Transfer::Xpic(3), UpdateOrder::Musl),
-        (Transfer::Fmpm(2), UpdateOrder::Usf),
-        (Transfer::Fmpm(2), UpdateOrder::Musl),
-    ];
-    for dim in [
-        Dimension::Plane2D,
-        Dimension::Axisymmetric2D,
-        Dimension::ThreeD,
-    ] {
-        for (transfer, order) in runs {
-            for contact in [Contact::Slip, Contact::Separate] {
-                let mut def = WorldDef {
-                    transfer,
-                    update_order: order,
-                    gravity: Vec3::new(0.0, -G, 0.0),
-                    effects: Effects {
-                        collider_capacity: 1,
-                        ..Effects::NONE
-                    },
-                    ..crate::common::free_space(dim, 16, h)
-                };
-                if dim == Dimension::Axisymmetric2D {
-                    // The axis r = 0 on the lower x face's wall plane.
-                    def.origin.x = -h;
-                    def.faces[Face::XMin as usize] = Boundary::Slip;
-                }
-                let mut buf = HeapBuffer::new(memory_requirements(&def).expect("valid").bytes);
-                let mut world = World::init(&def, buf.as_mut_bytes()).expect("init");
-                let m = world.add_material(&BLOCK).expect("material");
-                world
-                    .add_collider(&ColliderDef {
-                        position: Vec3::new(0.0, floor_y, 0.0),
-                        contact,
-                        ..ColliderDef::DEFAULT
-                    })
-                    .expect("floor");
-                let z = |z: Real| if dim == Dimension::ThreeD { z } else { 0.0 };
-                world
-                    .fill_box(
-                        Vec3::new(0.3, floor_y, z(0.3)),
-                        Vec3::new(0.7, floor_y + 0.2, z(0.7)),
-                        m,
-                        Vec3::new(0.0, -0.5, 0.0),
-                    )
-                    .expect("block");
-                let mut checked = 0;
-                for step in 0..40 {
-                    // The stencils a particle reads are those of where the step starts.
-                    let start = world.particles().position[1].to_vec();
-                    world.step(world.stable_dt()).expect("step");
-                    let p = world.particles();
-                    let speed = (0..p.count)
-                        .map(|i| p.velocity[1][i].abs().max(p.velocity[0][i].abs()))
-                        .fold(0.0, Real::max);
-                    let tol = 64.0 * Real::EPSILON * speed;
-                    for (&y, &v) in start.iter().zip(p.velocity[1]) {
-                        if y - floor_y > lp {
-                            continue;
-                        }
-                        checked += 1;
-                        assert!(
-                            v >= -tol,
-                            "{dim:?} {transfer:?} {order:?} {contact:?}, step {step}: a \
-                             particle {} above the floor moves into it at {v} m/s (block's \
-                             speed {speed})",
-                            y - floor_y
-                        );
-                    }
-                }
-                assert!(
-                    checked > 0,
-                    "{dim:?} {transfer:?} {order:?} {contact:?}: no contact"
                 );
             }
         }
