@@ -17,7 +17,7 @@
 //! as one world on N threads instead, on rank 0), `--workers N` (each rank steps on a pool of
 //! N threads; the reference steps on one), `--rebalance L` (cut the slabs again past L times
 //! the mean count, 1.25), `--no-rebalance` (keep the first slabs),
-//! `--expect-rebalance` (fail unless the slabs were cut again in every case), `--check-errors`
+//! `--expect-rebalance` (fail unless some case cut its slabs again), `--check-errors`
 //! (bad input: the same clear error on every rank), `--check-time-out` (a stalled rank: the
 //! others abort the job within their time-out).
 
@@ -240,6 +240,9 @@ fn main() {
         usage("--case");
     }
     let mut failed = false;
+    // Cases whose slabs were cut again (a re-cut leaves slabs that cannot improve alone, so
+    // not every case needs one).
+    let mut recut_cases = 0u32;
     for case in cases {
         if threads > 0 {
             if rank == 0 {
@@ -378,15 +381,16 @@ fn main() {
         }
         comm.process_at_rank(0).broadcast_into(&mut differs);
         failed |= (differs == 1) != expect_difference;
-        if expect_rebalance && recuts == 0 {
-            if rank == 0 {
-                eprintln!("{}: the slabs were never cut again", case.name);
-            }
-            failed = true;
-        }
+        recut_cases += (recuts > 0) as u32;
         if differs == 1 && expect_difference && rank == 0 {
             println!("{}: a difference, as expected with this halo", case.name);
         }
+    }
+    if expect_rebalance && recut_cases == 0 {
+        if rank == 0 {
+            eprintln!("split_check: no case cut its slabs again");
+        }
+        std::process::exit(1);
     }
     if failed {
         if rank == 0 {
